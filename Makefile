@@ -1,0 +1,34 @@
+# frf_ident — quick start: `make demo`, `make test` (no ROS needed; a virtualenv is bootstrapped).
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+OUT    ?= out
+
+# Every DDS participant we start stays on loopback (CONTRACT §2).
+export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
+export CYCLONEDDS_URI := file://$(CURDIR)/config/cyclonedds-localhost.xml
+export NUMBA_CACHE_DIR := $(CURDIR)/$(VENV)/numba_cache
+export MPLBACKEND := Agg
+
+.PHONY: demo test bench venv clean
+
+$(STAMP): setup.py
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	@touch $(STAMP)
+
+venv: $(STAMP)
+
+demo: $(STAMP)
+	$(PY) -m frf_ident demo --out $(OUT)/demo
+
+test: $(STAMP)
+	$(PY) -m pytest -q -ra test
+
+bench: $(STAMP)
+	$(PY) -m frf_ident.bench
+
+clean:
+	rm -rf $(VENV) $(OUT) build *.egg-info .pytest_cache

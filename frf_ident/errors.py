@@ -1,0 +1,33 @@
+"""Exception hierarchy of frf_ident.
+
+Every error a user can cause derives from :class:`FrfIdentInputError`; the CLI turns it into
+one line on stderr and exit status 2. Everything else is a failure (exit 1).
+"""
+
+
+class FrfIdentError(Exception):
+    """Base class of all frf_ident errors."""
+
+
+class FrfIdentInputError(FrfIdentError, ValueError):
+    """A user mistake: bad parameter, file, field or value (CLI exit status 2)."""
+
+
+class DesignError(FrfIdentInputError):
+    """An excitation design parameter is out of range."""
+
+
+class ModelFileError(FrfIdentInputError):
+    """A model file (CONTRACT section 5) is malformed."""
+
+
+class BagError(FrfIdentInputError):
+    """A bag cannot be read or lacks what the analysis needs."""
+
+
+class EstimationError(FrfIdentInputError):
+    """The data do not support the requested estimate (too few periods, band, rank...)."""
+
+
+class SafetyError(FrfIdentError):
+    """A torque or position bound would be violated; the excitation was refused or stopped."""

@@ -1,0 +1,50 @@
+import os
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'frf_ident'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test', 'test.*']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        (os.path.join('share', package_name, 'launch'),
+         glob(os.path.join('launch', '*launch.[pxy][yma]*'))),
+        (os.path.join('share', package_name, 'config'),
+         glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))),
+    ],
+    package_data={'frf_ident': ['config/*.yaml']},
+    python_requires='>=3.10',
+    install_requires=[
+        'setuptools',
+        'numpy>=1.24',
+        'scipy>=1.10',
+        'numba>=0.58',
+        'pyyaml>=6.0',
+        'matplotlib>=3.7',
+        'tqdm>=4.65',
+        'rosbags>=0.10.4',
+        'mcap>=1.1',
+        'mcap-ros2-support>=0.5',
+        'cyclonedds>=0.10.5',
+    ],
+    extras_require={
+        'test': ['pytest>=7.4', 'hypothesis>=6.80', 'control>=0.10'],
+        'control': ['control>=0.10'],
+    },
+    zip_safe=True,
+    maintainer='frf_ident developers',
+    maintainer_email='dev@example.com',
+    description='Closed-loop FRF identification of flexible-joint robots (Saupe & Knoblach 2015)',
+    license='Apache-2.0',
+    tests_require=['pytest'],
+    entry_points={
+        'console_scripts': [
+            'frf-ident = frf_ident.cli:main',
+        ],
+    },
+)
