@@ -1,0 +1,329 @@
+"""A small, streaming, fault-tolerant MCAP record scanner (read side only).
+
+Why not ``mcap.reader``: its seeking reader needs an intact summary section and its stream
+reader raises on the first damaged byte and parses each message into an object. A recorder
+that was killed leaves a file without summary and footer, and fuzzed/corrupt files must end
+in a ``BagError``, never a traceback. This scanner walks the data section record by record
+(reading one record, i.e. at most one chunk, at a time: memory is bounded by the chunk size),
+validates lengths against the file size and chunk CRCs when present, skips a damaged chunk
+whose framing is intact, stops at the first damaged record frame, and counts what was lost.
+
+Spec: https://mcap.dev/spec (records, opcodes, field order).
+"""
+from __future__ import annotations
+
+import struct
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import BinaryIO, Callable, Iterator
+
+MAGIC = b'\x89MCAP0\r\n'
+OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 1, 2, 3, 4, 5, 6
+OP_STATISTICS, OP_METADATA, OP_DATA_END = 0x0B, 0x0C, 0x0F
+_REC = struct.Struct('<BQ')
+_U16 = struct.Struct('<H')
+_U32 = struct.Struct('<I')
+_U64 = struct.Struct('<Q')
+_MSG = struct.Struct('<HIQQ')
+_CHUNK = struct.Struct('<QQQI')
+#: chunks (uncompressed) larger than this are treated as corrupt rather than allocated.
+MAX_CHUNK_BYTES = 1 << 30
+
+
+class McapFormatError(ValueError):
+    """The file is not MCAP or its framing is damaged beyond recovery."""
+
+
+@dataclass
+class ChannelInfo:
+    """One MCAP channel (a rosbag2 topic connection)."""
+
+    id: int
+    topic: str
+    msgtype: str
+    encoding: str
+    metadata: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass
+class ScanStats:
+    """What a scan read and what it had to give up on."""
+
+    file_bytes: int = 0
+    bytes_ok: int = 0
+    bytes_lost: int = 0
+    messages: int = 0
+    chunks_ok: int = 0
+    chunks_lost: int = 0
+    complete: bool = False  # footer and trailing magic seen
+    problems: list[str] = field(default_factory=list)
+    topics: dict[str, str] = field(default_factory=dict)  # topic -> type of every channel
+
+
+def _string(buf: bytes | memoryview, off: int) -> tuple[str, int]:
+    (n,) = _U32.unpack_from(buf, off)
+    off += 4
+    if off + n > len(buf):
+        raise McapFormatError(f'string of {n} bytes overruns its record')
+    return bytes(buf[off:off + n]).decode('utf-8'), off + n
+
+
+def _bytes(buf: bytes | memoryview, off: int) -> tuple[bytes, int]:
+    (n,) = _U32.unpack_from(buf, off)
+    off += 4
+    if off + n > len(buf):
+        raise McapFormatError(f'byte field of {n} bytes overruns its record')
+    return bytes(buf[off:off + n]), off + n
+
+
+def _string_map(buf: bytes | memoryview, off: int) -> tuple[dict[str, str], int]:
+    (n,) = _U32.unpack_from(buf, off)
+    off += 4
+    end = off + n
+    if end > len(buf):
+        raise McapFormatError(f'map of {n} bytes overruns its record')
+    out: dict[str, str] = {}
+    while off < end:
+        key, off = _string(buf, off)
+        out[key], off = _string(buf, off)
+    return out, end
+
+
+def _decompress(compression: str, data: bytes, size: int) -> bytes:
+    if size > MAX_CHUNK_BYTES:
+        raise McapFormatError(f'chunk claims {size} uncompressed bytes')
+    if compression == '':
+        return data
+    if compression == 'zstd':
+        try:
+            from compression import zstd  # type: ignore[import-not-found]  # Python >= 3.14
+        except ImportError:
+            from backports import zstd
+        out = zstd.ZstdDecompressor().decompress(data, max_length=size)
+    elif compression == 'lz4':
+        import lz4.frame
+        out = lz4.frame.decompress(data)
+    else:
+        raise McapFormatError(f'unsupported chunk compression {compression!r}')
+    if len(out) != size:
+        raise McapFormatError(f'chunk decompressed to {len(out)} bytes, header says {size}')
+    return out
+
+
+class McapScanner:
+    """Stream the messages of one MCAP file in file order, recovering what is readable.
+
+    Use :meth:`messages` once; afterwards :attr:`stats`, :attr:`channels`, :attr:`schemas`
+    and :attr:`metadata` describe the file. ``topics`` restricts which messages are yielded
+    (channel records are always collected). ``on_bytes`` is called with the number of bytes
+    consumed, for progress bars.
+    """
+
+    def __init__(self, path: Path | str, topics: set[str] | None = None,
+                 on_bytes: Callable[[int], None] | None = None) -> None:
+        self.path = Path(path)
+        self.topics = topics
+        self.on_bytes = on_bytes
+        self.channels: dict[int, ChannelInfo] = {}
+        self.schemas: dict[int, str] = {}
+        self.metadata: dict[str, dict[str, str]] = {}
+        self.stats = ScanStats()
+        self._wanted: dict[int, ChannelInfo | None] = {}
+
+    # ------------------------------------------------------------------ records
+    def _on_schema(self, buf: bytes | memoryview) -> None:
+        (sid,) = _U16.unpack_from(buf, 0)
+        name, _ = _string(buf, 2)
+        self.schemas[sid] = name
+
+    def _on_channel(self, buf: bytes | memoryview) -> None:
+        cid, sid = struct.unpack_from('<HH', buf, 0)
+        topic, off = _string(buf, 4)
+        enc, off = _string(buf, off)
+        meta, _ = _string_map(buf, off)
+        info = ChannelInfo(cid, topic, self.schemas.get(sid, ''), enc, meta)
+        self.channels[cid] = info
+        self.stats.topics[topic] = info.msgtype
+        wanted = self.topics is None or topic in self.topics
+        self._wanted[cid] = info if wanted else None
+
+    def _on_metadata(self, buf: bytes | memoryview) -> None:
+        name, off = _string(buf, 0)
+        self.metadata[name], _ = _string_map(buf, off)
+
+    def _records(self, buf: bytes | memoryview) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
+        """Messages of a chunk body (also parses the schema/channel records in it)."""
+        mv = memoryview(buf)
+        off, end = 0, len(mv)
+        while off < end:
+            if off + 9 > end:
+                raise McapFormatError(f'record header cut at chunk byte {off}')
+            op, length = _REC.unpack_from(mv, off)
+            body = off + 9
+            off = body + length
+            if off > end:
+                raise McapFormatError(f'record of {length} bytes overruns its chunk')
+            if op == OP_MESSAGE:
+                cid, _, log_time, _ = _MSG.unpack_from(mv, body)
+                info = self._wanted.get(cid)
+                self.stats.messages += 1
+                if info is not None:
+                    yield info, log_time, mv[body + 22:off]
+                elif cid not in self._wanted:
+                    raise McapFormatError(f'message on unknown channel {cid}')
+            elif op == OP_SCHEMA:
+                self._on_schema(mv[body:off])
+            elif op == OP_CHANNEL:
+                self._on_channel(mv[body:off])
+
+    def _chunk(self, buf: bytes) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
+        _, _, size, crc = _CHUNK.unpack_from(buf, 0)
+        compression, off = _string(buf, _CHUNK.size)
+        (n,) = _U64.unpack_from(buf, off)
+        off += 8
+        if off + n > len(buf):
+            raise McapFormatError(f'chunk data of {n} bytes overruns the chunk record')
+        data = _decompress(compression, buf[off:off + n], size)
+        if crc and zlib.crc32(data) != crc:
+            raise McapFormatError('chunk CRC mismatch')
+        yield from self._records(data)
+
+    # ------------------------------------------------------------------ main loop
+    def messages(self) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
+        """Yield ``(channel, log_time_ns, cdr_bytes)`` for every readable message.
+
+        Raises McapFormatError only when not even the MCAP magic is present.
+        """
+        st = self.stats
+        with self.path.open('rb') as f:
+            st.file_bytes = f.seek(0, 2)
+            f.seek(0)
+            if f.read(8) != MAGIC:
+                raise McapFormatError('no MCAP magic at the start of the file')
+            st.bytes_ok = 8
+            yield from self._walk(f)
+        st.bytes_lost = st.file_bytes - st.bytes_ok
+
+    def _walk(self, f: BinaryIO) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
+        st = self.stats
+        pos = 8
+        while True:
+            head = f.read(9)
+            if len(head) < 9:
+                if head or not st.complete:
+                    st.problems.append(f'file ends inside a record header at byte {pos}'
+                                       if head else f'file ends at byte {pos} without footer')
+                return
+            op, length = _REC.unpack_from(head, 0)
+            if length > st.file_bytes - pos - 9:
+                st.problems.append(f'record at byte {pos} (opcode 0x{op:02x}) claims {length} '
+                                   f'bytes, only {st.file_bytes - pos - 9} remain')
+                return
+            if op == OP_DATA_END or op == OP_FOOTER:
+                self._finish(f, pos, length)
+                return
+            if op in (OP_CHUNK, OP_MESSAGE, OP_SCHEMA, OP_CHANNEL, OP_METADATA):
+                buf = f.read(length)
+                ok = yield from self._top_record(op, buf, pos)
+                if ok:
+                    st.bytes_ok += 9 + length
+            else:  # index/attachment records: not needed, skip without reading them
+                f.seek(length, 1)
+                st.bytes_ok += 9 + length
+            pos += 9 + length
+            if self.on_bytes:
+                self.on_bytes(9 + length)
+
+    def _top_record(self, op: int, buf: bytes,
+                    pos: int) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
+        """Process one top-level record; a damaged one is counted as lost (returns False)."""
+        try:
+            if op == OP_CHUNK:
+                yield from self._chunk(buf)
+                self.stats.chunks_ok += 1
+            elif op == OP_MESSAGE:
+                yield from self._records(_REC.pack(op, len(buf)) + buf)
+            elif op == OP_SCHEMA:
+                self._on_schema(buf)
+            elif op == OP_CHANNEL:
+                self._on_channel(buf)
+            else:
+                self._on_metadata(buf)
+        except (McapFormatError, struct.error, UnicodeDecodeError, ValueError, OSError,
+                EOFError, RuntimeError) as exc:
+            if op == OP_CHUNK:
+                self.stats.chunks_lost += 1
+            self.stats.problems.append(f'damaged record at byte {pos} (opcode 0x{op:02x}): {exc}')
+            return False
+        return True
+
+    def _finish(self, f: BinaryIO, pos: int, length: int) -> None:
+        """Data section ended: the rest (summary, footer) is intact iff the magic closes it."""
+        st = self.stats
+        st.bytes_ok = st.file_bytes  # summary bytes are not message data
+        f.seek(st.file_bytes - 8)
+        if f.read(8) == MAGIC:
+            st.complete = True
+        else:
+            st.problems.append('file does not end with the MCAP magic (summary damaged)')
+
+
+def read_summary(path: Path | str) -> tuple[dict[int, ChannelInfo], dict[int, int], int, int] | None:
+    """Channels, per-channel message counts and start/end log time from the MCAP summary.
+
+    Returns None when the file has no intact summary with a statistics record (then the
+    caller scans the data section instead).
+    """
+    try:
+        return _read_summary(Path(path))
+    except (McapFormatError, struct.error, UnicodeDecodeError, OSError, ValueError):
+        return None
+
+
+def _read_summary(path: Path) -> tuple[dict[int, ChannelInfo], dict[int, int], int, int] | None:
+    with path.open('rb') as f:
+        size = f.seek(0, 2)
+        if size < 8 + 9 + 20 + 8:
+            return None
+        f.seek(size - 8 - 29)
+        tail = f.read(37)
+        if tail[-8:] != MAGIC or tail[0] != OP_FOOTER:
+            return None
+        summary_start, _, _ = struct.unpack_from('<QQI', tail, 9)
+        if summary_start == 0 or summary_start >= size - 37:
+            return None
+        f.seek(summary_start)
+        buf = f.read(size - 37 - summary_start)
+    schemas: dict[int, str] = {}
+    chans: list[tuple[int, int, str, str, dict[str, str]]] = []
+    stats: tuple[dict[int, int], int, int] | None = None
+    off = 0
+    while off + 9 <= len(buf):
+        op, length = _REC.unpack_from(buf, off)
+        body, off = off + 9, off + 9 + length
+        if off > len(buf):
+            return None
+        rec = memoryview(buf)[body:off]
+        if op == OP_SCHEMA:
+            (sid,) = _U16.unpack_from(rec, 0)
+            schemas[sid], _ = _string(rec, 2)
+        elif op == OP_CHANNEL:
+            cid, sid = struct.unpack_from('<HH', rec, 0)
+            topic, o = _string(rec, 4)
+            enc, o = _string(rec, o)
+            meta, _ = _string_map(rec, o)
+            chans.append((cid, sid, topic, enc, meta))
+        elif op == OP_STATISTICS:
+            t0, t1 = struct.unpack_from('<QQ', rec, 30)
+            (n,) = _U32.unpack_from(rec, 46)
+            counts = {}
+            for o in range(50, 50 + n, 10):
+                cid, cnt = struct.unpack_from('<HQ', rec, o)
+                counts[cid] = cnt
+            stats = (counts, t0, t1)
+    if stats is None:
+        return None
+    channels = {cid: ChannelInfo(cid, topic, schemas.get(sid, ''), enc, meta)
+                for cid, sid, topic, enc, meta in chans}
+    return channels, stats[0], stats[1], stats[2]

@@ -1,0 +1,692 @@
+"""Read rosbag2 MCAP bags (frf_ident's own or any robot's) into a :class:`Recording`.
+
+Streaming: messages are decoded one MCAP chunk at a time straight into numpy blocks, so
+memory is bounded by the output arrays, not by the bag. Damaged or unfinished files are
+recovered up to the last intact chunk (see :mod:`frf_ident.bag.mcapio`). Timing is analysed
+and repaired by :mod:`frf_ident.bag.timing`. Every problem with the input ends in one
+:class:`~frf_ident.errors.BagError` line naming the file, topic or field.
+"""
+from __future__ import annotations
+
+import json
+import math
+import struct
+from contextlib import nullcontext
+from dataclasses import dataclass
+from operator import itemgetter
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+import numpy as np
+import yaml
+
+from frf_ident.core.recording import Recording, Segment
+from frf_ident.errors import BagError
+
+from . import timing as tm
+from .cdr import CdrError, JointStateDecoder, decode_float64_array, decode_string
+from .mcapio import ChannelInfo, McapFormatError, McapScanner, ScanStats, read_summary
+from .topics import JOINT_STATE, BagTopics
+from .writer import FRF_BAG_KEY, grid_times
+
+_BLOCK = 8192
+_NAN = float('nan')
+
+
+# --------------------------------------------------------------------------- bag layout
+
+@dataclass
+class BagFiles:
+    """Where a bag's data is: MCAP files in order, plus metadata.yaml contents if present."""
+
+    path: Path
+    files: list[Path]
+    metadata: dict[str, Any] | None = None
+
+    @property
+    def name(self) -> str:
+        """Display name for messages."""
+        return str(self.path)
+
+
+def locate(path: str | Path) -> BagFiles:
+    """Resolve a bag directory, a bag directory without metadata.yaml, or a bare .mcap."""
+    p = Path(path)
+    if not p.exists():
+        raise BagError(f'bag {str(p)!r} does not exist')
+    if p.is_file():
+        return BagFiles(p, [p])
+    meta_path = p / 'metadata.yaml'
+    if meta_path.is_file():
+        info = _load_metadata(meta_path)
+        storage = info.get('storage_identifier', 'mcap')
+        if storage != 'mcap':
+            raise BagError(f'{meta_path}: storage_identifier {storage!r} is not supported; '
+                           f'expected mcap')
+        rel = info.get('relative_file_paths') or []
+        files = [p / str(f) for f in rel if (p / str(f)).is_file()]
+        if not files:
+            files = sorted(p.glob('*.mcap'))
+        if not files:
+            raise BagError(f'{meta_path}: none of the files {rel} exist in {str(p)!r}')
+        return BagFiles(p, files, info)
+    files = sorted(p.glob('*.mcap'))
+    if not files:
+        raise BagError(f'bag directory {str(p)!r} holds neither metadata.yaml nor an .mcap file')
+    return BagFiles(p, files)
+
+
+def _load_metadata(meta_path: Path) -> dict[str, Any]:
+    try:
+        doc = yaml.safe_load(meta_path.read_text(encoding='utf-8'))
+        info = doc['rosbag2_bagfile_information']
+        if not isinstance(info, dict):
+            raise TypeError('not a mapping')
+    except (OSError, yaml.YAMLError, KeyError, TypeError, UnicodeDecodeError) as exc:
+        raise BagError(f'{meta_path}: not a rosbag2 metadata.yaml '
+                       f'(expected key rosbag2_bagfile_information): {type(exc).__name__}') from None
+    return info
+
+
+def _metadata_counts(meta: dict[str, Any] | None) -> dict[str, int]:
+    out: dict[str, int] = {}
+    try:
+        for entry in (meta or {}).get('topics_with_message_count') or []:
+            out[str(entry['topic_metadata']['name'])] = int(entry['message_count'])
+    except (KeyError, TypeError, ValueError):
+        return {}
+    return out
+
+
+# --------------------------------------------------------------------------- accumulation
+
+class _Blocks:
+    """Rows appended in Python batches, stored as numpy blocks (bounded memory)."""
+
+    def __init__(self, width: int) -> None:
+        self.width = width
+        self.rows: list[tuple[float, ...]] = []
+        self.stamps: list[int] = []
+        self.logs: list[int] = []
+        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+
+    def add(self, stamp: int, log: int, row: tuple[float, ...]) -> None:
+        self.rows.append(row)
+        self.stamps.append(stamp)
+        self.logs.append(log)
+        if len(self.rows) >= _BLOCK:
+            self._seal()
+
+    def _seal(self) -> None:
+        if self.rows:
+            vals = np.array(self.rows, dtype=float).reshape(len(self.rows), self.width)
+            self.blocks.append((np.array(self.stamps, dtype=np.int64),
+                                np.array(self.logs, dtype=np.int64), vals))
+            self.rows, self.stamps, self.logs = [], [], []
+
+    def __len__(self) -> int:
+        return sum(b[0].size for b in self.blocks) + len(self.rows)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        self._seal()
+        if not self.blocks:
+            return (np.empty(0, np.int64), np.empty(0, np.int64), np.empty((0, self.width)))
+        out = tuple(np.concatenate([b[i] for b in self.blocks]) for i in range(3))
+        self.blocks = []
+        return out  # type: ignore[return-value]
+
+
+class _JointTable:
+    """Maps JointState messages (any joint order, missing joints/interfaces) onto columns."""
+
+    def __init__(self, joints: list[str] | None, fields: tuple[int, ...]) -> None:
+        self.joints = joints
+        self.fields = fields  # which of (position, velocity, effort) to keep
+        self.getters: dict[tuple[str, ...], Callable[[tuple[float, ...]], tuple[float, ...]]] = {}
+        self.data: _Blocks | None = None
+        self.pending: list[tuple[int, int, tuple[str, ...], tuple[tuple[float, ...], ...]]] = []
+        self.missing_joint_msgs = 0
+
+    def select(self, joints: list[str]) -> None:
+        self.joints = joints
+        self.data = _Blocks(len(joints) * len(self.fields))
+        for args in self.pending:
+            self.add(*args)
+        self.pending = []
+
+    def _getter(self, names: tuple[str, ...]) -> Callable[[tuple[float, ...]], tuple[float, ...]]:
+        assert self.joints is not None
+        pos = {n: i for i, n in enumerate(names)}
+        idx = [pos.get(j, len(names)) for j in self.joints]  # len(names) -> appended NaN
+        if len(idx) == 1:
+            i0 = idx[0]
+            return lambda v: (v[i0],)
+        return itemgetter(*idx)
+
+    def add(self, stamp: int, log: int, names: tuple[str, ...],
+            arrays: tuple[tuple[float, ...], ...], where: str = '') -> None:
+        if self.data is None:
+            self.pending.append((stamp, log, names, arrays))
+            return
+        get = self.getters.get(names)
+        if get is None:
+            if len(self.getters) > 1024:
+                self.getters.clear()
+            get = self.getters[names] = self._getter(names)
+        n = len(names)
+        nan_row = (_NAN,) * (n + 1)
+        row: tuple[float, ...] = ()
+        for f in self.fields:
+            vals = arrays[f]
+            if len(vals) == n:
+                row += get(vals + (_NAN,))
+            elif not vals:
+                row += get(nan_row)
+            else:
+                raise BagError(f'{where}: JointState {("position", "velocity", "effort")[f]} has '
+                               f'{len(vals)} values for {n} names at stamp {stamp * 1e-9:.6f} s')
+        self.data.add(stamp, log, row)
+
+
+class _Collector:
+    """Decodes the wanted topics of a scan into tables and events."""
+
+    def __init__(self, bag: BagFiles, topics: BagTopics, joints: list[str] | None) -> None:
+        self.bag = bag
+        self.topics = topics
+        self.expected = {t: ty for t, ty in topics.expected_types().items()
+                         if t != topics.effort_commands}
+        self.js = _JointTable(list(joints) if joints else None, (0, 1, 2))
+        self.exc = _JointTable(None, (1,))
+        if joints:
+            self.js.select(list(joints))
+            self.exc.select(list(joints))
+        self.exc_seen = False
+        self.ref: _Blocks | None = None
+        self.ref_width = -1
+        self.events: list[tuple[int, str]] = []
+        self.js_first_names: tuple[str, ...] | None = None
+        self.checked: set[int] = set()
+        self.dec_js = JointStateDecoder()
+        self.dec_exc = JointStateDecoder()
+
+    def check_channel(self, ch: ChannelInfo) -> None:
+        want = self.expected[ch.topic]
+        if ch.msgtype != want:
+            raise BagError(f'{self.bag.name}: topic {ch.topic} has type {ch.msgtype or "?"}; '
+                           f'expected {want}')
+        if ch.encoding != 'cdr':
+            raise BagError(f'{self.bag.name}: topic {ch.topic} uses message encoding '
+                           f'{ch.encoding!r}; expected cdr')
+        self.checked.add(ch.id)
+
+    def feed(self, ch: ChannelInfo, log: int, data: memoryview) -> None:
+        if ch.id not in self.checked:
+            self.check_channel(ch)
+        t = self.topics
+        try:
+            if ch.topic == t.joint_states:
+                self._joint_state(log, data)
+            elif ch.topic == t.velocity_commands:
+                self._command(log, data)
+            elif ch.topic == t.excitation:
+                stamp, names, arrays = self.dec_exc.decode(data)
+                self.exc_seen = True
+                self.exc.add(stamp, log, names, arrays, f'{self.bag.name}: {ch.topic}')
+            elif ch.topic == t.experiment:
+                self.events.append((log, decode_string(data)))
+        except CdrError as exc:
+            raise BagError(f'{self.bag.name}: malformed {ch.msgtype} on {ch.topic} at log time '
+                           f'{log * 1e-9:.6f} s: {exc}') from None
+
+    def _joint_state(self, log: int, data: memoryview) -> None:
+        stamp, names, arrays = self.dec_js.decode(data)
+        if self.js_first_names is None:
+            self.js_first_names = names
+            if self.js.joints is None:
+                if not names:
+                    raise BagError(f'{self.bag.name}: first {self.topics.joint_states} message '
+                                   f'has no joint names')
+                self.js.select(list(names))
+                self.exc.select(list(names))
+        self.js.add(stamp, log, names, arrays, f'{self.bag.name}: {self.topics.joint_states}')
+
+    def _command(self, log: int, data: memoryview) -> None:
+        vals = decode_float64_array(data)
+        if self.ref is None:
+            self.ref_width = len(vals)
+            self.ref = _Blocks(len(vals))
+        if len(vals) != self.ref_width:
+            raise BagError(f'{self.bag.name}: {self.topics.velocity_commands} data has {len(vals)}'
+                           f' values at log time {log * 1e-9:.6f} s; earlier messages had '
+                           f'{self.ref_width}')
+        self.ref.add(log, log, vals)
+
+
+# --------------------------------------------------------------------------- scanning
+
+def _scan(bag: BagFiles, topics: set[str], progress: bool,
+          sink: Callable[[ChannelInfo, int, memoryview], None]) -> list[ScanStats]:
+    total = sum(f.stat().st_size for f in bag.files)
+    bar_cm: Any = nullcontext(None)
+    if progress:
+        from tqdm import tqdm
+        bar_cm = tqdm(total=total, unit='B', unit_scale=True, desc=bag.path.name)
+    stats = []
+    with bar_cm as bar:
+        for f in bag.files:
+            scanner = McapScanner(f, topics, on_bytes=bar.update if bar is not None else None)
+            try:
+                for ch, log, data in scanner.messages():
+                    sink(ch, log, data)
+            except McapFormatError as exc:
+                raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
+            stats.append(scanner.stats)
+    return stats
+
+
+def _recovery(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str, int]) -> dict[str, Any]:
+    expected = _metadata_counts(bag.metadata)
+    rec: dict[str, Any] = {
+        'complete': all(s.complete for s in stats),
+        'bytes_lost': sum(s.bytes_lost for s in stats),
+        'chunks_lost': sum(s.chunks_lost for s in stats),
+        'problems': [p for s in stats for p in s.problems],
+        'metadata_yaml': bag.metadata is not None,
+    }
+    if expected:
+        lost = {t: expected[t] - read_counts.get(t, 0) for t in expected
+                if expected[t] > read_counts.get(t, 0)}
+        rec['messages_lost'] = sum(lost.values())
+        rec['messages_lost_per_topic'] = lost
+    elif not rec['complete']:
+        rec['messages_lost'] = 'unknown (no summary and no metadata.yaml)'
+    else:
+        rec['messages_lost'] = 0
+    return rec
+
+
+# --------------------------------------------------------------------------- public API
+
+def read_recording(path: str | Path, *, joints: list[str] | None = None,
+                   topics: BagTopics | None = None,
+                   t_range: tuple[float, float] | None = None,
+                   progress: bool = False) -> tuple[Recording, tm.TimingReport]:
+    """Read a bag into a uniformly sampled :class:`Recording` plus its :class:`TimingReport`.
+
+    ``path`` is a rosbag2 directory, a directory holding .mcap files without metadata.yaml,
+    or a bare .mcap file. ``joints`` selects joints by name (default: the names of the first
+    joint state message, in its order). ``t_range`` = (t0, t1) in seconds of the bag clock
+    keeps only that window. Raises :class:`BagError` (one line) for every input problem.
+    """
+    topics = topics or BagTopics()
+    if joints is not None and (isinstance(joints, str) or not joints):
+        raise BagError(f'{joints=}: expected a non-empty list of joint names')
+    if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
+        raise BagError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
+    bag = locate(path)
+    try:
+        return _read(bag, joints, topics, t_range, progress)
+    except BagError:
+        raise
+    except (struct.error, ValueError, KeyError, IndexError, TypeError, UnicodeDecodeError,
+            OverflowError, OSError) as exc:
+        raise BagError(f'{bag.name}: unreadable bag ({type(exc).__name__}: {exc})') from None
+
+
+def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
+          t_range: tuple[float, float] | None,
+          progress: bool) -> tuple[Recording, tm.TimingReport]:
+    col = _Collector(bag, topics, joints)
+    stats = _scan(bag, set(col.expected), progress, col.feed)
+    n_js = len(col.js.data) if col.js.data is not None else len(col.js.pending)
+    read_counts = {topics.joint_states: n_js,
+                   topics.velocity_commands: len(col.ref) if col.ref else 0,
+                   topics.excitation: len(col.exc.data) if col.exc.data else 0,
+                   topics.experiment: len(col.events)}
+    recovery = _recovery(bag, stats, read_counts)
+    if col.js.data is None or n_js == 0:
+        present = sorted({t for s in stats for t in s.topics})
+        raise BagError(f'{bag.name}: no messages on {topics.joint_states} (expected '
+                       f'{JOINT_STATE}; topics present: {present or "none"}){_lost_hint(recovery)}')
+    meta, segments, warnings = _experiment(col.events, bag, topics)
+    return _assemble(bag, col, topics, meta, segments, warnings, recovery, t_range)
+
+
+def _lost_hint(recovery: dict[str, Any]) -> str:
+    if recovery.get('bytes_lost'):
+        return f'; {recovery["bytes_lost"]} bytes of the file were unreadable'
+    return ''
+
+
+def _experiment(events: list[tuple[int, str]], bag: BagFiles,
+                topics: BagTopics) -> tuple[dict[str, Any], list[Segment], list[str]]:
+    """recording_meta and segments (start/end events paired) from /frf/experiment."""
+    meta: dict[str, Any] = {}
+    segs: dict[str, Segment] = {}
+    started: set[str] = set()
+    for log, text in sorted(events, key=lambda e: e[0]):
+        try:
+            d = json.loads(text)
+            if not isinstance(d, dict):
+                raise TypeError('not a JSON object')
+            if d.get('event') == 'recording_meta':
+                d.pop('event')
+                meta.update(d)
+                continue
+            key = json.dumps({k: v for k, v in d.items() if k != 'event'}, sort_keys=True)
+            event, seg = Segment.from_descriptor(text)
+        except (ValueError, TypeError, KeyError) as exc:
+            raise BagError(f'{bag.name}: {topics.experiment} message at {log * 1e-9:.6f} s is '
+                           f'not a segment descriptor (JSON with t_start, t_end): {exc}') from None
+        segs.setdefault(key, seg)
+        if event == 'start':
+            started.add(key)
+    warnings = [f'segment {s.t_start:.3f}..{s.t_end:.3f} s has an end event but no start event'
+                for k, s in segs.items() if k not in started]
+    return meta, list(segs.values()), warnings
+
+
+# --------------------------------------------------------------------------- assembly
+
+def _stamp_source(ns: np.ndarray) -> str:
+    return 'header' if tm.valid_header_stamps(ns) else 'log'
+
+
+def _window(ns: np.ndarray, t_range: tuple[float, float] | None) -> np.ndarray:
+    if t_range is None:
+        return np.ones(ns.size, dtype=bool)
+    lo, hi = (int(round(x * 1e9)) for x in t_range)
+    return (ns >= lo) & (ns <= hi)
+
+
+def _assemble(bag: BagFiles, col: _Collector, topics: BagTopics, meta: dict[str, Any],
+              segments: list[Segment], warnings: list[str], recovery: dict[str, Any],
+              t_range: tuple[float, float] | None) -> tuple[Recording, tm.TimingReport]:
+    assert col.js.data is not None and col.js.joints is not None
+    joint_names = list(col.js.joints)
+    frf = meta.pop(FRF_BAG_KEY, None)
+    stamps, logs, vals = col.js.data.arrays()
+    src = _stamp_source(stamps)
+    if src == 'log':
+        warnings.append(f'{topics.joint_states} header stamps are unset; using log time')
+        stamps = logs
+    sel = _window(stamps, t_range)
+    if not np.any(sel):
+        raise BagError(f'{bag.name}: no {topics.joint_states} samples in {t_range=} '
+                       f'(bag covers {stamps.min() * 1e-9:.3f}..{stamps.max() * 1e-9:.3f} s)')
+    stamps, logs, vals = stamps[sel], logs[sel], vals[sel]
+    nj = len(joint_names)
+    _check_joints(bag, topics, joint_names, vals, col)
+    st = tm.analyse(topics.joint_states, stamps, logs, src)
+    exact_t = _frf_grid(frf, st)
+    exact = exact_t is not None or tm.on_exact_grid(st)
+    if not exact:
+        tm.check_resampling(st, bag.name)
+    k_last = int(st.k[-1])
+    grid_ns = st.ns[0] + np.arange(k_last + 1) * st.dt_ns  # float ns
+    t = exact_t if exact_t is not None else grid_ns * 1e-9
+    values = vals[st.order]
+    _check_finite(bag, topics, joint_names, values, st.ns)
+    if exact:
+        cols = values
+    else:
+        x = (st.ns - st.ns[0]).astype(float)
+        xg = grid_ns - st.ns[0]
+        cols = np.column_stack([np.interp(xg, x, values[:, j]) for j in range(values.shape[1])])
+    report = tm.TimingReport(dt_s=st.dt_ns * 1e-9, n_samples=int(t.size), t_start_s=float(t[0]),
+                             t_end_s=float(t[-1]), resampled=not exact,
+                             grid='exact' if exact else 'resampled',
+                             topics={topics.joint_states: st.timing}, recovery=recovery,
+                             warnings=warnings)
+    per_sample = bool(frf and frf.get('reference') == 'per_sample' and exact_t is not None)
+    reference = _reference(bag, col, topics, joint_names, frf, grid_ns, st, per_sample, report)
+    excitation = _excitation(bag, col, topics, grid_ns, st, per_sample, report, t_range)
+    if reference is None and excitation is not None:
+        reference = excitation.copy()
+    _rate_warnings(report, topics.joint_states)
+    if t_range is not None:
+        segments = [s for s in segments if s.t_end >= t[0] and s.t_start <= t[-1]]
+    rec = Recording(t=t, joint_names=joint_names, position=cols[:, 0:nj],
+                    velocity=cols[:, nj:2 * nj], effort=cols[:, 2 * nj:3 * nj],
+                    reference=reference, excitation=excitation, segments=segments, meta=meta)
+    return rec, report
+
+
+def _frf_grid(frf: Any, st: tm.Stamps) -> np.ndarray | None:
+    """The writer's exact float time grid, if the bag's stamps are exactly on it."""
+    if not isinstance(frf, dict) or not isinstance(frf.get('time'), dict):
+        return None
+    try:
+        t_all = grid_times(frf['time'], int(frf['n']))
+    except (TypeError, ValueError, KeyError, OverflowError):
+        return None
+    if t_all.size == 0 or not np.all(np.isfinite(t_all)) or t_all[0] < 0:
+        return None
+    ns_all = np.round(t_all * 1e9).astype(np.int64)
+    i0 = int(np.searchsorted(ns_all, st.ns[0]))
+    i1 = i0 + st.ns.size
+    if i1 > t_all.size or not np.array_equal(ns_all[i0:i1], st.ns):
+        return None
+    return t_all[i0:i1]
+
+
+def _check_joints(bag: BagFiles, topics: BagTopics, joint_names: list[str], vals: np.ndarray,
+                  col: _Collector) -> None:
+    """A selected joint that no message carries is an error naming what is there."""
+    nj = len(joint_names)
+    seen = set(col.js_first_names or ()) | {n for names in col.js.getters for n in names}
+    for j, name in enumerate(joint_names):
+        if name not in seen:
+            raise BagError(f'{bag.name}: joint {name!r} not found in {topics.joint_states} '
+                           f'(joints present: {sorted(seen)})')
+        if np.all(np.isnan(vals[:, [j, nj + j, 2 * nj + j]])):
+            raise BagError(f'{bag.name}: joint {name!r} has no values in {topics.joint_states}')
+
+
+def _check_finite(bag: BagFiles, topics: BagTopics, joint_names: list[str], values: np.ndarray,
+                  ns: np.ndarray) -> None:
+    """inf anywhere, or NaN in part of a column, is an error; a column all NaN is a missing
+    interface (ros2_control convention) and stays NaN."""
+    nj = len(joint_names)
+    bad = ~np.isfinite(values)
+    if not bad.any():
+        return
+    for c in np.flatnonzero(bad.any(axis=0)):
+        col = values[:, c]
+        if np.all(np.isnan(col)):
+            continue
+        i = int(np.flatnonzero(~np.isfinite(col))[0])
+        field_name = ('position', 'velocity', 'effort')[c // nj]
+        raise BagError(f'{bag.name}: {topics.joint_states} {field_name}[{joint_names[c % nj]}] '
+                       f'is {col[i]} at t={ns[i] * 1e-9:.6f} s '
+                       f'({int(np.count_nonzero(~np.isfinite(col)))} non-finite values); '
+                       f'expected finite values')
+
+
+def _hold(c_ns: np.ndarray, c_vals: np.ndarray, grid_ns: np.ndarray,
+          hold_ns: float) -> np.ndarray:
+    """Zero-order hold of (c_ns, c_vals) onto grid_ns, NaN before the first value and where
+    the last value is older than ``hold_ns``."""
+    idx = np.searchsorted(c_ns, grid_ns, side='right') - 1
+    out = np.full((grid_ns.size, c_vals.shape[1]), np.nan)
+    ok = idx >= 0
+    ok[ok] = grid_ns[ok] - c_ns[idx[ok]] <= hold_ns
+    out[ok] = c_vals[idx[ok]]
+    return out
+
+
+def _exact_match(c_ns: np.ndarray, c_vals: np.ndarray, st: tm.Stamps, n: int) -> np.ndarray:
+    """Values at exactly the sample stamps (NaN where none was published)."""
+    out = np.full((n, c_vals.shape[1]), np.nan)
+    pos = np.searchsorted(st.ns, c_ns)
+    ok = pos < st.ns.size
+    ok[ok] = st.ns[pos[ok]] == c_ns[ok]
+    out[st.k[pos[ok]]] = c_vals[ok]
+    return out
+
+
+def _ref_columns(bag: BagFiles, col: _Collector, topics: BagTopics, joint_names: list[str],
+                 frf: Any) -> list[int]:
+    """Column of each selected joint in the command arrays (controller joint order)."""
+    order = list(frf.get('joint_names') or []) if isinstance(frf, dict) else []
+    if len(order) != col.ref_width:
+        order = list(col.js_first_names or [])
+    if len(order) != col.ref_width:
+        raise BagError(f'{bag.name}: {topics.velocity_commands} has {col.ref_width} values per '
+                       f'message but {topics.joint_states} names {len(order)} joints; cannot map '
+                       f'commands to joints')
+    return [order.index(j) for j in joint_names]
+
+
+def _reference(bag: BagFiles, col: _Collector, topics: BagTopics, joint_names: list[str],
+               frf: Any, grid_ns: np.ndarray, st: tm.Stamps, per_sample: bool,
+               report: tm.TimingReport) -> np.ndarray | None:
+    if col.ref is None or len(col.ref) == 0:
+        return None
+    ns, _, vals = col.ref.arrays()
+    if np.any(np.isinf(vals)):
+        raise BagError(f'{bag.name}: {topics.velocity_commands} data holds inf; expected finite '
+                       f'velocity commands')
+    vals = vals[:, _ref_columns(bag, col, topics, joint_names, frf)]
+    cst = tm.analyse(topics.velocity_commands, ns, ns, 'log', None)
+    report.topics[topics.velocity_commands] = cst.timing
+    v = vals[cst.order]
+    if per_sample:
+        return _exact_match(cst.ns, v, st, grid_ns.size)
+    hold = 3.0 * max(st.dt_ns, cst.dt_ns if cst.ns.size > 1 else 0.0)
+    return _hold(cst.ns.astype(float), v, grid_ns, hold)
+
+
+def _excitation(bag: BagFiles, col: _Collector, topics: BagTopics, grid_ns: np.ndarray,
+                st: tm.Stamps, per_sample: bool, report: tm.TimingReport,
+                t_range: tuple[float, float] | None) -> np.ndarray | None:
+    if col.exc.data is None or len(col.exc.data) == 0:
+        return None
+    ns, logs, vals = col.exc.data.arrays()
+    src = _stamp_source(ns)
+    if src == 'log':
+        ns = logs
+    if np.any(np.isinf(vals)):
+        raise BagError(f'{bag.name}: {topics.excitation} velocity holds inf; expected finite '
+                       f'values')
+    xst = tm.analyse(topics.excitation, ns, logs, src, None)
+    report.topics[topics.excitation] = xst.timing
+    v = vals[xst.order]
+    if per_sample:
+        return _exact_match(xst.ns, v, st, grid_ns.size)
+    hold = 3.0 * max(st.dt_ns, xst.dt_ns if xst.ns.size > 1 else 0.0)
+    return _hold(xst.ns.astype(float), v, grid_ns, hold)
+
+
+def _rate_warnings(report: tm.TimingReport, master: str) -> None:
+    base = report.topics[master].rate_hz
+    for name, tt in report.topics.items():
+        if name != master and tt.count > 1 and math.isfinite(tt.rate_hz) and \
+                abs(tt.rate_hz / base - 1.0) > 0.01:
+            report.warnings.append(f'{name} runs at {tt.rate_hz:.3f} Hz, {master} at '
+                                   f'{base:.3f} Hz (unequal rates; zero-order hold applied)')
+
+
+# --------------------------------------------------------------------------- bag_info
+
+def bag_info(path: str | Path) -> dict[str, Any]:
+    """Topics, types, message counts, start and duration of a bag (like ``ros2 bag info``).
+
+    Uses metadata.yaml when present, else the MCAP summary, else scans the file (then also
+    reporting what could not be read).
+    """
+    bag = locate(path)
+    if bag.metadata is not None:
+        return _info_from_metadata(bag)
+    topics: dict[str, dict[str, Any]] = {}
+    t0, t1, complete, lost = None, None, True, 0
+    for f in bag.files:
+        summ = read_summary(f)
+        if summ is not None:
+            chans, counts, s0, s1 = summ
+            for cid, ch in chans.items():
+                _add_topic(topics, ch.topic, ch.msgtype, counts.get(cid, 0))
+            if counts:
+                t0 = s0 if t0 is None else min(t0, s0)
+                t1 = s1 if t1 is None else max(t1, s1)
+            continue
+        scanner = McapScanner(f)
+        try:
+            for ch, log, _ in scanner.messages():
+                _add_topic(topics, ch.topic, ch.msgtype, 1)
+                t0 = log if t0 is None else min(t0, log)
+                t1 = log if t1 is None else max(t1, log)
+        except McapFormatError as exc:
+            raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
+        complete &= scanner.stats.complete
+        lost += scanner.stats.bytes_lost
+    return _info_dict(bag, topics, t0 or 0, t1 or 0, complete, lost)
+
+
+def _add_topic(topics: dict[str, dict[str, Any]], name: str, msgtype: str, n: int) -> None:
+    entry = topics.setdefault(name, {'name': name, 'type': msgtype, 'count': 0})
+    entry['count'] += n
+
+
+def _info_dict(bag: BagFiles, topics: dict[str, dict[str, Any]], t0: int, t1: int,
+               complete: bool, lost: int) -> dict[str, Any]:
+    return {'path': bag.name, 'files': [str(f) for f in bag.files], 'storage': 'mcap',
+            'metadata_yaml': bag.metadata is not None,
+            'message_count': sum(t['count'] for t in topics.values()),
+            'start_s': t0 * 1e-9, 'end_s': t1 * 1e-9, 'duration_s': (t1 - t0) * 1e-9,
+            'topics': sorted(topics.values(), key=lambda t: t['name']),
+            'complete': complete, 'bytes_lost': lost}
+
+
+def _info_from_metadata(bag: BagFiles) -> dict[str, Any]:
+    m = bag.metadata or {}
+    try:
+        t0 = int(m['starting_time']['nanoseconds_since_epoch'])
+        dur = int(m['duration']['nanoseconds'])
+        topics = {}
+        for e in m.get('topics_with_message_count') or []:
+            tmeta = e['topic_metadata']
+            topics[tmeta['name']] = {'name': tmeta['name'], 'type': tmeta['type'],
+                                     'count': int(e['message_count'])}
+    except (KeyError, TypeError, ValueError) as exc:
+        raise BagError(f'{bag.path / "metadata.yaml"}: missing or malformed key {exc}') from None
+    d = _info_dict(bag, topics, t0, t0 + dur, True, 0)
+    d['version'] = m.get('version')
+    d['storage'] = m.get('storage_identifier')
+    return d
+
+
+# --------------------------------------------------------------------------- repair
+
+def reindex(path: str | Path, out: str | Path) -> Path:
+    """Rewrite a damaged or unfinished bag as a complete one at ``out`` (all readable messages,
+    summary, footer and metadata.yaml), like ``ros2 bag reindex`` plus recovery."""
+    from .writer import BagRecorder
+
+    bag = locate(path)
+    rec = BagRecorder(chunk_bytes=1 << 20, flush_period_s=1e9)
+    rec.open(out)
+    try:
+        def copy(ch: ChannelInfo, log: int, data: memoryview) -> None:
+            rec.write(ch.topic, ch.msgtype, log, bytes(data))
+        _scan(bag, None, False, copy)  # type: ignore[arg-type]
+    finally:
+        rec.close()
+    return Path(out)
+
+
+def iter_raw(path: str | Path, topics: set[str] | None = None) -> Iterator[tuple[str, str, int,
+                                                                                 bytes]]:
+    """(topic, type, log_time_ns, cdr) of every readable message, streaming."""
+    bag = locate(path)
+    for f in bag.files:
+        scanner = McapScanner(f, topics)
+        try:
+            for ch, log, data in scanner.messages():
+                yield ch.topic, ch.msgtype, log, bytes(data)
+        except McapFormatError as exc:
+            raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
+
+
+__all__ = ['BagFiles', 'bag_info', 'iter_raw', 'locate', 'read_recording', 'reindex']

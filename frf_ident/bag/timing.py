@@ -1,0 +1,203 @@
+"""Timing analysis of recorded topics and the rules for resampling onto a uniform grid.
+
+Robots do not sample perfectly: header stamps jitter, messages get dropped or duplicated,
+arrive out of order, and the receive (log) time lags the header stamp. This module measures
+all of that per topic and decides whether the joint states may be resampled:
+
+- header stamps are used when valid (at most one zero stamp, not all equal), else log time;
+- messages are sorted by stamp (``non_monotonic`` counts the reversals in file order) and
+  exact duplicate stamps are dropped (first kept);
+- the sample period ``dt`` comes from a least-squares fit of stamps to sample indices
+  ``k = round((s - s0) / median(diff(s)))``; a gap is a step of k by more than one;
+- ``jitter`` = std of the intervals between consecutive (non-gap) samples relative to dt;
+- resampling (linear interpolation of joint states, zero-order hold of references) is
+  applied only if jitter < 5 % of dt and every gap is <= 3 missing samples, otherwise
+  :class:`~frf_ident.errors.BagError` explains which rule failed where.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from frf_ident.errors import BagError
+
+MAX_JITTER = 0.05
+MAX_GAP_SAMPLES = 3
+
+
+@dataclass
+class TopicTiming:
+    """Timing findings of one topic."""
+
+    topic: str
+    count: int
+    stamp_source: str = 'header'  # 'header' | 'log'
+    dt_s: float = float('nan')
+    rate_hz: float = float('nan')
+    jitter: float = 0.0  # std(interval) / dt over non-gap intervals
+    stamp_jitter: float = 0.0  # std(stamp - grid) / dt
+    gaps: int = 0
+    missing_samples: int = 0
+    longest_gap_samples: int = 0
+    longest_gap_at_s: float | None = None
+    duplicates: int = 0
+    non_monotonic: int = 0
+    header_log_offset_mean_s: float | None = None
+    header_log_offset_std_s: float | None = None
+    header_log_offset_max_s: float | None = None
+
+    def line(self) -> str:
+        """One human-readable line."""
+        txt = (f'{self.topic}: {self.count} msgs, {self.rate_hz:.3f} Hz ({self.stamp_source} '
+               f'stamps), jitter {100 * self.jitter:.2f} % of dt')
+        if self.gaps:
+            txt += (f', {self.gaps} gaps / {self.missing_samples} missing samples (longest '
+                    f'{self.longest_gap_samples} at t={self.longest_gap_at_s:.3f} s)')
+        if self.duplicates:
+            txt += f', {self.duplicates} duplicate stamps'
+        if self.non_monotonic:
+            txt += f', {self.non_monotonic} non-monotonic stamps'
+        if self.header_log_offset_mean_s is not None:
+            txt += (f', log-header offset {1e3 * self.header_log_offset_mean_s:.3f} '
+                    f'+- {1e3 * (self.header_log_offset_std_s or 0.0):.3f} ms')
+        return txt
+
+
+@dataclass
+class TimingReport:
+    """Everything read_recording found about timing and data loss."""
+
+    dt_s: float
+    n_samples: int
+    t_start_s: float
+    t_end_s: float
+    resampled: bool
+    grid: str  # 'exact' | 'resampled'
+    topics: dict[str, TopicTiming] = field(default_factory=dict)
+    recovery: dict[str, Any] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    def summary(self) -> list[str]:
+        """Human-readable lines (for logs and reports)."""
+        lines = [f'{self.n_samples} samples at {1.0 / self.dt_s:.3f} Hz, '
+                 f't = {self.t_start_s:.3f} .. {self.t_end_s:.3f} s, grid: {self.grid}'
+                 + (' (resampled)' if self.resampled else '')]
+        lines += [t.line() for t in self.topics.values()]
+        if self.recovery.get('bytes_lost') or not self.recovery.get('complete', True):
+            r = self.recovery
+            lines.append(f'recovered a damaged/unfinished bag: {r.get("bytes_lost", 0)} bytes '
+                         f'lost, {r.get("chunks_lost", 0)} chunks lost, messages lost: '
+                         f'{r.get("messages_lost", "unknown")}')
+        lines += [f'warning: {w}' for w in self.warnings]
+        return lines
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-serialisable form."""
+        d = asdict(self)
+        d['topics'] = {k: asdict(v) for k, v in self.topics.items()}
+        return d
+
+
+@dataclass
+class Stamps:
+    """Cleaned (sorted, de-duplicated) stamps of a topic and their sample indices."""
+
+    ns: np.ndarray  # int64, sorted, unique
+    order: np.ndarray  # indices into the raw (file-order) arrays
+    k: np.ndarray  # int64 sample index of each stamp relative to ns[0]
+    dt_ns: float
+    timing: TopicTiming
+
+
+def valid_header_stamps(ns: np.ndarray) -> bool:
+    """Header stamps are usable unless several are zero (unset) or all are equal.
+
+    One zero stamp is allowed: a simulation's first sample is stamped t = 0.
+    """
+    if ns.size == 0 or np.count_nonzero(ns <= 0) > 1:
+        return False
+    return ns.size == 1 or bool(np.ptp(ns) > 0)
+
+
+def analyse(topic: str, stamps: np.ndarray, log: np.ndarray, source: str,
+            dt_hint_ns: float | None = None) -> Stamps:
+    """Sort/deduplicate ``stamps`` (int64 ns, file order) and measure the topic's timing."""
+    tt = TopicTiming(topic=topic, count=int(stamps.size), stamp_source=source)
+    tt.non_monotonic = int(np.count_nonzero(np.diff(stamps) < 0))
+    order = np.argsort(stamps, kind='stable')
+    s = stamps[order]
+    keep = np.ones(s.size, dtype=bool)
+    keep[1:] = np.diff(s) != 0
+    tt.duplicates = int(s.size - np.count_nonzero(keep))
+    s, order = s[keep], order[keep]
+    if source == 'header' and log.size == stamps.size:
+        off = (log[order] - s).astype(float) * 1e-9
+        tt.header_log_offset_mean_s = float(off.mean())
+        tt.header_log_offset_std_s = float(off.std())
+        tt.header_log_offset_max_s = float(np.abs(off).max())
+    if s.size < 2:
+        dt = float(dt_hint_ns or 1e6)
+        return Stamps(s, order, np.zeros(s.size, dtype=np.int64), dt, tt)
+    dt, k = _fit_period(s, dt_hint_ns)
+    _measure(tt, s, k, dt)
+    return Stamps(s, order, k, dt, tt)
+
+
+def _fit_period(s: np.ndarray, dt_hint_ns: float | None) -> tuple[float, np.ndarray]:
+    rel = (s - s[0]).astype(float)
+    dt0 = float(dt_hint_ns or np.median(np.diff(rel)))
+    k = np.round(rel / dt0).astype(np.int64)
+    if dt_hint_ns is None and k[-1] > 0:
+        kc = k - k.mean()
+        dt = float(np.dot(kc, rel - rel.mean()) / np.dot(kc, kc))
+        k = np.round(rel / dt).astype(np.int64)
+    else:
+        dt = dt0
+    return dt, k
+
+
+def _measure(tt: TopicTiming, s: np.ndarray, k: np.ndarray, dt: float) -> None:
+    tt.dt_s = dt * 1e-9
+    tt.rate_hz = 1e9 / dt
+    dk = np.diff(k)
+    step = np.diff(s).astype(float)
+    regular = step[dk == 1]
+    tt.jitter = float(regular.std() / dt) if regular.size > 1 else 0.0
+    resid = (s - s[0]).astype(float) - k * dt
+    tt.stamp_jitter = float(resid.std() / dt)
+    gap = dk > 1
+    if np.any(gap):
+        miss = dk[gap] - 1
+        tt.gaps = int(gap.sum())
+        tt.missing_samples = int(miss.sum())
+        i = int(np.flatnonzero(gap)[np.argmax(miss)])
+        tt.longest_gap_samples = int(dk[i] - 1)
+        tt.longest_gap_at_s = float(s[i] * 1e-9)
+    # two stamps mapped onto one sample index: irregular beyond half a period
+    tt.jitter = max(tt.jitter, float(np.count_nonzero(dk == 0)) / max(dk.size, 1))
+
+
+def check_resampling(st: Stamps, where: str) -> None:
+    """Raise BagError when the stamps of ``st`` violate the resampling rules."""
+    tt = st.timing
+    if tt.jitter >= MAX_JITTER:
+        raise BagError(f'stamp jitter of {100 * tt.jitter:.1f} % of dt ({tt.dt_s * 1e3:.3f} ms) '
+                       f'in {tt.topic} of {where} exceeds {100 * MAX_JITTER:.0f} %; refusing to '
+                       f'resample')
+    if tt.longest_gap_samples > MAX_GAP_SAMPLES:
+        n = tt.longest_gap_samples
+        raise BagError(f'gap of {n * tt.dt_s:.3f} s ({n} samples) at t={tt.longest_gap_at_s:.3f} '
+                       f's in {tt.topic} of {where} exceeds {MAX_GAP_SAMPLES} samples; refusing '
+                       f'to resample (pass t_range to read around it)')
+
+
+def on_exact_grid(st: Stamps) -> bool:
+    """True if the stamps are gap-free and within 1 ns of s0 + k * dt."""
+    if st.ns.size < 2:
+        return True
+    if np.any(np.diff(st.k) != 1):
+        return False
+    resid = (st.ns - st.ns[0]).astype(float) - st.k * st.dt_ns
+    return bool(np.max(np.abs(resid)) <= 1.0)
