@@ -1,0 +1,241 @@
+"""Non-parametric FRF estimation (Saupe & Knoblach 2015, Sections 3, 4.3 and 5.1).
+
+- :func:`frf_from_spectra` — eq. 7, P(w_k) = Y(w_k) U(w_k)^+ per line, with cond(U)
+- :func:`frf_from_reference` — closed-loop estimate P = (Y R^H)(U R^H)^-1 that uses the
+  reference r, so output noise fed back through the controller does not bias P
+- :func:`periodic_spectra` — DFT of whole periods at given bins (no leakage)
+- :func:`best_linear_approximation` — eq. 14 over n_p realisations x n_q periods, with the
+  noise variance (from periods) and total / nonlinear variance (from realisations)
+- :func:`detection_line_levels` — output levels at non-excited odd and even lines
+- :func:`chirp_excerpt_dft` — Sec. 5.1 processing of one analysis frequency
+- :func:`chirp_spectra` — Sec. 5.1 for all analysis frequencies and channels
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import signal
+
+from frf_ident.errors import EstimationError
+
+
+def frf_from_spectra(Y: np.ndarray, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """FRF P(w_k) = Y(w_k) U(w_k)^+ on every line (eq. 7).
+
+    Parameters
+    ----------
+    Y : (n_freq, n_y, n_ex) output spectra, experiments stacked as columns.
+    U : (n_freq, n_u, n_ex) input spectra.
+
+    Returns
+    -------
+    P : (n_y, n_u, n_freq) and cond : (n_freq,) condition number of U(w_k).
+    """
+    Y = np.asarray(Y, dtype=complex)
+    U = np.asarray(U, dtype=complex)
+    if Y.ndim != 3 or U.ndim != 3 or Y.shape[0] != U.shape[0] or Y.shape[2] != U.shape[2]:
+        raise EstimationError(f'spectra shapes {Y.shape=} {U.shape=} must be '
+                              f'(n_freq, n_y, n_ex) and (n_freq, n_u, n_ex)')
+    n_u, n_ex = U.shape[1], U.shape[2]
+    if n_ex < n_u:
+        raise EstimationError(f'{n_ex=} experiments cannot identify {n_u=} inputs (eq. 7 needs '
+                              f'n_ex >= n_u)')
+    sv = np.linalg.svd(U, compute_uv=False)
+    cond = sv[:, 0] / np.maximum(sv[:, -1], 1e-300)
+    P = Y @ np.linalg.pinv(U)
+    return np.moveaxis(P, 0, -1), cond
+
+
+def frf_from_reference(Y: np.ndarray, U: np.ndarray, R: np.ndarray) -> tuple[np.ndarray,
+                                                                              np.ndarray]:
+    """Closed-loop FRF through the reference: P = (Y R^H)(U R^H)^-1 per line.
+
+    Equivalent to P = S_yr S_ur^-1 (indirect / joint input-output method): noise that the
+    controller feeds back into u is uncorrelated with r and drops out, while Y U^+ is biased
+    towards -1/K where the output noise dominates.
+
+    Shapes as :func:`frf_from_spectra`, R : (n_freq, n_r, n_ex). Returns (P, cond(U R^H)).
+    """
+    Y = np.asarray(Y, dtype=complex)
+    U = np.asarray(U, dtype=complex)
+    R = np.asarray(R, dtype=complex)
+    RH = np.conj(np.swapaxes(R, 1, 2))
+    Syr = Y @ RH
+    Sur = U @ RH
+    sv = np.linalg.svd(Sur, compute_uv=False)
+    cond = sv[:, 0] / np.maximum(sv[:, -1], 1e-300)
+    P = Syr @ np.linalg.pinv(Sur)
+    return np.moveaxis(P, 0, -1), cond
+
+
+def periodic_spectra(x: np.ndarray, bins: np.ndarray, axis: int = -2) -> np.ndarray:
+    """DFT coefficients of whole periods at the given bins (Sec. 4.2; mean removal is implicit).
+
+    ``x`` holds an integer number of samples per period along ``axis``; the result has that
+    axis replaced by the bins (scaled by 1/N: a sine of amplitude A gives |X| = A/2).
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.shape[axis]
+    X = np.fft.rfft(x, axis=axis) / n
+    return np.take(X, np.asarray(bins), axis=axis)
+
+
+@dataclass
+class BLAResult:
+    """Best linear approximation (eq. 14) with its variances, all (n_y, n_u, n_freq).
+
+    ``noise_variance`` is the variance of the BLA estimate due to noise (from the spread over
+    periods), ``total_variance`` that due to noise plus stochastic nonlinear contributions
+    (from the spread over realisations), ``nonlinear_variance`` their difference (>= 0).
+    ``cond`` (n_p, n_freq) is cond(U) per realisation.
+    """
+
+    response: np.ndarray
+    noise_variance: np.ndarray | None
+    total_variance: np.ndarray | None
+    nonlinear_variance: np.ndarray | None
+    cond: np.ndarray
+    per_realisation: np.ndarray
+
+
+def best_linear_approximation(Y: np.ndarray, U: np.ndarray) -> BLAResult:
+    """Multisine BLA P_l = 1/(n_p n_q) sum_p sum_q P[p,q] (eq. 14) with variances.
+
+    Parameters
+    ----------
+    Y : (n_p, n_q, n_freq, n_y, n_ex) output spectra per realisation p and period q.
+    U : (n_p, n_q, n_freq, n_u, n_ex) input spectra.
+
+    The spectra of each period give P[p,q] by eq. 7. Following Pintelon & Schoukens' robust
+    method, the sample variance over q (n_q >= 2) gives the noise variance and the sample
+    variance over p of the period means (n_p >= 2) the total variance of the estimate.
+    """
+    Y = np.asarray(Y, dtype=complex)
+    U = np.asarray(U, dtype=complex)
+    if Y.ndim != 5 or U.ndim != 5 or Y.shape[:3] != U.shape[:3]:
+        raise EstimationError(f'spectra shapes {Y.shape=} {U.shape=} must be '
+                              f'(n_p, n_q, n_freq, n_y|n_u, n_ex)')
+    n_p, n_q, n_freq = Y.shape[:3]
+    Ppq = np.empty((n_p, n_q, Y.shape[3], U.shape[3], n_freq), dtype=complex)
+    cond = np.empty((n_p, n_freq))
+    for p in range(n_p):
+        for q in range(n_q):
+            Ppq[p, q], c = frf_from_spectra(Y[p, q], U[p, q])
+            cond[p] = np.maximum(cond[p], c) if q else c
+    Pp = Ppq.mean(axis=1)
+    P = Pp.mean(axis=0)
+    noise_var = None
+    if n_q >= 2:
+        var_q = np.sum(np.abs(Ppq - Pp[:, None]) ** 2, axis=1) / (n_q - 1) / n_q
+        noise_var = var_q.sum(axis=0) / n_p ** 2
+    total_var = nl_var = None
+    if n_p >= 2:
+        total_var = np.sum(np.abs(Pp - P) ** 2, axis=0) / (n_p - 1) / n_p
+        if noise_var is not None:
+            nl_var = np.maximum(total_var - noise_var, 0.0)
+    return BLAResult(P, noise_var, total_var, nl_var, cond, Pp)
+
+
+@dataclass
+class DetectionLevels:
+    """Mean output power (per output channel) at excited, non-excited odd and even lines.
+
+    Energy at non-excited odd lines reveals odd nonlinearities (friction, stiffness,
+    saturation), at even lines even ones (asymmetry, gravity-dependent effects); the noise level
+    is the period-to-period variance. All are power spectral levels |Y|^2 averaged over lines
+    and realisations; ``*_db`` relative to the excited level.
+    """
+
+    excited: np.ndarray
+    odd: np.ndarray
+    even: np.ndarray
+    noise: np.ndarray | None
+
+    def to_dict(self) -> dict:
+        ex = np.maximum(self.excited, 1e-300)
+
+        def db(x):
+            return (10 * np.log10(np.maximum(x, 1e-300) / ex)).tolist()
+        d = {'excited_power': self.excited.tolist(), 'odd_db': db(self.odd),
+             'even_db': db(self.even)}
+        if self.noise is not None:
+            d['noise_db'] = db(self.noise)
+        return d
+
+
+def detection_line_levels(y_periods: np.ndarray, excited_bins: np.ndarray,
+                          max_bin: int) -> DetectionLevels:
+    """Levels at excited, non-excited odd and even detection lines (Sec. 4.3 remark).
+
+    ``y_periods`` : (n_p, n_q, N, n_y) output time series, N samples = one period.
+    Lines above ``max_bin`` (the top of the band) are ignored; DC is excluded.
+    """
+    y = np.asarray(y_periods, dtype=float)
+    n_p, n_q, n, n_y = y.shape
+    bins = np.arange(1, min(max_bin, n // 2) + 1)
+    Y = np.fft.rfft(y, axis=2)[:, :, bins, :] / n
+    Ym = Y.mean(axis=1)
+    power = np.mean(np.abs(Ym) ** 2, axis=0)
+    excited = np.isin(bins, excited_bins)
+    odd = (bins % 2 == 1) & ~excited
+    even = bins % 2 == 0
+    noise = None
+    if n_q >= 2:
+        noise = (np.var(Y, axis=1, ddof=1).real / n_q).mean(axis=0).mean(axis=0)
+        noise = np.broadcast_to(noise, (n_y,)).copy()
+
+    def level(mask):
+        return power[mask].mean(axis=0) if np.any(mask) else np.full(n_y, np.nan)
+    return DetectionLevels(level(excited), level(odd), level(even), noise)
+
+
+# --- chirp processing (Section 5.1) -----------------------------------------------------------
+
+def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
+                      n_periods: float = 4.0, samples_per_period: float = 10.0,
+                      t_first: float = 0.0) -> np.ndarray:
+    """One analysis frequency of the Sec. 5.1 chirp processing.
+
+    Takes the excerpt of ``n_periods`` periods of f_x centred on the time ``t_center`` at which
+    f_x is excited, subtracts its mean, low-pass filters and downsamples it to about
+    ``samples_per_period`` samples per period (polyphase FIR, zero phase), applies a Hann window
+    and evaluates the DFT at exactly f_x.
+
+    ``x`` : (N, ...) samples at rate fs, the first at time ``t_first``. Returns (...) complex.
+    """
+    x = np.asarray(x, dtype=float)
+    half = 0.5 * n_periods / f_x
+    i0 = int(round((t_center - half - t_first) * fs))
+    i1 = int(round((t_center + half - t_first) * fs))
+    if i0 < 0 or i1 > x.shape[0]:
+        raise EstimationError(f'excerpt for f_x={f_x:g} Hz around t={t_center:g} s is outside '
+                              f'the record [{t_first:g}, {t_first + x.shape[0] / fs:g}] s')
+    seg = x[i0:i1]
+    seg = seg - seg.mean(axis=0)
+    q = max(1, int(np.floor(fs / (samples_per_period * f_x))))
+    if q > 1:
+        seg = signal.resample_poly(seg, 1, q, axis=0)
+    n = seg.shape[0]
+    t = t_first + i0 / fs + np.arange(n) * (q / fs)
+    w = signal.windows.hann(n, sym=False)
+    kernel = w * np.exp(-2j * np.pi * f_x * (t - t_center))
+    return np.tensordot(kernel, seg, axes=(0, 0)) / np.sum(w)
+
+
+def chirp_analysis_frequencies(f_candidates: np.ndarray, t_of_f, t_start: float,
+                               t_end: float, n_periods: float = 4.0) -> np.ndarray:
+    """Analysis frequencies whose excerpt of ``n_periods`` periods lies inside [t_start, t_end]."""
+    f = np.asarray(f_candidates, dtype=float)
+    tc = t_of_f(f)
+    half = 0.5 * n_periods / f
+    return f[(tc - half >= t_start) & (tc + half <= t_end)]
+
+
+def chirp_spectra(x: np.ndarray, fs: float, freqs: np.ndarray, t_centers: np.ndarray, *,
+                  t_first: float = 0.0, n_periods: float = 4.0,
+                  samples_per_period: float = 10.0) -> np.ndarray:
+    """Sec. 5.1 spectra of all channels: x (N, n_ch) -> (n_freq, n_ch) complex."""
+    return np.stack([chirp_excerpt_dft(x, fs, f, tc, n_periods=n_periods,
+                                       samples_per_period=samples_per_period, t_first=t_first)
+                     for f, tc in zip(freqs, t_centers)])

@@ -1,0 +1,624 @@
+"""Flexible-joint robot plant (Saupe & Knoblach 2015, eqs. 1, 2, 20-22) and its simulation.
+
+Per axis i, motor position q_m, link position q_o, deflection dq = q_m - q_o (eq. 20):
+
+    Jm  ddq_m = tau_m + tau_ripple(q_m) - tau_fc(dq_m) - b_v dq_m - tau_s(dq) - d (dq_m - dq_o)  (eq. 21)
+    M_o ddq_o = tau_s(dq) + d (dq_m - dq_o) - tau_g                                             (eq. 22)
+
+with Coulomb friction tau_fc = Fc sgn(dq_m) (eq. 1), the deflection-dependent spring tau_s of
+eq. 2 (k1 up to the breakpoint bs, k2 beyond), an optional backlash dead zone of total width
+``backlash`` in front of the spring, position-periodic torque ripple
+sum a sin(s q_m + phase), a constant link-side gravity torque, an input delay and a torque limit.
+``M_o`` is the link inertia matrix: diagonal ``link_inertia`` plus optional symmetric coupling,
+which makes the MIMO FRF non-diagonal and reciprocal.
+
+Measurement: motor position, optionally quantised by the encoder resolution; velocity either the
+true motor velocity or, like a real drive, the difference of quantised positions over one sample;
+additive Gaussian noise on velocity and torque. Everything is switchable and seeded.
+
+Integration: classical RK4 for the smooth dynamics with ``substeps`` steps per sample and the
+input evaluated at the RK4 stage times (zero-order hold for a controller, or a finer input grid
+for continuous excitations); Coulomb friction by a set-valued (stick-slip exact) velocity
+projection after each substep. The linear case therefore matches the analytic FRF
+(:mod:`frf_ident.core.analytic`) to RK4 accuracy. The kernels are compiled with numba.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numba
+import numpy as np
+from scipy import linalg
+
+from frf_ident.errors import ModelFileError
+
+# columns of the per-axis parameter matrix used by the kernels
+JM, K1, K2, BS, DAMP, BV, FC, BL, GRAV, ULIM, NPARAM = range(11)
+
+
+@dataclass
+class AxisParams:
+    """Parameters of one flexible joint; keys and units of the model file (CONTRACT section 5).
+
+    Extensions beyond the contract (documented in README): ``gravity_torque`` [N m] constant
+    link-side load, ``encoder_resolution`` [rad/count] (0 = ideal), ``velocity_noise`` [rad/s]
+    and ``torque_noise`` [N m] standard deviations of additive measurement noise.
+    """
+
+    name: str = 'joint_1'
+    motor_inertia: float = 35.0
+    link_inertia: float = 150.0
+    stiffness: float = 1.5e5
+    damping: float = 400.0
+    viscous_friction: float = 0.0
+    coulomb_friction: float = 0.0
+    stiffness_k2: float | None = None
+    stiffness_breakpoint: float | None = None
+    backlash: float = 0.0
+    torque_ripple: list[dict[str, float]] = field(default_factory=list)
+    time_delay: float = 0.0
+    torque_limit: float = 150.0
+    gravity_torque: float = 0.0
+    encoder_resolution: float = 0.0
+    velocity_noise: float = 0.0
+    torque_noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        for key in ('motor_inertia', 'link_inertia', 'stiffness'):
+            val = getattr(self, key)
+            if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
+                raise ModelFileError(f'axis {self.name}: {key}={val!r} must be positive')
+        for key in ('damping', 'viscous_friction', 'coulomb_friction', 'backlash', 'time_delay',
+                    'encoder_resolution', 'velocity_noise', 'torque_noise'):
+            val = getattr(self, key)
+            if not (isinstance(val, (int, float)) and math.isfinite(val) and val >= 0):
+                raise ModelFileError(f'axis {self.name}: {key}={val!r} must be >= 0')
+        if not (self.torque_limit > 0):
+            raise ModelFileError(f'axis {self.name}: torque_limit={self.torque_limit!r} '
+                                 f'must be positive')
+        if (self.stiffness_k2 is None) != (self.stiffness_breakpoint is None):
+            raise ModelFileError(f'axis {self.name}: stiffness_k2 and stiffness_breakpoint '
+                                 f'must both be set or both be null')
+        if self.stiffness_breakpoint is not None and not self.stiffness_breakpoint > 0:
+            raise ModelFileError(f'axis {self.name}: stiffness_breakpoint='
+                                 f'{self.stiffness_breakpoint!r} must be positive')
+        for i, rip in enumerate(self.torque_ripple):
+            missing = {'amplitude', 'spatial_frequency'} - set(rip)
+            if missing:
+                raise ModelFileError(f'axis {self.name}: torque_ripple[{i}] lacks '
+                                     f'{sorted(missing)}')
+
+    @property
+    def is_linear(self) -> bool:
+        return (self.coulomb_friction == 0 and self.backlash == 0 and not self.torque_ripple
+                and (self.stiffness_k2 is None or self.stiffness_k2 == self.stiffness))
+
+
+@dataclass
+class RobotParams:
+    """A multi-axis flexible-joint robot: axes plus optional link-side inertial coupling.
+
+    ``link_coupling`` is an (n, n) symmetric matrix of off-diagonal link inertia terms [kg m^2]
+    (diagonal ignored); the link inertia matrix is diag(link_inertia) + offdiag(link_coupling).
+    """
+
+    axes: list[AxisParams]
+    link_coupling: np.ndarray | None = None
+    sample_rate: float = 1000.0
+    substeps: int = 2
+    velocity_from_encoder: bool = False
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not self.axes:
+            raise ModelFileError('model has no axes')
+        if not (self.sample_rate > 0):
+            raise ModelFileError(f'sample_rate={self.sample_rate!r} must be positive')
+        if int(self.substeps) < 1:
+            raise ModelFileError(f'substeps={self.substeps!r} must be >= 1')
+        n = len(self.axes)
+        if self.link_coupling is not None:
+            c = np.asarray(self.link_coupling, dtype=float)
+            if c.shape != (n, n) or not np.allclose(c, c.T):
+                raise ModelFileError(f'link_coupling must be a symmetric {n}x{n} matrix, '
+                                     f'got shape {c.shape}')
+            self.link_coupling = c
+        if np.any(np.linalg.eigvalsh(self.link_inertia_matrix()) <= 0):
+            raise ModelFileError('link inertia matrix (link_inertia + link_coupling) must be '
+                                 'positive definite')
+
+    @property
+    def n_axes(self) -> int:
+        return len(self.axes)
+
+    @property
+    def dt(self) -> float:
+        return 1.0 / self.sample_rate
+
+    @property
+    def joint_names(self) -> list[str]:
+        return [a.name for a in self.axes]
+
+    def link_inertia_matrix(self) -> np.ndarray:
+        m = np.diag([a.link_inertia for a in self.axes]).astype(float)
+        if self.link_coupling is not None:
+            off = self.link_coupling - np.diag(np.diag(self.link_coupling))
+            m = m + off
+        return m
+
+    def torque_limits(self) -> np.ndarray:
+        return np.array([a.torque_limit for a in self.axes], dtype=float)
+
+    def with_axes(self, **changes: Any) -> 'RobotParams':
+        """Copy with the same attribute changes applied to every axis."""
+        return replace(self, axes=[replace(a, **changes) for a in self.axes])
+
+    def linear(self) -> 'RobotParams':
+        """The linear part: no Coulomb friction, backlash, ripple, nonlinear stiffness."""
+        return self.with_axes(coulomb_friction=0.0, backlash=0.0, torque_ripple=[],
+                              stiffness_k2=None, stiffness_breakpoint=None)
+
+
+# --- packing for the compiled kernels ---------------------------------------------------------
+
+@dataclass
+class _Packed:
+    prm: np.ndarray       # (n, NPARAM)
+    ad: np.ndarray        # (4n, 4n) state transition over one substep
+    ga: np.ndarray        # (4n, n) input matrices for the stage values at start,
+    gm: np.ndarray        #   middle and end of a substep (quadratic interpolation)
+    gb: np.ndarray
+    gw: np.ndarray        # (4n, 2n) residual torques (motor side, link side), held
+    cg: np.ndarray        # (4n,) effect of the constant gravity torque over one substep
+    nonlinear: bool       # any residual torque (nonlinear spring, backlash, ripple)
+    ra: np.ndarray        # (n, R) ripple amplitudes
+    rs: np.ndarray        # (n, R) spatial frequencies
+    rp: np.ndarray        # (n, R) phases
+    offsets: np.ndarray   # (2 m + 1, n) int: sample offset of the command seen at stage j
+    nbuf: int
+    enc: np.ndarray       # (n,) encoder resolution
+    vnoise: np.ndarray    # (n,)
+    tnoise: np.ndarray    # (n,)
+
+
+def _pack(params: RobotParams) -> _Packed:
+    n = params.n_axes
+    prm = np.zeros((n, NPARAM))
+    n_rip = max([len(a.torque_ripple) for a in params.axes] + [1])
+    ra, rs, rp = np.zeros((n, n_rip)), np.zeros((n, n_rip)), np.zeros((n, n_rip))
+    dt, m = params.dt, int(params.substeps)
+    offsets = np.zeros((2 * m + 1, n), dtype=np.int64)
+    for i, a in enumerate(params.axes):
+        prm[i, JM] = a.motor_inertia
+        prm[i, K1] = a.stiffness
+        nonlinear = a.stiffness_k2 is not None and a.stiffness_breakpoint is not None
+        prm[i, K2] = a.stiffness_k2 if nonlinear else a.stiffness
+        prm[i, BS] = a.stiffness_breakpoint if nonlinear else 0.0
+        prm[i, DAMP] = a.damping
+        prm[i, BV] = a.viscous_friction
+        prm[i, FC] = a.coulomb_friction
+        prm[i, BL] = a.backlash
+        prm[i, GRAV] = a.gravity_torque
+        prm[i, ULIM] = a.torque_limit
+        for j, rip in enumerate(a.torque_ripple):
+            ra[i, j] = float(rip['amplitude'])
+            rs[i, j] = float(rip['spatial_frequency'])
+            rp[i, j] = float(rip.get('phase', 0.0))
+        # command applied at stage time tau_j = j h/2 of sample k is u[k + offset]:
+        # the zero-order-held command delayed by time_delay (left limit at the step's end).
+        h2 = dt / (2 * m)
+        for j in range(2 * m + 1):
+            tau = j * h2
+            tau = min(max(tau, 1e-9 * dt), dt * (1 - 1e-9))
+            offsets[j, i] = math.floor((tau - a.time_delay) / dt)
+    nbuf = int(-offsets.min()) + 2
+    ad, ga, gm, gb, gw = _substep_matrices(params, dt / m)
+    nonlinear = bool(np.any(ra != 0) or np.any(prm[:, BL] > 0)
+                     or np.any((prm[:, BS] > 0) & (prm[:, K2] != prm[:, K1])))
+    cg = gw[:, n:] @ (-prm[:, GRAV])
+    return _Packed(prm, ad, ga, gm, gb, gw, cg, nonlinear, ra, rs, rp, offsets, nbuf,
+                   np.array([a.encoder_resolution for a in params.axes]),
+                   np.array([a.velocity_noise for a in params.axes]),
+                   np.array([a.torque_noise for a in params.axes]))
+
+
+def state_space(params: RobotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Linear state space x' = A x + B tau of eqs. 20-22 (k1, d, viscous friction, coupling).
+
+    x = [q_m, v_m, q_o, v_o] (blocks of n). Returns (A, B, C_velocity, C_position).
+    """
+    n = params.n_axes
+    jmi = np.diag([1.0 / a.motor_inertia for a in params.axes])
+    bv = np.diag([a.viscous_friction for a in params.axes])
+    k = np.diag([a.stiffness for a in params.axes])
+    d = np.diag([a.damping for a in params.axes])
+    moi = np.linalg.inv(params.link_inertia_matrix())
+    z, eye = np.zeros((n, n)), np.eye(n)
+    A = np.block([
+        [z, eye, z, z],
+        [-jmi @ k, -jmi @ (d + bv), jmi @ k, jmi @ d],
+        [z, z, z, eye],
+        [moi @ k, moi @ d, -moi @ k, -moi @ d],
+    ])
+    B = np.vstack([z, jmi, z, z])
+    return A, B, np.hstack([z, eye, z, z]), np.hstack([eye, z, z, z])
+
+
+def _substep_matrices(params: RobotParams, h: float):
+    """Exact discretisation of the linear part over one substep h.
+
+    Augmented exponential of [[A, Bu, 0, 0], [0, 0, I, 0], [0, 0, 0, I], [0, 0, 0, 0]] h gives
+    the responses to an input a + b s + c s^2 / 2; rewritten for the values at s = 0, h/2, h.
+    The residual torques enter like inputs: motor side through B, link side through M_o^-1.
+    """
+    A, B, _, _ = state_space(params)
+    n = params.n_axes
+    nx = 4 * n
+    Bo = np.vstack([np.zeros((3 * n, n)), np.linalg.inv(params.link_inertia_matrix())])
+    Bu = np.hstack([B, Bo])
+    nu = 2 * n
+    M = np.zeros((nx + 3 * nu, nx + 3 * nu))
+    M[:nx, :nx] = A
+    M[:nx, nx:nx + nu] = Bu
+    M[nx:nx + nu, nx + nu:nx + 2 * nu] = np.eye(nu)
+    M[nx + nu:nx + 2 * nu, nx + 2 * nu:] = np.eye(nu)
+    E = linalg.expm(M * h)
+    ad = E[:nx, :nx]
+    e0, e1, e2 = (E[:nx, nx + j * nu:nx + (j + 1) * nu] for j in range(3))
+    # u(s) = ua + beta s + gamma s^2 through (0, ua), (h/2, um), (h, ub); c = 2 gamma
+    ga = e0 - 3.0 / h * e1 + 4.0 / h ** 2 * e2
+    gm = 4.0 / h * e1 - 8.0 / h ** 2 * e2
+    gb = -1.0 / h * e1 + 4.0 / h ** 2 * e2
+    return (np.ascontiguousarray(ad), np.ascontiguousarray(ga[:, :n]),
+            np.ascontiguousarray(gm[:, :n]), np.ascontiguousarray(gb[:, :n]),
+            np.ascontiguousarray(e0))
+
+
+# --- compiled kernels -------------------------------------------------------------------------
+
+@numba.njit(cache=True, fastmath=True)
+def _spring(e, k1, k2, bs):
+    """Deflection-dependent spring torque (eq. 2)."""
+    if bs > 0.0 and abs(e) > bs:
+        return math.copysign(k2 * (abs(e) - bs) + k1 * bs, e)
+    return k1 * e
+
+
+@numba.njit(cache=True, fastmath=True)
+def _residual(x, prm, ra, rs, rp, wm, wo):
+    """Nonlinear residual torques beyond the linear model (k1, d) at flat state x.
+
+    Motor side wm = ripple - (tau_s - k1 dq) - (tau_d - d dv) and link side
+    wo = (tau_s - k1 dq) + (tau_d - d dv) (gravity is a constant input, see _exp_substep), with tau_s of eq. 2 behind the backlash
+    dead zone and the transmission damping acting only in contact.
+    """
+    n = wm.shape[0]
+    for i in range(n):
+        qm = x[i]
+        dq = qm - x[2 * n + i]
+        res = 0.0
+        e = dq
+        bl = prm[i, BL]
+        if bl > 0.0:
+            half = 0.5 * bl
+            if dq > half:
+                e = dq - half
+            elif dq < -half:
+                e = dq + half
+            else:
+                e = 0.0
+                res = -prm[i, DAMP] * (x[n + i] - x[3 * n + i])
+        res += _spring(e, prm[i, K1], prm[i, K2], prm[i, BS]) - prm[i, K1] * dq
+        rip = 0.0
+        for j in range(ra.shape[1]):
+            a = ra[i, j]
+            if a != 0.0:
+                rip += a * math.sin(rs[i, j] * qm + rp[i, j])
+        wm[i] = rip - res
+        wo[i] = res
+
+
+@numba.njit(cache=True, fastmath=True)
+def _exp_substep(x, ua, um, ub, prm, ad, ga, gm, gb, gw, cg, ra, rs, rp, nonlinear, h,
+                 lin, xp, w, w2):
+    """One substep of the exponential integrator, then Coulomb friction.
+
+    Linear part exact: x+ = Ad x + Ga ua + Gm um + Gb ub + cg (input quadratic through the
+    values at start, middle and end: exact for zero-order hold; cg the constant gravity load). Nonlinear residual torques w(x) by the
+    exponential Heun (trapezoidal) rule: x+ += Gw (w(x) + w(x*)) / 2.
+    """
+    nx = x.shape[0]
+    n = ua.shape[0]
+    for r in range(nx):
+        acc = cg[r]
+        for c in range(nx):
+            acc += ad[r, c] * x[c]
+        for c in range(n):
+            acc += ga[r, c] * ua[c] + gm[r, c] * um[c] + gb[r, c] * ub[c]
+        lin[r] = acc
+    if nonlinear:
+        _residual(x, prm, ra, rs, rp, w[:n], w[n:])
+        for r in range(nx):
+            acc = lin[r]
+            for c in range(2 * n):
+                acc += gw[r, c] * w[c]
+            xp[r] = acc
+        _residual(xp, prm, ra, rs, rp, w2[:n], w2[n:])
+        for r in range(nx):
+            acc = lin[r]
+            for c in range(2 * n):
+                acc += 0.5 * gw[r, c] * (w[c] + w2[c])
+            x[r] = acc
+    else:
+        for r in range(nx):
+            x[r] = lin[r]
+    # Coulomb friction (eq. 1) as a set-valued force: the friction impulse over the substep is
+    # at most Fc h; if that suffices to stop the motor it sticks (exact stick-slip).
+    for i in range(n):
+        fc = prm[i, FC]
+        if fc > 0.0:
+            dvmax = fc * h / prm[i, JM]
+            v = x[n + i]
+            vnew = 0.0 if abs(v) <= dvmax else v - math.copysign(dvmax, v)
+            x[i] += 0.5 * h * (vnew - v)
+            x[n + i] = vnew
+
+
+@numba.njit(cache=True, fastmath=True)
+def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, ga, gm, gb, gw, cg, ra, rs,
+             rp, nonlinear, scratch):
+    """Advance the plant over [t_k, t_k+dt): commands from the delay ring buffer (zero-order
+    hold), plus an optional feed-forward torque on the stage grid uff[2 m k ... 2 m k + 2 m]."""
+    n = buf.shape[1]
+    h = dt / m
+    ua, um, ub = scratch[0, :n], scratch[1, :n], scratch[2, :n]
+    lin, xp = scratch[3], scratch[4]
+    w, w2 = scratch[5, :2 * n], scratch[6, :2 * n]
+    for s in range(m):
+        ja, jm, jb = 2 * s, 2 * s + 1, 2 * s + 2
+        for i in range(n):
+            lim = prm[i, ULIM]
+            a = buf[(k + nbuf + offsets[ja, i]) % nbuf, i]
+            b = buf[(k + nbuf + offsets[jm, i]) % nbuf, i]
+            c = buf[(k + nbuf + offsets[jb, i]) % nbuf, i]
+            if has_ff:
+                base = 2 * m * k
+                a += uff[base + ja, i]
+                b += uff[base + jm, i]
+                c += uff[base + jb, i]
+            ua[i] = min(max(a, -lim), lim)
+            um[i] = min(max(b, -lim), lim)
+            ub[i] = min(max(c, -lim), lim)
+        _exp_substep(x, ua, um, ub, prm, ad, ga, gm, gb, gw, cg, ra, rs, rp, nonlinear, h,
+                     lin, xp, w, w2)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _measure(x, qprev, enc, from_encoder, dt, vn, qout, vout):
+    """Encoder position (quantised) and velocity (true or by differentiation) plus noise."""
+    n = qout.shape[0]
+    for i in range(n):
+        q = x[i]
+        if enc[i] > 0.0:
+            q = enc[i] * math.floor(q / enc[i] + 0.5)
+        qout[i] = q
+        if from_encoder:
+            vout[i] = (q - qprev[i]) / dt + vn[i]
+        else:
+            vout[i] = x[n + i] + vn[i]
+
+
+@numba.njit(cache=True, fastmath=True)
+def _pi_step(e, integ, kp, ki, ff, ulim, dt, u):
+    """Velocity PI with torque limit and back-calculation anti-windup (per axis, in place).
+
+    u = kp e + I + ff, I += ki e dt; when u saturates, I is set so u sits at the limit.
+    """
+    for i in range(e.shape[0]):
+        integ[i] += ki[i] * e[i] * dt
+        v = kp[i] * e[i] + integ[i] + ff[i]
+        if v > ulim[i]:
+            integ[i] -= v - ulim[i]
+            v = ulim[i]
+        elif v < -ulim[i]:
+            integ[i] -= v + ulim[i]
+            v = -ulim[i]
+        u[i] = v
+
+
+@numba.njit(cache=True, fastmath=True)
+def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, m, dt,
+              offsets, nbuf, prm, ad, ga, gm, gb, gw, cg, ra, rs, rp, nonlinear, enc, from_encoder,
+              vnoise, tnoise, out_q, out_v, out_u, out_x):
+    """Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
+
+    ``uff`` adds a torque on the RK4 stage grid (continuous excitations). Fills out_q, out_v,
+    out_u (measured effort = commanded torque at the sample + torque noise) and out_x (true
+    states, N x 4 x n). State arrays are updated in place so runs can be chained.
+    """
+    n = r.shape[1]
+    N = r.shape[0]
+    scratch = np.zeros((7, 4 * n))
+    qm = np.zeros(n)
+    vm = np.zeros(n)
+    e = np.zeros(n)
+    u = np.zeros(n)
+    for k in range(N):
+        _measure(x, qprev, enc, from_encoder, dt, vnoise[k], qm, vm)
+        for i in range(n):
+            qprev[i] = qm[i]
+        if closed:
+            for i in range(n):
+                e[i] = r[k, i] - vm[i]
+            _pi_step(e, integ, kp, ki, u_ext[k], ulim_ctrl, dt, u)
+        else:
+            for i in range(n):
+                u[i] = min(max(u_ext[k, i], -ulim_ctrl[i]), ulim_ctrl[i])
+        for i in range(n):
+            buf[k % nbuf, i] = u[i]
+            applied = u[i]
+            if has_ff:
+                applied += uff[2 * m * k, i]
+            applied = min(max(applied, -prm[i, ULIM]), prm[i, ULIM])
+            out_q[k, i] = qm[i]
+            out_v[k, i] = vm[i]
+            out_u[k, i] = applied + tnoise[k, i]
+            for s in range(4):
+                out_x[k, s, i] = x[s * n + i]
+        _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, ga, gm, gb, gw, cg, ra,
+                 rs, rp, nonlinear, scratch)
+
+
+# --- Python API -------------------------------------------------------------------------------
+
+@dataclass
+class SimResult:
+    """Sampled signals of a simulation run, each (N, n): t (N,), q/v measured, u applied torque,
+    states (N, 4, n) true [q_m, v_m, q_o, v_o]."""
+
+    t: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+    effort: np.ndarray
+    states: np.ndarray
+
+
+def static_deflection(axis: AxisParams) -> float:
+    """Spring deflection that carries the gravity torque (eq. 2 inverted, backlash added)."""
+    g = axis.gravity_torque
+    if g == 0:
+        return 0.0
+    k1, bs = axis.stiffness, axis.stiffness_breakpoint
+    if bs is not None and abs(g) > axis.stiffness * bs:
+        e = bs + (abs(g) - k1 * bs) / axis.stiffness_k2
+    else:
+        e = abs(g) / k1
+    return math.copysign(e + 0.5 * axis.backlash, g)
+
+
+class FlexibleJointPlant:
+    """Simulated robot, usable as a CONTRACT section 4 plant plug-in and for batch runs.
+
+    ``step(torque)`` applies a motor torque for one sample (zero-order hold, through the input
+    delay and torque limit) and returns the measurement (position, velocity, effort) at the end
+    of the sample. :meth:`simulate` runs many samples at compiled speed, optionally with the
+    velocity PI in the loop.
+    """
+
+    def __init__(self, config: dict | RobotParams | None = None) -> None:
+        if isinstance(config, RobotParams):
+            self.params = config
+        else:
+            from frf_ident.core.model import default_robot, robot_from_dict
+            self.params = robot_from_dict(config) if config else default_robot()
+        self._packed = _pack(self.params)
+        self.reset()
+
+    @property
+    def dt(self) -> float:
+        return self.params.dt
+
+    @property
+    def joint_names(self) -> list[str]:
+        return self.params.joint_names
+
+    @property
+    def n_axes(self) -> int:
+        return self.params.n_axes
+
+    @property
+    def state(self) -> np.ndarray:
+        """True state as a (4, n) view: rows q_m, v_m, q_o, v_o."""
+        return self.x.reshape(4, self.n_axes)
+
+    def equilibrium_torque(self) -> np.ndarray:
+        """Motor torque that holds the robot at rest against gravity."""
+        return np.array([a.gravity_torque for a in self.params.axes], dtype=float)
+
+    def reset(self, seed: int | None = None) -> None:
+        """Back to rest at the static equilibrium under gravity, noise generator re-seeded."""
+        n = self.n_axes
+        self.x = np.zeros(4 * n)  # flat [q_m, v_m, q_o, v_o]; see ``state``
+        self.x[:n] = [static_deflection(a) for a in self.params.axes]
+        self.qprev = self.x[:n].copy()
+        enc = self._packed.enc
+        self.qprev = np.where(enc > 0, enc * np.floor(self.qprev / np.where(enc > 0, enc, 1)
+                                                      + 0.5), self.qprev)
+        self.buf = np.tile(self.equilibrium_torque(), (self._packed.nbuf, 1))
+        self.k = 0
+        self.rng = np.random.default_rng(self.params.seed if seed is None else seed)
+
+    def _noise(self, n_samples: int) -> tuple[np.ndarray, np.ndarray]:
+        p = self._packed
+        n = self.n_axes
+        vn = self.rng.standard_normal((n_samples, n)) * p.vnoise if p.vnoise.any() \
+            else np.zeros((n_samples, n))
+        tn = self.rng.standard_normal((n_samples, n)) * p.tnoise if p.tnoise.any() \
+            else np.zeros((n_samples, n))
+        return vn, tn
+
+    def simulate(self, *, reference: np.ndarray | None = None, torque: np.ndarray | None = None,
+                 torque_fine: np.ndarray | None = None, controller: Any = None,
+                 n_samples: int | None = None) -> SimResult:
+        """Run samples from the current state.
+
+        Closed loop (``controller`` given, a :class:`~frf_ident.core.controller.PIVelocity`):
+        u = PI(reference - y) + torque. Open loop: u = torque (zero-order hold). ``torque_fine``
+        is an extra torque on the RK4 stage grid, shape (2 m N + 1, n) with m = substeps, used
+        for continuous-time excitations (e.g. the paper's open-loop example).
+        """
+        n = self.n_axes
+        lengths = [a.shape[0] for a in (reference, torque) if a is not None]
+        if torque_fine is not None:
+            lengths.append((torque_fine.shape[0] - 1) // (2 * self.params.substeps))
+        N = n_samples if n_samples is not None else (lengths[0] if lengths else 0)
+        if any(L != N for L in lengths):
+            raise ValueError(f'input lengths {lengths} differ from {N=}')
+        r = np.zeros((N, n)) if reference is None else np.ascontiguousarray(reference, float)
+        u_ext = np.zeros((N, n)) if torque is None else np.ascontiguousarray(torque, float)
+        has_ff = torque_fine is not None
+        uff = np.ascontiguousarray(torque_fine, float) if has_ff else np.zeros((1, n))
+        p = self._packed
+        vn, tn = self._noise(N)
+        out_q, out_v, out_u = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
+        out_x = np.empty((N, 4, n))
+        if controller is not None:
+            kp, ki, ulim, integ, closed = (controller.kp, controller.ki,
+                                           np.minimum(controller.torque_limit,
+                                                      self.params.torque_limits()),
+                                           controller.integral, True)
+        else:
+            kp = ki = np.zeros(n)
+            ulim, integ, closed = self.params.torque_limits(), np.zeros(n), False
+        _simulate(self.x, self.qprev, integ, self.buf, r, u_ext, uff, has_ff, kp, ki, ulim,
+                  closed, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm, p.ad,
+                  p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.nonlinear, p.enc, bool(self.params.velocity_from_encoder), vn, tn,
+                  out_q, out_v, out_u, out_x)
+        t = (self.k + np.arange(N)) * self.dt
+        self.k += N
+        self._rebase_buffer(N)
+        return SimResult(t, out_q, out_v, out_u, out_x)
+
+    def _rebase_buffer(self, n_done: int) -> None:
+        """Keep the ring buffer indexed from sample 0 of the next run."""
+        nbuf = self._packed.nbuf
+        shift = n_done % nbuf
+        if shift:
+            self.buf = np.ascontiguousarray(np.roll(self.buf, -shift, axis=0))
+
+    def step(self, torque: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Apply motor torque [N m] for one sample; return (position, velocity, effort).
+
+        CONTRACT section 4: the returned measurement is taken at the end of the sample, the
+        effort is the torque applied (after the torque limit) plus torque noise.
+        """
+        torque = np.asarray(torque, dtype=float).reshape(1, self.n_axes)
+        self.simulate(torque=torque)
+        q, v = np.empty(self.n_axes), np.empty(self.n_axes)
+        vn, _ = self._noise(1)
+        _measure(self.x, self.qprev, self._packed.enc, bool(self.params.velocity_from_encoder),
+                 self.dt, vn[0], q, v)
+        lim = self.params.torque_limits()
+        return q, v, np.clip(torque[0], -lim, lim)
