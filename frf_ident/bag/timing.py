@@ -7,8 +7,8 @@ all of that per topic and decides whether the joint states may be resampled:
 - header stamps are used when valid (at most one zero stamp, not all equal), else log time;
 - messages are sorted by stamp (``non_monotonic`` counts the reversals in file order) and
   exact duplicate stamps are dropped (first kept);
-- the sample period ``dt`` comes from a least-squares fit of stamps to sample indices
-  ``k = round((s - s0) / median(diff(s)))``; a gap is a step of k by more than one;
+- sample indices k accumulate the rounded intervals ``round(diff(s) / dt)``, and the period
+  ``dt`` is the least-squares slope of stamps over k; a gap is a step of k by more than one;
 - ``jitter`` = std of the intervals between consecutive (non-gap) samples relative to dt;
 - resampling (linear interpolation of joint states, zero-order hold of references) is
   applied only if jitter < 5 % of dt and every gap is <= 3 missing samples, otherwise
@@ -146,15 +146,20 @@ def analyse(topic: str, stamps: np.ndarray, log: np.ndarray, source: str,
 
 
 def _fit_period(s: np.ndarray, dt_hint_ns: float | None) -> tuple[float, np.ndarray]:
-    rel = (s - s[0]).astype(float)
-    dt0 = float(dt_hint_ns or np.median(np.diff(rel)))
-    k = np.round(rel / dt0).astype(np.int64)
-    if dt_hint_ns is None and k[-1] > 0:
+    """Sample period and per-stamp sample index.
+
+    Indices accumulate the rounded interval lengths (robust to drops and to a slightly wrong
+    first guess); the period is then the least-squares slope of stamps over indices.
+    """
+    step = np.diff(s).astype(float)
+    dt = float(dt_hint_ns or np.median(step))
+    for _ in range(2 if dt_hint_ns is None else 1):
+        k = np.concatenate(([0], np.cumsum(np.round(step / dt)))).astype(np.int64)
+        if dt_hint_ns is not None or k[-1] <= 0:
+            break
         kc = k - k.mean()
+        rel = (s - s[0]).astype(float)
         dt = float(np.dot(kc, rel - rel.mean()) / np.dot(kc, kc))
-        k = np.round(rel / dt).astype(np.int64)
-    else:
-        dt = dt0
     return dt, k
 
 

@@ -31,3 +31,59 @@ def make_recording(seconds: float = 5.0, fs: float = 1000.0, t0: float = 0.0) ->
     return Recording(t, list(JOINTS), pos, vel, eff, ref, exc, segs, meta)
 
 
+
+
+def truth(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The clean (position, velocity, effort) of make_recording at arbitrary times t."""
+    w = 2 * np.pi * FREQS
+    return (np.sin(np.outer(t, w)) / w, np.cos(np.outer(t, w)),
+            3.0 * np.sin(np.outer(t, w) + 0.3))
+
+
+def write_robot_bag(path, *, seconds: float = 10.0, fs: float = 1000.0, jitter: float = 0.01,
+                    drop: float = 0.005, gap: tuple[float, int] | None = None,
+                    seed: int = 1, effort: bool = True, extra=None):
+    """A /joint_states-only bag as a real robot records it, written with rosbags.
+
+    Timing model (documented in README_bag.md): the controller samples at
+    s_k = t0 + k*dt + u_k with u_k ~ U(-jitter*dt, +jitter*dt) (scheduling jitter) and stamps
+    each JointState with that instant, so the values are the true signals at s_k. A fraction
+    ``drop`` of the messages is lost at random (never the first/last); ``gap`` = (t, n) removes
+    n consecutive samples starting at time t. Receive (log) time = s_k + 250 us + Exp(50 us)
+    transport latency. The joint order is shuffled in every message.
+    """
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from frf_ident.bag.topics import QOS_DEFAULT
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    js_t = store.types['sensor_msgs/msg/JointState']
+    hdr_t, time_t = store.types['std_msgs/msg/Header'], store.types['builtin_interfaces/msg/Time']
+    rng = np.random.default_rng(seed)
+    n = int(round(seconds * fs))
+    dt = 1.0 / fs
+    t0 = 100.0
+    s = t0 + np.arange(n) * dt + rng.uniform(-jitter * dt, jitter * dt, n)
+    keep = rng.random(n) >= drop
+    keep[[0, -1]] = True
+    if gap is not None:
+        i = int(round(gap[0] * fs))
+        keep[i:i + gap[1]] = False
+    pos, vel, eff = truth(s)
+    stamps = np.round(s * 1e9).astype(np.int64)
+    logs = stamps + 250_000 + rng.exponential(50_000, n).astype(np.int64)
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        conn = w.add_connection('/joint_states', 'sensor_msgs/msg/JointState', typestore=store,
+                                offered_qos_profiles=[QOS_DEFAULT])
+        for k in np.flatnonzero(keep):
+            perm = rng.permutation(len(JOINTS))
+            sec, nsec = divmod(int(stamps[k]), 10**9)
+            msg = js_t(header=hdr_t(stamp=time_t(sec=sec, nanosec=nsec), frame_id=''),
+                       name=[JOINTS[j] for j in perm], position=pos[k, perm],
+                       velocity=vel[k, perm],
+                       effort=eff[k, perm] if effort else np.empty(0))
+            w.write(conn, int(logs[k]), store.serialize_cdr(msg, msg.__msgtype__))
+        if extra is not None:
+            extra(w, store)
+    return {'stamps': stamps, 'keep': keep, 't0': t0, 'dt': dt}

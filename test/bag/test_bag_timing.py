@@ -1,0 +1,106 @@
+"""Reading bags recorded by real robots: jitter, drops, gaps, duplicates, missing interfaces."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from bag_synth import JOINTS, truth, write_robot_bag
+
+from frf_ident.bag import read_recording
+from frf_ident.bag.timing import MAX_GAP_SAMPLES
+from frf_ident.errors import BagError
+
+
+def test_jitter_and_drops_resampled(tmp_path: Path) -> None:
+    info = write_robot_bag(tmp_path / 'robot', jitter=0.01, drop=0.005)
+    rec, rep = read_recording(tmp_path / 'robot', joints=JOINTS)
+    assert rep.resampled and rep.grid == 'resampled'
+    js = rep.topics['/joint_states']
+    assert js.stamp_source == 'header'
+    assert 0.005 < js.jitter < 0.012  # uniform +-1 %: std of intervals = 0.82 % of dt
+    assert js.missing_samples == int((~info['keep']).sum()) and js.gaps > 0
+    assert js.longest_gap_samples <= MAX_GAP_SAMPLES
+    assert js.header_log_offset_mean_s == pytest.approx(300e-6, rel=0.05)
+    assert rep.dt_s == pytest.approx(1e-3, rel=1e-5)
+    assert rec.t.size == info['keep'].size  # dropped samples are back on the grid
+    assert rec.joint_names == JOINTS
+    default, _ = read_recording(tmp_path / 'robot')  # default: order of the first message
+    assert sorted(default.joint_names) == JOINTS
+    j = [default.joint_names.index(n) for n in JOINTS]
+    np.testing.assert_array_equal(default.velocity[:, j], rec.velocity)
+    # linear interpolation error bound: amplitude * (w * gap)^2 / 8 with gap <= 2 dt here
+    pos, vel, eff = truth(rec.t)
+    np.testing.assert_allclose(rec.position, pos, atol=1e-5)
+    np.testing.assert_allclose(rec.velocity, vel, atol=2e-4)
+    np.testing.assert_allclose(rec.effort, eff, atol=6e-4)
+    assert rec.reference is None and rec.excitation is None
+    assert any('jitter' in line for line in rep.summary())
+
+
+def test_gap_too_large_is_refused(tmp_path: Path) -> None:
+    write_robot_bag(tmp_path / 'gap', seconds=5.0, drop=0.0, gap=(2.3, 120))
+    with pytest.raises(BagError) as exc:
+        read_recording(tmp_path / 'gap')
+    msg = str(exc.value)
+    assert '\n' not in msg
+    assert 'gap of 0.120 s (120 samples) at t=102.29' in msg
+    assert '/joint_states' in msg and 'exceeds 3 samples' in msg
+    # reading around the gap works
+    rec, rep = read_recording(tmp_path / 'gap', t_range=(100.0, 102.25))
+    assert rec.t[-1] <= 102.25 and not rep.topics['/joint_states'].gaps
+
+
+def test_too_much_jitter_is_refused(tmp_path: Path) -> None:
+    write_robot_bag(tmp_path / 'jit', seconds=2.0, jitter=0.08, drop=0.0)
+    with pytest.raises(BagError, match=r'stamp jitter of \d+\.\d % of dt .* exceeds 5 %'):
+        read_recording(tmp_path / 'jit')
+
+
+def test_missing_interface_duplicates_and_reordering(tmp_path: Path) -> None:
+    """ros2_control style: effort interface absent; one duplicated and one late message."""
+    def extra(w, store):  # noqa: ANN001
+        conn = w.connections[0]
+        js = store.types['sensor_msgs/msg/JointState']
+        hdr, tm_ = store.types['std_msgs/msg/Header'], store.types['builtin_interfaces/msg/Time']
+        p, v, _ = truth(np.array([100.5]))
+        # a duplicate of the sample at t=100.5 s... stamped exactly on it
+        sec, nsec = divmod(info_stamp[0], 10**9)
+        msg = js(header=hdr(stamp=tm_(sec=sec, nanosec=nsec), frame_id=''), name=list(JOINTS),
+                 position=p[0], velocity=v[0], effort=np.empty(0))
+        w.write(conn, info_stamp[0] + 10**9, store.serialize_cdr(msg, msg.__msgtype__))
+
+    info_stamp = [int(round(100.5 * 1e9))]
+    write_robot_bag(tmp_path / 'rc', seconds=2.0, jitter=0.0, drop=0.0, effort=False,
+                    extra=extra)
+    rec, rep = read_recording(tmp_path / 'rc', joints=JOINTS)
+    js = rep.topics['/joint_states']
+    assert js.duplicates == 1 and js.non_monotonic == 1
+    assert np.all(np.isnan(rec.effort))
+    pos, vel, _ = truth(rec.t)
+    np.testing.assert_allclose(rec.velocity, vel, atol=1e-9)
+    assert rec.t.size == 2000
+
+
+def test_header_stamps_unset_use_log_time(tmp_path: Path) -> None:
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from frf_ident.bag.topics import QOS_DEFAULT
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    js = store.types['sensor_msgs/msg/JointState']
+    with Writer(tmp_path / 'log', version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        c = w.add_connection('/joint_states', js.__msgtype__, typestore=store,
+                             offered_qos_profiles=[QOS_DEFAULT])
+        for k in range(500):
+            m = js(header=store.types['std_msgs/msg/Header'](
+                stamp=store.types['builtin_interfaces/msg/Time'](sec=0, nanosec=0),
+                frame_id=''), name=['a'], position=np.array([k * 1.0]),
+                velocity=np.array([1.0]), effort=np.array([0.0]))
+            w.write(c, 10**9 + k * 2_000_000, store.serialize_cdr(m, js.__msgtype__))
+    rec, rep = read_recording(tmp_path / 'log')
+    assert rep.topics['/joint_states'].stamp_source == 'log'
+    assert rep.dt_s == pytest.approx(2e-3)
+    assert any('header stamps are unset' in w for w in rep.warnings)
+    np.testing.assert_array_equal(rec.position[:, 0], np.arange(500.0))
