@@ -1,0 +1,127 @@
+"""Middleware layer: the same node code on rclpy (ROS 2 Jazzy) or on plain Cyclone DDS.
+
+The backend is rclpy when ``import rclpy`` works, otherwise the Cyclone DDS backend
+(:mod:`frf_ident.middleware.dds_backend`), which speaks ROS 2's wire conventions so a ROS 2 graph
+with rmw_cyclonedds_cpp sees its topics and calls its services. ``FRF_IDENT_MIDDLEWARE=rclpy|dds``
+forces one.
+
+Node code uses only this module: ``create_node``, ``msg`` / ``srv`` type lookups (messages are
+built with keyword arguments and ROS field names), the QoS helpers, and rclpy's Node method names
+(``create_publisher``, ``create_subscription``, ``create_timer``, ``create_service``,
+``create_client``, ``declare_parameter``, ``get_parameter``, ``get_clock``, ``get_logger``,
+``destroy_node``). Differences from plain rclpy: ``Client.call`` raises TimeoutError instead of
+returning None, and ``None`` / ``[]`` parameter defaults are dynamically typed.
+"""
+
+import importlib
+import os
+import threading
+from types import ModuleType
+from typing import Any, Optional, Sequence
+
+from frf_ident.middleware.params import load_params_file, parse_ros_args, strip_ros_args
+from frf_ident.middleware.qos import (QosSpec, qos_clock, qos_default, qos_sensor_data,
+                                      qos_transient_local)
+
+__all__ = [
+    'QosSpec', 'backend', 'backend_name', 'create_node', 'init', 'load_params_file', 'msg', 'ok',
+    'parse_ros_args', 'qos_clock', 'qos_default', 'qos_sensor_data', 'qos_transient_local',
+    'shutdown', 'spin', 'spin_once', 'srv', 'strip_ros_args',
+]
+
+ENV_BACKEND = 'FRF_IDENT_MIDDLEWARE'
+_backend: Optional[ModuleType] = None
+_lock = threading.Lock()
+
+
+def _select_backend() -> ModuleType:
+    forced = os.environ.get(ENV_BACKEND, '').strip().lower()
+    if forced not in ('', 'rclpy', 'dds'):
+        raise ValueError(f'{ENV_BACKEND} must be "rclpy" or "dds", got {forced=}')
+    if forced == 'dds':
+        return importlib.import_module('frf_ident.middleware.dds_backend')
+    try:
+        importlib.import_module('rclpy')
+    except ImportError as exc:
+        if forced == 'rclpy':
+            raise ImportError(f'{ENV_BACKEND}=rclpy but rclpy cannot be imported: {exc}') from exc
+        return importlib.import_module('frf_ident.middleware.dds_backend')
+    return importlib.import_module('frf_ident.middleware.rclpy_backend')
+
+
+def backend() -> ModuleType:
+    """The backend module (chosen once per process)."""
+    global _backend
+    with _lock:
+        if _backend is None:
+            _backend = _select_backend()
+        return _backend
+
+
+def backend_name() -> str:
+    """``'rclpy'`` or ``'dds'``."""
+    return backend().BACKEND_NAME
+
+
+def init(args: Optional[Sequence[str]] = None) -> None:
+    """Initialise the middleware; ``args`` (default ``sys.argv``) may carry ``--ros-args``."""
+    backend().init(args)
+
+
+def ok() -> bool:
+    """True between :func:`init` (or the first :func:`create_node`) and :func:`shutdown`."""
+    return backend().ok()
+
+
+def shutdown() -> None:
+    """Destroy all nodes and leave the DDS domain (safe to call twice)."""
+    backend().shutdown()
+
+
+def create_node(name: str, *, parameter_overrides: Optional[dict[str, Any]] = None,
+                use_sim_time: Optional[bool] = None, namespace: str = '/') -> Any:
+    """Create a node on the chosen backend (initialising it with ``sys.argv`` if needed).
+
+    Parameter precedence (lowest first): declared default, ``--params-file`` (``/**`` then the
+    node's own section), ``-p name:=value``, ``parameter_overrides``, ``use_sim_time``.
+    Use :func:`load_params_file` to pass a ROS parameter YAML as ``parameter_overrides``.
+    """
+    return backend().create_node(name, namespace=namespace,
+                                 parameter_overrides=parameter_overrides,
+                                 use_sim_time=use_sim_time)
+
+
+def spin(node: Any, stop_event: Optional[threading.Event] = None) -> None:
+    """Run ``node``'s callbacks in this thread until ``stop_event`` is set or shutdown."""
+    backend().spin(node, stop_event)
+
+
+def spin_once(node: Any, timeout_sec: Optional[float] = None) -> None:
+    """Wait up to ``timeout_sec`` for work and run the ready callbacks of ``node``."""
+    backend().spin_once(node, timeout_sec)
+
+
+def msg(type_name: str) -> type:
+    """Message class for ``pkg/msg/Type`` on the current backend."""
+    b = backend()
+    if b.BACKEND_NAME == 'rclpy':
+        return b.msg(type_name)
+    from frf_ident.middleware import ros_types
+    try:
+        return ros_types.MESSAGES[type_name]
+    except KeyError:
+        raise KeyError(f'message type not available on the DDS backend: {type_name=}; '
+                       f'known: {sorted(ros_types.MESSAGES)}') from None
+
+
+def srv(type_name: str) -> Any:
+    """Service type for ``pkg/srv/Type`` (with ``.Request`` and ``.Response``)."""
+    b = backend()
+    if b.BACKEND_NAME == 'rclpy':
+        return b.srv(type_name)
+    from frf_ident.middleware import ros_types
+    try:
+        return ros_types.SERVICES[type_name]
+    except KeyError:
+        raise KeyError(f'service type not available on the DDS backend: {type_name=}; '
+                       f'known: {sorted(ros_types.SERVICES)}') from None

@@ -1,0 +1,182 @@
+"""rclpy backend (ROS 2 Jazzy): a thin subclass of rclpy.node.Node.
+
+Only what differs from rclpy is written here: backend-neutral :class:`QosSpec` arguments,
+dynamically typed parameters for ``None`` / empty-list defaults, parameter overrides as a dict,
+and a client whose ``call`` raises TimeoutError and also works when nobody spins the node.
+Everything else (parameters from ``--ros-args``, ``use_sim_time`` and the /clock-driven node
+clock and timers, logging) is rclpy's own. This module is imported only when rclpy is.
+"""
+
+import importlib
+import threading
+from typing import Any, Callable, Optional, Sequence
+
+from rcl_interfaces.msg import ParameterDescriptor
+import rclpy
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node as RclpyNode
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from frf_ident.middleware.qos import as_qos_spec, QosSpec
+
+BACKEND_NAME = 'rclpy'
+
+
+def to_qos_profile(qos: 'QosSpec | int') -> QoSProfile:
+    """Backend-neutral QoS -> rclpy QoSProfile (unset policies keep rmw defaults)."""
+    spec = as_qos_spec(qos)
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=spec.depth,
+        reliability=ReliabilityPolicy.RELIABLE if spec.reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=(DurabilityPolicy.TRANSIENT_LOCAL if spec.transient_local
+                    else DurabilityPolicy.VOLATILE))
+
+
+class Client:
+    """rclpy client wrapper: ``call`` raises TimeoutError and spins the node if nobody does."""
+
+    def __init__(self, node: 'Node', client: Any) -> None:
+        self._node = node
+        self._client = client
+        self.srv_type = client.srv_type
+        self.service_name = client.service_name
+
+    def service_is_ready(self) -> bool:
+        return self._client.service_is_ready()
+
+    def wait_for_service(self, timeout_sec: Optional[float] = None) -> bool:
+        return self._client.wait_for_service(timeout_sec=timeout_sec)
+
+    def call_async(self, request: Any) -> Any:
+        return self._client.call_async(request)
+
+    def call(self, request: Any, timeout_sec: Optional[float] = None) -> Any:
+        """Send ``request`` and block for the reply; TimeoutError after ``timeout_sec``."""
+        if not self._client.wait_for_service(timeout_sec=timeout_sec):
+            raise TimeoutError(f'service not available: {self.service_name=} {timeout_sec=}')
+        if self._node.is_spinning():
+            # Another thread (or this one, inside a callback of the MultiThreadedExecutor of
+            # spin(); clients use a reentrant group) delivers the reply.
+            response = self._client.call(request, timeout_sec=timeout_sec)
+        else:
+            future = self._client.call_async(request)
+            rclpy.spin_until_future_complete(self._node, future, timeout_sec=timeout_sec)
+            if not future.done():
+                self._client.remove_pending_request(future)
+            response = future.result()
+        if response is None:
+            raise TimeoutError(f'no reply from {self.service_name=} within {timeout_sec=}')
+        return response
+
+    def destroy(self) -> None:
+        self._node.destroy_client(self._client)
+
+
+class Node(RclpyNode):
+    """rclpy Node accepting the backend-neutral arguments of frf_ident.middleware."""
+
+    def __init__(self, name: str, *, namespace: str = '/',
+                 parameter_overrides: Optional[dict[str, Any]] = None,
+                 use_sim_time: Optional[bool] = None) -> None:
+        overrides = dict(parameter_overrides or {})
+        if use_sim_time is not None:
+            overrides['use_sim_time'] = bool(use_sim_time)
+        super().__init__(name, namespace=namespace, parameter_overrides=[
+            Parameter(key, value=value) for key, value in overrides.items()])
+        self._client_group = ReentrantCallbackGroup()
+        self._spinners = 0
+        self._spinners_lock = threading.Lock()
+
+    def is_spinning(self) -> bool:
+        """True while :func:`spin` or :func:`spin_once` of this module runs this node."""
+        return self._spinners > 0
+
+    def _spinning(self, delta: int) -> None:
+        with self._spinners_lock:
+            self._spinners += delta
+
+    def declare_parameter(self, name: str, value: Any = None,
+                          descriptor: Optional[ParameterDescriptor] = None,
+                          ignore_override: bool = False) -> Parameter:
+        """As rclpy, but ``None`` and ``[]`` defaults declare a dynamically typed parameter."""
+        if descriptor is None and (value is None or (isinstance(value, (list, tuple))
+                                                     and not value)):
+            descriptor = ParameterDescriptor(dynamic_typing=True)
+        return super().declare_parameter(name, value, descriptor, ignore_override)
+
+    def create_publisher(self, msg_type: Any, topic: str, qos: 'QosSpec | int',
+                         **kwargs: Any) -> Any:
+        return super().create_publisher(msg_type, topic, to_qos_profile(qos), **kwargs)
+
+    def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], None],
+                            qos: 'QosSpec | int', **kwargs: Any) -> Any:
+        return super().create_subscription(msg_type, topic, callback, to_qos_profile(qos),
+                                           **kwargs)
+
+    def create_client(self, srv_type: Any, srv_name: str, **kwargs: Any) -> Client:
+        kwargs.setdefault('callback_group', self._client_group)
+        return Client(self, super().create_client(srv_type, srv_name, **kwargs))
+
+
+def init(args: Optional[Sequence[str]] = None) -> None:
+    if not rclpy.ok():
+        rclpy.init(args=None if args is None else list(args))
+
+
+def ok() -> bool:
+    return rclpy.ok()
+
+
+def shutdown() -> None:
+    rclpy.try_shutdown()
+
+
+def create_node(name: str, *, namespace: str = '/',
+                parameter_overrides: Optional[dict[str, Any]] = None,
+                use_sim_time: Optional[bool] = None) -> Node:
+    init()
+    return Node(name, namespace=namespace, parameter_overrides=parameter_overrides,
+                use_sim_time=use_sim_time)
+
+
+def spin_once(node: Node, timeout_sec: Optional[float] = None) -> None:
+    node._spinning(+1)
+    try:
+        rclpy.spin_once(node, timeout_sec=timeout_sec)
+    finally:
+        node._spinning(-1)
+
+
+def spin(node: Node, stop_event: Optional[threading.Event] = None) -> None:
+    """Spin with a MultiThreadedExecutor until ``stop_event`` is set or rclpy shuts down."""
+    executor = MultiThreadedExecutor()
+    executor.add_node(node)
+    node._spinning(+1)
+    try:
+        while rclpy.ok() and not (stop_event is not None and stop_event.is_set()):
+            executor.spin_once(timeout_sec=0.1)
+    finally:
+        node._spinning(-1)
+        executor.remove_node(node)
+        executor.shutdown()
+
+
+def msg(type_name: str) -> type:
+    """``pkg/msg/Type`` -> the generated rclpy message class."""
+    pkg, kind, name = _split(type_name, 'msg')
+    return getattr(importlib.import_module(f'{pkg}.{kind}'), name)
+
+
+def srv(type_name: str) -> type:
+    """``pkg/srv/Type`` -> the generated rclpy service class."""
+    pkg, kind, name = _split(type_name, 'srv')
+    return getattr(importlib.import_module(f'{pkg}.{kind}'), name)
+
+
+def _split(type_name: str, kind: str) -> tuple[str, str, str]:
+    parts = type_name.split('/')
+    if len(parts) != 3 or parts[1] != kind:
+        raise ValueError(f'expected a pkg/{kind}/Type name, got {type_name=}')
+    return parts[0], parts[1], parts[2]
