@@ -365,6 +365,7 @@ def _experiment(events: list[tuple[int, str]], bag: BagFiles,
     meta: dict[str, Any] = {}
     segs: dict[str, Segment] = {}
     started: set[str] = set()
+    other: dict[str, int] = {}
     for log, text in sorted(events, key=lambda e: e[0]):
         try:
             d = json.loads(text)
@@ -373,6 +374,9 @@ def _experiment(events: list[tuple[int, str]], bag: BagFiles,
             if d.get('event') == 'recording_meta':
                 d.pop('event')
                 meta.update(d)
+                continue
+            if d.get('event', 'start') not in ('start', 'end'):
+                other[str(d.get('event'))] = other.get(str(d.get('event')), 0) + 1
                 continue
             key = json.dumps({k: v for k, v in d.items() if k != 'event'}, sort_keys=True)
             event, seg = Segment.from_descriptor(text)
@@ -384,6 +388,8 @@ def _experiment(events: list[tuple[int, str]], bag: BagFiles,
             started.add(key)
     warnings = [f'segment {s.t_start:.3f}..{s.t_end:.3f} s has an end event but no start event'
                 for k, s in segs.items() if k not in started]
+    warnings += [f'{topics.experiment}: ignored {n} event(s) {name!r} (not start/end)'
+                 for name, n in other.items()]
     return meta, list(segs.values()), warnings
 
 

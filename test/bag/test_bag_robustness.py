@@ -1,0 +1,218 @@
+"""Bad input always ends in one BagError line; damaged bags are recovered where possible."""
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from bag_synth import make_recording
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_typestore
+
+from frf_ident.bag import BagRecorder, bag_info, read_recording, write_recording
+from frf_ident.bag.reader import iter_raw
+from frf_ident.bag.topics import QOS_DEFAULT
+from frf_ident.core.recording import Recording
+from frf_ident.errors import BagError
+
+STORE = get_typestore(Stores.ROS2_JAZZY)
+
+
+def one_line_error(path: Path | str, match: str, **kw: object) -> str:
+    with pytest.raises(BagError) as exc:
+        read_recording(path, **kw)  # type: ignore[arg-type]
+    msg = str(exc.value)
+    assert '\n' not in msg and 'Traceback' not in msg
+    assert match in msg, msg
+    return msg
+
+
+@pytest.fixture(scope='module')
+def small_rec() -> Recording:
+    return make_recording(seconds=2.0)
+
+
+@pytest.fixture(scope='module')
+def small_bag(tmp_path_factory: pytest.TempPathFactory, small_rec: Recording) -> Path:
+    return write_recording(small_rec, tmp_path_factory.mktemp('rb') / 'small')
+
+
+@pytest.fixture(scope='module')
+def chunky_bag(tmp_path_factory: pytest.TempPathFactory, small_bag: Path) -> Path:
+    """small_bag re-recorded with BagRecorder in 16 KiB chunks (many chunks to damage)."""
+    out = tmp_path_factory.mktemp('rb') / 'chunky'
+    with BagRecorder(chunk_bytes=16 * 1024).open(out) as rec:
+        for topic, msgtype, log, raw in iter_raw(small_bag):
+            rec.write(topic, msgtype, log, raw)
+    return out
+
+
+def _copy(bag: Path, dst: Path) -> Path:
+    shutil.copytree(bag, dst)
+    return dst
+
+
+def _mcap(bag: Path) -> Path:
+    return next(bag.glob('*.mcap'))
+
+
+# --------------------------------------------------------------------------- recovery
+
+def test_truncated_bag_recovers_complete_chunks(clean_bag: Path, clean_rec: Recording,
+                                                tmp_path: Path) -> None:
+    small_rec = clean_rec
+    bag = _copy(clean_bag, tmp_path / 'cut')
+    data = _mcap(bag).read_bytes()
+    _mcap(bag).write_bytes(data[: int(len(data) * 0.6)])
+    rec, rep = read_recording(bag)
+    n = rec.t.size
+    assert 0 < n < small_rec.t.size
+    np.testing.assert_array_equal(rec.t, small_rec.t[:n])  # still the exact grid
+    np.testing.assert_array_equal(rec.velocity, small_rec.velocity[:n])
+    r = rep.recovery
+    assert not r['complete'] and r['bytes_lost'] > 0
+    assert r['messages_lost_per_topic']['/joint_states'] == small_rec.t.size - n
+    assert any('recovered' in line for line in rep.summary())
+    info = bag_info(bag)  # metadata.yaml is intact, so it still describes the full bag
+    assert info['message_count'] > 0
+
+
+def test_corrupt_chunk_in_the_middle(small_bag: Path, tmp_path: Path) -> None:
+    bag = _copy(small_bag, tmp_path / 'bad')
+    data = bytearray(_mcap(bag).read_bytes())
+    mid = len(data) // 2
+    data[mid:mid + 2000] = b'\xff' * 2000
+    _mcap(bag).write_bytes(bytes(data))
+    try:
+        rec, rep = read_recording(bag)
+    except BagError as exc:
+        assert '\n' not in str(exc)
+    else:
+        assert rep.recovery['bytes_lost'] > 0 or rep.recovery['problems']
+
+
+def test_metadata_missing_dir_and_bare_file(small_bag: Path, small_rec: Recording,
+                                            tmp_path: Path) -> None:
+    bag = _copy(small_bag, tmp_path / 'nometa')
+    (bag / 'metadata.yaml').unlink()
+    rec, rep = read_recording(bag)
+    assert rec.t.size == small_rec.t.size and rep.recovery['messages_lost'] == 0
+    assert bag_info(bag)['message_count'] == bag_info(small_bag)['message_count']
+
+
+# --------------------------------------------------------------------------- bad input
+
+def test_nonexistent_and_not_a_bag(tmp_path: Path) -> None:
+    one_line_error(tmp_path / 'nope', 'does not exist')
+    (tmp_path / 'empty.mcap').write_bytes(b'')
+    one_line_error(tmp_path / 'empty.mcap', 'not a readable MCAP file')
+    (tmp_path / 'text.mcap').write_text('hello world, not a bag\n' * 10)
+    one_line_error(tmp_path / 'text.mcap', 'not a readable MCAP file')
+    (tmp_path / 'dir').mkdir()
+    one_line_error(tmp_path / 'dir', 'neither metadata.yaml nor an .mcap')
+
+
+def test_broken_metadata_yaml(small_bag: Path, tmp_path: Path) -> None:
+    bag = _copy(small_bag, tmp_path / 'm')
+    (bag / 'metadata.yaml').write_text('just: [a, list\n')
+    one_line_error(bag, 'not a rosbag2 metadata.yaml')
+    (bag / 'metadata.yaml').write_text('rosbag2_bagfile_information:\n  storage_identifier: '
+                                       'sqlite3\n')
+    one_line_error(bag, "storage_identifier 'sqlite3' is not supported; expected mcap")
+
+
+def _bag_with(path: Path, topic: str, msgtype: str, msgs: list) -> Path:
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        c = w.add_connection(topic, msgtype, typestore=STORE, offered_qos_profiles=[QOS_DEFAULT])
+        for stamp, msg in msgs:
+            w.write(c, stamp, STORE.serialize_cdr(msg, msgtype))
+    return path
+
+
+def _js(k: int, names: list[str], pos: list[float]) -> object:
+    js = STORE.types['sensor_msgs/msg/JointState']
+    hdr = STORE.types['std_msgs/msg/Header']
+    tm = STORE.types['builtin_interfaces/msg/Time']
+    return js(header=hdr(stamp=tm(sec=1, nanosec=k * 1_000_000), frame_id=''), name=names,
+              position=np.array(pos), velocity=np.zeros(len(names)),
+              effort=np.zeros(len(names)))
+
+
+def test_empty_bag(tmp_path: Path) -> None:
+    _bag_with(tmp_path / 'e', '/joint_states', 'sensor_msgs/msg/JointState', [])
+    one_line_error(tmp_path / 'e', 'no messages on /joint_states')
+
+
+def test_missing_topic(tmp_path: Path) -> None:
+    clock = STORE.types['rosgraph_msgs/msg/Clock']
+    tm = STORE.types['builtin_interfaces/msg/Time']
+    _bag_with(tmp_path / 'c', '/clock', clock.__msgtype__,
+              [(k, clock(clock=tm(sec=0, nanosec=k))) for k in range(1, 5)])
+    msg = one_line_error(tmp_path / 'c', 'no messages on /joint_states')
+    assert "topics present: ['/clock']" in msg
+
+
+def test_wrong_type(tmp_path: Path) -> None:
+    f64 = STORE.types['std_msgs/msg/Float64MultiArray']
+    lay = STORE.types['std_msgs/msg/MultiArrayLayout']
+    _bag_with(tmp_path / 'w', '/joint_states', f64.__msgtype__,
+              [(1, f64(layout=lay(dim=[], data_offset=0), data=np.ones(3)))])
+    one_line_error(tmp_path / 'w', 'topic /joint_states has type std_msgs/msg/Float64MultiArray;'
+                   ' expected sensor_msgs/msg/JointState')
+
+
+def test_missing_joint(tmp_path: Path) -> None:
+    msgs = [(10**9 + k * 10**6, _js(k, ['a', 'b'], [k, k])) for k in range(20)]
+    _bag_with(tmp_path / 'j', '/joint_states', 'sensor_msgs/msg/JointState', msgs)
+    one_line_error(tmp_path / 'j', "joint 'zz' not found in /joint_states (joints present: "
+                   "['a', 'b'])", joints=['a', 'zz'])
+
+
+@pytest.mark.parametrize('bad', [np.nan, np.inf, -np.inf])
+def test_non_finite_values(tmp_path: Path, bad: float) -> None:
+    msgs = [(10**9 + k * 10**6, _js(k, ['a', 'b'], [k, bad if k == 7 else k]))
+            for k in range(20)]
+    _bag_with(tmp_path / 'n', '/joint_states', 'sensor_msgs/msg/JointState', msgs)
+    msg = one_line_error(tmp_path / 'n', '/joint_states position[b] is ')
+    assert 'at t=1.007000 s' in msg and 'expected finite values' in msg
+
+
+def test_bad_arguments(small_bag: Path) -> None:
+    one_line_error(small_bag, 'expected a non-empty list', joints=[])
+    one_line_error(small_bag, 't_start < t_end', t_range=(2.0, 1.0))
+    one_line_error(small_bag, 'no /joint_states samples in', t_range=(50.0, 60.0))
+
+
+# --------------------------------------------------------------------------- fuzz
+
+@settings(max_examples=int(os.environ.get("FRF_FUZZ_EXAMPLES", "50")), deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(data=st.data())
+def test_fuzz_truncation_and_corruption(chunky_bag: Path, data: st.DataObject) -> None:
+    raw = bytearray(_mcap(chunky_bag).read_bytes())
+    n = len(raw)
+    cut = data.draw(st.one_of(st.just(n), st.integers(0, n)), label='cut')
+    flips = data.draw(st.lists(st.tuples(st.integers(0, n - 1), st.integers(0, 255)),
+                               max_size=8), label='flips')
+    for pos, val in flips:
+        raw[pos] = val
+    tmp = Path(tempfile.mkdtemp())
+    try:
+        f = tmp / 'fuzz.mcap'
+        f.write_bytes(bytes(raw[:cut]))
+        try:
+            rec, rep = read_recording(f)
+            assert rec.t.size >= 1 and rep.summary()
+        except BagError as exc:
+            assert '\n' not in str(exc)
+        try:
+            bag_info(f)
+        except BagError as exc:
+            assert '\n' not in str(exc)
+    finally:
+        shutil.rmtree(tmp)
