@@ -109,7 +109,7 @@ def _delete(entity: Any) -> None:
 
 
 def _gid(entity: Any) -> ros_types.Gid:
-    return ros_types.Gid(data=list(entity.get_guid().bytes))
+    return ros_types.Gid(data=entity.get_guid().bytes)
 
 
 def _new_endpoint_id() -> str:

@@ -73,7 +73,7 @@ class Clock(IdlStruct, typename=_dds_name('rosgraph_msgs/msg/Clock')):
 # rmw_dds_common (Jazzy): the ros_discovery_info topic that gives `ros2 node list` its names.
 @dataclass
 class Gid(IdlStruct, typename=_dds_name('rmw_dds_common/msg/Gid')):
-    data: t.array[t.uint8, 16] = field(default_factory=lambda: [0] * 16)
+    data: t.array[t.uint8, 16] = bytes(16)
 
 
 @dataclass
