@@ -16,11 +16,14 @@ Measurement: motor position, optionally quantised by the encoder resolution; vel
 true motor velocity or, like a real drive, the difference of quantised positions over one sample;
 additive Gaussian noise on velocity and torque. Everything is switchable and seeded.
 
-Integration: classical RK4 for the smooth dynamics with ``substeps`` steps per sample and the
-input evaluated at the RK4 stage times (zero-order hold for a controller, or a finer input grid
-for continuous excitations); Coulomb friction by a set-valued (stick-slip exact) velocity
-projection after each substep. The linear case therefore matches the analytic FRF
-(:mod:`frf_ident.core.analytic`) to RK4 accuracy. The kernels are compiled with numba.
+Integration (exponential integrator, compiled with numba): the linear two-mass dynamics
+(k1, d, viscous friction, coupling) are propagated exactly by precomputed matrix exponentials,
+for the delayed zero-order-held command of a digital controller (exact for any delay) and for a
+feed-forward torque interpolated quadratically on a stage grid of 2 ``substeps`` points per
+sample (continuous-time excitations). Only the nonlinear residual torques (eq. 2 spring beyond
+k1, backlash, ripple) use an exponential Heun step, and Coulomb friction a set-valued
+(stick-slip exact) velocity projection after each substep. Linear runs therefore match the
+analytic FRFs of :mod:`frf_ident.core.analytic` to rounding.
 """
 from __future__ import annotations
 
@@ -173,10 +176,12 @@ class _Packed:
     gw: np.ndarray        # (4n, 2n) residual torques (motor side, link side), held
     cg: np.ndarray        # (4n,) effect of the constant gravity torque over one substep
     nonlinear: bool       # any residual torque (nonlinear spring, backlash, ripple)
+    gold: np.ndarray      # (m, 4n, n) held command, delayed: part of substep s under the older
+    gnew: np.ndarray      #   command u[k + offsets[s, 0, i]] and under the newer one
     ra: np.ndarray        # (n, R) ripple amplitudes
     rs: np.ndarray        # (n, R) spatial frequencies
     rp: np.ndarray        # (n, R) phases
-    offsets: np.ndarray   # (2 m + 1, n) int: sample offset of the command seen at stage j
+    offsets: np.ndarray   # (m, 2, n) int: sample offsets of the older / newer command
     nbuf: int
     enc: np.ndarray       # (n,) encoder resolution
     vnoise: np.ndarray    # (n,)
@@ -189,7 +194,6 @@ def _pack(params: RobotParams) -> _Packed:
     n_rip = max([len(a.torque_ripple) for a in params.axes] + [1])
     ra, rs, rp = np.zeros((n, n_rip)), np.zeros((n, n_rip)), np.zeros((n, n_rip))
     dt, m = params.dt, int(params.substeps)
-    offsets = np.zeros((2 * m + 1, n), dtype=np.int64)
     for i, a in enumerate(params.axes):
         prm[i, JM] = a.motor_inertia
         prm[i, K1] = a.stiffness
@@ -206,19 +210,13 @@ def _pack(params: RobotParams) -> _Packed:
             ra[i, j] = float(rip['amplitude'])
             rs[i, j] = float(rip['spatial_frequency'])
             rp[i, j] = float(rip.get('phase', 0.0))
-        # command applied at stage time tau_j = j h/2 of sample k is u[k + offset]:
-        # the zero-order-held command delayed by time_delay (left limit at the step's end).
-        h2 = dt / (2 * m)
-        for j in range(2 * m + 1):
-            tau = j * h2
-            tau = min(max(tau, 1e-9 * dt), dt * (1 - 1e-9))
-            offsets[j, i] = math.floor((tau - a.time_delay) / dt)
-    nbuf = int(-offsets.min()) + 2
     ad, ga, gm, gb, gw = _substep_matrices(params, dt / m)
+    offsets, gold, gnew = _delayed_hold_matrices(params)
+    nbuf = int(-offsets.min()) + 2
     nonlinear = bool(np.any(ra != 0) or np.any(prm[:, BL] > 0)
                      or np.any((prm[:, BS] > 0) & (prm[:, K2] != prm[:, K1])))
     cg = gw[:, n:] @ (-prm[:, GRAV])
-    return _Packed(prm, ad, ga, gm, gb, gw, cg, nonlinear, ra, rs, rp, offsets, nbuf,
+    return _Packed(prm, ad, ga, gm, gb, gw, cg, nonlinear, gold, gnew, ra, rs, rp, offsets, nbuf,
                    np.array([a.encoder_resolution for a in params.axes]),
                    np.array([a.velocity_noise for a in params.axes]),
                    np.array([a.torque_noise for a in params.axes]))
@@ -244,6 +242,46 @@ def state_space(params: RobotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray
     ])
     B = np.vstack([z, jmi, z, z])
     return A, B, np.hstack([z, eye, z, z]), np.hstack([eye, z, z, z])
+
+
+def _hold_response(A: np.ndarray, b: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
+    """(e^{A tau}, int_0^tau e^{A s} ds b) by one augmented matrix exponential."""
+    nx = A.shape[0]
+    M = np.zeros((nx + 1, nx + 1))
+    M[:nx, :nx] = A * tau
+    M[:nx, nx] = b * tau
+    E = linalg.expm(M)
+    return E[:nx, :nx], E[:nx, nx]
+
+
+def _delayed_hold_matrices(params: RobotParams):
+    """Exact response to the zero-order-held command delayed by each axis' time_delay.
+
+    Over substep s of sample k (times [s h, (s+1) h) after t_k) axis i sees the command
+    u[k + floor((tau - delay_i)/dt)], which switches at most once, at a fraction phi of the
+    substep: x+ gets Gold u_old + Gnew u_new with Gold = e^{A h (1-phi)} Gamma(phi h) b_i and
+    Gnew = Gamma(h (1-phi)) b_i. Returns offsets (m, 2, n), Gold, Gnew (m, 4n, n).
+    """
+    A, B, _, _ = state_space(params)
+    n, m, dt = params.n_axes, int(params.substeps), params.dt
+    h = dt / m
+    nx = A.shape[0]
+    offsets = np.zeros((m, 2, n), dtype=np.int64)
+    gold, gnew = np.zeros((m, nx, n)), np.zeros((m, nx, n))
+    eps = 1e-9 * dt
+    for s in range(m):
+        for i, a in enumerate(params.axes):
+            o_old = math.floor((s * h + eps - a.time_delay) / dt)
+            o_new = math.floor(((s + 1) * h - eps - a.time_delay) / dt)
+            phi = 0.0
+            if o_new != o_old:
+                phi = (a.time_delay + (o_old + 1) * dt - s * h) / h
+            offsets[s, 0, i], offsets[s, 1, i] = o_old, o_new
+            e_rest, g_rest = _hold_response(A, B[:, i], h * (1.0 - phi))
+            _, g_first = _hold_response(A, B[:, i], h * phi)
+            gold[s, :, i] = e_rest @ g_first
+            gnew[s, :, i] = g_rest
+    return offsets, gold, gnew
 
 
 def _substep_matrices(params: RobotParams, h: float):
@@ -321,22 +359,26 @@ def _residual(x, prm, ra, rs, rp, wm, wo):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _exp_substep(x, ua, um, ub, prm, ad, ga, gm, gb, gw, cg, ra, rs, rp, nonlinear, h,
-                 lin, xp, w, w2):
+def _exp_substep(x, uo, un, go, gn, fa, fm, fb, has_ff, prm, ad, ga, gm, gb, gw, cg, ra, rs,
+                 rp, nonlinear, h, lin, xp, w, w2):
     """One substep of the exponential integrator, then Coulomb friction.
 
-    Linear part exact: x+ = Ad x + Ga ua + Gm um + Gb ub + cg (input quadratic through the
-    values at start, middle and end: exact for zero-order hold; cg the constant gravity load). Nonlinear residual torques w(x) by the
+    Linear part exact: x+ = Ad x + Go uo + Gn un + cg for the delayed zero-order-held command
+    (older / newer value), plus Ga fa + Gm fm + Gb fb for a feed-forward torque quadratic
+    through its values at start, middle and end of the substep; cg the constant gravity load. Nonlinear residual torques w(x) by the
     exponential Heun (trapezoidal) rule: x+ += Gw (w(x) + w(x*)) / 2.
     """
     nx = x.shape[0]
-    n = ua.shape[0]
+    n = uo.shape[0]
     for r in range(nx):
         acc = cg[r]
         for c in range(nx):
             acc += ad[r, c] * x[c]
         for c in range(n):
-            acc += ga[r, c] * ua[c] + gm[r, c] * um[c] + gb[r, c] * ub[c]
+            acc += go[r, c] * uo[c] + gn[r, c] * un[c]
+        if has_ff:
+            for c in range(n):
+                acc += ga[r, c] * fa[c] + gm[r, c] * fm[c] + gb[r, c] * fb[c]
         lin[r] = acc
     if nonlinear:
         _residual(x, prm, ra, rs, rp, w[:n], w[n:])
@@ -367,32 +409,32 @@ def _exp_substep(x, ua, um, ub, prm, ad, ga, gm, gb, gw, cg, ra, rs, rp, nonline
 
 
 @numba.njit(cache=True, fastmath=True)
-def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, ga, gm, gb, gw, cg, ra, rs,
-             rp, nonlinear, scratch):
-    """Advance the plant over [t_k, t_k+dt): commands from the delay ring buffer (zero-order
-    hold), plus an optional feed-forward torque on the stage grid uff[2 m k ... 2 m k + 2 m]."""
+def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
+             cg, ra, rs, rp, nonlinear, scratch):
+    """Advance the plant over [t_k, t_k+dt): delayed zero-order-held commands from the ring
+    buffer plus an optional feed-forward torque on the stage grid uff[2 m k ... 2 m k + 2 m].
+    The total torque is limited to +-torque_limit (the feed-forward is cut where it would
+    exceed the limit together with the command)."""
     n = buf.shape[1]
     h = dt / m
-    ua, um, ub = scratch[0, :n], scratch[1, :n], scratch[2, :n]
-    lin, xp = scratch[3], scratch[4]
-    w, w2 = scratch[5, :2 * n], scratch[6, :2 * n]
+    uo, un = scratch[0, :n], scratch[1, :n]
+    fa, fm, fb = scratch[2, :n], scratch[3, :n], scratch[4, :n]
+    lin, xp = scratch[5], scratch[6]
+    w, w2 = scratch[7, :2 * n], scratch[8, :2 * n]
     for s in range(m):
-        ja, jm, jb = 2 * s, 2 * s + 1, 2 * s + 2
         for i in range(n):
             lim = prm[i, ULIM]
-            a = buf[(k + nbuf + offsets[ja, i]) % nbuf, i]
-            b = buf[(k + nbuf + offsets[jm, i]) % nbuf, i]
-            c = buf[(k + nbuf + offsets[jb, i]) % nbuf, i]
+            a = min(max(buf[(k + nbuf + offsets[s, 0, i]) % nbuf, i], -lim), lim)
+            b = min(max(buf[(k + nbuf + offsets[s, 1, i]) % nbuf, i], -lim), lim)
+            uo[i] = a
+            un[i] = b
             if has_ff:
-                base = 2 * m * k
-                a += uff[base + ja, i]
-                b += uff[base + jm, i]
-                c += uff[base + jb, i]
-            ua[i] = min(max(a, -lim), lim)
-            um[i] = min(max(b, -lim), lim)
-            ub[i] = min(max(c, -lim), lim)
-        _exp_substep(x, ua, um, ub, prm, ad, ga, gm, gb, gw, cg, ra, rs, rp, nonlinear, h,
-                     lin, xp, w, w2)
+                base = 2 * m * k + 2 * s
+                fa[i] = min(max(a + uff[base, i], -lim), lim) - a
+                fm[i] = min(max(b + uff[base + 1, i], -lim), lim) - b
+                fb[i] = min(max(b + uff[base + 2, i], -lim), lim) - b
+        _exp_substep(x, uo, un, gold[s], gnew[s], fa, fm, fb, has_ff, prm, ad, ga, gm, gb, gw,
+                     cg, ra, rs, rp, nonlinear, h, lin, xp, w, w2)
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -430,17 +472,17 @@ def _pi_step(e, integ, kp, ki, ff, ulim, dt, u):
 
 @numba.njit(cache=True, fastmath=True)
 def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, m, dt,
-              offsets, nbuf, prm, ad, ga, gm, gb, gw, cg, ra, rs, rp, nonlinear, enc, from_encoder,
-              vnoise, tnoise, out_q, out_v, out_u, out_x):
+              offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, nonlinear, enc,
+              from_encoder, vnoise, tnoise, out_q, out_v, out_u, out_x):
     """Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
 
-    ``uff`` adds a torque on the RK4 stage grid (continuous excitations). Fills out_q, out_v,
+    ``uff`` adds a torque on the integrator's stage grid (continuous excitations). Fills out_q, out_v,
     out_u (measured effort = commanded torque at the sample + torque noise) and out_x (true
     states, N x 4 x n). State arrays are updated in place so runs can be chained.
     """
     n = r.shape[1]
     N = r.shape[0]
-    scratch = np.zeros((7, 4 * n))
+    scratch = np.zeros((9, 4 * n))
     qm = np.zeros(n)
     vm = np.zeros(n)
     e = np.zeros(n)
@@ -467,8 +509,8 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
             out_u[k, i] = applied + tnoise[k, i]
             for s in range(4):
                 out_x[k, s, i] = x[s * n + i]
-        _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, ga, gm, gb, gw, cg, ra,
-                 rs, rp, nonlinear, scratch)
+        _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb,
+                 gw, cg, ra, rs, rp, nonlinear, scratch)
 
 
 # --- Python API -------------------------------------------------------------------------------
@@ -566,7 +608,7 @@ class FlexibleJointPlant:
 
         Closed loop (``controller`` given, a :class:`~frf_ident.core.controller.PIVelocity`):
         u = PI(reference - y) + torque. Open loop: u = torque (zero-order hold). ``torque_fine``
-        is an extra torque on the RK4 stage grid, shape (2 m N + 1, n) with m = substeps, used
+        is an extra torque on the integrator's stage grid, shape (2 m N + 1, n) with m = substeps, used
         for continuous-time excitations (e.g. the paper's open-loop example).
         """
         n = self.n_axes
@@ -594,7 +636,7 @@ class FlexibleJointPlant:
             ulim, integ, closed = self.params.torque_limits(), np.zeros(n), False
         _simulate(self.x, self.qprev, integ, self.buf, r, u_ext, uff, has_ff, kp, ki, ulim,
                   closed, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm, p.ad,
-                  p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.nonlinear, p.enc, bool(self.params.velocity_from_encoder), vn, tn,
+                  p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.nonlinear, p.enc, bool(self.params.velocity_from_encoder), vn, tn,
                   out_q, out_v, out_u, out_x)
         t = (self.k + np.arange(N)) * self.dt
         self.k += N
