@@ -1,4 +1,4 @@
-"""Two processes over Cyclone DDS on loopback: topics, Trigger service, transient-local latching."""
+"""Two processes over Cyclone DDS on loopback: topics, Trigger service, latched topic."""
 
 import json
 from pathlib import Path

@@ -58,7 +58,8 @@ SAMPLES = {
     'rmw_dds_common/msg/Gid': rt.Gid(data=bytes(range(16))),
     'rmw_dds_common/msg/NodeEntitiesInfo': rt.NodeEntitiesInfo(
         node_namespace='/', node_name='frf_excitation',
-        reader_gid_seq=[rt.Gid(data=b'\x01' * 16)], writer_gid_seq=[rt.Gid(), rt.Gid(data=b'\xff' * 16)]),
+        reader_gid_seq=[rt.Gid(data=b'\x01' * 16)],
+        writer_gid_seq=[rt.Gid(), rt.Gid(data=b'\xff' * 16)]),
     'rmw_dds_common/msg/ParticipantEntitiesInfo': rt.ParticipantEntitiesInfo(
         gid=rt.Gid(data=bytes(range(16, 32))), node_entities_info_seq=[rt.NodeEntitiesInfo(
             node_namespace='/', node_name='a', reader_gid_seq=[], writer_gid_seq=[rt.Gid()])]),
