@@ -125,6 +125,7 @@ def test_localhost_config_equals_shipped_xml():
 
 
 GUARDED_CHILD = '''
+import os
 from frf_ident.middleware import dds_backend as dds
 real_domain, real_participant, made = dds.Domain, dds.DomainParticipant, []
 def domain(domain_id, config):
