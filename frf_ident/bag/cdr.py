@@ -114,8 +114,8 @@ class JointStateDecoder:
         return self._names, off
 
 
-def decode_float64_array(data: bytes | memoryview) -> tuple[float, ...]:
-    """``data`` field of a ``std_msgs/msg/Float64MultiArray`` (layout is skipped)."""
+def _float64_array_layout(data: bytes | memoryview) -> tuple[int, int]:
+    """(data_start, count) of the ``data`` field of a Float64MultiArray."""
     try:
         _check_header(data)
         (ndim,) = _U32.unpack_from(data, 4)
@@ -126,10 +126,16 @@ def decode_float64_array(data: bytes | memoryview) -> tuple[float, ...]:
             _, off = _read_string(data, off)
             off = _align(off, 4) + 8  # size, stride
         off = _align(off, 4) + 4  # data_offset
-        values, _ = _read_doubles(data, off)
+        start, n, _ = _doubles_layout(data, off)
     except struct.error as exc:
         raise CdrError(f'truncated Float64MultiArray ({len(data)} bytes)') from exc
-    return values
+    return start, n
+
+
+def decode_float64_array(data: bytes | memoryview) -> tuple[float, ...]:
+    """``data`` field of a ``std_msgs/msg/Float64MultiArray`` (layout is skipped)."""
+    start, n = _float64_array_layout(data)
+    return _doubles(n).unpack_from(data, start) if n else ()
 
 
 def decode_string(data: bytes | memoryview) -> str:
@@ -201,3 +207,77 @@ def encode_string(text: str) -> bytes:
     buf = bytearray(_HDR_LE)
     _put_string(buf, text)
     return bytes(buf)
+
+
+# --------------------------------------------------------------------------- batch decoders
+
+def _gather(buf: bytes, starts: Sequence[int], length: int) -> np.ndarray:
+    """(m, length) uint8 matrix of the equally long messages starting at ``starts``."""
+    raw = np.frombuffer(buf, dtype=np.uint8)
+    return raw[np.asarray(starts, dtype=np.intp)[:, None] + np.arange(length)]
+
+
+def _same_structure(rows: np.ndarray, first: np.ndarray, data_regions: list[tuple[int, int]],
+                    skip: tuple[int, int] | None) -> bool:
+    """All rows equal ``first`` outside the float regions (and the stamp bytes ``skip``)."""
+    mask = np.ones(first.size, dtype=bool)
+    for a, b in data_regions:
+        mask[a:b] = False
+    if skip is not None:
+        mask[skip[0]:skip[1]] = False
+    return bool(np.all(rows[:, mask] == first[mask]))
+
+
+def _doubles_layout(data: bytes | memoryview, off: int) -> tuple[int, int, int]:
+    """(data_start, count, next_offset) of a float64 sequence at ``off``."""
+    off = _align(off, 4)
+    (n,) = _U32.unpack_from(data, off)
+    off += 4
+    if n == 0:
+        return off, 0, off
+    off = _align(off, 8)
+    if off + 8 * n > len(data):
+        raise CdrError(f'float64 sequence of {n} at byte {off} exceeds the message')
+    return off, n, off + 8 * n
+
+
+def decode_joint_state_batch(buf: bytes, starts: Sequence[int], ends: Sequence[int]) -> tuple[
+        np.ndarray, tuple[str, ...], list[np.ndarray]] | None:
+    """Vectorised decode of JointStates that share names, frame_id and array lengths.
+
+    Returns ``(stamps_ns (m,), names, [position, velocity, effort] each (m, count))`` or
+    None when the messages differ in structure (the caller then decodes one by one).
+    """
+    length = ends[0] - starts[0]
+    if any(b - a != length for a, b in zip(starts, ends)):
+        return None
+    first_mv = memoryview(buf)[starts[0]:ends[0]]
+    try:
+        _check_header(first_mv)
+        names, off = JointStateDecoder()._decode_names(first_mv)
+        regions = []
+        for _ in range(3):
+            a, n, off = _doubles_layout(first_mv, off)
+            regions.append((a, a + 8 * n))
+    except struct.error as exc:
+        raise CdrError(f'truncated JointState ({length} bytes)') from exc
+    rows = _gather(buf, starts, length)
+    if not _same_structure(rows, rows[0], regions, (4, 12)):
+        return None
+    sec = rows[:, 4:8].copy().view('<i4')[:, 0].astype(np.int64)
+    nsec = rows[:, 8:12].copy().view('<u4')[:, 0].astype(np.int64)
+    arrays = [rows[:, a:b].copy().view('<f8') for a, b in regions]
+    return sec * 1_000_000_000 + nsec, names, arrays
+
+
+def decode_float64_array_batch(buf: bytes, starts: Sequence[int],
+                               ends: Sequence[int]) -> np.ndarray | None:
+    """Vectorised ``data`` of equally shaped Float64MultiArrays, (m, n); None if they differ."""
+    length = ends[0] - starts[0]
+    if any(b - a != length for a, b in zip(starts, ends)):
+        return None
+    start, n = _float64_array_layout(memoryview(buf)[starts[0]:ends[0]])
+    rows = _gather(buf, starts, length)
+    if not _same_structure(rows, rows[0], [(start, start + 8 * n)], None):
+        return None
+    return rows[:, start:start + 8 * n].copy().view('<f8')

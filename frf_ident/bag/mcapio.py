@@ -47,6 +47,17 @@ class ChannelInfo:
 
 
 @dataclass
+class Batch:
+    """Messages of one channel from one chunk: ``buf[starts[i]:ends[i]]`` is message i."""
+
+    channel: ChannelInfo
+    buf: bytes
+    logs: list[int]
+    starts: list[int]
+    ends: list[int]
+
+
+@dataclass
 class ScanStats:
     """What a scan read and what it had to give up on."""
 
@@ -152,46 +163,64 @@ class McapScanner:
         name, off = _string(buf, 0)
         self.metadata[name], _ = _string_map(buf, off)
 
-    def _records(self, buf: bytes | memoryview) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
-        """Messages of a chunk body (also parses the schema/channel records in it)."""
+    def _records(self, buf: bytes) -> Iterator[Batch]:
+        """Batches (one per wanted channel) of a chunk body; also parses schemas/channels.
+
+        Messages before a damaged record are still yielded; the error is raised afterwards.
+        """
+        batches: dict[int, Batch] = {}
+        error: Exception | None = None
         mv = memoryview(buf)
         off, end = 0, len(mv)
-        while off < end:
-            if off + 9 > end:
-                raise McapFormatError(f'record header cut at chunk byte {off}')
-            op, length = _REC.unpack_from(mv, off)
-            body = off + 9
-            off = body + length
-            if off > end:
-                raise McapFormatError(f'record of {length} bytes overruns its chunk')
-            if op == OP_MESSAGE:
-                cid, _, log_time, _ = _MSG.unpack_from(mv, body)
-                info = self._wanted.get(cid)
-                self.stats.messages += 1
-                if info is not None:
-                    yield info, log_time, mv[body + 22:off]
-                elif cid not in self._wanted:
-                    raise McapFormatError(f'message on unknown channel {cid}')
-            elif op == OP_SCHEMA:
-                self._on_schema(mv[body:off])
-            elif op == OP_CHANNEL:
-                self._on_channel(mv[body:off])
+        wanted = self._wanted
+        try:
+            while off < end:
+                if off + 9 > end:
+                    raise McapFormatError(f'record header cut at chunk byte {off}')
+                op, length = _REC.unpack_from(mv, off)
+                body = off + 9
+                off = body + length
+                if off > end or length < 22 and op == OP_MESSAGE:
+                    raise McapFormatError(f'record of {length} bytes overruns its chunk')
+                if op == OP_MESSAGE:
+                    cid, _, log_time, _ = _MSG.unpack_from(mv, body)
+                    self.stats.messages += 1
+                    info = wanted.get(cid)
+                    if info is not None:
+                        batch = batches.get(cid)
+                        if batch is None:
+                            batch = batches[cid] = Batch(info, buf, [], [], [])
+                        batch.logs.append(log_time)
+                        batch.starts.append(body + 22)
+                        batch.ends.append(off)
+                    elif cid not in wanted:
+                        raise McapFormatError(f'message on unknown channel {cid}')
+                elif op == OP_SCHEMA:
+                    self._on_schema(mv[body:off])
+                elif op == OP_CHANNEL:
+                    self._on_channel(mv[body:off])
+        except (McapFormatError, struct.error, UnicodeDecodeError) as exc:
+            error = exc
+        yield from batches.values()
+        if error is not None:
+            raise error
 
-    def _chunk(self, buf: bytes) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
+    def _chunk(self, buf: bytes) -> Iterator[Batch]:
         _, _, size, crc = _CHUNK.unpack_from(buf, 0)
         compression, off = _string(buf, _CHUNK.size)
         (n,) = _U64.unpack_from(buf, off)
         off += 8
         if off + n > len(buf):
             raise McapFormatError(f'chunk data of {n} bytes overruns the chunk record')
-        data = _decompress(compression, buf[off:off + n], size)
+        data = _decompress(compression, buf[off:off + n], size) if compression else \
+            buf[off:off + n]
         if crc and zlib.crc32(data) != crc:
             raise McapFormatError('chunk CRC mismatch')
         yield from self._records(data)
 
     # ------------------------------------------------------------------ main loop
-    def messages(self) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
-        """Yield ``(channel, log_time_ns, cdr_bytes)`` for every readable message.
+    def batches(self) -> Iterator[Batch]:
+        """Yield the wanted messages chunk by chunk, one :class:`Batch` per channel.
 
         Raises McapFormatError only when not even the MCAP magic is present.
         """
@@ -205,7 +234,14 @@ class McapScanner:
             yield from self._walk(f)
         st.bytes_lost = st.file_bytes - st.bytes_ok
 
-    def _walk(self, f: BinaryIO) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
+    def messages(self) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
+        """Yield ``(channel, log_time_ns, cdr_bytes)`` for every readable wanted message."""
+        for batch in self.batches():
+            mv = memoryview(batch.buf)
+            for log, a, b in zip(batch.logs, batch.starts, batch.ends):
+                yield batch.channel, log, mv[a:b]
+
+    def _walk(self, f: BinaryIO) -> Iterator[Batch]:
         st = self.stats
         pos = 8
         while True:
@@ -235,8 +271,7 @@ class McapScanner:
             if self.on_bytes:
                 self.on_bytes(9 + length)
 
-    def _top_record(self, op: int, buf: bytes,
-                    pos: int) -> Iterator[tuple[ChannelInfo, int, memoryview]]:
+    def _top_record(self, op: int, buf: bytes, pos: int) -> Iterator[Batch]:
         """Process one top-level record; a damaged one is counted as lost (returns False)."""
         try:
             if op == OP_CHUNK:

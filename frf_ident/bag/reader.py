@@ -24,8 +24,9 @@ from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import BagError
 
 from . import timing as tm
-from .cdr import CdrError, JointStateDecoder, decode_float64_array, decode_string
-from .mcapio import ChannelInfo, McapFormatError, McapScanner, ScanStats, read_summary
+from .cdr import (CdrError, JointStateDecoder, decode_float64_array,
+                  decode_float64_array_batch, decode_joint_state_batch, decode_string)
+from .mcapio import Batch, ChannelInfo, McapFormatError, McapScanner, ScanStats, read_summary
 from .topics import JOINT_STATE, BagTopics
 from .writer import FRF_BAG_KEY, grid_times
 
@@ -100,109 +101,175 @@ def _metadata_counts(meta: dict[str, Any] | None) -> dict[str, int]:
 
 # --------------------------------------------------------------------------- accumulation
 
-class _Blocks:
-    """Rows appended in Python batches, stored as numpy blocks (bounded memory)."""
+class _Table:
+    """Stamps, log times and value rows of one topic in preallocated, growing numpy arrays.
 
-    def __init__(self, width: int) -> None:
+    Preallocated from the message count in the summary/metadata when known, so memory is the
+    output arrays plus one chunk; otherwise capacity doubles as needed.
+    """
+
+    def __init__(self, width: int, capacity: int = 0) -> None:
         self.width = width
-        self.rows: list[tuple[float, ...]] = []
-        self.stamps: list[int] = []
-        self.logs: list[int] = []
-        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self.n = 0
+        cap = max(int(capacity), 1024)
+        self.stamps = np.empty(cap, dtype=np.int64)
+        self.logs = np.empty(cap, dtype=np.int64)
+        self.vals = np.empty((cap, width))
+        self._rows: list[tuple[float, ...]] = []
+        self._rstamps: list[int] = []
+        self._rlogs: list[int] = []
 
-    def add(self, stamp: int, log: int, row: tuple[float, ...]) -> None:
-        self.rows.append(row)
-        self.stamps.append(stamp)
-        self.logs.append(log)
-        if len(self.rows) >= _BLOCK:
+    def __len__(self) -> int:
+        return self.n + len(self._rows)
+
+    def _reserve(self, m: int) -> None:
+        need = self.n + m
+        if need <= self.stamps.size:
+            return
+        cap = max(need, 2 * self.stamps.size)
+        for name in ('stamps', 'logs', 'vals'):
+            old = getattr(self, name)
+            new = np.empty((cap,) + old.shape[1:], dtype=old.dtype)
+            new[:self.n] = old[:self.n]
+            setattr(self, name, new)
+
+    def add_block(self, stamps: np.ndarray | list[int], logs: np.ndarray | list[int],
+                  vals: np.ndarray) -> None:
+        self._seal()
+        m = len(stamps)
+        self._reserve(m)
+        self.stamps[self.n:self.n + m] = stamps
+        self.logs[self.n:self.n + m] = logs
+        self.vals[self.n:self.n + m] = vals
+        self.n += m
+
+    def add_row(self, stamp: int, log: int, row: tuple[float, ...]) -> None:
+        self._rows.append(row)
+        self._rstamps.append(stamp)
+        self._rlogs.append(log)
+        if len(self._rows) >= _BLOCK:
             self._seal()
 
     def _seal(self) -> None:
-        if self.rows:
-            vals = np.array(self.rows, dtype=float).reshape(len(self.rows), self.width)
-            self.blocks.append((np.array(self.stamps, dtype=np.int64),
-                                np.array(self.logs, dtype=np.int64), vals))
-            self.rows, self.stamps, self.logs = [], [], []
-
-    def __len__(self) -> int:
-        return sum(b[0].size for b in self.blocks) + len(self.rows)
+        if self._rows:
+            rows, stamps, logs = self._rows, self._rstamps, self._rlogs
+            self._rows, self._rstamps, self._rlogs = [], [], []
+            self.add_block(stamps, logs, np.array(rows, dtype=float).reshape(len(rows),
+                                                                               self.width))
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         self._seal()
-        if not self.blocks:
-            return (np.empty(0, np.int64), np.empty(0, np.int64), np.empty((0, self.width)))
-        out = tuple(np.concatenate([b[i] for b in self.blocks]) for i in range(3))
-        self.blocks = []
-        return out  # type: ignore[return-value]
+        return self.stamps[:self.n], self.logs[:self.n], self.vals[:self.n]
+
+
+_FIELDS = ('position', 'velocity', 'effort')
 
 
 class _JointTable:
     """Maps JointState messages (any joint order, missing joints/interfaces) onto columns."""
 
-    def __init__(self, joints: list[str] | None, fields: tuple[int, ...]) -> None:
-        self.joints = joints
+    def __init__(self, fields: tuple[int, ...], where: str, capacity: int) -> None:
         self.fields = fields  # which of (position, velocity, effort) to keep
+        self.where = where
+        self.capacity = capacity
+        self.joints: list[str] | None = None
+        self.data: _Table | None = None
         self.getters: dict[tuple[str, ...], Callable[[tuple[float, ...]], tuple[float, ...]]] = {}
-        self.data: _Blocks | None = None
-        self.pending: list[tuple[int, int, tuple[str, ...], tuple[tuple[float, ...], ...]]] = []
-        self.missing_joint_msgs = 0
+        self.columns: dict[tuple[str, ...], np.ndarray] = {}
+        self.pending: list[tuple[Any, ...]] = []
+        self.names_seen: set[str] = set()
+
+    def __len__(self) -> int:
+        return len(self.data) if self.data is not None else len(self.pending)
 
     def select(self, joints: list[str]) -> None:
-        self.joints = joints
-        self.data = _Blocks(len(joints) * len(self.fields))
-        for args in self.pending:
-            self.add(*args)
-        self.pending = []
+        self.joints = list(joints)
+        self.data = _Table(len(joints) * len(self.fields), self.capacity)
+        pending, self.pending = self.pending, []
+        for kind, *args in pending:
+            (self.add_batch if kind == 'batch' else self.add)(*args)
+
+    def _columns(self, names: tuple[str, ...]) -> np.ndarray:
+        cols = self.columns.get(names)
+        if cols is None:
+            assert self.joints is not None
+            pos = {n: i for i, n in enumerate(names)}
+            cols = np.array([pos.get(j, len(names)) for j in self.joints], dtype=np.intp)
+            self.columns[names] = cols
+            self.names_seen.update(names)
+        return cols
 
     def _getter(self, names: tuple[str, ...]) -> Callable[[tuple[float, ...]], tuple[float, ...]]:
-        assert self.joints is not None
-        pos = {n: i for i, n in enumerate(names)}
-        idx = [pos.get(j, len(names)) for j in self.joints]  # len(names) -> appended NaN
-        if len(idx) == 1:
-            i0 = idx[0]
-            return lambda v: (v[i0],)
-        return itemgetter(*idx)
-
-    def add(self, stamp: int, log: int, names: tuple[str, ...],
-            arrays: tuple[tuple[float, ...], ...], where: str = '') -> None:
-        if self.data is None:
-            self.pending.append((stamp, log, names, arrays))
-            return
         get = self.getters.get(names)
         if get is None:
-            if len(self.getters) > 1024:
-                self.getters.clear()
-            get = self.getters[names] = self._getter(names)
+            idx = [int(i) for i in self._columns(names)]  # len(names) -> appended NaN
+            if len(idx) == 1:
+                i0 = idx[0]
+                get = self.getters[names] = lambda v: (v[i0],)
+            else:
+                get = self.getters[names] = itemgetter(*idx)
+        return get
+
+    def _bad_length(self, f: int, got: int, n: int, stamp: int) -> BagError:
+        return BagError(f'{self.where}: JointState {_FIELDS[f]} has {got} values for {n} names '
+                        f'at stamp {stamp * 1e-9:.6f} s; expected {n} or none')
+
+    def add(self, stamp: int, log: int, names: tuple[str, ...],
+            arrays: tuple[tuple[float, ...], ...]) -> None:
+        """One decoded message."""
+        if self.data is None:
+            self.pending.append(('one', stamp, log, names, arrays))
+            return
+        get = self._getter(names)
         n = len(names)
-        nan_row = (_NAN,) * (n + 1)
         row: tuple[float, ...] = ()
         for f in self.fields:
             vals = arrays[f]
             if len(vals) == n:
                 row += get(vals + (_NAN,))
             elif not vals:
-                row += get(nan_row)
+                row += get((_NAN,) * (n + 1))
             else:
-                raise BagError(f'{where}: JointState {("position", "velocity", "effort")[f]} has '
-                               f'{len(vals)} values for {n} names at stamp {stamp * 1e-9:.6f} s')
-        self.data.add(stamp, log, row)
+                raise self._bad_length(f, len(vals), n, stamp)
+        self.data.add_row(stamp, log, row)
+
+    def add_batch(self, stamps: np.ndarray, logs: list[int], names: tuple[str, ...],
+                  arrays: list[np.ndarray]) -> None:
+        """Messages of one chunk sharing names and array lengths (vectorised)."""
+        if self.data is None:
+            self.pending.append(('batch', stamps, logs, names, arrays))
+            return
+        cols = self._columns(names)
+        n, m = len(names), stamps.size
+        present = cols < n
+        out = np.full((m, len(cols) * len(self.fields)), np.nan)
+        for i, f in enumerate(self.fields):
+            vals = arrays[f]
+            if vals.shape[1] == n:
+                out[:, i * len(cols):(i + 1) * len(cols)][:, present] = vals[:, cols[present]]
+            elif vals.shape[1]:
+                raise self._bad_length(f, vals.shape[1], n, int(stamps[0]))
+        self.data.add_block(stamps, logs, out)
 
 
 class _Collector:
     """Decodes the wanted topics of a scan into tables and events."""
 
-    def __init__(self, bag: BagFiles, topics: BagTopics, joints: list[str] | None) -> None:
+    def __init__(self, bag: BagFiles, topics: BagTopics, joints: list[str] | None,
+                 counts: dict[str, int]) -> None:
         self.bag = bag
         self.topics = topics
+        self.counts = counts
         self.expected = {t: ty for t, ty in topics.expected_types().items()
                          if t != topics.effort_commands}
-        self.js = _JointTable(list(joints) if joints else None, (0, 1, 2))
-        self.exc = _JointTable(None, (1,))
+        self.js = _JointTable((0, 1, 2), f'{bag.name}: {topics.joint_states}',
+                              counts.get(topics.joint_states, 0))
+        self.exc = _JointTable((1,), f'{bag.name}: {topics.excitation}',
+                               counts.get(topics.excitation, 0))
         if joints:
             self.js.select(list(joints))
             self.exc.select(list(joints))
-        self.exc_seen = False
-        self.ref: _Blocks | None = None
+        self.ref: _Table | None = None
         self.ref_width = -1
         self.events: list[tuple[int, str]] = []
         self.js_first_names: tuple[str, ...] | None = None
@@ -220,53 +287,93 @@ class _Collector:
                            f'{ch.encoding!r}; expected cdr')
         self.checked.add(ch.id)
 
-    def feed(self, ch: ChannelInfo, log: int, data: memoryview) -> None:
+    def feed(self, batch: Batch) -> None:
+        ch = batch.channel
         if ch.id not in self.checked:
             self.check_channel(ch)
         t = self.topics
         try:
             if ch.topic == t.joint_states:
-                self._joint_state(log, data)
-            elif ch.topic == t.velocity_commands:
-                self._command(log, data)
+                self._joint_states(batch, self.js, self.dec_js, first=True)
             elif ch.topic == t.excitation:
-                stamp, names, arrays = self.dec_exc.decode(data)
-                self.exc_seen = True
-                self.exc.add(stamp, log, names, arrays, f'{self.bag.name}: {ch.topic}')
+                self._joint_states(batch, self.exc, self.dec_exc, first=False)
+            elif ch.topic == t.velocity_commands:
+                self._commands(batch)
             elif ch.topic == t.experiment:
-                self.events.append((log, decode_string(data)))
+                mv = memoryview(batch.buf)
+                for log, a, b in zip(batch.logs, batch.starts, batch.ends):
+                    self.events.append((log, decode_string(mv[a:b])))
         except CdrError as exc:
-            raise BagError(f'{self.bag.name}: malformed {ch.msgtype} on {ch.topic} at log time '
-                           f'{log * 1e-9:.6f} s: {exc}') from None
+            raise BagError(f'{self.bag.name}: malformed {ch.msgtype} on {ch.topic} near log time '
+                           f'{batch.logs[0] * 1e-9:.6f} s: {exc}') from None
 
-    def _joint_state(self, log: int, data: memoryview) -> None:
-        stamp, names, arrays = self.dec_js.decode(data)
-        if self.js_first_names is None:
-            self.js_first_names = names
-            if self.js.joints is None:
-                if not names:
-                    raise BagError(f'{self.bag.name}: first {self.topics.joint_states} message '
-                                   f'has no joint names')
-                self.js.select(list(names))
-                self.exc.select(list(names))
-        self.js.add(stamp, log, names, arrays, f'{self.bag.name}: {self.topics.joint_states}')
+    def _first_names(self, names: tuple[str, ...]) -> None:
+        self.js_first_names = names
+        if self.js.joints is None:
+            if not names:
+                raise BagError(f'{self.bag.name}: first {self.topics.joint_states} message '
+                               f'has no joint names')
+            self.js.select(list(names))
+            self.exc.select(list(names))
 
-    def _command(self, log: int, data: memoryview) -> None:
-        vals = decode_float64_array(data)
+    def _joint_states(self, batch: Batch, table: _JointTable, dec: JointStateDecoder,
+                      first: bool) -> None:
+        fast = decode_joint_state_batch(batch.buf, batch.starts, batch.ends) \
+            if len(batch.starts) > 8 else None
+        if fast is not None:
+            stamps, names, arrays = fast
+            if first and self.js_first_names is None:
+                self._first_names(names)
+            table.add_batch(stamps, batch.logs, names, arrays)
+            return
+        mv = memoryview(batch.buf)
+        for log, a, b in zip(batch.logs, batch.starts, batch.ends):
+            stamp, names, arrays = dec.decode(mv[a:b])
+            if first and self.js_first_names is None:
+                self._first_names(names)
+            table.add(stamp, log, names, arrays)
+
+    def _commands(self, batch: Batch) -> None:
+        fast = decode_float64_array_batch(batch.buf, batch.starts, batch.ends) \
+            if len(batch.starts) > 8 else None
+        if fast is not None:
+            self._ref_table(fast.shape[1], batch.logs[0]).add_block(batch.logs, batch.logs, fast)
+            return
+        mv = memoryview(batch.buf)
+        for log, a, b in zip(batch.logs, batch.starts, batch.ends):
+            vals = decode_float64_array(mv[a:b])
+            self._ref_table(len(vals), log).add_row(log, log, vals)
+
+    def _ref_table(self, width: int, log: int) -> _Table:
         if self.ref is None:
-            self.ref_width = len(vals)
-            self.ref = _Blocks(len(vals))
-        if len(vals) != self.ref_width:
-            raise BagError(f'{self.bag.name}: {self.topics.velocity_commands} data has {len(vals)}'
-                           f' values at log time {log * 1e-9:.6f} s; earlier messages had '
+            self.ref_width = width
+            self.ref = _Table(width, self.counts.get(self.topics.velocity_commands, 0))
+        if width != self.ref_width:
+            raise BagError(f'{self.bag.name}: {self.topics.velocity_commands} data has {width} '
+                           f'values at log time {log * 1e-9:.6f} s; earlier messages had '
                            f'{self.ref_width}')
-        self.ref.add(log, log, vals)
+        return self.ref
 
 
 # --------------------------------------------------------------------------- scanning
 
-def _scan(bag: BagFiles, topics: set[str], progress: bool,
-          sink: Callable[[ChannelInfo, int, memoryview], None]) -> list[ScanStats]:
+def _expected_counts(bag: BagFiles) -> dict[str, int]:
+    """Message count per topic from metadata.yaml, else from the MCAP summaries (or {})."""
+    counts = _metadata_counts(bag.metadata)
+    if counts:
+        return counts
+    for f in bag.files:
+        summ = read_summary(f)
+        if summ is None:
+            return {}
+        chans, per_channel, _, _ = summ
+        for cid, ch in chans.items():
+            counts[ch.topic] = counts.get(ch.topic, 0) + per_channel.get(cid, 0)
+    return counts
+
+
+def _scan(bag: BagFiles, topics: set[str] | None, progress: bool,
+          sink: Callable[[Batch], None]) -> list[ScanStats]:
     total = sum(f.stat().st_size for f in bag.files)
     bar_cm: Any = nullcontext(None)
     if progress:
@@ -277,16 +384,16 @@ def _scan(bag: BagFiles, topics: set[str], progress: bool,
         for f in bag.files:
             scanner = McapScanner(f, topics, on_bytes=bar.update if bar is not None else None)
             try:
-                for ch, log, data in scanner.messages():
-                    sink(ch, log, data)
+                for batch in scanner.batches():
+                    sink(batch)
             except McapFormatError as exc:
                 raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
             stats.append(scanner.stats)
     return stats
 
 
-def _recovery(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str, int]) -> dict[str, Any]:
-    expected = _metadata_counts(bag.metadata)
+def _recovery(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str, int],
+              expected: dict[str, int]) -> dict[str, Any]:
     rec: dict[str, Any] = {
         'complete': all(s.complete for s in stats),
         'bytes_lost': sum(s.bytes_lost for s in stats),
@@ -337,14 +444,15 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
 def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
           t_range: tuple[float, float] | None,
           progress: bool) -> tuple[Recording, tm.TimingReport]:
-    col = _Collector(bag, topics, joints)
+    expected = _expected_counts(bag)
+    col = _Collector(bag, topics, joints, expected)
     stats = _scan(bag, set(col.expected), progress, col.feed)
-    n_js = len(col.js.data) if col.js.data is not None else len(col.js.pending)
+    n_js = len(col.js)
     read_counts = {topics.joint_states: n_js,
                    topics.velocity_commands: len(col.ref) if col.ref else 0,
-                   topics.excitation: len(col.exc.data) if col.exc.data else 0,
+                   topics.excitation: len(col.exc),
                    topics.experiment: len(col.events)}
-    recovery = _recovery(bag, stats, read_counts)
+    recovery = _recovery(bag, stats, read_counts, expected)
     if col.js.data is None or n_js == 0:
         present = sorted({t for s in stats for t in s.topics})
         raise BagError(f'{bag.name}: no messages on {topics.joint_states} (expected '
@@ -417,11 +525,12 @@ def _assemble(bag: BagFiles, col: _Collector, topics: BagTopics, meta: dict[str,
     if src == 'log':
         warnings.append(f'{topics.joint_states} header stamps are unset; using log time')
         stamps = logs
-    sel = _window(stamps, t_range)
-    if not np.any(sel):
-        raise BagError(f'{bag.name}: no {topics.joint_states} samples in {t_range=} '
-                       f'(bag covers {stamps.min() * 1e-9:.3f}..{stamps.max() * 1e-9:.3f} s)')
-    stamps, logs, vals = stamps[sel], logs[sel], vals[sel]
+    if t_range is not None:
+        sel = _window(stamps, t_range)
+        if not np.any(sel):
+            raise BagError(f'{bag.name}: no {topics.joint_states} samples in {t_range=} (bag '
+                           f'covers {stamps.min() * 1e-9:.3f}..{stamps.max() * 1e-9:.3f} s)')
+        stamps, logs, vals = stamps[sel], logs[sel], vals[sel]
     nj = len(joint_names)
     _check_joints(bag, topics, joint_names, vals, col)
     st = tm.analyse(topics.joint_states, stamps, logs, src)
@@ -432,7 +541,7 @@ def _assemble(bag: BagFiles, col: _Collector, topics: BagTopics, meta: dict[str,
     k_last = int(st.k[-1])
     grid_ns = st.ns[0] + np.arange(k_last + 1) * st.dt_ns  # float ns
     t = exact_t if exact_t is not None else grid_ns * 1e-9
-    values = vals[st.order]
+    values = vals if _is_identity(st.order, vals.shape[0]) else vals[st.order]
     _check_finite(bag, topics, joint_names, values, st.ns)
     if exact:
         cols = values
@@ -459,6 +568,10 @@ def _assemble(bag: BagFiles, col: _Collector, topics: BagTopics, meta: dict[str,
     return rec, report
 
 
+def _is_identity(order: np.ndarray, n: int) -> bool:
+    return order.size == n and bool(np.all(order == np.arange(n)))
+
+
 def _frf_grid(frf: Any, st: tm.Stamps) -> np.ndarray | None:
     """The writer's exact float time grid, if the bag's stamps are exactly on it."""
     if not isinstance(frf, dict) or not isinstance(frf.get('time'), dict):
@@ -481,7 +594,7 @@ def _check_joints(bag: BagFiles, topics: BagTopics, joint_names: list[str], vals
                   col: _Collector) -> None:
     """A selected joint that no message carries is an error naming what is there."""
     nj = len(joint_names)
-    seen = set(col.js_first_names or ()) | {n for names in col.js.getters for n in names}
+    seen = set(col.js_first_names or ()) | col.js.names_seen
     for j, name in enumerate(joint_names):
         if name not in seen:
             raise BagError(f'{bag.name}: joint {name!r} not found in {topics.joint_states} '
@@ -674,9 +787,11 @@ def reindex(path: str | Path, out: str | Path) -> Path:
     rec = BagRecorder(chunk_bytes=1 << 20, flush_period_s=1e9)
     rec.open(out)
     try:
-        def copy(ch: ChannelInfo, log: int, data: memoryview) -> None:
-            rec.write(ch.topic, ch.msgtype, log, bytes(data))
-        _scan(bag, None, False, copy)  # type: ignore[arg-type]
+        def copy(batch: Batch) -> None:
+            ch = batch.channel
+            for log, a, b in zip(batch.logs, batch.starts, batch.ends):
+                rec.write(ch.topic, ch.msgtype, log, batch.buf[a:b])
+        _scan(bag, None, False, copy)
     finally:
         rec.close()
     return Path(out)
