@@ -14,6 +14,13 @@ from cyclonedds.idl import IdlStruct, make_idl_struct
 import cyclonedds.idl.types as t
 
 
+def _as_list(value: Any) -> list:
+    """Sequences as lists: Cyclone's serializer tests ``if value:``, which numpy arrays refuse."""
+    if isinstance(value, list):
+        return value
+    return value.tolist() if hasattr(value, 'tolist') else list(value)
+
+
 def _dds_name(ros_type: str) -> str:
     """``pkg/msg/Type`` -> ``pkg::msg::dds_::Type_`` (rosidl_typesupport / rmw_cyclonedds)."""
     pkg, kind, name = ros_type.split('/')
@@ -55,6 +62,9 @@ class Float64MultiArray(IdlStruct, typename=_dds_name('std_msgs/msg/Float64Multi
     layout: MultiArrayLayout = field(default_factory=MultiArrayLayout)
     data: t.sequence[t.float64] = field(default_factory=list)
 
+    def __post_init__(self) -> None:  # accept numpy arrays and tuples like rclpy does
+        self.data = _as_list(self.data)
+
 
 @dataclass
 class JointState(IdlStruct, typename=_dds_name('sensor_msgs/msg/JointState')):
@@ -63,6 +73,12 @@ class JointState(IdlStruct, typename=_dds_name('sensor_msgs/msg/JointState')):
     position: t.sequence[t.float64] = field(default_factory=list)
     velocity: t.sequence[t.float64] = field(default_factory=list)
     effort: t.sequence[t.float64] = field(default_factory=list)
+
+    def __post_init__(self) -> None:  # accept numpy arrays and tuples like rclpy does
+        self.name = _as_list(self.name)
+        self.position = _as_list(self.position)
+        self.velocity = _as_list(self.velocity)
+        self.effort = _as_list(self.effort)
 
 
 @dataclass

@@ -140,6 +140,14 @@ def test_trigger_reply_framing_matches_doc_example():
     assert data[:4] + body == reference
 
 
+def test_numpy_arrays_are_accepted():
+    js = rt.JointState(name=('a', 'b'), position=np.array([1.0, 2.0]), velocity=np.zeros(2),
+                       effort=np.arange(2.0))
+    assert rt.JointState.deserialize(js.serialize()).position == [1.0, 2.0]
+    cmd = rt.Float64MultiArray(data=np.array([0.5, -0.5]))
+    assert rt.Float64MultiArray.deserialize(cmd.serialize()).data == [0.5, -0.5]
+
+
 def test_messages_construct_with_ros_keywords_and_defaults():
     js = rt.JointState()
     assert js.header.stamp.sec == 0 and js.name == [] and js.effort == []
