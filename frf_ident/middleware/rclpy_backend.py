@@ -24,8 +24,14 @@ from frf_ident.middleware.qos import as_qos_spec, QosSpec
 BACKEND_NAME = 'rclpy'
 
 
-def to_qos_profile(qos: 'QosSpec | int') -> QoSProfile:
-    """Backend-neutral QoS -> rclpy QoSProfile (unset policies keep rmw defaults)."""
+def to_qos_profile(qos: 'QosSpec | int | QoSProfile') -> QoSProfile:
+    """Backend-neutral QoS -> rclpy QoSProfile (unset policies keep rmw defaults).
+
+    A QoSProfile passes through unchanged: rclpy's own Node internals (parameter events,
+    TimeSource's /clock subscription) call the overridden create_* methods with one.
+    """
+    if isinstance(qos, QoSProfile):
+        return qos
     spec = as_qos_spec(qos)
     return QoSProfile(
         history=HistoryPolicy.KEEP_LAST, depth=spec.depth,
@@ -106,12 +112,12 @@ class Node(RclpyNode):
             descriptor = ParameterDescriptor(dynamic_typing=True)
         return super().declare_parameter(name, value, descriptor, ignore_override)
 
-    def create_publisher(self, msg_type: Any, topic: str, qos: 'QosSpec | int',
+    def create_publisher(self, msg_type: Any, topic: str, qos: 'QosSpec | int | QoSProfile',
                          **kwargs: Any) -> Any:
         return super().create_publisher(msg_type, topic, to_qos_profile(qos), **kwargs)
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], None],
-                            qos: 'QosSpec | int', **kwargs: Any) -> Any:
+                            qos: 'QosSpec | int | QoSProfile', **kwargs: Any) -> Any:
         return super().create_subscription(msg_type, topic, callback, to_qos_profile(qos),
                                            **kwargs)
 
