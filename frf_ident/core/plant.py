@@ -580,7 +580,9 @@ class FlexibleJointPlant:
         return np.array([a.gravity_torque for a in self.params.axes], dtype=float)
 
     def reset(self, seed: int | None = None) -> None:
-        """Back to rest at the static equilibrium under gravity, noise generator re-seeded."""
+        """Back to rest at the static equilibrium under gravity.
+
+        The noise generator continues (new noise in every run) unless ``seed`` is given."""
         n = self.n_axes
         self.x = np.zeros(4 * n)  # flat [q_m, v_m, q_o, v_o]; see ``state``
         self.x[:n] = [static_deflection(a) for a in self.params.axes]
@@ -590,7 +592,8 @@ class FlexibleJointPlant:
                                                       + 0.5), self.qprev)
         self.buf = np.tile(self.equilibrium_torque(), (self._packed.nbuf, 1))
         self.k = 0
-        self.rng = np.random.default_rng(self.params.seed if seed is None else seed)
+        if seed is not None or not hasattr(self, 'rng'):
+            self.rng = np.random.default_rng(self.params.seed if seed is None else seed)
 
     def _noise(self, n_samples: int) -> tuple[np.ndarray, np.ndarray]:
         p = self._packed

@@ -1,8 +1,6 @@
 """Synthetic recordings for the bag tests (3 joints of sines, built with numpy)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from frf_ident.core.recording import Recording, Segment
@@ -29,8 +27,6 @@ def make_recording(seconds: float = 5.0, fs: float = 1000.0, t0: float = 0.0) ->
             Segment(t0 + 2.1, t0 + seconds - 0.5, {'design': 'chirp', 'iteration': 1})]
     meta = {'seed': 7, 'model': {'axes': 3}, 'note': 'synthetic'}
     return Recording(t, list(JOINTS), pos, vel, eff, ref, exc, segs, meta)
-
-
 
 
 def truth(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -17,7 +17,7 @@ from frf_ident.bag import BagRecorder, bag_info, read_recording, reindex
 from frf_ident.bag.cdr import JointStateEncoder
 from frf_ident.errors import BagError
 
-CHILD = textwrap.dedent('''
+CHILD = textwrap.dedent("""
     import signal, sys, time
     import numpy as np
     from frf_ident.bag import BagRecorder
@@ -47,7 +47,7 @@ CHILD = textwrap.dedent('''
             print(k, flush=True)
             time.sleep(0.01)
     print('closed', k, flush=True)
-''')
+""")
 
 
 def _spawn(path: Path, mode: str) -> subprocess.Popen[str]:

@@ -190,7 +190,10 @@ def test_bad_arguments(small_bag: Path) -> None:
 
 # --------------------------------------------------------------------------- fuzz
 
-@settings(max_examples=int(os.environ.get("FRF_FUZZ_EXAMPLES", "50")), deadline=None,
+FUZZ_EXAMPLES = int(os.environ.get('FRF_FUZZ_EXAMPLES', '50'))
+
+
+@settings(max_examples=FUZZ_EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(data=st.data())
 def test_fuzz_truncation_and_corruption(chunky_bag: Path, data: st.DataObject) -> None:

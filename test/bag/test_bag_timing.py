@@ -104,3 +104,32 @@ def test_header_stamps_unset_use_log_time(tmp_path: Path) -> None:
     assert rep.dt_s == pytest.approx(2e-3)
     assert any('header stamps are unset' in w for w in rep.warnings)
     np.testing.assert_array_equal(rec.position[:, 0], np.arange(500.0))
+
+
+def test_slow_commands_are_zero_order_held(tmp_path: Path) -> None:
+    """A ros2_control-style bag: 1 kHz joint states, velocity commands at 100 Hz (log time)."""
+    f64 = None
+
+    def extra(w, store):  # noqa: ANN001
+        nonlocal f64
+        f64 = store.types['std_msgs/msg/Float64MultiArray']
+        lay = store.types['std_msgs/msg/MultiArrayLayout']
+        c = w.add_connection('/velocity_controller/commands', f64.__msgtype__, typestore=store,
+                             offered_qos_profiles=[QOS_DEFAULT])
+        for i in range(100):  # 100.000 .. 100.990 s; value i on every joint
+            m = f64(layout=lay(dim=[], data_offset=0), data=np.full(3, float(i)))
+            raw = store.serialize_cdr(m, f64.__msgtype__)
+            w.write(c, int(round((100.0 + 0.01 * i) * 1e9)), raw)
+
+    from frf_ident.bag.topics import QOS_DEFAULT
+
+    write_robot_bag(tmp_path / 'zoh', seconds=1.5, jitter=0.0, drop=0.0, extra=extra)
+    rec, rep = read_recording(tmp_path / 'zoh')
+    t_cmd = 100.0 + 0.01 * np.arange(100)
+    idx = np.searchsorted(np.round(t_cmd * 1e9), np.round(rec.t * 1e9), side='right') - 1
+    expect = np.where(rec.t - t_cmd[idx] <= 0.03 + 1e-9, idx, -1).astype(float)
+    expect[expect < 0] = np.nan
+    np.testing.assert_array_equal(rec.reference[:, 0], expect)
+    assert np.isnan(rec.reference[-1, 0])  # held 30 ms (3 command periods), then NaN
+    assert any('unequal rates' in w for w in rep.warnings)
+    assert rep.topics['/velocity_controller/commands'].rate_hz == pytest.approx(100.0)

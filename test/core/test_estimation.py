@@ -1,0 +1,94 @@
+"""Estimators against analytic truth and Monte-Carlo truth."""
+import numpy as np
+import pytest
+
+from frf_ident.core.analytic import robot_frf
+from frf_ident.core.chirp import ChirpDesign, chirp_phase_flips
+from frf_ident.core.estimation import (best_linear_approximation, frf_from_reference,
+                                       frf_from_spectra)
+from frf_ident.core.experiments import run_open_loop_chirp, run_open_loop_multisine
+from frf_ident.core.model import default_robot
+from frf_ident.core.multisine import design_odd_multisine, multisine_realisation
+from frf_ident.core.plant import AxisParams, FlexibleJointPlant, RobotParams
+from frf_ident.errors import EstimationError
+
+FS = 1000.0
+
+
+def test_eq7_exact_for_known_spectra_and_rank_check():
+    rng = np.random.default_rng(0)
+    P = rng.normal(size=(2, 3, 5)) + 1j * rng.normal(size=(2, 3, 5))
+    U = rng.normal(size=(5, 3, 4)) + 1j * rng.normal(size=(5, 3, 4))
+    Y = np.einsum('oif,fie->foe', P, U)
+    Ph, cond = frf_from_spectra(Y, U)
+    assert np.allclose(Ph, P) and np.all(cond >= 1)
+    with pytest.raises(EstimationError, match='n_ex=2'):
+        frf_from_spectra(Y[:, :, :2], U[:, :, :2])
+    Pr, _ = frf_from_reference(Y, U, U.conj() + 0.3 * U)
+    assert np.allclose(Pr, P)
+
+
+def test_multisine_bla_exact_on_linear_mimo_plant():
+    """3x3 with link coupling, eq. 9 excitation: the closed-form continuous MIMO FRF."""
+    # open loop without viscous friction and gravity, so one transient period suffices
+    rob = default_robot().with_axes(viscous_friction=0.0, gravity_torque=0.0)
+    plant = FlexibleJointPlant(rob)
+    d = design_odd_multisine(2.0, 60.0, bound=50.0, resolution_hz=0.5, fs=FS)
+    run = run_open_loop_multisine(plant, d, n_realisations=2, n_periods=2,
+                                  rng=np.random.default_rng(1))
+    truth = robot_frf(rob, d.freq_hz)
+    err = np.abs(run.frf.response / truth - 1)
+    assert np.max(err) < 1e-4          # quadratic input interpolation at 1 kHz; < 0.001 dB
+    assert run.frf.meta['cond_max'] < 1.5
+
+
+def test_chirp_estimate_on_linear_mimo_plant():
+    rob = default_robot().with_axes(viscous_friction=0.0, gravity_torque=0.0)
+    rob.substeps = 2
+    plant = FlexibleJointPlant(rob)
+    d = ChirpDesign(2.0, 60.0, 20.0, np.array([[100.0], [150.0], [120.0]]))
+    run = run_open_loop_chirp(plant, d, chirp_phase_flips(3))
+    truth = robot_frf(rob, run.frf.freq_hz)
+    err_db = 20 * np.log10(np.abs(run.frf.response / truth))
+    diag = err_db[[0, 1, 2], [0, 1, 2]]
+    assert np.median(np.abs(diag)) < 0.1
+    # eq. 26 excitation is well conditioned for eq. 7
+    assert run.frf.meta['cond_max'] < 5
+
+
+def _nonlinear_plant(seed):
+    ax = AxisParams(stiffness_k2=4.5e5, stiffness_breakpoint=1.5e-4, velocity_noise=4e-5,
+                    torque_limit=1e4)
+    return FlexibleJointPlant(RobotParams([ax], sample_rate=FS, substeps=1, seed=seed))
+
+
+def test_bla_variances_agree_with_monte_carlo():
+    """Noise variance (from periods) and total variance (from realisations) of the BLA agree
+    with the Monte-Carlo spread of the BLA over repeated experiments within 25 %."""
+    d = design_odd_multisine(2.0, 40.0, bound=60.0, resolution_hz=0.5, fs=FS)
+    n_p, n_q, runs = 6, 4, 40
+    fixed = [multisine_realisation(d, 1, np.random.default_rng(100 + p), fs=FS)
+             for p in range(n_p)]
+    noise_only, full = [], []
+    for r in range(runs):
+        # noise-only repetitions: same phases, new noise
+        a = run_open_loop_multisine(_nonlinear_plant(r), d, n_realisations=n_p, n_periods=n_q,
+                                    rng=np.random.default_rng(0), realisations=fixed)
+        noise_only.append(a)
+        # full repetitions: new phases and new noise
+        b = run_open_loop_multisine(_nonlinear_plant(1000 + r), d, n_realisations=n_p,
+                                    n_periods=n_q, rng=np.random.default_rng(5000 + r))
+        full.append(b)
+    P_noise = np.stack([a.frf.response[0, 0] for a in noise_only])
+    mc_noise = np.var(P_noise, axis=0, ddof=1)
+    pred_noise = np.mean([a.bla.noise_variance[0, 0] for a in noise_only], axis=0)
+    P_full = np.stack([b.frf.response[0, 0] for b in full])
+    mc_total = np.var(P_full, axis=0, ddof=1)
+    pred_total = np.mean([b.bla.total_variance[0, 0] for b in full], axis=0)
+    ratio_noise = np.mean(pred_noise) / np.mean(mc_noise)
+    ratio_total = np.mean(pred_total) / np.mean(mc_total)
+    assert 0.75 < ratio_noise < 1.25, ratio_noise
+    assert 0.75 < ratio_total < 1.25, ratio_total
+    # the nonlinearity is active: nonlinear variance well above noise variance
+    nl = np.mean([b.bla.nonlinear_variance[0, 0] for b in full], axis=0)
+    assert np.mean(nl) > 3 * np.mean(pred_noise)
