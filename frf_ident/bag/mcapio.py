@@ -304,7 +304,10 @@ class McapScanner:
             st.problems.append('file does not end with the MCAP magic (summary damaged)')
 
 
-def read_summary(path: Path | str) -> tuple[dict[int, ChannelInfo], dict[int, int], int, int] | None:
+Summary = tuple[dict[int, ChannelInfo], dict[int, int], int, int]
+
+
+def read_summary(path: Path | str) -> Summary | None:
     """Channels, per-channel message counts and start/end log time from the MCAP summary.
 
     Returns None when the file has no intact summary with a statistics record (then the
@@ -316,7 +319,7 @@ def read_summary(path: Path | str) -> tuple[dict[int, ChannelInfo], dict[int, in
         return None
 
 
-def _read_summary(path: Path) -> tuple[dict[int, ChannelInfo], dict[int, int], int, int] | None:
+def _read_summary(path: Path) -> Summary | None:
     with path.open('rb') as f:
         size = f.seek(0, 2)
         if size < 8 + 9 + 20 + 8:

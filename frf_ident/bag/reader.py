@@ -84,8 +84,8 @@ def _load_metadata(meta_path: Path) -> dict[str, Any]:
         if not isinstance(info, dict):
             raise TypeError('not a mapping')
     except (OSError, yaml.YAMLError, KeyError, TypeError, UnicodeDecodeError) as exc:
-        raise BagError(f'{meta_path}: not a rosbag2 metadata.yaml '
-                       f'(expected key rosbag2_bagfile_information): {type(exc).__name__}') from None
+        raise BagError(f'{meta_path}: not a rosbag2 metadata.yaml (expected key '
+                       f'rosbag2_bagfile_information): {type(exc).__name__}') from None
     return info
 
 
@@ -154,8 +154,8 @@ class _Table:
         if self._rows:
             rows, stamps, logs = self._rows, self._rstamps, self._rlogs
             self._rows, self._rstamps, self._rlogs = [], [], []
-            self.add_block(stamps, logs, np.array(rows, dtype=float).reshape(len(rows),
-                                                                               self.width))
+            vals = np.array(rows, dtype=float).reshape(len(rows), self.width)
+            self.add_block(stamps, logs, vals)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         self._seal()
@@ -456,7 +456,8 @@ def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
     if col.js.data is None or n_js == 0:
         present = sorted({t for s in stats for t in s.topics})
         raise BagError(f'{bag.name}: no messages on {topics.joint_states} (expected '
-                       f'{JOINT_STATE}; topics present: {present or "none"}){_lost_hint(recovery)}')
+                       f'{JOINT_STATE}; topics present: {present or "none"})'
+                       f'{_lost_hint(recovery)}')
     meta, segments, warnings = _experiment(col.events, bag, topics)
     return _assemble(bag, col, topics, meta, segments, warnings, recovery, t_range)
 

@@ -431,4 +431,3 @@ def _value(ts: Typestore, spec: tuple[Any, Any], v: Any) -> Any:
     if int(elem[0]) == 1 and elem[1][0] in _BASE_DTYPES:
         return np.asarray(items, dtype=_BASE_DTYPES[elem[1][0]])
     return [_value(ts, elem, x) for x in items]
-
