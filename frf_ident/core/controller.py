@@ -55,7 +55,8 @@ class PIVelocity:
         e = np.asarray(reference, dtype=float) - np.asarray(measured, dtype=float)
         ff = np.zeros(self.n_axes) if feedforward is None else np.asarray(feedforward, float)
         u = np.empty(self.n_axes)
-        _pi_step(e, self.integral, self.kp, self.ki, ff, self.torque_limit, self.dt, u)
+        _pi_step(e, self.integral, self.kp, self.ki, ff.reshape(1, -1), 0, self.torque_limit,
+                 self.dt, u)
         return u
 
     def copy(self) -> 'PIVelocity':

@@ -325,14 +325,16 @@ def _spring(e, k1, k2, bs):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _residual(x, prm, ra, rs, rp, wm, wo):
+def _residual(x, prm, ra, rs, rp, sc, row):
     """Nonlinear residual torques beyond the linear model (k1, d) at flat state x.
 
-    Motor side wm = ripple - (tau_s - k1 dq) - (tau_d - d dv) and link side
-    wo = (tau_s - k1 dq) + (tau_d - d dv) (gravity is a constant input, see _exp_substep), with tau_s of eq. 2 behind the backlash
-    dead zone and the transmission damping acting only in contact.
+    Writes sc[row, :n] = motor side ripple - (tau_s - k1 dq) - (tau_d - d dv) and
+    sc[row, n:2n] = link side (tau_s - k1 dq) + (tau_d - d dv), with tau_s of eq. 2 behind the
+    backlash dead zone and the transmission damping acting only in contact. Gravity is a
+    constant input (see _exp_substep). Kernels index preallocated rows instead of slicing, as
+    array views cost reference counting in the hot loop.
     """
-    n = wm.shape[0]
+    n = prm.shape[0]
     for i in range(n):
         qm = x[i]
         dq = qm - x[2 * n + i]
@@ -354,48 +356,53 @@ def _residual(x, prm, ra, rs, rp, wm, wo):
             a = ra[i, j]
             if a != 0.0:
                 rip += a * math.sin(rs[i, j] * qm + rp[i, j])
-        wm[i] = rip - res
-        wo[i] = res
+        sc[row, i] = rip - res
+        sc[row, n + i] = res
+
+
+# rows of the kernels' scratch array
+_UO, _UN, _FA, _FM, _FB, _LIN, _XP, _W1, _W2, _NSCRATCH = range(10)
 
 
 @numba.njit(cache=True, fastmath=True)
-def _exp_substep(x, uo, un, go, gn, fa, fm, fb, has_ff, prm, ad, ga, gm, gb, gw, cg, ra, rs,
-                 rp, nonlinear, h, lin, xp, w, w2):
+def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp,
+                 nonlinear, h):
     """One substep of the exponential integrator, then Coulomb friction.
 
     Linear part exact: x+ = Ad x + Go uo + Gn un + cg for the delayed zero-order-held command
-    (older / newer value), plus Ga fa + Gm fm + Gb fb for a feed-forward torque quadratic
-    through its values at start, middle and end of the substep; cg the constant gravity load. Nonlinear residual torques w(x) by the
-    exponential Heun (trapezoidal) rule: x+ += Gw (w(x) + w(x*)) / 2.
+    (older / newer value, rows _UO/_UN of sc), plus Ga fa + Gm fm + Gb fb for a feed-forward
+    torque quadratic through its values at start, middle and end of the substep; cg the
+    constant gravity load. Nonlinear residual torques w(x) by the exponential Heun
+    (trapezoidal) rule: x+ = lin + Gw (w(x) + w(x*)) / 2 with the predictor x* = lin + Gw w(x).
     """
     nx = x.shape[0]
-    n = uo.shape[0]
+    n = prm.shape[0]
     for r in range(nx):
         acc = cg[r]
         for c in range(nx):
             acc += ad[r, c] * x[c]
         for c in range(n):
-            acc += go[r, c] * uo[c] + gn[r, c] * un[c]
+            acc += gold[s, r, c] * sc[_UO, c] + gnew[s, r, c] * sc[_UN, c]
         if has_ff:
             for c in range(n):
-                acc += ga[r, c] * fa[c] + gm[r, c] * fm[c] + gb[r, c] * fb[c]
-        lin[r] = acc
+                acc += ga[r, c] * sc[_FA, c] + gm[r, c] * sc[_FM, c] + gb[r, c] * sc[_FB, c]
+        sc[_LIN, r] = acc
     if nonlinear:
-        _residual(x, prm, ra, rs, rp, w[:n], w[n:])
+        _residual(x, prm, ra, rs, rp, sc, _W1)
         for r in range(nx):
-            acc = lin[r]
+            acc = sc[_LIN, r]
             for c in range(2 * n):
-                acc += gw[r, c] * w[c]
-            xp[r] = acc
-        _residual(xp, prm, ra, rs, rp, w2[:n], w2[n:])
+                acc += gw[r, c] * sc[_W1, c]
+            sc[_XP, r] = acc
+        _residual(sc[_XP], prm, ra, rs, rp, sc, _W2)
         for r in range(nx):
-            acc = lin[r]
+            acc = sc[_LIN, r]
             for c in range(2 * n):
-                acc += 0.5 * gw[r, c] * (w[c] + w2[c])
+                acc += 0.5 * gw[r, c] * (sc[_W1, c] + sc[_W2, c])
             x[r] = acc
     else:
         for r in range(nx):
-            x[r] = lin[r]
+            x[r] = sc[_LIN, r]
     # Coulomb friction (eq. 1) as a set-valued force: the friction impulse over the substep is
     # at most Fc h; if that suffices to stop the motor it sticks (exact stick-slip).
     for i in range(n):
@@ -410,36 +417,33 @@ def _exp_substep(x, uo, un, go, gn, fa, fm, fb, has_ff, prm, ad, ga, gm, gb, gw,
 
 @numba.njit(cache=True, fastmath=True)
 def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
-             cg, ra, rs, rp, nonlinear, scratch):
+             cg, ra, rs, rp, nonlinear, sc):
     """Advance the plant over [t_k, t_k+dt): delayed zero-order-held commands from the ring
     buffer plus an optional feed-forward torque on the stage grid uff[2 m k ... 2 m k + 2 m].
     The total torque is limited to +-torque_limit (the feed-forward is cut where it would
     exceed the limit together with the command)."""
-    n = buf.shape[1]
+    n = prm.shape[0]
     h = dt / m
-    uo, un = scratch[0, :n], scratch[1, :n]
-    fa, fm, fb = scratch[2, :n], scratch[3, :n], scratch[4, :n]
-    lin, xp = scratch[5], scratch[6]
-    w, w2 = scratch[7, :2 * n], scratch[8, :2 * n]
     for s in range(m):
         for i in range(n):
             lim = prm[i, ULIM]
             a = min(max(buf[(k + nbuf + offsets[s, 0, i]) % nbuf, i], -lim), lim)
             b = min(max(buf[(k + nbuf + offsets[s, 1, i]) % nbuf, i], -lim), lim)
-            uo[i] = a
-            un[i] = b
+            sc[_UO, i] = a
+            sc[_UN, i] = b
             if has_ff:
                 base = 2 * m * k + 2 * s
-                fa[i] = min(max(a + uff[base, i], -lim), lim) - a
-                fm[i] = min(max(b + uff[base + 1, i], -lim), lim) - b
-                fb[i] = min(max(b + uff[base + 2, i], -lim), lim) - b
-        _exp_substep(x, uo, un, gold[s], gnew[s], fa, fm, fb, has_ff, prm, ad, ga, gm, gb, gw,
-                     cg, ra, rs, rp, nonlinear, h, lin, xp, w, w2)
+                sc[_FA, i] = min(max(a + uff[base, i], -lim), lim) - a
+                sc[_FM, i] = min(max(b + uff[base + 1, i], -lim), lim) - b
+                sc[_FB, i] = min(max(b + uff[base + 2, i], -lim), lim) - b
+        _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp,
+                     nonlinear, h)
 
 
 @numba.njit(cache=True, fastmath=True)
-def _measure(x, qprev, enc, from_encoder, dt, vn, qout, vout):
-    """Encoder position (quantised) and velocity (true or by differentiation) plus noise."""
+def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
+    """Encoder position (quantised) and velocity (true or by differentiation) plus noise
+    vn[k]."""
     n = qout.shape[0]
     for i in range(n):
         q = x[i]
@@ -447,20 +451,20 @@ def _measure(x, qprev, enc, from_encoder, dt, vn, qout, vout):
             q = enc[i] * math.floor(q / enc[i] + 0.5)
         qout[i] = q
         if from_encoder:
-            vout[i] = (q - qprev[i]) / dt + vn[i]
+            vout[i] = (q - qprev[i]) / dt + vn[k, i]
         else:
-            vout[i] = x[n + i] + vn[i]
+            vout[i] = x[n + i] + vn[k, i]
 
 
 @numba.njit(cache=True, fastmath=True)
-def _pi_step(e, integ, kp, ki, ff, ulim, dt, u):
+def _pi_step(e, integ, kp, ki, ff, k, ulim, dt, u):
     """Velocity PI with torque limit and back-calculation anti-windup (per axis, in place).
 
-    u = kp e + I + ff, I += ki e dt; when u saturates, I is set so u sits at the limit.
+    u = kp e + I + ff[k], I += ki e dt; when u saturates, I is set so u sits at the limit.
     """
     for i in range(e.shape[0]):
         integ[i] += ki[i] * e[i] * dt
-        v = kp[i] * e[i] + integ[i] + ff[i]
+        v = kp[i] * e[i] + integ[i] + ff[k, i]
         if v > ulim[i]:
             integ[i] -= v - ulim[i]
             v = ulim[i]
@@ -476,25 +480,25 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
               from_encoder, vnoise, tnoise, out_q, out_v, out_u, out_x):
     """Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
 
-    ``uff`` adds a torque on the integrator's stage grid (continuous excitations). Fills out_q, out_v,
-    out_u (measured effort = commanded torque at the sample + torque noise) and out_x (true
-    states, N x 4 x n). State arrays are updated in place so runs can be chained.
+    ``uff`` adds a torque on the integrator's stage grid (continuous excitations). Fills
+    out_q, out_v, out_u (measured effort = commanded torque at the sample + torque noise) and
+    out_x (true states, N x 4 x n). State arrays are updated in place so runs can be chained.
     """
     n = r.shape[1]
     N = r.shape[0]
-    scratch = np.zeros((9, 4 * n))
+    sc = np.zeros((_NSCRATCH, 4 * n))
     qm = np.zeros(n)
     vm = np.zeros(n)
     e = np.zeros(n)
     u = np.zeros(n)
     for k in range(N):
-        _measure(x, qprev, enc, from_encoder, dt, vnoise[k], qm, vm)
+        _measure(x, qprev, enc, from_encoder, dt, vnoise, k, qm, vm)
         for i in range(n):
             qprev[i] = qm[i]
         if closed:
             for i in range(n):
                 e[i] = r[k, i] - vm[i]
-            _pi_step(e, integ, kp, ki, u_ext[k], ulim_ctrl, dt, u)
+            _pi_step(e, integ, kp, ki, u_ext, k, ulim_ctrl, dt, u)
         else:
             for i in range(n):
                 u[i] = min(max(u_ext[k, i], -ulim_ctrl[i]), ulim_ctrl[i])
@@ -510,7 +514,7 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
             for s in range(4):
                 out_x[k, s, i] = x[s * n + i]
         _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb,
-                 gw, cg, ra, rs, rp, nonlinear, scratch)
+                 gw, cg, ra, rs, rp, nonlinear, sc)
 
 
 # --- Python API -------------------------------------------------------------------------------
@@ -664,6 +668,6 @@ class FlexibleJointPlant:
         q, v = np.empty(self.n_axes), np.empty(self.n_axes)
         vn, _ = self._noise(1)
         _measure(self.x, self.qprev, self._packed.enc, bool(self.params.velocity_from_encoder),
-                 self.dt, vn[0], q, v)
+                 self.dt, vn, 0, q, v)
         lim = self.params.torque_limits()
         return q, v, np.clip(torque[0], -lim, lim)
