@@ -137,6 +137,40 @@ def best_linear_approximation(Y: np.ndarray, U: np.ndarray) -> BLAResult:
     return BLAResult(P, noise_var, total_var, nl_var, cond, Pp)
 
 
+def best_linear_approximation_reference(Y: np.ndarray, U: np.ndarray,
+                                        R: np.ndarray) -> BLAResult:
+    """Closed-loop BLA through the reference: P_p = (sum_q Y R^H)(sum_q U R^H)^-1, then eq. 14
+    over realisations.
+
+    Shapes as :func:`best_linear_approximation`, R : (n_p, n_q, n_freq, n_r, n_ex). Averaging
+    the cross spectra with r over the periods before inverting removes the noise that the
+    controller feeds back into u (uncorrelated with r), which biases the per-period Y U^+.
+    Noise variance from the spread of the per-period estimates, total variance from the spread
+    over realisations.
+    """
+    Y, U, R = (np.asarray(a, dtype=complex) for a in (Y, U, R))
+    n_p, n_q, n_freq = Y.shape[:3]
+    RH = np.conj(np.swapaxes(R, -1, -2))
+    Syr = Y @ RH                                        # (p, q, F, n_y, n_r)
+    Sur = U @ RH
+    Pp = np.moveaxis(Syr.mean(axis=1) @ np.linalg.pinv(Sur.mean(axis=1)), 1, -1)
+    sv = np.linalg.svd(Sur.mean(axis=1), compute_uv=False)
+    cond = sv[..., 0] / np.maximum(sv[..., -1], 1e-300)
+    P = Pp.mean(axis=0)
+    noise_var = None
+    if n_q >= 2:
+        Ppq = np.moveaxis(Syr @ np.linalg.pinv(Sur), 2, -1)    # (p, q, n_y, n_u, F)
+        var_q = np.sum(np.abs(Ppq - Ppq.mean(axis=1, keepdims=True)) ** 2, axis=1) \
+            / (n_q - 1) / n_q
+        noise_var = var_q.sum(axis=0) / n_p ** 2
+    total_var = nl_var = None
+    if n_p >= 2:
+        total_var = np.sum(np.abs(Pp - P) ** 2, axis=0) / (n_p - 1) / n_p
+        if noise_var is not None:
+            nl_var = np.maximum(total_var - noise_var, 0.0)
+    return BLAResult(P, noise_var, total_var, nl_var, cond, Pp)
+
+
 @dataclass
 class DetectionLevels:
     """Mean output power (per output channel) at excited, non-excited odd and even lines.
