@@ -6,6 +6,7 @@ file and the field (one line, CLI exit status 2).
 from __future__ import annotations
 
 import importlib
+import re
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +19,26 @@ from frf_ident.core.plant import FlexibleJointPlant, RobotParams
 from frf_ident.errors import FrfIdentInputError, ModelFileError
 
 
+class _Loader(yaml.SafeLoader):
+    """SafeLoader that reads floats as YAML 1.2 does: '1.5e5' is a number (PyYAML's YAML 1.1
+    resolver would make it a string, and the contract's own example uses it)."""
+
+
+_Loader.add_implicit_resolver(
+    'tag:yaml.org,2002:float',
+    re.compile(r'''^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+                |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+                |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
+                |[-+]?\.(?:inf|Inf|INF)
+                |\.(?:nan|NaN|NAN))$''', re.X),
+    list('-+0123456789.'))
+
+
+def load_yaml(text: str) -> Any:
+    """Parse YAML text with YAML 1.2 float rules (see _Loader)."""
+    return yaml.load(text, Loader=_Loader)
+
+
 def read_model_dict(path: str | Path) -> dict[str, Any]:
     """Parse a model file into a mapping (no validation beyond YAML syntax)."""
     p = Path(path)
@@ -28,7 +49,7 @@ def read_model_dict(path: str | Path) -> dict[str, Any]:
     except OSError as exc:
         raise ModelFileError(f'{p}: cannot read model file ({exc.strerror})') from None
     try:
-        d = yaml.safe_load(text)
+        d = load_yaml(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, 'problem_mark', None)
         where = f' line {mark.line + 1}' if mark else ''
