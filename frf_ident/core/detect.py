@@ -1,0 +1,495 @@
+"""Detect the excitation in a measured signal: periodic multisine or exponential chirp.
+
+For data recorded by other tools (a robot's own bag, a CSV/MAT import) the experiment
+descriptors of ``/frf/experiment`` are missing; these detectors recover the design from the
+signal itself (pure numpy/scipy, no bag or ROS imports).
+
+- :func:`detect_multisine` — period (autocorrelation peak, the smallest lag that matches),
+  the block of whole periods (where consecutive periods agree), excited DFT lines and whether
+  they are odd multiples of f0 (Saupe & Knoblach 2015, Sec. 4).
+- :func:`detect_chirp` — exponential chirp f(t) = exp(a0 t + a1) (eq. 16): instantaneous
+  frequency from zero crossings (with hysteresis) and a robust log-linear fit; band
+  [f_low, f_high] and the active interval [t0, t1] from the signal's extent.
+- :func:`detect_excitation` — tries both, returns whichever was found.
+
+Signals are ``(N,)`` arrays sampled uniformly at ``fs``; ``(N, n)`` arrays are reduced to the
+channel with the largest RMS (all channels of a MIMO experiment share the design).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import fft as sfft
+from scipy import signal
+
+from frf_ident.errors import EstimationError
+
+__all__ = ['ChirpDetection', 'MultisineDetection', 'detect_chirp', 'detect_excitation',
+           'detect_multisine']
+
+
+# --------------------------------------------------------------------------- results
+
+@dataclass
+class MultisineDetection:
+    """A periodic (multisine) excitation found in a signal.
+
+    Attributes
+    ----------
+    fs : sample rate [Hz].
+    period_samples : samples per period P.
+    n_periods : whole periods in the periodic block.
+    start : index of the first sample of the periodic block.
+    f0 : fundamental fs / P [Hz].
+    harmonics : excited DFT lines h (frequency h * f0), sorted.
+    odd : True when every excited line is an odd multiple of f0.
+    correlation : normalised autocorrelation at lag P (1 = identical periods).
+    line_level_db : weakest excited line over the median non-excited line [dB].
+    channel : column of a 2-D input that was analysed.
+    """
+
+    fs: float
+    period_samples: int
+    n_periods: int
+    start: int
+    f0: float
+    harmonics: np.ndarray
+    odd: bool
+    correlation: float
+    line_level_db: float
+    channel: int = 0
+    kind: str = field(default='multisine', init=False)
+
+    @property
+    def freq_hz(self) -> np.ndarray:
+        """Excited frequencies h * f0 [Hz]."""
+        return self.harmonics * self.f0
+
+    @property
+    def period(self) -> float:
+        """Period duration [s]."""
+        return self.period_samples / self.fs
+
+    @property
+    def stop(self) -> int:
+        """Index one past the last sample of the periodic block."""
+        return self.start + self.n_periods * self.period_samples
+
+    def describe(self) -> str:
+        """One sentence a person can check against the design."""
+        f = self.freq_hz
+        lines = (f'{f.size} excited lines {f[0]:.3g}-{f[-1]:.3g} Hz, '
+                 + ('all odd multiples of f0' if self.odd else 'not all odd multiples of f0'))
+        return (f'{"odd " if self.odd else ""}multisine: period {self.period_samples} samples '
+                f'({self.period:.4g} s, f0 = {self.f0:.4g} Hz), {self.n_periods} whole periods '
+                f'from sample {self.start} (t = {self.start / self.fs:.3f} s), {lines} '
+                f'(weakest line {self.line_level_db:.0f} dB above the rest, '
+                f'period correlation {self.correlation:.3f})')
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary."""
+        return {'kind': self.kind, 'fs': self.fs, 'period_samples': self.period_samples,
+                'n_periods': self.n_periods, 'start': self.start, 'f0': self.f0,
+                'harmonics': self.harmonics.tolist(), 'freq_hz': self.freq_hz.tolist(),
+                'odd': self.odd, 'correlation': self.correlation,
+                'line_level_db': self.line_level_db, 'channel': self.channel}
+
+
+@dataclass
+class ChirpDetection:
+    """An exponential chirp f(t) = exp(a0 t + a1) on [t0, t1] (eq. 16) found in a signal.
+
+    Times are seconds from the first sample (index 0 is t = 0).
+
+    Attributes
+    ----------
+    fs : sample rate [Hz].
+    f_low, f_high : instantaneous frequency at t0 and t1 [Hz] (f_low > f_high for a down-sweep).
+    t0, t1 : start and end of the active chirp [s].
+    a0, a1 : eq. 16 coefficients (a0 = sweep rate [1/s]).
+    n_half_cycles : half cycles used in the fit (inliers).
+    fit_residual : standard deviation of ln f around the fit (relative frequency error).
+    channel : column of a 2-D input that was analysed.
+    """
+
+    fs: float
+    f_low: float
+    f_high: float
+    t0: float
+    t1: float
+    a0: float
+    a1: float
+    n_half_cycles: int
+    fit_residual: float
+    channel: int = 0
+    kind: str = field(default='chirp', init=False)
+
+    @property
+    def duration(self) -> float:
+        return self.t1 - self.t0
+
+    @property
+    def start(self) -> int:
+        """Index of the first sample of the chirp."""
+        return int(round(self.t0 * self.fs))
+
+    @property
+    def stop(self) -> int:
+        """Index one past the last sample of the chirp."""
+        return int(round(self.t1 * self.fs)) + 1
+
+    def frequency(self, t: np.ndarray | float) -> np.ndarray:
+        """Instantaneous frequency exp(a0 t + a1) [Hz] (eq. 16)."""
+        return np.exp(self.a0 * np.asarray(t, dtype=float) + self.a1)
+
+    def describe(self) -> str:
+        """One sentence a person can check against the design."""
+        decades = abs(np.log10(self.f_high / self.f_low))
+        return (f'exponential chirp {self.f_low:.3g}-{self.f_high:.3g} Hz '
+                f'({decades:.2f} decades) from t0 = {self.t0:.3f} s to t1 = {self.t1:.3f} s '
+                f'({self.duration:.3g} s), sweep rate a0 = {self.a0:.4g} 1/s, fitted on '
+                f'{self.n_half_cycles} half cycles with {100 * self.fit_residual:.2g} % '
+                f'frequency scatter')
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary."""
+        return {'kind': self.kind, 'fs': self.fs, 'f_low': self.f_low, 'f_high': self.f_high,
+                't0': self.t0, 't1': self.t1, 'a0': self.a0, 'a1': self.a1,
+                'n_half_cycles': self.n_half_cycles, 'fit_residual': self.fit_residual,
+                'channel': self.channel}
+
+
+# --------------------------------------------------------------------------- input checks
+
+def _prepare(x: np.ndarray, fs: float, min_samples: int = 16) -> tuple[np.ndarray, int]:
+    """Validate, pick the strongest channel, remove the median. Returns (x, channel)."""
+    if not (np.isfinite(fs) and fs > 0):
+        raise EstimationError(f'{fs=} must be a positive sample rate in Hz')
+    x = np.asarray(x, dtype=float)
+    if x.ndim not in (1, 2):
+        raise EstimationError(f'signal must be (N,) or (N, n_channels), got {x.shape=}')
+    if x.shape[0] < min_samples:
+        raise EstimationError(f'signal has {x.shape[0]} samples; need at least {min_samples}')
+    if not np.all(np.isfinite(x)):
+        raise EstimationError(f'signal has {int(np.sum(~np.isfinite(x)))} non-finite samples')
+    channel = 0
+    if x.ndim == 2:
+        centred = x - np.median(x, axis=0)
+        channel = int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))
+        x = x[:, channel]
+    return x - np.median(x), channel
+
+
+# --------------------------------------------------------------------------- multisine
+
+def _lag_correlation(x: np.ndarray, max_lag: int) -> np.ndarray:
+    """Pearson-like autocorrelation per lag: sum x[n] x[n+k] over the overlap, normalised by
+    the energies of both overlapping parts (1 exactly for a noise-free periodic signal)."""
+    n = x.size
+    nfft = sfft.next_fast_len(2 * n, real=True)
+    spec = sfft.rfft(x, nfft)
+    acf = sfft.irfft(spec * np.conj(spec), nfft)[:max_lag + 1]
+    cum = np.concatenate([[0.0], np.cumsum(x ** 2)])
+    k = np.arange(max_lag + 1)
+    norm = np.sqrt(cum[n - k] * (cum[n] - cum[k]))
+    return acf / np.maximum(norm, 1e-300)
+
+
+def _period_candidate(r: np.ndarray, min_correlation: float) -> tuple[int, float]:
+    """Smallest lag whose autocorrelation peak is close to the best one (0 if none)."""
+    below = np.flatnonzero(r < 0)
+    if below.size == 0:
+        return 0, float('nan')
+    lag_min = int(below[0])
+    peaks, props = signal.find_peaks(r[lag_min:], height=min_correlation)
+    if peaks.size == 0:
+        return 0, float(np.max(r[lag_min:])) if r.size > lag_min else float('nan')
+    heights = props['peak_heights']
+    first = int(np.flatnonzero(heights >= heights.max() - 0.05 * (1.0 - min_correlation))[0])
+    lag = int(peaks[first]) + lag_min
+    return lag, float(r[lag])
+
+
+def _moving_mean(v: np.ndarray, w: int) -> np.ndarray:
+    """Centred moving mean over ``w`` samples (shorter windows at the ends)."""
+    if w <= 1:
+        return v
+    kernel = np.ones(w)
+    return np.convolve(v, kernel, mode='same') / np.convolve(np.ones(v.size), kernel, mode='same')
+
+
+def _periodic_block(x: np.ndarray, p: int) -> tuple[int, int]:
+    """(start, n_periods) of the longest run in which x[n + P] matches x[n].
+
+    rho[n] = mean (x[n+P] - x[n])^2 over P/16 samples, divided by the mean of x[n]^2 + x[n+P]^2
+    over a whole period (constant for a periodic signal): 0 for identical periods, about 1
+    for unrelated signals or noise alone, noise / (signal + noise) in a noisy steady state.
+    The run must carry signal (idle parts match trivially); its edges are then refined to
+    the sample (:func:`_refine_edges`).
+    """
+    w = max(1, p // 16)
+    e2 = (x[p:] - x[:-p]) ** 2
+    ee = _moving_mean(e2, w)
+    xx = _moving_mean(x[p:] ** 2 + x[:-p] ** 2, p)
+    active = xx > 0.05 * np.quantile(xx, 0.9)
+    rho = ee / np.maximum(xx, 1e-300)
+    ref = float(np.quantile(rho[active], 0.25)) if np.any(active) else 1.0
+    ok = active & (rho < min(0.5 * (1.0 + ref), max(3.0 * ref, 0.05)))
+    a, b = _longest_run(ok)
+    if b <= a:
+        return 0, 0
+    a, b = _refine_edges(e2, a, b, w, floor=1e-12 * float(np.mean(x ** 2)))
+    n_periods = min((b - a + p + w // 2) // p, (x.size - a) // p)
+    return int(a), int(n_periods)
+
+
+def _refine_edges(e2: np.ndarray, a: int, b: int, w: int, *, floor: float,
+                  w2: int = 32) -> tuple[int, int]:
+    """Move the run edges [a, b) of the smoothed mismatch to the sample where e^2 (averaged
+    over ``w2`` samples) leaves its steady-state level (three times its median in the core,
+    at least ``floor``: rounding errors of a noise-free signal do not count)."""
+    if b - a <= 4 * w:
+        return a, b
+    kernel = np.ones(w2) / w2
+    fwd = np.convolve(e2, kernel, mode='full')[w2 - 1:]  # mean of e2[n:n+w2]
+    bwd = np.convolve(e2, kernel, mode='full')[:e2.size]  # mean of e2[n-w2+1:n+1]
+    thr = max(3.0 * float(np.median(fwd[a + w:b - w])), floor)
+    lo, hi = max(0, a - w), min(e2.size, a + w)
+    bad = np.flatnonzero(fwd[lo:hi] > thr)
+    a_new = lo + int(bad[-1]) + 1 if bad.size else lo
+    lo, hi = max(0, b - w), min(e2.size, b + w)
+    bad = np.flatnonzero(bwd[lo:hi] > thr)
+    b_new = lo + int(bad[0]) if bad.size else hi
+    return (a_new, b_new) if b_new > a_new else (a, b)
+
+
+def _longest_run(mask: np.ndarray) -> tuple[int, int]:
+    """[a, b) of the longest run of True (0, 0 if none)."""
+    if not np.any(mask):
+        return 0, 0
+    d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    i = int(np.argmax(ends - starts))
+    return int(starts[i]), int(ends[i])
+
+
+def _excited_lines(block: np.ndarray, min_line_db: float,
+                   dynamic_range_db: float) -> tuple[np.ndarray, float]:
+    """Lines of the period-averaged DFT far above the median line. Returns (bins, level_db)."""
+    spec = sfft.rfft(block, axis=1).mean(axis=0)
+    power = np.abs(spec[1:]) ** 2  # without DC
+    floor = np.median(power)
+    thr = max(floor * 10 ** (min_line_db / 10), power.max() * 10 ** (-dynamic_range_db / 10))
+    bins = np.flatnonzero(power > thr) + 1
+    rest = np.delete(power, bins - 1)
+    rest_level = np.median(rest) if rest.size else 0.0
+    level = 10 * np.log10(power[bins - 1].min() / max(rest_level, power.max() * 1e-30)) \
+        if bins.size else float('nan')
+    return bins, float(level)
+
+
+def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
+                     min_correlation: float = 0.3, min_line_db: float = 20.0,
+                     dynamic_range_db: float = 80.0) -> MultisineDetection:
+    """Find a periodic multisine in ``x`` sampled at ``fs``.
+
+    The period P is the smallest lag at which the normalised autocorrelation peaks (at least
+    ``min_correlation`` and within reach of the highest peak), checked against its
+    neighbours so consecutive periods match best; the periodic block is the longest stretch in
+    which x[n + P] equals x[n] within the steady-state noise; excited lines are the bins of the
+    period-averaged DFT more than ``min_line_db`` above the median bin (and within
+    ``dynamic_range_db`` of the strongest). If the lines share a common factor g, the period
+    is P / g.
+
+    Raises :class:`EstimationError` (one line) if no ``min_periods`` whole periods are found.
+    """
+    x, channel = _prepare(x, fs)
+    n = x.size
+    max_lag = n // max(2, int(min_periods))
+    if max_lag < 4:
+        raise EstimationError(f'signal of {n} samples too short for {min_periods=} periods')
+    r = _lag_correlation(x, max_lag)
+    p, corr = _period_candidate(r, min_correlation)
+    if p == 0:
+        best = f'{corr:.2f}' if np.isfinite(corr) else 'none'
+        raise EstimationError(f'no periodicity: best autocorrelation {best} beyond the main '
+                              f'lobe is below {min_correlation=} (lags up to {max_lag} samples)')
+    start, n_per = _periodic_block(x, p)
+    if n_per >= 2:
+        q = _refine_period(x[start:start + n_per * p + 2], p)
+        if q != p:
+            p = q
+            start, n_per = _periodic_block(x, p)
+    if n_per < min_periods:
+        raise EstimationError(f'period {p} samples ({p / fs:.4g} s) found but only {n_per} '
+                              f'whole periods repeat; need {min_periods=}')
+    block = x[start:start + n_per * p].reshape(n_per, p)
+    bins, level = _excited_lines(block, min_line_db, dynamic_range_db)
+    if bins.size == 0:
+        raise EstimationError(f'period {p} samples found but no DFT line stands '
+                              f'{min_line_db=} dB above the rest')
+    g = int(np.gcd.reduce(bins))
+    if g > 1 and p % g == 0:
+        p, bins, n_per = p // g, bins // g, n_per * g
+    return MultisineDetection(float(fs), int(p), int(n_per), int(start), float(fs) / p,
+                              bins.astype(np.int64), bool(np.all(bins % 2 == 1)),
+                              float(r[min(p, r.size - 1)]), level, channel)
+
+
+def _refine_period(x: np.ndarray, p: int, reach: int = 2) -> int:
+    """Integer lag near ``p`` with the smallest mean squared difference of shifted copies."""
+    best, best_err = p, np.inf
+    for k in range(max(1, p - reach), p + reach + 1):
+        if k >= x.size:
+            break
+        d = x[k:] - x[:-k]
+        err = float(np.mean(d ** 2) / max(np.mean(x[k:] ** 2 + x[:-k] ** 2), 1e-300))
+        if err < best_err - 1e-15:
+            best, best_err = k, err
+    return best
+
+
+# --------------------------------------------------------------------------- chirp
+
+def _half_cycles(x: np.ndarray, fs: float, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Zero crossings with hysteresis ``h``: returns (mid times, frequencies) of half cycles.
+
+    The state flips only when x passes +h or -h; each flip is dated by the linearly
+    interpolated zero crossing just before it, so noise below h causes no chatter.
+    """
+    state = np.where(x > h, 1.0, np.where(x < -h, -1.0, np.nan))
+    idx = np.flatnonzero(np.isfinite(state))
+    if idx.size < 3:
+        return np.zeros(0), np.zeros(0)
+    s = state[idx]
+    flips = idx[1:][s[1:] != s[:-1]]  # first sample beyond the threshold after a flip
+    sign_change = np.flatnonzero(np.signbit(x[1:]) != np.signbit(x[:-1]))  # between i, i+1
+    if flips.size < 3 or sign_change.size == 0:
+        return np.zeros(0), np.zeros(0)
+    j = np.searchsorted(sign_change, flips, side='left') - 1
+    j = np.clip(j, 0, None)
+    i = sign_change[j]
+    frac = x[i] / (x[i] - x[i + 1])
+    tz = (i + frac) / fs
+    d = np.diff(tz)
+    good = d > 0
+    mid = 0.5 * (tz[1:] + tz[:-1])
+    return mid[good], 0.5 / d[good]
+
+
+def _robust_loglinear(t: np.ndarray, f: np.ndarray, iterations: int = 5
+                      ) -> tuple[float, float, np.ndarray, float]:
+    """Fit ln f = a0 t + a1 with MAD-based outlier rejection. Returns a0, a1, inliers, std."""
+    lf = np.log(f)
+    keep = np.ones(t.size, dtype=bool)
+    a0 = a1 = 0.0
+    for _ in range(iterations):
+        if keep.sum() < 3:
+            break
+        a0, a1 = np.polyfit(t[keep], lf[keep], 1)
+        res = lf - (a0 * t + a1)
+        mad = 1.4826 * np.median(np.abs(res[keep]))
+        new = np.abs(res) <= max(4.0 * mad, 0.01)
+        if np.array_equal(new, keep):
+            break
+        keep = new
+    res = lf[keep] - (a0 * t[keep] + a1)
+    return float(a0), float(a1), keep, float(np.std(res)) if res.size else float('inf')
+
+
+def _onset(x: np.ndarray, model: np.ndarray, lo: int, hi: int, fit: slice) -> int:
+    """Index k in [lo, hi] minimising sum_{n<k} x^2 + sum_{n>=k} (x - A cos - B sin)^2.
+
+    ``model`` is (2, N) cos/sin of the fitted chirp phase; A, B are least-squares fitted on
+    ``fit`` (whole cycles inside the chirp). Matching the whole waveform makes the onset
+    independent of the chirp's starting phase and robust to noise.
+    """
+    coef, *_ = np.linalg.lstsq(model[:, fit].T, x[fit], rcond=None)
+    m = coef @ model[:, lo:hi]
+    seg = x[lo:hi]
+    off = np.concatenate([[0.0], np.cumsum(seg ** 2)])          # x^2 before k
+    on = np.concatenate([[0.0], np.cumsum((seg - m) ** 2)])     # residual from k on
+    cost = off + (on[-1] - on)
+    return lo + int(np.argmin(cost))
+
+
+def _chirp_extent(x: np.ndarray, fs: float, a0: float, a1: float, t_first: float,
+                  t_last: float) -> tuple[int, int]:
+    """Start index and last index of the chirp around the fitted half cycles [t_first, t_last]."""
+    n = x.size
+    t = np.arange(n) / fs
+    ph = 2 * np.pi * np.exp(a1) * np.expm1(a0 * t) / a0 if a0 != 0 else 2 * np.pi * np.exp(a1) * t
+    model = np.stack([np.cos(ph), np.sin(ph)])
+    f_first, f_last = np.exp(a0 * np.array([t_first, t_last]) + a1)
+    p_first, p_last = int(np.ceil(fs / f_first)), int(np.ceil(fs / f_last))
+    i_first = min(max(int(np.floor(t_first * fs)), 0), n - 1)
+    i_last = min(max(int(np.ceil(t_last * fs)), 0), n - 1)
+    i0 = _onset(x, model, max(0, i_first - 2 * p_first), min(n, i_first + p_first),
+                slice(i_first, min(n, i_first + 2 * p_first)))
+    rev = _onset(x[::-1], model[:, ::-1], max(0, n - 1 - i_last - 2 * p_last),
+                 min(n, n - 1 - i_last + p_last),
+                 slice(n - 1 - i_last, min(n, n - 1 - i_last + 2 * p_last)))
+    return i0, n - rev
+
+
+def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
+                 max_scatter: float = 0.08, min_inliers: float = 0.7,
+                 hysteresis: float = 0.3) -> ChirpDetection:
+    """Find an exponential chirp f(t) = exp(a0 t + a1) (eq. 16) in ``x`` sampled at ``fs``.
+
+    Half cycles between zero crossings (hysteresis ``hysteresis`` times the 99th percentile of
+    |x|) give f = 1 / (2 duration) at their mid times; a robust fit of ln f over t gives a0, a1.
+    t0 and t1 are the on- and offset of the fitted waveform A cos(phase) + B sin(phase)
+    (least squares, searched two periods outside the first and last fitted half cycles), f_low = f(t0), f_high = f(t1). It is a chirp when at least ``min_inliers`` of
+    the half cycles follow the fit with relative scatter below ``max_scatter`` and the band
+    spans a ratio of at least ``min_ratio``.
+
+    Raises :class:`EstimationError` (one line) otherwise.
+    """
+    x, channel = _prepare(x, fs)
+    h = hysteresis * float(np.quantile(np.abs(x), 0.99))
+    if h <= 0:
+        raise EstimationError('no chirp: the signal is constant')
+    t_mid, f = _half_cycles(x, fs, h)
+    if t_mid.size < 10:
+        raise EstimationError(f'no chirp: only {t_mid.size} half cycles above the '
+                              f'hysteresis level {h:.3g}')
+    a0, a1, keep, scatter = _robust_loglinear(t_mid, f)
+    frac = float(keep.mean())
+    tk = t_mid[keep]
+    ratio = float(np.exp(abs(a0) * (tk[-1] - tk[0]))) if tk.size > 1 else 1.0
+    if frac < min_inliers or scatter > max_scatter or ratio < min_ratio:
+        raise EstimationError(
+            f'no exponential chirp: {100 * frac:.0f} % of {t_mid.size} half cycles follow '
+            f'ln f = a0 t + a1 with {100 * scatter:.2g} % scatter over a frequency ratio '
+            f'{ratio:.3g} (need {100 * min_inliers:.0f} %, < {100 * max_scatter:.2g} %, '
+            f'>= {min_ratio:g})')
+    i0, i1 = _chirp_extent(x, fs, a0, a1, float(tk[0]), float(tk[-1]))
+    t0, t1 = i0 / fs, (i1 - 1) / fs
+    return ChirpDetection(float(fs), float(np.exp(a0 * t0 + a1)), float(np.exp(a0 * t1 + a1)),
+                          float(t0), float(t1), a0, a1, int(keep.sum()), scatter, channel)
+
+
+# --------------------------------------------------------------------------- both
+
+def detect_excitation(x: np.ndarray, fs: float, **kwargs: Any
+                      ) -> MultisineDetection | ChirpDetection:
+    """Detect a periodic multisine, else an exponential chirp, in ``x`` sampled at ``fs``.
+
+    The result's ``kind`` ('multisine' or 'chirp') says which was found and ``describe()``
+    says what. ``kwargs`` may hold ``min_periods`` for the multisine detector. Raises
+    :class:`EstimationError` with one line giving both reasons if neither is found.
+    """
+    try:
+        return detect_multisine(x, fs, min_periods=kwargs.get('min_periods', 2))
+    except EstimationError as exc:
+        why_ms = str(exc)
+    try:
+        return detect_chirp(x, fs)
+    except EstimationError as exc:
+        why_chirp = str(exc)
+    n = np.asarray(x).shape[0] if np.ndim(x) else 0
+    raise EstimationError(f'no multisine or exponential chirp found in {n} samples at '
+                          f'{fs=:g} Hz: {why_ms}; {why_chirp}')

@@ -1,0 +1,129 @@
+"""Excitation detection against analytic truth: designed multisines and chirps."""
+import numpy as np
+import pytest
+
+from frf_ident.core import chirp as ch
+from frf_ident.core import multisine as ms
+from frf_ident.core.detect import (ChirpDetection, MultisineDetection, detect_chirp,
+                                   detect_excitation, detect_multisine)
+from frf_ident.errors import EstimationError
+
+FS = 1000.0
+
+
+def _multisine(design, n_periods, *, lead=0, tail=0, noise=0.0, seed=0, n_u=1):
+    real = ms.multisine_realisation(design, n_u, np.random.default_rng(seed), fs=FS)
+    p = design.period_samples(FS)
+    x = real.evaluate(np.arange(n_periods * p) / FS)[0]          # (N, n_u), experiment 1
+    x = np.concatenate([np.zeros((lead, n_u)), x, np.zeros((tail, n_u))])
+    rng = np.random.default_rng(seed + 100)
+    x = x + noise * x.std() * rng.standard_normal(x.shape)
+    return x[:, 0] if n_u == 1 else x
+
+
+@pytest.fixture(scope='module')
+def design():
+    """1-60 Hz odd multisine at 1 kHz with 0.33 Hz resolution: 3072-sample period, 49 lines."""
+    return ms.design_odd_multisine(1.0, 60.0, bound=1.0, resolution_hz=0.5, fs=FS)
+
+
+@pytest.mark.parametrize('lead, n_periods, tail, noise', [
+    (0, 5, 0, 0.0), (1234, 4, 300, 0.0), (500, 3, 0, 0.3), (777, 6, 2000, 0.3)])
+def test_multisine_period_lines_start(design, lead, n_periods, tail, noise):
+    x = _multisine(design, n_periods, lead=lead, tail=tail, noise=noise)
+    det = detect_multisine(x, fs=FS)
+    assert isinstance(det, MultisineDetection) and det.kind == 'multisine'
+    assert det.period_samples == design.period_samples(FS) == 3072
+    assert det.n_periods == n_periods
+    assert det.f0 == pytest.approx(design.f0, rel=1e-12)
+    np.testing.assert_array_equal(det.harmonics, design.harmonics)
+    np.testing.assert_allclose(det.freq_hz, design.freq_hz, rtol=1e-12)
+    assert det.odd
+    tol = 0 if noise == 0 else 40              # exact without noise, a few samples with it
+    assert abs(det.start - lead) <= tol
+    text = det.describe()
+    assert 'odd multisine' in text and '3072 samples' in text and f'{n_periods} whole' in text
+
+
+def test_paper_design_mimo_channel(design):
+    """The paper's 12.288 s design on 3 inputs (eq. 9 shifts): strongest channel analysed."""
+    paper = ms.design_odd_multisine(1.0, 60.0, bound=150.0, resolution_hz=0.1, fs=FS)
+    x = _multisine(paper, 3, n_u=3, lead=100, noise=0.05)
+    x[:, 1] *= 3.0
+    det = detect_excitation(x, FS)
+    assert det.kind == 'multisine' and det.channel == 1
+    assert det.period_samples == 12288 and det.n_periods == 3
+    np.testing.assert_array_equal(det.harmonics, paper.harmonics)
+
+
+def test_multisine_with_even_lines_is_not_odd():
+    p = 2000
+    t = np.arange(4 * p) / FS
+    h = np.arange(2, 40)
+    x = ms.multisine(t, h * FS / p, 1.0, np.random.default_rng(3).uniform(0, 2 * np.pi, h.size))
+    det = detect_multisine(x + 2.0, fs=FS)                # constant offset is ignored
+    assert det.period_samples == p and det.n_periods == 4
+    np.testing.assert_array_equal(det.harmonics, h)
+    assert not det.odd and 'not all odd' in det.describe()
+
+
+def test_common_factor_shortens_period():
+    """Lines 2, 4, 6 of a 1000-sample window are lines 1, 2, 3 of a 500-sample period."""
+    t = np.arange(6000) / FS
+    x = sum(np.sin(2 * np.pi * k * t + k) for k in (2, 4, 6))
+    det = detect_multisine(x, fs=FS)
+    assert det.period_samples == 500 and det.n_periods == 12
+    np.testing.assert_array_equal(det.harmonics, [1, 2, 3])
+
+
+@pytest.mark.parametrize('f_low, f_high, duration, lead, phi, noise', [
+    (1.0, 60.0, 20.0, 2.0, 0.0, 0.0),
+    (1.0, 60.0, 20.0, 2.0, 1.3, 0.1),
+    (2.0, 60.0, 20.0, 0.0, 0.0, 0.1),
+    (0.5, 100.0, 30.0, 1.3, 2.5, 0.1),
+])
+def test_chirp_band_within_2_percent(f_low, f_high, duration, lead, phi, noise):
+    a0, a1 = ch.exponential_chirp_coefficients(f_low, f_high, lead, lead + duration)
+    t = np.arange(int((lead + duration + 1.5) * FS)) / FS
+    x = ch.exponential_chirp(t, a0, a1, lead, lead + duration, 1.0, phi)
+    x = x + noise * np.random.default_rng(4).standard_normal(x.size)
+    det = detect_chirp(x, fs=FS)
+    assert isinstance(det, ChirpDetection) and det.kind == 'chirp'
+    assert det.f_low == pytest.approx(f_low, rel=0.02)
+    assert det.f_high == pytest.approx(f_high, rel=0.02)
+    assert det.a0 == pytest.approx(a0, rel=0.01)
+    assert det.t0 == pytest.approx(lead, abs=0.05)
+    assert det.t1 == pytest.approx(lead + duration, abs=0.05)
+    assert 'exponential chirp' in det.describe()
+    with pytest.raises(EstimationError, match='no periodicity'):
+        detect_multisine(x, fs=FS)
+
+
+def test_chirp_design_table1_amplitudes_mimo():
+    """ChirpDesign with Table 1 amplitude steps (100 / 50 below / above 40 Hz), eq. 26 phases."""
+    d = ch.ChirpDesign(2.0, 60.0, 20.0, np.array([[100.0, 50.0], [150.0, 75.0]]), [40.0], t0=1.0)
+    t = np.arange(int(22.0 * FS)) / FS
+    x = d.evaluate(t, ch.chirp_phase_flips(2))[1]          # experiment 2, (N, 2)
+    det = detect_excitation(x, FS)
+    assert det.kind == 'chirp' and det.channel == 1
+    assert det.f_low == pytest.approx(2.0, rel=0.02) and det.f_high == pytest.approx(60, rel=0.02)
+    assert det.duration == pytest.approx(20.0, rel=0.01)
+
+
+def test_neither_raises_one_line():
+    x = np.random.default_rng(5).standard_normal(20000)
+    with pytest.raises(EstimationError) as err:
+        detect_excitation(x, FS)
+    msg = str(err.value)
+    assert '\n' not in msg and 'no multisine or exponential chirp' in msg and 'fs=1000' in msg
+
+
+@pytest.mark.parametrize('x, fs, needle', [
+    (np.zeros(5), FS, 'samples'),
+    (np.ones(100), -1.0, 'fs=-1.0'),
+    (np.full(100, np.nan), FS, 'non-finite'),
+    (np.zeros((10, 10, 10)), FS, 'x.shape'),
+])
+def test_bad_input(x, fs, needle):
+    with pytest.raises(EstimationError, match=needle):
+        detect_excitation(x, fs)
