@@ -352,6 +352,8 @@ class ChirpIteration:
             return summary
         P_ru = Um @ np.linalg.inv(Rm)                                  # eq. 7 for r -> u
         R_next = self._regularised_solve(P_ru, self.U_des)               # eq. 18
+        R_next = self._amplitude_secant(Rm, Um, R_next)
+        self._previous = (Rm, Um)
         # never more than max_gain_step times the previous reference on a line
         grow = np.abs(R_next) / np.maximum(np.abs(Rm), 1e-300)
         limit = np.minimum(1.0, self.cfg.max_gain_step / np.maximum(grow, 1e-300))
@@ -368,6 +370,26 @@ class ChirpIteration:
         self.R = R_next
         self.iteration += 1
         return summary
+
+    def _amplitude_secant(self, Rm: np.ndarray, Um: np.ndarray, R_lin: np.ndarray
+                          ) -> np.ndarray:
+        """Correct eq. 18 for amplitude-dependent r -> u (friction, saturation).
+
+        Eq. 18 assumes u scales with r (slope 1 in log-log). With the previous iteration the
+        local slope alpha = dlog|U| / dlog|R| per line and channel is measured and the
+        log-magnitude step of eq. 18 divided by it (a secant step); the phase stays eq. 18's.
+        """
+        prev = getattr(self, '_previous', None)
+        if prev is None:
+            return R_lin
+        Rp, Up = prev
+        d_r = np.log(np.abs(Rm) / np.maximum(np.abs(Rp), 1e-300)).mean(axis=2)   # (F, n)
+        d_u = np.log(np.abs(Um) / np.maximum(np.abs(Up), 1e-300)).mean(axis=2)
+        ok = np.abs(d_r) > 0.05
+        alpha = np.where(ok, d_u / np.where(ok, d_r, 1.0), 1.0)
+        alpha = np.clip(alpha, 0.25, 2.0)[:, :, None]
+        step = np.log(np.abs(R_lin) / np.maximum(np.abs(Rm), 1e-300))
+        return np.abs(Rm) * np.exp(step / alpha) * np.exp(1j * np.angle(R_lin))
 
     def _regularised_solve(self, P: np.ndarray, B: np.ndarray) -> np.ndarray:
         """X = P^-1 B per line, Tikhonov-regularised where P is ill-conditioned."""
