@@ -1,0 +1,12 @@
+"""Data exchange with other tools: import measured tables (CSV/MAT) as recordings, export
+frequency responses (python-control, MATLAB idfrd, CSV, JSON). See README_io.md."""
+from .export import from_control, read_frf, to_control, write_frf
+
+__all__ = ['from_control', 'import_table', 'load_map', 'read_frf', 'to_control', 'write_frf']
+
+
+def __getattr__(name: str):  # the importer pulls in yaml/scipy.io only when used
+    if name in ('import_table', 'load_map'):
+        from . import importer
+        return getattr(importer, name)
+    raise AttributeError(name)
