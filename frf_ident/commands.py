@@ -157,3 +157,7 @@ def _register_handlers() -> None:
 
 
 _register_handlers()
+
+
+# --- import (frf_ident.io) --------------------------------------------------------------------
+from frf_ident.io import cli_import as _cli_import  # noqa: E402,F401  (registers 'import')
