@@ -1,0 +1,229 @@
+"""Figures of the HTML report (matplotlib, Agg backend). Each function writes one PNG.
+
+- :func:`bode_figure` — magnitude and phase per channel with 2-sigma uncertainty bands
+- :func:`snr_figure` — coherence-like SNR per line, |P|^2 / var(P) in dB
+- :func:`spectrogram_figure` — PSD of the torques over time (like Fig. 3 of the paper)
+- :func:`timeseries_figure` — torque, velocity and reference over time
+- :func:`iteration_figure` — chirp iteration: error to u_des per iteration and channel
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import matplotlib
+
+matplotlib.use('Agg')
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from scipy import signal  # noqa: E402
+
+from frf_ident.core.frd import FrequencyResponse  # noqa: E402
+
+DPI = 100
+REF_STYLE = {'color': 'k', 'lw': 1.3}
+
+
+def variance_of(frf: FrequencyResponse) -> tuple[np.ndarray | None, str]:
+    """(variance, which): total variance if present, else noise variance, else None."""
+    if frf.total_variance is not None:
+        return frf.total_variance, 'total'
+    if frf.noise_variance is not None:
+        return frf.noise_variance, 'noise'
+    return None, ''
+
+
+def _db(x: np.ndarray) -> np.ndarray:
+    return 20.0 * np.log10(np.maximum(np.abs(x), 1e-300))
+
+
+def _deg(p: np.ndarray) -> np.ndarray:
+    return np.degrees(np.unwrap(np.angle(p)))
+
+
+def _save(fig: plt.Figure, path: Path) -> Path:
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return Path(path)
+
+
+def _channel_title(frf: FrequencyResponse, o: int, i: int) -> str:
+    return f'{frf.inputs[i]} \u2192 {frf.outputs[o]}'
+
+
+def bode_figure(frfs: Mapping[str, FrequencyResponse], path: Path, *,
+                reference: FrequencyResponse | None = None, title: str = '',
+                units: str = '') -> Path:
+    """Bode diagram of every channel: magnitude [dB] above phase [deg], one column per input.
+
+    Estimates are markers joined by thin lines, with a shaded +-2 sigma band (from the total
+    variance, else the noise variance): |P| +- 2 sigma in magnitude and +-asin(2 sigma/|P|)
+    in phase. ``reference`` is drawn as a black line.
+    """
+    first = next(iter(frfs.values()))
+    n_out, n_in = first.noutputs, first.ninputs
+    fig, axes = plt.subplots(2 * n_out, n_in, figsize=(4.6 * n_in + 0.6, 2.3 * 2 * n_out + 0.8),
+                             sharex=True, squeeze=False)
+    for o in range(n_out):
+        for i in range(n_in):
+            ax_m, ax_p = axes[2 * o, i], axes[2 * o + 1, i]
+            if reference is not None and reference.response.shape[:2] == (n_out, n_in):
+                ax_m.semilogx(reference.freq_hz, _db(reference.response[o, i]), **REF_STYLE,
+                              label='reference')
+                ax_p.semilogx(reference.freq_hz, _deg(reference.response[o, i]), **REF_STYLE)
+            for k, (label, frf) in enumerate(frfs.items()):
+                if frf.response.shape[:2] == (n_out, n_in):
+                    _bode_channel(ax_m, ax_p, frf, o, i, f'C{k}', label)
+            ax_m.set_title(_channel_title(first, o, i), fontsize=9)
+            ax_m.set_ylabel(f'|P| [dB{units}]' if i == 0 else '')
+            ax_p.set_ylabel('phase [deg]' if i == 0 else '')
+            for ax in (ax_m, ax_p):
+                ax.grid(True, which='both', alpha=0.3)
+            if o == n_out - 1:
+                ax_p.set_xlabel('frequency [Hz]')
+    axes[0, 0].legend(fontsize=7, loc='best')
+    fig.suptitle(title or 'Frequency response estimates (shaded: \u00b12\u03c3)')
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def _bode_channel(ax_m: plt.Axes, ax_p: plt.Axes, frf: FrequencyResponse, o: int, i: int,
+                  color: str, label: str) -> None:
+    f, p = frf.freq_hz, frf.response[o, i]
+    var, which = variance_of(frf)
+    band = f' (\u00b12\u03c3 {which})' if var is not None else ''
+    ax_m.semilogx(f, _db(p), '.-', color=color, ms=3, lw=0.5, label=f'{label}{band}')
+    phase = _deg(p)
+    ax_p.semilogx(f, phase, '.-', color=color, ms=3, lw=0.5)
+    if var is None:
+        return
+    sig2 = 2.0 * np.sqrt(np.maximum(var[o, i], 0.0))
+    mag = np.abs(p)
+    lo = _db(np.maximum(mag - sig2, mag * 1e-3))
+    ax_m.fill_between(f, lo, _db(mag + sig2), color=color, alpha=0.2, lw=0)
+    dphi = np.degrees(np.arcsin(np.clip(sig2 / np.maximum(mag, 1e-300), 0.0, 1.0)))
+    ax_p.fill_between(f, phase - dphi, phase + dphi, color=color, alpha=0.2, lw=0)
+
+
+def snr_figure(frfs: Mapping[str, FrequencyResponse], path: Path) -> Path | None:
+    """SNR per line, 10 log10(|P|^2 / var) [dB], one panel per channel; None without variances."""
+    with_var = {k: v for k, v in frfs.items() if variance_of(v)[0] is not None}
+    if not with_var:
+        return None
+    first = next(iter(with_var.values()))
+    n_out, n_in = first.noutputs, first.ninputs
+    fig, axes = plt.subplots(n_out, n_in, figsize=(4.6 * n_in + 0.6, 2.6 * n_out + 0.8),
+                             sharex=True, sharey=True, squeeze=False)
+    for k, (label, frf) in enumerate(frfs.items()):
+        var, which = variance_of(frf)
+        if var is None or frf.response.shape[:2] != (n_out, n_in):
+            continue
+        snr = 10 * np.log10(np.abs(frf.response) ** 2 / np.maximum(var, 1e-300))
+        for o in range(n_out):
+            for i in range(n_in):
+                axes[o, i].semilogx(frf.freq_hz, snr[o, i], '.-', color=f'C{k}', ms=3, lw=0.5,
+                                    label=f'{label} ({which} variance)')
+    for o in range(n_out):
+        for i in range(n_in):
+            ax = axes[o, i]
+            ax.axhline(20, color='0.4', ls='--', lw=0.8, label='20 dB: \u03c3 = 10 % of |P|')
+            ax.axhline(0, color='C3', ls=':', lw=0.8, label='0 dB: \u03c3 = |P|')
+            ax.set_title(_channel_title(first, o, i), fontsize=9)
+            ax.grid(True, which='both', alpha=0.3)
+            if i == 0:
+                ax.set_ylabel('|P|\u00b2 / var [dB]')
+            if o == n_out - 1:
+                ax.set_xlabel('frequency [Hz]')
+    axes[0, 0].legend(fontsize=7, loc='best')
+    fig.suptitle('Signal-to-noise ratio per frequency line (higher is better)')
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def spectrogram_figure(x: np.ndarray, fs: float, names: Sequence[str], path: Path, *,
+                       f_range: tuple[float, float] = (1.0, 60.0), t0: float = 0.0,
+                       quantity: str = 'torque', unit: str = 'N m') -> Path:
+    """PSD over time of each column of ``x`` (scipy.signal.spectrogram), log frequency axis.
+
+    Windows of about 2 s (Hann, 7/8 overlap) resolve 1 Hz; colour is 10 log10 PSD in
+    dB re 1 unit^2/Hz, the colour range spans 60 dB below the maximum.
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.shape[1]
+    f_hi = min(f_range[1], 0.5 * fs)
+    nper = int(min(x.shape[0], 2 ** int(np.ceil(np.log2(2.0 * fs)))))
+    fig, axes = plt.subplots(n, 1, figsize=(10, 2.4 * n + 0.9), sharex=True, squeeze=False)
+    for j in range(n):
+        ax = axes[j, 0]
+        f, t, sxx = signal.spectrogram(x[:, j] - np.mean(x[:, j]), fs=fs, window='hann',
+                                       nperseg=nper, noverlap=7 * nper // 8, scaling='density')
+        sel = (f >= f_range[0] * 0.9) & (f <= f_hi * 1.05)
+        db = 10 * np.log10(np.maximum(sxx[sel], 1e-300))
+        top = float(np.max(db)) if db.size else 0.0
+        mesh = ax.pcolormesh(t + t0, f[sel], db, shading='gouraud', cmap='viridis',
+                             vmin=top - 60, vmax=top, rasterized=True)
+        ax.set_yscale('log')
+        ax.set_ylim(f_range[0], f_hi)
+        ax.set_ylabel(f'{names[j]}\nfrequency [Hz]')
+        fig.colorbar(mesh, ax=ax, pad=0.01).set_label(f'PSD [dB re ({unit})\u00b2/Hz]',
+                                                      fontsize=8)
+    axes[-1, 0].set_xlabel('time [s]')
+    fig.suptitle(f'Power spectral density of the {quantity} over time '
+                 f'({nper / fs:.3g} s Hann windows)')
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def timeseries_figure(t: np.ndarray, series: Sequence[tuple[str, np.ndarray, str]],
+                      names: Sequence[str], path: Path, *, max_points: int = 20000) -> Path:
+    """Signals over time: one row per joint, one column per (label, (N, n) array, unit)."""
+    t = np.asarray(t, dtype=float)
+    step = max(1, t.size // max_points)
+    n = len(names)
+    fig, axes = plt.subplots(n, len(series), figsize=(5.0 * len(series) + 0.5, 1.9 * n + 0.9),
+                             sharex=True, squeeze=False)
+    for c, (label, data, unit) in enumerate(series):
+        for j in range(n):
+            ax = axes[j, c]
+            ax.plot(t[::step], data[::step, j], lw=0.6, color=f'C{c}')
+            ax.grid(True, alpha=0.3)
+            if j == 0:
+                ax.set_title(f'{label} [{unit}]', fontsize=9)
+            if c == 0:
+                ax.set_ylabel(names[j])
+        axes[-1, c].set_xlabel('time [s]')
+    fig.suptitle('Recorded signals' + (f' (every {step}th sample)' if step > 1 else ''))
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def iteration_figure(iterations: Sequence[Mapping[str, Any]], path: Path,
+                     channel_names: Sequence[str] | None = None,
+                     tolerance_db: float | None = None) -> Path:
+    """Error of the plant input to u_des [dB] per chirp iteration, one line per channel."""
+    its = np.array([int(it['iteration']) for it in iterations])
+    err = np.array([np.atleast_1d(np.asarray(iteration_errors(it), dtype=float))
+                    for it in iterations])
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for c in range(err.shape[1]):
+        name = channel_names[c] if channel_names and c < len(channel_names) else f'channel {c}'
+        ax.plot(its, err[:, c], 'o-', label=name)
+    if tolerance_db is not None:
+        ax.axhline(tolerance_db, color='0.4', ls='--', lw=0.8, label='tolerance')
+    ax.axhline(0, color='k', lw=0.6)
+    ax.set_xticks(its)
+    ax.set_xlabel('iteration')
+    ax.set_ylabel('error of u to u_des [dB]')
+    ax.set_title('Chirp iteration (Sec. 5.3): convergence of the plant input to u_des')
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def iteration_errors(it: Mapping[str, Any]) -> list[float]:
+    """Per-channel error [dB] of one iteration dict ('error_db' or 'error_db_per_channel')."""
+    for key in ('error_db', 'error_db_per_channel'):
+        if key in it:
+            return [float(v) for v in np.atleast_1d(it[key])]
+    raise KeyError(f"iteration {it.get('iteration')!r} has no 'error_db' list")

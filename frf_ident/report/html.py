@@ -1,0 +1,298 @@
+"""One self-contained HTML report (inline CSS, no scripts, no external resources) that shows
+FRF estimates, their uncertainty, the excitation and the data quality of a run.
+
+``write_report(out_dir, frfs=..., ...)`` writes ``out_dir/report.html`` and its PNG figures
+next to it (referenced by relative file name, so the directory can be moved or zipped):
+
+- ``bode.png`` — Bode magnitude/phase per channel, +-2 sigma bands, optional reference
+- ``snr.png`` — |P|^2 / variance per line in dB (only for estimates with variances)
+- ``timeseries.png`` — torque, velocity and reference over time (with a recording)
+- ``spectrogram.png`` — PSD of the torques over time, log frequency axis 1-60 Hz (Fig. 3)
+- ``iterations.png`` — chirp iteration: error to u_des in dB per iteration and channel
+- the timing findings of the bag reader (``TimingReport``) as tables
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import html
+import math
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from frf_ident.core.frd import FrequencyResponse
+from frf_ident.core.recording import Recording
+from frf_ident.errors import FrfIdentInputError
+from frf_ident.report import figures
+
+__all__ = ['write_report']
+
+REPORT_NAME = 'report.html'
+
+_CSS = """
+body { font-family: system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 2em auto;
+       max-width: 1200px; color: #222; line-height: 1.45; padding: 0 1em; }
+h1 { border-bottom: 2px solid #3b6ea5; padding-bottom: .2em; }
+h2 { color: #3b6ea5; margin-top: 2em; }
+figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
+figcaption { font-size: .9em; color: #555; margin-top: .3em; }
+table { border-collapse: collapse; margin: .6em 0; font-size: .9em; }
+th, td { border: 1px solid #ccc; padding: .25em .6em; text-align: left; }
+th { background: #eef3f8; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
+.warn { color: #a33; } .ok { color: #272; } .muted { color: #777; font-size: .85em; }
+nav a { margin-right: 1em; }
+"""
+
+
+def write_report(out_dir: str | Path, *, frfs: Mapping[str, FrequencyResponse],
+                 reference: FrequencyResponse | None = None,
+                 recording: Recording | None = None,
+                 timing: Mapping[str, Any] | Any | None = None,
+                 iterations: Sequence[Mapping[str, Any]] | None = None,
+                 title: str = 'FRF identification report') -> Path:
+    """Write ``out_dir/report.html`` plus PNG figures; return the HTML path.
+
+    Parameters
+    ----------
+    out_dir : directory (created if needed); existing report files in it are replaced.
+    frfs : label -> estimate (e.g. {'multisine': ..., 'chirp': ...}); all with the same
+        channels as the first.
+    reference : model or known FRF drawn as a black line.
+    recording : the time series; gives the time plot and the torque spectrogram.
+    timing : ``TimingReport`` or its ``to_dict()``.
+    iterations : chirp iteration summaries ``{'iteration': i, 'error_db': [per channel]}``
+        (``error_db_per_channel`` is accepted too), optional ``tolerance_db``.
+    title : page and heading title.
+    """
+    if not frfs and recording is None:
+        raise FrfIdentInputError('write_report: nothing to report (frfs is empty and no '
+                                 'recording given)')
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    timing_d = timing.to_dict() if hasattr(timing, 'to_dict') else timing
+    sections: list[tuple[str, str, str]] = []  # (anchor, heading, html)
+    if frfs:
+        sections.append(('estimates', 'Estimates', _estimates_table(frfs, reference)))
+        sections.append(('bode', 'Bode diagrams', _bode_section(out, frfs, reference)))
+        snr = _snr_section(out, frfs)
+        if snr:
+            sections.append(('snr', 'Signal-to-noise ratio per line', snr))
+    if recording is not None:
+        sections.append(('signals', 'Recorded signals', _signals_section(out, recording)))
+        sections.append(('spectrogram', 'Torque spectrogram',
+                         _spectrogram_section(out, recording)))
+    if iterations:
+        sections.append(('iterations', 'Chirp iteration', _iteration_section(
+            out, iterations, _input_names(frfs, recording))))
+    if timing_d:
+        sections.append(('timing', 'Timing of the recording', _timing_section(timing_d)))
+    path = out / REPORT_NAME
+    path.write_text(_page(title, sections, recording))
+    return path
+
+
+# --------------------------------------------------------------------------- page
+
+def _page(title: str, sections: list[tuple[str, str, str]], rec: Recording | None) -> str:
+    nav = ' '.join(f'<a href="#{a}">{html.escape(h)}</a>' for a, h, _ in sections)
+    body = '\n'.join(f'<section id="{a}"><h2>{html.escape(h)}</h2>\n{content}\n</section>'
+                     for a, h, content in sections)
+    stamp = _dt.datetime.now().isoformat(timespec='seconds')
+    src = ''
+    if rec is not None:
+        src = (f' &middot; recording: {rec.t.size} samples at {rec.fs:.6g} Hz, '
+               f'{rec.t[-1] - rec.t[0]:.3f} s, joints {html.escape(", ".join(rec.joint_names))}')
+    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">\n'
+            f'<meta name="viewport" content="width=device-width, initial-scale=1">\n'
+            f'<title>{html.escape(title)}</title>\n<style>{_CSS}</style></head>\n<body>\n'
+            f'<h1>{html.escape(title)}</h1>\n<p class="muted">frf_ident report, {stamp}{src}'
+            f'</p>\n<nav>{nav}</nav>\n{body}\n</body></html>\n')
+
+
+def _figure(name: str, caption: str, alt: str) -> str:
+    return (f'<figure><img src="{html.escape(name)}" alt="{html.escape(alt)}">'
+            f'<figcaption>{caption}</figcaption></figure>')
+
+
+def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
+    head = ''.join(f'<th>{html.escape(str(h))}</th>' for h in header)
+    body = ''.join('<tr>' + ''.join(_cell(v) for v in row) + '</tr>' for row in rows)
+    return f'<table><tr>{head}</tr>{body}</table>'
+
+
+def _cell(v: Any) -> str:
+    if isinstance(v, bool) or v is None:
+        return f'<td>{html.escape(str(v))}</td>'
+    if isinstance(v, (int, np.integer)):
+        return f'<td class="num">{int(v)}</td>'
+    if isinstance(v, (float, np.floating)):
+        return f'<td class="num">{_num(float(v))}</td>'
+    return f'<td>{html.escape(str(v))}</td>'
+
+
+def _num(v: float) -> str:
+    if not math.isfinite(v):
+        return str(v)
+    return f'{v:.4g}'
+
+
+# --------------------------------------------------------------------------- sections
+
+def _estimates_table(frfs: Mapping[str, FrequencyResponse],
+                     reference: FrequencyResponse | None) -> str:
+    rows = []
+    for label, frf in frfs.items():
+        var, which = figures.variance_of(frf)
+        snr = (float(np.median(10 * np.log10(np.abs(frf.response) ** 2
+                                             / np.maximum(var, 1e-300))))
+               if var is not None else None)
+        err = _error_to_reference(frf, reference)
+        rows.append([label, f'{frf.noutputs} \u00d7 {frf.ninputs}', frf.freq_hz.size,
+                     f'{frf.freq_hz[0]:.3g} \u2013 {frf.freq_hz[-1]:.3g}',
+                     str(frf.meta.get('method', frf.meta.get('design', ''))) or '\u2014',
+                     which or 'none', '\u2014' if snr is None else f'{snr:.1f}',
+                     '\u2014' if err is None else f'{err:.2f}'])
+    first = next(iter(frfs.values()))
+    chans = ', '.join(f'{html.escape(i)} \u2192 {html.escape(o)}'
+                      for o in first.outputs for i in first.inputs)
+    return (_table(['estimate', 'outputs \u00d7 inputs', 'lines', 'band [Hz]', 'method',
+                    'variance', 'median SNR [dB]', 'RMS error to reference [dB]'], rows)
+            + f'<p class="muted">Channels (input \u2192 output): {chans}</p>')
+
+
+def _error_to_reference(frf: FrequencyResponse, ref: FrequencyResponse | None) -> float | None:
+    """RMS over lines and channels of 20 log10 |P / P_ref| (reference interpolated in log f)."""
+    if ref is None or ref.response.shape[:2] != frf.response.shape[:2]:
+        return None
+    inside = (frf.freq_hz >= ref.freq_hz[0]) & (frf.freq_hz <= ref.freq_hz[-1])
+    if not inside.any():
+        return None
+    lf, lr = np.log(frf.freq_hz[inside]), np.log(ref.freq_hz)
+    errs = []
+    for o in range(frf.noutputs):
+        for i in range(frf.ninputs):
+            mag_ref = np.exp(np.interp(lf, lr, np.log(np.maximum(np.abs(ref.response[o, i]),
+                                                                  1e-300))))
+            errs.append(20 * np.log10(np.maximum(np.abs(frf.response[o, i, inside]), 1e-300)
+                                      / mag_ref))
+    return float(np.sqrt(np.mean(np.concatenate(errs) ** 2)))
+
+
+def _bode_section(out: Path, frfs: Mapping[str, FrequencyResponse],
+                  reference: FrequencyResponse | None) -> str:
+    figures.bode_figure(frfs, out / 'bode.png', reference=reference)
+    return _figure('bode.png',
+                   'Magnitude (upper row of each pair) and phase (lower row) of every channel '
+                   'input \u2192 output. Markers: estimated lines; shaded: \u00b12\u03c3 '
+                   'uncertainty from the total variance (noise + nonlinear distortion) or, '
+                   'without it, the noise variance; black line: reference. Wide bands and '
+                   'scattered markers mark lines the data do not determine well.',
+                   'Bode diagrams of the estimates')
+
+
+def _snr_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str:
+    if figures.snr_figure(frfs, out / 'snr.png') is None:
+        return ''
+    return _figure('snr.png',
+                   'Coherence-like signal-to-noise ratio per line, |P|\u00b2 / var(P) in dB. '
+                   'Above 20 dB (dashed) the 1\u03c3 uncertainty is below 10 % of |P|; near '
+                   '0 dB (dotted) the estimate is as large as its uncertainty. Dips usually '
+                   'sit at anti-resonances or where friction or too little excitation hide the '
+                   'dynamics.', 'SNR per line')
+
+
+def _signals_section(out: Path, rec: Recording) -> str:
+    unit = _common_units(rec)
+    series = [('motor torque u', rec.effort, unit('effort', 'N m')),
+              ('velocity y', rec.velocity, unit('velocity', 'rad/s'))]
+    if rec.reference is not None and np.isfinite(rec.reference).any():
+        series.append(('reference r', rec.reference, unit('reference', 'rad/s')))
+    figures.timeseries_figure(rec.t, series, rec.joint_names, out / 'timeseries.png')
+    units = rec.meta.get('units')
+    note = (f' Units per joint (import map): {html.escape(str(units))}.' if units else '')
+    return _figure('timeseries.png',
+                   f'Applied motor torque, measured velocity and velocity reference of each '
+                   f'joint over time.{note}', 'time series')
+
+
+def _common_units(rec: Recording):
+    """unit(signal, default): the unit all joints share per the import map, else default."""
+    units = rec.meta.get('units') if isinstance(rec.meta.get('units'), dict) else {}
+
+    def unit(sig: str, default: str) -> str:
+        found = {str(u.get(sig)) for u in units.values() if isinstance(u, dict) and u.get(sig)}
+        return found.pop() if len(found) == 1 and len(units) == len(rec.joint_names) \
+            else default
+    return unit
+
+
+def _spectrogram_section(out: Path, rec: Recording) -> str:
+    f_hi = min(60.0, 0.5 * rec.fs)
+    figures.spectrogram_figure(rec.effort, rec.fs, rec.joint_names, out / 'spectrogram.png',
+                               f_range=(1.0, f_hi), t0=float(rec.t[0]),
+                               unit=_common_units(rec)('effort', 'N m'))
+    return _figure('spectrogram.png',
+                   f'Power spectral density of the motor torques over time, 1\u2013{f_hi:g} Hz '
+                   'on a log axis (as Fig. 3 of Saupe &amp; Knoblach 2015). A chirp is a '
+                   'rising ridge; faint parallel ridges above it are harmonics from '
+                   'nonlinearities; a multisine is a set of horizontal lines; broadband '
+                   'vertical stripes are impacts or friction reversals.', 'torque spectrogram')
+
+
+def _input_names(frfs: Mapping[str, FrequencyResponse], rec: Recording | None) -> list[str]:
+    if rec is not None:
+        return list(rec.joint_names)
+    return list(next(iter(frfs.values())).inputs) if frfs else []
+
+
+def _iteration_section(out: Path, iterations: Sequence[Mapping[str, Any]],
+                       names: list[str]) -> str:
+    try:
+        errs = [figures.iteration_errors(it) for it in iterations]
+    except KeyError as exc:
+        raise FrfIdentInputError(f'write_report: {exc.args[0]}') from None
+    tol = next((float(it['tolerance_db']) for it in iterations if 'tolerance_db' in it), None)
+    figures.iteration_figure(iterations, out / 'iterations.png', names, tol)
+    n = max(len(e) for e in errs)
+    header = ['iteration'] + [names[c] if c < len(names) else f'channel {c}' for c in range(n)]
+    rows = [[int(it['iteration'])] + [float(v) for v in e] for it, e in zip(iterations, errs)]
+    return (_figure('iterations.png',
+                    'Error of the measured plant input u to the desired u_des (dB, per '
+                    'channel) after each iteration of the closed-loop excitation design '
+                    '(Sec. 5.3, eq. 18). It should fall towards 0 dB; the paper needed six '
+                    'iterations.', 'iteration convergence')
+            + _table(header, rows))
+
+
+def _timing_section(t: Mapping[str, Any]) -> str:
+    rate = 1.0 / t['dt_s'] if t.get('dt_s') else float('nan')
+    facts = [['samples', t.get('n_samples')], ['sample rate [Hz]', rate],
+             ['time span [s]', f"{_num(t.get('t_start_s', float('nan')))} \u2013 "
+                               f"{_num(t.get('t_end_s', float('nan')))}"],
+             ['time grid', t.get('grid')], ['resampled', t.get('resampled')]]
+    parts = [_table(['finding', 'value'], facts)]
+    topics = t.get('topics') or {}
+    if topics:
+        rows = [[name, d.get('count'), d.get('rate_hz'), d.get('stamp_source'),
+                 100 * float(d.get('jitter', 0.0)), d.get('gaps'), d.get('missing_samples'),
+                 d.get('duplicates'), d.get('non_monotonic'),
+                 None if d.get('header_log_offset_mean_s') is None
+                 else 1e3 * d['header_log_offset_mean_s']]
+                for name, d in topics.items()]
+        parts.append(_table(['topic', 'messages', 'rate [Hz]', 'stamps', 'jitter [% of dt]',
+                             'gaps', 'missing samples', 'duplicates', 'non-monotonic',
+                             'log - header [ms]'], rows))
+    rec = t.get('recovery') or {}
+    if rec.get('bytes_lost') or rec.get('complete') is False:
+        parts.append(f'<p class="warn">Recovered a damaged or unfinished bag: '
+                     f'{rec.get("bytes_lost", 0)} bytes and {rec.get("chunks_lost", 0)} chunks '
+                     f'lost, messages lost: {html.escape(str(rec.get("messages_lost", "?")))}'
+                     f'.</p>')
+    warnings = t.get('warnings') or []
+    if warnings:
+        parts.append('<ul class="warn">' + ''.join(f'<li>{html.escape(str(w))}</li>'
+                                                   for w in warnings) + '</ul>')
+    else:
+        parts.append('<p class="ok">No timing warnings.</p>')
+    return '\n'.join(parts)
