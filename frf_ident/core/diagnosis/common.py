@@ -1,0 +1,141 @@
+"""Shared pieces of the diagnosis: effect names, the result record, simulation of a model on the
+recorded excitation, splitting a recording into fit and held-out parts, and the metrics of
+CONTRACT section 7 (frf_error_db, time_nrmse)."""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from frf_ident.core.controller import PIVelocity
+from frf_ident.core.plant import FlexibleJointPlant, RobotParams
+from frf_ident.core.recording import Recording, Segment
+
+EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'backlash',
+           'torque_ripple', 'time_delay', 'parameter_mismatch')
+
+
+@dataclass
+class Effect:
+    """One diagnosed effect: CONTRACT section 7 entry plus the model change it implies."""
+
+    name: str
+    axis: str
+    score: float
+    parameters: dict[str, Any]
+    evidence: str
+    axis_index: int = 0
+    gain: float = 0.0          # relative reduction of the fit loss when the effect is added
+
+    def to_dict(self) -> dict[str, Any]:
+        return {'name': self.name, 'axis': self.axis, 'score': round(float(self.score), 3),
+                'parameters': _plain(self.parameters), 'evidence': self.evidence}
+
+
+def _plain(x: Any) -> Any:
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return float(f'{float(x):.6g}')
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
+def apply_effect(robot: RobotParams, eff: Effect) -> RobotParams:
+    """The robot with the effect's parameters written into its axis (model-file keys)."""
+    axes = list(robot.axes)
+    axes[eff.axis_index] = replace(axes[eff.axis_index], **copy.deepcopy(eff.parameters))
+    return replace(robot, axes=axes)
+
+
+def quiet(robot: RobotParams) -> RobotParams:
+    """The model without measurement noise/quantisation: what a simulation predicts."""
+    return robot.with_axes(velocity_noise=0.0, torque_noise=0.0, encoder_resolution=0.0)
+
+
+def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recording:
+    """Run ``robot`` in closed loop with ``ctrl`` on the recording's velocity reference (the
+    same excitation through the same controller) and return a Recording with the same
+    segments, so that it can be estimated exactly like the measurement."""
+    if rec.reference is None:
+        raise ValueError('recording has no reference; closed-loop simulation impossible')
+    plant = FlexibleJointPlant(replace(quiet(robot), sample_rate=rec.fs))
+    plant.reset(seed=0)
+    c = ctrl.copy()
+    c.dt = rec.dt
+    c.reset(plant.equilibrium_torque())
+    r = np.nan_to_num(rec.reference)
+    res = plant.simulate(reference=r, controller=c)
+    return Recording(rec.t.copy(), list(rec.joint_names), res.position, res.velocity,
+                     res.effort, rec.reference, rec.excitation, list(rec.segments),
+                     {'simulated': True})
+
+
+def split_recording(rec: Recording) -> tuple[Recording, Recording, str]:
+    """Fit and validation views of an identification recording (same samples, different
+    segments): multisine realisations 0..n_p-2 and the last chirp iteration for fitting; the
+    last multisine realisation and the second-last chirp iteration held out."""
+    segs = rec.segments
+    ms = [s for s in segs if s.info.get('design') == 'multisine']
+    cv = [s for s in segs if s.info.get('design') == 'constant_velocity']
+    ch = [s for s in segs if s.info.get('design') == 'chirp']
+    fit, val, said = list(cv), list(cv), []
+    if ms:
+        n_p = 1 + max(s.info['realisation'] for s in ms)
+        if n_p >= 2:
+            fit += [s for s in ms if s.info['realisation'] < n_p - 1]
+            val += [Segment(s.t_start, s.t_end, dict(s.info, realisation=0))
+                    for s in ms if s.info['realisation'] == n_p - 1]
+            said.append(f'multisine realisation {n_p} of {n_p}')
+        else:
+            fit += ms
+    if ch:
+        its = sorted({s.info['iteration'] for s in ch})
+        fit += [s for s in ch if s.info['iteration'] == its[-1]]
+        if len(its) >= 2:
+            val += [s for s in ch if s.info['iteration'] == its[-2]]
+            said.append(f'chirp iteration {its[-2]} (fit on iteration {its[-1]})')
+    key = lambda s: s.t_start  # noqa: E731
+    mk = lambda sg: Recording(rec.t, rec.joint_names, rec.position, rec.velocity,  # noqa: E731
+                              rec.effort, rec.reference, rec.excitation, sorted(sg, key=key),
+                              rec.meta)
+    text = ('held out (not used for fitting): ' + ' and '.join(said)) if said else \
+        'no held-out experiments in the recording: metrics on the fit data'
+    return mk(fit), mk(val), text
+
+
+def segment_mask(rec: Recording, designs=('multisine', 'chirp')) -> np.ndarray:
+    """Samples inside the recording's segments of the given designs."""
+    m = np.zeros(rec.t.size, bool)
+    for s in rec.segments:
+        if s.info.get('design') in designs:
+            m[rec.slice(s.t_start, s.t_end)] = True
+    return m
+
+
+def nrmse(meas: np.ndarray, model: np.ndarray, mask: np.ndarray | None = None) -> float:
+    """RMS of the output error over RMS of the measured output (both mean-free)."""
+    if mask is not None:
+        meas, model = meas[mask], model[mask]
+    den = np.sqrt(np.mean((meas - np.mean(meas, 0)) ** 2))
+    return float(np.sqrt(np.mean((meas - model) ** 2)) / max(den, 1e-300))
+
+
+def diag_ratio(pm, ps) -> np.ndarray:
+    """Diagonal elements P_measured/P_model, shape (n, n_freq)."""
+    n = min(pm.response.shape[0], pm.response.shape[1])
+    idx = np.arange(n)
+    return pm.response[idx, idx] / ps.response[idx, idx]
+
+
+def frf_error_db(pairs) -> float:
+    """CONTRACT section 7: RMS over the analysed lines of 20 log10 |P_measured / P_model|."""
+    vals = [20 * np.log10(np.abs(diag_ratio(pm, ps))).ravel() for pm, ps in pairs]
+    v = np.concatenate(vals) if vals else np.array([np.nan])
+    v = v[np.isfinite(v)]
+    return float(np.sqrt(np.mean(v ** 2))) if v.size else float('nan')

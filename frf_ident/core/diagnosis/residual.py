@@ -1,0 +1,185 @@
+"""Time-domain evidence: the motor-side inverse-dynamics residual and its regression.
+
+For the flexible joint (eqs. 20-22) every motor-side torque the model lacks (Coulomb and
+viscous friction, torque ripple) appears exactly in
+
+    f = u - (Jm a_m + b_v v_m + K (q_m - q_o) + D (v_m - v_o)),
+
+where the link states q_o, v_o follow from the *measured* motor motion through the stable
+link-side equation M_o ddq_o = K (q_m - q_o) + D (v_m - v_o) - g. For a (numerically) rigid
+axis this reduces to f = u - (Jm + Jo) a - b_v v. Both sides are low-pass filtered (zero
+phase) before the regression f ~ c0 + Fc sgn(v) + dFv v [+ dJ a] + ripple harmonics.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import signal
+
+from frf_ident.core.plant import RobotParams
+
+
+def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
+    """Zero-phase 4th-order Butterworth low-pass along axis 0."""
+    sos = signal.butter(4, min(fc, 0.45 * fs), fs=fs, output='sos')
+    return signal.sosfiltfilt(sos, x, axis=0)
+
+
+def is_rigid(robot: RobotParams, fs: float) -> bool:
+    """True when every axis' locked resonance lies far above the Nyquist frequency."""
+    return all(math.sqrt(a.stiffness * (1 / a.motor_inertia + 1 / a.link_inertia)) / (2 * math.pi)
+               > 2 * fs for a in robot.axes)
+
+
+def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: float,
+                              robot: RobotParams, link_position: np.ndarray | None = None
+                              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Motor-side residual torque of the model, evaluated between samples (k + 1/2) where the
+    zero-order-held torque u[k] acts. Returns (f, q_half, v_half, a_half), each (N-1, n).
+    With ``link_position`` (a link-side encoder) the deflection is measured, not simulated."""
+    n = robot.n_axes
+    qh = 0.5 * (q[1:] + q[:-1])
+    vh = 0.5 * (v[1:] + v[:-1])
+    ah = np.diff(v, axis=0) / dt
+    jm = np.array([a.motor_inertia for a in robot.axes])
+    jo = np.array([a.link_inertia for a in robot.axes])
+    bv = np.array([a.viscous_friction for a in robot.axes])
+    k = np.array([a.stiffness for a in robot.axes])
+    d = np.array([a.damping for a in robot.axes])
+    if link_position is not None:
+        qo = 0.5 * (link_position[1:] + link_position[:-1])
+        vo = np.gradient(qo, dt, axis=0)
+        f = u[:-1] - (jm * ah + bv * vh + k * (qh - qo) + d * (vh - vo))
+    elif is_rigid(robot, 1 / dt):
+        f = u[:-1] - ((jm + jo) * ah + bv * vh)
+    else:
+        mo = robot.link_inertia_matrix()
+        moi = np.linalg.inv(mo)
+        K, D = np.diag(k), np.diag(d)
+        z, eye = np.zeros((n, n)), np.eye(n)
+        A = np.block([[z, eye], [-moi @ K, -moi @ D]])
+        B = np.block([[z, z, z], [moi @ K, moi @ D, -moi]])
+        g = np.array([a.gravity_torque for a in robot.axes])
+        sysd = signal.cont2discrete((A, B, np.eye(2 * n), np.zeros((2 * n, 3 * n))), dt,
+                                    method='foh')
+        w = np.hstack([qh, vh, np.tile(g, (qh.shape[0], 1))])
+        x0 = np.concatenate([qh[0] - g / k, vh[0]])
+        _, xs = signal.dlsim(sysd, w, x0=x0)[:2]
+        qo, vo = xs[:, :n], xs[:, n:]
+        f = u[:-1] - (jm * ah + bv * vh + k * (qh - qo) + d * (vh - vo))
+    return f, qh, vh, ah
+
+
+@dataclass
+class Regression:
+    """Result of the motor-side residual regression of one axis."""
+
+    coef: dict[str, float]
+    tstat: dict[str, float]
+    partial_r2: dict[str, float]
+    ripple: list[dict[str, float]] = field(default_factory=list)
+    ripple_peak_ratio: float = 0.0
+    rms_residual: float = 0.0
+    rms_effort: float = 0.0
+    n_eff: float = 0.0
+
+
+def _ls(X: np.ndarray, y: np.ndarray, n_eff: float):
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    res = y - X @ coef
+    dof = max(n_eff - X.shape[1], 1.0)
+    s2 = float(res @ res) / y.size * y.size / dof
+    cov = s2 * np.linalg.pinv(X.T @ X) * (y.size / n_eff)
+    se = np.sqrt(np.maximum(np.diag(cov), 1e-300))
+    return coef, coef / se, res
+
+
+def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray, *, s_max: float = 600.0
+                ) -> tuple[float, float]:
+    """Spatial frequency [1/rad] whose sin/cos in motor position explain most of the residual
+    f (already mean-free); returns (s, peak power / median power of the scan)."""
+    qm, fm = q[mask], f[mask]
+    span = float(np.ptp(qm)) if qm.size else 0.0
+    if span <= 0:
+        return 0.0, 0.0
+    s_min = 4 * 2 * math.pi / span
+    grid = np.arange(s_min, s_max, 0.1 * 2 * math.pi / span)
+    if grid.size < 8:
+        return 0.0, 0.0
+    step = max(1, qm.size // 20000)
+    qs, fs_ = qm[::step], fm[::step]
+    pw = np.empty(grid.size)
+    for i, s in enumerate(grid):
+        c, sn = np.cos(s * qs), np.sin(s * qs)
+        pw[i] = (fs_ @ c) ** 2 + (fs_ @ sn) ** 2
+    i = int(np.argmax(pw))
+    # refine the peak on a finer grid
+    fine = np.linspace(grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)], 41)
+    pf = [(fs_ @ np.cos(s * qs)) ** 2 + (fs_ @ np.sin(s * qs)) ** 2 for s in fine]
+    return float(fine[int(np.argmax(pf))]), float(pw[i] / max(np.median(pw), 1e-300))
+
+
+def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: np.ndarray,
+                 mask: np.ndarray, fs: float, *, fc: float = 20.0, v_eps: float = 0.0,
+                 with_inertia: bool = False, nuisance: np.ndarray | None = None,
+                 ripple: bool = True) -> Regression:
+    """Regress the residual f of one axis on [1, sgn(v), v, (a), (nuisance), ripple sin/cos].
+
+    All columns are low-pass filtered like f (fc [Hz]); samples with |v| < v_eps (sticking,
+    where the Coulomb force is undetermined) and outside ``mask`` are left out. t statistics
+    use an effective sample count N * 2 fc / fs (filtered data are correlated)."""
+    sg = np.sign(lowpass(v, fs, fc))
+    cols = {'offset': np.ones_like(v), 'coulomb_friction': sg, 'viscous_friction': v}
+    if with_inertia:
+        cols['inertia'] = a
+    if nuisance is not None:
+        for j in range(nuisance.shape[1]):
+            cols[f'nuisance_{j}'] = nuisance[:, j]
+    m = mask & (np.abs(lowpass(v, fs, fc)) > v_eps)
+    # edges of the filter around sign changes carry the undetermined stick phase
+    ch = np.flatnonzero(np.diff(sg) != 0)
+    guard = int(0.5 * fs / fc)
+    for c in ch:
+        m[max(c - guard, 0):c + guard + 1] = False
+    ff = lowpass(f, fs, fc)
+    n_eff = max(m.sum() * 2 * fc / fs, 10.0)
+    rip: list[dict[str, float]] = []
+    peak = 0.0
+    if ripple:
+        X0 = np.column_stack([lowpass(c, fs, fc) for c in cols.values()])
+        c0, *_ = np.linalg.lstsq(X0[m], ff[m], rcond=None)
+        s, peak = find_ripple(ff - X0 @ c0, q, m)
+        if s > 0:
+            cols['ripple_sin'] = np.sin(s * q)
+            cols['ripple_cos'] = np.cos(s * q)
+    names = list(cols)
+    X = np.column_stack([lowpass(c, fs, fc) for c in cols.values()])
+    Xm, ym = X[m], ff[m]
+    # a regressor without variation in the selected data (e.g. sgn(v) on a constant
+    # velocity) is dropped
+    keep = [j for j in range(len(names)) if names[j] == 'offset' or np.std(Xm[:, j]) > 1e-12]
+    coef, t, res = _ls(Xm[:, keep], ym, n_eff)
+    cf = {names[j]: float(coef[i]) for i, j in enumerate(keep)}
+    ts = {names[j]: float(t[i]) for i, j in enumerate(keep)}
+    tot = float(np.sum((ym - ym.mean()) ** 2)) or 1e-300
+    pr2: dict[str, float] = {}
+    groups = {'coulomb_friction': ['coulomb_friction'], 'viscous_friction': ['viscous_friction'],
+              'torque_ripple': ['ripple_sin', 'ripple_cos'], 'inertia': ['inertia']}
+    for g, members in groups.items():
+        idx = [i for i, j in enumerate(keep) if names[j] in members]
+        if not idx:
+            continue
+        rest = [i for i in range(len(keep)) if i not in idx]
+        c2, *_ = np.linalg.lstsq(Xm[:, keep][:, rest], ym, rcond=None)
+        r2 = ym - Xm[:, keep][:, rest] @ c2
+        pr2[g] = float((r2 @ r2 - res @ res) / tot)
+    if 'ripple_sin' in cf:
+        amp = math.hypot(cf['ripple_sin'], cf['ripple_cos'])
+        tr = math.hypot(ts['ripple_sin'], ts['ripple_cos'])
+        # f = u - model = -(ripple torque): the ripple is the negated harmonic
+        rip = [{'amplitude': amp, 'spatial_frequency': s,
+                'phase': math.atan2(-cf['ripple_cos'], -cf['ripple_sin']), 't': tr}]
+    return Regression(cf, ts, pr2, rip, peak, float(np.sqrt(np.mean(res ** 2))),
+                      float(np.std(lowpass(u, fs, fc)[m])), n_eff)

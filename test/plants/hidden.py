@@ -1,0 +1,60 @@
+"""Test-only plant plug-in (CONTRACT section 4) with hidden effects the diagnosis cannot see.
+
+``HiddenPlant(model_dict)`` is the model's own simulation plus the changes in the module-level
+``HIDDEN`` (or the JSON in the environment variable FRF_HIDDEN, for the CLI):
+{axis_index: {model-file key: value}}. It subclasses FlexibleJointPlant so the runner keeps
+its compiled speed. :func:`draw_effect` draws one effect with random plausible parameters.
+"""
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import replace
+
+import numpy as np
+
+from frf_ident.core.model import robot_from_dict
+from frf_ident.core.plant import FlexibleJointPlant, RobotParams
+
+HIDDEN: dict[int, dict] = {}
+NOISE = 2e-5     # velocity noise of the "real" robot [rad/s]
+
+
+def hidden_robot(model: dict, hidden: dict[int, dict]) -> RobotParams:
+    robot = robot_from_dict(model)
+    axes = [replace(a, velocity_noise=max(a.velocity_noise, NOISE)) for a in robot.axes]
+    for i, ch in hidden.items():
+        axes[int(i)] = replace(axes[int(i)], **ch)
+    return replace(robot, axes=axes, seed=int(os.environ.get('FRF_HIDDEN_SEED', '3')))
+
+
+class HiddenPlant(FlexibleJointPlant):
+    def __init__(self, config: dict | None = None) -> None:
+        hidden = HIDDEN or {int(k): v for k, v in
+                            json.loads(os.environ.get('FRF_HIDDEN', '{}')).items()}
+        super().__init__(hidden_robot(config, hidden))
+
+
+def draw_effect(name: str, rng: np.random.Generator, axis) -> dict:
+    """Random plausible change of one axis (AxisParams ``axis`` of the nominal model) for the
+    effect ``name``; returns {model-file key: value}."""
+    if name == 'coulomb_friction':
+        return {'coulomb_friction': float(rng.uniform(8, 30))}
+    if name == 'viscous_friction':
+        return {'viscous_friction': axis.viscous_friction + float(rng.uniform(40, 120))}
+    if name == 'stiffness_nonlinearity':
+        return {'stiffness_k2': axis.stiffness * float(rng.uniform(1.4, 1.9)),
+                'stiffness_breakpoint': float(rng.uniform(1.0, 2.0)) * 1e-4}
+    if name == 'backlash':
+        return {'backlash': float(rng.uniform(2e-5, 8e-5))}
+    if name == 'torque_ripple':
+        return {'torque_ripple': [{'amplitude': float(rng.uniform(3, 10)),
+                                   'spatial_frequency': float(rng.uniform(60, 200)),
+                                   'phase': float(rng.uniform(-3, 3))}]}
+    if name == 'time_delay':
+        return {'time_delay': float(rng.uniform(1.5e-3, 4e-3))}
+    if name == 'parameter_mismatch':
+        key = ['stiffness', 'link_inertia', 'motor_inertia'][int(rng.integers(3))]
+        f = float(rng.choice([-1, 1]) * rng.uniform(0.15, 0.35))
+        return {key: getattr(axis, key) * (1 + f)}
+    raise ValueError(f'{name=} is not an effect')
