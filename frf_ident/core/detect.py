@@ -245,24 +245,36 @@ def _periodic_block(x: np.ndarray, p: int) -> tuple[int, int]:
     return int(a), int(n_periods)
 
 
-def _refine_edges(e2: np.ndarray, a: int, b: int, w: int, *, floor: float,
-                  w2: int = 32) -> tuple[int, int]:
-    """Move the run edges [a, b) of the smoothed mismatch to the sample where e^2 (averaged
-    over ``w2`` samples) leaves its steady-state level (three times its median in the core,
-    at least ``floor``: rounding errors of a noise-free signal do not count)."""
-    if b - a <= 4 * w:
-        return a, b
-    kernel = np.ones(w2) / w2
-    fwd = np.convolve(e2, kernel, mode='full')[w2 - 1:]  # mean of e2[n:n+w2]
-    bwd = np.convolve(e2, kernel, mode='full')[:e2.size]  # mean of e2[n-w2+1:n+1]
-    thr = max(3.0 * float(np.median(fwd[a + w:b - w])), floor)
+def _refine_edges(e2: np.ndarray, a: int, b: int, w: int, *,
+                  floor: float) -> tuple[int, int]:
+    """Move the edges [a, b) of the smoothed run to the sample where the variance of the
+    period difference e changes (maximum-likelihood change point within +-w samples); an edge
+    stays where it is unless the variance outside is at least three times the inside one.
+    ``floor`` keeps rounding errors of a noise-free signal from counting as variance."""
     lo, hi = max(0, a - w), min(e2.size, a + w)
-    bad = np.flatnonzero(fwd[lo:hi] > thr)
-    a_new = lo + int(bad[-1]) + 1 if bad.size else lo
+    k = _variance_change(e2[lo:hi], floor, inside_after=True)
+    a_new = a if k is None else lo + k
     lo, hi = max(0, b - w), min(e2.size, b + w)
-    bad = np.flatnonzero(bwd[lo:hi] > thr)
-    b_new = lo + int(bad[0]) if bad.size else hi
+    k = _variance_change(e2[lo:hi], floor, inside_after=False)
+    b_new = b if k is None else lo + k
     return (a_new, b_new) if b_new > a_new else (a, b)
+
+
+def _variance_change(e2: np.ndarray, floor: float, *, inside_after: bool) -> int | None:
+    """Index k splitting e2 into two parts of different mean (Gaussian variance change point),
+    or None if the outside part is not clearly (3x) larger than the inside part."""
+    n = e2.size
+    if n < 4:
+        return None
+    c = np.concatenate([[0.0], np.cumsum(e2)])
+    k = np.arange(1, n)
+    v1 = np.maximum(c[k] / k, floor)
+    v2 = np.maximum((c[n] - c[k]) / (n - k), floor)
+    cost = k * np.log(v1) + (n - k) * np.log(v2)
+    best = int(k[np.argmin(cost)])
+    inside, outside = (v2, v1) if inside_after else (v1, v2)
+    j = best - 1
+    return best if outside[j] > 3.0 * inside[j] else None
 
 
 def _longest_run(mask: np.ndarray) -> tuple[int, int]:
