@@ -163,7 +163,11 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
     coef, t, res = _ls(Xm[:, keep], ym, n_eff)
     cf = {names[j]: float(coef[i]) for i, j in enumerate(keep)}
     ts = {names[j]: float(t[i]) for i, j in enumerate(keep)}
-    tot = float(np.sum((ym - ym.mean()) ** 2)) or 1e-300
+    # shares of what the offset and nuisance regressors (gravity) leave unexplained
+    base = [i for i, j in enumerate(keep) if names[j] == 'offset' or names[j].startswith('nuis')]
+    cb, *_ = np.linalg.lstsq(Xm[:, keep][:, base], ym, rcond=None)
+    rb = ym - Xm[:, keep][:, base] @ cb
+    tot = float(rb @ rb) or 1e-300
     pr2: dict[str, float] = {}
     groups = {'coulomb_friction': ['coulomb_friction'], 'viscous_friction': ['viscous_friction'],
               'torque_ripple': ['ripple_sin', 'ripple_cos'], 'inertia': ['inertia']}
