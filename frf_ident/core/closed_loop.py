@@ -34,13 +34,38 @@ def _segment_arrays(rec: Recording, seg: Segment) -> dict[str, np.ndarray]:
     exc = rec.excitation if rec.excitation is not None else rec.reference
     if exc is None:
         raise EstimationError('recording has no reference/excitation to estimate from')
-    return {'u': rec.effort[sl], 'y': rec.velocity[sl], 'r': exc[sl]}
+    return {'u': rec.effort[sl], 'y': rec.velocity[sl], 'r': exc[sl], 'q': rec.position[sl]}
 
 
-def multisine_periods(rec: Recording, *, compensate: bool = True
+def _disturbance_at(cv: dict[str, np.ndarray], key: str, q: np.ndarray,
+                    align: str) -> np.ndarray:
+    """The constant-velocity run's series to subtract (Sec. 4.4 E).
+
+    align 'time': sample by sample, as the paper does. 'position': per axis, the run's series
+    read at the excited run's positions (the run moves monotonically, so position maps to
+    time): position-periodic disturbances such as torque ripple then cancel even when the
+    excited run starts a little elsewhere or the multisine displaces it.
+    """
+    x = cv[key][:q.shape[0]]
+    if align == 'time':
+        return x
+    out = np.empty_like(x)
+    for i in range(q.shape[1]):
+        qc = cv['q'][:, i]
+        if np.all(np.diff(qc) > 0):
+            out[:, i] = np.interp(q[:, i], qc, cv[key][:, i])
+        elif np.all(np.diff(qc) < 0):
+            out[:, i] = np.interp(q[::-1, i][::-1], qc[::-1], cv[key][::-1, i])
+        else:
+            out[:, i] = x[:, i]          # not monotonic: fall back to time alignment
+    return out
+
+
+def multisine_periods(rec: Recording, *, compensate: bool = True, align: str = 'position'
                       ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """Per (p, m) segment: the measured periods after the transient, compensated by the
-    constant-velocity run when requested. Returns arrays shaped (n_p, n_ex, n_q, N, n)."""
+    constant-velocity run when requested (``align`` see :func:`_disturbance_at`). Returns
+    arrays shaped (n_p, n_ex, n_q, N, n)."""
     segs = [s for s in rec.segments if s.info.get('design') == 'multisine']
     if not segs:
         raise EstimationError('recording has no multisine segments')
@@ -67,7 +92,7 @@ def multisine_periods(rec: Recording, *, compensate: bool = True
         for k in ('u', 'y', 'r'):
             x = a[k][:need]
             if cv is not None and k != 'r':
-                x = x - cv[k][:need]
+                x = x - _disturbance_at(cv, k, a['q'][:need], align)
             out[k][s.info['realisation'], s.info['experiment']] = \
                 x[n_tr * n_per:].reshape(n_q, n_per, n)
     if np.isnan(out['u']).any():
@@ -76,14 +101,14 @@ def multisine_periods(rec: Recording, *, compensate: bool = True
     return out, info
 
 
-def multisine_frf(rec: Recording, *, compensate: bool = True,
-                  method: str = 'reference') -> tuple[FrequencyResponse, BLAResult]:
+def multisine_frf(rec: Recording, *, compensate: bool = True, method: str = 'reference',
+                  align: str = 'position') -> tuple[FrequencyResponse, BLAResult]:
     """Multisine best linear approximation (eq. 14) of the closed-loop data.
 
     method 'reference': P_p = (sum_q Y R^H)(sum_q U R^H)^-1 per realisation, averaged over p;
     'plain': P[p,q] = Y U^+ (eq. 7) per period, averaged over p and q.
     """
-    data, info = multisine_periods(rec, compensate=compensate)
+    data, info = multisine_periods(rec, compensate=compensate, align=align)
     bins = np.asarray(info['design_params']['harmonics'])
     spec = {k: np.moveaxis(periodic_spectra(v, bins, axis=3), 1, -1)
             for k, v in data.items()}                         # (p, q, F, n, n_ex)
@@ -99,7 +124,7 @@ def multisine_frf(rec: Recording, *, compensate: bool = True,
     frf = FrequencyResponse(bins * f0, bla.response, ins, outs, bla.noise_variance,
                             bla.total_variance, {
                                 'design': 'multisine', 'method': method,
-                                'compensated': compensate,
+                                'compensated': compensate, 'alignment': align,
                                 'n_p': int(data['u'].shape[0]), 'n_q': int(data['u'].shape[2]),
                                 'cond_max': float(np.max(bla.cond)),
                                 'detection_lines': det.to_dict()})

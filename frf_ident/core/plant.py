@@ -477,8 +477,13 @@ def _pi_step(e, integ, kp, ki, ff, k, ulim, dt, u):
 @numba.njit(cache=True, fastmath=True)
 def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, m, dt,
               offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, nonlinear, enc,
-              from_encoder, vnoise, tnoise, out_q, out_v, out_u, out_x):
+              from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v, out_u, out_x,
+              out_r):
     """Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
+
+    With a position plan (``has_plan``) the velocity reference gets position feedback,
+    r_k <- r_k + kpos (qplan_k - q_k), as the excitation node does for moves; out_r holds the
+    reference actually used.
 
     ``uff`` adds a torque on the integrator's stage grid (continuous excitations). Fills
     out_q, out_v, out_u (measured effort = commanded torque at the sample + torque noise) and
@@ -497,7 +502,11 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
             qprev[i] = qm[i]
         if closed:
             for i in range(n):
-                e[i] = r[k, i] - vm[i]
+                ref = r[k, i]
+                if has_plan:
+                    ref += kpos[i] * (qplan[k, i] - qm[i])
+                out_r[k, i] = ref
+                e[i] = ref - vm[i]
             _pi_step(e, integ, kp, ki, u_ext, k, ulim_ctrl, dt, u)
         else:
             for i in range(n):
@@ -529,6 +538,7 @@ class SimResult:
     velocity: np.ndarray
     effort: np.ndarray
     states: np.ndarray
+    reference: np.ndarray | None = None
 
 
 def static_deflection(axis: AxisParams) -> float:
@@ -610,13 +620,17 @@ class FlexibleJointPlant:
 
     def simulate(self, *, reference: np.ndarray | None = None, torque: np.ndarray | None = None,
                  torque_fine: np.ndarray | None = None, controller: Any = None,
-                 n_samples: int | None = None) -> SimResult:
+                 n_samples: int | None = None, position_plan: np.ndarray | None = None,
+                 position_gain: float | np.ndarray = 0.0) -> SimResult:
         """Run samples from the current state.
 
         Closed loop (``controller`` given, a :class:`~frf_ident.core.controller.PIVelocity`):
         u = PI(reference - y) + torque. Open loop: u = torque (zero-order hold). ``torque_fine``
-        is an extra torque on the integrator's stage grid, shape (2 m N + 1, n) with m = substeps, used
-        for continuous-time excitations (e.g. the paper's open-loop example).
+        is an extra torque on the integrator's stage grid, shape (2 m N + 1, n) with
+        m = substeps, used for continuous-time excitations (e.g. the paper's open-loop example).
+        ``position_plan`` (N, n): absolute measured positions to hold with ``position_gain``
+        [1/s] of position feedback on the reference (closed loop only); the reference used is
+        returned in ``SimResult.reference``.
         """
         n = self.n_axes
         lengths = [a.shape[0] for a in (reference, torque) if a is not None]
@@ -633,6 +647,10 @@ class FlexibleJointPlant:
         vn, tn = self._noise(N)
         out_q, out_v, out_u = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
         out_x = np.empty((N, 4, n))
+        out_r = r.copy()
+        has_plan = position_plan is not None
+        qplan = np.ascontiguousarray(position_plan, float) if has_plan else np.zeros((1, n))
+        kpos = np.broadcast_to(np.asarray(position_gain, float), (n,)).copy()
         if controller is not None:
             kp, ki, ulim, integ, closed = (controller.kp, controller.ki,
                                            np.minimum(controller.torque_limit,
@@ -643,12 +661,13 @@ class FlexibleJointPlant:
             ulim, integ, closed = self.params.torque_limits(), np.zeros(n), False
         _simulate(self.x, self.qprev, integ, self.buf, r, u_ext, uff, has_ff, kp, ki, ulim,
                   closed, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm, p.ad,
-                  p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.nonlinear, p.enc, bool(self.params.velocity_from_encoder), vn, tn,
-                  out_q, out_v, out_u, out_x)
+                  p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.nonlinear,
+                  p.enc, bool(self.params.velocity_from_encoder), vn, tn, qplan, kpos, has_plan,
+                  out_q, out_v, out_u, out_x, out_r)
         t = (self.k + np.arange(N)) * self.dt
         self.k += N
         self._rebase_buffer(N)
-        return SimResult(t, out_q, out_v, out_u, out_x)
+        return SimResult(t, out_q, out_v, out_u, out_x, out_r)
 
     def _rebase_buffer(self, n_done: int) -> None:
         """Keep the ring buffer indexed from sample 0 of the next run."""

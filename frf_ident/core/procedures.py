@@ -34,8 +34,10 @@ from frf_ident.errors import DesignError, SafetyError
 class Phase:
     """One step of a procedure.
 
-    kind: 'excite' (reference given), 'move' (to ``target`` [rad] relative to the operating
-    point, reference computed at run time by :func:`move_reference`) or 'settle' (zero).
+    kind: 'excite' (reference given, no feedback), 'move' (to ``target`` [rad] relative to the
+    operating point; reference and position plan computed at run time by :func:`move_plan`,
+    executed with position feedback) or 'settle' (hold the position reached, with position
+    feedback).
     ``reference`` is the total velocity reference (constant velocity + excitation),
     ``excitation`` the excitation part; both (n_samples, n_axes).
     """
@@ -58,6 +60,23 @@ def move_reference(q_now: np.ndarray, q_target: np.ndarray, n_samples: int,
     s = (np.arange(n_samples) + 0.5) / n_samples
     shape = 30.0 * s ** 2 * (1.0 - s) ** 2
     return np.outer(shape, (np.asarray(q_target) - np.asarray(q_now)) / T)
+
+
+POSITION_GAIN = 2.5    # [1/s] position feedback on the reference in move/settle phases; well
+#                        below the rigid-body velocity-loop bandwidth kp/(Jm+Jo) ~ 7-11 rad/s
+
+
+def move_plan(q_now: np.ndarray, q_target: np.ndarray, n_samples: int, dt: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Feed-forward velocity and planned position (absolute) of a move from q_now to q_target.
+
+    The executor adds POSITION_GAIN (plan - q) to the reference, so the robot ends on the
+    target despite friction, ripple and gravity, and every segment starts where the
+    compensation run started (Sec. 4.4 E needs the same position trajectory).
+    """
+    ref = move_reference(q_now, q_target, n_samples, dt)
+    plan = np.asarray(q_now, dtype=float) + np.cumsum(ref, axis=0) * dt
+    return ref, plan
 
 
 def _ramp(v_from: np.ndarray, v_to: np.ndarray, n: int) -> np.ndarray:
@@ -83,7 +102,7 @@ class MultisineConfig:
     amplitude_ratio: float = 0.75
     position_bound_deg: float = 4.0
     ramp_s: float = 0.5
-    settle_s: float = 0.5
+    settle_s: float = 1.5
     return_s: float = 2.0
     compensate: bool = True
     seed: int = 0
@@ -352,8 +371,6 @@ class ChirpIteration:
             return summary
         P_ru = Um @ np.linalg.inv(Rm)                                  # eq. 7 for r -> u
         R_next = self._regularised_solve(P_ru, self.U_des)               # eq. 18
-        R_next = self._amplitude_secant(Rm, Um, R_next)
-        self._previous = (Rm, Um)
         # never more than max_gain_step times the previous reference on a line
         grow = np.abs(R_next) / np.maximum(np.abs(Rm), 1e-300)
         limit = np.minimum(1.0, self.cfg.max_gain_step / np.maximum(grow, 1e-300))
@@ -370,26 +387,6 @@ class ChirpIteration:
         self.R = R_next
         self.iteration += 1
         return summary
-
-    def _amplitude_secant(self, Rm: np.ndarray, Um: np.ndarray, R_lin: np.ndarray
-                          ) -> np.ndarray:
-        """Correct eq. 18 for amplitude-dependent r -> u (friction, saturation).
-
-        Eq. 18 assumes u scales with r (slope 1 in log-log). With the previous iteration the
-        local slope alpha = dlog|U| / dlog|R| per line and channel is measured and the
-        log-magnitude step of eq. 18 divided by it (a secant step); the phase stays eq. 18's.
-        """
-        prev = getattr(self, '_previous', None)
-        if prev is None:
-            return R_lin
-        Rp, Up = prev
-        d_r = np.log(np.abs(Rm) / np.maximum(np.abs(Rp), 1e-300)).mean(axis=2)   # (F, n)
-        d_u = np.log(np.abs(Um) / np.maximum(np.abs(Up), 1e-300)).mean(axis=2)
-        ok = np.abs(d_r) > 0.05
-        alpha = np.where(ok, d_u / np.where(ok, d_r, 1.0), 1.0)
-        alpha = np.clip(alpha, 0.25, 2.0)[:, :, None]
-        step = np.log(np.abs(R_lin) / np.maximum(np.abs(Rm), 1e-300))
-        return np.abs(Rm) * np.exp(step / alpha) * np.exp(1j * np.angle(R_lin))
 
     def _regularised_solve(self, P: np.ndarray, B: np.ndarray) -> np.ndarray:
         """X = P^-1 B per line, Tikhonov-regularised where P is ill-conditioned."""

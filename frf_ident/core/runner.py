@@ -15,8 +15,8 @@ import numpy as np
 
 from frf_ident.core.controller import PIVelocity
 from frf_ident.core.plant import FlexibleJointPlant
-from frf_ident.core.procedures import (ChirpConfig, ChirpIteration, MultisineConfig, Phase,
-                                       move_reference, multisine_procedure)
+from frf_ident.core.procedures import (POSITION_GAIN, ChirpConfig, ChirpIteration,
+                                       MultisineConfig, Phase, move_plan, multisine_procedure)
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import FrfIdentInputError
 
@@ -49,6 +49,7 @@ class ClosedLoop:
             q, v, _ = plant.step(hold)
             self.q_last, self.y_last = np.asarray(q, float), np.asarray(v, float)
         self.q0 = self.q_last.copy()
+        self.hold: np.ndarray | None = None     # position a settle phase holds after a move
         self.log: dict[str, list[np.ndarray]] = {k: [] for k in ('q', 'v', 'u', 'r', 'x')}
         self.segments: list[Segment] = []
 
@@ -56,18 +57,26 @@ class ClosedLoop:
     def t(self) -> float:
         return self.k * self.dt
 
-    def run(self, reference: np.ndarray, excitation: np.ndarray | None = None
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Run the reference (N, n); returns and logs (position, velocity, effort)."""
+    def run(self, reference: np.ndarray, excitation: np.ndarray | None = None,
+            plan: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Run the reference (N, n); returns and logs (position, velocity, effort).
+
+        With ``plan`` (N, n absolute positions) the reference gets position feedback
+        r + POSITION_GAIN (plan - q), as for moves; the reference actually used is logged.
+        """
         r = np.ascontiguousarray(reference, dtype=float)
         if self.fast:
-            res = self.plant.simulate(reference=r, controller=self.ctrl)
-            q, v, u = res.position, res.velocity, res.effort
+            res = self.plant.simulate(reference=r, controller=self.ctrl, position_plan=plan,
+                                      position_gain=POSITION_GAIN)
+            q, v, u, r = res.position, res.velocity, res.effort, res.reference
             self.q_last = self.plant.state[0].copy()
         else:
             q, v, u = (np.empty_like(r) for _ in range(3))
+            r = r.copy()
             for k in range(r.shape[0]):
                 q[k], v[k] = self.q_last, self.y_last
+                if plan is not None:
+                    r[k] += POSITION_GAIN * (plan[k] - self.q_last)
                 u[k] = self.ctrl.step(r[k], self.y_last)
                 qn, vn, _ = self.plant.step(u[k])
                 self.q_last, self.y_last = np.asarray(qn, float), np.asarray(vn, float)
@@ -87,10 +96,14 @@ class ClosedLoop:
                 self.segments.append(Segment(t0, self.t, dict(ph.segment)))
             return out
         if ph.kind == 'move':
-            ref = move_reference(self.q_last - self.q0, ph.target, ph.n_samples, self.dt)
-            return self.run(ref)
+            ref, plan = move_plan(self.q_last, self.q0 + ph.target, ph.n_samples, self.dt)
+            self.hold = plan[-1]
+            return self.run(ref, plan=plan)
         if ph.kind == 'settle':
-            return self.run(np.zeros((ph.n_samples, self.n)))
+            hold = self.q_last if self.hold is None else self.hold
+            self.hold = None
+            return self.run(np.zeros((ph.n_samples, self.n)),
+                            plan=np.tile(hold, (ph.n_samples, 1)))
         raise ValueError(f'unknown phase kind {ph.kind!r}')
 
     def recording(self, meta: dict[str, Any] | None = None) -> Recording:

@@ -1,0 +1,86 @@
+"""`frf-ident identify` -> bag -> `frf-ident estimate`: the bag carries everything."""
+import json
+
+import numpy as np
+import pytest
+import yaml
+
+from frf_ident.bag import read_recording
+from frf_ident.cli import main
+from frf_ident.commands import identification_config
+from frf_ident.core.closed_loop import estimate_recording
+from frf_ident.core.runner import run_identification
+from frf_ident.model_file import load_model, load_plant
+
+ARGS = ['--realisations', '2', '--periods', '2', '--resolution', '0.5',
+        '--chirp-duration', '8', '--max-iterations', '2']
+
+
+@pytest.fixture(scope='module')
+def bag(tmp_path_factory):
+    out = tmp_path_factory.mktemp('id') / 'bag'
+    assert main(['identify', '--out', str(out), *ARGS]) == 0
+    return out
+
+
+def test_bag_is_rosbag2_mcap_v9_readable_by_rosbags_and_mcap(bag):
+    meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert meta['version'] == 9 and meta['storage_identifier'] == 'mcap'
+    topics = {t['topic_metadata']['name']: t['topic_metadata']['type']
+              for t in meta['topics_with_message_count']}
+    assert topics['/joint_states'] == 'sensor_msgs/msg/JointState'
+    assert topics['/velocity_controller/commands'] == 'std_msgs/msg/Float64MultiArray'
+    assert topics['/effort_controller/commands'] == 'std_msgs/msg/Float64MultiArray'
+    assert topics['/frf/excitation'] == 'sensor_msgs/msg/JointState'
+    assert topics['/frf/experiment'] == 'std_msgs/msg/String'
+    from rosbags.highlevel import AnyReader
+    with AnyReader([bag]) as reader:
+        conns = [c for c in reader.connections if c.topic == '/frf/experiment']
+        texts = [reader.deserialize(raw, c.msgtype).data
+                 for c, _, raw in reader.messages(connections=conns)]
+    events = [json.loads(t)['event'] for t in texts]
+    assert events.count('start') == events.count('end') > 0
+    from mcap_ros2.reader import read_ros2_messages
+    mcap_file = next(bag.glob('*.mcap'))
+    n = 0
+    for m in read_ros2_messages(str(mcap_file), topics=['/joint_states']):
+        assert len(m.ros_msg.position) == 3
+        n += 1
+        if n > 100:
+            break
+    assert n > 100
+
+
+def test_estimate_from_bag_equals_in_memory_run(bag, tmp_path):
+    model, _, ctrl = load_model(None)
+    parser_args = type('A', (), dict(procedures='multisine,chirp', realisations=2, periods=2,
+                                     resolution=0.5, no_compensation=False,
+                                     chirp_duration=8.0, max_iterations=2, seed=0))()
+    rec = run_identification(load_plant(None, model), ctrl, identification_config(parser_args))
+    mem = estimate_recording(rec)
+    from_bag = estimate_recording(read_recording(bag)[0])
+    assert set(mem) == set(from_bag)
+    for k in mem:
+        assert np.allclose(from_bag[k].response, mem[k].response, rtol=1e-12, atol=0), k
+    assert main(['estimate', str(bag), '--out', str(tmp_path / 'est')]) == 0
+    doc = json.loads((tmp_path / 'est' / 'frf.json').read_text())
+    assert np.asarray(doc['re']).shape == (3, 3, len(doc['freq_hz']))
+    assert np.allclose(np.asarray(doc['re']) + 1j * np.asarray(doc['im']),
+                       mem['multisine'].response, rtol=1e-12)
+    assert (tmp_path / 'est' / 'bode.png').stat().st_size > 10_000
+
+
+def test_identify_refuses_existing_bag_and_bad_model(bag, tmp_path, capsys):
+    before = sorted(p.stat().st_mtime_ns for p in bag.iterdir())
+    assert main(['identify', '--out', str(bag), *ARGS]) == 2
+    assert sorted(p.stat().st_mtime_ns for p in bag.iterdir()) == before
+    err = capsys.readouterr().err
+    assert 'already exists' in err and len(err.strip().splitlines()) == 1
+    bad = tmp_path / 'm.yaml'
+    bad.write_text('frf_ident_model: 1\naxes:\n  - {name: j, motor_inertia: -3}\n')
+    assert main(['identify', '--model', str(bad), '--out', str(tmp_path / 'b')]) == 2
+    err = capsys.readouterr().err
+    assert 'motor_inertia=-3' in err and len(err.strip().splitlines()) == 1
+    assert main(['identify', '--model', str(tmp_path / 'nope.yaml'),
+                 '--out', str(tmp_path / 'b')]) == 2
+    assert main(['identify', '--plant', 'no_such_mod:X', '--out', str(tmp_path / 'b')]) == 2
