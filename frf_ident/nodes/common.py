@@ -1,0 +1,88 @@
+"""Shared plumbing of the node processes: parameters, stamps, signals, readiness, CDR bytes."""
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any, Optional, Sequence
+
+from frf_ident import middleware as mw
+
+#: Topic defaults (CONTRACT section 3); every one is a node parameter.
+TOPICS = {
+    'joint_states_topic': '/joint_states',
+    'effort_topic': '/effort_controller/commands',
+    'velocity_topic': '/velocity_controller/commands',
+    'excitation_topic': '/frf/excitation',
+    'experiment_topic': '/frf/experiment',
+    'clock_topic': '/clock',
+}
+READY = 'FRF_NODE_READY'
+#: deep queues: lockstep references are published ahead, recorders must never drop a sample
+DEEP = 20000
+
+
+def repo_config(name: str) -> Optional[Path]:
+    p = Path(__file__).resolve().parents[2] / 'config' / name
+    return p if p.is_file() else None
+
+
+def param(node: Any, name: str, default: Any) -> Any:
+    """Declare ``name`` with ``default`` and return its value."""
+    return node.declare_parameter(name, default).value
+
+
+def topics(node: Any, which: Sequence[str]) -> dict[str, str]:
+    return {k: param(node, k, TOPICS[k]) for k in which}
+
+
+def stamp_ns(msg: Any) -> int:
+    s = msg.header.stamp
+    return s.sec * 1_000_000_000 + s.nanosec
+
+
+def set_stamp(msg: Any, ns: int) -> None:
+    st = msg.header.stamp
+    st.sec, st.nanosec = divmod(int(ns), 1_000_000_000)
+
+
+def to_cdr(msg: Any) -> bytes:
+    """CDR bytes (with encapsulation header) of a received message, as rosbag2 stores them."""
+    if mw.backend_name() == 'dds':
+        return msg.serialize()
+    from rclpy.serialization import serialize_message  # rclpy backend only
+    return serialize_message(msg)
+
+
+class StopOnSignal:
+    """SIGINT/SIGTERM set ``event`` (and wake the given nodes); a second signal exits hard."""
+
+    def __init__(self) -> None:
+        self.event = threading.Event()
+        self.nodes: list[Any] = []
+        self.callbacks: list[Any] = []
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, self._handler)
+            signal.signal(signal.SIGTERM, self._handler)
+
+    def _handler(self, signum: int, frame: Any) -> None:
+        if self.event.is_set():
+            raise SystemExit(128 + signum)
+        self.event.set()
+        for cb in self.callbacks:
+            cb()
+        for n in self.nodes:
+            wake = getattr(n, 'wake', None)
+            if wake is not None:
+                wake()
+
+
+def announce_ready(name: str) -> None:
+    print(f'{READY} {name}', flush=True)
+
+
+def init(argv: Optional[Sequence[str]]) -> list[str]:
+    args = list(sys.argv if argv is None else argv)
+    mw.init(args)
+    return args

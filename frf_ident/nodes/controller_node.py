@@ -1,0 +1,123 @@
+"""controller_node: the velocity PI of the model file between /joint_states and the effort commands.
+
+Subscribes /joint_states (y = velocity) and /velocity_controller/commands (r), publishes
+/effort_controller/commands (u = PI(r, y), always within +-torque_limit: the PI saturates with
+anti-windup, and non-finite references count as zero).
+
+lockstep: true  -- references are consumed in order, one per joint-state sample: the excitation
+                   node publishes them ahead, so each step costs one hop plant -> controller ->
+                   plant. A joint state without its reference waits for it.
+lockstep: false -- the latest reference is used (as ros2_control's forward controllers do).
+Joint states with a stamp not newer than the last one are ignored (the idle re-send).
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import Any, Optional, Sequence
+
+import numpy as np
+
+from frf_ident import middleware as mw
+from frf_ident.nodes import common as c
+
+
+class ControllerNode:
+    def __init__(self, node: Any) -> None:
+        from frf_ident.model_file import load_model
+        self.node = node
+        model_path = c.param(node, 'model', '')
+        self.lockstep = bool(c.param(node, 'lockstep', True))
+        t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic'))
+        model, robot, self.ctrl = load_model(model_path or None)
+        self.joints = list(robot.joint_names)
+        self.n = len(self.joints)
+        self.ctrl.torque_limit = np.minimum(self.ctrl.torque_limit, robot.torque_limits())
+        self.ctrl.copy().step(np.zeros(self.n), np.zeros(self.n))   # load the compiled PI now
+        F64 = mw.msg('std_msgs/msg/Float64MultiArray')
+        self.cmd = F64(data=[0.0] * self.n)
+        self.pub = node.create_publisher(F64, t['effort_topic'], mw.qos_default(c.DEEP))
+        self.refs: deque = deque()
+        self.latest = np.zeros(self.n)
+        self.pending: Optional[np.ndarray] = None
+        self.last_stamp = -1
+        self.order: Optional[list[int]] = None
+        self.names: Optional[list[str]] = None
+        node.create_subscription(F64, t['velocity_topic'], self._on_ref, mw.qos_default(c.DEEP))
+        node.create_subscription(mw.msg('sensor_msgs/msg/JointState'), t['joint_states_topic'],
+                                 self._on_state, mw.qos_default(c.DEEP))
+
+    def _ref(self, data: Any) -> np.ndarray:
+        r = np.asarray(data, dtype=float)
+        if r.shape != (self.n,):
+            self.node.get_logger().error(f'velocity command has {r.size} values for {self.n} '
+                                         'joints; using zero')
+            return np.zeros(self.n)
+        if not np.all(np.isfinite(r)):
+            r = np.where(np.isfinite(r), r, 0.0)
+        return r
+
+    def _on_ref(self, msg: Any) -> None:
+        r = self._ref(msg.data)
+        if not self.lockstep:
+            self.latest = r
+            return
+        if self.pending is not None:
+            y, self.pending = self.pending, None
+            self._control(r, y)
+        else:
+            self.refs.append(r)
+
+    def _velocity(self, msg: Any) -> np.ndarray:
+        names = msg.name
+        if self.names is None or list(names) != self.names:
+            self.names = list(names)
+            pos = {n: i for i, n in enumerate(names)}
+            missing = [j for j in self.joints if j not in pos]
+            if missing:
+                raise RuntimeError(f'/joint_states lacks joints {missing}')
+            self.order = [pos[j] for j in self.joints]
+        v = msg.velocity
+        return np.array([v[i] for i in self.order], dtype=float)
+
+    def _on_state(self, msg: Any) -> None:
+        s = c.stamp_ns(msg)
+        if s <= self.last_stamp:
+            return
+        self.last_stamp = s
+        y = self._velocity(msg)
+        if not self.lockstep:
+            self._control(self.latest, y)
+        elif self.refs:
+            self._control(self.refs.popleft(), y)
+        else:
+            self.pending = y
+
+    def _control(self, r: np.ndarray, y: np.ndarray) -> None:
+        u = self.ctrl.step(r, y)
+        lim = self.ctrl.torque_limit
+        u = np.minimum(np.maximum(u, -lim), lim)   # enforced whatever the PI state
+        if not all(map(math.isfinite, u)):
+            u = np.zeros(self.n)
+        self.cmd.data = u.tolist()
+        self.pub.publish(self.cmd)
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    c.init(argv)
+    stop = c.StopOnSignal()
+    node = mw.create_node('controller_node')
+    stop.nodes.append(node)
+    ctl = ControllerNode(node)
+    node.get_logger().info(f'velocity PI on {ctl.joints}, torque limit '
+                           f'{ctl.ctrl.torque_limit.tolist()}, lockstep={ctl.lockstep}')
+    c.announce_ready('controller_node')
+    try:
+        mw.spin(node, stop.event)
+    finally:
+        mw.shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

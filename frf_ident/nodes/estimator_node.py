@@ -1,0 +1,189 @@
+"""estimator_node: records the experiment topics to a rosbag2 MCAP bag and estimates the FRF.
+
+Recorded (CONTRACT section 3): /joint_states, /velocity_controller/commands,
+/effort_controller/commands, /frf/excitation, /frf/experiment, with
+:class:`frf_ident.bag.BagRecorder` (chunks handed to the OS every 64 KiB / 0.5 s, so a crash
+loses at most the open chunk; SIGINT/SIGTERM drain every message already delivered and close
+the bag cleanly).
+
+Log times are sample times: a joint state or excitation message is logged at its header stamp;
+a velocity command at the stamp of the /frf/excitation message the excitation node sends right
+before it (same sample); an effort command (lockstep) at the stamp of the joint state it answers;
+a descriptor at its own t_start / t_end. The bag therefore reads back on the exact sample grid.
+
+When a ``procedure_end`` descriptor arrives and the joint states up to its end are recorded,
+the bag is flushed and estimated (``read_recording`` + ``estimate_recording``, as
+``frf-ident estimate``) into ``output_dir``/frf.json, in a worker thread.
+"""
+from __future__ import annotations
+
+import json
+import threading
+import time
+from collections import deque
+from pathlib import Path
+from typing import Any, Optional, Sequence
+
+from frf_ident import middleware as mw
+from frf_ident.nodes import common as c
+
+JS, F64, STR = 'sensor_msgs/msg/JointState', 'std_msgs/msg/Float64MultiArray', 'std_msgs/msg/String'
+
+
+class Estimator:
+    def __init__(self, node: Any) -> None:
+        from frf_ident.bag import BagRecorder
+        from frf_ident.bag.topics import BagTopics
+        self.node = node
+        self.log = node.get_logger()
+        bag = c.param(node, 'bag', '') or f'frf_bag_{time.strftime("%Y%m%d_%H%M%S")}'
+        self.out_dir = Path(c.param(node, 'output_dir', '') or f'{bag}_frf')
+        self.estimate = bool(c.param(node, 'estimate', True))
+        self.lockstep = bool(c.param(node, 'lockstep', True))
+        t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic',
+                            'excitation_topic', 'experiment_topic'))
+        self.t = t
+        self.rec = BagRecorder(topics=BagTopics(
+            joint_states=t['joint_states_topic'], velocity_commands=t['velocity_topic'],
+            effort_commands=t['effort_topic'], excitation=t['excitation_topic'],
+            experiment=t['experiment_topic']))
+        self.rec.open(bag)
+        self.bag = Path(bag)
+        self.last_js = -1
+        self.js_stamps: deque = deque()     # joint-state stamps not yet answered by a command
+        self.exc_stamps: deque = deque()    # excitation stamps not yet paired with a command
+        self.cmd_wait: deque = deque()      # velocity commands waiting for their stamp
+        self.eff_wait: deque = deque()      # effort commands waiting for their joint state
+        self.counts = {k: 0 for k in t.values()}
+        self.pending_end: list[int] = []
+        self.worker: Optional[threading.Thread] = None
+        self.estimated = 0
+        self.lock = threading.Lock()
+        deep = mw.qos_default(c.DEEP)
+        node.create_subscription(mw.msg(JS), t['joint_states_topic'], self._on_js, deep)
+        node.create_subscription(mw.msg(JS), t['excitation_topic'], self._on_exc, deep)
+        node.create_subscription(mw.msg(F64), t['velocity_topic'], self._on_vel, deep)
+        node.create_subscription(mw.msg(F64), t['effort_topic'], self._on_eff, deep)
+        node.create_subscription(mw.msg(STR), t['experiment_topic'], self._on_exp,
+                                 mw.qos_transient_local(100))
+
+    def _write(self, topic: str, msg_type: str, stamp: int, data: bytes) -> None:
+        self.rec.write(topic, msg_type, stamp, data)
+        self.counts[topic] += 1
+
+    def _on_js(self, msg: Any) -> None:
+        s = c.stamp_ns(msg)
+        if s <= self.last_js:
+            return                      # the plant's idle re-send of the same sample
+        self.last_js = s
+        self._write(self.t['joint_states_topic'], JS, s, c.to_cdr(msg))
+        if not self.lockstep:
+            return
+        if self.eff_wait:
+            self._write(self.t['effort_topic'], F64, s, self.eff_wait.popleft())
+        else:
+            self.js_stamps.append(s)
+        if self.pending_end:
+            self._maybe_estimate()
+
+    def _on_eff(self, msg: Any) -> None:
+        data = c.to_cdr(msg)
+        if not self.lockstep:
+            self._write(self.t['effort_topic'], F64, max(self.last_js, 0), data)
+        elif self.js_stamps:
+            self._write(self.t['effort_topic'], F64, self.js_stamps.popleft(), data)
+        else:
+            self.eff_wait.append(data)
+
+    def _on_exc(self, msg: Any) -> None:
+        s = c.stamp_ns(msg)
+        self._write(self.t['excitation_topic'], JS, s, c.to_cdr(msg))
+        if self.cmd_wait:
+            self._write(self.t['velocity_topic'], F64, s, self.cmd_wait.popleft())
+        else:
+            self.exc_stamps.append(s)
+
+    def _on_vel(self, msg: Any) -> None:
+        data = c.to_cdr(msg)
+        if self.exc_stamps:
+            self._write(self.t['velocity_topic'], F64, self.exc_stamps.popleft(), data)
+        else:
+            self.cmd_wait.append(data)
+
+    def _on_exp(self, msg: Any) -> None:
+        try:
+            d = json.loads(msg.data)
+        except ValueError:
+            d = {}
+        event = d.get('event')
+        t_key = 't_start' if event == 'start' else 't_end'
+        t_s = d.get(t_key)
+        stamp = int(round(float(t_s) * 1e9)) if t_s is not None else max(self.last_js, 0)
+        self._write(self.t['experiment_topic'], STR, stamp, c.to_cdr(msg))
+        if event == 'procedure_end' and self.estimate:
+            self.pending_end.append(stamp)
+            self._maybe_estimate()
+        elif event == 'aborted':
+            self.rec.flush()
+
+    def _maybe_estimate(self) -> None:
+        if not self.pending_end or self.last_js < self.pending_end[0]:
+            return
+        if self.worker is not None and self.worker.is_alive():
+            return
+        t_end = self.pending_end[-1] if self.last_js >= self.pending_end[-1] else \
+            self.pending_end[0]
+        self.pending_end = [s for s in self.pending_end if s > t_end]
+        self.rec.flush()
+        self.worker = threading.Thread(target=self._estimate, args=(t_end,), daemon=True)
+        self.worker.start()
+
+    def _estimate(self, t_end_ns: int) -> None:
+        from frf_ident.commands import estimate_bag
+        try:   # only what has been recorded up to the end of the procedure
+            estimate_bag(self.bag, self.out_dir, t_range=(0.0, t_end_ns * 1e-9),
+                         progress=lambda m: None)
+            self.estimated += 1
+            self.log.info(f'estimated {self.bag} -> {self.out_dir / "frf.json"}')
+        except Exception as exc:
+            self.log.error(f'estimation of {self.bag} failed: {type(exc).__name__}: {exc}')
+
+    def drain_and_close(self, node: Any) -> None:
+        """Take every message already delivered, then finalise the bag."""
+        quiet_since = time.monotonic()
+        total = sum(self.counts.values())
+        deadline = time.monotonic() + 5.0
+        while time.monotonic() - quiet_since < 0.2 and time.monotonic() < deadline:
+            mw.spin_once(node, 0.02)
+            now = sum(self.counts.values())
+            if now != total:
+                total, quiet_since = now, time.monotonic()
+        # unpaired commands (should not happen in a complete run): keep them, at the last stamp
+        for q, topic in ((self.cmd_wait, 'velocity_topic'), (self.eff_wait, 'effort_topic')):
+            while q:
+                self._write(self.t[topic], F64, max(self.last_js, 0), q.popleft())
+        if self.worker is not None:
+            self.worker.join(60.0)
+        self.rec.close()
+        self.log.info(f'bag closed: {self.bag} ({json.dumps(self.counts)})')
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    c.init(argv)
+    stop = c.StopOnSignal()
+    node = mw.create_node('estimator_node')
+    stop.nodes.append(node)
+    est = Estimator(node)
+    c.announce_ready('estimator_node')
+    try:
+        mw.spin(node, stop.event)
+        est.drain_and_close(node)
+        print(f'FRF_BAG {est.bag}', flush=True)
+    finally:
+        est.rec.close()
+        mw.shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,123 @@
+"""plant_node: the simulated robot (model file) or a CONTRACT section 4 plug-in plant on ROS topics.
+
+Subscribes the effort commands (Float64MultiArray, joint order), publishes /joint_states
+(position, velocity = plant output y, effort = the torque applied over the sample that just
+ended; header.stamp = sample time k*dt) and /clock.
+
+lockstep: true  -- one sample per received command (deterministic, faster than real time); the
+                   current joint state is re-sent every ``idle_republish_s`` wall seconds while
+                   no command comes, so late subscribers still get it (same stamp: consumers
+                   skip stamps they have seen).
+lockstep: false -- free-running on a wall timer at the model's sample rate, zero-order holding
+                   the last command.
+
+Run: ``python -m frf_ident.nodes.plant_node --ros-args -p model:=config/model_3axis.yaml``.
+"""
+from __future__ import annotations
+
+import time
+from typing import Any, Optional, Sequence
+
+import numpy as np
+
+from frf_ident import middleware as mw
+from frf_ident.nodes import common as c
+
+
+class PlantNode:
+    def __init__(self, node: Any) -> None:
+        from frf_ident.core.plant import FlexibleJointPlant
+        from frf_ident.model_file import load_model, load_plant
+        self.node = node
+        model_path = c.param(node, 'model', '')
+        plant_spec = c.param(node, 'plant', '')
+        self.lockstep = bool(c.param(node, 'lockstep', True))
+        self.idle_republish_s = float(c.param(node, 'idle_republish_s', 0.2))
+        t = c.topics(node, ('joint_states_topic', 'effort_topic', 'clock_topic'))
+        model, _robot, ctrl = load_model(model_path or None)
+        self.plant = load_plant(plant_spec or None, model)
+        self.plant.reset()
+        self.n = len(self.plant.joint_names)
+        self.dt_ns = int(round(float(self.plant.dt) * 1e9))
+        # the first measurement, exactly as the offline ClosedLoop takes it
+        if isinstance(self.plant, FlexibleJointPlant):
+            q0, v0 = self.plant.state[0].copy(), np.zeros(self.n)
+            e0 = self.plant.equilibrium_torque()
+        else:
+            hold = np.asarray(ctrl.integral, dtype=float)
+            q0, v0, e0 = (np.asarray(a, float) for a in self.plant.step(hold))
+        if isinstance(self.plant, FlexibleJointPlant):   # compile/load the kernels now
+            load_plant(plant_spec or None, model).step(e0)
+        self.k = 0
+        JointState, Clock = mw.msg('sensor_msgs/msg/JointState'), mw.msg('rosgraph_msgs/msg/Clock')
+        self.js = JointState(name=list(self.plant.joint_names), position=q0.tolist(),
+                             velocity=v0.tolist(), effort=e0.tolist())
+        self.clock = Clock()
+        self.hold = e0.copy()
+        self.js_pub = node.create_publisher(JointState, t['joint_states_topic'],
+                                            mw.qos_default(c.DEEP))
+        self.clock_pub = node.create_publisher(Clock, t['clock_topic'], mw.qos_clock())
+        node.create_subscription(mw.msg('std_msgs/msg/Float64MultiArray'), t['effort_topic'],
+                                 self._on_command, mw.qos_default(c.DEEP))
+        self.last_pub = 0.0
+        if not self.lockstep:
+            node.create_timer(float(self.plant.dt), self._tick)
+        self._publish()
+
+    def _publish(self) -> None:
+        ns = self.k * self.dt_ns
+        st = self.clock.clock
+        st.sec, st.nanosec = divmod(ns, 1_000_000_000)
+        c.set_stamp(self.js, ns)
+        self.clock_pub.publish(self.clock)
+        self.js_pub.publish(self.js)
+        self.last_pub = time.monotonic()
+
+    def _advance(self, torque: Any) -> None:
+        q, v, e = self.plant.step(torque)
+        self.k += 1
+        js = self.js
+        js.position = q.tolist() if hasattr(q, 'tolist') else list(q)
+        js.velocity = v.tolist() if hasattr(v, 'tolist') else list(v)
+        js.effort = e.tolist() if hasattr(e, 'tolist') else list(e)
+        self._publish()
+
+    def _on_command(self, msg: Any) -> None:
+        data = msg.data
+        if len(data) != self.n:
+            self.node.get_logger().error(f'effort command has {len(data)} values for {self.n} '
+                                         f'joints; ignored')
+            return
+        if self.lockstep:
+            self._advance(np.asarray(data, dtype=float))
+        else:
+            self.hold[:] = data
+
+    def _tick(self) -> None:
+        self._advance(self.hold)
+
+    def idle(self) -> None:
+        if self.lockstep and time.monotonic() - self.last_pub > self.idle_republish_s:
+            self._publish()
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    c.init(argv)
+    stop = c.StopOnSignal()
+    node = mw.create_node('plant_node', use_sim_time=False)   # it is the clock source
+    stop.nodes.append(node)
+    plant = PlantNode(node)
+    node.get_logger().info(f'plant {type(plant.plant).__name__} {plant.plant.joint_names}, '
+                           f'dt {plant.plant.dt} s, lockstep={plant.lockstep}')
+    c.announce_ready('plant_node')
+    try:
+        while not stop.event.is_set():
+            mw.spin_once(node, 0.05)
+            plant.idle()
+    finally:
+        mw.shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
