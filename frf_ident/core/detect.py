@@ -9,7 +9,7 @@ signal itself (pure numpy/scipy, no bag or ROS imports).
   they are odd multiples of f0 (Saupe & Knoblach 2015, Sec. 4).
 - :func:`detect_chirp` — exponential chirp f(t) = exp(a0 t + a1) (eq. 16): instantaneous
   frequency from zero crossings (with hysteresis) and a robust log-linear fit; band
-  [f_low, f_high] and the active interval [t0, t1] from the signal's extent.
+  [f_low, f_high] and the active interval [t0, t1] from a least-squares on-/offset fit.
 - :func:`detect_excitation` — tries both, returns whichever was found.
 
 Signals are ``(N,)`` arrays sampled uniformly at ``fs``; ``(N, n)`` arrays are reduced to the
@@ -454,7 +454,8 @@ def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
     Half cycles between zero crossings (hysteresis ``hysteresis`` times the 99th percentile of
     |x|) give f = 1 / (2 duration) at their mid times; a robust fit of ln f over t gives a0, a1.
     t0 and t1 are the on- and offset of the fitted waveform A cos(phase) + B sin(phase)
-    (least squares, searched two periods outside the first and last fitted half cycles), f_low = f(t0), f_high = f(t1). It is a chirp when at least ``min_inliers`` of
+    (least squares, searched two periods outside the first and last fitted half cycles),
+    f_low = f(t0), f_high = f(t1). It is a chirp when at least ``min_inliers`` of
     the half cycles follow the fit with relative scatter below ``max_scatter`` and the band
     spans a ratio of at least ``min_ratio``.
 
