@@ -9,6 +9,7 @@ from scipy import signal
 from scipy.io import loadmat, savemat
 
 from frf_ident.bag import read_recording
+from frf_ident.cli import main
 from frf_ident.core.detect import detect_excitation
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.importer import import_table, load_map
@@ -81,13 +82,11 @@ def test_kuka_kr300_six_axes_consistent_units():
 
 @needs_data
 @pytest.mark.parametrize('data, mp', [(EMPS, EMPS_MAP), (KUKA, KUKA_MAP)])
-def test_cli_import_writes_bag_and_never_overwrites(tmp_path, data, mp):
+def test_cli_import_writes_bag_and_never_overwrites(tmp_path, capsys, data, mp):
     out = tmp_path / 'bag'
-    cmd = [sys.executable, '-m', 'frf_ident', 'import', str(data), '--map', str(mp),
-           '--out', str(out)]
-    run = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path)
-    assert run.returncode == 0, run.stderr
-    assert f'wrote {out}' in run.stdout
+    argv = ['import', str(data), '--map', str(mp), '--out', str(out)]
+    assert main(argv) == 0
+    assert f'wrote {out}' in capsys.readouterr().out
     rec, timing = read_recording(out)
     ref = import_table(data, mp)
     assert timing.grid == 'exact' and np.array_equal(rec.t, ref.t)
@@ -95,13 +94,14 @@ def test_cli_import_writes_bag_and_never_overwrites(tmp_path, data, mp):
         assert np.array_equal(getattr(rec, name), getattr(ref, name))
     assert rec.meta['import']['source'] == data.name
     before = sorted(p.stat().st_mtime_ns for p in out.iterdir())
-    again = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path)
-    assert again.returncode == 2 and 'already exists' in again.stderr
-    assert len(again.stderr.strip().splitlines()) == 1 and 'Traceback' not in again.stderr
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert 'already exists' in err and len(err.strip().splitlines()) == 1
     assert sorted(p.stat().st_mtime_ns for p in out.iterdir()) == before
 
 
 def test_cli_bad_map_exit_2_one_line(tmp_path):
+    """A real process: exit status 2, one line on stderr, no traceback, no bag."""
     mp = tmp_path / 'm.yaml'
     mp.write_text('frf_ident_map: 1\ntime: {sample_time: 0.001}\njoints:\n'
                   '  - {name: j, position: q, effort: nope}\n')
