@@ -16,6 +16,8 @@ import numpy as np
 from frf_ident.core.model import robot_from_dict
 from frf_ident.core.plant import FlexibleJointPlant, RobotParams
 
+from frf_ident.diagnosis_bench import draw_effect  # noqa: E402,F401  (the same draws)
+
 HIDDEN: dict[int, dict] = {}
 NOISE = 2e-5     # velocity noise of the "real" robot [rad/s]
 
@@ -35,7 +37,7 @@ class HiddenPlant(FlexibleJointPlant):
         super().__init__(hidden_robot(config, hidden))
 
 
-def draw_effect(name: str, rng: np.random.Generator, axis) -> dict:
+def _draw_effect_unused(name, rng, axis):
     """Random plausible change of one axis (AxisParams ``axis`` of the nominal model) for the
     effect ``name``; returns {model-file key: value}."""
     if name == 'coulomb_friction':

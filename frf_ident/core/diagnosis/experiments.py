@@ -116,7 +116,8 @@ def friction_regression(ev: Evaluator, robot: RobotParams, axis: int):
     mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity')))[:-1]
     noise = max(robot.axes[axis].velocity_noise, 1e-6)
     return regress_axis(f[:, axis], qh[:, axis], vh[:, axis], ah[:, axis],
-                        rec.effort[:-1, axis], mask, rec.fs, v_eps=5 * noise + 1e-4)
+                        rec.effort[:-1, axis], mask, rec.fs, v_eps=5 * noise + 1e-4,
+                        ripple_mask=segment_mask(ev.fit, ('constant_velocity',))[:-1])
 
 
 def fit_coulomb(reg, robot: RobotParams, axis: int) -> Effect | None:

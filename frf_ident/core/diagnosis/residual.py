@@ -124,7 +124,7 @@ def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray, *, s_max: float 
 def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: np.ndarray,
                  mask: np.ndarray, fs: float, *, fc: float = 20.0, v_eps: float = 0.0,
                  with_inertia: bool = False, nuisance: np.ndarray | None = None,
-                 ripple: bool = True) -> Regression:
+                 ripple: bool = True, ripple_mask: np.ndarray | None = None) -> Regression:
     """Regress the residual f of one axis on [1, sgn(v), v, (a), (nuisance), ripple sin/cos].
 
     All columns are low-pass filtered like f (fc [Hz]); samples with |v| < v_eps (sticking,
@@ -150,7 +150,7 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
     if ripple:
         X0 = np.column_stack([lowpass(c, fs, fc) for c in cols.values()])
         c0, *_ = np.linalg.lstsq(X0[m], ff[m], rcond=None)
-        s, peak = find_ripple(ff - X0 @ c0, q, m)
+        s, peak = find_ripple(ff - X0 @ c0, q, m if ripple_mask is None else ripple_mask)
         if s > 0:
             cols['ripple_sin'] = np.sin(s * q)
             cols['ripple_cos'] = np.cos(s * q)
