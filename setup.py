@@ -45,6 +45,11 @@ setup(
     entry_points={
         'console_scripts': [
             'frf-ident = frf_ident.cli:main',
+            'plant_node = frf_ident.nodes.plant_node:main',
+            'controller_node = frf_ident.nodes.controller_node:main',
+            'excitation_node = frf_ident.nodes.excitation_node:main',
+            'estimator_node = frf_ident.nodes.estimator_node:main',
+            'iteration_service = frf_ident.nodes.iteration_service:main',
         ],
     },
 )

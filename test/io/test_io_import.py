@@ -2,6 +2,8 @@
 import subprocess
 import sys
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import yaml
@@ -14,7 +16,8 @@ from frf_ident.core.detect import detect_excitation
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.importer import import_table, load_map
 
-from conftest import ROOT, SHARED_DATA
+ROOT = Path(__file__).resolve().parents[2]
+SHARED_DATA = ROOT.parent / 'shared' / 'data'
 
 EMPS = SHARED_DATA / 'EMPS' / 'DATA_EMPS.mat'
 KUKA = SHARED_DATA / 'KUKA_KR300_Weigand2021' / 'recorded_FF_A_2020-10-21.mat'
