@@ -162,3 +162,4 @@ _register_handlers()
 # --- import (frf_ident.io) --------------------------------------------------------------------
 from frf_ident.io import cli_import as _cli_import  # noqa: E402,F401  (registers 'import')
 from frf_ident import diagnose_cmd  # noqa: E402,F401
+from frf_ident import demo_cmd  # noqa: E402,F401

@@ -1,0 +1,195 @@
+"""The node graph as separate processes over DDS on loopback (each test on its own domain).
+
+- chirp iteration via the service + multisine experiment: FRF = offline run_identification
+  + estimate_recording within 0.1 dB;
+- the bag opens with rosbags AnyReader and mcap_ros2 and yields the FRF offline;
+- SIGKILL of the plant mid-run: reference at zero within 50 ms wall, bag readable;
+- SIGINT/SIGTERM of the estimator: bag finalised, no message lost.
+"""
+from __future__ import annotations
+
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from frf_ident.core.procedures import ChirpConfig, MultisineConfig
+from frf_ident.nodes.graph import Graph, graph_env
+
+ROOT = Path(__file__).resolve().parents[2]
+MODEL = ROOT / 'config' / 'model_3axis.yaml'
+
+
+def _ms() -> MultisineConfig:
+    return MultisineConfig(n_realisations=2, n_periods=2, resolution_hz=1.0, return_s=1.0,
+                           settle_s=0.3)
+
+
+def _chirp() -> ChirpConfig:
+    return ChirpConfig(duration=6.0, max_iterations=2)
+
+
+@pytest.fixture(scope='module')
+def graph_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp('graph')
+    g = Graph(out, model=MODEL, multisine=_ms(), chirp=_chirp(),
+              params={'excitation_node': {'stale_s': 0.5}})
+    g.start()
+    try:
+        results = g.drive()
+    finally:
+        bag = g.stop()
+    return g, bag, results
+
+
+@pytest.fixture(scope='module')
+def offline():
+    from frf_ident.core.closed_loop import estimate_recording
+    from frf_ident.core.runner import IdentificationConfig, run_identification
+    from frf_ident.model_file import load_model, load_plant
+    model, _robot, ctrl = load_model(MODEL)
+    rec = run_identification(load_plant(None, model), ctrl,
+                             IdentificationConfig(_ms(), _chirp()))
+    return rec, estimate_recording(rec)
+
+
+def _db(x):
+    return 20 * np.log10(np.abs(x))
+
+
+def test_graph_matches_offline(graph_run, offline):
+    from frf_ident.bag import read_recording
+    from frf_ident.core.closed_loop import estimate_recording
+    g, bag, results = graph_run
+    assert results['multisine']['success'], results
+    its = results['iterations']
+    assert len(its) >= 1 and all(i['success'] for i in its), its
+    rec_off, est_off = offline
+    off_its = rec_off.meta['summary']['chirp']['iterations']
+    for node_it, off_it in zip(its, off_its):
+        assert node_it['reply']['iteration'] == off_it['iteration']
+        assert abs(node_it['reply']['error_db'] - off_it['max_abs_error_db']) < 0.1
+    rec, _timing = read_recording(bag)
+    est = estimate_recording(rec)
+    for key in ('multisine', 'chirp'):
+        a, b = est[key], est_off[key]
+        np.testing.assert_allclose(a.freq_hz, b.freq_hz)
+        err = np.max(np.abs(_db(a.frf) - _db(b.frf)))
+        assert err < 0.1, f'{key}: max |dB| difference {err:.3f}'
+    live = json.loads((g.frf_dir / 'frf.json').read_text())
+    assert live['estimate'] == 'multisine'
+
+
+def test_bag_readers(graph_run):
+    from mcap_ros2.reader import read_ros2_messages
+    from rosbags.highlevel import AnyReader
+    _g, bag, _ = graph_run
+    with AnyReader([bag]) as reader:
+        topics = {c.topic for c in reader.connections}
+        assert {'/joint_states', '/velocity_controller/commands', '/effort_controller/commands',
+                '/frf/excitation', '/frf/experiment'} <= topics
+        conns = [c for c in reader.connections if c.topic == '/joint_states']
+        n_js = sum(1 for _ in reader.messages(connections=conns))
+    mcap = next(bag.glob('*.mcap'))
+    n = sum(1 for m in read_ros2_messages(str(mcap), topics=['/joint_states']))
+    assert n == n_js > 1000
+
+
+def _observer(env, tag_file: Path) -> subprocess.Popen:
+    code = f'''
+import sys, time, threading, json
+from frf_ident import middleware as mw
+node = mw.create_node('kill_observer')
+log = []
+node.create_subscription(mw.msg('std_msgs/msg/Float64MultiArray'),
+    '/velocity_controller/commands', lambda m: log.append((time.time(), list(m.data))),
+    mw.qos_default(20000))
+stop = threading.Event()
+threading.Thread(target=lambda: (sys.stdin.read(), stop.set()), daemon=True).start()
+print('ready', flush=True)
+mw.spin(node, stop)
+open({str(tag_file)!r}, 'w').write(json.dumps(log))
+mw.shutdown()
+'''
+    return subprocess.Popen([sys.executable, '-c', code], env=env, stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True, cwd=str(ROOT))
+
+
+def test_kill_plant(tmp_path):
+    from frf_ident.bag import read_recording
+    g = Graph(tmp_path, model=MODEL, multisine=MultisineConfig(
+        n_realisations=1, n_periods=2, resolution_hz=1.0, compensate=False),
+        params={'excitation_node': {'stale_s': 0.02}})
+    g.start()
+    obs_file = tmp_path / 'observed.json'
+    obs = _observer(g.env, obs_file)
+    assert obs.stdout.readline().strip() == 'ready'
+    drv = g.driver(multisine=True, iterations=0)
+    try:
+        time.sleep(4.0)
+        t_kill = time.time()
+        g.kill('plant_node')
+        drv.wait(30)
+        time.sleep(0.5)
+    finally:
+        obs.stdin.close()
+        obs.wait(10)
+        bag = g.stop()
+    log = json.loads(obs_file.read_text())
+    after = [(t, d) for t, d in log if t >= t_kill]
+    assert after, 'no reference published after the kill'
+    assert np.allclose(after[-1][1], 0.0), after[-1]
+    nonzero = [t for t, d in after if np.any(np.abs(d) > 0)]
+    t_zero = after[-1][0] if not nonzero else min(t for t, d in after if t > max(nonzero))
+    assert t_zero - t_kill < 0.05, f'reference zero {1e3 * (t_zero - t_kill):.1f} ms after kill'
+    exc_log = (tmp_path / 'excitation_node.log').read_text()
+    assert 'aborted' in exc_log and 'stale' in exc_log
+    rec, timing = read_recording(bag)
+    assert rec.t.size > 1000
+    assert 'aborted' in (tmp_path / 'excitation_node.log').read_text()
+
+
+def test_estimator_signal_finalises_bag(tmp_path):
+    from frf_ident.bag import read_recording
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        out = tmp_path / sig.name
+        g = Graph(out, model=MODEL, nodes=('estimator_node',))
+        g.start()
+        n = 3000
+        code = f'''
+import time
+from frf_ident import middleware as mw
+node = mw.create_node('fake_plant')
+JS = mw.msg('sensor_msgs/msg/JointState')
+pub = node.create_publisher(JS, '/joint_states', mw.qos_default(20000))
+while pub.get_subscription_count() == 0:
+    time.sleep(0.01)
+time.sleep(0.3)
+m = JS(name=['joint_1', 'joint_2', 'joint_3'], position=[0.0] * 3, velocity=[0.0] * 3,
+       effort=[0.0] * 3)
+for k in range({n}):
+    m.header.stamp.sec, m.header.stamp.nanosec = divmod(k * 1000000, 1000000000)
+    m.velocity = [float(k)] * 3
+    pub.publish(m)
+print('sent', flush=True)
+time.sleep(0.5)
+mw.shutdown()
+'''
+        pub = subprocess.Popen([sys.executable, '-c', code], env=g.env, stdout=subprocess.PIPE,
+                               text=True, cwd=str(ROOT))
+        assert pub.stdout.readline().strip() == 'sent'
+        g.kill('estimator_node', sig)          # right after the last message went out
+        assert g.procs['estimator_node'].wait(30) == 0
+        pub.wait(10)
+        g.stop()
+        assert (g.bag / 'metadata.yaml').is_file()
+        rec, _ = read_recording(g.bag)
+        assert rec.t.size == n
+        np.testing.assert_array_equal(rec.velocity[:, 0], np.arange(n, dtype=float))
