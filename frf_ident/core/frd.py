@@ -145,7 +145,8 @@ class FrequencyResponse:
     @classmethod
     def from_control(cls, frd) -> 'FrequencyResponse':
         omega = np.asarray(frd.omega, dtype=float)
-        resp = np.asarray(frd.fresp, dtype=complex)
+        resp = np.asarray(getattr(frd, 'frdata', None) if hasattr(frd, 'frdata') else frd.fresp,
+                          dtype=complex)
         return cls(omega / (2 * np.pi), resp, list(frd.input_labels), list(frd.output_labels))
 
 
