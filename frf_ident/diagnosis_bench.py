@@ -41,7 +41,7 @@ def draw_effect(name: str, rng: np.random.Generator, axis) -> dict[str, Any]:
         return {'backlash': float(rng.uniform(2e-5, 8e-5))}
     if name == 'torque_ripple':
         return {'torque_ripple': [{'amplitude': float(rng.uniform(3, 10)),
-                                   'spatial_frequency': float(rng.uniform(60, 200)),
+                                   'spatial_frequency': float(rng.uniform(300, 1500)),
                                    'phase': float(rng.uniform(-3, 3))}]}
     if name == 'time_delay':
         return {'time_delay': float(rng.uniform(1.5e-3, 4e-3))}

@@ -9,10 +9,7 @@ from frf_ident.diagnosis_bench import NOMINAL_1AXIS, draw_effect, param_error, r
 AXIS = robot_from_dict(NOMINAL_1AXIS).axes[0]
 
 
-@pytest.mark.parametrize('k, name', [
-    pytest.param(k, n, marks=pytest.mark.xfail(reason='ripple spatial-frequency search not '
-                                                  'yet robust (unfinished)', strict=False))
-    if n == 'torque_ripple' else (k, n) for k, n in enumerate(EFFECTS)])
+@pytest.mark.parametrize('k, name', list(enumerate(EFFECTS)))
 def test_hidden_effect_ranked_first(k, name):
     hidden = draw_effect(name, np.random.default_rng(2024 + k), AXIS)
     res = run_case(hidden, seed=k)

@@ -35,28 +35,3 @@ class HiddenPlant(FlexibleJointPlant):
         hidden = HIDDEN or {int(k): v for k, v in
                             json.loads(os.environ.get('FRF_HIDDEN', '{}')).items()}
         super().__init__(hidden_robot(config, hidden))
-
-
-def _draw_effect_unused(name, rng, axis):
-    """Random plausible change of one axis (AxisParams ``axis`` of the nominal model) for the
-    effect ``name``; returns {model-file key: value}."""
-    if name == 'coulomb_friction':
-        return {'coulomb_friction': float(rng.uniform(8, 30))}
-    if name == 'viscous_friction':
-        return {'viscous_friction': axis.viscous_friction + float(rng.uniform(40, 120))}
-    if name == 'stiffness_nonlinearity':
-        return {'stiffness_k2': axis.stiffness * float(rng.uniform(1.4, 1.9)),
-                'stiffness_breakpoint': float(rng.uniform(1.0, 2.0)) * 1e-4}
-    if name == 'backlash':
-        return {'backlash': float(rng.uniform(2e-5, 8e-5))}
-    if name == 'torque_ripple':
-        return {'torque_ripple': [{'amplitude': float(rng.uniform(3, 10)),
-                                   'spatial_frequency': float(rng.uniform(60, 200)),
-                                   'phase': float(rng.uniform(-3, 3))}]}
-    if name == 'time_delay':
-        return {'time_delay': float(rng.uniform(1.5e-3, 4e-3))}
-    if name == 'parameter_mismatch':
-        key = ['stiffness', 'link_inertia', 'motor_inertia'][int(rng.integers(3))]
-        f = float(rng.choice([-1, 1]) * rng.uniform(0.15, 0.35))
-        return {key: getattr(axis, key) * (1 + f)}
-    raise ValueError(f'{name=} is not an effect')

@@ -96,7 +96,7 @@ def _ls(X: np.ndarray, y: np.ndarray, n_eff: float):
     return coef, coef / se, res
 
 
-def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray, *, s_max: float = 600.0
+def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray, *, s_max: float = 3000.0
                 ) -> tuple[float, float]:
     """Spatial frequency [1/rad] whose sin/cos in motor position explain most of the residual
     f (already mean-free); returns (s, peak power / median power of the scan)."""
