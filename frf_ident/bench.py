@@ -224,12 +224,13 @@ def bench_diagnosis() -> list[tuple[str, str, str, str]]:
     parameters in a plug-in plant, identified and diagnosed against the nominal model."""
     from frf_ident.diagnosis_bench import hit_rate
     r = hit_rate(28)
-    per = ', '.join(f'{k} {sum(v)}/{len(v)}' for k, v in r['per_effect'].items())
-    return [(f"hidden effect ranked first ({r['n']} seeds)", f"{r['hits']}/{r['n']}",
+    rows = [(f"hidden effect ranked first ({r['n']} seeds)", f"{r['hits']}/{r['n']}",
              'chance 1/7', f"{r['rate'] * 7:.1f}x chance"),
-            ('... parameter within 20 % / held-out gain', f"{r['param_ok']}/{r['n']}",
-             f"{r['gain_ok']}/{r['n']}", ''),
-            (per[:48], per[48:74], per[74:100], per[100:116])]
+            ('... and parameter within 20 % / held-out gain', f"{r['param_ok']}/{r['n']}",
+             f"{r['gain_ok']}/{r['n']}", '')]
+    rows += [(f'  {name}', f'{sum(hits)}/{len(hits)}', '', '')
+             for name, hits in r['per_effect'].items()]
+    return rows
 
 
 def main(argv: list[str] | None = None) -> int:
