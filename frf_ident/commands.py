@@ -122,6 +122,8 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     for line in timing.summary():
         progress(line)
     estimates = estimate_recording(rec)
+    for line in next(iter(estimates.values())).meta.get('detected', []):
+        progress(f'detected: {line}')
     key = primary or ('multisine' if 'multisine' in estimates else next(iter(estimates)))
     if key not in estimates:
         raise FrfIdentInputError(f'--primary {key!r}: the bag supports {sorted(estimates)}')
