@@ -99,6 +99,18 @@ def has_experiments(rec: Recording) -> bool:
         s.info.get('design') in ('multisine', 'chirp') for s in rec.segments)
 
 
+def _select_joints(rec, names):
+    """The recording restricted to the named joints, in that order."""
+    from frf_ident.core.recording import Recording
+    idx = [list(rec.joint_names).index(n) for n in names]
+
+    def pick(a):
+        return None if a is None else a[:, idx]
+    return Recording(rec.t, list(names), pick(rec.position), pick(rec.velocity),
+                     pick(rec.effort), pick(rec.reference), pick(rec.excitation),
+                     list(rec.segments), dict(rec.meta))
+
+
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
              progress: Callable[[str], None] = print) -> dict[str, Any]:
     """Run the diagnosis and write DIR/report.json, extended_model.yaml, report.html."""
@@ -107,11 +119,18 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     model, robot, ctrl = load_model(model_path)
     rec, extras = load_data(data, map_path)
     if robot.joint_names != list(rec.joint_names):
-        if robot.n_axes != len(rec.joint_names):
+        if set(robot.joint_names) <= set(rec.joint_names):
+            rec = _select_joints(rec, robot.joint_names)
+        elif robot.n_axes < len(rec.joint_names):
+            progress(f'note: model axes {robot.joint_names} taken in order for the first '
+                     f'{robot.n_axes} data joints {rec.joint_names[:robot.n_axes]}')
+            rec = _select_joints(rec, rec.joint_names[:robot.n_axes])
+        elif robot.n_axes != len(rec.joint_names):
             raise FrfIdentInputError(f'--model {model_path}: axes {robot.joint_names} do not '
                                      f'match the data joints {rec.joint_names}')
-        progress(f'note: model axes {robot.joint_names} taken in order for data joints '
-                 f'{rec.joint_names}')
+        else:
+            progress(f'note: model axes {robot.joint_names} taken in order for data joints '
+                     f'{rec.joint_names}')
     if abs(robot.sample_rate - rec.fs) > 1e-6 * rec.fs:
         from dataclasses import replace
         robot = replace(robot, sample_rate=rec.fs)

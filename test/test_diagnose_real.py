@@ -44,3 +44,22 @@ def test_kuka_names_friction_and_reports_elasticity(tmp_path):
              and 'stiffness' in e['parameters']]
     assert stiff, names
     assert rep['metrics']['extended']['time_nrmse'] < rep['metrics']['baseline']['time_nrmse']
+
+
+@pytest.mark.skipif(not (EMPS.is_file() and KUKA.is_file()), reason='shared data not present')
+def test_imported_bags_are_accepted_by_estimate_and_diagnose(tmp_path):
+    """EMPS and KUKA import to bags; estimate detects EMPS's periodic excitation; diagnose
+    accepts both (KUKA's 6 joints -> the model's axes 1-3)."""
+    for name, data, mp, model in (
+            ('emps', EMPS, 'map_emps.yaml', 'model_emps.yaml'),
+            ('kuka', KUKA, 'map_kuka_kr300.yaml', 'model_kuka_kr300_axes123.yaml')):
+        bag = tmp_path / f'{name}_bag'
+        assert main(['import', str(data), '--map', str(ROOT / 'config' / mp),
+                     '--out', str(bag)]) == 0
+        assert main(['diagnose', str(bag), '--model', str(ROOT / 'config' / model),
+                     '--out', str(tmp_path / f'{name}_diag')]) == 0
+        rep = json.loads((tmp_path / f'{name}_diag' / 'report.json').read_text())
+        assert rep['effects'], name
+    assert main(['estimate', str(tmp_path / 'emps_bag'), '--out', str(tmp_path / 'est')]) == 0
+    frf = json.loads((tmp_path / 'est' / 'frf.json').read_text())
+    assert len(frf['freq_hz']) > 100
