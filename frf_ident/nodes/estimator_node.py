@@ -6,6 +6,10 @@ Recorded (CONTRACT section 3): /joint_states, /velocity_controller/commands,
 loses at most the open chunk; SIGINT/SIGTERM drain every message already delivered and close
 the bag cleanly).
 
+In lockstep the plant reports in joint state k+1 the torque it applied from t_k (u_k); the
+recorder writes joint state k once k+1 has arrived, with that effort, so the bag has the
+offline recordings' convention (y_k and u_k at t_k; the newest sample keeps its own effort).
+
 Log times are sample times: a joint state or excitation message is logged at its header stamp;
 a velocity command at the stamp of the /frf/excitation message the excitation node sends right
 before it (same sample); an effort command (lockstep) at the stamp of the joint state it answers;
@@ -50,6 +54,7 @@ class Estimator:
         self.rec.open(bag)
         self.bag = Path(bag)
         self.last_js = -1
+        self.held_js: Any = None
         self.js_stamps: deque = deque()     # joint-state stamps not yet answered by a command
         self.exc_stamps: deque = deque()    # excitation stamps not yet paired with a command
         self.cmd_wait: deque = deque()      # velocity commands waiting for their stamp
@@ -76,9 +81,15 @@ class Estimator:
         if s <= self.last_js:
             return                      # the plant's idle re-send of the same sample
         self.last_js = s
-        self._write(self.t['joint_states_topic'], JS, s, c.to_cdr(msg))
         if not self.lockstep:
+            self._write(self.t['joint_states_topic'], JS, s, c.to_cdr(msg))
             return
+        # lockstep: joint state k is written when k+1 arrives, with effort = the torque the
+        # plant reports for the sample starting at t_k (u_k), the offline recording convention
+        held, self.held_js = self.held_js, msg
+        if held is not None:
+            held.effort = msg.effort
+            self._write(self.t['joint_states_topic'], JS, c.stamp_ns(held), c.to_cdr(held))
         if self.eff_wait:
             self._write(self.t['effort_topic'], F64, s, self.eff_wait.popleft())
         else:
@@ -158,6 +169,9 @@ class Estimator:
             now = sum(self.counts.values())
             if now != total:
                 total, quiet_since = now, time.monotonic()
+        if self.held_js is not None:    # the newest sample: its u_k was never applied
+            held, self.held_js = self.held_js, None
+            self._write(self.t['joint_states_topic'], JS, c.stamp_ns(held), c.to_cdr(held))
         # unpaired commands (should not happen in a complete run): keep them, at the last stamp
         for q, topic in ((self.cmd_wait, 'velocity_topic'), (self.eff_wait, 'effort_topic')):
             while q:

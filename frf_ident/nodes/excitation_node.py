@@ -68,6 +68,7 @@ class Run:
         self.i_sample = 0
         self.ref: Optional[np.ndarray] = None
         self.exc: Optional[np.ndarray] = None
+        self.plan: Optional[np.ndarray] = None
         self.seg_ranges: list[tuple[int, int, np.ndarray]] = []   # (k0, k1, reference)
         self.u: dict[int, np.ndarray] = {}                         # segment index -> torque
         self.end_k: Optional[int] = None
@@ -92,9 +93,9 @@ class Excitation:
         self.stale_s = float(c.param(node, 'stale_s', 0.02))
         self.stale_samples = int(c.param(node, 'stale_samples', 3))
         self.start_grace_s = float(c.param(node, 'start_grace_s', 0.2))
-        self.abort_ramp_s = float(c.param(node, 'abort_ramp_s', 0.02))
+        self.abort_ramp_s = float(c.param(node, 'abort_ramp_s', 0.01))
         self.bound = math.radians(float(c.param(node, 'position_bound_deg', 4.0)))
-        self.live_bound = math.radians(float(c.param(node, 'live_position_bound_deg', 6.0)))
+        self.live_bound = math.radians(float(c.param(node, 'live_position_bound_deg', 8.0)))
         t = c.topics(node, ('joint_states_topic', 'velocity_topic', 'excitation_topic',
                             'experiment_topic'))
         self.ms_cfg = _config(node, 'multisine', MultisineConfig)
@@ -130,6 +131,7 @@ class Excitation:
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None
         self.chirp = None
+        self.hold: Optional[np.ndarray] = None   # position a settle phase holds after a move
         self._stop = threading.Event()
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
@@ -195,7 +197,7 @@ class Excitation:
 
     def _pump(self) -> None:
         """Publish references up to ``lookahead`` samples past the newest joint state."""
-        from frf_ident.core.procedures import move_reference
+        from frf_ident.core.procedures import POSITION_GAIN, move_plan
         run = self.run
         while run.end_k is None and self.next_k <= self.k_js + self.lookahead - 1 + \
                 (0 if self.lockstep else 1):
@@ -203,15 +205,21 @@ class Excitation:
                 run.end_k = self.next_k        # done once the plant applied the last command
                 break
             ph = run.phases[run.i_phase]
+            held = ph.kind in ('move', 'settle')
+            if held and self.k_js != self.next_k:
+                break       # position-held phases need the measured position of each sample
             if run.i_sample == 0:
-                if ph.kind == 'move':
-                    if self.k_js != self.next_k:   # needs the position at its first sample
-                        break
-                    run.ref = move_reference(self.q_js - self.q0, ph.target, ph.n_samples,
-                                             self.dt)
+                run.plan = None
+                if ph.kind == 'move':    # as ClosedLoop.run_phase: plan from the measured q
+                    run.ref, run.plan = move_plan(self.q_js, self.q0 + ph.target,
+                                                  ph.n_samples, self.dt)
+                    self.hold = run.plan[-1]
                     run.exc = np.zeros_like(run.ref)
                 elif ph.kind == 'settle':
+                    hold = self.q_js if self.hold is None else self.hold
+                    self.hold = None
                     run.ref = np.zeros((ph.n_samples, self.n))
+                    run.plan = np.tile(hold, (ph.n_samples, 1))
                     run.exc = run.ref
                 else:
                     run.ref = ph.reference
@@ -224,7 +232,11 @@ class Excitation:
                         run.u[len(run.seg_ranges) - 1] = np.full((ph.n_samples, self.n), np.nan)
                     self._descriptor(ph.segment, 'start', k0, k1)
             i = run.i_sample
-            self._publish_ref(self.next_k, run.ref[i], run.exc[i])
+            if run.plan is not None:
+                r = run.ref[i] + POSITION_GAIN * (run.plan[i] - self.q_js)
+                self._publish_ref(self.next_k, r, run.exc[i])
+            else:
+                self._publish_ref(self.next_k, run.ref[i], run.exc[i])
             self.next_k += 1
             run.i_sample += 1
             if run.i_sample >= ph.n_samples:

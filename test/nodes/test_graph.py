@@ -81,7 +81,7 @@ def test_graph_matches_offline(graph_run, offline):
     for key in ('multisine', 'chirp'):
         a, b = est[key], est_off[key]
         np.testing.assert_allclose(a.freq_hz, b.freq_hz)
-        err = np.max(np.abs(_db(a.frf) - _db(b.frf)))
+        err = np.max(np.abs(_db(a.response) - _db(b.response)))
         assert err < 0.1, f'{key}: max |dB| difference {err:.3f}'
     live = json.loads((g.frf_dir / 'frf.json').read_text())
     assert live['estimate'] == 'multisine'
@@ -133,7 +133,7 @@ def test_kill_plant(tmp_path):
     assert obs.stdout.readline().strip() == 'ready'
     drv = g.driver(multisine=True, iterations=0)
     try:
-        time.sleep(4.0)
+        time.sleep(2.0)
         t_kill = time.time()
         g.kill('plant_node')
         drv.wait(30)
@@ -152,7 +152,7 @@ def test_kill_plant(tmp_path):
     exc_log = (tmp_path / 'excitation_node.log').read_text()
     assert 'aborted' in exc_log and 'stale' in exc_log
     rec, timing = read_recording(bag)
-    assert rec.t.size > 1000
+    assert rec.t.size > 300
     assert 'aborted' in (tmp_path / 'excitation_node.log').read_text()
 
 
