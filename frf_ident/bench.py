@@ -233,6 +233,21 @@ def bench_diagnosis() -> list[tuple[str, str, str, str]]:
     return rows
 
 
+@section('nodes')
+def bench_nodes() -> list[tuple[str, str, str, str]]:
+    """Lockstep closed-loop steps/s of the node graph (separate processes over DDS on
+    loopback) against a plain DDS ping-pong of the same backend in the same run (goal 50 %)."""
+    from frf_ident.nodes.bench import bench_lockstep
+    r = bench_lockstep()
+    pp = r['pingpong_per_s']
+    return [('node graph lockstep (plant, controller, excitation)',
+             f"{r['graph_steps_per_s']:,.0f} steps/s", f'DDS ping-pong {pp:,.0f}/s',
+             f"{100 * r['graph_steps_per_s'] / pp:.0f} % (goal 50 %)"),
+            ('... with the estimator recording the bag',
+             f"{r['graph_with_recorder_steps_per_s']:,.0f} steps/s", f'DDS ping-pong {pp:,.0f}/s',
+             f"{100 * r['graph_with_recorder_steps_per_s'] / pp:.0f} %")]
+
+
 def main(argv: list[str] | None = None) -> int:
     import importlib
     for mod in ('frf_ident.bench_extra',):

@@ -90,7 +90,7 @@ class Excitation:
         model_path = c.param(node, 'model', '')
         self.lockstep = bool(c.param(node, 'lockstep', True))
         self.lookahead = int(c.param(node, 'lookahead', 20)) if self.lockstep else 1
-        self.stale_s = float(c.param(node, 'stale_s', 0.02))
+        self.stale_s = float(c.param(node, 'stale_s', 0.5))
         self.stale_samples = int(c.param(node, 'stale_samples', 3))
         self.start_grace_s = float(c.param(node, 'start_grace_s', 0.2))
         self.abort_ramp_s = float(c.param(node, 'abort_ramp_s', 0.01))
