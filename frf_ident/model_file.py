@@ -6,7 +6,6 @@ file and the field (one line, CLI exit status 2).
 from __future__ import annotations
 
 import importlib
-import re
 from pathlib import Path
 from typing import Any
 
@@ -17,26 +16,7 @@ from frf_ident.core.model import (controller_from_dict, default_model_dict, robo
                                   robot_to_dict)
 from frf_ident.core.plant import FlexibleJointPlant, RobotParams
 from frf_ident.errors import FrfIdentInputError, ModelFileError
-
-
-class _Loader(yaml.SafeLoader):
-    """SafeLoader that reads floats as YAML 1.2 does: '1.5e5' is a number (PyYAML's YAML 1.1
-    resolver would make it a string, and the contract's own example uses it)."""
-
-
-_Loader.add_implicit_resolver(
-    'tag:yaml.org,2002:float',
-    re.compile(r'''^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-                |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-                |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
-                |[-+]?\.(?:inf|Inf|INF)
-                |\.(?:nan|NaN|NAN))$''', re.X),
-    list('-+0123456789.'))
-
-
-def load_yaml(text: str) -> Any:
-    """Parse YAML text with YAML 1.2 float rules (see _Loader)."""
-    return yaml.load(text, Loader=_Loader)
+from frf_ident.yamlio import load_yaml
 
 
 def read_model_dict(path: str | Path) -> dict[str, Any]:

@@ -124,17 +124,23 @@ def best_linear_approximation(Y: np.ndarray, U: np.ndarray) -> BLAResult:
             Ppq[p, q], c = frf_from_spectra(Y[p, q], U[p, q])
             cond[p] = np.maximum(cond[p], c) if q else c
     Pp = Ppq.mean(axis=1)
-    P = Pp.mean(axis=0)
-    noise_var = None
+    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), cond, Pp)
+
+
+def _bla_variances(Ppq: np.ndarray, Pp: np.ndarray):
+    """(noise, total, nonlinear) variances of the eq. 14 mean from per-period estimates Ppq
+    (n_p, n_q, ...) and per-realisation estimates Pp (n_p, ...); None where n < 2."""
+    n_p, n_q = Ppq.shape[:2]
+    noise_var = total_var = nl_var = None
     if n_q >= 2:
-        var_q = np.sum(np.abs(Ppq - Pp[:, None]) ** 2, axis=1) / (n_q - 1) / n_q
+        var_q = np.sum(np.abs(Ppq - Ppq.mean(axis=1, keepdims=True)) ** 2, axis=1) \
+            / (n_q - 1) / n_q
         noise_var = var_q.sum(axis=0) / n_p ** 2
-    total_var = nl_var = None
     if n_p >= 2:
-        total_var = np.sum(np.abs(Pp - P) ** 2, axis=0) / (n_p - 1) / n_p
+        total_var = np.sum(np.abs(Pp - Pp.mean(axis=0)) ** 2, axis=0) / (n_p - 1) / n_p
         if noise_var is not None:
             nl_var = np.maximum(total_var - noise_var, 0.0)
-    return BLAResult(P, noise_var, total_var, nl_var, cond, Pp)
+    return noise_var, total_var, nl_var
 
 
 def best_linear_approximation_reference(Y: np.ndarray, U: np.ndarray,
@@ -156,19 +162,8 @@ def best_linear_approximation_reference(Y: np.ndarray, U: np.ndarray,
     Pp = np.moveaxis(Syr.mean(axis=1) @ np.linalg.pinv(Sur.mean(axis=1)), 1, -1)
     sv = np.linalg.svd(Sur.mean(axis=1), compute_uv=False)
     cond = sv[..., 0] / np.maximum(sv[..., -1], 1e-300)
-    P = Pp.mean(axis=0)
-    noise_var = None
-    if n_q >= 2:
-        Ppq = np.moveaxis(Syr @ np.linalg.pinv(Sur), 2, -1)    # (p, q, n_y, n_u, F)
-        var_q = np.sum(np.abs(Ppq - Ppq.mean(axis=1, keepdims=True)) ** 2, axis=1) \
-            / (n_q - 1) / n_q
-        noise_var = var_q.sum(axis=0) / n_p ** 2
-    total_var = nl_var = None
-    if n_p >= 2:
-        total_var = np.sum(np.abs(Pp - P) ** 2, axis=0) / (n_p - 1) / n_p
-        if noise_var is not None:
-            nl_var = np.maximum(total_var - noise_var, 0.0)
-    return BLAResult(P, noise_var, total_var, nl_var, cond, Pp)
+    Ppq = np.moveaxis(Syr @ np.linalg.pinv(Sur), 2, -1)        # (p, q, n_y, n_u, F)
+    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), cond, Pp)
 
 
 @dataclass

@@ -12,22 +12,9 @@ from typing import Any, Iterator, Sequence
 import yaml
 
 from frf_ident.errors import FrfIdentInputError
+from frf_ident.yamlio import Yaml12FloatLoader
 
 _PARAMS_KEY = 'ros__parameters'
-
-
-class _RosYamlLoader(yaml.SafeLoader):
-    """SafeLoader reading ``1e4`` / ``1.0e4`` as floats, like rcl (YAML 1.1 reads strings)."""
-
-
-_RosYamlLoader.add_implicit_resolver(
-    'tag:yaml.org,2002:float',
-    re.compile(r'''^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-                |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-                |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
-                |[-+]?\.(?:inf|Inf|INF)
-                |\.(?:nan|NaN|NAN))$''', re.X),
-    list('-+0123456789.'))
 
 
 def _flatten(values: dict, prefix: str = '') -> dict[str, Any]:
@@ -72,7 +59,7 @@ def load_params_file(path: 'str | Path', node_name: 'str | None',
     path = str(path)
     try:
         with open(path, encoding='utf-8') as f:
-            tree = yaml.load(f, Loader=_RosYamlLoader)
+            tree = yaml.load(f, Loader=Yaml12FloatLoader)
     except OSError as exc:
         raise FrfIdentInputError(f'cannot read parameter file {path=}: {exc}') from exc
     except yaml.YAMLError as exc:
@@ -100,7 +87,7 @@ def load_params_file(path: 'str | Path', node_name: 'str | None',
 def _parse_value(text: str) -> Any:
     """Parse a ``-p name:=value`` value the way rcl does: as a YAML scalar or flow sequence."""
     try:
-        return yaml.load(text, Loader=_RosYamlLoader) if text != '' else ''
+        return yaml.load(text, Loader=Yaml12FloatLoader) if text != '' else ''
     except yaml.YAMLError as exc:
         raise FrfIdentInputError(f'cannot parse parameter value {text=}: {exc}') from exc
 
