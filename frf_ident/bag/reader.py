@@ -671,11 +671,7 @@ def _reference(bag: BagFiles, col: _Collector, topics: BagTopics, joint_names: l
     vals = vals[:, _ref_columns(bag, col, topics, joint_names, frf)]
     cst = tm.analyse(topics.velocity_commands, ns, ns, 'log', None)
     report.topics[topics.velocity_commands] = cst.timing
-    v = vals[cst.order]
-    if per_sample:
-        return _exact_match(cst.ns, v, st, grid_ns.size)
-    hold = 3.0 * max(st.dt_ns, cst.dt_ns if cst.ns.size > 1 else 0.0)
-    return _hold(cst.ns.astype(float), v, grid_ns, hold)
+    return _onto_grid(cst, vals[cst.order], st, grid_ns, per_sample)
 
 
 def _excitation(bag: BagFiles, col: _Collector, topics: BagTopics, grid_ns: np.ndarray,
@@ -692,11 +688,17 @@ def _excitation(bag: BagFiles, col: _Collector, topics: BagTopics, grid_ns: np.n
                        f'values')
     xst = tm.analyse(topics.excitation, ns, logs, src, None)
     report.topics[topics.excitation] = xst.timing
-    v = vals[xst.order]
+    return _onto_grid(xst, vals[xst.order], st, grid_ns, per_sample)
+
+
+def _onto_grid(src: tm.Stamps, v: np.ndarray, st: tm.Stamps, grid_ns: np.ndarray,
+               per_sample: bool) -> np.ndarray:
+    """A command-like series on the /joint_states grid: matched by exact stamp for our own
+    bags, else held for at most 3 sample or command periods (NaN beyond)."""
     if per_sample:
-        return _exact_match(xst.ns, v, st, grid_ns.size)
-    hold = 3.0 * max(st.dt_ns, xst.dt_ns if xst.ns.size > 1 else 0.0)
-    return _hold(xst.ns.astype(float), v, grid_ns, hold)
+        return _exact_match(src.ns, v, st, grid_ns.size)
+    hold = 3.0 * max(st.dt_ns, src.dt_ns if src.ns.size > 1 else 0.0)
+    return _hold(src.ns.astype(float), v, grid_ns, hold)
 
 
 def _rate_warnings(report: tm.TimingReport, master: str) -> None:

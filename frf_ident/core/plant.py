@@ -526,6 +526,26 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
                  gw, cg, ra, rs, rp, nonlinear, sc)
 
 
+@numba.njit(cache=True, fastmath=True)
+def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw, cg,
+              ra, rs, rp, nonlinear, enc, from_encoder, vnoise, sc, q, v):
+    """One sample of :func:`_simulate` for a command u given from outside (plug-in step):
+    the start position becomes qprev, u enters the delay buffer, the plant advances and the
+    measurement at the end of the sample goes to q, v. The buffer is left rebased (latest
+    command last), as :meth:`FlexibleJointPlant._rebase_buffer` leaves it."""
+    n = u.shape[0]
+    _measure(x, qprev, enc, False, dt, vnoise, 0, q, v)
+    for i in range(n):
+        qprev[i] = q[i]
+        buf[0, i] = u[i]
+    _advance(x, buf, 0, offsets, nbuf, buf, False, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
+             cg, ra, rs, rp, nonlinear, sc)
+    for r in range(nbuf - 1):
+        for i in range(n):
+            buf[r, i], buf[r + 1, i] = buf[r + 1, i], buf[r, i]
+    _measure(x, qprev, enc, from_encoder, dt, vnoise, 0, q, v)
+
+
 # --- Python API -------------------------------------------------------------------------------
 
 @dataclass
@@ -605,6 +625,7 @@ class FlexibleJointPlant:
         self.qprev = np.where(enc > 0, enc * np.floor(self.qprev / np.where(enc > 0, enc, 1)
                                                       + 0.5), self.qprev)
         self.buf = np.tile(self.equilibrium_torque(), (self._packed.nbuf, 1))
+        self._scratch = np.zeros((_NSCRATCH, 4 * n))
         self.k = 0
         if seed is not None or not hasattr(self, 'rng'):
             self.rng = np.random.default_rng(self.params.seed if seed is None else seed)
@@ -680,13 +701,17 @@ class FlexibleJointPlant:
         """Apply motor torque [N m] for one sample; return (position, velocity, effort).
 
         CONTRACT section 4: the returned measurement is taken at the end of the sample, the
-        effort is the torque applied (after the torque limit) plus torque noise.
+        effort is the torque applied (after the torque limit) plus torque noise. Runs the same
+        compiled kernels as :meth:`simulate` without its batch bookkeeping (the node hot path).
         """
-        torque = np.asarray(torque, dtype=float).reshape(1, self.n_axes)
-        self.simulate(torque=torque)
+        p = self._packed
+        lim = p.prm[:, ULIM]
+        u = np.clip(np.asarray(torque, dtype=float).reshape(self.n_axes), -lim, lim)
+        vn, tn = self._noise(1)
         q, v = np.empty(self.n_axes), np.empty(self.n_axes)
-        vn, _ = self._noise(1)
-        _measure(self.x, self.qprev, self._packed.enc, bool(self.params.velocity_from_encoder),
-                 self.dt, vn, 0, q, v)
-        lim = self.params.torque_limits()
-        return q, v, np.clip(torque[0], -lim, lim)
+        _step_one(self.x, self.qprev, self.buf, u, p.offsets, p.nbuf, int(self.params.substeps),
+                  self.dt, p.prm, p.ad, p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs,
+                  p.rp, p.nonlinear, p.enc, bool(self.params.velocity_from_encoder), vn,
+                  self._scratch, q, v)
+        self.k += 1
+        return q, v, u + tn[0]

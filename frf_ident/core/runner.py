@@ -149,7 +149,9 @@ def run_identification(plant: Any, controller: PIVelocity,
         summary['multisine'] = {'experiment_time_s': loop.t - t_start,
                                 'segments': n_exc, 'lines': int(design.harmonics.size),
                                 'period_s': design.period,
-                                'constant_velocity': phases[2].reference[-1].tolist()}
+                                'constant_velocity':
+                                    next(p.segment for p in phases if p.segment)[
+                                        'constant_velocity']}
     if cfg.chirp is not None:
         it = ChirpIteration(cfg.chirp, loop.n, fs, controller.torque_limit)
         t_start = loop.t

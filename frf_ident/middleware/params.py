@@ -92,32 +92,29 @@ def _parse_value(text: str) -> Any:
         raise FrfIdentInputError(f'cannot parse parameter value {text=}: {exc}') from exc
 
 
-def ros_args_sections(argv: Sequence[str]) -> list[str]:
-    """The arguments that belong to ``--ros-args`` sections (each ends at ``--`` or argv's end)."""
-    out: list[str] = []
+def _split_ros_args(argv: Sequence[str]) -> tuple[list[str], list[str]]:
+    """(arguments inside ``--ros-args`` sections, the rest); a section ends at ``--``."""
+    ros: list[str] = []
+    rest: list[str] = []
     inside = False
     for arg in argv:
         if arg == '--ros-args':
             inside = True
         elif arg == '--' and inside:
             inside = False
-        elif inside:
-            out.append(arg)
-    return out
+        else:
+            (ros if inside else rest).append(arg)
+    return ros, rest
+
+
+def ros_args_sections(argv: Sequence[str]) -> list[str]:
+    """The arguments that belong to ``--ros-args`` sections (each ends at ``--`` or argv's end)."""
+    return _split_ros_args(argv)[0]
 
 
 def strip_ros_args(argv: Sequence[str]) -> list[str]:
     """``argv`` without its ``--ros-args`` sections (as ``rclpy.utilities.remove_ros_args``)."""
-    out: list[str] = []
-    inside = False
-    for arg in argv:
-        if arg == '--ros-args':
-            inside = True
-        elif arg == '--' and inside:
-            inside = False
-        elif not inside:
-            out.append(arg)
-    return out
+    return _split_ros_args(argv)[1]
 
 
 # ROS arguments that take one value and do not concern parameters.

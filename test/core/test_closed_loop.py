@@ -122,7 +122,11 @@ def test_torque_ripple_compensation_20db_at_ripple_lines():
     err_c = np.linalg.norm((comp.response - truth).reshape(9, -1), axis=0)[near]
     err_r = np.linalg.norm((raw.response - truth).reshape(9, -1), axis=0)[near]
     gain_db = 20 * np.log10(np.sqrt(np.mean(err_r ** 2)) / np.sqrt(np.mean(err_c ** 2)))
-    print(f'ripple lines {f[near].round(2)}: compensation gain {gain_db:.1f} dB')
+    timed, _ = multisine_frf(rec, compensate=True, align='time')      # the paper's way
+    err_t = np.linalg.norm((timed.response - truth).reshape(9, -1), axis=0)[near]
+    gain_t = 20 * np.log10(np.sqrt(np.mean(err_r ** 2)) / np.sqrt(np.mean(err_t ** 2)))
+    print(f'ripple lines {f[near].round(2)}: compensation gain {gain_db:.1f} dB '
+          f'(position-aligned), {gain_t:.1f} dB (time-aligned)')
     assert gain_db >= 20.0
 
 
