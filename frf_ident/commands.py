@@ -117,7 +117,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
                  progress=_say) -> dict:
     from frf_ident.bag import read_recording
     from frf_ident.core.closed_loop import estimate_recording
-    from frf_ident.plots import bode_matrix
+    from frf_ident.report.figures import bode_figure
     rec, timing = read_recording(bag, joints=joints, t_range=t_range)
     for line in timing.summary():
         progress(line)
@@ -138,7 +138,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
                'timing': timing.to_dict(), 'experiment': rec.meta.get('summary', {})}
     (out / 'summary.json').write_text(json.dumps(summary, indent=1, default=str))
     pairs = [(k, v) for k, v in estimates.items() if k in ('multisine', 'chirp')]
-    bode_matrix(pairs or [(key, frf)], out / 'bode.png',
+    bode_figure(dict(pairs or [(key, frf)]), out / 'bode.png',
                 title=f'{bag.name}: {" vs ".join(k for k, _ in pairs) or key}')
     progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
              f'{frf.freq_hz.size} lines) and {out / "bode.png"}')

@@ -1,8 +1,9 @@
-"""Plots (matplotlib, Agg backend): Bode diagrams of estimates against references."""
+"""The paper-reproduction figures (matplotlib, Agg). Bode grids of estimates:
+:func:`frf_ident.report.figures.bode_figure`."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Callable
 
 import matplotlib
 
@@ -10,7 +11,6 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from frf_ident.core.frd import FrequencyResponse  # noqa: E402
 
 
 def _db(p: np.ndarray) -> np.ndarray:
@@ -50,49 +50,5 @@ def paper_figure(results: dict[str, Any], case: str, path: Path,
     fig.suptitle(f'Saupe & Knoblach (2015) Sec. 6 example: tau_m -> dq_m, {label}')
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
-
-
-def bode_matrix(frfs: Sequence[tuple[str, FrequencyResponse]], path: Path, *,
-                title: str = '', reference: tuple[str, FrequencyResponse] | None = None,
-                bands: bool = True) -> Path:
-    """Bode magnitude/phase of every channel (n_out x n_in grid, magnitude over phase).
-
-    ``frfs`` are (label, estimate) pairs drawn as markers, ``reference`` a line; estimates with
-    variances get a +-2 sigma band.
-    """
-    first = frfs[0][1]
-    n_out, n_in = first.noutputs, first.ninputs
-    fig, axes = plt.subplots(2 * n_out, n_in, figsize=(4.2 * n_in, 2.6 * 2 * n_out),
-                             sharex=True, squeeze=False)
-    for o in range(n_out):
-        for i in range(n_in):
-            ax_m, ax_p = axes[2 * o, i], axes[2 * o + 1, i]
-            if reference is not None:
-                lab, ref = reference
-                ax_m.semilogx(ref.freq_hz, _db(ref.response[o, i]), 'k-', lw=1, label=lab)
-                ax_p.semilogx(ref.freq_hz, _deg(ref.response[o, i]), 'k-', lw=1)
-            for k, (lab, frf) in enumerate(frfs):
-                p = frf.response[o, i]
-                ax_m.semilogx(frf.freq_hz, _db(p), f'C{k}.', ms=3, label=lab)
-                ax_p.semilogx(frf.freq_hz, _deg(p), f'C{k}.', ms=3)
-                sd = frf.std_db() if bands else None
-                if sd is not None:
-                    ax_m.fill_between(frf.freq_hz, _db(p) - 2 * sd[o, i], _db(p) + 2 * sd[o, i],
-                                      color=f'C{k}', alpha=0.2, lw=0)
-            ax_m.set_title(f'{first.inputs[i]} -> {first.outputs[o]}', fontsize=8)
-            ax_m.grid(True, which='both', alpha=0.3)
-            ax_p.grid(True, which='both', alpha=0.3)
-            if i == 0:
-                ax_m.set_ylabel('dB')
-                ax_p.set_ylabel('deg')
-            if o == n_out - 1:
-                ax_p.set_xlabel('f / Hz')
-    axes[0, 0].legend(fontsize=7, loc='best')
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
     plt.close(fig)
     return Path(path)

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
@@ -95,6 +96,8 @@ def _bode_channel(ax_m: plt.Axes, ax_p: plt.Axes, frf: FrequencyResponse, o: int
     ax_m.semilogx(f, _db(p), '.-', color=color, ms=3, lw=0.5, label=f'{label}{band}')
     phase = _deg(p)
     ax_p.semilogx(f, phase, '.-', color=color, ms=3, lw=0.5)
+    for ax in (ax_m, ax_p):        # decade labels only: minor labels collide on short bands
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     if var is None:
         return
     sig2 = 2.0 * np.sqrt(np.maximum(var[o, i], 0.0))
