@@ -102,15 +102,21 @@ def test_bag_readers(graph_run):
     assert n == n_js > 1000
 
 
+KILL_AFTER = 1000      # references seen before the plant is killed
+
+
 def _observer(env, tag_file: Path) -> subprocess.Popen:
     code = f'''
 import sys, time, threading, json
 from frf_ident import middleware as mw
 node = mw.create_node('kill_observer')
 log = []
+def seen(m):
+    log.append((time.time(), list(m.data)))
+    if len(log) == {KILL_AFTER}:
+        print('running', flush=True)
 node.create_subscription(mw.msg('std_msgs/msg/Float64MultiArray'),
-    '/velocity_controller/commands', lambda m: log.append((time.time(), list(m.data))),
-    mw.qos_default(20000))
+    '/velocity_controller/commands', seen, mw.qos_default(20000))
 stop = threading.Event()
 threading.Thread(target=lambda: (sys.stdin.read(), stop.set()), daemon=True).start()
 print('ready', flush=True)
@@ -133,7 +139,8 @@ def test_kill_plant(tmp_path):
     assert obs.stdout.readline().strip() == 'ready'
     drv = g.driver(multisine=True, iterations=0)
     try:
-        time.sleep(2.0)
+        # kill once the run is well under way (by samples, not wall time: load varies)
+        assert obs.stdout.readline().strip() == 'running'
         t_kill = time.time()
         g.kill('plant_node')
         drv.wait(30)
