@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import select
 import signal
 import subprocess
 import sys
@@ -132,14 +133,19 @@ def test_kill_plant(tmp_path):
     from frf_ident.bag import read_recording
     g = Graph(tmp_path, model=MODEL, multisine=MultisineConfig(
         n_realisations=1, n_periods=2, resolution_hz=1.0, compensate=False),
-        params={'excitation_node': {'stale_s': 0.02}})
+        params={'excitation_node': {'stale_s': 0.03}})   # + 10 ms ramp: < 50 ms
     g.start()
     obs_file = tmp_path / 'observed.json'
     obs = _observer(g.env, obs_file)
     assert obs.stdout.readline().strip() == 'ready'
     drv = g.driver(multisine=True, iterations=0)
     try:
-        # kill once the run is well under way (by samples, not wall time: load varies)
+        # kill once the run is well under way (by samples, not wall time: load varies);
+        # never wait forever: a watchdog abort before that leaves the observer silent
+        ready, _, _ = select.select([obs.stdout], [], [], 60.0)
+        if not ready:
+            pytest.fail('no 1000 references within 60 s; excitation log: '
+                        + (tmp_path / 'excitation_node.log').read_text()[-400:])
         assert obs.stdout.readline().strip() == 'running'
         t_kill = time.time()
         g.kill('plant_node')
