@@ -161,6 +161,25 @@ class _Table:
         self._seal()
         return self.stamps[:self.n], self.logs[:self.n], self.vals[:self.n]
 
+    def times(self) -> np.ndarray:
+        """Header stamps when they are valid, else log times (ns) of the rows held."""
+        stamps, logs, _ = self.arrays()
+        return stamps if tm.valid_header_stamps(stamps) else logs
+
+    def subset(self, mask: np.ndarray) -> '_Table':
+        """A new table holding the rows where ``mask`` is true (streaming windows)."""
+        stamps, logs, vals = self.arrays()
+        out = _Table(self.width, int(np.count_nonzero(mask)))
+        out.add_block(stamps[mask], logs[mask], vals[mask])
+        return out
+
+    def keep(self, mask: np.ndarray) -> None:
+        """Drop the rows where ``mask`` is false, in place (streaming: bounded memory)."""
+        stamps, logs, vals = self.arrays()
+        m = int(np.count_nonzero(mask))
+        self.stamps[:m], self.logs[:m], self.vals[:m] = stamps[mask], logs[mask], vals[mask]
+        self.n = m
+
 
 _FIELDS = ('position', 'velocity', 'effort')
 
@@ -372,23 +391,30 @@ def _expected_counts(bag: BagFiles) -> dict[str, int]:
     return counts
 
 
-def _scan(bag: BagFiles, topics: set[str] | None, progress: bool,
-          sink: Callable[[Batch], None]) -> list[ScanStats]:
+def iter_batches(bag: BagFiles, topics: set[str] | None, progress: bool,
+                 stats: list[ScanStats]) -> Iterator[Batch]:
+    """The wanted messages of every file of ``bag``, chunk by chunk; each file's
+    :class:`ScanStats` is appended to ``stats`` when its scan ends."""
     total = sum(f.stat().st_size for f in bag.files)
     bar_cm: Any = nullcontext(None)
     if progress:
         from tqdm import tqdm
         bar_cm = tqdm(total=total, unit='B', unit_scale=True, desc=bag.path.name)
-    stats = []
     with bar_cm as bar:
         for f in bag.files:
             scanner = McapScanner(f, topics, on_bytes=bar.update if bar is not None else None)
             try:
-                for batch in scanner.batches():
-                    sink(batch)
+                yield from scanner.batches()
             except McapFormatError as exc:
                 raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
             stats.append(scanner.stats)
+
+
+def _scan(bag: BagFiles, topics: set[str] | None, progress: bool,
+          sink: Callable[[Batch], None]) -> list[ScanStats]:
+    stats: list[ScanStats] = []
+    for batch in iter_batches(bag, topics, progress, stats):
+        sink(batch)
     return stats
 
 
@@ -574,21 +600,25 @@ def _is_identity(order: np.ndarray, n: int) -> bool:
 
 
 def _frf_grid(frf: Any, st: tm.Stamps) -> np.ndarray | None:
-    """The writer's exact float time grid, if the bag's stamps are exactly on it."""
+    """The writer's exact float time grid, if the bag's stamps are exactly on it (computed
+    for the samples at hand only, so a window of a long bag costs its own size)."""
     if not isinstance(frf, dict) or not isinstance(frf.get('time'), dict):
         return None
     try:
-        t_all = grid_times(frf['time'], int(frf['n']))
-    except (TypeError, ValueError, KeyError, OverflowError):
+        spec, n_all = frf['time'], int(frf['n'])
+        t1 = grid_times(spec, 2)
+        step = float(t1[1] - t1[0])
+        guess = int(round((st.ns[0] * 1e-9 - float(t1[0])) / step))
+        for i0 in (guess, guess - 1, guess + 1):
+            if i0 < 0 or i0 + st.ns.size > n_all:
+                continue
+            t = grid_times(spec, st.ns.size, i0)
+            if np.all(np.isfinite(t)) and t[0] >= 0 and \
+                    np.array_equal(np.round(t * 1e9).astype(np.int64), st.ns):
+                return t
+    except (TypeError, ValueError, KeyError, OverflowError, ZeroDivisionError):
         return None
-    if t_all.size == 0 or not np.all(np.isfinite(t_all)) or t_all[0] < 0:
-        return None
-    ns_all = np.round(t_all * 1e9).astype(np.int64)
-    i0 = int(np.searchsorted(ns_all, st.ns[0]))
-    i1 = i0 + st.ns.size
-    if i1 > t_all.size or not np.array_equal(ns_all[i0:i1], st.ns):
-        return None
-    return t_all[i0:i1]
+    return None
 
 
 def _check_joints(bag: BagFiles, topics: BagTopics, joint_names: list[str], vals: np.ndarray,

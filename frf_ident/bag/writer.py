@@ -138,9 +138,10 @@ def _time_grid(t: np.ndarray) -> dict[str, Any] | None:
     return None
 
 
-def grid_times(spec: dict[str, Any], n: int) -> np.ndarray:
-    """The ``n`` float times described by a ``_time_grid`` spec."""
-    k = np.arange(n)
+def grid_times(spec: dict[str, Any], n: int, start: int = 0) -> np.ndarray:
+    """The float times of samples ``start .. start + n - 1`` of a ``_time_grid`` spec (each
+    element identical to the same element of the whole grid)."""
+    k = np.arange(start, start + n)
     if spec['grid'] == 'mul':
         return float(spec['t0']) + k * float(spec['dt'])
     if spec['grid'] == 'div':

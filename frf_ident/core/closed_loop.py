@@ -18,15 +18,15 @@ import numpy as np
 from frf_ident.core.chirp import ChirpDesign
 from frf_ident.core.estimation import (BLAResult, best_linear_approximation,
                                        best_linear_approximation_reference, chirp_spectra,
-                                       detection_line_levels, frf_from_reference,
-                                       frf_from_spectra, periodic_spectra)
+                                       detection_levels_from_spectra, detection_line_spectra,
+                                       frf_from_reference, frf_from_spectra, periodic_spectra)
 from frf_ident.core.frd import FrequencyResponse
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
 
 
-def _names(rec: Recording) -> tuple[list[str], list[str]]:
-    return ([f'tau_m/{j}' for j in rec.joint_names], [f'dq_m/{j}' for j in rec.joint_names])
+def _names(joint_names: list[str]) -> tuple[list[str], list[str]]:
+    return ([f'tau_m/{j}' for j in joint_names], [f'dq_m/{j}' for j in joint_names])
 
 
 def _segment_arrays(rec: Recording, seg: Segment) -> dict[str, np.ndarray]:
@@ -61,74 +61,184 @@ def _disturbance_at(cv: dict[str, np.ndarray], key: str, q: np.ndarray,
     return out
 
 
-def multisine_periods(rec: Recording, *, compensate: bool = True, align: str = 'position'
-                      ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    """Per (p, m) segment: the measured periods after the transient, compensated by the
-    constant-velocity run when requested (``align`` see :func:`_disturbance_at`). Returns
-    arrays shaped (n_p, n_ex, n_q, N, n)."""
-    segs = [s for s in rec.segments if s.info.get('design') == 'multisine']
-    if not segs:
-        raise EstimationError('recording has no multisine segments')
-    info = segs[0].info
-    n_per, n_q, n_tr = info['period_samples'], info['periods'], info['transient_periods']
-    n_p = 1 + max(s.info['realisation'] for s in segs)
-    n_ex = 1 + max(s.info['experiment'] for s in segs)
-    n = len(rec.joint_names)
-    cv = None
-    if compensate:
-        cv_segs = [s for s in rec.segments if s.info.get('design') == 'constant_velocity']
-        if not cv_segs:
-            raise EstimationError('compensation requested but the recording has no '
-                                  'constant-velocity run')
-        cv = _segment_arrays(rec, cv_segs[0])
-    out = {k: np.full((n_p, n_ex, n_q, n_per, n), np.nan) for k in ('u', 'y', 'r')}
-    for s in segs:
-        a = _segment_arrays(rec, s)
-        need = (n_tr + n_q) * n_per
+class MultisineSpectra:
+    """DFT lines of a multisine experiment, gathered one segment at a time.
+
+    Each (realisation p, experiment m) segment contributes the spectra of its steady-state
+    periods at the excited bins (u, y, r) and, when a constant-velocity run was added first,
+    the spectra of that run's series as subtracted from it (Sec. 4.4 E; the DFT is linear, so
+    X - D equals the spectrum of the compensated series). Memory is one segment plus the
+    spectra, so a bag longer than memory can be estimated window by window.
+    """
+
+    def __init__(self, info: dict[str, Any], *, align: str = 'position') -> None:
+        self.info = info
+        self.align = align
+        self.bins = np.asarray(info['design_params']['harmonics'])
+        self.n_per, self.n_q = int(info['period_samples']), int(info['periods'])
+        self.n_tr = int(info['transient_periods'])
+        self.cv: dict[str, np.ndarray] | None = None
+        self.spec: dict[tuple[int, int], dict[str, np.ndarray]] = {}
+        self.joint_names: list[str] = []
+
+    def add_constant_velocity(self, rec: Recording, seg: Segment) -> None:
+        """The constant-velocity run (Sec. 4.4 E); add it before the multisine segments."""
+        if self.spec:
+            raise EstimationError('the constant-velocity run must come before the multisine '
+                                  'segments it compensates')
+        self.cv = _segment_arrays(rec, seg)
+
+    def add(self, rec: Recording, seg: Segment) -> None:
+        """One multisine segment of ``rec``."""
+        a = _segment_arrays(rec, seg)
+        need = (self.n_tr + self.n_q) * self.n_per
         if a['u'].shape[0] < need:
-            raise EstimationError(f'multisine segment at t={s.t_start:.3f} s has '
+            raise EstimationError(f'multisine segment at t={seg.t_start:.3f} s has '
                                   f'{a["u"].shape[0]} samples, expected {need} '
-                                  f'({n_tr} transient + {n_q} periods of {n_per})')
-        for k in ('u', 'y', 'r'):
-            x = a[k][:need]
-            if cv is not None and k != 'r':
-                x = x - _disturbance_at(cv, k, a['q'][:need], align)
-            out[k][s.info['realisation'], s.info['experiment']] = \
-                x[n_tr * n_per:].reshape(n_q, n_per, n)
-    if np.isnan(out['u']).any():
-        raise EstimationError(f'multisine segments incomplete: expected {n_p} realisations x '
-                              f'{n_ex} experiments')
-    return out, info
+                                  f'({self.n_tr} transient + {self.n_q} periods of '
+                                  f'{self.n_per})')
+        self.joint_names = list(rec.joint_names)
+        steady = slice(self.n_tr * self.n_per, need)
+        shape = (self.n_q, self.n_per, len(rec.joint_names))
+
+        def lines(x: np.ndarray) -> np.ndarray:          # (n_q, F, n)
+            return periodic_spectra(x[steady].reshape(shape), self.bins, axis=1)
+        out = {k: lines(a[k][:need]) for k in ('u', 'y', 'r')}
+        det = {'y': a['y'][:need]}
+        if self.cv is not None:
+            for k in ('u', 'y'):
+                d = _disturbance_at(self.cv, k, a['q'][:need], self.align)
+                out['d' + k] = lines(d)
+                if k == 'y':
+                    det['dy'] = d
+        if seg.info['experiment'] == 0:                 # detection lines (Sec. 4.3 remark)
+            for k, x in det.items():
+                _, out['det_' + k] = detection_line_spectra(
+                    x[steady].reshape(shape), int(self.bins[-1]), axis=1)
+        self.spec[(seg.info['realisation'], seg.info['experiment'])] = out
+
+    def _stack(self, key: str, compensate: bool) -> np.ndarray:
+        n_p = 1 + max(p for p, _ in self.spec)
+        n_ex = 1 + max(m for _, m in self.spec)
+        missing = [(p, m) for p in range(n_p) for m in range(n_ex) if (p, m) not in self.spec]
+        if missing:
+            raise EstimationError(f'multisine segments incomplete: expected {n_p} realisations '
+                                  f'x {n_ex} experiments, missing (p, m) = {missing[:4]}')
+        rows = []
+        for p in range(n_p):
+            row = []
+            for m in range(n_ex):
+                s = self.spec[(p, m)]
+                x = s[key]
+                if compensate and key != 'r':
+                    if 'd' + key not in s:
+                        raise EstimationError('compensation requested but the recording has '
+                                              'no constant-velocity run')
+                    x = x - s['d' + key]
+                row.append(x)
+            rows.append(row)
+        return np.array(rows)                          # (n_p, n_ex, n_q, F, n)
+
+    def frf(self, *, compensate: bool = True, method: str = 'reference'
+            ) -> tuple[FrequencyResponse, BLAResult]:
+        """Multisine best linear approximation (eq. 14) of the gathered segments.
+
+        method 'reference': P_p = (sum_q Y R^H)(sum_q U R^H)^-1 per realisation, averaged
+        over p; 'plain': P[p,q] = Y U^+ (eq. 7) per period, averaged over p and q.
+        """
+        if not self.spec:
+            raise EstimationError('recording has no multisine segments')
+        spec = {k: np.moveaxis(self._stack(k, compensate), 1, -1)
+                for k in ('y', 'u', 'r')}                 # (p, q, F, n, n_ex)
+        if method == 'reference':
+            bla = best_linear_approximation_reference(spec['y'], spec['u'], spec['r'])
+        elif method == 'plain':
+            bla = best_linear_approximation(spec['y'], spec['u'])
+        else:
+            raise ValueError(f"{method=} must be 'reference' or 'plain'")
+        n_p = spec['u'].shape[0]
+        Yd = np.array([self.spec[(p, 0)]['det_y'] - (self.spec[(p, 0)]['det_dy']
+                                                      if compensate else 0.0)
+                       for p in range(n_p)])
+        det = detection_levels_from_spectra(
+            Yd, np.arange(1, Yd.shape[2] + 1), self.bins)
+        ins, outs = _names(self.joint_names)
+        f0 = self.info['design_params']['f0']
+        frf = FrequencyResponse(self.bins * f0, bla.response, ins, outs, bla.noise_variance,
+                                bla.total_variance, {
+                                    'design': 'multisine', 'method': method,
+                                    'compensated': compensate, 'alignment': self.align,
+                                    'n_p': int(n_p), 'n_q': int(self.n_q),
+                                    'cond_max': float(np.max(bla.cond)),
+                                    'detection_lines': det.to_dict()})
+        return frf, bla
 
 
 def multisine_frf(rec: Recording, *, compensate: bool = True, method: str = 'reference',
                   align: str = 'position') -> tuple[FrequencyResponse, BLAResult]:
-    """Multisine best linear approximation (eq. 14) of the closed-loop data.
+    """Multisine best linear approximation (eq. 14) of the closed-loop data (see
+    :meth:`MultisineSpectra.frf`); ``align`` see :func:`_disturbance_at`."""
+    est = SegmentEstimator(rec.segments, align=align)
+    est.add_window(rec, compensate=compensate)
+    if est.multisine is None:
+        raise EstimationError('recording has no multisine segments')
+    return est.multisine.frf(compensate=compensate, method=method)
 
-    method 'reference': P_p = (sum_q Y R^H)(sum_q U R^H)^-1 per realisation, averaged over p;
-    'plain': P[p,q] = Y U^+ (eq. 7) per period, averaged over p and q.
-    """
-    data, info = multisine_periods(rec, compensate=compensate, align=align)
-    bins = np.asarray(info['design_params']['harmonics'])
-    spec = {k: np.moveaxis(periodic_spectra(v, bins, axis=3), 1, -1)
-            for k, v in data.items()}                         # (p, q, F, n, n_ex)
-    if method == 'reference':
-        bla = best_linear_approximation_reference(spec['y'], spec['u'], spec['r'])
-    elif method == 'plain':
-        bla = best_linear_approximation(spec['y'], spec['u'])
-    else:
-        raise ValueError(f"{method=} must be 'reference' or 'plain'")
-    ins, outs = _names(rec)
-    f0 = info['design_params']['f0']
-    det = detection_line_levels(data['y'][:, 0], bins, int(bins[-1]))
-    frf = FrequencyResponse(bins * f0, bla.response, ins, outs, bla.noise_variance,
-                            bla.total_variance, {
-                                'design': 'multisine', 'method': method,
-                                'compensated': compensate, 'alignment': align,
-                                'n_p': int(data['u'].shape[0]), 'n_q': int(data['u'].shape[2]),
-                                'cond_max': float(np.max(bla.cond)),
-                                'detection_lines': det.to_dict()})
-    return frf, bla
+
+class ChirpSpectra:
+    """Sec. 5.1 spectra (u, y, r at the analysis frequencies) of chirp experiments, per
+    iteration, gathered one segment at a time."""
+
+    def __init__(self) -> None:
+        self.spec: dict[int, dict[int, dict[str, np.ndarray]]] = {}
+        self.info: dict[int, dict[str, Any]] = {}
+        self.joint_names: list[str] = []
+
+    def add(self, rec: Recording, seg: Segment) -> None:
+        info = seg.info
+        it = int(info['iteration'])
+        design = ChirpDesign.from_dict(info['design_params'])
+        freqs = np.asarray(info['freq_hz'])
+        tc = design.time_at(freqs)
+        a = _segment_arrays(rec, seg)
+        self.joint_names = list(rec.joint_names)
+        self.info.setdefault(it, info)
+        self.spec.setdefault(it, {})[int(info['experiment'])] = {
+            k: chirp_spectra(a[k], rec.fs, freqs, tc) for k in ('u', 'y', 'r')}
+
+    def iterations(self) -> list[int]:
+        return sorted(self.spec)
+
+    def frf(self, *, iteration: int | None = None, method: str = 'plain',
+            path: str = 'u->y') -> FrequencyResponse:
+        """Chirp estimate of one iteration (default: the last).
+
+        path 'u->y' is the plant P (eq. 7, or reference-based with method='reference'),
+        'r->u' the transfer the iteration inverts (eq. 18).
+        """
+        if not self.spec:
+            raise EstimationError('recording has no chirp segments')
+        it = self.iterations()[-1] if iteration is None else iteration
+        if it not in self.spec:
+            raise EstimationError(f'{iteration=}: the recording holds chirp iterations '
+                                  f'{self.iterations()}')
+        exps = self.spec[it]
+        Y, U, R = (np.stack([exps[m][k] for m in sorted(exps)], axis=-1)
+                   for k in ('y', 'u', 'r'))
+        ins, outs = _names(self.joint_names)
+        if path == 'r->u':
+            P, cond = frf_from_spectra(U, R)
+            ins = [f'r/{j}' for j in self.joint_names]
+            outs = [f'tau_m/{j}' for j in self.joint_names]
+        elif method == 'reference':
+            P, cond = frf_from_reference(Y, U, R)
+        elif method == 'plain':
+            P, cond = frf_from_spectra(Y, U)
+        else:
+            raise ValueError(f"{method=} must be 'reference' or 'plain'")
+        return FrequencyResponse(np.asarray(self.info[it]['freq_hz']), P, ins, outs, meta={
+            'design': 'chirp', 'iteration': it, 'method': method, 'path': path,
+            'cond_max': float(np.max(cond))})
 
 
 def chirp_iterations(rec: Recording) -> list[int]:
@@ -137,56 +247,84 @@ def chirp_iterations(rec: Recording) -> list[int]:
 
 def chirp_frf(rec: Recording, *, iteration: int | None = None, method: str = 'plain',
               path: str = 'u->y') -> FrequencyResponse:
-    """Chirp estimate of one iteration (default: the last) by the Sec. 5.1 processing.
-
-    path 'u->y' is the plant P (eq. 7, or reference-based with method='reference'),
-    'r->u' the transfer the iteration inverts (eq. 18).
-    """
+    """Chirp estimate of one iteration (default: the last), see :meth:`ChirpSpectra.frf`."""
     its = chirp_iterations(rec)
     if not its:
         raise EstimationError('recording has no chirp segments')
     it = its[-1] if iteration is None else iteration
-    segs = sorted((s for s in rec.segments if s.info.get('design') == 'chirp'
-                   and s.info['iteration'] == it), key=lambda s: s.info['experiment'])
-    info = segs[0].info
-    design = ChirpDesign.from_dict(info['design_params'])
-    freqs = np.asarray(info['freq_hz'])
-    tc = design.time_at(freqs)
-    fs = rec.fs
-    S = {k: [] for k in ('u', 'y', 'r')}
-    for s in segs:
-        a = _segment_arrays(rec, s)
-        for k in S:
-            S[k].append(chirp_spectra(a[k], fs, freqs, tc))
-    Y, U, R = (np.stack(S[k], axis=-1) for k in ('y', 'u', 'r'))
-    ins, outs = _names(rec)
-    if path == 'r->u':
-        P, cond = frf_from_spectra(U, R)
-        ins = [f'r/{j}' for j in rec.joint_names]
-        outs = [f'tau_m/{j}' for j in rec.joint_names]
-    elif method == 'reference':
-        P, cond = frf_from_reference(Y, U, R)
-    elif method == 'plain':
-        P, cond = frf_from_spectra(Y, U)
-    else:
-        raise ValueError(f"{method=} must be 'reference' or 'plain'")
-    return FrequencyResponse(freqs, P, ins, outs, meta={
-        'design': 'chirp', 'iteration': it, 'method': method, 'path': path,
-        'cond_max': float(np.max(cond))})
+    acc = ChirpSpectra()
+    for s in rec.segments_where(design='chirp', iteration=it):
+        acc.add(rec, s)
+    return acc.frf(iteration=it, method=method, path=path)
+
+
+class SegmentEstimator:
+    """Every estimate the experiment segments support, fed window by window.
+
+    ``add_window(rec)`` takes a recording that holds some of the segments completely (the
+    whole run, or one window of a long bag); segments are processed in time order with the
+    constant-velocity run first, and nothing but their spectra is kept.
+    """
+
+    def __init__(self, segments: list[Segment], *, align: str = 'position') -> None:
+        self.segments = sorted(segments, key=lambda s: (
+            s.info.get('design') != 'constant_velocity', s.t_start))
+        self.align = align
+        self.has_cv = any(s.info.get('design') == 'constant_velocity' for s in segments)
+        ms = [s for s in segments if s.info.get('design') == 'multisine']
+        self.multisine = MultisineSpectra(ms[0].info, align=align) if ms else None
+        self.chirp = ChirpSpectra() if any(s.info.get('design') == 'chirp'
+                                           for s in segments) else None
+        self.done: set[int] = set()
+
+    def add_window(self, rec: Recording, *, compensate: bool = True) -> int:
+        """Process the not yet processed segments that ``rec`` overlaps (a segment it holds
+        only in part is an error); returns how many."""
+        t0, t1 = float(rec.t[0]), float(rec.t[-1])
+        count = 0
+        for i, s in enumerate(self.segments):
+            if i in self.done or s.t_end <= t0 or s.t_start > t1:
+                continue
+            design = s.info.get('design')
+            if design == 'constant_velocity' and self.multisine is not None and compensate:
+                self.multisine.add_constant_velocity(rec, s)
+            elif design == 'multisine' and self.multisine is not None:
+                self.multisine.add(rec, s)
+            elif design == 'chirp' and self.chirp is not None:
+                self.chirp.add(rec, s)
+            self.done.add(i)
+            count += 1
+        return count
+
+    def missing(self) -> list[Segment]:
+        """Segments no window covered completely."""
+        return [s for i, s in enumerate(self.segments) if i not in self.done and
+                s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
+
+    def results(self) -> dict[str, FrequencyResponse]:
+        """Every estimate, keyed as :func:`estimate_recording` documents."""
+        out: dict[str, FrequencyResponse] = {}
+        ms = self.multisine
+        if ms is not None and ms.spec:
+            cv = self.has_cv and ms.cv is not None
+            out['multisine'] = ms.frf(compensate=cv)[0]
+            out['multisine_plain'] = ms.frf(compensate=cv, method='plain')[0]
+            if cv:
+                out['multisine_uncompensated'] = ms.frf(compensate=False)[0]
+        if self.chirp is not None and self.chirp.spec:
+            out['chirp'] = self.chirp.frf()
+            out['chirp_reference'] = self.chirp.frf(method='reference')
+        return out
 
 
 def estimate_recording(rec: Recording) -> dict[str, FrequencyResponse]:
-    """Every estimate the recording supports, keyed by name."""
-    out: dict[str, FrequencyResponse] = {}
-    if any(s.info.get('design') == 'multisine' for s in rec.segments):
-        has_cv = any(s.info.get('design') == 'constant_velocity' for s in rec.segments)
-        out['multisine'] = multisine_frf(rec, compensate=has_cv)[0]
-        out['multisine_plain'] = multisine_frf(rec, compensate=has_cv, method='plain')[0]
-        if has_cv:
-            out['multisine_uncompensated'] = multisine_frf(rec, compensate=False)[0]
-    if chirp_iterations(rec):
-        out['chirp'] = chirp_frf(rec)
-        out['chirp_reference'] = chirp_frf(rec, method='reference')
+    """Every estimate the recording supports, keyed by name: 'multisine' (reference-based,
+    compensated when a constant-velocity run exists), 'multisine_plain',
+    'multisine_uncompensated', 'chirp', 'chirp_reference'; without descriptors the
+    detected ones (:func:`estimate_detected`)."""
+    est = SegmentEstimator(rec.segments)
+    est.add_window(rec)
+    out = est.results()
     if not out:
         out = estimate_detected(rec)
     return out

@@ -200,10 +200,24 @@ def detection_line_levels(y_periods: np.ndarray, excited_bins: np.ndarray,
     ``y_periods`` : (n_p, n_q, N, n_y) output time series, N samples = one period.
     Lines above ``max_bin`` (the top of the band) are ignored; DC is excluded.
     """
+    bins, Y = detection_line_spectra(y_periods, max_bin, axis=2)
+    return detection_levels_from_spectra(Y, bins, excited_bins)
+
+
+def detection_line_spectra(y_periods: np.ndarray, max_bin: int, *, axis: int = -2
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """Bins 1..min(max_bin, N/2) and the DFT of whole periods there (the input of
+    :func:`detection_levels_from_spectra`; computable one segment at a time)."""
     y = np.asarray(y_periods, dtype=float)
-    n_p, n_q, n, n_y = y.shape
+    n = y.shape[axis]
     bins = np.arange(1, min(max_bin, n // 2) + 1)
-    Y = np.fft.rfft(y, axis=2)[:, :, bins, :] / n
+    return bins, periodic_spectra(y, bins, axis=axis)
+
+
+def detection_levels_from_spectra(Y: np.ndarray, bins: np.ndarray,
+                                  excited_bins: np.ndarray) -> DetectionLevels:
+    """Detection-line levels from period spectra ``Y`` (n_p, n_q, n_bins, n_y) at ``bins``."""
+    n_q, n_y = Y.shape[1], Y.shape[3]
     Ym = Y.mean(axis=1)
     power = np.mean(np.abs(Ym) ** 2, axis=0)
     excited = np.isin(bins, excited_bins)
