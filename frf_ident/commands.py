@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Callable
 
@@ -111,17 +112,50 @@ def _estimate_args(p: argparse.ArgumentParser) -> None:
                    help='analyse only this time range [s]')
     p.add_argument('--primary', default=None,
                    help='which estimate goes to frf.json (default: multisine, else chirp)')
+    p.add_argument('--stream', action='store_true',
+                   help='read the bag window by window in bounded memory (automatic when the '
+                        'bag would need more than --max-memory)')
+    p.add_argument('--max-memory', type=float, default=None, metavar='MB',
+                   help='memory the in-memory reader may use before streaming (default: a '
+                        'quarter of RAM, at most 4096)')
+    p.add_argument('--window', type=float, default=300.0, metavar='S',
+                   help='streaming block length for bags without experiment descriptors '
+                        '[s] (default 300; must hold a few multisine periods or a whole chirp)')
+
+
+def _read_estimates(bag: Path, joints, t_range, stream: bool | None, max_memory_mb,
+                    window_s: float, progress):
+    """(estimates, timing report, experiment summary, streaming stats or None)."""
+    from frf_ident import streaming
+    budget = streaming.default_memory_budget() if max_memory_mb is None else \
+        int(max_memory_mb * (1 << 20))
+    if max_memory_mb is not None and not max_memory_mb > 0:
+        raise FrfIdentInputError(f'--max-memory {max_memory_mb}: expected a size in MB > 0')
+    if not window_s > 0:
+        raise FrfIdentInputError(f'--window {window_s}: expected a block length in s > 0')
+    if stream or streaming.needs_streaming(bag, budget):
+        res = streaming.stream_estimate(bag, joints=joints, t_range=t_range, block_s=window_s,
+                                        progress=progress, bar=sys.stderr.isatty())
+        st = res.stats
+        progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
+                 f'at most {st.peak_rows} held at once')
+        return res.estimates, res.timing, res.meta.get('summary', {}), {
+            'windows': st.windows, 'peak_rows': st.peak_rows, 'messages': st.messages,
+            'budget_bytes': budget}
+    from frf_ident.bag import read_recording
+    from frf_ident.core.closed_loop import estimate_recording
+    rec, timing = read_recording(bag, joints=joints, t_range=t_range)
+    return estimate_recording(rec), timing, rec.meta.get('summary', {}), None
 
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,
-                 progress=_say) -> dict:
-    from frf_ident.bag import read_recording
-    from frf_ident.core.closed_loop import estimate_recording
+                 stream: bool | None = None, max_memory_mb: float | None = None,
+                 window_s: float = 300.0, progress=_say) -> dict:
     from frf_ident.report.figures import bode_figure
-    rec, timing = read_recording(bag, joints=joints, t_range=t_range)
+    estimates, timing, experiment, streamed = _read_estimates(
+        bag, joints, t_range, stream, max_memory_mb, window_s, progress)
     for line in timing.summary():
         progress(line)
-    estimates = estimate_recording(rec)
     for line in next(iter(estimates.values())).meta.get('detected', []):
         progress(f'detected: {line}')
     key = primary or ('multisine' if 'multisine' in estimates else next(iter(estimates)))
@@ -135,7 +169,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     (out / 'estimates.json').write_text(json.dumps({k: v.to_dict()
                                                     for k, v in estimates.items()}))
     summary = {'bag': str(bag), 'primary': key, 'estimates': sorted(estimates),
-               'timing': timing.to_dict(), 'experiment': rec.meta.get('summary', {})}
+               'timing': timing.to_dict(), 'experiment': experiment, 'streaming': streamed}
     (out / 'summary.json').write_text(json.dumps(summary, indent=1, default=str))
     pairs = [(k, v) for k, v in estimates.items() if k in ('multisine', 'chirp')]
     bode_figure(dict(pairs or [(key, frf)]), out / 'bode.png',
@@ -148,7 +182,8 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
 def _estimate(args: argparse.Namespace) -> int:
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
     estimate_bag(args.bag, args.out, joints=joints,
-                 t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary)
+                 t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary,
+                 stream=args.stream, max_memory_mb=args.max_memory, window_s=args.window)
     return 0
 
 

@@ -428,8 +428,8 @@ def _recovery(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str, int]
         'metadata_yaml': bag.metadata is not None,
     }
     if expected:
-        lost = {t: expected[t] - read_counts.get(t, 0) for t in expected
-                if expected[t] > read_counts.get(t, 0)}
+        lost = {t: expected[t] - n for t, n in read_counts.items()
+                if expected.get(t, 0) > n}       # topics not read are not lost
         rec['messages_lost'] = sum(lost.values())
         rec['messages_lost_per_topic'] = lost
     elif not rec['complete']:

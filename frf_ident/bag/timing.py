@@ -100,6 +100,42 @@ class TimingReport:
         return d
 
 
+def merge_reports(reports: list[TimingReport], recovery: dict[str, Any] | None = None
+                  ) -> TimingReport:
+    """One report for the windows of a streamed bag: counts and losses add up, jitter and
+    offsets take the worst window, warnings are kept once each."""
+    if not reports:
+        raise ValueError('no timing reports to merge')
+    topics: dict[str, TopicTiming] = {}
+    for r in reports:
+        for name, tt in r.topics.items():
+            m = topics.get(name)
+            if m is None:
+                topics[name] = TopicTiming(**asdict(tt))
+                continue
+            m.count += tt.count
+            m.gaps += tt.gaps
+            m.missing_samples += tt.missing_samples
+            m.duplicates += tt.duplicates
+            m.non_monotonic += tt.non_monotonic
+            m.jitter = max(m.jitter, tt.jitter)
+            m.stamp_jitter = max(m.stamp_jitter, tt.stamp_jitter)
+            if tt.longest_gap_samples > m.longest_gap_samples:
+                m.longest_gap_samples = tt.longest_gap_samples
+                m.longest_gap_at_s = tt.longest_gap_at_s
+            for key in ('header_log_offset_std_s', 'header_log_offset_max_s'):
+                vals = [v for v in (getattr(m, key), getattr(tt, key)) if v is not None]
+                setattr(m, key, max(vals) if vals else None)
+    warnings = list(dict.fromkeys(w for r in reports for w in r.warnings))
+    return TimingReport(dt_s=float(np.median([r.dt_s for r in reports])),
+                        n_samples=sum(r.n_samples for r in reports),
+                        t_start_s=min(r.t_start_s for r in reports),
+                        t_end_s=max(r.t_end_s for r in reports),
+                        resampled=any(r.resampled for r in reports),
+                        grid='exact' if all(r.grid == 'exact' for r in reports) else 'resampled',
+                        topics=topics, recovery=recovery or {}, warnings=warnings)
+
+
 @dataclass
 class Stamps:
     """Cleaned (sorted, de-duplicated) stamps of a topic and their sample indices."""

@@ -334,11 +334,7 @@ def estimate_detected(rec: Recording) -> dict[str, FrequencyResponse]:
     """Estimates of a recording without descriptors: the excitation is detected per joint
     (:mod:`frf_ident.core.foreign`); one entry 'detected/<joint>' per excited input, the
     detection sentences in each estimate's meta['detected']."""
-    from frf_ident.core.foreign import detect_segments, detected_frf
-    segments, notes = detect_segments(rec)
-    out = {}
-    for seg in segments:
-        frf = detected_frf(rec, seg)
-        frf.meta['detected'] = notes
-        out[f"detected/{rec.joint_names[seg.info['input']]}"] = frf
-    return out
+    from frf_ident.core.foreign import DetectedEstimator
+    est = DetectedEstimator()
+    est.add_detected(rec)
+    return est.results()

@@ -8,6 +8,8 @@ inputs that share lines, so those are refused with the reason).
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from frf_ident.core.chirp import ChirpDesign
@@ -91,44 +93,133 @@ def _check_single_input(u_lines: np.ndarray, j: int, name: str) -> None:
                               f'cannot separate them')
 
 
-def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
-    """Column j of P (all outputs / input j) from a detected excitation of input j."""
+class DetectedEstimator:
+    """Column estimates of detected excitations, gathered block by block.
+
+    A long recording without descriptors is cut into blocks; each block's detections are
+    added here and the same excitation (same input, same period and lines, or the same chirp
+    band) found again in a later block adds its periods: the H1 sums sum_q Y conj(U_j) and
+    sum_q |U_j|^2 and the spread of the per-period ratios (for the variance) are kept, not the
+    data. One block alone gives exactly :func:`detected_frf`.
+    """
+
+    def __init__(self) -> None:
+        self.entries: dict[tuple, dict[str, Any]] = {}
+        self.notes: list[str] = []
+
+    def add_detected(self, rec: Recording) -> int:
+        """Detect the excitation in ``rec`` (:func:`detect_segments`) and add every
+        detection; the sentences go to :attr:`notes` (each once). Returns how many."""
+        segments, notes = detect_segments(rec)
+        self.notes.extend(n for n in notes if n not in self.notes)
+        for seg in segments:
+            self.add(rec, seg)
+        return len(segments)
+
+    def add(self, rec: Recording, seg: Segment) -> None:
+        """One detected segment of ``rec`` (from :func:`detect_segments`)."""
+        info = seg.info
+        j = int(info['input'])
+        names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{n}' for n in rec.joint_names])
+        if info['design'] == 'detected_multisine':
+            bins, U, Y, skip = _multisine_periods(rec, seg)
+            _check_single_input(U.mean(axis=0), j, rec.joint_names[j])
+            key = (j, 'multisine', int(info['period_samples']), tuple(bins.tolist()))
+            e = self.entries.setdefault(key, {'names': names, 'f0': info['f0'], 'bins': bins,
+                                              'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
+                                              'm2': 0.0, 'skip': 0, 'blocks': 0})
+            Uj = U[:, :, j]
+            e['syu'] = e['syu'] + np.einsum('qfo,qf->fo', Y, np.conj(Uj))
+            e['suu'] = e['suu'] + np.sum(np.abs(Uj) ** 2, axis=0)
+            for Pq in Y / Uj[:, :, None]:                   # Welford over periods
+                e['n'] += 1
+                d = Pq - e['mean']
+                e['mean'] = e['mean'] + d / e['n']
+                e['m2'] = e['m2'] + np.abs(d * np.conj(Pq - e['mean']))
+            e['skip'] += skip
+            e['blocks'] += 1
+            return
+        freqs, U, Y = _chirp_lines(rec, seg)
+        _check_single_input(U, j, rec.joint_names[j])
+        key = (j, 'chirp', round(info['f_low'], 1), round(info['f_high'], 1))
+        e = self.entries.setdefault(key, {'names': names, 'freqs': freqs, 'syu': 0.0,
+                                          'suu': 0.0, 'blocks': 0})
+        if e['freqs'].shape != freqs.shape:
+            key = key + (len(self.entries),)
+            e = self.entries.setdefault(key, {'names': names, 'freqs': freqs, 'syu': 0.0,
+                                              'suu': 0.0, 'blocks': 0})
+        e['syu'] = e['syu'] + Y * np.conj(U[:, j:j + 1])
+        e['suu'] = e['suu'] + np.abs(U[:, j:j + 1]) ** 2
+        e['blocks'] += 1
+
+    def results(self) -> dict[str, FrequencyResponse]:
+        """One FrequencyResponse per detected excitation, keyed 'detected/<input joint>'
+        (a second excitation of the same joint: 'detected/<joint>#2'), the detection
+        sentences in meta['detected']."""
+        out: dict[str, FrequencyResponse] = {}
+        for e in self.entries.values():
+            name = 'detected/' + e['names'][0].split('/', 1)[1]
+            n = sum(1 for k in out if k == name or k.startswith(name + '#'))
+            frf = self._response(e)
+            frf.meta['detected'] = list(self.notes)
+            out[name if n == 0 else f'{name}#{n + 1}'] = frf
+        return out
+
+    @staticmethod
+    def _response(e: dict[str, Any]) -> FrequencyResponse:
+        name_in, names_out = e['names']
+        if 'freqs' in e:
+            P = (e['syu'] / e['suu']).T[:, None, :]
+            return FrequencyResponse(e['freqs'], P, [name_in], names_out, meta={
+                'design': 'detected_chirp', 'blocks': e['blocks']})
+        P = (e['syu'] / e['suu'][:, None]).T[:, None, :]
+        var = None
+        if e['n'] >= 2:
+            var = (e['m2'] / (e['n'] - 1) / e['n']).T[:, None, :]
+        return FrequencyResponse(e['bins'] * e['f0'], P, [name_in], names_out, var, None, {
+            'design': 'detected_multisine', 'periods': e['n'],
+            'transient_periods': e['skip'], 'blocks': e['blocks']})
+
+
+def _multisine_periods(rec: Recording, seg: Segment
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Excited bins and the period spectra U, Y (n_q, F, n) of a detected multisine, the
+    first period skipped as transient when there are at least three."""
     info = seg.info
     j = info['input']
     sl = rec.slice(seg.t_start, seg.t_end)
     u, y = rec.effort[sl], rec.velocity[sl]
-    names_in = [f'tau_m/{rec.joint_names[j]}']
-    names_out = [f'dq_m/{n}' for n in rec.joint_names]
-    if info['design'] == 'detected_multisine':
-        n_per, n_q = info['period_samples'], info['periods']
-        skip = 1 if n_q >= 3 else 0      # the first period carries the start-up transient
-        n_q -= skip
-        x0 = skip * n_per
-        bins = np.asarray(info['harmonics'])
-        U = periodic_spectra(u[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
-        Y = periodic_spectra(y[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
-        # keep the lines the input really excites (a detection may add weak leakage lines)
-        pj = np.mean(np.abs(U[:, :, j]) ** 2, axis=0)
-        keep = pj >= 1e-2 * np.median(pj)
-        bins, U, Y = bins[keep], U[:, keep], Y[:, keep]
-        _check_single_input(U.mean(axis=0), j, rec.joint_names[j])
-        # H1 over the periods at each line: sum Y conj(U_j) / sum |U_j|^2
-        Uj = U[:, :, j]
-        P = np.einsum('qfo,qf->of', Y, np.conj(Uj)) / np.sum(np.abs(Uj) ** 2, axis=0)
-        var = None
-        if n_q >= 2:
-            Pq = Y / Uj[:, :, None]
-            var = (np.var(Pq, axis=0, ddof=1) / n_q).T[:, None, :]
-        return FrequencyResponse(bins * info['f0'], P[:, None, :], names_in, names_out, var,
-                                 None, {'design': 'detected_multisine', 'periods': n_q,
-                                        'transient_periods': skip})
+    n_per, n_q = info['period_samples'], info['periods']
+    skip = 1 if n_q >= 3 else 0      # the first period carries the start-up transient
+    n_q -= skip
+    x0 = skip * n_per
+    bins = np.asarray(info['harmonics'])
+    U = periodic_spectra(u[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
+    Y = periodic_spectra(y[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
+    # keep the lines the input really excites (a detection may add weak leakage lines)
+    pj = np.mean(np.abs(U[:, :, j]) ** 2, axis=0)
+    keep = pj >= 1e-2 * np.median(pj)
+    return bins[keep], U[:, keep], Y[:, keep], skip
+
+
+def _chirp_lines(rec: Recording, seg: Segment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Analysis frequencies and the Sec. 5.1 spectra U, Y (F, n) of a detected chirp."""
+    info = seg.info
     design = ChirpDesign(info['f_low'], info['f_high'], info['t1'] - info['t0'],
                          np.ones((1, 1)), t0=info['t0'])
     freqs = chirp_analysis_frequencies(reference_frequency_set(info['f_low'], info['f_high']),
                                        design.time_at, info['t0'], info['t1'])
     tc = design.time_at(freqs)            # detection times count from the first sample
-    U = chirp_spectra(rec.effort, rec.fs, freqs, tc)
-    Y = chirp_spectra(rec.velocity, rec.fs, freqs, tc)
-    _check_single_input(U, j, rec.joint_names[j])
-    P = (Y / U[:, j:j + 1]).T[:, None, :]
-    return FrequencyResponse(freqs, P, names_in, names_out, meta={'design': 'detected_chirp'})
+    return (freqs, chirp_spectra(rec.effort, rec.fs, freqs, tc),
+            chirp_spectra(rec.velocity, rec.fs, freqs, tc))
+
+
+def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
+    """Column j of P (all outputs / input j) from a detected excitation of input j: H1 over
+    the periods at each line, sum Y conj(U_j) / sum |U_j|^2 (multisine), or Y / U_j at the
+    Sec. 5.1 analysis frequencies (chirp)."""
+    est = DetectedEstimator()
+    est.add(rec, seg)
+    frf = next(iter(est.results().values()))
+    frf.meta.pop('detected')
+    return frf
