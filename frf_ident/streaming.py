@@ -109,6 +109,9 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                 det.add_detected(rec)
             except EstimationError as exc:
                 notes.append(f'block {rec.t[0]:.3f}..{rec.t[-1]:.3f} s: {exc}')
+                continue
+            if det.used_until is not None:      # next block on the period grid: no loss
+                reader.continue_from(det.used_until)
         if not det.entries:
             raise EstimationError(f'no multisine or chirp found in any {block_s:g} s block '
                                   f'({len(reports)} blocks; first: '

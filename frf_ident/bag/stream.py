@@ -87,7 +87,8 @@ class WindowReader:
     ``windows`` are (start_ns, end_ns) in the bag's sample time (header stamps when valid);
     ``block_s`` instead cuts consecutive blocks from the first sample (within ``span`` =
     (start_ns, end_ns) when given). ``joints`` selects
-    joints as in :func:`read_recording`. After the iteration :attr:`stats` holds the counts
+    joints as in :func:`read_recording`; ``experiment`` is the first pass
+    (:func:`read_experiment`, run here when not given). After the iteration :attr:`stats` holds the counts
     and the recovery summary of damaged files.
     """
 
@@ -108,7 +109,7 @@ class WindowReader:
         self.joints = joints
         self.windows = sorted(windows) if windows is not None else None
         self.block_ns = int(round(block_s * 1e9)) if block_s is not None else None
-        self.experiment = experiment or ExperimentIndex({}, [], [])
+        self.experiment = experiment or read_experiment(path, topics=self.topics)
         self.margin_ns = int(round(margin_s * 1e9))
         self.drain_rows = int(drain_rows)
         self.span = span
@@ -117,6 +118,19 @@ class WindowReader:
         self._next = 0
         self._origin: int | None = None
         self._last_ns: int | None = None
+        self._starts: list[int] = []
+        self._resume: int | None = None
+
+    def continue_from(self, t_s: float) -> None:
+        """Block mode: start the next block at ``t_s`` [s] (e.g. where the last whole
+        multisine period of the current block ends) instead of right after it; ignored
+        unless it lies inside the block just read (the scan only moves forward)."""
+        if self.block_ns is None or not self._starts:
+            return
+        ns = int(round(t_s * 1e9))
+        lo = self._starts[-1]
+        if lo + self.margin_ns // 2 < ns <= lo + self.block_ns and len(self._starts) == self._next:
+            self._resume = ns
 
     # ------------------------------------------------------------------ windows
     def _window(self, i: int) -> tuple[int, int] | None:
@@ -124,7 +138,13 @@ class WindowReader:
             return self.windows[i] if i < len(self.windows) else None
         if self._origin is None or self.block_ns is None:
             return None
-        lo = self._origin + i * self.block_ns
+        if i < len(self._starts):
+            lo = self._starts[i]
+        else:
+            lo = self._resume if self._resume is not None else (
+                self._origin if i == 0 else self._starts[-1] + self.block_ns)
+            self._resume = None
+            self._starts.append(lo)
         end = self.span[1] if self.span is not None else None
         if self._last_ns is not None:
             end = self._last_ns if end is None else min(end, self._last_ns)

@@ -106,6 +106,9 @@ class DetectedEstimator:
     def __init__(self) -> None:
         self.entries: dict[tuple, dict[str, Any]] = {}
         self.notes: list[str] = []
+        #: end [s] of the earliest detection of the last add_detected call: a next block
+        #: starting there loses no period at the block boundary
+        self.used_until: float | None = None
 
     def add_detected(self, rec: Recording) -> int:
         """Detect the excitation in ``rec`` (:func:`detect_segments`) and add every
@@ -114,6 +117,7 @@ class DetectedEstimator:
         self.notes.extend(n for n in notes if n not in self.notes)
         for seg in segments:
             self.add(rec, seg)
+        self.used_until = min((s.t_end for s in segments), default=None)
         return len(segments)
 
     def add(self, rec: Recording, seg: Segment) -> None:
@@ -122,12 +126,23 @@ class DetectedEstimator:
         j = int(info['input'])
         names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{n}' for n in rec.joint_names])
         if info['design'] == 'detected_multisine':
-            bins, U, Y, skip = _multisine_periods(rec, seg)
-            _check_single_input(U.mean(axis=0), j, rec.joint_names[j])
-            key = (j, 'multisine', int(info['period_samples']), tuple(bins.tolist()))
-            e = self.entries.setdefault(key, {'names': names, 'f0': info['f0'], 'bins': bins,
-                                              'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
-                                              'm2': 0.0, 'skip': 0, 'blocks': 0})
+            key = (j, 'multisine', int(info['period_samples']), tuple(info['harmonics']))
+            e = self.entries.get(key)
+            # the excitation goes on from an earlier block: no start-up transient to skip,
+            # and the periods that block used are not used again
+            going_on = e is not None and seg.t_start - e['t_end'] < 1.5 * info[
+                'period_samples'] / rec.fs
+            bins, U, Y, skip = _multisine_periods(rec, seg, used_until=e['t_end'] if going_on
+                                                  else None)
+            if U.shape[0] == 0:
+                return
+            _check_single_input(U.mean(axis=0)[_strong_lines(U[:, :, j])], j,
+                                rec.joint_names[j])
+            if e is None:
+                e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
+                                         'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
+                                         'm2': 0.0, 'skip': 0, 'blocks': 0}
+            e['t_end'] = seg.t_end
             Uj = U[:, :, j]
             e['syu'] = e['syu'] + np.einsum('qfo,qf->fo', Y, np.conj(Uj))
             e['suu'] = e['suu'] + np.sum(np.abs(Uj) ** 2, axis=0)
@@ -172,34 +187,49 @@ class DetectedEstimator:
             P = (e['syu'] / e['suu']).T[:, None, :]
             return FrequencyResponse(e['freqs'], P, [name_in], names_out, meta={
                 'design': 'detected_chirp', 'blocks': e['blocks']})
-        P = (e['syu'] / e['suu'][:, None]).T[:, None, :]
+        keep = _strong_lines(e['suu'][None, :])
+        P = (e['syu'][keep] / e['suu'][keep, None]).T[:, None, :]
         var = None
         if e['n'] >= 2:
-            var = (e['m2'] / (e['n'] - 1) / e['n']).T[:, None, :]
-        return FrequencyResponse(e['bins'] * e['f0'], P, [name_in], names_out, var, None, {
+            var = (e['m2'][keep] / (e['n'] - 1) / e['n']).T[:, None, :]
+        return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
             'design': 'detected_multisine', 'periods': e['n'],
             'transient_periods': e['skip'], 'blocks': e['blocks']})
 
 
-def _multisine_periods(rec: Recording, seg: Segment
+def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None = None
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """Excited bins and the period spectra U, Y (n_q, F, n) of a detected multisine, the
-    first period skipped as transient when there are at least three."""
+    """Excited bins and the period spectra U, Y (n_q, F, n) of a detected multisine.
+
+    The first period is skipped as start-up transient when there are at least three, unless
+    the excitation was already running (``used_until``: the end [s] of the periods an
+    earlier block used; periods starting before it are skipped instead, so overlapping
+    blocks never count a period twice)."""
     info = seg.info
     j = info['input']
     sl = rec.slice(seg.t_start, seg.t_end)
     u, y = rec.effort[sl], rec.velocity[sl]
     n_per, n_q = info['period_samples'], info['periods']
-    skip = 1 if n_q >= 3 else 0      # the first period carries the start-up transient
+    if used_until is None:
+        skip = 1 if n_q >= 3 else 0
+    else:
+        starts = seg.t_start + np.arange(n_q) * n_per / rec.fs
+        skip = int(np.count_nonzero(starts < used_until - 0.5 / rec.fs))
+    if skip >= n_q:
+        return np.asarray(info['harmonics']), np.empty((0, 0, 0)), np.empty((0, 0, 0)), skip
     n_q -= skip
     x0 = skip * n_per
     bins = np.asarray(info['harmonics'])
     U = periodic_spectra(u[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
     Y = periodic_spectra(y[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
-    # keep the lines the input really excites (a detection may add weak leakage lines)
-    pj = np.mean(np.abs(U[:, :, j]) ** 2, axis=0)
-    keep = pj >= 1e-2 * np.median(pj)
-    return bins[keep], U[:, keep], Y[:, keep], skip
+    return bins, U, Y, skip
+
+
+def _strong_lines(uj: np.ndarray) -> np.ndarray:
+    """The lines the input really excites (a detection may add weak leakage lines): power
+    over the periods ``uj`` (n_q, F) at least 1 % of the median line's."""
+    pj = np.mean(np.abs(uj) ** 2, axis=0)
+    return pj >= 1e-2 * np.median(pj)
 
 
 def _chirp_lines(rec: Recording, seg: Segment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
