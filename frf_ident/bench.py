@@ -1,4 +1,4 @@
-"""`make bench`: speed and accuracy figures, each printed beside a baseline measured in the same run.
+"""`make bench`: speed and accuracy figures, each beside a baseline measured in the same run.
 
 Sections (run all, or name some: ``python -m frf_ident.bench simulation estimation``):
 
@@ -6,6 +6,8 @@ Sections (run all, or name some: ``python -m frf_ident.bench simulation estimati
   gravity): simulated seconds per wall second, against real time (goal >= 1000x).
 - estimation — multisine BLA (eq. 14) vs a plain scipy.signal.csd/welch H1 estimate on the same
   3x3 data: wall time and error against the analytic FRF.
+- stream — a bag without descriptors estimated in 60 s blocks vs read into memory: peak
+  memory for 5 and 20 min of data (bounded memory for bags larger than RAM).
 Further sections register themselves in SECTIONS (closed-loop procedures, node graph, bags).
 """
 from __future__ import annotations
@@ -212,6 +214,56 @@ def bench_bag_read() -> list[tuple[str, str, str, str]]:
             ('peak memory while reading (ours builds the arrays)',
              f"{ours['peak_bytes'] / mb:.0f} MB", f"AnyReader {base['peak_bytes'] / mb:.0f} MB",
              f"{ours['peak_bytes'] / max(base['peak_bytes'], 1):.1f}x")]
+
+
+def periodic_multisine_run(duration_s: float, seed: int = 0, fs: float = 1000.0):
+    """A long run without descriptors (as a robot's own bag would be): the 3-axis model in
+    closed loop, a periodic odd multisine velocity reference on joint_2 (2-60 Hz, 0.5 Hz
+    resolution), 1e-3 rad/s noise on the measured velocity."""
+    from frf_ident.core.model import controller_from_dict, default_model_dict, robot_from_dict
+    from frf_ident.core.multisine import design_odd_multisine, multisine_realisation
+    from frf_ident.core.plant import FlexibleJointPlant
+    from frf_ident.core.recording import Recording
+    d = default_model_dict()
+    rob = robot_from_dict(d)
+    ctrl = controller_from_dict(d, rob)
+    des = design_odd_multisine(2.0, 60.0, bound=0.01, resolution_hz=0.5, fs=fs)
+    real = multisine_realisation(des, 1, np.random.default_rng(seed), fs=fs)
+    n = des.period_samples(fs)
+    reps = int(duration_s * fs) // n
+    r = np.zeros((reps * n, 3))
+    r[:, 1] = np.tile(real.evaluate(np.arange(n) / fs)[0][:, 0], reps)
+    res = FlexibleJointPlant(rob).simulate(reference=r, controller=ctrl)
+    noise = np.random.default_rng(seed + 1).normal(0.0, 1e-3, res.velocity.shape)
+    return Recording(res.t, rob.joint_names, res.position, res.velocity + noise, res.effort,
+                     reference=r)
+
+
+@section('stream')
+def bench_stream() -> list[tuple[str, str, str, str]]:
+    """Estimate of a bag without descriptors, streamed in 60 s blocks vs read into memory:
+    peak traced memory for a 5 min and a 20 min bag (the streamed one must stay flat)."""
+    import tempfile
+    from pathlib import Path
+
+    from frf_ident.bag import read_recording, write_recording
+    from frf_ident.bag.bench import _measure
+    from frf_ident.core.closed_loop import estimate_recording
+    from frf_ident.streaming import stream_estimate
+    rows = []
+    mb = 1024 ** 2
+    with tempfile.TemporaryDirectory() as tmp:
+        for minutes in (5, 20):
+            path = write_recording(periodic_multisine_run(60.0 * minutes),
+                                   Path(tmp) / f'long_{minutes}')
+            size = sum(f.stat().st_size for f in path.glob('*.mcap'))
+            s_sec, s_peak = _measure(lambda: stream_estimate(path, block_s=60.0))
+            m_sec, m_peak = _measure(lambda: estimate_recording(read_recording(path)[0]))
+            rows.append((f'{minutes} min bag ({size / mb:.0f} MB): streamed peak / time',
+                         f'{s_peak / mb:.0f} MB / {s_sec:.1f} s',
+                         f'in memory {m_peak / mb:.0f} MB / {m_sec:.1f} s',
+                         f'{m_peak / max(s_peak, 1):.1f}x less'))
+    return rows
 
 
 @section('diagnosis')

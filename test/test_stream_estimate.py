@@ -12,33 +12,10 @@ import pytest
 
 from frf_ident.bag import read_recording, write_recording
 from frf_ident.bag.stream import WindowReader, read_experiment, segment_windows
+from frf_ident.bench import periodic_multisine_run
 from frf_ident.cli import main
 from frf_ident.core.closed_loop import estimate_recording
-from frf_ident.core.model import controller_from_dict, default_model_dict, robot_from_dict
-from frf_ident.core.multisine import design_odd_multisine, multisine_realisation
-from frf_ident.core.plant import FlexibleJointPlant
-from frf_ident.core.recording import Recording
 from frf_ident.streaming import stream_estimate
-
-FS = 1000.0
-
-
-def _foreign_run(duration_s: float, seed: int = 0) -> Recording:
-    """3-axis closed loop, a periodic odd multisine velocity reference on joint_2, 1 % noise
-    on the measured velocity; no experiment descriptors."""
-    d = default_model_dict()
-    rob = robot_from_dict(d)
-    ctrl = controller_from_dict(d, rob)
-    des = design_odd_multisine(2.0, 60.0, bound=0.01, resolution_hz=0.5, fs=FS)
-    real = multisine_realisation(des, 1, np.random.default_rng(seed), fs=FS)
-    n = des.period_samples(FS)
-    reps = int(duration_s * FS) // n
-    r = np.zeros((reps * n, 3))
-    r[:, 1] = np.tile(real.evaluate(np.arange(n) / FS)[0][:, 0], reps)
-    res = FlexibleJointPlant(rob).simulate(reference=r, controller=ctrl)
-    noise = np.random.default_rng(seed + 1).normal(0.0, 1e-3, res.velocity.shape)
-    return Recording(res.t, rob.joint_names, res.position, res.velocity + noise, res.effort,
-                     reference=r)
 
 
 @pytest.fixture(scope='module')
@@ -47,7 +24,7 @@ def foreign_bags(tmp_path_factory):
     out = {}
     for dur in (60.0, 240.0):
         path = root / f'foreign_{int(dur)}s'
-        write_recording(_foreign_run(dur), path)
+        write_recording(periodic_multisine_run(dur), path)
         out[dur] = path
     return out
 

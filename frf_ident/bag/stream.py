@@ -86,10 +86,10 @@ class WindowReader:
 
     ``windows`` are (start_ns, end_ns) in the bag's sample time (header stamps when valid);
     ``block_s`` instead cuts consecutive blocks from the first sample (within ``span`` =
-    (start_ns, end_ns) when given). ``joints`` selects
-    joints as in :func:`read_recording`; ``experiment`` is the first pass
-    (:func:`read_experiment`, run here when not given). After the iteration :attr:`stats` holds the counts
-    and the recovery summary of damaged files.
+    (start_ns, end_ns) when given). ``joints`` selects joints as in :func:`read_recording`;
+    ``experiment`` is the first pass (:func:`read_experiment`, run here when not given).
+    After the iteration :attr:`stats` holds the counts and the recovery summary of damaged
+    files.
     """
 
     def __init__(self, path: str | Path, *, windows: list[tuple[int, int]] | None = None,

@@ -157,9 +157,8 @@ class MultisineSpectra:
         else:
             raise ValueError(f"{method=} must be 'reference' or 'plain'")
         n_p = spec['u'].shape[0]
-        Yd = np.array([self.spec[(p, 0)]['det_y'] - (self.spec[(p, 0)]['det_dy']
-                                                      if compensate else 0.0)
-                       for p in range(n_p)])
+        first = [self.spec[(p, 0)] for p in range(n_p)]
+        Yd = np.array([s['det_y'] - s['det_dy'] if compensate else s['det_y'] for s in first])
         det = detection_levels_from_spectra(
             Yd, np.arange(1, Yd.shape[2] + 1), self.bins)
         ins, outs = _names(self.joint_names)

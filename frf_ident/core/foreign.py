@@ -206,7 +206,6 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
     earlier block used; periods starting before it are skipped instead, so overlapping
     blocks never count a period twice)."""
     info = seg.info
-    j = info['input']
     sl = rec.slice(seg.t_start, seg.t_end)
     u, y = rec.effort[sl], rec.velocity[sl]
     n_per, n_q = info['period_samples'], info['periods']
