@@ -111,17 +111,45 @@ def _estimate_args(p: argparse.ArgumentParser) -> None:
                    help='analyse only this time range [s]')
     p.add_argument('--primary', default=None,
                    help='which estimate goes to frf.json (default: multisine, else chirp)')
+    g = p.add_argument_group('excitation of a bag without /frf/experiment descriptors '
+                             '(what `detected:` prints; replaces detection)')
+    g.add_argument('--input', metavar='JOINT', help='the excited joint (the only input)')
+    kind = g.add_mutually_exclusive_group()
+    kind.add_argument('--multisine-period', type=float, metavar='SECONDS',
+                      help='multisine period [s]; block and lines are found in the data')
+    kind.add_argument('--chirp', type=float, nargs=2, metavar=('F_LOW', 'F_HIGH'),
+                      help='exponential chirp from F_LOW to F_HIGH [Hz] (needs --chirp-time)')
+    g.add_argument('--band', type=float, nargs=2, metavar=('F_LOW', 'F_HIGH'),
+                   help='analyse only the multisine lines in this band [Hz]')
+    g.add_argument('--chirp-time', type=float, nargs=2, metavar=('T0', 'T1'),
+                   help='sweep start and end [s from the first analysed sample]')
+
+
+def excitation_options(args: argparse.Namespace):
+    """The --input/--multisine-period/--band/--chirp/--chirp-time options of `estimate`."""
+    from frf_ident.core.foreign import ExcitationOptions
+    tup = (lambda v: tuple(v) if v is not None else None)
+    return ExcitationOptions(input=args.input, multisine_period=args.multisine_period,
+                             band=tup(args.band), chirp=tup(args.chirp),
+                             chirp_time=tup(args.chirp_time))
 
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,
-                 progress=_say) -> dict:
+                 options=None, progress=_say) -> dict:
+    """Estimate every FRF the bag supports and write DIR/frf.json, estimates.json,
+    summary.json and bode.png. Refusals (:class:`EstimationError`) name the bag and leave
+    ``out`` untouched; ``options`` (ExcitationOptions) replace detection."""
     from frf_ident.bag import read_recording
     from frf_ident.core.closed_loop import estimate_recording
+    from frf_ident.errors import EstimationError
     from frf_ident.report.figures import bode_figure
     rec, timing = read_recording(bag, joints=joints, t_range=t_range)
     for line in timing.summary():
         progress(line)
-    estimates = estimate_recording(rec)
+    try:
+        estimates = estimate_recording(rec, options=options)
+    except EstimationError as exc:
+        raise EstimationError(f'{bag}: {exc}') from None
     for line in next(iter(estimates.values())).meta.get('detected', []):
         progress(f'detected: {line}')
     key = primary or ('multisine' if 'multisine' in estimates else next(iter(estimates)))
@@ -148,7 +176,8 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
 def _estimate(args: argparse.Namespace) -> int:
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
     estimate_bag(args.bag, args.out, joints=joints,
-                 t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary)
+                 t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary,
+                 options=excitation_options(args))
     return 0
 
 

@@ -175,8 +175,17 @@ def chirp_frf(rec: Recording, *, iteration: int | None = None, method: str = 'pl
         'cond_max': float(np.max(cond))})
 
 
-def estimate_recording(rec: Recording) -> dict[str, FrequencyResponse]:
-    """Every estimate the recording supports, keyed by name."""
+def estimate_recording(rec: Recording, *, options=None) -> dict[str, FrequencyResponse]:
+    """Every estimate the recording supports, keyed by name. The data are checked first
+    (:func:`frf_ident.core.checks.check_descriptor_recording`: band, periods, clipping).
+    ``options`` (:class:`frf_ident.core.foreign.ExcitationOptions`) replace detection in a
+    recording without descriptors; a recording with descriptors refuses them."""
+    from frf_ident.core.checks import check_descriptor_recording
+    if any(s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
+        if options is not None and options.given():
+            raise EstimationError(f'{options.text()}: the recording has experiment descriptors; '
+                                  f'expected excitation options only without them')
+        check_descriptor_recording(rec)
     out: dict[str, FrequencyResponse] = {}
     if any(s.info.get('design') == 'multisine' for s in rec.segments):
         has_cv = any(s.info.get('design') == 'constant_velocity' for s in rec.segments)
@@ -188,16 +197,19 @@ def estimate_recording(rec: Recording) -> dict[str, FrequencyResponse]:
         out['chirp'] = chirp_frf(rec)
         out['chirp_reference'] = chirp_frf(rec, method='reference')
     if not out:
-        out = estimate_detected(rec)
+        out = estimate_detected(rec, options)
     return out
 
 
-def estimate_detected(rec: Recording) -> dict[str, FrequencyResponse]:
+def estimate_detected(rec: Recording, options=None) -> dict[str, FrequencyResponse]:
     """Estimates of a recording without descriptors: the excitation is detected per joint
-    (:mod:`frf_ident.core.foreign`); one entry 'detected/<joint>' per excited input, the
-    detection sentences in each estimate's meta['detected']."""
-    from frf_ident.core.foreign import detect_segments, detected_frf
-    segments, notes = detect_segments(rec)
+    (:mod:`frf_ident.core.foreign`; ``options`` replace detection where given) and checked;
+    one entry 'detected/<joint>' per excited input, the detection sentences in each
+    estimate's meta['detected']."""
+    from frf_ident.core.foreign import check_detected_segment, detect_segments, detected_frf
+    segments, notes = detect_segments(rec, options)
+    for seg in segments:
+        check_detected_segment(rec, seg)
     out = {}
     for seg in segments:
         frf = detected_frf(rec, seg)
