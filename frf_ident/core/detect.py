@@ -356,8 +356,8 @@ def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods:
     """A multisine of known ``period`` [s] in ``x``: no autocorrelation search, so it works
     on data too short for :func:`detect_multisine` (two periods suffice).
 
-    The period is snapped to the sample grid (the integer lag within 2 samples of
-    ``period * fs`` at which the data repeat best, so a rounded printed period still fits);
+    A period that is not a whole number of samples (e.g. rounded when printed) is snapped to
+    the integer lag within 2 samples of ``period * fs`` at which the data repeat best;
     the periodic block and the excited lines are found as in :func:`detect_multisine`, the
     lines restricted to ``band`` = (f_low, f_high) [Hz] when given. Raises
     :class:`EstimationError` if fewer than ``min_periods`` whole periods repeat or no line is
@@ -371,7 +371,8 @@ def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods:
         raise EstimationError(f'{period=:g} s ({p0} samples) leaves {x.size // max(p0, 1)} '
                               f'whole periods in {x.size} samples ({x.size / fs:.4g} s); '
                               f'expected at least {min_periods=}')
-    p = _refine_period(x, p0) if x.size // (p0 + 2) >= 2 else p0
+    whole = abs(period * fs - p0) <= 1e-3        # given to the sample: keep it as is
+    p = p0 if whole or x.size // (p0 + 2) < 2 else _refine_period(x, p0)
     start, n_per = _periodic_block(x, p)
     if n_per < min_periods:
         raise EstimationError(f'{period=:g} s ({p} samples): only {n_per} whole periods '
