@@ -121,21 +121,43 @@ def _estimate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument('--window', type=float, default=300.0, metavar='S',
                    help='streaming block length for bags without experiment descriptors '
                         '[s] (default 300; must hold a few multisine periods or a whole chirp)')
+    g = p.add_argument_group('excitation of a bag without /frf/experiment descriptors '
+                             '(what `detected:` prints; replaces detection)')
+    g.add_argument('--input', metavar='JOINT', help='the excited joint (the only input)')
+    kind = g.add_mutually_exclusive_group()
+    kind.add_argument('--multisine-period', type=float, metavar='SECONDS',
+                      help='multisine period [s]; block and lines are found in the data')
+    kind.add_argument('--chirp', type=float, nargs=2, metavar=('F_LOW', 'F_HIGH'),
+                      help='exponential chirp from F_LOW to F_HIGH [Hz] (needs --chirp-time)')
+    g.add_argument('--band', type=float, nargs=2, metavar=('F_LOW', 'F_HIGH'),
+                   help='analyse only the multisine lines in this band [Hz]')
+    g.add_argument('--chirp-time', type=float, nargs=2, metavar=('T0', 'T1'),
+                   help='sweep start and end [s from the first analysed sample]')
 
 
-def _read_estimates(bag: Path, joints, t_range, stream: bool | None, max_memory_mb,
+def excitation_options(args: argparse.Namespace):
+    """The --input/--multisine-period/--band/--chirp/--chirp-time options of `estimate`."""
+    from frf_ident.core.foreign import ExcitationOptions
+    tup = (lambda v: tuple(v) if v is not None else None)
+    return ExcitationOptions(input=args.input, multisine_period=args.multisine_period,
+                             band=tup(args.band), chirp=tup(args.chirp),
+                             chirp_time=tup(args.chirp_time))
+
+
+def _read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max_memory_mb,
                     window_s: float, progress):
     """(estimates, timing report, experiment summary, streaming stats or None)."""
     from frf_ident import streaming
-    budget = streaming.default_memory_budget() if max_memory_mb is None else \
-        int(max_memory_mb * (1 << 20))
     if max_memory_mb is not None and not max_memory_mb > 0:
         raise FrfIdentInputError(f'--max-memory {max_memory_mb}: expected a size in MB > 0')
     if not window_s > 0:
         raise FrfIdentInputError(f'--window {window_s}: expected a block length in s > 0')
+    budget = streaming.default_memory_budget() if max_memory_mb is None else \
+        int(max_memory_mb * (1 << 20))
     if stream or streaming.needs_streaming(bag, budget):
         res = streaming.stream_estimate(bag, joints=joints, t_range=t_range, block_s=window_s,
-                                        progress=progress, bar=sys.stderr.isatty())
+                                        options=options, progress=progress,
+                                        bar=sys.stderr.isatty())
         st = res.stats
         progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
                  f'at most {st.peak_rows} held at once')
@@ -145,17 +167,28 @@ def _read_estimates(bag: Path, joints, t_range, stream: bool | None, max_memory_
     from frf_ident.bag import read_recording
     from frf_ident.core.closed_loop import estimate_recording
     rec, timing = read_recording(bag, joints=joints, t_range=t_range)
-    return estimate_recording(rec), timing, rec.meta.get('summary', {}), None
+    for line in timing.summary():
+        progress(line)
+    return estimate_recording(rec, options=options), timing, rec.meta.get('summary', {}), None
 
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,
-                 stream: bool | None = None, max_memory_mb: float | None = None,
+                 options=None, stream: bool | None = None, max_memory_mb: float | None = None,
                  window_s: float = 300.0, progress=_say) -> dict:
+    """Estimate every FRF the bag supports and write DIR/frf.json, estimates.json,
+    summary.json and bode.png. Refusals (:class:`EstimationError`) name the bag and leave
+    ``out`` untouched; ``options`` (ExcitationOptions) replace detection; ``stream`` (or a
+    bag over ``max_memory_mb``) reads it window by window (:mod:`frf_ident.streaming`)."""
+    from frf_ident.errors import EstimationError
     from frf_ident.report.figures import bode_figure
-    estimates, timing, experiment, streamed = _read_estimates(
-        bag, joints, t_range, stream, max_memory_mb, window_s, progress)
-    for line in timing.summary():
-        progress(line)
+    try:
+        estimates, timing, experiment, streamed = _read_estimates(
+            bag, joints, t_range, options, stream, max_memory_mb, window_s, progress)
+    except EstimationError as exc:
+        raise EstimationError(f'{bag}: {exc}') from None
+    if streamed is not None:
+        for line in timing.summary():
+            progress(line)
     for line in next(iter(estimates.values())).meta.get('detected', []):
         progress(f'detected: {line}')
     key = primary or ('multisine' if 'multisine' in estimates else next(iter(estimates)))
@@ -183,7 +216,8 @@ def _estimate(args: argparse.Namespace) -> int:
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
     estimate_bag(args.bag, args.out, joints=joints,
                  t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary,
-                 stream=args.stream, max_memory_mb=args.max_memory, window_s=args.window)
+                 options=excitation_options(args), stream=args.stream,
+                 max_memory_mb=args.max_memory, window_s=args.window)
     return 0
 
 

@@ -19,7 +19,7 @@ from typing import Any, Callable
 
 from frf_ident.bag import stream as bs
 from frf_ident.bag import timing as tm
-from frf_ident.core.closed_loop import SegmentEstimator
+from frf_ident.core.closed_loop import SegmentEstimator, check_recording
 from frf_ident.core.foreign import DetectedEstimator
 from frf_ident.core.frd import FrequencyResponse
 from frf_ident.errors import EstimationError
@@ -67,15 +67,24 @@ def _in_range(windows: list[tuple[int, int]], t_range: tuple[float, float] | Non
 
 def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                     t_range: tuple[float, float] | None = None, block_s: float = 300.0,
-                    progress: Callable[[str], None] | None = None,
+                    options: Any = None, progress: Callable[[str], None] | None = None,
                     bar: bool = False) -> StreamedEstimate:
-    """Every estimate the bag supports, read window by window (see the module docstring)."""
+    """Every estimate the bag supports, read window by window (see the module docstring).
+
+    Each window is checked as :func:`~frf_ident.core.closed_loop.estimate_recording` checks a
+    whole recording (band, periods, clipping); ``options``
+    (:class:`~frf_ident.core.foreign.ExcitationOptions`) replace detection in every block.
+    Only the last chirp iteration is read (the one estimated)."""
     say = progress or (lambda _msg: None)
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
         raise EstimationError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
     exp = bs.read_experiment(bag)
     segments = [s for s in exp.segments
                 if s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
+    chirps = [s.info.get('iteration', 0) for s in segments if s.info.get('design') == 'chirp']
+    if chirps:
+        segments = [s for s in segments if s.info.get('design') != 'chirp'
+                    or s.info.get('iteration', 0) == max(chirps)]
     if t_range is not None:
         segments = [s for s in segments if s.t_end >= t_range[0] and s.t_start <= t_range[1]]
     reports: list[tm.TimingReport] = []
@@ -87,6 +96,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                                  progress=bar)
         est = SegmentEstimator(segments)
         for rec, report in reader:
+            check_recording(rec, options)
             est.add_window(rec)
             reports.append(report)
         missing = est.missing()
@@ -106,7 +116,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         for rec, report in reader:
             reports.append(report)
             try:
-                det.add_detected(rec)
+                det.add_detected(rec, options)
             except EstimationError as exc:
                 notes.append(f'block {rec.t[0]:.3f}..{rec.t[-1]:.3f} s: {exc}')
                 continue

@@ -316,24 +316,39 @@ class SegmentEstimator:
         return out
 
 
-def estimate_recording(rec: Recording) -> dict[str, FrequencyResponse]:
+def estimate_recording(rec: Recording, *, options=None) -> dict[str, FrequencyResponse]:
     """Every estimate the recording supports, keyed by name: 'multisine' (reference-based,
     compensated when a constant-velocity run exists), 'multisine_plain',
     'multisine_uncompensated', 'chirp', 'chirp_reference'; without descriptors the
-    detected ones (:func:`estimate_detected`)."""
+    detected ones (:func:`estimate_detected`). The data are checked first
+    (:func:`frf_ident.core.checks.check_descriptor_recording`: band, periods, clipping).
+    ``options`` (:class:`frf_ident.core.foreign.ExcitationOptions`) replace detection in a
+    recording without descriptors; a recording with descriptors refuses them."""
+    check_recording(rec, options)
     est = SegmentEstimator(rec.segments)
     est.add_window(rec)
     out = est.results()
     if not out:
-        out = estimate_detected(rec)
+        out = estimate_detected(rec, options)
     return out
 
 
-def estimate_detected(rec: Recording) -> dict[str, FrequencyResponse]:
+def check_recording(rec: Recording, options=None) -> None:
+    """The input checks of a recording (or one window of it) with descriptors."""
+    from frf_ident.core.checks import check_descriptor_recording
+    if any(s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
+        if options is not None and options.given():
+            raise EstimationError(f'{options.text()}: the recording has experiment descriptors; '
+                                  f'expected excitation options only without them')
+        check_descriptor_recording(rec)
+
+
+def estimate_detected(rec: Recording, options=None) -> dict[str, FrequencyResponse]:
     """Estimates of a recording without descriptors: the excitation is detected per joint
-    (:mod:`frf_ident.core.foreign`); one entry 'detected/<joint>' per excited input, the
-    detection sentences in each estimate's meta['detected']."""
+    (:mod:`frf_ident.core.foreign`; ``options`` replace detection where given) and checked;
+    one entry 'detected/<joint>' per excited input, the detection sentences in each
+    estimate's meta['detected']."""
     from frf_ident.core.foreign import DetectedEstimator
     est = DetectedEstimator()
-    est.add_detected(rec)
+    est.add_detected(rec, options)
     return est.results()

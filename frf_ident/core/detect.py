@@ -27,7 +27,7 @@ from scipy import signal
 from frf_ident.errors import EstimationError
 
 __all__ = ['ChirpDetection', 'MultisineDetection', 'detect_chirp', 'detect_excitation',
-           'detect_multisine']
+           'detect_multisine', 'multisine_at_period']
 
 
 # --------------------------------------------------------------------------- results
@@ -83,7 +83,7 @@ class MultisineDetection:
         lines = (f'{f.size} excited lines {f[0]:.3g}-{f[-1]:.3g} Hz, '
                  + ('all odd multiples of f0' if self.odd else 'not all odd multiples of f0'))
         return (f'{"odd " if self.odd else ""}multisine: period {self.period_samples} samples '
-                f'({self.period:.4g} s, f0 = {self.f0:.4g} Hz), {self.n_periods} whole periods '
+                f'({self.period:.6g} s, f0 = {self.f0:.6g} Hz), {self.n_periods} whole periods '
                 f'from sample {self.start} (t = {self.start / self.fs:.3f} s), {lines} '
                 f'(weakest line {self.line_level_db:.0f} dB above the rest, '
                 f'period correlation {self.correlation:.3f})')
@@ -348,6 +348,48 @@ def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
     return MultisineDetection(float(fs), int(p), int(n_per), int(start), float(fs) / p,
                               bins.astype(np.int64), bool(np.all(bins % 2 == 1)),
                               float(r[min(p, r.size - 1)]), level, channel)
+
+
+def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods: int = 2,
+                        band: tuple[float, float] | None = None, min_line_db: float = 20.0,
+                        dynamic_range_db: float = 80.0) -> MultisineDetection:
+    """A multisine of known ``period`` [s] in ``x``: no autocorrelation search, so it works
+    on data too short for :func:`detect_multisine` (two periods suffice).
+
+    A period that is not a whole number of samples (e.g. rounded when printed) is snapped to
+    the integer lag within 2 samples of ``period * fs`` at which the data repeat best;
+    the periodic block and the excited lines are found as in :func:`detect_multisine`, the
+    lines restricted to ``band`` = (f_low, f_high) [Hz] when given. Raises
+    :class:`EstimationError` if fewer than ``min_periods`` whole periods repeat or no line is
+    excited in the band.
+    """
+    if not (np.isfinite(period) and period > 0):
+        raise EstimationError(f'{period=} must be a positive duration in seconds')
+    x, channel = _prepare(x, fs, min_samples=1)
+    p0 = int(round(period * fs))
+    if p0 < 4 or x.size // p0 < min_periods:
+        raise EstimationError(f'{period=:g} s ({p0} samples) leaves {x.size // max(p0, 1)} '
+                              f'whole periods in {x.size} samples ({x.size / fs:.4g} s); '
+                              f'expected at least {min_periods=}')
+    whole = abs(period * fs - p0) <= 1e-3        # given to the sample: keep it as is
+    p = p0 if whole or x.size // (p0 + 2) < 2 else _refine_period(x, p0)
+    start, n_per = _periodic_block(x, p)
+    if n_per < min_periods:
+        raise EstimationError(f'{period=:g} s ({p} samples): only {n_per} whole periods '
+                              f'repeat in the data; expected at least {min_periods=}')
+    block = x[start:start + n_per * p].reshape(n_per, p)
+    bins, level = _excited_lines(block, min_line_db, dynamic_range_db)
+    if band is not None:
+        f = bins * fs / p
+        bins = bins[(f >= band[0]) & (f <= band[1])]
+    if bins.size == 0:
+        raise EstimationError(f'{period=:g} s: no DFT line stands {min_line_db=} dB above the '
+                              f'rest' + (f' in {band=} Hz' if band is not None else ''))
+    a, b = block[:-1].ravel(), block[1:].ravel()
+    corr = float(a @ b / max(np.sqrt((a @ a) * (b @ b)), 1e-300))
+    return MultisineDetection(float(fs), int(p), int(n_per), int(start), float(fs) / p,
+                              bins.astype(np.int64), bool(np.all(bins % 2 == 1)), corr, level,
+                              channel)
 
 
 def _refine_period(x: np.ndarray, p: int, reach: int = 2) -> int:

@@ -5,15 +5,23 @@ an exponential chirp, on the velocity reference when the bag has one, else on th
 Each detection becomes a :class:`~frf_ident.core.recording.Segment`, and the FRF is estimated
 column by column for the excited inputs (one experiment cannot separate simultaneously excited
 inputs that share lines, so those are refused with the reason).
+
+What detection would find can also be given (:class:`ExcitationOptions`, the options of
+`frf-ident estimate`): the excited joint, a multisine period (and the band of its lines), or a
+chirp's band and sweep times; the given parts replace the respective detection.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
+from frf_ident.core.checks import (JOINT_STATES, check_band, check_covers, check_not_clipped,
+                                   check_periods)
 from frf_ident.core.chirp import ChirpDesign
-from frf_ident.core.detect import ChirpDetection, MultisineDetection, detect_excitation
+from frf_ident.core.detect import (ChirpDetection, MultisineDetection, detect_excitation,
+                                   multisine_at_period)
 from frf_ident.core.estimation import (chirp_analysis_frequencies, chirp_spectra,
                                        periodic_spectra)
 from frf_ident.core.frd import FrequencyResponse
@@ -29,31 +37,153 @@ def _source(rec: Recording) -> tuple[np.ndarray, str]:
     return rec.effort, 'torque'
 
 
-def detect_segments(rec: Recording) -> tuple[list[Segment], list[str]]:
-    """Detect the excitation per joint; returns segments and one sentence per detection."""
+@dataclass(frozen=True)
+class ExcitationOptions:
+    """What is known about the excitation of a recording without descriptors; None: detect.
+
+    Attributes
+    ----------
+    input : name of the excited joint (the only input analysed).
+    multisine_period : multisine period [s]; the periodic block and lines are found in the data.
+    band : (f_low, f_high) [Hz]; only multisine lines inside are analysed.
+    chirp : (f_low, f_high) [Hz] of an exponential chirp (eq. 16); needs ``chirp_time``.
+    chirp_time : (t0, t1) [s] of the sweep, counted from the first analysed sample (as the
+        detection reports them).
+    """
+
+    input: str | None = None
+    multisine_period: float | None = None
+    band: tuple[float, float] | None = None
+    chirp: tuple[float, float] | None = None
+    chirp_time: tuple[float, float] | None = None
+
+    def given(self) -> bool:
+        """True when any option is set."""
+        return any(v is not None for v in (self.input, self.multisine_period, self.band,
+                                           self.chirp, self.chirp_time))
+
+    def text(self) -> str:
+        """The given options as 'name=value' pairs."""
+        return ', '.join(f'{k}={v!r}' for k, v in vars(self).items() if v is not None)
+
+    def check(self, rec: Recording) -> None:
+        """Refuse options that contradict each other or the recording (one line each)."""
+        if self.input is not None and self.input not in rec.joint_names:
+            raise EstimationError(f'input={self.input!r} is not a joint of the recording; '
+                                  f'expected one of {rec.joint_names}')
+        if self.chirp is not None and self.multisine_period is not None:
+            raise EstimationError('chirp and multisine_period both given; expected one '
+                                  'excitation')
+        if (self.chirp is None) != (self.chirp_time is None):
+            raise EstimationError(f'chirp={self.chirp} and chirp_time={self.chirp_time}: '
+                                  f'expected both (band and sweep times) or neither')
+        if self.band is not None:
+            if self.chirp is not None:
+                raise EstimationError(f'band={self.band} restricts multisine lines; for a chirp '
+                                      f'give its band as chirp=(f_low, f_high)')
+            lo, hi = self.band
+            if not lo < hi:
+                raise EstimationError(f'band={self.band}: expected f_low < f_high [Hz]')
+            check_band([lo, hi], rec.fs, where=f'band={self.band}')
+        duration = float(rec.t[-1] - rec.t[0]) + rec.dt
+        if self.multisine_period is not None:
+            if not self.multisine_period > 0:
+                raise EstimationError(f'multisine_period={self.multisine_period}: expected a '
+                                      f'positive period in seconds')
+            check_periods(int(duration // self.multisine_period), need=2,
+                          where=f'multisine_period={self.multisine_period:g} s in a recording '
+                                f'of {duration:.4g} s', hint='a shorter period or more data')
+        if self.chirp is not None:
+            lo, hi = self.chirp
+            if not (lo > 0 and hi > 0 and lo != hi):
+                raise EstimationError(f'chirp={self.chirp}: expected two different positive '
+                                      f'frequencies [Hz]')
+            check_band([lo, hi], rec.fs, where=f'chirp={self.chirp}')
+            t0, t1 = self.chirp_time
+            if not 0 <= t0 < t1 <= duration:
+                raise EstimationError(f'chirp_time={self.chirp_time}: expected 0 <= t0 < t1 <= '
+                                      f'{duration:.4g} s (seconds from the first analysed '
+                                      f'sample)')
+
+
+def _given_chirp(opts: ExcitationOptions, fs: float) -> ChirpDetection:
+    """The exponential chirp f(t) = exp(a0 t + a1) through (t0, f_low) and (t1, f_high)."""
+    (f_low, f_high), (t0, t1) = opts.chirp, opts.chirp_time
+    a0 = float(np.log(f_high / f_low) / (t1 - t0))
+    return ChirpDetection(float(fs), float(f_low), float(f_high), float(t0), float(t1), a0,
+                          float(np.log(f_low) - a0 * t0), 0, 0.0)
+
+
+def _excitation_of(x: np.ndarray, fs: float, opts: ExcitationOptions
+                   ) -> MultisineDetection | ChirpDetection:
+    """The excitation of one channel: from the options where given, else detected."""
+    if opts.chirp is not None:
+        return _given_chirp(opts, fs)
+    if opts.multisine_period is not None:
+        return multisine_at_period(x, fs, opts.multisine_period, band=opts.band)
+    det = detect_excitation(x, fs)
+    if opts.band is not None:
+        if not isinstance(det, MultisineDetection):
+            raise EstimationError(f'band={opts.band} restricts multisine lines but a chirp was '
+                                  f'detected ({det.describe()})')
+        f = det.freq_hz
+        keep = (f >= opts.band[0]) & (f <= opts.band[1])
+        if not np.any(keep):
+            raise EstimationError(f'band={opts.band}: none of the {f.size} detected lines '
+                                  f'{f[0]:.4g}-{f[-1]:.4g} Hz lies inside')
+        det = replace(det, harmonics=det.harmonics[keep],
+                      odd=bool(np.all(det.harmonics[keep] % 2 == 1)))
+    return det
+
+
+def _describe(det: MultisineDetection | ChirpDetection, opts: ExcitationOptions) -> str:
+    """The detection sentence, marked where options replaced detection."""
+    if opts.chirp is not None:
+        return (f'exponential chirp {det.f_low:.6g}-{det.f_high:.6g} Hz from t0 = '
+                f'{det.t0:.6g} s to t1 = {det.t1:.6g} s, sweep rate a0 = {det.a0:.4g} 1/s '
+                f'(given)')
+    text = det.describe()
+    if opts.multisine_period is not None:
+        text += f' (period given: {opts.multisine_period:g} s)'
+    if opts.band is not None:
+        text += f' (lines restricted to {opts.band[0]:g}-{opts.band[1]:g} Hz)'
+    return text
+
+
+def detect_segments(rec: Recording, options: ExcitationOptions | None = None
+                    ) -> tuple[list[Segment], list[str]]:
+    """Detect the excitation per joint (or take it from ``options``); returns segments and
+    one sentence per detection."""
+    opts = options or ExcitationOptions()
+    opts.check(rec)
     x, source = _source(rec)
     fs = rec.fs
     level = np.std(x, axis=0)
     found: list[tuple[int, MultisineDetection | ChirpDetection]] = []
     notes: list[str] = []
-    for j in np.argsort(level)[::-1]:
-        if level[j] < 1e-3 * level.max():
+    order = ([rec.joint_names.index(opts.input)] if opts.input is not None
+             else np.argsort(level)[::-1])
+    for j in order:
+        if opts.input is None and level[j] < 1e-3 * level.max():
             continue
         try:
-            det = detect_excitation(x[:, j], fs)
+            det = _excitation_of(x[:, j], fs, opts)
         except EstimationError as exc:
+            if opts.input is not None:
+                raise EstimationError(f'input={opts.input!r} ({source}): {exc}') from None
             notes.append(f'{rec.joint_names[j]}: no excitation found in the {source} ({exc})')
             continue
         strongest = _strongest_channel(x, det, fs)
-        if strongest != j:
+        if opts.input is None and strongest != j:
             notes.append(f'{rec.joint_names[j]}: follows the excitation of '
                          f'{rec.joint_names[strongest]} (coupling), not an input')
             continue
         found.append((int(j), det))
-        notes.append(f'{rec.joint_names[j]} ({source}): {det.describe()}')
+        notes.append(f'{rec.joint_names[j]} ({source}): {_describe(det, opts)}')
     if not found:
-        raise EstimationError(f'no multisine or chirp found in the {source} of any joint; '
-                              f'pass the experiment descriptors or a time range')
+        raise EstimationError(f'no multisine or chirp found in the {source} of any joint '
+                              f'({"; ".join(notes) or "no joint moves"}); pass the experiment '
+                              f'descriptors or the excitation as options')
     segments = []
     for j, det in found:
         if isinstance(det, MultisineDetection):
@@ -70,6 +200,24 @@ def detect_segments(rec: Recording) -> tuple[list[Segment], list[str]]:
             t1 = rec.t[0] + det.t1
         segments.append(Segment(rec.t[0] + i0 / fs, t1, info))
     return segments, notes
+
+
+def check_detected_segment(rec: Recording, seg: Segment) -> None:
+    """Band below Nyquist, at least two whole periods (multisine) or the sweep inside the
+    data (chirp), and no clipped torque in the segment: refused with one line otherwise."""
+    info = seg.info
+    name = rec.joint_names[info['input']]
+    if info['design'] == 'detected_multisine':
+        what = f'detected multisine of {name} ({seg.t_start:.3f}..{seg.t_end:.3f} s)'
+        check_band(np.asarray(info['harmonics']) * info['f0'], rec.fs, where=what)
+        check_periods(int(info['periods']), need=2, where=what,
+                      hint='record more periods or give a shorter multisine period')
+    else:
+        what = f'chirp of {name} ({seg.t_start:.3f}..{seg.t_end:.3f} s)'
+        check_band([info['f_low'], info['f_high']], rec.fs, where=what)
+        check_covers(rec.t[0], rec.t[-1], seg.t_start, seg.t_end, dt=rec.dt, where=what)
+    check_not_clipped(rec.effort[rec.slice(seg.t_start, seg.t_end)],
+                      joint_names=rec.joint_names, where=JOINT_STATES, span=f'the {what}')
 
 
 def _strongest_channel(x: np.ndarray, det: MultisineDetection | ChirpDetection,
@@ -110,10 +258,13 @@ class DetectedEstimator:
         #: starting there loses no period at the block boundary
         self.used_until: float | None = None
 
-    def add_detected(self, rec: Recording) -> int:
-        """Detect the excitation in ``rec`` (:func:`detect_segments`) and add every
-        detection; the sentences go to :attr:`notes` (each once). Returns how many."""
-        segments, notes = detect_segments(rec)
+    def add_detected(self, rec: Recording, options: ExcitationOptions | None = None) -> int:
+        """Detect the excitation in ``rec`` (:func:`detect_segments`; ``options`` replace
+        detection where given), check and add every detection; the sentences go to
+        :attr:`notes` (each once). Returns how many."""
+        segments, notes = detect_segments(rec, options)
+        for seg in segments:
+            check_detected_segment(rec, seg)
         self.notes.extend(n for n in notes if n not in self.notes)
         for seg in segments:
             self.add(rec, seg)

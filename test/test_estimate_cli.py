@@ -1,0 +1,210 @@
+"""`frf-ident estimate` on bad input (one line, exit 2, nothing lost) and with the excitation
+given as options for bags without /frf/experiment descriptors."""
+import hashlib
+import json
+import re
+
+import numpy as np
+import pytest
+
+from frf_ident.bag import write_recording
+from frf_ident.cli import main
+from frf_ident.core.chirp import chirp_phase
+from frf_ident.core.model import controller_from_dict, default_model_dict, robot_from_dict
+from frf_ident.core.multisine import design_odd_multisine, multisine_realisation
+from frf_ident.core.plant import FlexibleJointPlant
+from frf_ident.core.procedures import MultisineConfig
+from frf_ident.core.recording import Recording
+from frf_ident.core.runner import IdentificationConfig, run_identification
+from frf_ident.model_file import load_model, load_plant
+
+FS = 1000.0
+
+
+def _digest(path):
+    h = hashlib.sha256()
+    for f in sorted(p for p in path.rglob('*') if p.is_file()):
+        h.update(f.name.encode() + f.read_bytes())
+    return h.hexdigest()
+
+
+def refused(bag, capsys, *args, match=()):
+    """Run estimate; it must exit 2 with one stderr line, leave the bag alone, write nothing."""
+    out = bag.parent / f'out_{bag.name}'
+    before = _digest(bag)
+    assert main(['estimate', str(bag), '--out', str(out), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'Traceback' not in err, err
+    assert err.startswith('frf-ident estimate: error: '), err
+    for m in match:
+        assert m in err, err
+    assert _digest(bag) == before and not out.exists()
+    return err
+
+
+def _copy_rec(rec, **kw):
+    d = dict(t=rec.t, joint_names=rec.joint_names, position=rec.position,
+             velocity=rec.velocity, effort=rec.effort, reference=rec.reference,
+             excitation=rec.excitation, segments=rec.segments, meta=dict(rec.meta))
+    d.update(kw)
+    return Recording(**d)
+
+
+# --------------------------------------------------------------------------- descriptor bags
+
+@pytest.fixture(scope='module')
+def ms_rec():
+    """A short frf_ident multisine run: 1 realisation x 2 periods of 1 s, no compensation."""
+    model, _, ctrl = load_model(None)
+    cfg = IdentificationConfig(MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0,
+                                               compensate=False), None)
+    return run_identification(load_plant(None, model), ctrl, cfg)
+
+
+@pytest.fixture(scope='module')
+def ms_bag(ms_rec, tmp_path_factory):
+    return write_recording(ms_rec, tmp_path_factory.mktemp('ms') / 'ms')
+
+
+def test_own_run_is_accepted(ms_bag, tmp_path, capsys):
+    assert main(['estimate', str(ms_bag), '--out', str(tmp_path / 'e')]) == 0
+    assert json.loads((tmp_path / 'e' / 'frf.json').read_text())['estimate'] == 'multisine'
+
+
+def test_clipped_torque_refused(ms_rec, tmp_path, capsys):
+    """joint_2's torque cut at its 20/80 % quantiles in the multisine segments: a drive limit."""
+    u = ms_rec.effort.copy()
+    segs = [s for s in ms_rec.segments if s.info.get('design') == 'multisine']
+    idx = np.concatenate([np.arange(ms_rec.slice(s.t_start, s.t_end).start,
+                                    ms_rec.slice(s.t_start, s.t_end).stop) for s in segs])
+    lo, hi = np.quantile(u[idx, 1], [0.2, 0.8])
+    u[idx, 1] = np.clip(u[idx, 1], lo, hi)
+    bag = write_recording(_copy_rec(ms_rec, effort=u), tmp_path / 'clipped')
+    err = refused(bag, capsys, match=(f'{bag}: /joint_states effort[joint_2] is clipped at ',
+                                      'of the samples of the multisine segments (runs up to',
+                                      'expected an unsaturated plant input'))
+    pct = float(re.search(r'in ([0-9.]+) % of the samples', err).group(1))
+    assert 30 <= pct <= 45     # 40 % cut, less what the transient periods hold
+
+
+def test_decimated_recording_refused_for_band_above_nyquist(ms_rec, tmp_path, capsys):
+    """/joint_states kept at 100 Hz: the 2-60 Hz lines reach above its 50 Hz Nyquist."""
+    k = slice(None, None, 10)
+    dec = _copy_rec(ms_rec, t=ms_rec.t[k], position=ms_rec.position[k],
+                    velocity=ms_rec.velocity[k], effort=ms_rec.effort[k],
+                    reference=ms_rec.reference[k], excitation=ms_rec.excitation[k])
+    bag = write_recording(dec, tmp_path / 'dec')
+    refused(bag, capsys, match=(f'{bag}: /frf/experiment multisine design: band 1.953-60.55 Hz',
+                                'reaches the Nyquist frequency 50 Hz of the recording (sampled '
+                                'at 100 Hz'))
+
+
+def test_t_range_cutting_a_segment_refused(ms_rec, ms_bag, capsys):
+    seg = next(s for s in ms_rec.segments if s.info.get('design') == 'multisine')
+    period = seg.info['period_samples'] / FS        # 1 transient + 1.5 of the 2 periods
+    t_end = seg.t_start + 2.5 * period
+    err = refused(ms_bag, capsys, '--t-range', str(seg.t_start - 1), str(t_end),
+                  match=(f'multisine segment {seg.t_start:.3f}..{seg.t_end:.3f} s realisation 0 '
+                         'experiment 0', '1 whole steady-state period; expected at least need=2',
+                         'a time range must include the whole segment'))
+    assert str(ms_bag) in err
+
+
+def test_excitation_options_refused_with_descriptors(ms_bag, capsys):
+    refused(ms_bag, capsys, '--multisine-period', '1.0',
+            match=('multisine_period=1.0: the recording has experiment descriptors',))
+
+
+# --------------------------------------------------------------------------- foreign bags
+
+@pytest.fixture(scope='module')
+def plant_loop():
+    d = default_model_dict()
+    rob = robot_from_dict(d)
+    return rob, controller_from_dict(d, rob)
+
+
+def _closed_loop(plant_loop, r2):
+    """Closed-loop run with velocity reference r2 on joint_2, recorded without descriptors."""
+    rob, ctrl = plant_loop
+    r = np.zeros((r2.size, 3))
+    r[:, 1] = r2
+    res = FlexibleJointPlant(rob).simulate(reference=r, controller=ctrl)
+    return Recording(res.t, rob.joint_names, res.position, res.velocity, res.effort)
+
+
+@pytest.fixture(scope='module')
+def ms_unit():
+    des = design_odd_multisine(2.0, 60.0, bound=0.01, resolution_hz=0.5, fs=FS)
+    real = multisine_realisation(des, 1, np.random.default_rng(0), fs=FS)
+    n = des.period_samples(FS)
+    return real.evaluate(np.arange(n) / FS)[0][:, 0]
+
+
+@pytest.fixture(scope='module')
+def foreign_ms_bag(plant_loop, ms_unit, tmp_path_factory):
+    rec = _closed_loop(plant_loop, np.tile(ms_unit, 5))
+    return write_recording(rec, tmp_path_factory.mktemp('fm') / 'robot')
+
+
+def _frf(out):
+    d = json.loads((out / 'frf.json').read_text())
+    return np.asarray(d['freq_hz']), np.asarray(d['re']) + 1j * np.asarray(d['im']), d
+
+
+def test_printed_detection_given_back_gives_the_same_frf(foreign_ms_bag, tmp_path, capsys):
+    assert main(['estimate', str(foreign_ms_bag), '--out', str(tmp_path / 'auto')]) == 0
+    said = capsys.readouterr().out
+    m = re.search(r'detected: (\w+) \(torque\): multisine: period \d+ samples '
+                  r'\(([0-9.]+) s', said)
+    assert m, said
+    assert main(['estimate', str(foreign_ms_bag), '--out', str(tmp_path / 'given'),
+                 '--input', m.group(1), '--multisine-period', m.group(2)]) == 0
+    assert '(period given: 3.072 s)' in capsys.readouterr().out
+    f_a, p_a, _ = _frf(tmp_path / 'auto')
+    f_g, p_g, _ = _frf(tmp_path / 'given')
+    np.testing.assert_array_equal(f_a, f_g)
+    np.testing.assert_allclose(p_g, p_a, rtol=1e-9)
+    # a band keeps only the lines inside it (weak ones the whole band's median dropped may
+    # come back), with the same values at the lines both analyse
+    assert main(['estimate', str(foreign_ms_bag), '--out', str(tmp_path / 'band'),
+                 '--band', '5', '20']) == 0
+    f_b, p_b, _ = _frf(tmp_path / 'band')
+    assert f_b.min() >= 5 and f_b.max() <= 20
+    inside = (f_a >= 5) & (f_a <= 20)
+    assert np.all(np.isin(f_a[inside], f_b))
+    np.testing.assert_allclose(p_b[..., np.isin(f_b, f_a)], p_a[..., inside], rtol=1e-9)
+
+
+def test_narrow_chirp_needs_its_band_given(plant_loop, foreign_ms_bag, tmp_path, capsys):
+    """A 10-14 Hz exponential chirp spans a frequency ratio of 1.4, below the chirp detector's
+    1.5: detection takes it for a 2-line periodic signal. Given band and times fix that."""
+    t = np.arange(int(12 * FS)) / FS
+    a0 = np.log(14.0 / 10.0) / 10.0
+    r2 = 0.01 * np.sin(chirp_phase(t, a0, np.log(10.0) - a0 * 1.0, 1.0))
+    r2[(t < 1.0) | (t > 11.0)] = 0.0
+    bag = write_recording(_closed_loop(plant_loop, r2), tmp_path / 'chirp')
+    assert main(['estimate', str(bag), '--out', str(tmp_path / 'auto')]) == 0
+    assert 'exponential chirp' not in capsys.readouterr().out
+    refused(bag, capsys, '--chirp', '10', '14', match=('expected both',))
+    assert main(['estimate', str(bag), '--out', str(tmp_path / 'e'), '--input', 'joint_2',
+                 '--chirp', '10', '14', '--chirp-time', '1', '11']) == 0
+    assert 'exponential chirp 10-14 Hz from t0 = 1 s to t1 = 11 s' in capsys.readouterr().out
+    f_c, p_c, d = _frf(tmp_path / 'e')
+    assert f_c.min() >= 10 and f_c.max() <= 14 and f_c.size >= 3
+    assert main(['estimate', str(foreign_ms_bag), '--out', str(tmp_path / 'ms')]) == 0
+    f_m, p_m, _ = _frf(tmp_path / 'ms')
+    o = d['outputs'].index('dq_m/joint_2')
+    ref = np.interp(f_c, f_m, np.abs(p_m[o, 0]))   # between multisine lines 0.5 Hz apart
+    assert np.max(np.abs(20 * np.log10(np.abs(p_c[o, 0]) / ref))) < 1.5
+
+
+@pytest.mark.parametrize('args, match', [
+    (['--input', 'joint_9'], "input='joint_9' is not a joint of the recording; expected one of"),
+    (['--multisine-period', '30'], 'multisine_period=30 s in a recording of 15.36 s: 0 whole'),
+    (['--band', '5', '600'], 'reaches the Nyquist frequency 500 Hz of the recording'),
+    (['--chirp', '1', '700', '--chirp-time', '0', '5'], 'chirp=(1.0, 700.0): band 1-700 Hz'),
+    (['--chirp', '1', '10', '--chirp-time', '3', '50'], 'chirp_time=(3.0, 50.0): expected'),
+])
+def test_bad_options_refused(foreign_ms_bag, capsys, args, match):
+    refused(foreign_ms_bag, capsys, *args, match=(str(foreign_ms_bag), match))
