@@ -71,7 +71,11 @@ def test_own_run_is_accepted(ms_bag, tmp_path, capsys):
     assert json.loads((tmp_path / 'e' / 'frf.json').read_text())['estimate'] == 'multisine'
 
 
-def test_clipped_torque_refused(ms_rec, tmp_path, capsys):
+STREAM = pytest.mark.parametrize('mode', [(), ('--stream',)], ids=['in_memory', 'streamed'])
+
+
+@STREAM
+def test_clipped_torque_refused(ms_rec, tmp_path, capsys, mode):
     """joint_2's torque cut at its 20/80 % quantiles in the multisine segments: a drive limit."""
     u = ms_rec.effort.copy()
     segs = [s for s in ms_rec.segments if s.info.get('design') == 'multisine']
@@ -80,30 +84,33 @@ def test_clipped_torque_refused(ms_rec, tmp_path, capsys):
     lo, hi = np.quantile(u[idx, 1], [0.2, 0.8])
     u[idx, 1] = np.clip(u[idx, 1], lo, hi)
     bag = write_recording(_copy_rec(ms_rec, effort=u), tmp_path / 'clipped')
-    err = refused(bag, capsys, match=(f'{bag}: /joint_states effort[joint_2] is clipped at ',
-                                      'of the samples of the multisine segments (runs up to',
-                                      'expected an unsaturated plant input'))
+    err = refused(bag, capsys, *mode,
+                  match=(f'{bag}: /joint_states effort[joint_2] is clipped at ',
+                         'of the samples of the multisine segments (runs up to',
+                         'expected an unsaturated plant input'))
     pct = float(re.search(r'in ([0-9.]+) % of the samples', err).group(1))
     assert 30 <= pct <= 45     # 40 % cut, less what the transient periods hold
 
 
-def test_decimated_recording_refused_for_band_above_nyquist(ms_rec, tmp_path, capsys):
+@STREAM
+def test_decimated_recording_refused_for_band_above_nyquist(ms_rec, tmp_path, capsys, mode):
     """/joint_states kept at 100 Hz: the 2-60 Hz lines reach above its 50 Hz Nyquist."""
     k = slice(None, None, 10)
     dec = _copy_rec(ms_rec, t=ms_rec.t[k], position=ms_rec.position[k],
                     velocity=ms_rec.velocity[k], effort=ms_rec.effort[k],
                     reference=ms_rec.reference[k], excitation=ms_rec.excitation[k])
     bag = write_recording(dec, tmp_path / 'dec')
-    refused(bag, capsys, match=(f'{bag}: /frf/experiment multisine design: band 1.953-60.55 Hz',
-                                'reaches the Nyquist frequency 50 Hz of the recording (sampled '
-                                'at 100 Hz'))
+    refused(bag, capsys, *mode,
+            match=(f'{bag}: /frf/experiment multisine design: band 1.953-60.55 Hz',
+                   'reaches the Nyquist frequency 50 Hz of the recording (sampled at 100 Hz'))
 
 
-def test_t_range_cutting_a_segment_refused(ms_rec, ms_bag, capsys):
+@STREAM
+def test_t_range_cutting_a_segment_refused(ms_rec, ms_bag, capsys, mode):
     seg = next(s for s in ms_rec.segments if s.info.get('design') == 'multisine')
     period = seg.info['period_samples'] / FS        # 1 transient + 1.5 of the 2 periods
     t_end = seg.t_start + 2.5 * period
-    err = refused(ms_bag, capsys, '--t-range', str(seg.t_start - 1), str(t_end),
+    err = refused(ms_bag, capsys, *mode, '--t-range', str(seg.t_start - 1), str(t_end),
                   match=(f'multisine segment {seg.t_start:.3f}..{seg.t_end:.3f} s realisation 0 '
                          'experiment 0', '1 whole steady-state period; expected at least need=2',
                          'a time range must include the whole segment'))
