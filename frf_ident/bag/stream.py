@@ -195,7 +195,7 @@ class WindowReader:
             if w is None or (not final and w[1] > horizon):
                 break
             self._next += 1
-            item = self._emit(col, w)
+            item = self._emit(col, w, times)
             if item is not None:
                 yield item
         w = self._window(self._next)
@@ -207,12 +207,12 @@ class WindowReader:
             if t.size and t.min() < cut:
                 table.keep(t >= cut)
 
-    def _emit(self, col: _Collector, w: tuple[int, int]
+    def _emit(self, col: _Collector, w: tuple[int, int], t: np.ndarray
               ) -> tuple[Recording, tm.TimingReport] | None:
-        """Assemble window ``w`` from the rows held (None if it holds no joint state)."""
+        """Assemble window ``w`` from the rows held, whose times are ``t`` (None if it
+        holds no joint state)."""
         lo, hi = w
         assert col.js.data is not None
-        t = col.js.data.times()
         sel = (t >= lo) & (t <= hi)
         if not np.any(sel):
             return None

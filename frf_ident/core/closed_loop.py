@@ -269,7 +269,6 @@ class SegmentEstimator:
         self.segments = sorted(segments, key=lambda s: (
             s.info.get('design') != 'constant_velocity', s.t_start))
         self.align = align
-        self.has_cv = any(s.info.get('design') == 'constant_velocity' for s in segments)
         ms = [s for s in segments if s.info.get('design') == 'multisine']
         self.multisine = MultisineSpectra(ms[0].info, align=align) if ms else None
         self.chirp = ChirpSpectra() if any(s.info.get('design') == 'chirp'
@@ -305,7 +304,7 @@ class SegmentEstimator:
         out: dict[str, FrequencyResponse] = {}
         ms = self.multisine
         if ms is not None and ms.spec:
-            cv = self.has_cv and ms.cv is not None
+            cv = ms.cv is not None
             out['multisine'] = ms.frf(compensate=cv)[0]
             out['multisine_plain'] = ms.frf(compensate=cv, method='plain')[0]
             if cv:

@@ -103,25 +103,23 @@ def spin_once(node: Any, timeout_sec: Optional[float] = None) -> None:
 
 def msg(type_name: str) -> type:
     """Message class for ``pkg/msg/Type`` on the current backend."""
-    b = backend()
-    if b.BACKEND_NAME == 'rclpy':
-        return b.msg(type_name)
-    from frf_ident.middleware import ros_types
-    try:
-        return ros_types.MESSAGES[type_name]
-    except KeyError:
-        raise KeyError(f'message type not available on the DDS backend: {type_name=}; '
-                       f'known: {sorted(ros_types.MESSAGES)}') from None
+    return _interface('message', type_name)
 
 
 def srv(type_name: str) -> Any:
     """Service type for ``pkg/srv/Type`` (with ``.Request`` and ``.Response``)."""
+    return _interface('service', type_name)
+
+
+def _interface(kind: str, type_name: str) -> Any:
+    """A message or service type: rclpy's own, or the DDS backend's table of them."""
     b = backend()
     if b.BACKEND_NAME == 'rclpy':
-        return b.srv(type_name)
+        return (b.msg if kind == 'message' else b.srv)(type_name)
     from frf_ident.middleware import ros_types
+    table = ros_types.MESSAGES if kind == 'message' else ros_types.SERVICES
     try:
-        return ros_types.SERVICES[type_name]
+        return table[type_name]
     except KeyError:
-        raise KeyError(f'service type not available on the DDS backend: {type_name=}; '
-                       f'known: {sorted(ros_types.SERVICES)}') from None
+        raise KeyError(f'{kind} type not available on the DDS backend: {type_name=}; '
+                       f'known: {sorted(table)}') from None
