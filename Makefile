@@ -5,7 +5,7 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= out
 
-# Every DDS participant we start stays on loopback (CONTRACT §2).
+# Every DDS participant we start stays on loopback (docs/CONTRACT.md §2).
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 export CYCLONEDDS_URI := file://$(CURDIR)/config/cyclonedds-localhost.xml
 export NUMBA_CACHE_DIR := $(CURDIR)/$(VENV)/numba_cache
@@ -28,7 +28,7 @@ test: $(STAMP)
 	$(PY) -m pytest -q -ra test
 
 bench: $(STAMP)
-	$(PY) -m frf_ident.bench
+	$(PY) -m benchmarks
 
 clean:
 	rm -rf $(VENV) $(OUT) build *.egg-info .pytest_cache

@@ -8,7 +8,7 @@ package_name = 'frf_ident'
 setup(
     name=package_name,
     version='0.1.0',
-    packages=find_packages(exclude=['test', 'test.*']),
+    packages=find_packages(exclude=['test', 'test.*', 'benchmarks', 'benchmarks.*']),
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
@@ -17,7 +17,6 @@ setup(
         (os.path.join('share', package_name, 'config'),
          glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))),
     ],
-    package_data={'frf_ident': ['config/*.yaml']},
     python_requires='>=3.10',
     install_requires=[
         'setuptools',
@@ -33,7 +32,7 @@ setup(
         'cyclonedds>=0.10.5',
     ],
     extras_require={
-        'test': ['pytest>=7.4', 'hypothesis>=6.80', 'control>=0.10'],
+        'test': ['pytest>=7.4', 'hypothesis>=6.80', 'control>=0.10', 'import-linter>=2.1'],
         'control': ['control>=0.10'],
     },
     zip_safe=True,

@@ -18,7 +18,7 @@ class DesignError(FrfIdentInputError):
 
 
 class ModelFileError(FrfIdentInputError):
-    """A model file (CONTRACT section 5) is malformed."""
+    """A model file (docs/CONTRACT.md §5) is malformed."""
 
 
 class BagError(FrfIdentInputError):

@@ -1,4 +1,4 @@
-"""Shared test setup: every DDS participant stays on loopback (CONTRACT section 2)."""
+"""Shared test setup: every DDS participant stays on loopback (docs/CONTRACT.md §2)."""
 import os
 from pathlib import Path
 

@@ -9,14 +9,14 @@ import pytest
 
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
-from frf_ident.core.chirp import chirp_phase
-from frf_ident.core.model import controller_from_dict, default_model_dict, robot_from_dict
-from frf_ident.core.multisine import design_odd_multisine, multisine_realisation
-from frf_ident.core.plant import FlexibleJointPlant
-from frf_ident.core.procedures import MultisineConfig
+from frf_ident.core.excitation.chirp import chirp_phase
+from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
+from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
+from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.core.excitation.procedures import MultisineConfig
 from frf_ident.core.recording import Recording
-from frf_ident.core.runner import IdentificationConfig, run_identification
-from frf_ident.model_file import load_model, load_plant
+from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
+from frf_ident.io.model_file import load_model, load_plant
 
 FS = 1000.0
 

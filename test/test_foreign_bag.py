@@ -5,10 +5,10 @@ from scipy.interpolate import CubicSpline
 
 from frf_ident.bag import read_recording
 from frf_ident.cli import main
-from frf_ident.core.closed_loop import estimate_recording
-from frf_ident.core.model import controller_from_dict, default_model_dict, robot_from_dict
-from frf_ident.core.multisine import design_odd_multisine, multisine_realisation
-from frf_ident.core.plant import FlexibleJointPlant
+from frf_ident.core.estimation.described import estimate_recording
+from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
+from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
+from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.core.recording import Recording
 
 FS = 1000.0

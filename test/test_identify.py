@@ -7,10 +7,10 @@ import yaml
 
 from frf_ident.bag import read_recording
 from frf_ident.cli import main
-from frf_ident.commands import identification_config
-from frf_ident.core.closed_loop import estimate_recording
-from frf_ident.core.runner import run_identification
-from frf_ident.model_file import load_model, load_plant
+from frf_ident.cli.identify import identification_config
+from frf_ident.core.estimation.described import estimate_recording
+from frf_ident.core.simulation.runner import run_identification
+from frf_ident.io.model_file import load_model, load_plant
 
 ARGS = ['--realisations', '2', '--periods', '2', '--resolution', '0.5',
         '--chirp-duration', '8', '--max-iterations', '2']

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from frf_ident.cli import main
-from frf_ident.reproduce import analytic_linear
+from frf_ident.app.reproduce import analytic_linear
 
 
 @pytest.fixture(scope='module')

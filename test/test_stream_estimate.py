@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from frf_ident.bag import read_recording, write_recording
-from frf_ident.bag.stream import WindowReader, read_experiment, segment_windows
-from frf_ident.bench import periodic_multisine_run
+from frf_ident.bag.windows import WindowReader, read_experiment, segment_windows
+from benchmarks.__main__ import periodic_multisine_run
 from frf_ident.cli import main
-from frf_ident.core.closed_loop import estimate_recording
-from frf_ident.streaming import stream_estimate
+from frf_ident.core.estimation.described import estimate_recording
+from frf_ident.app.stream_estimate import stream_estimate
 
 
 @pytest.fixture(scope='module')
@@ -79,7 +79,8 @@ def test_blocks_of_a_foreign_bag_give_the_in_memory_estimate(foreign_bags):
 def test_streamed_estimate_of_an_own_bag_equals_the_in_memory_one(tmp_path, capsys):
     from argparse import Namespace
 
-    from frf_ident.commands import identification_config, run_identify
+    from frf_ident.app.identify import run_identify
+    from frf_ident.cli.identify import identification_config
     bag = tmp_path / 'own'
     cfg = identification_config(Namespace(
         procedures='multisine,chirp', realisations=2, periods=2, resolution=0.5,

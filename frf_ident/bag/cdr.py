@@ -3,7 +3,7 @@
 Why: per message, rosbags' generic ``deserialize_cdr`` builds Python objects for every field;
 these codecs read exactly what the reader needs with ``struct.unpack_from`` and reuse the
 decoded joint names while consecutive messages carry the same ``frame_id`` and ``name`` bytes
-(the normal case), which makes reading several times faster (``frf_ident.bag.bench``). The
+(the normal case), which makes reading several times faster (``benchmarks.bag_read``). The
 byte layout is tested against rosbags' ``serialize_cdr``/``deserialize_cdr`` in test/bag.
 
 Alignment is counted from the byte after the 4-byte encapsulation header; sequences of float64

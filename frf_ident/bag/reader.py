@@ -271,7 +271,7 @@ class _JointTable:
         self.data.add_block(stamps, logs, out)
 
 
-class _Collector:
+class Collector:
     """Decodes the wanted topics of a scan into tables and events."""
 
     def __init__(self, bag: BagFiles, topics: BagTopics, joints: list[str] | None,
@@ -376,7 +376,7 @@ class _Collector:
 
 # --------------------------------------------------------------------------- scanning
 
-def _expected_counts(bag: BagFiles) -> dict[str, int]:
+def expected_counts(bag: BagFiles) -> dict[str, int]:
     """Message count per topic from metadata.yaml, else from the MCAP summaries (or {})."""
     counts = _metadata_counts(bag.metadata)
     if counts:
@@ -418,7 +418,7 @@ def _scan(bag: BagFiles, topics: set[str] | None, progress: bool,
     return stats
 
 
-def _recovery(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str, int],
+def recovery_report(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str, int],
               expected: dict[str, int]) -> dict[str, Any]:
     rec: dict[str, Any] = {
         'complete': all(s.complete for s in stats),
@@ -470,22 +470,22 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
 def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
           t_range: tuple[float, float] | None,
           progress: bool) -> tuple[Recording, tm.TimingReport]:
-    expected = _expected_counts(bag)
-    col = _Collector(bag, topics, joints, expected)
+    expected = expected_counts(bag)
+    col = Collector(bag, topics, joints, expected)
     stats = _scan(bag, set(col.expected), progress, col.feed)
     n_js = len(col.js)
     read_counts = {topics.joint_states: n_js,
                    topics.velocity_commands: len(col.ref) if col.ref else 0,
                    topics.excitation: len(col.exc),
                    topics.experiment: len(col.events)}
-    recovery = _recovery(bag, stats, read_counts, expected)
+    recovery = recovery_report(bag, stats, read_counts, expected)
     if col.js.data is None or n_js == 0:
         present = sorted({t for s in stats for t in s.topics})
         raise BagError(f'{bag.name}: no messages on {topics.joint_states} (expected '
                        f'{JOINT_STATE}; topics present: {present or "none"})'
                        f'{_lost_hint(recovery)}')
-    meta, segments, warnings = _experiment(col.events, bag, topics)
-    return _assemble(bag, col, topics, meta, segments, warnings, recovery, t_range)
+    meta, segments, warnings = read_descriptors(col.events, bag, topics)
+    return assemble(bag, col, topics, meta, segments, warnings, recovery, t_range)
 
 
 def _lost_hint(recovery: dict[str, Any]) -> str:
@@ -494,7 +494,7 @@ def _lost_hint(recovery: dict[str, Any]) -> str:
     return ''
 
 
-def _experiment(events: list[tuple[int, str]], bag: BagFiles,
+def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
                 topics: BagTopics) -> tuple[dict[str, Any], list[Segment], list[str]]:
     """recording_meta and segments (start/end events paired) from /frf/experiment."""
     meta: dict[str, Any] = {}
@@ -541,7 +541,7 @@ def _window(ns: np.ndarray, t_range: tuple[float, float] | None) -> np.ndarray:
     return (ns >= lo) & (ns <= hi)
 
 
-def _assemble(bag: BagFiles, col: _Collector, topics: BagTopics, meta: dict[str, Any],
+def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, Any],
               segments: list[Segment], warnings: list[str], recovery: dict[str, Any],
               t_range: tuple[float, float] | None) -> tuple[Recording, tm.TimingReport]:
     assert col.js.data is not None and col.js.joints is not None
@@ -622,7 +622,7 @@ def _frf_grid(frf: Any, st: tm.Stamps) -> np.ndarray | None:
 
 
 def _check_joints(bag: BagFiles, topics: BagTopics, joint_names: list[str], vals: np.ndarray,
-                  col: _Collector) -> None:
+                  col: Collector) -> None:
     """A selected joint that no message carries is an error naming what is there."""
     nj = len(joint_names)
     seen = set(col.js_first_names or ()) | col.js.names_seen
@@ -676,7 +676,7 @@ def _exact_match(c_ns: np.ndarray, c_vals: np.ndarray, st: tm.Stamps, n: int) ->
     return out
 
 
-def _ref_columns(bag: BagFiles, col: _Collector, topics: BagTopics, joint_names: list[str],
+def _ref_columns(bag: BagFiles, col: Collector, topics: BagTopics, joint_names: list[str],
                  frf: Any) -> list[int]:
     """Column of each selected joint in the command arrays (controller joint order)."""
     order = list(frf.get('joint_names') or []) if isinstance(frf, dict) else []
@@ -689,7 +689,7 @@ def _ref_columns(bag: BagFiles, col: _Collector, topics: BagTopics, joint_names:
     return [order.index(j) for j in joint_names]
 
 
-def _reference(bag: BagFiles, col: _Collector, topics: BagTopics, joint_names: list[str],
+def _reference(bag: BagFiles, col: Collector, topics: BagTopics, joint_names: list[str],
                frf: Any, grid_ns: np.ndarray, st: tm.Stamps, per_sample: bool,
                report: tm.TimingReport) -> np.ndarray | None:
     if col.ref is None or len(col.ref) == 0:
@@ -704,7 +704,7 @@ def _reference(bag: BagFiles, col: _Collector, topics: BagTopics, joint_names: l
     return _onto_grid(cst, vals[cst.order], st, grid_ns, per_sample)
 
 
-def _excitation(bag: BagFiles, col: _Collector, topics: BagTopics, grid_ns: np.ndarray,
+def _excitation(bag: BagFiles, col: Collector, topics: BagTopics, grid_ns: np.ndarray,
                 st: tm.Stamps, per_sample: bool, report: tm.TimingReport,
                 t_range: tuple[float, float] | None) -> np.ndarray | None:
     if col.exc.data is None or len(col.exc.data) == 0:

@@ -1,4 +1,4 @@
-"""Topic names, message types and QoS profiles of frf_ident bags (CONTRACT section 3)."""
+"""Topic names, message types and QoS profiles of frf_ident bags (docs/CONTRACT.md §3)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -43,7 +43,7 @@ QOS_LATCHED = make_qos(transient_local=True)
 
 @dataclass(frozen=True)
 class BagTopics:
-    """Topic names used in a bag; every name is configurable (CONTRACT section 3)."""
+    """Topic names used in a bag; every name is configurable (docs/CONTRACT.md §3)."""
 
     joint_states: str = '/joint_states'
     velocity_commands: str = '/velocity_controller/commands'

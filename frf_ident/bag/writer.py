@@ -3,7 +3,7 @@
 Two writers:
 
 - :func:`write_recording` turns a finished (e.g. simulated) :class:`Recording` into a bag on
-  the CONTRACT section 3 topics, log time = header stamp.
+  the docs/CONTRACT.md §3 topics, log time = header stamp.
 - :class:`BagRecorder` records incrementally from a running node and keeps the file readable
   if the process dies: it closes small MCAP chunks often and flushes them to the OS.
 
@@ -29,6 +29,7 @@ from rosbags.rosbag2.storage_mcap import McapWriter
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from frf_ident.core.jsonable import json_default
 from frf_ident.core.recording import Recording
 from frf_ident.errors import BagError
 
@@ -49,13 +50,6 @@ def typestore() -> Typestore:
         _TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
     return _TYPESTORE
 
-
-def _json_default(o: Any) -> Any:
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, np.generic):
-        return o.item()
-    raise TypeError(f'not JSON serialisable: {type(o).__name__}')
 
 
 # --------------------------------------------------------------------------- write_recording
@@ -161,7 +155,7 @@ def _experiment_events(rec: Recording, stamps: np.ndarray) -> list[tuple[int, in
     if grid:
         frf['time'] = grid
     meta[FRF_BAG_KEY] = frf
-    events = [(int(stamps[0]), 0, json.dumps(meta, sort_keys=True, default=_json_default))]
+    events = [(int(stamps[0]), 0, json.dumps(meta, sort_keys=True, default=json_default))]
     for seg in rec.segments:
         for event, t, order in (('start', seg.t_start, 2), ('end', seg.t_end, 1)):
             ns = max(int(round(float(t) * 1e9)), 0)

@@ -1,7 +1,7 @@
 """In-memory recording of an identification run: the neutral form between runner, bag and estimator.
 
 A :class:`Recording` holds uniformly sampled time series of all joints plus the experiment
-segments (what was excited when). The bag adapter writes it to the CONTRACT section 3 topics
+segments (what was excited when). The bag adapter writes it to the docs/CONTRACT.md §3 topics
 and reads it back; the estimators only ever see a Recording, so estimation from a bag equals
 estimation from the in-memory run.
 """
@@ -13,13 +13,15 @@ from typing import Any
 
 import numpy as np
 
+from frf_ident.core.jsonable import json_default
+
 
 @dataclass
 class Segment:
-    """One experiment segment (CONTRACT section 3, /frf/experiment descriptor).
+    """One experiment segment (docs/CONTRACT.md §3, /frf/experiment descriptor).
 
     ``info`` carries everything estimation needs and is JSON-serialisable. Keys used by the
-    estimators (see ``frf_ident.core.procedures``):
+    estimators (see ``frf_ident.core.excitation.procedures``):
 
     - ``design``: 'multisine' | 'chirp' | 'constant_velocity' | 'idle'
     - ``procedure``: name of the procedure (e.g. 'multisine_bla', 'chirp_iteration')
@@ -39,7 +41,7 @@ class Segment:
         """JSON text published on /frf/experiment at segment start (event='start') or end."""
         d = {'event': event, 't_start': float(self.t_start), 't_end': float(self.t_end)}
         d.update(self.info)
-        return json.dumps(d, sort_keys=True, default=_np_default)
+        return json.dumps(d, sort_keys=True, default=json_default)
 
     @classmethod
     def from_descriptor(cls, text: str) -> tuple[str, 'Segment']:
@@ -49,13 +51,6 @@ class Segment:
         t1 = float(d.pop('t_end'))
         return event, cls(t0, t1, d)
 
-
-def _np_default(o: Any) -> Any:
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, np.generic):
-        return o.item()
-    raise TypeError(f'not JSON serialisable: {type(o).__name__}')
 
 
 @dataclass

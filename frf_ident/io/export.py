@@ -1,4 +1,4 @@
-"""Export a :class:`~frf_ident.core.frd.FrequencyResponse` to other tools, and read it back.
+"""Export a :class:`~frf_ident.core.estimation.frd.FrequencyResponse` to other tools, and read it back.
 
 Formats (chosen by the file suffix in :func:`write_frf` / :func:`read_frf`):
 
@@ -39,7 +39,8 @@ from typing import Any
 
 import numpy as np
 
-from frf_ident.core.frd import FrequencyResponse, jsonable
+from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.jsonable import jsonable
 from frf_ident.errors import FrfIdentInputError
 
 __all__ = ['FORMATS', 'from_control', 'read_csv', 'read_frf', 'read_json', 'read_mat',

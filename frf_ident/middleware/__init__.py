@@ -24,12 +24,14 @@ from frf_ident.middleware.qos import (QosSpec, qos_clock, qos_default, qos_senso
                                       qos_transient_local)
 
 __all__ = [
-    'QosSpec', 'backend', 'backend_name', 'create_node', 'init', 'load_params_file', 'msg', 'ok',
+    'READY', 'QosSpec', 'backend', 'backend_name', 'create_node', 'init', 'load_params_file', 'msg', 'ok',
     'parse_ros_args', 'qos_clock', 'qos_default', 'qos_sensor_data', 'qos_transient_local',
     'shutdown', 'spin', 'spin_once', 'srv', 'strip_ros_args',
 ]
 
 ENV_BACKEND = 'FRF_IDENT_MIDDLEWARE'
+#: first word of the line a node process prints on stdout once it is wired and spinning
+READY = 'FRF_NODE_READY'
 _backend: Optional[ModuleType] = None
 _lock = threading.Lock()
 

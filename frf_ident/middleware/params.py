@@ -12,7 +12,7 @@ from typing import Any, Iterator, Sequence
 import yaml
 
 from frf_ident.errors import FrfIdentInputError
-from frf_ident.yamlio import Yaml12FloatLoader
+from frf_ident.io.yamlio import Yaml12FloatLoader
 
 _PARAMS_KEY = 'ros__parameters'
 

@@ -4,12 +4,11 @@ from __future__ import annotations
 import signal
 import sys
 import threading
-from pathlib import Path
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
 
-#: Topic defaults (CONTRACT section 3); every one is a node parameter.
+#: Topic defaults (docs/CONTRACT.md §3); every one is a node parameter.
 TOPICS = {
     'joint_states_topic': '/joint_states',
     'effort_topic': '/effort_controller/commands',
@@ -18,14 +17,9 @@ TOPICS = {
     'experiment_topic': '/frf/experiment',
     'clock_topic': '/clock',
 }
-READY = 'FRF_NODE_READY'
+READY = mw.READY
 #: deep queues: lockstep references are published ahead, recorders must never drop a sample
 DEEP = 20000
-
-
-def repo_config(name: str) -> Optional[Path]:
-    p = Path(__file__).resolve().parents[2] / 'config' / name
-    return p if p.is_file() else None
 
 
 def param(node: Any, name: str, default: Any) -> Any:

@@ -24,7 +24,7 @@ from frf_ident.nodes import common as c
 
 class ControllerNode:
     def __init__(self, node: Any) -> None:
-        from frf_ident.model_file import load_model
+        from frf_ident.io.model_file import load_model
         self.node = node
         model_path = c.param(node, 'model', '')
         self.lockstep = bool(c.param(node, 'lockstep', True))

@@ -1,6 +1,6 @@
 """estimator_node: records the experiment topics to a rosbag2 MCAP bag and estimates the FRF.
 
-Recorded (CONTRACT section 3): /joint_states, /velocity_controller/commands,
+Recorded (docs/CONTRACT.md §3): /joint_states, /velocity_controller/commands,
 /effort_controller/commands, /frf/excitation, /frf/experiment, with
 :class:`frf_ident.bag.BagRecorder` (chunks handed to the OS every 64 KiB / 0.5 s, so a crash
 loses at most the open chunk; SIGINT/SIGTERM drain every message already delivered and close
@@ -150,7 +150,7 @@ class Estimator:
         self.worker.start()
 
     def _estimate(self, t_end_ns: int) -> None:
-        from frf_ident.commands import estimate_bag
+        from frf_ident.app.estimate import estimate_bag
         try:   # only what has been recorded up to the end of the procedure
             estimate_bag(self.bag, self.out_dir, t_range=(0.0, t_end_ns * 1e-9),
                          progress=lambda m: None)

@@ -2,7 +2,7 @@
 
 The process holds two nodes:
 
-- ``excitation_node`` streams the phases of :mod:`frf_ident.core.procedures` (multisine
+- ``excitation_node`` streams the phases of :mod:`frf_ident.core.excitation.procedures` (multisine
   procedure, chirp iterations) as velocity references on /velocity_controller/commands, the
   excitation part with its sample stamp on /frf/excitation, and ``Segment.descriptor`` JSON on
   /frf/experiment (reliable, transient-local).
@@ -83,8 +83,8 @@ class Excitation:
     """The excitation engine of the excitation_node."""
 
     def __init__(self, node: Any) -> None:
-        from frf_ident.core.procedures import ChirpConfig, MultisineConfig
-        from frf_ident.model_file import load_model
+        from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+        from frf_ident.io.model_file import load_model
         self.node = node
         self.log = node.get_logger()
         model_path = c.param(node, 'model', '')
@@ -197,7 +197,7 @@ class Excitation:
 
     def _pump(self) -> None:
         """Publish references up to ``lookahead`` samples past the newest joint state."""
-        from frf_ident.core.procedures import POSITION_GAIN, move_plan
+        from frf_ident.core.excitation.procedures import POSITION_GAIN, move_plan
         run = self.run
         while run.end_k is None and self.next_k <= self.k_js + self.lookahead - 1 + \
                 (0 if self.lockstep else 1):
@@ -274,7 +274,7 @@ class Excitation:
 
     # -- safety ---------------------------------------------------------------------------------
     def check_plan(self, phases: list, start: np.ndarray) -> None:
-        from frf_ident.core.procedures import check_position_bound
+        from frf_ident.core.excitation.procedures import check_position_bound
         check_position_bound(phases, start, self.bound, self.dt)
 
     def _abort(self, reason: str) -> None:
@@ -320,7 +320,7 @@ class Excitation:
 
     # -- procedures -----------------------------------------------------------------------------
     def run_multisine(self, timeout_s: Optional[float] = None) -> dict:
-        from frf_ident.core.procedures import multisine_procedure
+        from frf_ident.core.excitation.procedures import multisine_procedure
         phases, design = multisine_procedure(self.ms_cfg, self.n, self.fs)  # checks the bound
         run = self.start('multisine', phases)
         if not run.done.wait(timeout_s):
@@ -333,7 +333,7 @@ class Excitation:
                 'steps_per_s': run.steps_per_s, 'max_gap_ms': 1e3 * run.max_gap}
 
     def chirp_iteration(self) -> Any:
-        from frf_ident.core.procedures import ChirpIteration
+        from frf_ident.core.excitation.procedures import ChirpIteration
         if self.chirp is None:
             self.chirp = ChirpIteration(self.chirp_cfg, self.n, self.fs, self.torque_limit)
         return self.chirp

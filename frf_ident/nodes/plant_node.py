@@ -1,4 +1,4 @@
-"""plant_node: the simulated robot (model file) or a CONTRACT section 4 plug-in plant on ROS topics.
+"""plant_node: the simulated robot (model file) or a docs/CONTRACT.md §4 plug-in plant on ROS topics.
 
 Subscribes the effort commands (Float64MultiArray, joint order), publishes /joint_states
 (position, velocity = plant output y, effort = the torque applied over the sample that just
@@ -26,8 +26,8 @@ from frf_ident.nodes import common as c
 
 class PlantNode:
     def __init__(self, node: Any) -> None:
-        from frf_ident.core.plant import FlexibleJointPlant
-        from frf_ident.model_file import load_model, load_plant
+        from frf_ident.core.simulation.plant import FlexibleJointPlant
+        from frf_ident.io.model_file import load_model, load_plant
         self.node = node
         model_path = c.param(node, 'model', '')
         plant_spec = c.param(node, 'plant', '')

@@ -21,7 +21,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from frf_ident.core.frd import FrequencyResponse
+from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import figures

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from rosbags.typesys import Stores, get_typestore
 
 from frf_ident.bag import cdr, read_recording
-from frf_ident.bag.bench import bench_read
+from benchmarks.bag_read import bench_read
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
 JS = STORE.types['sensor_msgs/msg/JointState']

@@ -1,10 +1,10 @@
-"""frf_ident.core.checks against analytic cases: clipping, Nyquist band, periods, coverage."""
+"""frf_ident.core.estimation.checks against analytic cases: clipping, Nyquist band, periods, coverage."""
 import numpy as np
 import pytest
 
-from frf_ident.core.checks import (MIN_RUN, check_band, check_covers, check_not_clipped,
+from frf_ident.core.estimation.checks import (MIN_RUN, check_band, check_covers, check_not_clipped,
                                    check_periods, clipping)
-from frf_ident.core.multisine import design_odd_multisine, multisine_realisation
+from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
 from frf_ident.errors import EstimationError
 
 FS = 1000.0

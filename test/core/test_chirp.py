@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from frf_ident.core import chirp as ch
+from frf_ident.core.excitation import chirp as ch
 from frf_ident.errors import DesignError
 
 

@@ -2,13 +2,13 @@
 import numpy as np
 import pytest
 
-from frf_ident.core.analytic import robot_frf_sampled
-from frf_ident.core.closed_loop import chirp_frf, estimate_recording, multisine_frf
-from frf_ident.core.experiments import resonance_peak
-from frf_ident.core.model import controller_from_dict, default_model_dict, robot_from_dict
-from frf_ident.core.plant import FlexibleJointPlant
-from frf_ident.core.procedures import ChirpConfig, MultisineConfig
-from frf_ident.core.runner import IdentificationConfig, run_identification
+from frf_ident.core.simulation.analytic import robot_frf_sampled
+from frf_ident.core.estimation.described import chirp_frf, estimate_recording, multisine_frf
+from frf_ident.core.simulation.open_loop import resonance_peak
+from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
+from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
 
 
 def _robot():

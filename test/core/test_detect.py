@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from frf_ident.core import chirp as ch
-from frf_ident.core import multisine as ms
-from frf_ident.core.detect import (ChirpDetection, MultisineDetection, detect_chirp,
+from frf_ident.core.excitation import chirp as ch
+from frf_ident.core.excitation import multisine as ms
+from frf_ident.core.excitation.detect import (ChirpDetection, MultisineDetection, detect_chirp,
                                    detect_excitation, detect_multisine)
 from frf_ident.errors import EstimationError
 

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from frf_ident.core.diagnosis import EFFECTS
-from frf_ident.core.model import robot_from_dict
-from frf_ident.diagnosis_bench import NOMINAL_1AXIS, draw_effect, param_error, run_case
+from frf_ident.core.model.schema import robot_from_dict
+from benchmarks.diagnosis import NOMINAL_1AXIS, draw_effect, param_error, run_case
 
 AXIS = robot_from_dict(NOMINAL_1AXIS).axes[0]
 

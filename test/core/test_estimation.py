@@ -2,14 +2,15 @@
 import numpy as np
 import pytest
 
-from frf_ident.core.analytic import robot_frf
-from frf_ident.core.chirp import ChirpDesign, chirp_phase_flips
-from frf_ident.core.estimation import (best_linear_approximation, frf_from_reference,
+from frf_ident.core.simulation.analytic import robot_frf
+from frf_ident.core.excitation.chirp import ChirpDesign, chirp_phase_flips
+from frf_ident.core.estimation.spectra import (best_linear_approximation, frf_from_reference,
                                        frf_from_spectra)
-from frf_ident.core.experiments import run_open_loop_chirp, run_open_loop_multisine
-from frf_ident.core.model import default_robot
-from frf_ident.core.multisine import design_odd_multisine, multisine_realisation
-from frf_ident.core.plant import AxisParams, FlexibleJointPlant, RobotParams
+from frf_ident.core.simulation.open_loop import run_open_loop_chirp, run_open_loop_multisine
+from frf_ident.core.model.schema import default_robot
+from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
+from frf_ident.core.model.params import AxisParams, RobotParams
+from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import EstimationError
 
 FS = 1000.0

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from frf_ident.core import multisine as ms
+from frf_ident.core.excitation import multisine as ms
 from frf_ident.errors import DesignError
 
 

@@ -2,12 +2,13 @@
 import numpy as np
 import pytest
 
-from frf_ident.core.analytic import robot_frf, robot_frf_sampled, two_mass_frf
-from frf_ident.core.estimation import periodic_spectra
-from frf_ident.core.experiments import stage_grid
-from frf_ident.core.model import default_robot
-from frf_ident.core.multisine import design_odd_multisine, multisine_realisation
-from frf_ident.core.plant import AxisParams, FlexibleJointPlant, RobotParams
+from frf_ident.core.simulation.analytic import robot_frf, robot_frf_sampled, two_mass_frf
+from frf_ident.core.estimation.spectra import periodic_spectra
+from frf_ident.core.simulation.open_loop import stage_grid
+from frf_ident.core.model.schema import default_robot
+from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
+from frf_ident.core.model.params import AxisParams, RobotParams
+from frf_ident.core.simulation.plant import FlexibleJointPlant
 
 FS = 1000.0
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.io import loadmat
 
-from frf_ident.core.frd import FrequencyResponse
+from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.export import from_control, read_frf, to_control, write_frf
 

@@ -12,7 +12,7 @@ from scipy.io import loadmat, savemat
 
 from frf_ident.bag import read_recording
 from frf_ident.cli import main
-from frf_ident.core.detect import detect_excitation
+from frf_ident.core.excitation.detect import detect_excitation
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.importer import import_table, load_map
 

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from frf_ident.core.procedures import ChirpConfig, MultisineConfig
-from frf_ident.nodes.graph import Graph, graph_env
+from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.app.graph import Graph, graph_env
 
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / 'config' / 'model_3axis.yaml'
@@ -52,9 +52,9 @@ def graph_run(tmp_path_factory):
 
 @pytest.fixture(scope='module')
 def offline():
-    from frf_ident.core.closed_loop import estimate_recording
-    from frf_ident.core.runner import IdentificationConfig, run_identification
-    from frf_ident.model_file import load_model, load_plant
+    from frf_ident.core.estimation.described import estimate_recording
+    from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
+    from frf_ident.io.model_file import load_model, load_plant
     model, _robot, ctrl = load_model(MODEL)
     rec = run_identification(load_plant(None, model), ctrl,
                              IdentificationConfig(_ms(), _chirp()))
@@ -67,7 +67,7 @@ def _db(x):
 
 def test_graph_matches_offline(graph_run, offline):
     from frf_ident.bag import read_recording
-    from frf_ident.core.closed_loop import estimate_recording
+    from frf_ident.core.estimation.described import estimate_recording
     g, bag, results = graph_run
     assert results['multisine']['success'], results
     its = results['iterations']

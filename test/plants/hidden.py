@@ -1,4 +1,4 @@
-"""Test-only plant plug-in (CONTRACT section 4) with hidden effects the diagnosis cannot see.
+"""Test-only plant plug-in (docs/CONTRACT.md §4) with hidden effects the diagnosis cannot see.
 
 ``HiddenPlant(model_dict)`` is the model's own simulation plus the changes in the module-level
 ``HIDDEN`` (or the JSON in the environment variable FRF_HIDDEN, for the CLI):
@@ -13,10 +13,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from frf_ident.core.model import robot_from_dict
-from frf_ident.core.plant import FlexibleJointPlant, RobotParams
+from frf_ident.core.model.schema import robot_from_dict
+from frf_ident.core.model.params import RobotParams
+from frf_ident.core.simulation.plant import FlexibleJointPlant
 
-from frf_ident.diagnosis_bench import draw_effect  # noqa: E402,F401  (the same draws)
+from benchmarks.diagnosis import draw_effect  # noqa: E402,F401  (the same draws)
 
 HIDDEN: dict[int, dict] = {}
 NOISE = 2e-5     # velocity noise of the "real" robot [rad/s]

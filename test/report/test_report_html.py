@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from frf_ident.bag import TimingReport, TopicTiming
-from frf_ident.core import chirp as ch
-from frf_ident.core.frd import FrequencyResponse
+from frf_ident.core.excitation import chirp as ch
+from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import write_report

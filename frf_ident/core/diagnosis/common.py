@@ -1,16 +1,17 @@
 """Shared pieces of the diagnosis: effect names, the result record, simulation of a model on the
 recorded excitation, splitting a recording into fit and held-out parts, and the metrics of
-CONTRACT section 7 (frf_error_db, time_nrmse)."""
+docs/CONTRACT.md §7 (frf_error_db, time_nrmse)."""
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from frf_ident.core.controller import PIVelocity
-from frf_ident.core.plant import FlexibleJointPlant, RobotParams
+from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.model.params import RobotParams
+from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.core.recording import Recording, Segment
 
 EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'backlash',
@@ -19,7 +20,7 @@ EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'ba
 
 @dataclass
 class Effect:
-    """One diagnosed effect: CONTRACT section 7 entry plus the model change it implies."""
+    """One diagnosed effect: docs/CONTRACT.md §7 entry plus the model change it implies."""
 
     name: str
     axis: str
@@ -134,7 +135,7 @@ def diag_ratio(pm, ps) -> np.ndarray:
 
 
 def frf_error_db(pairs) -> float:
-    """CONTRACT section 7: RMS over the analysed lines of 20 log10 |P_measured / P_model|."""
+    """docs/CONTRACT.md §7: RMS over the analysed lines of 20 log10 |P_measured / P_model|."""
     vals = [20 * np.log10(np.abs(diag_ratio(pm, ps))).ravel() for pm, ps in pairs]
     v = np.concatenate(vals) if vals else np.array([np.nan])
     v = v[np.isfinite(v)]

@@ -15,10 +15,10 @@ from typing import Any, Callable
 import numpy as np
 from scipy import optimize
 
-from frf_ident.core.analytic import robot_frf_sampled
-from frf_ident.core.closed_loop import chirp_frf, multisine_frf
-from frf_ident.core.controller import PIVelocity
-from frf_ident.core.plant import RobotParams
+from frf_ident.core.simulation.analytic import robot_frf_sampled
+from frf_ident.core.estimation.described import chirp_frf, multisine_frf
+from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 
@@ -90,7 +90,7 @@ class Evaluator:
         return float(np.mean([(t[k] + fl[k]) / (b[k] + fl[k]) for k in b]))
 
     def metrics(self, robot: RobotParams) -> dict[str, float]:
-        """CONTRACT section 7 metrics on the held-out part."""
+        """docs/CONTRACT.md §7 metrics on the held-out part."""
         sim = self._sim(robot)
         sv = replace_segments(sim, self.val if self.val.segments else self.fit)
         mv = self.meas_val if self.meas_val else self.meas_fit

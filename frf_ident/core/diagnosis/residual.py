@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import signal
 
-from frf_ident.core.plant import RobotParams
+from frf_ident.core.model.params import RobotParams
 
 
 def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:

@@ -17,7 +17,7 @@ from typing import Any, Callable
 import numpy as np
 from scipy import signal
 
-from frf_ident.core.plant import RobotParams
+from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 
 from .common import Effect

@@ -1,0 +1,1 @@
+"""Benchmarks of frf_ident (`make bench`); not part of the installed package."""

@@ -1,0 +1,61 @@
+"""Lockstep closed-loop speed of the node graph vs plain DDS ping-pong, in the same run.
+
+``bench_lockstep()`` starts plant, controller and excitation node (and, for the second figure,
+the estimator recording everything) as processes on a private loopback domain, runs a
+multisine procedure in lockstep and reads the samples per wall second from the excitation
+node; then it measures :func:`benchmarks.pingpong.dds_pingpong` (one
+Float64MultiArray ping + one JointState pong between two processes = one lockstep step's
+messages). Goal: graph >= 50 % of ping-pong.
+
+Run: ``python -m benchmarks.graph``.
+"""
+from __future__ import annotations
+
+import json
+import tempfile
+from pathlib import Path
+from typing import Any, Optional
+
+from frf_ident.app.graph import Graph
+
+
+def _graph_rate(out: Path, nodes: tuple[str, ...], model: Optional[str]) -> dict[str, Any]:
+    from frf_ident.core.excitation.procedures import MultisineConfig
+    ms = MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0, compensate=False)
+    g = Graph(out, model=model, multisine=ms, nodes=nodes,
+              params={'excitation_node': {'stale_s': 2.0}})
+    g.start()
+    try:
+        res = g.drive(multisine=True, iterations=0)
+    finally:
+        g.stop()
+    reply = res['multisine']['reply']
+    return {'steps_per_s': reply['steps_per_s'], 'max_gap_ms': reply['max_gap_ms'],
+            'samples': int(round(reply['experiment_time_s'] * 1000))}
+
+
+def bench_lockstep(model: Optional[str] = None, n_pingpong: int = 3000) -> dict[str, Any]:
+    """{'graph_steps_per_s', 'graph_with_recorder_steps_per_s', 'pingpong_per_s', 'ratio', ...}"""
+    from benchmarks.pingpong import dds_pingpong
+    with tempfile.TemporaryDirectory(prefix='frf_bench_') as tmp:
+        bare = _graph_rate(Path(tmp) / 'bare', ('plant_node', 'controller_node',
+                                                'excitation_node'), model)
+        full = _graph_rate(Path(tmp) / 'full', ('plant_node', 'controller_node',
+                                                'excitation_node', 'estimator_node'), model)
+    pp = dds_pingpong(n_pingpong)
+    return {'graph_steps_per_s': bare['steps_per_s'],
+            'graph_max_gap_ms': bare['max_gap_ms'],
+            'graph_with_recorder_steps_per_s': full['steps_per_s'],
+            'graph_with_recorder_max_gap_ms': full['max_gap_ms'],
+            'pingpong_per_s': pp,
+            'ratio': bare['steps_per_s'] / pp,
+            'ratio_with_recorder': full['steps_per_s'] / pp,
+            'goal_ratio': 0.5}
+
+
+def main() -> None:
+    print(json.dumps(bench_lockstep(), indent=1))
+
+
+if __name__ == '__main__':
+    main()

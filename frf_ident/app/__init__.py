@@ -1,0 +1,1 @@
+"""Application functions: identify, estimate, import, diagnose, reproduce, demo (used by the CLI and the nodes)."""

@@ -1,0 +1,114 @@
+"""Offline FRF estimation from a bag: every estimate the bag supports, written to a directory.
+
+Bags that would not fit the memory budget are read window by window
+(:mod:`frf_ident.app.stream_estimate`); both paths give the same estimates.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Callable
+
+from frf_ident.app.console import say
+from frf_ident.app import stream_estimate
+from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
+from frf_ident.errors import FrfIdentInputError
+
+__all__ = ['estimate_bag', 'read_estimates']
+
+
+def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max_memory_mb,
+                   window_s: float, progress: Callable[[str], None]):
+    """Read the bag (in memory or streamed) and estimate.
+
+    Returns
+    -------
+    tuple
+        (estimates by name, timing report, experiment summary, streaming stats or None).
+    """
+    if max_memory_mb is not None and not max_memory_mb > 0:
+        raise FrfIdentInputError(f'--max-memory {max_memory_mb}: expected a size in MB > 0')
+    if not window_s > 0:
+        raise FrfIdentInputError(f'--window {window_s}: expected a block length in s > 0')
+    budget = stream_estimate.default_memory_budget() if max_memory_mb is None else \
+        int(max_memory_mb * (1 << 20))
+    if stream or stream_estimate.needs_streaming(bag, budget):
+        res = stream_estimate.stream_estimate(bag, joints=joints, t_range=t_range, block_s=window_s,
+                                        options=options, progress=progress,
+                                        bar=sys.stderr.isatty())
+        st = res.stats
+        progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
+                 f'at most {st.peak_rows} held at once')
+        return res.estimates, res.timing, res.meta.get('summary', {}), {
+            'windows': st.windows, 'peak_rows': st.peak_rows, 'messages': st.messages,
+            'budget_bytes': budget}
+    from frf_ident.bag import read_recording
+    from frf_ident.core.estimation.described import estimate_recording
+    rec, timing = read_recording(bag, joints=joints, t_range=t_range)
+    for line in timing.summary():
+        progress(line)
+    return estimate_recording(rec, options=options), timing, rec.meta.get('summary', {}), None
+
+
+def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,
+                 options=None, stream: bool | None = None, max_memory_mb: float | None = None,
+                 window_s: float = DEFAULT_BLOCK_S,
+                 progress: Callable[[str], None] = say) -> dict:
+    """Estimate every FRF the bag supports; write frf.json, estimates.json, summary.json, bode.png.
+
+    Parameters
+    ----------
+    bag : bag directory or .mcap file.
+    out : output directory (created; untouched when the bag is refused).
+    joints : joint names to analyse (default: all).
+    t_range : (start, end) in s: analyse only this time range.
+    primary : which estimate goes to frf.json (default: multisine, else chirp).
+    options : :class:`~frf_ident.core.estimation.detected.ExcitationOptions` replacing
+        detection in bags without experiment descriptors.
+    stream : read window by window; None: only when the bag exceeds ``max_memory_mb``.
+    max_memory_mb : memory budget of the in-memory reader (default: a quarter of RAM).
+    window_s : streaming block length for bags without experiment descriptors [s].
+    progress : called with one line per step.
+
+    Returns
+    -------
+    dict
+        Estimate name -> :class:`~frf_ident.core.estimation.frd.FrequencyResponse`.
+
+    Raises
+    ------
+    EstimationError
+        The data do not support an estimate (the message names the bag).
+    """
+    from frf_ident.errors import EstimationError
+    from frf_ident.report.figures import bode_figure
+    try:
+        estimates, timing, experiment, streamed = read_estimates(
+            bag, joints, t_range, options, stream, max_memory_mb, window_s, progress)
+    except EstimationError as exc:
+        raise EstimationError(f'{bag}: {exc}') from None
+    if streamed is not None:
+        for line in timing.summary():
+            progress(line)
+    for line in next(iter(estimates.values())).meta.get('detected', []):
+        progress(f'detected: {line}')
+    key = primary or ('multisine' if 'multisine' in estimates else next(iter(estimates)))
+    if key not in estimates:
+        raise FrfIdentInputError(f'--primary {key!r}: the bag supports {sorted(estimates)}')
+    out.mkdir(parents=True, exist_ok=True)
+    frf = estimates[key]
+    doc = frf.to_dict()
+    doc['estimate'] = key
+    (out / 'frf.json').write_text(json.dumps(doc))
+    (out / 'estimates.json').write_text(json.dumps({k: v.to_dict()
+                                                    for k, v in estimates.items()}))
+    summary = {'bag': str(bag), 'primary': key, 'estimates': sorted(estimates),
+               'timing': timing.to_dict(), 'experiment': experiment, 'streaming': streamed}
+    (out / 'summary.json').write_text(json.dumps(summary, indent=1, default=str))
+    pairs = [(k, v) for k, v in estimates.items() if k in ('multisine', 'chirp')]
+    bode_figure(dict(pairs or [(key, frf)]), out / 'bode.png',
+                title=f'{bag.name}: {" vs ".join(k for k, _ in pairs) or key}')
+    progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
+             f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
+    return estimates

@@ -1,0 +1,244 @@
+"""Start the node graph as separate OS processes on the DDS backend and drive an identification.
+
+:class:`Graph` writes a ROS parameter file, starts plant, controller, excitation (+ iteration
+service) and estimator as ``python -m frf_ident.nodes.<node> --ros-args --params-file F``
+with a loopback-only environment (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, CYCLONEDDS_URI =
+config/cyclonedds-localhost.xml, FRF_IDENT_MIDDLEWARE=dds) and its own ROS_DOMAIN_ID, waits
+until every node reports ready, then drives the identification from a driver process
+(``/frf/run_multisine``, then ``/frf/run_iteration`` until converged or max_iterations) and
+stops the graph with SIGINT (the estimator drains and finalises the bag).
+
+    bag, results = run_graph('out/run', multisine=MultisineConfig(...), chirp=ChirpConfig(...))
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any, Optional, Sequence
+
+import numpy as np
+import yaml
+
+from frf_ident import middleware as mw
+from frf_ident.io.share import SOURCE_ROOT, share_dir
+
+NODES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node')
+
+
+def graph_env(domain_id: int, base: Optional[dict] = None) -> dict[str, str]:
+    env = dict(os.environ if base is None else base)
+    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    env['FRF_IDENT_MIDDLEWARE'] = 'dds'
+    env['ROS_DOMAIN_ID'] = str(int(domain_id))
+    cfg = share_dir() / 'config' / 'cyclonedds-localhost.xml'
+    if cfg.is_file():
+        env['CYCLONEDDS_URI'] = cfg.as_uri()
+    env['PYTHONPATH'] = os.pathsep.join([str(SOURCE_ROOT)] + [p for p in env.get(
+        'PYTHONPATH', '').split(os.pathsep) if p])
+    env['PYTHONUNBUFFERED'] = '1'
+    return env
+
+
+def _cfg_params(prefix: str, cfg: Any) -> dict[str, Any]:
+    out = {}
+    for f in dataclasses.fields(cfg):
+        v = getattr(cfg, f.name)
+        if isinstance(v, np.ndarray):
+            v = v.reshape(-1).tolist()
+        elif isinstance(v, np.generic):
+            v = v.item()
+        out[f'{prefix}.{f.name}'] = v
+    return out
+
+
+class Graph:
+    """The four node processes on one private ROS domain."""
+
+    def __init__(self, out_dir: str | Path, *, model: Optional[str | Path] = None,
+                 robot: Optional[str | Path] = None, multisine: Any = None, chirp: Any = None,
+                 lockstep: bool = True, domain_id: Optional[int] = None,
+                 params: Optional[dict[str, dict[str, Any]]] = None,
+                 log: Any = None, nodes: Sequence[str] = NODES) -> None:
+        self.nodes = tuple(nodes)
+        self.out = Path(out_dir)
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.bag = self.out / 'bag'
+        self.frf_dir = self.out / 'frf_live'
+        self.domain_id = domain_id if domain_id is not None else random.randint(100, 200)
+        self.env = graph_env(self.domain_id)
+        self.robot = str(robot or model or '')
+        self.say = log or (lambda m: None)
+        common: dict[str, Any] = {'use_sim_time': True, 'lockstep': bool(lockstep),
+                                  'model': self.robot}
+        exc: dict[str, Any] = {}
+        if multisine is not None:
+            exc.update(_cfg_params('multisine', multisine))
+        if chirp is not None:
+            exc.update(_cfg_params('chirp', chirp))
+        self.max_iterations = int(chirp.max_iterations) if chirp is not None else 0
+        self.run_multisine = multisine is not None
+        sections = {'/**': common, 'plant_node': {}, 'controller_node': {},
+                    'excitation_node': exc, 'iteration_service': {'bag': str(self.bag)},
+                    'estimator_node': {'bag': str(self.bag), 'output_dir': str(self.frf_dir)}}
+        for name, extra in (params or {}).items():
+            sections.setdefault(name, {}).update(extra)
+        self.params_file = self.out / 'frf_ident_params.yaml'
+        self.params_file.write_text(yaml.safe_dump(
+            {k: {'ros__parameters': v} for k, v in sections.items()}, sort_keys=False))
+        self.procs: dict[str, subprocess.Popen] = {}
+        self.logs: dict[str, list[str]] = {}
+        self._ready: dict[str, threading.Event] = {}
+
+    def _reader(self, name: str, proc: subprocess.Popen) -> None:
+        for line in proc.stdout:
+            self.logs[name].append(line.rstrip())
+            if line.startswith(mw.READY):
+                self._ready[name].set()
+
+    def start(self, timeout_s: float = 60.0) -> 'Graph':
+        if self.bag.exists():
+            raise FileExistsError(f'{self.bag} exists; refusing to overwrite recorded data')
+        for name in self.nodes:
+            cmd = [sys.executable, '-m', f'frf_ident.nodes.{name}', '--ros-args',
+                   '--params-file', str(self.params_file)]
+            errf = open(self.out / f'{name}.log', 'w')
+            proc = subprocess.Popen(cmd, env=self.env, stdout=subprocess.PIPE, stderr=errf,
+                                    text=True, cwd=str(SOURCE_ROOT))
+            self.procs[name], self.logs[name] = proc, []
+            self._ready[name] = threading.Event()
+            threading.Thread(target=self._reader, args=(name, proc), daemon=True).start()
+        deadline = time.monotonic() + timeout_s
+        for name, ev in self._ready.items():
+            while not ev.wait(0.1):
+                if self.procs[name].poll() is not None:
+                    self.stop()
+                    raise RuntimeError(f'{name} exited with {self.procs[name].returncode}; see '
+                                       f'{self.out / (name + ".log")}')
+                if time.monotonic() > deadline:
+                    self.stop()
+                    raise TimeoutError(f'{name} not ready within {timeout_s} s')
+        self.say(f'graph up on ROS_DOMAIN_ID={self.domain_id}: {", ".join(self.nodes)}')
+        return self
+
+    def driver(self, *, multisine: Optional[bool] = None, iterations: Optional[int] = None,
+               timeout_s: float = 600.0) -> subprocess.Popen:
+        cmd = [sys.executable, '-m', 'frf_ident.app.graph', 'drive',
+               '--iterations', str(self.max_iterations if iterations is None else iterations),
+               '--timeout', str(timeout_s)]
+        if multisine if multisine is not None else self.run_multisine:
+            cmd.append('--multisine')
+        return subprocess.Popen(cmd, env=self.env, stdout=subprocess.PIPE, text=True,
+                                stderr=open(self.out / 'driver.log', 'w'), cwd=str(SOURCE_ROOT))
+
+    def drive(self, **kw: Any) -> dict:
+        """Run the identification (blocking); returns the driver's results."""
+        proc = self.driver(**kw)
+        results: dict[str, Any] = {'iterations': []}
+        for line in proc.stdout:
+            if line.startswith('FRF_RESULT '):
+                d = json.loads(line[len('FRF_RESULT '):])
+                if d.get('kind') == 'multisine':
+                    results['multisine'] = d
+                else:
+                    results['iterations'].append(d)
+                self.say(f"{d.get('kind')}: {json.dumps(d.get('reply'))[:200]}")
+        rc = proc.wait()
+        if rc != 0:
+            raise RuntimeError(f'graph driver failed ({rc}); see {self.out / "driver.log"}')
+        return results
+
+    def kill(self, name: str, sig: int = signal.SIGKILL) -> None:
+        self.procs[name].send_signal(sig)
+
+    def stop(self, timeout_s: float = 60.0) -> Path:
+        """SIGINT every node (estimator last), wait; returns the bag path."""
+        order = ('excitation_node', 'controller_node', 'plant_node', 'estimator_node')
+        for name in order:
+            p = self.procs.get(name)
+            if p is None or p.poll() is not None:
+                continue
+            p.send_signal(signal.SIGINT)
+            try:
+                p.wait(timeout_s)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+        return self.bag
+
+    def __enter__(self) -> 'Graph':
+        return self.start()
+
+    def __exit__(self, *exc: Any) -> None:
+        self.stop()
+
+
+def run_graph(out_dir: str | Path, *, model: Optional[str | Path] = None,
+              robot: Optional[str | Path] = None, multisine: Any = None, chirp: Any = None,
+              domain_id: Optional[int] = None, log: Any = None,
+              params: Optional[dict[str, dict[str, Any]]] = None) -> tuple[Path, dict]:
+    """Full identification over the node graph; returns (bag path, driver results)."""
+    g = Graph(out_dir, model=model, robot=robot, multisine=multisine, chirp=chirp,
+              domain_id=domain_id, log=log, params=params)
+    g.start()
+    try:
+        results = g.drive()
+    finally:
+        bag = g.stop()
+    results['frf_live'] = str(g.frf_dir)
+    return bag, results
+
+
+def _drive(args: argparse.Namespace) -> int:
+    """Driver process: call the services in order, print one FRF_RESULT line per reply."""
+    mw.init([])
+    node = mw.create_node('frf_graph_driver')
+    Trigger = mw.srv('std_srvs/srv/Trigger')
+    cl_ms = node.create_client(Trigger, '/frf/run_multisine')
+    cl_it = node.create_client(Trigger, '/frf/run_iteration')
+    try:
+        for cl in (cl_ms, cl_it):
+            if not cl.wait_for_service(30.0):
+                raise TimeoutError(f'{cl.service_name} not available')
+        time.sleep(0.5)   # the plant re-sends its joint state: every recorder has sample 0
+        if args.multisine:
+            rep = cl_ms.call(Trigger.Request(), args.timeout)
+            print('FRF_RESULT ' + json.dumps({'kind': 'multisine', 'success': rep.success,
+                                              'reply': json.loads(rep.message)}), flush=True)
+            if not rep.success:
+                return 1
+        for _ in range(args.iterations):
+            rep = cl_it.call(Trigger.Request(), args.timeout)
+            reply = json.loads(rep.message)
+            print('FRF_RESULT ' + json.dumps({'kind': 'iteration', 'success': rep.success,
+                                              'reply': reply}), flush=True)
+            if not rep.success:
+                return 1
+            if reply.get('converged'):
+                break
+        return 0
+    finally:
+        mw.shutdown()
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest='cmd', required=True)
+    d = sub.add_parser('drive')
+    d.add_argument('--multisine', action='store_true')
+    d.add_argument('--iterations', type=int, default=0)
+    d.add_argument('--timeout', type=float, default=600.0)
+    args = p.parse_args(argv)
+    return _drive(args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

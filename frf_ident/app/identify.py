@@ -1,0 +1,41 @@
+"""Identification on a plant: load the model and plant, run the experiments, record a bag."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Callable
+
+from frf_ident.app.console import say
+from frf_ident.errors import FrfIdentInputError
+
+__all__ = ['run_identify']
+
+
+def run_identify(model_path: str | Path | None, plant_spec: str | None, config: Any,
+                 out: Path, *, progress: Callable[[str], None] = say):
+    """Run the identification experiments in closed loop and write the bag.
+
+    Parameters
+    ----------
+    model_path : model file, or None for the embedded 3-axis model.
+    plant_spec : plant plug-in ``'package.module:Class'``, or None for the model's simulation.
+    config : :class:`~frf_ident.core.simulation.runner.IdentificationConfig`.
+    out : bag directory to create; an existing path is refused (nothing is overwritten).
+    progress : called with one line per step.
+
+    Returns
+    -------
+    Recording
+        The recorded run (also written to ``out``).
+    """
+    from frf_ident.bag import write_recording
+    from frf_ident.core.simulation.runner import run_identification
+    from frf_ident.io.model_file import load_model, load_plant
+    if out.exists():
+        raise FrfIdentInputError(f'{out}: already exists; choose a new bag path (nothing was '
+                                 f'overwritten)')
+    model, robot, ctrl = load_model(model_path)
+    plant = load_plant(plant_spec, model)
+    rec = run_identification(plant, ctrl, config, progress=progress,
+                             meta={'model': model, 'plant': plant_spec or 'model'})
+    write_recording(rec, out)
+    return rec

@@ -1,0 +1,56 @@
+"""Import measured tables (CSV or MAT) as bags, using a map file."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable
+
+from frf_ident.app.console import say
+from frf_ident.errors import FrfIdentInputError
+
+__all__ = ['import_file']
+
+
+def import_file(file: Path, map_path: Path, out: Path, *, progress: Callable[[str], None] = say) -> Path:
+    """Import a measured table as a bag and say what excitation each joint carries.
+
+    Parameters
+    ----------
+    file : measured data, .csv or .mat.
+    map_path : YAML map naming the time, joints, columns and unit scales (see README, "Files").
+    out : bag directory to create; an existing path is refused (nothing is overwritten).
+    progress : called with one line per step.
+
+    Returns
+    -------
+    Path
+        ``out``.
+    """
+    from frf_ident.bag import write_recording
+    from frf_ident.core.excitation.detect import detect_excitation
+    from frf_ident.errors import EstimationError
+    from frf_ident.io.importer import import_table
+    if out.exists():
+        raise FrfIdentInputError(f'--out {str(out)!r} already exists; choose a new bag path '
+                                 f'(nothing was overwritten)')
+    rec = import_table(file, map_path)
+    info = rec.meta['import']
+    progress(f'{file.name}: {rec.t.size} samples at {rec.fs:.6g} Hz '
+             f'(t = {rec.t[0]:.3f} .. {rec.t[-1]:.3f} s), joints {", ".join(rec.joint_names)}')
+    for key, how in info['derived'].items():
+        progress(f'  {key}: {how}')
+    for j, name in enumerate(rec.joint_names):
+        sig, what = (rec.reference, 'reference') if rec.reference is not None \
+            and not all_nan(rec.reference[:, j]) else (rec.effort, 'effort')
+        try:
+            progress(f'  {name} {what}: {detect_excitation(sig[:, j], rec.fs).describe()}')
+        except EstimationError:
+            pass
+    write_recording(rec, out)
+    progress(f'wrote {out}')
+    return out
+
+
+def all_nan(x) -> bool:
+    """True when every sample of ``x`` is NaN."""
+    import numpy as np
+    return bool(np.isnan(x).all())

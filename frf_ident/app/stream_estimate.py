@@ -1,0 +1,145 @@
+"""Estimation of bags larger than memory: windows from :mod:`frf_ident.bag.windows` fed to the
+core's segment-wise estimators.
+
+- bags with /frf/experiment descriptors: one window per experiment segment, the spectra of
+  each segment kept (:class:`~frf_ident.core.estimation.described.SegmentEstimator`); the estimates
+  equal the in-memory ones;
+- bags without descriptors: blocks of ``block_s`` seconds; each block's excitation is
+  detected and its periods added to the H1 sums of that excitation
+  (:class:`~frf_ident.core.estimation.detected.DetectedEstimator`), so every period of the bag counts.
+
+Memory is bounded by the longest window, not by the bag.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from frf_ident.bag import windows as bs
+from frf_ident.bag import timing as tm
+from frf_ident.core.estimation.described import SegmentEstimator, check_recording
+from frf_ident.core.estimation.detected import DetectedEstimator
+from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.errors import EstimationError
+
+#: in-memory arrays take about this many bytes per byte of MCAP data (measured: 3-joint
+#: JointState bags, float64 columns plus the copies of timing repair and assembly)
+MEMORY_PER_BAG_BYTE = 3.0
+
+#: block length for bags without experiment descriptors [s]: a few multisine periods or
+#: a whole chirp must fit in one block
+DEFAULT_BLOCK_S = 300.0
+
+
+@dataclass
+class StreamedEstimate:
+    """Estimates of a streamed bag with the merged timing report and what the stream did."""
+
+    estimates: dict[str, FrequencyResponse]
+    timing: tm.TimingReport
+    stats: bs.StreamStats
+    meta: dict[str, Any] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+
+def default_memory_budget() -> int:
+    """Bytes the in-memory reader may use before ``estimate`` streams: a quarter of the
+    physical memory, at most 4 GiB."""
+    try:
+        phys = os.sysconf('SC_PAGE_SIZE') * os.sysconf('SC_PHYS_PAGES')
+    except (ValueError, OSError, AttributeError):
+        phys = 8 << 30
+    return int(min(phys // 4, 4 << 30))
+
+
+def needs_streaming(bag: str | Path, budget_bytes: int) -> bool:
+    """True when reading the bag into memory would exceed ``budget_bytes``."""
+    from frf_ident.bag.reader import locate
+    size = sum(f.stat().st_size for f in locate(bag).files)
+    return size * MEMORY_PER_BAG_BYTE > budget_bytes
+
+
+def _in_range(windows: list[tuple[int, int]], t_range: tuple[float, float] | None
+              ) -> list[tuple[int, int]]:
+    if t_range is None:
+        return windows
+    lo, hi = (int(round(x * 1e9)) for x in t_range)
+    return [(max(a, lo), min(b, hi)) for a, b in windows if b >= lo and a <= hi]
+
+
+def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
+                    t_range: tuple[float, float] | None = None, block_s: float = DEFAULT_BLOCK_S,
+                    options: Any = None, progress: Callable[[str], None] | None = None,
+                    bar: bool = False) -> StreamedEstimate:
+    """Every estimate the bag supports, read window by window (see the module docstring).
+
+    Each window is checked as :func:`~frf_ident.core.estimation.described.estimate_recording` checks a
+    whole recording (band, periods, clipping); ``options``
+    (:class:`~frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in every block.
+    Only the last chirp iteration is read (the one estimated)."""
+    say = progress or (lambda _msg: None)
+    if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
+        raise EstimationError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
+    exp = bs.read_experiment(bag)
+    segments = [s for s in exp.segments
+                if s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
+    chirps = [s.info.get('iteration', 0) for s in segments if s.info.get('design') == 'chirp']
+    if chirps:
+        segments = [s for s in segments if s.info.get('design') != 'chirp'
+                    or s.info.get('iteration', 0) == max(chirps)]
+    if t_range is not None:
+        segments = [s for s in segments if s.t_end >= t_range[0] and s.t_start <= t_range[1]]
+    reports: list[tm.TimingReport] = []
+    notes: list[str] = []
+    if segments:
+        windows = _in_range(bs.segment_windows(segments), t_range)
+        say(f'streaming: {len(segments)} experiment segments in {len(windows)} windows')
+        reader = bs.WindowReader(bag, windows=windows, joints=joints, experiment=exp,
+                                 progress=bar)
+        est = SegmentEstimator(segments)
+        for rec, report in reader:
+            check_recording(rec, options)
+            est.add_window(rec)
+            reports.append(report)
+        missing = est.missing()
+        if missing:
+            s = missing[0]
+            raise EstimationError(f'{len(missing)} experiment segment(s) have no joint states '
+                                  f'in the bag, first {s.info.get("design")} at '
+                                  f'{s.t_start:.3f}..{s.t_end:.3f} s')
+        estimates = est.results()
+    else:
+        say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '
+            f'{block_s:g} s')
+        span = None if t_range is None else tuple(int(round(x * 1e9)) for x in t_range)
+        reader = bs.WindowReader(bag, block_s=block_s, joints=joints, experiment=exp,
+                                 span=span, progress=bar)
+        det = DetectedEstimator()
+        for rec, report in reader:
+            reports.append(report)
+            try:
+                det.add_detected(rec, options)
+            except EstimationError as exc:
+                notes.append(f'block {rec.t[0]:.3f}..{rec.t[-1]:.3f} s: {exc}')
+                continue
+            if det.used_until is not None:      # next block on the period grid: no loss
+                reader.continue_from(det.used_until)
+        if not det.entries:
+            raise EstimationError(f'no multisine or chirp found in any {block_s:g} s block '
+                                  f'({len(reports)} blocks; first: '
+                                  f'{notes[0] if notes else "no joint states"})')
+        estimates = det.results()
+        for frf in estimates.values():
+            frf.meta['detected'] = frf.meta['detected'] + notes
+    if not reports:
+        raise EstimationError(f'{bag}: no joint states inside the analysed windows')
+    timing = tm.merge_reports(reports, reader.stats.recovery)
+    meta = dict(exp.meta)
+    meta.pop('_frf_bag', None)
+    return StreamedEstimate(estimates, timing, reader.stats, meta, notes)
+
+
+__all__ = ['MEMORY_PER_BAG_BYTE', 'StreamedEstimate', 'default_memory_budget',
+           'needs_streaming', 'stream_estimate']

@@ -1,0 +1,240 @@
+"""Bounded-memory reading of bags longer than memory: the recording window by window.
+
+:func:`read_recording` builds the whole recording's arrays; for a 10 GB /joint_states bag that
+is more than a machine holds. Here the bag is scanned once (after a first pass over the small
+/frf/experiment topic) and the joint states are kept only while a window needs them:
+
+- bags with experiment descriptors: one window per segment (overlapping segments merged);
+  samples between windows are dropped as soon as the scan has passed them;
+- bags without descriptors (``block_s``): consecutive blocks of ``block_s`` seconds from the
+  first sample, for detection and estimation block by block.
+
+Each window is assembled by the same code as :func:`read_recording` (timing analysis,
+resampling rules, exact time grid, command alignment), so a window equals the same time
+range of the in-memory recording. Memory is bounded by the longest window plus
+``drain_rows`` messages, independent of the bag's length.
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+
+from frf_ident.core.recording import Recording, Segment
+from frf_ident.errors import BagError
+
+from . import timing as tm
+from .mcapio import ScanStats
+from .reader import (BagFiles, assemble, Collector, read_descriptors, expected_counts,
+                     recovery_report, iter_batches, locate)
+from .topics import BagTopics
+
+_PAD_NS = 10_000_000          # windows reach 10 ms beyond their segment
+
+
+@dataclass
+class ExperimentIndex:
+    """What the /frf/experiment topic says: recording_meta, segments, warnings."""
+
+    meta: dict[str, Any]
+    segments: list[Segment]
+    warnings: list[str]
+    events: int = 0
+
+
+def read_experiment(path: str | Path, *, topics: BagTopics | None = None) -> ExperimentIndex:
+    """First pass: the experiment descriptors only (no joint state is decoded)."""
+    topics = topics or BagTopics()
+    bag = locate(path)
+    col = Collector(bag, topics, None, {})
+    stats: list[ScanStats] = []
+    for batch in iter_batches(bag, {topics.experiment}, False, stats):
+        col.feed(batch)
+    meta, segments, warnings = read_descriptors(col.events, bag, topics)
+    return ExperimentIndex(meta, segments, warnings, len(col.events))
+
+
+def segment_windows(segments: list[Segment]) -> list[tuple[int, int]]:
+    """(start_ns, end_ns) windows covering the estimable segments, overlapping ones merged."""
+    spans = sorted((int(round(s.t_start * 1e9)) - _PAD_NS, int(round(s.t_end * 1e9)) + _PAD_NS)
+                   for s in segments
+                   if s.info.get('design') in ('multisine', 'chirp', 'constant_velocity'))
+    out: list[list[int]] = []
+    for a, b in spans:
+        if out and a <= out[-1][1]:
+            out[-1][1] = max(out[-1][1], b)
+        else:
+            out.append([max(a, 0), b])
+    return [(a, b) for a, b in out]
+
+
+@dataclass
+class StreamStats:
+    """What a streaming read did: windows, the most rows held at once, data loss."""
+
+    windows: int = 0
+    messages: dict[str, int] = field(default_factory=dict)
+    peak_rows: int = 0
+    recovery: dict[str, Any] = field(default_factory=dict)
+
+
+class WindowReader:
+    """Iterate ``(Recording, TimingReport)`` per window of a bag, in one scan.
+
+    ``windows`` are (start_ns, end_ns) in the bag's sample time (header stamps when valid);
+    ``block_s`` instead cuts consecutive blocks from the first sample (within ``span`` =
+    (start_ns, end_ns) when given). ``joints`` selects joints as in :func:`read_recording`;
+    ``experiment`` is the first pass (:func:`read_experiment`, run here when not given).
+    After the iteration :attr:`stats` holds the counts and the recovery summary of damaged
+    files.
+    """
+
+    def __init__(self, path: str | Path, *, windows: list[tuple[int, int]] | None = None,
+                 block_s: float | None = None, joints: list[str] | None = None,
+                 topics: BagTopics | None = None, experiment: ExperimentIndex | None = None,
+                 span: tuple[int, int] | None = None,
+                 margin_s: float = 1.0, drain_rows: int = 1 << 16,
+                 progress: bool = False) -> None:
+        if (windows is None) == (block_s is None):
+            raise ValueError('give exactly one of windows= or block_s=')
+        if block_s is not None and not block_s > 0:
+            raise BagError(f'{block_s=}: expected a window length > 0 s')
+        if joints is not None and (isinstance(joints, str) or not joints):
+            raise BagError(f'{joints=}: expected a non-empty list of joint names')
+        self.bag: BagFiles = locate(path)
+        self.topics = topics or BagTopics()
+        self.joints = joints
+        self.windows = sorted(windows) if windows is not None else None
+        self.block_ns = int(round(block_s * 1e9)) if block_s is not None else None
+        self.experiment = experiment or read_experiment(path, topics=self.topics)
+        self.margin_ns = int(round(margin_s * 1e9))
+        self.drain_rows = int(drain_rows)
+        self.span = span
+        self.progress = progress
+        self.stats = StreamStats()
+        self._next = 0
+        self._origin: int | None = None
+        self._last_ns: int | None = None
+        self._starts: list[int] = []
+        self._resume: int | None = None
+
+    def continue_from(self, t_s: float) -> None:
+        """Block mode: start the next block at ``t_s`` [s] (e.g. where the last whole
+        multisine period of the current block ends) instead of right after it; ignored
+        unless it lies inside the block just read (the scan only moves forward)."""
+        if self.block_ns is None or not self._starts:
+            return
+        ns = int(round(t_s * 1e9))
+        lo = self._starts[-1]
+        if lo + self.margin_ns // 2 < ns <= lo + self.block_ns and len(self._starts) == self._next:
+            self._resume = ns
+
+    # ------------------------------------------------------------------ windows
+    def _window(self, i: int) -> tuple[int, int] | None:
+        if self.windows is not None:
+            return self.windows[i] if i < len(self.windows) else None
+        if self._origin is None or self.block_ns is None:
+            return None
+        if i < len(self._starts):
+            lo = self._starts[i]
+        else:
+            lo = self._resume if self._resume is not None else (
+                self._origin if i == 0 else self._starts[-1] + self.block_ns)
+            self._resume = None
+            self._starts.append(lo)
+        end = self.span[1] if self.span is not None else None
+        if self._last_ns is not None:
+            end = self._last_ns if end is None else min(end, self._last_ns)
+        if end is not None and lo > end:
+            return None
+        hi = lo + self.block_ns - 1
+        return lo, hi if self.span is None else min(hi, self.span[1])
+
+    # ------------------------------------------------------------------ scan
+    def __iter__(self) -> Iterator[tuple[Recording, tm.TimingReport]]:
+        col = Collector(self.bag, self.topics, self.joints, {})
+        wanted = set(col.expected) - {self.topics.experiment}
+        scan: list[ScanStats] = []
+        counts = self.stats.messages
+        counts.update({t: 0 for t in wanted})
+        fed = 0
+        for batch in iter_batches(self.bag, wanted, self.progress, scan):
+            col.feed(batch)
+            counts[batch.channel.topic] = counts.get(batch.channel.topic, 0) + len(batch.logs)
+            fed += len(batch.logs)
+            if fed >= self.drain_rows:
+                fed = 0
+                yield from self._drain(col, final=False)
+        yield from self._drain(col, final=True)
+        read = dict(counts)
+        read[self.topics.experiment] = self.experiment.events
+        self.stats.recovery = recovery_report(self.bag, scan, read, expected_counts(self.bag))
+
+    def _tables(self, col: Collector) -> list[Any]:
+        tables = [col.js.data, col.exc.data, col.ref]
+        return [t for t in tables if t is not None and len(t)]
+
+    def _drain(self, col: Collector, final: bool) -> Iterator[tuple[Recording, tm.TimingReport]]:
+        if col.js.data is None or not len(col.js.data):
+            return
+        held = sum(len(t) for t in self._tables(col))
+        self.stats.peak_rows = max(self.stats.peak_rows, held)
+        times = col.js.data.times()
+        if self._origin is None:
+            self._origin = int(times.min())
+            if self.span is not None:
+                self._origin = max(self._origin, self.span[0])
+        if final:
+            self._last_ns = int(times.max())
+        horizon = int(times.max()) - self.margin_ns
+        while True:
+            w = self._window(self._next)
+            if w is None or (not final and w[1] > horizon):
+                break
+            self._next += 1
+            item = self._emit(col, w, times)
+            if item is not None:
+                yield item
+        w = self._window(self._next)
+        cut = (w[0] - self.margin_ns) if w is not None else horizon
+        if final:
+            return
+        for table in self._tables(col):
+            t = table.times()
+            if t.size and t.min() < cut:
+                table.keep(t >= cut)
+
+    def _emit(self, col: Collector, w: tuple[int, int], t: np.ndarray
+              ) -> tuple[Recording, tm.TimingReport] | None:
+        """Assemble window ``w`` from the rows held, whose times are ``t`` (None if it
+        holds no joint state)."""
+        lo, hi = w
+        assert col.js.data is not None
+        sel = (t >= lo) & (t <= hi)
+        if not np.any(sel):
+            return None
+        view = copy.copy(col)
+        view.js = copy.copy(col.js)
+        view.js.data = col.js.data.subset(sel)
+        reach = (lo - self.margin_ns, hi + self.margin_ns)
+        if col.exc.data is not None and len(col.exc.data):
+            view.exc = copy.copy(col.exc)
+            te = col.exc.data.times()
+            view.exc.data = col.exc.data.subset((te >= reach[0]) & (te <= reach[1]))
+        if col.ref is not None and len(col.ref):
+            tr = col.ref.times()
+            view.ref = col.ref.subset((tr >= reach[0]) & (tr <= reach[1]))
+        ex = self.experiment
+        segs = [s for s in ex.segments
+                if s.t_end * 1e9 >= lo and s.t_start * 1e9 <= hi]
+        rec, report = assemble(self.bag, view, self.topics, copy.deepcopy(ex.meta), segs,
+                                list(ex.warnings), {}, None)
+        self.stats.windows += 1
+        return rec, report
+
+
+__all__ = ['ExperimentIndex', 'StreamStats', 'WindowReader', 'read_experiment',
+           'segment_windows']

@@ -1,0 +1,34 @@
+"""`frf-ident demo --out DIR`: node graph on the simulated robot, estimation, diagnosis."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = 'the main job: node graph on the simulated robot, estimation, diagnosis'
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``demo``; defaults are the demo's short experiments."""
+    from frf_ident.app.demo import DEMO_CHIRP, DEMO_MODEL, DEMO_MULTISINE, DEMO_ROBOT
+    ms, ch = DEMO_MULTISINE, DEMO_CHIRP
+    p.add_argument('--out', type=Path, required=True, help='output directory')
+    p.add_argument('--model', type=Path,
+                   help=f'nominal model for diagnosis (default config/{DEMO_MODEL})')
+    p.add_argument('--robot', type=Path,
+                   help=f'the simulated "real" robot (default config/{DEMO_ROBOT})')
+    p.add_argument('--realisations', type=int, default=ms.n_realisations)
+    p.add_argument('--periods', type=int, default=ms.n_periods)
+    p.add_argument('--resolution', type=float, default=ms.resolution_hz)
+    p.add_argument('--chirp-duration', type=float, default=ch.duration)
+    p.add_argument('--max-iterations', type=int, default=ch.max_iterations)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the demo."""
+    from dataclasses import replace
+
+    from frf_ident.app.demo import DEMO_CHIRP, DEMO_MULTISINE, run_demo
+    ms = replace(DEMO_MULTISINE, n_realisations=args.realisations, n_periods=args.periods,
+                 resolution_hz=args.resolution)
+    ch = replace(DEMO_CHIRP, duration=args.chirp_duration, max_iterations=args.max_iterations)
+    return run_demo(args.out, model=args.model, robot=args.robot, multisine=ms, chirp=ch)

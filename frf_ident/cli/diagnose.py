@@ -1,0 +1,36 @@
+"""`frf-ident diagnose DATA --model M.yaml --out DIR`: what the nominal model gets wrong."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = ('compare data with the nominal model, name the effects it lacks, extend the model '
+        '(report.json, extended_model.yaml, report.html)')
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``diagnose``."""
+    p.add_argument('data', type=Path, help='bag (identify or robot), or CSV/MAT (with --map; '
+                                           'EMPS and KUKA KR300 .mat recognised without)')
+    p.add_argument('--model', type=Path, required=True, help='nominal model file')
+    p.add_argument('--out', type=Path, required=True, help='output directory')
+    p.add_argument('--map', type=Path, default=None, help='import map for CSV/MAT data')
+
+
+def run(args: argparse.Namespace) -> int:
+    """Diagnose and print the effects found and the held-out metrics."""
+    from frf_ident.app.console import say
+    from frf_ident.app.diagnose import diagnose
+    res = diagnose(args.data, args.model, args.out, map_path=args.map, progress=say)
+    rep = res['report']
+    for k, e in enumerate(rep['effects']):
+        print(f"{k + 1}. {e['name']} ({e['axis']}, score {e['score']:.2f}): {e['parameters']}")
+    if not rep['effects']:
+        print('no effects: the nominal model explains the data within its noise')
+    m = rep['metrics']
+    print(f"held-out error: nominal {m['baseline']['frf_error_db']} dB / time NRMSE "
+          f"{m['baseline']['time_nrmse']}, extended {m['extended']['frf_error_db']} dB / "
+          f"{m['extended']['time_nrmse']} ({m['validation']})")
+    print(f'wrote {args.out / "report.json"}, {args.out / "extended_model.yaml"}, '
+          f'{args.out / "report.html"}')
+    return 0

@@ -1,0 +1,63 @@
+"""`frf-ident estimate BAG --out DIR`: offline FRF estimation from a bag."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = 'estimate FRFs offline from a bag'
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``estimate``."""
+    from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
+    p.add_argument('bag', type=Path)
+    p.add_argument('--out', type=Path, required=True, help='output directory')
+    p.add_argument('--joints', help='comma list of joint names to analyse (default: all)')
+    p.add_argument('--t-range', type=float, nargs=2, metavar=('START', 'END'),
+                   help='analyse only this time range [s]')
+    p.add_argument('--primary', default=None,
+                   help='which estimate goes to frf.json (default: multisine, else chirp)')
+    p.add_argument('--stream', action='store_true',
+                   help='read the bag window by window in bounded memory (automatic when the '
+                        'bag would need more than --max-memory)')
+    p.add_argument('--max-memory', type=float, default=None, metavar='MB',
+                   help='memory the in-memory reader may use before streaming (default: a '
+                        'quarter of RAM, at most 4096)')
+    p.add_argument('--window', type=float, default=DEFAULT_BLOCK_S, metavar='S',
+                   help=f'streaming block length for bags without experiment descriptors '
+                        f'[s] (default {DEFAULT_BLOCK_S:g}; must hold a few multisine periods '
+                        f'or a whole chirp)')
+    g = p.add_argument_group('excitation of a bag without /frf/experiment descriptors '
+                             '(what `detected:` prints; replaces detection)')
+    g.add_argument('--input', metavar='JOINT', help='the excited joint (the only input)')
+    kind = g.add_mutually_exclusive_group()
+    kind.add_argument('--multisine-period', type=float, metavar='SECONDS',
+                      help='multisine period [s]; block and lines are found in the data')
+    kind.add_argument('--chirp', type=float, nargs=2, metavar=('F_LOW', 'F_HIGH'),
+                      help='exponential chirp from F_LOW to F_HIGH [Hz] (needs --chirp-time)')
+    g.add_argument('--band', type=float, nargs=2, metavar=('F_LOW', 'F_HIGH'),
+                   help='analyse only the multisine lines in this band [Hz]')
+    g.add_argument('--chirp-time', type=float, nargs=2, metavar=('T0', 'T1'),
+                   help='sweep start and end [s from the first analysed sample]')
+
+
+def excitation_options(args: argparse.Namespace):
+    """The --input/--multisine-period/--band/--chirp/--chirp-time options as ExcitationOptions."""
+    from frf_ident.core.estimation.detected import ExcitationOptions
+
+    def tup(v):
+        return tuple(v) if v is not None else None
+    return ExcitationOptions(input=args.input, multisine_period=args.multisine_period,
+                             band=tup(args.band), chirp=tup(args.chirp),
+                             chirp_time=tup(args.chirp_time))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Estimate and write the output directory."""
+    from frf_ident.app.estimate import estimate_bag
+    joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
+    estimate_bag(args.bag, args.out, joints=joints,
+                 t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary,
+                 options=excitation_options(args), stream=args.stream,
+                 max_memory_mb=args.max_memory, window_s=args.window)
+    return 0

@@ -1,0 +1,23 @@
+"""`frf-ident import FILE.csv|FILE.mat --map MAP.yaml --out BAG`."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = 'convert measured data (CSV or MAT table) into a bag, using a map file'
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``import``."""
+    p.add_argument('file', type=Path, help='measured data: .csv or .mat')
+    p.add_argument('--map', type=Path, required=True,
+                   help='YAML map: time, joints and their columns/variables, unit scales '
+                        '(see README, "Files"; examples in config/map_*.yaml)')
+    p.add_argument('--out', type=Path, required=True, help='bag directory to create')
+
+
+def run(args: argparse.Namespace) -> int:
+    """Import the file and write the bag."""
+    from frf_ident.app.import_data import import_file
+    import_file(args.file, args.map, args.out)
+    return 0

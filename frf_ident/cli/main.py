@@ -1,0 +1,69 @@
+"""`frf-ident` command line: an explicit table of subcommands, one module each.
+
+Each module in :mod:`frf_ident.cli` has ``HELP``, ``add_arguments(parser)`` and ``run(args)``;
+``run`` translates the arguments and calls one application function of :mod:`frf_ident.app`.
+
+Exit status: 0 success, 2 usage/input error (one line on stderr naming the file, field or
+value), 1 failure. Set FRF_IDENT_DEBUG=1 to see tracebacks of failures.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from frf_ident.cli import demo, diagnose, estimate, identify, import_data, reproduce
+from frf_ident.errors import FrfIdentInputError
+
+__all__ = ['COMMANDS', 'build_parser', 'main']
+
+#: subcommand name -> its module (HELP, add_arguments, run); the order is the help order
+COMMANDS = {
+    'identify': identify,
+    'estimate': estimate,
+    'import': import_data,
+    'diagnose': diagnose,
+    'demo': demo,
+    'reproduce': reproduce,
+}
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse that reports a usage error in one line with exit status 2."""
+
+    def error(self, message: str) -> None:
+        self.exit(2, f'{self.prog}: error: {message}\n')
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of every subcommand in :data:`COMMANDS`."""
+    p = OneLineParser(prog='frf-ident', description='Closed-loop FRF identification of '
+                                                    'flexible-joint robots (Saupe & Knoblach '
+                                                    '2015).')
+    sub = p.add_subparsers(dest='command', required=True, parser_class=OneLineParser)
+    for name, module in COMMANDS.items():
+        module.add_arguments(sub.add_parser(name, help=module.HELP))
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run ``frf-ident`` with ``argv`` (default: ``sys.argv[1:]``); return the exit status."""
+    args = build_parser().parse_args(argv)
+    try:
+        return COMMANDS[args.command].run(args)
+    except FrfIdentInputError as exc:
+        print(f'frf-ident {args.command}: error: {exc}', file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f'frf-ident {args.command}: interrupted', file=sys.stderr)
+        return 130
+    except Exception as exc:  # a failure, not a user mistake
+        if os.environ.get('FRF_IDENT_DEBUG'):
+            raise
+        print(f'frf-ident {args.command}: failed: {type(exc).__name__}: {exc} '
+              f'(FRF_IDENT_DEBUG=1 shows the traceback)', file=sys.stderr)
+        return 1
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,353 @@
+"""Closed-loop FRF estimation from a Recording (Sections 4.3, 4.4, 5.1, 7).
+
+Works only from what a bag holds: the time series and the experiment segments. So estimation
+from a bag equals estimation from the in-memory run.
+
+- :func:`multisine_frf` — BLA over realisations x periods, optionally with the
+  constant-velocity run subtracted (periodic-disturbance compensation, Sec. 4.4 E), by the
+  reference-based estimator or the plain Y U^+ (eq. 7)
+- :func:`chirp_frf` — Sec. 5.1 processing of a chirp iteration's experiments
+- :func:`estimate_recording` — every estimate a recording supports
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from frf_ident.core.excitation.chirp import ChirpDesign
+from frf_ident.core.estimation.spectra import (BLAResult, best_linear_approximation,
+                                       best_linear_approximation_reference, chirp_spectra,
+                                       detection_levels_from_spectra, detection_line_spectra,
+                                       frf_from_reference, frf_from_spectra, periodic_spectra)
+from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.recording import Recording, Segment
+from frf_ident.errors import EstimationError
+
+
+def _names(joint_names: list[str]) -> tuple[list[str], list[str]]:
+    return ([f'tau_m/{j}' for j in joint_names], [f'dq_m/{j}' for j in joint_names])
+
+
+def _segment_arrays(rec: Recording, seg: Segment) -> dict[str, np.ndarray]:
+    sl = rec.slice(seg.t_start, seg.t_end)
+    exc = rec.excitation if rec.excitation is not None else rec.reference
+    if exc is None:
+        raise EstimationError('recording has no reference/excitation to estimate from')
+    return {'u': rec.effort[sl], 'y': rec.velocity[sl], 'r': exc[sl], 'q': rec.position[sl]}
+
+
+def _disturbance_at(cv: dict[str, np.ndarray], key: str, q: np.ndarray,
+                    align: str) -> np.ndarray:
+    """The constant-velocity run's series to subtract (Sec. 4.4 E).
+
+    align 'time': sample by sample, as the paper does. 'position': per axis, the run's series
+    read at the excited run's positions (the run moves monotonically, so position maps to
+    time): position-periodic disturbances such as torque ripple then cancel even when the
+    excited run starts a little elsewhere or the multisine displaces it.
+    """
+    x = cv[key][:q.shape[0]]
+    if align == 'time':
+        return x
+    out = np.empty_like(x)
+    for i in range(q.shape[1]):
+        qc = cv['q'][:, i]
+        if np.all(np.diff(qc) > 0):
+            out[:, i] = np.interp(q[:, i], qc, cv[key][:, i])
+        elif np.all(np.diff(qc) < 0):
+            out[:, i] = np.interp(q[::-1, i][::-1], qc[::-1], cv[key][::-1, i])
+        else:
+            out[:, i] = x[:, i]          # not monotonic: fall back to time alignment
+    return out
+
+
+class MultisineSpectra:
+    """DFT lines of a multisine experiment, gathered one segment at a time.
+
+    Each (realisation p, experiment m) segment contributes the spectra of its steady-state
+    periods at the excited bins (u, y, r) and, when a constant-velocity run was added first,
+    the spectra of that run's series as subtracted from it (Sec. 4.4 E; the DFT is linear, so
+    X - D equals the spectrum of the compensated series). Memory is one segment plus the
+    spectra, so a bag longer than memory can be estimated window by window.
+    """
+
+    def __init__(self, info: dict[str, Any], *, align: str = 'position') -> None:
+        self.info = info
+        self.align = align
+        self.bins = np.asarray(info['design_params']['harmonics'])
+        self.n_per, self.n_q = int(info['period_samples']), int(info['periods'])
+        self.n_tr = int(info['transient_periods'])
+        self.cv: dict[str, np.ndarray] | None = None
+        self.spec: dict[tuple[int, int], dict[str, np.ndarray]] = {}
+        self.joint_names: list[str] = []
+
+    def add_constant_velocity(self, rec: Recording, seg: Segment) -> None:
+        """The constant-velocity run (Sec. 4.4 E); add it before the multisine segments."""
+        if self.spec:
+            raise EstimationError('the constant-velocity run must come before the multisine '
+                                  'segments it compensates')
+        self.cv = _segment_arrays(rec, seg)
+
+    def add(self, rec: Recording, seg: Segment) -> None:
+        """One multisine segment of ``rec``."""
+        a = _segment_arrays(rec, seg)
+        need = (self.n_tr + self.n_q) * self.n_per
+        if a['u'].shape[0] < need:
+            raise EstimationError(f'multisine segment at t={seg.t_start:.3f} s has '
+                                  f'{a["u"].shape[0]} samples, expected {need} '
+                                  f'({self.n_tr} transient + {self.n_q} periods of '
+                                  f'{self.n_per})')
+        self.joint_names = list(rec.joint_names)
+        steady = slice(self.n_tr * self.n_per, need)
+        shape = (self.n_q, self.n_per, len(rec.joint_names))
+
+        def lines(x: np.ndarray) -> np.ndarray:          # (n_q, F, n)
+            return periodic_spectra(x[steady].reshape(shape), self.bins, axis=1)
+        out = {k: lines(a[k][:need]) for k in ('u', 'y', 'r')}
+        det = {'y': a['y'][:need]}
+        if self.cv is not None:
+            for k in ('u', 'y'):
+                d = _disturbance_at(self.cv, k, a['q'][:need], self.align)
+                out['d' + k] = lines(d)
+                if k == 'y':
+                    det['dy'] = d
+        if seg.info['experiment'] == 0:                 # detection lines (Sec. 4.3 remark)
+            for k, x in det.items():
+                _, out['det_' + k] = detection_line_spectra(
+                    x[steady].reshape(shape), int(self.bins[-1]), axis=1)
+        self.spec[(seg.info['realisation'], seg.info['experiment'])] = out
+
+    def _stack(self, key: str, compensate: bool) -> np.ndarray:
+        n_p = 1 + max(p for p, _ in self.spec)
+        n_ex = 1 + max(m for _, m in self.spec)
+        missing = [(p, m) for p in range(n_p) for m in range(n_ex) if (p, m) not in self.spec]
+        if missing:
+            raise EstimationError(f'multisine segments incomplete: expected {n_p} realisations '
+                                  f'x {n_ex} experiments, missing (p, m) = {missing[:4]}')
+        rows = []
+        for p in range(n_p):
+            row = []
+            for m in range(n_ex):
+                s = self.spec[(p, m)]
+                x = s[key]
+                if compensate and key != 'r':
+                    if 'd' + key not in s:
+                        raise EstimationError('compensation requested but the recording has '
+                                              'no constant-velocity run')
+                    x = x - s['d' + key]
+                row.append(x)
+            rows.append(row)
+        return np.array(rows)                          # (n_p, n_ex, n_q, F, n)
+
+    def frf(self, *, compensate: bool = True, method: str = 'reference'
+            ) -> tuple[FrequencyResponse, BLAResult]:
+        """Multisine best linear approximation (eq. 14) of the gathered segments.
+
+        method 'reference': P_p = (sum_q Y R^H)(sum_q U R^H)^-1 per realisation, averaged
+        over p; 'plain': P[p,q] = Y U^+ (eq. 7) per period, averaged over p and q.
+        """
+        if not self.spec:
+            raise EstimationError('recording has no multisine segments')
+        spec = {k: np.moveaxis(self._stack(k, compensate), 1, -1)
+                for k in ('y', 'u', 'r')}                 # (p, q, F, n, n_ex)
+        if method == 'reference':
+            bla = best_linear_approximation_reference(spec['y'], spec['u'], spec['r'])
+        elif method == 'plain':
+            bla = best_linear_approximation(spec['y'], spec['u'])
+        else:
+            raise ValueError(f"{method=} must be 'reference' or 'plain'")
+        n_p = spec['u'].shape[0]
+        first = [self.spec[(p, 0)] for p in range(n_p)]
+        Yd = np.array([s['det_y'] - s['det_dy'] if compensate else s['det_y'] for s in first])
+        det = detection_levels_from_spectra(
+            Yd, np.arange(1, Yd.shape[2] + 1), self.bins)
+        ins, outs = _names(self.joint_names)
+        f0 = self.info['design_params']['f0']
+        frf = FrequencyResponse(self.bins * f0, bla.response, ins, outs, bla.noise_variance,
+                                bla.total_variance, {
+                                    'design': 'multisine', 'method': method,
+                                    'compensated': compensate, 'alignment': self.align,
+                                    'n_p': int(n_p), 'n_q': int(self.n_q),
+                                    'cond_max': float(np.max(bla.cond)),
+                                    'detection_lines': det.to_dict()})
+        return frf, bla
+
+
+def multisine_frf(rec: Recording, *, compensate: bool = True, method: str = 'reference',
+                  align: str = 'position') -> tuple[FrequencyResponse, BLAResult]:
+    """Multisine best linear approximation (eq. 14) of the closed-loop data (see
+    :meth:`MultisineSpectra.frf`); ``align`` see :func:`_disturbance_at`."""
+    est = SegmentEstimator(rec.segments, align=align)
+    est.add_window(rec, compensate=compensate)
+    if est.multisine is None:
+        raise EstimationError('recording has no multisine segments')
+    return est.multisine.frf(compensate=compensate, method=method)
+
+
+class ChirpSpectra:
+    """Sec. 5.1 spectra (u, y, r at the analysis frequencies) of chirp experiments, per
+    iteration, gathered one segment at a time."""
+
+    def __init__(self) -> None:
+        self.spec: dict[int, dict[int, dict[str, np.ndarray]]] = {}
+        self.info: dict[int, dict[str, Any]] = {}
+        self.joint_names: list[str] = []
+
+    def add(self, rec: Recording, seg: Segment) -> None:
+        info = seg.info
+        it = int(info['iteration'])
+        design = ChirpDesign.from_dict(info['design_params'])
+        freqs = np.asarray(info['freq_hz'])
+        tc = design.time_at(freqs)
+        a = _segment_arrays(rec, seg)
+        self.joint_names = list(rec.joint_names)
+        self.info.setdefault(it, info)
+        self.spec.setdefault(it, {})[int(info['experiment'])] = {
+            k: chirp_spectra(a[k], rec.fs, freqs, tc) for k in ('u', 'y', 'r')}
+
+    def iterations(self) -> list[int]:
+        return sorted(self.spec)
+
+    def frf(self, *, iteration: int | None = None, method: str = 'plain',
+            path: str = 'u->y') -> FrequencyResponse:
+        """Chirp estimate of one iteration (default: the last).
+
+        path 'u->y' is the plant P (eq. 7, or reference-based with method='reference'),
+        'r->u' the transfer the iteration inverts (eq. 18).
+        """
+        if not self.spec:
+            raise EstimationError('recording has no chirp segments')
+        it = self.iterations()[-1] if iteration is None else iteration
+        if it not in self.spec:
+            raise EstimationError(f'{iteration=}: the recording holds chirp iterations '
+                                  f'{self.iterations()}')
+        exps = self.spec[it]
+        Y, U, R = (np.stack([exps[m][k] for m in sorted(exps)], axis=-1)
+                   for k in ('y', 'u', 'r'))
+        ins, outs = _names(self.joint_names)
+        if path == 'r->u':
+            P, cond = frf_from_spectra(U, R)
+            ins = [f'r/{j}' for j in self.joint_names]
+            outs = [f'tau_m/{j}' for j in self.joint_names]
+        elif method == 'reference':
+            P, cond = frf_from_reference(Y, U, R)
+        elif method == 'plain':
+            P, cond = frf_from_spectra(Y, U)
+        else:
+            raise ValueError(f"{method=} must be 'reference' or 'plain'")
+        return FrequencyResponse(np.asarray(self.info[it]['freq_hz']), P, ins, outs, meta={
+            'design': 'chirp', 'iteration': it, 'method': method, 'path': path,
+            'cond_max': float(np.max(cond))})
+
+
+def chirp_iterations(rec: Recording) -> list[int]:
+    return sorted({s.info['iteration'] for s in rec.segments if s.info.get('design') == 'chirp'})
+
+
+def chirp_frf(rec: Recording, *, iteration: int | None = None, method: str = 'plain',
+              path: str = 'u->y') -> FrequencyResponse:
+    """Chirp estimate of one iteration (default: the last), see :meth:`ChirpSpectra.frf`."""
+    its = chirp_iterations(rec)
+    if not its:
+        raise EstimationError('recording has no chirp segments')
+    it = its[-1] if iteration is None else iteration
+    acc = ChirpSpectra()
+    for s in rec.segments_where(design='chirp', iteration=it):
+        acc.add(rec, s)
+    return acc.frf(iteration=it, method=method, path=path)
+
+
+class SegmentEstimator:
+    """Every estimate the experiment segments support, fed window by window.
+
+    ``add_window(rec)`` takes a recording that holds some of the segments completely (the
+    whole run, or one window of a long bag); segments are processed in time order with the
+    constant-velocity run first, and nothing but their spectra is kept.
+    """
+
+    def __init__(self, segments: list[Segment], *, align: str = 'position') -> None:
+        self.segments = sorted(segments, key=lambda s: (
+            s.info.get('design') != 'constant_velocity', s.t_start))
+        self.align = align
+        ms = [s for s in segments if s.info.get('design') == 'multisine']
+        self.multisine = MultisineSpectra(ms[0].info, align=align) if ms else None
+        self.chirp = ChirpSpectra() if any(s.info.get('design') == 'chirp'
+                                           for s in segments) else None
+        self.done: set[int] = set()
+
+    def add_window(self, rec: Recording, *, compensate: bool = True) -> int:
+        """Process the not yet processed segments that ``rec`` overlaps (a segment it holds
+        only in part is an error); returns how many."""
+        t0, t1 = float(rec.t[0]), float(rec.t[-1])
+        count = 0
+        for i, s in enumerate(self.segments):
+            if i in self.done or s.t_end <= t0 or s.t_start > t1:
+                continue
+            design = s.info.get('design')
+            if design == 'constant_velocity' and self.multisine is not None and compensate:
+                self.multisine.add_constant_velocity(rec, s)
+            elif design == 'multisine' and self.multisine is not None:
+                self.multisine.add(rec, s)
+            elif design == 'chirp' and self.chirp is not None:
+                self.chirp.add(rec, s)
+            self.done.add(i)
+            count += 1
+        return count
+
+    def missing(self) -> list[Segment]:
+        """Segments no window covered completely."""
+        return [s for i, s in enumerate(self.segments) if i not in self.done and
+                s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
+
+    def results(self) -> dict[str, FrequencyResponse]:
+        """Every estimate, keyed as :func:`estimate_recording` documents."""
+        out: dict[str, FrequencyResponse] = {}
+        ms = self.multisine
+        if ms is not None and ms.spec:
+            cv = ms.cv is not None
+            out['multisine'] = ms.frf(compensate=cv)[0]
+            out['multisine_plain'] = ms.frf(compensate=cv, method='plain')[0]
+            if cv:
+                out['multisine_uncompensated'] = ms.frf(compensate=False)[0]
+        if self.chirp is not None and self.chirp.spec:
+            out['chirp'] = self.chirp.frf()
+            out['chirp_reference'] = self.chirp.frf(method='reference')
+        return out
+
+
+def estimate_recording(rec: Recording, *, options=None) -> dict[str, FrequencyResponse]:
+    """Every estimate the recording supports, keyed by name: 'multisine' (reference-based,
+    compensated when a constant-velocity run exists), 'multisine_plain',
+    'multisine_uncompensated', 'chirp', 'chirp_reference'; without descriptors the
+    detected ones (:func:`estimate_detected`). The data are checked first
+    (:func:`frf_ident.core.estimation.checks.check_descriptor_recording`: band, periods, clipping).
+    ``options`` (:class:`frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in a
+    recording without descriptors; a recording with descriptors refuses them."""
+    check_recording(rec, options)
+    est = SegmentEstimator(rec.segments)
+    est.add_window(rec)
+    out = est.results()
+    if not out:
+        out = estimate_detected(rec, options)
+    return out
+
+
+def check_recording(rec: Recording, options=None) -> None:
+    """The input checks of a recording (or one window of it) with descriptors."""
+    from frf_ident.core.estimation.checks import check_descriptor_recording
+    if any(s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
+        if options is not None and options.given():
+            raise EstimationError(f'{options.text()}: the recording has experiment descriptors; '
+                                  f'expected excitation options only without them')
+        check_descriptor_recording(rec)
+
+
+def estimate_detected(rec: Recording, options=None) -> dict[str, FrequencyResponse]:
+    """Estimates of a recording without descriptors: the excitation is detected per joint
+    (:mod:`frf_ident.core.estimation.detected`; ``options`` replace detection where given) and checked;
+    one entry 'detected/<joint>' per excited input, the detection sentences in each
+    estimate's meta['detected']."""
+    from frf_ident.core.estimation.detected import DetectedEstimator
+    est = DetectedEstimator()
+    est.add_detected(rec, options)
+    return est.results()

@@ -1,0 +1,405 @@
+"""Estimation from recordings that carry no experiment descriptors (foreign bags, imports).
+
+The excitation is detected in the data (:mod:`frf_ident.core.excitation.detect`): a periodic multisine or
+an exponential chirp, on the velocity reference when the bag has one, else on the torque.
+Each detection becomes a :class:`~frf_ident.core.recording.Segment`, and the FRF is estimated
+column by column for the excited inputs (one experiment cannot separate simultaneously excited
+inputs that share lines, so those are refused with the reason).
+
+What detection would find can also be given (:class:`ExcitationOptions`, the options of
+`frf-ident estimate`): the excited joint, a multisine period (and the band of its lines), or a
+chirp's band and sweep times; the given parts replace the respective detection.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from frf_ident.core.estimation.checks import (JOINT_STATES, check_band, check_covers, check_not_clipped,
+                                   check_periods)
+from frf_ident.core.excitation.chirp import ChirpDesign
+from frf_ident.core.excitation.detect import (ChirpDetection, MultisineDetection, detect_excitation,
+                                   multisine_at_period)
+from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
+                                       periodic_spectra)
+from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.excitation.multisine import reference_frequency_set
+from frf_ident.core.recording import Recording, Segment
+from frf_ident.errors import EstimationError
+
+
+def _source(rec: Recording) -> tuple[np.ndarray, str]:
+    ref = rec.reference
+    if ref is not None and np.all(np.isfinite(ref)) and np.any(np.std(ref, axis=0) > 0):
+        return ref, 'velocity reference'
+    return rec.effort, 'torque'
+
+
+@dataclass(frozen=True)
+class ExcitationOptions:
+    """What is known about the excitation of a recording without descriptors; None: detect.
+
+    Attributes
+    ----------
+    input : name of the excited joint (the only input analysed).
+    multisine_period : multisine period [s]; the periodic block and lines are found in the data.
+    band : (f_low, f_high) [Hz]; only multisine lines inside are analysed.
+    chirp : (f_low, f_high) [Hz] of an exponential chirp (eq. 16); needs ``chirp_time``.
+    chirp_time : (t0, t1) [s] of the sweep, counted from the first analysed sample (as the
+        detection reports them).
+    """
+
+    input: str | None = None
+    multisine_period: float | None = None
+    band: tuple[float, float] | None = None
+    chirp: tuple[float, float] | None = None
+    chirp_time: tuple[float, float] | None = None
+
+    def given(self) -> bool:
+        """True when any option is set."""
+        return any(v is not None for v in (self.input, self.multisine_period, self.band,
+                                           self.chirp, self.chirp_time))
+
+    def text(self) -> str:
+        """The given options as 'name=value' pairs."""
+        return ', '.join(f'{k}={v!r}' for k, v in vars(self).items() if v is not None)
+
+    def check(self, rec: Recording) -> None:
+        """Refuse options that contradict each other or the recording (one line each)."""
+        if self.input is not None and self.input not in rec.joint_names:
+            raise EstimationError(f'input={self.input!r} is not a joint of the recording; '
+                                  f'expected one of {rec.joint_names}')
+        if self.chirp is not None and self.multisine_period is not None:
+            raise EstimationError('chirp and multisine_period both given; expected one '
+                                  'excitation')
+        if (self.chirp is None) != (self.chirp_time is None):
+            raise EstimationError(f'chirp={self.chirp} and chirp_time={self.chirp_time}: '
+                                  f'expected both (band and sweep times) or neither')
+        if self.band is not None:
+            if self.chirp is not None:
+                raise EstimationError(f'band={self.band} restricts multisine lines; for a chirp '
+                                      f'give its band as chirp=(f_low, f_high)')
+            lo, hi = self.band
+            if not lo < hi:
+                raise EstimationError(f'band={self.band}: expected f_low < f_high [Hz]')
+            check_band([lo, hi], rec.fs, where=f'band={self.band}')
+        duration = float(rec.t[-1] - rec.t[0]) + rec.dt
+        if self.multisine_period is not None:
+            if not self.multisine_period > 0:
+                raise EstimationError(f'multisine_period={self.multisine_period}: expected a '
+                                      f'positive period in seconds')
+            check_periods(int(duration // self.multisine_period), need=2,
+                          where=f'multisine_period={self.multisine_period:g} s in a recording '
+                                f'of {duration:.4g} s', hint='a shorter period or more data')
+        if self.chirp is not None:
+            lo, hi = self.chirp
+            if not (lo > 0 and hi > 0 and lo != hi):
+                raise EstimationError(f'chirp={self.chirp}: expected two different positive '
+                                      f'frequencies [Hz]')
+            check_band([lo, hi], rec.fs, where=f'chirp={self.chirp}')
+            t0, t1 = self.chirp_time
+            if not 0 <= t0 < t1 <= duration:
+                raise EstimationError(f'chirp_time={self.chirp_time}: expected 0 <= t0 < t1 <= '
+                                      f'{duration:.4g} s (seconds from the first analysed '
+                                      f'sample)')
+
+
+def _given_chirp(opts: ExcitationOptions, fs: float) -> ChirpDetection:
+    """The exponential chirp f(t) = exp(a0 t + a1) through (t0, f_low) and (t1, f_high)."""
+    (f_low, f_high), (t0, t1) = opts.chirp, opts.chirp_time
+    a0 = float(np.log(f_high / f_low) / (t1 - t0))
+    return ChirpDetection(float(fs), float(f_low), float(f_high), float(t0), float(t1), a0,
+                          float(np.log(f_low) - a0 * t0), 0, 0.0)
+
+
+def _excitation_of(x: np.ndarray, fs: float, opts: ExcitationOptions
+                   ) -> MultisineDetection | ChirpDetection:
+    """The excitation of one channel: from the options where given, else detected."""
+    if opts.chirp is not None:
+        return _given_chirp(opts, fs)
+    if opts.multisine_period is not None:
+        return multisine_at_period(x, fs, opts.multisine_period, band=opts.band)
+    det = detect_excitation(x, fs)
+    if opts.band is not None:
+        if not isinstance(det, MultisineDetection):
+            raise EstimationError(f'band={opts.band} restricts multisine lines but a chirp was '
+                                  f'detected ({det.describe()})')
+        f = det.freq_hz
+        keep = (f >= opts.band[0]) & (f <= opts.band[1])
+        if not np.any(keep):
+            raise EstimationError(f'band={opts.band}: none of the {f.size} detected lines '
+                                  f'{f[0]:.4g}-{f[-1]:.4g} Hz lies inside')
+        det = replace(det, harmonics=det.harmonics[keep],
+                      odd=bool(np.all(det.harmonics[keep] % 2 == 1)))
+    return det
+
+
+def _describe(det: MultisineDetection | ChirpDetection, opts: ExcitationOptions) -> str:
+    """The detection sentence, marked where options replaced detection."""
+    if opts.chirp is not None:
+        return (f'exponential chirp {det.f_low:.6g}-{det.f_high:.6g} Hz from t0 = '
+                f'{det.t0:.6g} s to t1 = {det.t1:.6g} s, sweep rate a0 = {det.a0:.4g} 1/s '
+                f'(given)')
+    text = det.describe()
+    if opts.multisine_period is not None:
+        text += f' (period given: {opts.multisine_period:g} s)'
+    if opts.band is not None:
+        text += f' (lines restricted to {opts.band[0]:g}-{opts.band[1]:g} Hz)'
+    return text
+
+
+def detect_segments(rec: Recording, options: ExcitationOptions | None = None
+                    ) -> tuple[list[Segment], list[str]]:
+    """Detect the excitation per joint (or take it from ``options``); returns segments and
+    one sentence per detection."""
+    opts = options or ExcitationOptions()
+    opts.check(rec)
+    x, source = _source(rec)
+    fs = rec.fs
+    level = np.std(x, axis=0)
+    found: list[tuple[int, MultisineDetection | ChirpDetection]] = []
+    notes: list[str] = []
+    order = ([rec.joint_names.index(opts.input)] if opts.input is not None
+             else np.argsort(level)[::-1])
+    for j in order:
+        if opts.input is None and level[j] < 1e-3 * level.max():
+            continue
+        try:
+            det = _excitation_of(x[:, j], fs, opts)
+        except EstimationError as exc:
+            if opts.input is not None:
+                raise EstimationError(f'input={opts.input!r} ({source}): {exc}') from None
+            notes.append(f'{rec.joint_names[j]}: no excitation found in the {source} ({exc})')
+            continue
+        strongest = _strongest_channel(x, det, fs)
+        if opts.input is None and strongest != j:
+            notes.append(f'{rec.joint_names[j]}: follows the excitation of '
+                         f'{rec.joint_names[strongest]} (coupling), not an input')
+            continue
+        found.append((int(j), det))
+        notes.append(f'{rec.joint_names[j]} ({source}): {_describe(det, opts)}')
+    if not found:
+        raise EstimationError(f'no multisine or chirp found in the {source} of any joint '
+                              f'({"; ".join(notes) or "no joint moves"}); pass the experiment '
+                              f'descriptors or the excitation as options')
+    segments = []
+    for j, det in found:
+        if isinstance(det, MultisineDetection):
+            i0 = det.start
+            info = {'design': 'detected_multisine', 'input': j, 'period_samples':
+                    det.period_samples, 'periods': det.n_periods,
+                    'harmonics': np.asarray(det.harmonics).tolist(), 'f0': det.f0}
+            t1 = rec.t[0] + (i0 + det.n_periods * det.period_samples) / fs
+        else:
+            info = {'design': 'detected_chirp', 'input': j, 'f_low': det.f_low,
+                    'f_high': det.f_high, 't0': det.t0, 't1': det.t1, 'a0': det.a0,
+                    'a1': det.a1}
+            i0 = int(round(det.t0 * fs))
+            t1 = rec.t[0] + det.t1
+        segments.append(Segment(rec.t[0] + i0 / fs, t1, info))
+    return segments, notes
+
+
+def check_detected_segment(rec: Recording, seg: Segment) -> None:
+    """Band below Nyquist, at least two whole periods (multisine) or the sweep inside the
+    data (chirp), and no clipped torque in the segment: refused with one line otherwise."""
+    info = seg.info
+    name = rec.joint_names[info['input']]
+    if info['design'] == 'detected_multisine':
+        what = f'detected multisine of {name} ({seg.t_start:.3f}..{seg.t_end:.3f} s)'
+        check_band(np.asarray(info['harmonics']) * info['f0'], rec.fs, where=what)
+        check_periods(int(info['periods']), need=2, where=what,
+                      hint='record more periods or give a shorter multisine period')
+    else:
+        what = f'chirp of {name} ({seg.t_start:.3f}..{seg.t_end:.3f} s)'
+        check_band([info['f_low'], info['f_high']], rec.fs, where=what)
+        check_covers(rec.t[0], rec.t[-1], seg.t_start, seg.t_end, dt=rec.dt, where=what)
+    check_not_clipped(rec.effort[rec.slice(seg.t_start, seg.t_end)],
+                      joint_names=rec.joint_names, where=JOINT_STATES, span=f'the {what}')
+
+
+def _strongest_channel(x: np.ndarray, det: MultisineDetection | ChirpDetection,
+                       fs: float) -> int:
+    """The channel with the most power at the detected excitation (lines or sweep)."""
+    if isinstance(det, MultisineDetection):
+        seg = x[det.start:det.start + det.period_samples]
+        p = np.abs(periodic_spectra(seg, np.asarray(det.harmonics), axis=0)) ** 2
+        return int(np.argmax(p.sum(axis=0)))
+    i0, i1 = int(det.t0 * fs), int(det.t1 * fs)
+    return int(np.argmax(np.std(x[i0:i1], axis=0)))
+
+
+def _check_single_input(u_lines: np.ndarray, j: int, name: str) -> None:
+    """Other inputs must be quiet at the lines of input j (column estimation is valid)."""
+    p = np.mean(np.abs(u_lines) ** 2, axis=0)
+    others = np.delete(p, j)
+    if others.size and np.max(others) > 0.1 * p[j]:
+        raise EstimationError(f'{name}: other inputs are excited at the same lines '
+                              f'({10 * np.log10(np.max(others) / p[j]):.1f} dB); one experiment '
+                              f'cannot separate them')
+
+
+class DetectedEstimator:
+    """Column estimates of detected excitations, gathered block by block.
+
+    A long recording without descriptors is cut into blocks; each block's detections are
+    added here and the same excitation (same input, same period and lines, or the same chirp
+    band) found again in a later block adds its periods: the H1 sums sum_q Y conj(U_j) and
+    sum_q |U_j|^2 and the spread of the per-period ratios (for the variance) are kept, not the
+    data. One block alone gives exactly :func:`detected_frf`.
+    """
+
+    def __init__(self) -> None:
+        self.entries: dict[tuple, dict[str, Any]] = {}
+        self.notes: list[str] = []
+        #: end [s] of the earliest detection of the last add_detected call: a next block
+        #: starting there loses no period at the block boundary
+        self.used_until: float | None = None
+
+    def add_detected(self, rec: Recording, options: ExcitationOptions | None = None) -> int:
+        """Detect the excitation in ``rec`` (:func:`detect_segments`; ``options`` replace
+        detection where given), check and add every detection; the sentences go to
+        :attr:`notes` (each once). Returns how many."""
+        segments, notes = detect_segments(rec, options)
+        for seg in segments:
+            check_detected_segment(rec, seg)
+        self.notes.extend(n for n in notes if n not in self.notes)
+        for seg in segments:
+            self.add(rec, seg)
+        self.used_until = min((s.t_end for s in segments), default=None)
+        return len(segments)
+
+    def add(self, rec: Recording, seg: Segment) -> None:
+        """One detected segment of ``rec`` (from :func:`detect_segments`)."""
+        info = seg.info
+        j = int(info['input'])
+        names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{n}' for n in rec.joint_names])
+        if info['design'] == 'detected_multisine':
+            key = (j, 'multisine', int(info['period_samples']), tuple(info['harmonics']))
+            e = self.entries.get(key)
+            # the excitation goes on from an earlier block: no start-up transient to skip,
+            # and the periods that block used are not used again
+            going_on = e is not None and seg.t_start - e['t_end'] < 1.5 * info[
+                'period_samples'] / rec.fs
+            bins, U, Y, skip = _multisine_periods(rec, seg, used_until=e['t_end'] if going_on
+                                                  else None)
+            if U.shape[0] == 0:
+                return
+            _check_single_input(U.mean(axis=0)[_strong_lines(U[:, :, j])], j,
+                                rec.joint_names[j])
+            if e is None:
+                e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
+                                         'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
+                                         'm2': 0.0, 'skip': 0, 'blocks': 0}
+            e['t_end'] = seg.t_end
+            Uj = U[:, :, j]
+            e['syu'] = e['syu'] + np.einsum('qfo,qf->fo', Y, np.conj(Uj))
+            e['suu'] = e['suu'] + np.sum(np.abs(Uj) ** 2, axis=0)
+            for Pq in Y / Uj[:, :, None]:                   # Welford over periods
+                e['n'] += 1
+                d = Pq - e['mean']
+                e['mean'] = e['mean'] + d / e['n']
+                e['m2'] = e['m2'] + np.abs(d * np.conj(Pq - e['mean']))
+            e['skip'] += skip
+            e['blocks'] += 1
+            return
+        freqs, U, Y = _chirp_lines(rec, seg)
+        _check_single_input(U, j, rec.joint_names[j])
+        key = (j, 'chirp', round(info['f_low'], 1), round(info['f_high'], 1))
+        e = self.entries.setdefault(key, {'names': names, 'freqs': freqs, 'syu': 0.0,
+                                          'suu': 0.0, 'blocks': 0})
+        if e['freqs'].shape != freqs.shape:
+            key = key + (len(self.entries),)
+            e = self.entries.setdefault(key, {'names': names, 'freqs': freqs, 'syu': 0.0,
+                                              'suu': 0.0, 'blocks': 0})
+        e['syu'] = e['syu'] + Y * np.conj(U[:, j:j + 1])
+        e['suu'] = e['suu'] + np.abs(U[:, j:j + 1]) ** 2
+        e['blocks'] += 1
+
+    def results(self) -> dict[str, FrequencyResponse]:
+        """One FrequencyResponse per detected excitation, keyed 'detected/<input joint>'
+        (a second excitation of the same joint: 'detected/<joint>#2'), the detection
+        sentences in meta['detected']."""
+        out: dict[str, FrequencyResponse] = {}
+        for e in self.entries.values():
+            name = 'detected/' + e['names'][0].split('/', 1)[1]
+            n = sum(1 for k in out if k == name or k.startswith(name + '#'))
+            frf = self._response(e)
+            frf.meta['detected'] = list(self.notes)
+            out[name if n == 0 else f'{name}#{n + 1}'] = frf
+        return out
+
+    @staticmethod
+    def _response(e: dict[str, Any]) -> FrequencyResponse:
+        name_in, names_out = e['names']
+        if 'freqs' in e:
+            P = (e['syu'] / e['suu']).T[:, None, :]
+            return FrequencyResponse(e['freqs'], P, [name_in], names_out, meta={
+                'design': 'detected_chirp', 'blocks': e['blocks']})
+        keep = _strong_lines(e['suu'][None, :])
+        P = (e['syu'][keep] / e['suu'][keep, None]).T[:, None, :]
+        var = None
+        if e['n'] >= 2:
+            var = (e['m2'][keep] / (e['n'] - 1) / e['n']).T[:, None, :]
+        return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
+            'design': 'detected_multisine', 'periods': e['n'],
+            'transient_periods': e['skip'], 'blocks': e['blocks']})
+
+
+def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Excited bins and the period spectra U, Y (n_q, F, n) of a detected multisine.
+
+    The first period is skipped as start-up transient when there are at least three, unless
+    the excitation was already running (``used_until``: the end [s] of the periods an
+    earlier block used; periods starting before it are skipped instead, so overlapping
+    blocks never count a period twice)."""
+    info = seg.info
+    sl = rec.slice(seg.t_start, seg.t_end)
+    u, y = rec.effort[sl], rec.velocity[sl]
+    n_per, n_q = info['period_samples'], info['periods']
+    if used_until is None:
+        skip = 1 if n_q >= 3 else 0
+    else:
+        starts = seg.t_start + np.arange(n_q) * n_per / rec.fs
+        skip = int(np.count_nonzero(starts < used_until - 0.5 / rec.fs))
+    if skip >= n_q:
+        return np.asarray(info['harmonics']), np.empty((0, 0, 0)), np.empty((0, 0, 0)), skip
+    n_q -= skip
+    x0 = skip * n_per
+    bins = np.asarray(info['harmonics'])
+    U = periodic_spectra(u[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
+    Y = periodic_spectra(y[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
+    return bins, U, Y, skip
+
+
+def _strong_lines(uj: np.ndarray) -> np.ndarray:
+    """The lines the input really excites (a detection may add weak leakage lines): power
+    over the periods ``uj`` (n_q, F) at least 1 % of the median line's."""
+    pj = np.mean(np.abs(uj) ** 2, axis=0)
+    return pj >= 1e-2 * np.median(pj)
+
+
+def _chirp_lines(rec: Recording, seg: Segment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Analysis frequencies and the Sec. 5.1 spectra U, Y (F, n) of a detected chirp."""
+    info = seg.info
+    design = ChirpDesign(info['f_low'], info['f_high'], info['t1'] - info['t0'],
+                         np.ones((1, 1)), t0=info['t0'])
+    freqs = chirp_analysis_frequencies(reference_frequency_set(info['f_low'], info['f_high']),
+                                       design.time_at, info['t0'], info['t1'])
+    tc = design.time_at(freqs)            # detection times count from the first sample
+    return (freqs, chirp_spectra(rec.effort, rec.fs, freqs, tc),
+            chirp_spectra(rec.velocity, rec.fs, freqs, tc))
+
+
+def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
+    """Column j of P (all outputs / input j) from a detected excitation of input j: H1 over
+    the periods at each line, sum Y conj(U_j) / sum |U_j|^2 (multisine), or Y / U_j at the
+    Sec. 5.1 analysis frequencies (chirp)."""
+    est = DetectedEstimator()
+    est.add(rec, seg)
+    frf = next(iter(est.results().values()))
+    frf.meta.pop('detected')
+    return frf

@@ -1,0 +1,398 @@
+"""The experiment procedures of Section 7 as schedules of phases (closed loop, velocity reference).
+
+A procedure is a list of :class:`Phase` objects. ``excite`` phases carry a precomputed velocity
+reference and an experiment segment; ``move`` phases bring an axis back to a position relative
+to the operating point (their reference is computed when the phase starts, from the measured
+position); ``settle`` phases hold still. The offline runner (:mod:`frf_ident.core.simulation.runner`) and the
+excitation node execute the same phases, so simulation and the node graph run identical
+experiments.
+
+- :func:`multisine_procedure` — Sec. 4.4/7: odd random multisine on a constant velocity
+  (amplitude <= 0.75 of it, every axis within +-4 deg), n_p realisations x n_q periods, MIMO by
+  eq. 9, plus one constant-velocity-only run for periodic-disturbance compensation.
+- :class:`ChirpIteration` — Sec. 5.3 (eqs. 17-19): MIMO chirps (eq. 26 phases) whose reference
+  is iterated until the plant input reaches the desired torque amplitudes (Table 1).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from frf_ident.core.excitation.chirp import (ChirpDesign, chirp_instantaneous_frequency, chirp_phase,
+                                  chirp_phase_flips)
+from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_excerpt_dft,
+                                       chirp_spectra)
+from frf_ident.core.excitation.multisine import (MultisineDesign, design_odd_multisine, mimo_phase_shifts,
+                                      multisine_realisation, reference_frequency_set)
+from frf_ident.errors import DesignError, SafetyError
+
+
+@dataclass
+class Phase:
+    """One step of a procedure.
+
+    kind: 'excite' (reference given, no feedback), 'move' (to ``target`` [rad] relative to the
+    operating point; reference and position plan computed at run time by :func:`move_plan`,
+    executed with position feedback) or 'settle' (hold the position reached, with position
+    feedback).
+    ``reference`` is the total velocity reference (constant velocity + excitation),
+    ``excitation`` the excitation part; both (n_samples, n_axes).
+    """
+
+    kind: str
+    n_samples: int
+    reference: np.ndarray | None = None
+    excitation: np.ndarray | None = None
+    segment: dict[str, Any] | None = None
+    target: np.ndarray | None = None
+
+
+def move_reference(q_now: np.ndarray, q_target: np.ndarray, n_samples: int,
+                   dt: float) -> np.ndarray:
+    """Velocity reference of a minimum-jerk move from q_now to q_target in n_samples.
+
+    v(s) = dq / T * 30 s^2 (1 - s)^2 with s = t / T integrates exactly to dq.
+    """
+    T = n_samples * dt
+    s = (np.arange(n_samples) + 0.5) / n_samples
+    shape = 30.0 * s ** 2 * (1.0 - s) ** 2
+    return np.outer(shape, (np.asarray(q_target) - np.asarray(q_now)) / T)
+
+
+POSITION_GAIN = 2.5    # [1/s] position feedback on the reference in move/settle phases; well
+#                        below the rigid-body velocity-loop bandwidth kp/(Jm+Jo) ~ 7-11 rad/s
+
+
+def move_plan(q_now: np.ndarray, q_target: np.ndarray, n_samples: int, dt: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Feed-forward velocity and planned position (absolute) of a move from q_now to q_target.
+
+    The executor adds POSITION_GAIN (plan - q) to the reference, so the robot ends on the
+    target despite friction, ripple and gravity, and every segment starts where the
+    compensation run started (Sec. 4.4 E needs the same position trajectory).
+    """
+    ref = move_reference(q_now, q_target, n_samples, dt)
+    plan = np.asarray(q_now, dtype=float) + np.cumsum(ref, axis=0) * dt
+    return ref, plan
+
+
+def _ramp(v_from: np.ndarray, v_to: np.ndarray, n: int) -> np.ndarray:
+    s = (np.arange(n) + 0.5) / n
+    w = 0.5 - 0.5 * np.cos(np.pi * s)
+    return v_from + np.outer(w, v_to - v_from)
+
+
+# --- multisine on a constant velocity (Sections 4.4 and 7) ----------------------------------
+
+@dataclass
+class MultisineConfig:
+    """Section 7 multisine settings. ``resolution_hz`` 0.1 gives the paper's 12.3 s periods;
+    the default 0.25 Hz (4.1 s) keeps simulations short at the same line density in dB/decade
+    above 2 Hz."""
+
+    f_low: float = 2.0
+    f_high: float = 60.0
+    resolution_hz: float = 0.25
+    n_realisations: int = 10
+    n_periods: int = 5
+    transient_periods: int = 1
+    amplitude_ratio: float = 0.75
+    position_bound_deg: float = 4.0
+    ramp_s: float = 0.5
+    settle_s: float = 1.5
+    return_s: float = 2.0
+    compensate: bool = True
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.n_periods < 1:
+            raise DesignError(f'n_periods={self.n_periods} must be at least 1')
+        if self.n_realisations < 1:
+            raise DesignError(f'n_realisations={self.n_realisations} must be at least 1')
+        if not 0 < self.amplitude_ratio <= 0.75:
+            raise DesignError(f'amplitude_ratio={self.amplitude_ratio} must be in (0, 0.75] '
+                              f'(the multisine stays <= 0.75 of the constant velocity)')
+        if not self.position_bound_deg > 0:
+            raise DesignError(f'position_bound_deg={self.position_bound_deg} must be positive')
+
+
+def constant_velocity_for_bound(bound_rad: float, travel_time: float, ramp_time: float,
+                                ms_position_peak: float) -> float:
+    """Largest constant velocity whose travel from -bound stays inside +bound (Sec. 4.4 D).
+
+    The move spans 2 bound minus twice the multisine's own position excursion, over the
+    segment plus one ramp (the two half ramps).
+    """
+    room = 2.0 * bound_rad - 2.0 * ms_position_peak
+    if room <= 0:
+        raise DesignError(f'position bound {math.degrees(bound_rad):.2f} deg leaves no room '
+                          f'for a constant velocity')
+    return room / (travel_time + ramp_time)
+
+
+def multisine_procedure(cfg: MultisineConfig, n_axes: int, fs: float) -> tuple[list[Phase],
+                                                                               MultisineDesign]:
+    """Phases of the Section 7 multisine experiment (constant-velocity run first)."""
+    dt = 1.0 / fs
+    design = design_odd_multisine(cfg.f_low, cfg.f_high, bound=1.0,
+                                  resolution_hz=cfg.resolution_hz, fs=fs)
+    n_per = design.period_samples(fs)
+    n_seg = (cfg.transient_periods + cfg.n_periods) * n_per
+    n_ramp = max(1, int(round(cfg.ramp_s * fs)))
+    bound = math.radians(cfg.position_bound_deg)
+    rng = np.random.default_rng(cfg.seed)
+    reals = [multisine_realisation(design, n_axes, rng, fs=fs)
+             for _ in range(cfg.n_realisations)]
+    t = np.arange(n_per) / fs
+    unit = [r.evaluate(t) for r in reals]                 # (n_ex, n_per, n_u), peak 1
+    # position excursion of a unit multisine (zero-mean integral), then the velocity
+    ms_pos = max(np.max(np.abs(np.cumsum(u - u.mean(axis=1, keepdims=True), axis=1) * dt))
+                 for u in unit)
+    v_c = 0.0
+    for _ in range(20):   # fixed point: amplitude = ratio * v_c, excursion scales with it
+        v_new = constant_velocity_for_bound(bound * 0.95, n_seg * dt, n_ramp * dt,
+                                            cfg.amplitude_ratio * v_c * ms_pos)
+        if abs(v_new - v_c) < 1e-12:
+            break
+        v_c = v_new
+    amp = cfg.amplitude_ratio * v_c
+    vc = np.full(n_axes, v_c)
+    start = np.full(n_axes, -bound * 0.95)
+    n_settle = max(1, int(round(cfg.settle_s * fs)))
+    n_return = max(1, int(round(cfg.return_s * fs)))
+    phases: list[Phase] = []
+    common = {'procedure': 'multisine', 'design_params': design.to_dict(),
+              'periods': cfg.n_periods, 'transient_periods': cfg.transient_periods,
+              'period_samples': n_per, 'constant_velocity': vc.tolist(),
+              'amplitude': amp, 'n_realisations': cfg.n_realisations, 'n_axes': n_axes,
+              'freq_hz': design.freq_hz.tolist()}
+
+    def run(exc: np.ndarray, info: dict[str, Any]) -> None:
+        phases.append(Phase('move', n_return, target=start))
+        phases.append(Phase('settle', n_settle))
+        phases.append(Phase('excite', n_ramp, reference=_ramp(np.zeros(n_axes), vc, n_ramp),
+                            excitation=np.zeros((n_ramp, n_axes))))
+        ref = vc + exc
+        phases.append(Phase('excite', n_seg, reference=ref, excitation=exc, segment=info))
+        phases.append(Phase('excite', n_ramp, reference=_ramp(vc, np.zeros(n_axes), n_ramp),
+                            excitation=np.zeros((n_ramp, n_axes))))
+        phases.append(Phase('settle', n_settle))
+
+    if cfg.compensate:
+        run(np.zeros((n_seg, n_axes)), dict(common, design='constant_velocity',
+                                            realisation=-1, experiment=-1))
+    reps = cfg.transient_periods + cfg.n_periods
+    for p, u in enumerate(unit):
+        for m in range(n_axes):
+            exc = amp * np.tile(u[m], (reps, 1))
+            run(exc, dict(common, design='multisine', realisation=p, experiment=m))
+    phases.append(Phase('move', n_return, target=np.zeros(n_axes)))
+    phases.append(Phase('settle', n_settle))
+    check_position_bound(phases, start, bound, dt)
+    return phases, design
+
+
+def check_position_bound(phases: list[Phase], start: np.ndarray, bound: float, dt: float) -> None:
+    """Predicted position (integral of the reference) of every excite phase within +-bound."""
+    q = np.asarray(start, dtype=float).copy()
+    for ph in phases:
+        if ph.kind == 'move':
+            q = np.asarray(ph.target, dtype=float).copy()
+        elif ph.kind == 'excite':
+            traj = q + np.cumsum(ph.reference, axis=0) * dt
+            peak = np.max(np.abs(traj))
+            if peak > bound * (1 + 1e-9):
+                raise SafetyError(f'planned position reaches {math.degrees(peak):.2f} deg, '
+                                  f'beyond the bound {math.degrees(bound):.2f} deg')
+            q = traj[-1]
+
+
+# --- chirp iteration (Section 5.3) ----------------------------------------------------------
+
+TABLE1_AMPLITUDES = np.array([[100.0, 50.0], [150.0, 75.0], [120.0, 60.0]])   # N m, <>40 Hz
+TABLE1_BREAKS_HZ = [40.0]
+
+
+@dataclass
+class ChirpConfig:
+    """Section 7 chirp settings: 2-60 Hz, 20 s, eq. 26 phases, Table 1 torque amplitudes."""
+
+    f_low: float = 2.0
+    f_high: float = 60.0
+    duration: float = 20.0
+    u_des: np.ndarray = field(default_factory=lambda: TABLE1_AMPLITUDES.copy())
+    breaks_hz: list[float] = field(default_factory=lambda: list(TABLE1_BREAKS_HZ))
+    r_initial: np.ndarray = field(default_factory=lambda: np.array([0.006, 0.006, 0.012]))
+    max_iterations: int = 6
+    tolerance_db: float = 1.0
+    n_lines: int = 80
+    lead_s: float = 0.5
+    settle_s: float = 1.0
+    max_gain_step: float = 100.0
+    torque_margin: float = 0.95
+    regularisation: float = 1e-3
+
+    def __post_init__(self) -> None:
+        self.u_des = np.atleast_2d(np.asarray(self.u_des, dtype=float))
+        self.r_initial = np.atleast_1d(np.asarray(self.r_initial, dtype=float))
+        if np.any(self.u_des <= 0) or np.any(self.r_initial <= 0):
+            raise DesignError(f'u_des {self.u_des.tolist()} and r_initial '
+                              f'{self.r_initial.tolist()} must be positive')
+        if self.max_iterations < 1:
+            raise DesignError(f'max_iterations={self.max_iterations} must be at least 1')
+
+
+class ChirpIteration:
+    """Iterative closed-loop excitation design of Sec. 5.3 for an n_u-axis robot.
+
+    State: the current reference spectra R_i (n_lines, n_u, n_ex) in *chirp coordinates*
+    (the excerpt DFT of the signal divided by that of a unit chirp, so a chirp of amplitude a
+    and phase psi reads a e^{j psi}). Step i: run the experiments of :meth:`phases`, then
+    :meth:`update` with the measured r and u: P_r->u = U R^-1 (eq. 7 on r -> u), the next
+    R_{i+1} = P_r->u^-1 U_des (eq. 18), regularised, step-limited and scaled so the predicted
+    torque stays below the limit; r_{i+1}(t) synthesised from R_{i+1} (eq. 19).
+    """
+
+    def __init__(self, cfg: ChirpConfig, n_axes: int, fs: float,
+                 torque_limit: np.ndarray) -> None:
+        self.cfg, self.n, self.fs = cfg, n_axes, fs
+        self.dt = 1.0 / fs
+        self.design = ChirpDesign(cfg.f_low, cfg.f_high, cfg.duration, np.ones((n_axes, 1)))
+        self.design.check_sample_rate(fs)
+        self.torque_limit = np.broadcast_to(np.asarray(torque_limit, float), (n_axes,)).copy()
+        u_des = cfg.u_des[:n_axes]
+        if u_des.shape[0] != n_axes:
+            raise DesignError(f'u_des has {cfg.u_des.shape[0]} rows for {n_axes} axes')
+        if np.any(u_des >= self.torque_limit[:, None]):
+            raise SafetyError(f'desired torque amplitudes {u_des.tolist()} reach the torque '
+                              f'limits {self.torque_limit.tolist()}')
+        self.phi = chirp_phase_flips(n_axes)
+        cand = reference_frequency_set(cfg.f_low, cfg.f_high, cfg.n_lines)
+        self.freqs = chirp_analysis_frequencies(cand, self.design.time_at, self.design.t0,
+                                                self.design.t1)
+        self.t_centers = self.design.time_at(self.freqs)
+        levels = np.stack([self.design_amplitude(l, u_des) for l in range(n_axes)])  # (n, F)
+        self.u_des_amp = levels.T                                              # (F, n)
+        E = np.exp(1j * self.phi)
+        self.U_des = self.u_des_amp[:, :, None] * E[None]                     # (F, n, n_ex)
+        r0 = np.broadcast_to(cfg.r_initial[:n_axes], (n_axes,))
+        self.R = np.broadcast_to(r0[None, :, None] * E[None], self.U_des.shape).copy()
+        self.iteration = 1
+        self.history: list[dict[str, Any]] = []
+        self._unit = self._unit_chirp_spectrum()
+
+    def design_amplitude(self, axis: int, u_des: np.ndarray) -> np.ndarray:
+        from frf_ident.core.excitation.chirp import amplitude_schedule
+        return amplitude_schedule(self.cfg.breaks_hz, u_des[axis])(self.freqs)
+
+    def _unit_chirp_spectrum(self) -> np.ndarray:
+        """Excerpt DFT of the unit chirp sin(theta(t)) at every analysis line (Sec. 5.1)."""
+        n = int(round(self.design.t1 * self.fs)) + 1
+        t = np.arange(n) * self.dt
+        x = np.sin(chirp_phase(t, self.design.a0, self.design.a1, self.design.t0))
+        return np.array([chirp_excerpt_dft(x, self.fs, f, tc)
+                         for f, tc in zip(self.freqs, self.t_centers)])
+
+    # -- signals -------------------------------------------------------------------------------
+    def reference_signals(self, R: np.ndarray | None = None) -> np.ndarray:
+        """r(t) for every experiment from chirp-coordinate spectra R (eq. 19):
+        r_lm(t) = |R_lm(f(t))| sin(theta(t) + arg R_lm(f(t))), interpolated over log f.
+        Returns (n_ex, n_samples, n_u) on [0, t1]."""
+        R = self.R if R is None else R
+        n = int(round(self.design.t1 * self.fs)) + 1
+        t = np.arange(n) * self.dt
+        theta = chirp_phase(t, self.design.a0, self.design.a1, self.design.t0)
+        lf = np.log(np.clip(chirp_instantaneous_frequency(t, self.design.a0, self.design.a1),
+                            self.freqs[0], self.freqs[-1]))
+        lx = np.log(self.freqs)
+        out = np.zeros((self.n, n, self.n))
+        taper = np.ones(n)
+        nt = int(0.05 * self.fs)      # 50 ms cosine fade in/out: no step at the ends
+        taper[:nt] = 0.5 - 0.5 * np.cos(np.pi * np.arange(nt) / nt)
+        taper[-nt:] = taper[:nt][::-1]
+        for m in range(self.n):
+            for l in range(self.n):
+                mag = np.interp(lf, lx, np.abs(R[:, l, m]))
+                ph = np.interp(lf, lx, np.unwrap(np.angle(R[:, l, m])))
+                out[m, :, l] = taper * mag * np.sin(theta + ph)
+        return out
+
+    def phases(self) -> list[Phase]:
+        """Phases of the current iteration: one chirp experiment per input (eq. 26)."""
+        sig = self.reference_signals()
+        n_lead = int(round(self.cfg.lead_s * self.fs))
+        n_settle = int(round(self.cfg.settle_s * self.fs))
+        out: list[Phase] = []
+        for m in range(self.n):
+            out.append(Phase('move', n_settle, target=np.zeros(self.n)))
+            out.append(Phase('settle', n_lead))
+            seg = {'procedure': 'chirp', 'design': 'chirp', 'iteration': self.iteration,
+                   'experiment': m, 'design_params': self.design.to_dict(),
+                   'freq_hz': self.freqs.tolist(), 'n_axes': self.n,
+                   'u_des': self.u_des_amp.T.tolist()}
+            out.append(Phase('excite', sig.shape[1], reference=sig[m], excitation=sig[m],
+                             segment=seg))
+            out.append(Phase('settle', n_settle))
+        return out
+
+    # -- the update (eqs. 18-19) ---------------------------------------------------------------
+    def spectra(self, x: np.ndarray) -> np.ndarray:
+        """Chirp-coordinate spectra (F, n) of one experiment's samples x (N, n) from t0."""
+        return chirp_spectra(x, self.fs, self.freqs, self.t_centers) / self._unit[:, None]
+
+    def error_db(self, U: np.ndarray) -> np.ndarray:
+        """Per line and channel: 20 log10 |U_lm| / U_des,l, worst over experiments (F, n)."""
+        ratio = np.abs(U) / self.u_des_amp[:, :, None]
+        err = 20 * np.log10(np.maximum(ratio, 1e-12))
+        idx = np.argmax(np.abs(err), axis=2)
+        return np.take_along_axis(err, idx[:, :, None], axis=2)[:, :, 0]
+
+    def update(self, r_runs: list[np.ndarray], u_runs: list[np.ndarray],
+               y_runs: list[np.ndarray] | None = None) -> dict[str, Any]:
+        """Process the measured experiments of this iteration and design the next reference.
+
+        ``r_runs``/``u_runs``: per experiment m, (N, n) samples from the chirp start t0.
+        Returns the iteration summary (errors in dB, converged flag, predicted peak torque).
+        """
+        Rm = np.stack([self.spectra(r) for r in r_runs], axis=-1)   # (F, n, n_ex)
+        Um = np.stack([self.spectra(u) for u in u_runs], axis=-1)
+        err = self.error_db(Um)
+        peak_u = [float(np.max(np.abs(u))) for u in u_runs]
+        summary = {'iteration': self.iteration, 'max_abs_error_db': float(np.max(np.abs(err))),
+                   'error_db_per_channel': np.max(np.abs(err), axis=0).tolist(),
+                   'max_abs_torque': np.max(np.abs(np.stack(u_runs)), axis=(0, 1)).tolist(),
+                   'peak_torque': max(peak_u), 'converged': False}
+        if summary['max_abs_error_db'] <= self.cfg.tolerance_db:
+            summary['converged'] = True
+            self.history.append(summary)
+            return summary
+        P_ru = Um @ np.linalg.inv(Rm)                                  # eq. 7 for r -> u
+        R_next = self._regularised_solve(P_ru, self.U_des)               # eq. 18
+        # never more than max_gain_step times the previous reference on a line
+        grow = np.abs(R_next) / np.maximum(np.abs(Rm), 1e-300)
+        limit = np.minimum(1.0, self.cfg.max_gain_step / np.maximum(grow, 1e-300))
+        R_next = R_next * limit
+        U_pred = P_ru @ R_next
+        peak = np.max(np.abs(U_pred), axis=(0, 2))                       # per channel
+        scale = np.min(np.minimum(1.0, self.cfg.torque_margin * self.torque_limit
+                                  / np.maximum(peak, 1e-300)))
+        R_next = R_next * scale
+        summary.update({'predicted_peak_torque': (peak * scale).tolist(),
+                        'scaled_for_torque_limit': bool(scale < 1.0),
+                        'cond_P_ru_max': float(np.max(np.linalg.cond(P_ru)))})
+        self.history.append(summary)
+        self.R = R_next
+        self.iteration += 1
+        return summary
+
+    def _regularised_solve(self, P: np.ndarray, B: np.ndarray) -> np.ndarray:
+        """X = P^-1 B per line, Tikhonov-regularised where P is ill-conditioned."""
+        U_, s, Vh = np.linalg.svd(P)
+        lam = self.cfg.regularisation * s[:, :1]
+        inv_s = s / (s ** 2 + lam ** 2)
+        Pinv = np.conj(np.swapaxes(Vh, 1, 2)) @ (inv_s[:, :, None] * np.conj(
+            np.swapaxes(U_, 1, 2)))
+        return Pinv @ B

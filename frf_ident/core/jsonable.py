@@ -1,0 +1,49 @@
+"""numpy values as plain JSON values: the one conversion used by every file writer."""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ['json_default', 'jsonable']
+
+
+def jsonable(obj: Any) -> Any:
+    """Recursively convert numpy arrays and scalars (and complex numbers) to plain Python.
+
+    Parameters
+    ----------
+    obj : dict, list, tuple, numpy array or scalar, complex, or a plain value.
+
+    Returns
+    -------
+    object
+        The same structure with lists for arrays, Python scalars for numpy scalars, and
+        ``{'re': ..., 'im': ...}`` for complex values; dict keys become strings.
+    """
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        if np.iscomplexobj(obj):
+            return {'re': obj.real.tolist(), 'im': obj.imag.tolist()}
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, complex):
+        return {'re': obj.real, 'im': obj.imag}
+    return obj
+
+
+def json_default(obj: Any) -> Any:
+    """``default=`` of :func:`json.dumps` for numpy arrays and scalars.
+
+    Raises
+    ------
+    TypeError
+        For anything else, as json.dumps expects.
+    """
+    if isinstance(obj, (np.ndarray, np.generic)):
+        return jsonable(obj)
+    raise TypeError(f'not JSON serialisable: {type(obj).__name__}')

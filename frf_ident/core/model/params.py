@@ -1,0 +1,140 @@
+"""Typed parameters of a flexible-joint robot: one :class:`AxisParams` per joint and the
+:class:`RobotParams` of the whole arm (Saupe & Knoblach 2015, eqs. 1, 2, 20-22).
+
+The model file (docs/CONTRACT.md, "Model file") is converted to and from these classes by
+:mod:`frf_ident.core.model.schema`; the simulation reads them in :mod:`frf_ident.core.simulation.plant`.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from frf_ident.errors import ModelFileError
+
+__all__ = ['AxisParams', 'RobotParams']
+
+
+@dataclass
+class AxisParams:
+    """Parameters of one flexible joint; keys and units of the model file (docs/CONTRACT.md §5).
+
+    Extensions beyond the contract (documented in README): ``gravity_torque`` [N m] constant
+    link-side load, ``encoder_resolution`` [rad/count] (0 = ideal), ``velocity_noise`` [rad/s]
+    and ``torque_noise`` [N m] standard deviations of additive measurement noise.
+    """
+
+    name: str = 'joint_1'
+    motor_inertia: float = 35.0
+    link_inertia: float = 150.0
+    stiffness: float = 1.5e5
+    damping: float = 400.0
+    viscous_friction: float = 0.0
+    coulomb_friction: float = 0.0
+    stiffness_k2: float | None = None
+    stiffness_breakpoint: float | None = None
+    backlash: float = 0.0
+    torque_ripple: list[dict[str, float]] = field(default_factory=list)
+    time_delay: float = 0.0
+    torque_limit: float = 150.0
+    gravity_torque: float = 0.0
+    encoder_resolution: float = 0.0
+    velocity_noise: float = 0.0
+    torque_noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        for key in ('motor_inertia', 'link_inertia', 'stiffness'):
+            val = getattr(self, key)
+            if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
+                raise ModelFileError(f'axis {self.name}: {key}={val!r} must be positive')
+        for key in ('damping', 'viscous_friction', 'coulomb_friction', 'backlash', 'time_delay',
+                    'encoder_resolution', 'velocity_noise', 'torque_noise'):
+            val = getattr(self, key)
+            if not (isinstance(val, (int, float)) and math.isfinite(val) and val >= 0):
+                raise ModelFileError(f'axis {self.name}: {key}={val!r} must be >= 0')
+        if not (self.torque_limit > 0):
+            raise ModelFileError(f'axis {self.name}: torque_limit={self.torque_limit!r} '
+                                 f'must be positive')
+        if (self.stiffness_k2 is None) != (self.stiffness_breakpoint is None):
+            raise ModelFileError(f'axis {self.name}: stiffness_k2 and stiffness_breakpoint '
+                                 f'must both be set or both be null')
+        if self.stiffness_breakpoint is not None and not self.stiffness_breakpoint > 0:
+            raise ModelFileError(f'axis {self.name}: stiffness_breakpoint='
+                                 f'{self.stiffness_breakpoint!r} must be positive')
+        for i, rip in enumerate(self.torque_ripple):
+            missing = {'amplitude', 'spatial_frequency'} - set(rip)
+            if missing:
+                raise ModelFileError(f'axis {self.name}: torque_ripple[{i}] lacks '
+                                     f'{sorted(missing)}')
+
+    @property
+    def is_linear(self) -> bool:
+        return (self.coulomb_friction == 0 and self.backlash == 0 and not self.torque_ripple
+                and (self.stiffness_k2 is None or self.stiffness_k2 == self.stiffness))
+
+
+@dataclass
+class RobotParams:
+    """A multi-axis flexible-joint robot: axes plus optional link-side inertial coupling.
+
+    ``link_coupling`` is an (n, n) symmetric matrix of off-diagonal link inertia terms [kg m^2]
+    (diagonal ignored); the link inertia matrix is diag(link_inertia) + offdiag(link_coupling).
+    """
+
+    axes: list[AxisParams]
+    link_coupling: np.ndarray | None = None
+    sample_rate: float = 1000.0
+    substeps: int = 2
+    velocity_from_encoder: bool = False
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not self.axes:
+            raise ModelFileError('model has no axes')
+        if not (self.sample_rate > 0):
+            raise ModelFileError(f'sample_rate={self.sample_rate!r} must be positive')
+        if int(self.substeps) < 1:
+            raise ModelFileError(f'substeps={self.substeps!r} must be >= 1')
+        n = len(self.axes)
+        if self.link_coupling is not None:
+            c = np.asarray(self.link_coupling, dtype=float)
+            if c.shape != (n, n) or not np.allclose(c, c.T):
+                raise ModelFileError(f'link_coupling must be a symmetric {n}x{n} matrix, '
+                                     f'got shape {c.shape}')
+            self.link_coupling = c
+        if np.any(np.linalg.eigvalsh(self.link_inertia_matrix()) <= 0):
+            raise ModelFileError('link inertia matrix (link_inertia + link_coupling) must be '
+                                 'positive definite')
+
+    @property
+    def n_axes(self) -> int:
+        return len(self.axes)
+
+    @property
+    def dt(self) -> float:
+        return 1.0 / self.sample_rate
+
+    @property
+    def joint_names(self) -> list[str]:
+        return [a.name for a in self.axes]
+
+    def link_inertia_matrix(self) -> np.ndarray:
+        m = np.diag([a.link_inertia for a in self.axes]).astype(float)
+        if self.link_coupling is not None:
+            off = self.link_coupling - np.diag(np.diag(self.link_coupling))
+            m = m + off
+        return m
+
+    def torque_limits(self) -> np.ndarray:
+        return np.array([a.torque_limit for a in self.axes], dtype=float)
+
+    def with_axes(self, **changes: Any) -> 'RobotParams':
+        """Copy with the same attribute changes applied to every axis."""
+        return replace(self, axes=[replace(a, **changes) for a in self.axes])
+
+    def linear(self) -> 'RobotParams':
+        """The linear part: no Coulomb friction, backlash, ripple, nonlinear stiffness."""
+        return self.with_axes(coulomb_friction=0.0, backlash=0.0, torque_ripple=[],
+                              stiffness_k2=None, stiffness_breakpoint=None)

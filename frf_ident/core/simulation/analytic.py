@@ -1,0 +1,131 @@
+"""Closed-form frequency responses of the linear flexible-joint robot (analytic truth).
+
+- :func:`two_mass_frf` — SISO dq_m / tau_m of eqs. 20-22 (linear):
+  (Jo s^2 + d s + k1) / (s (Jm Jo s^2 + (Jm + Jo)(d s + k1)))   (+ viscous friction)
+- :func:`robot_frf` — MIMO continuous-time tau_m -> dq_m with link inertial coupling
+- :func:`state_space` — linear state-space model (A, B, C) of the robot
+- :func:`robot_frf_sampled` — the exact FRF of the sampled plant as the simulation realises it:
+  zero-order-hold input, input delay, velocity sampled (or differentiated encoder position)
+- :func:`closed_loop_frfs` — r -> u and r -> y through the velocity PI controller
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy import linalg
+
+from frf_ident.core.model.params import RobotParams
+
+from frf_ident.core.simulation.plant import state_space
+
+
+def two_mass_frf(freq_hz: np.ndarray, motor_inertia: float, link_inertia: float,
+                 stiffness: float, damping: float, viscous_friction: float = 0.0) -> np.ndarray:
+    """Linear two-mass FRF dq_m/tau_m of eqs. 20-22 at freq_hz (continuous time)."""
+    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
+    jm, jo, bv = motor_inertia, link_inertia, viscous_friction
+    z = damping * s + stiffness
+    num = jo * s ** 2 + z
+    # (Jm s^2 + bv s + Z - Z^2 / (Jo s^2 + Z)) q_m = tau_m,  dq_m = s q_m
+    return s * num / ((jm * s ** 2 + bv * s) * num + z * jo * s ** 2)
+
+
+def _link_stiffness_terms(params: RobotParams):
+    n = params.n_axes
+    jm = np.diag([a.motor_inertia for a in params.axes])
+    bv = np.diag([a.viscous_friction for a in params.axes])
+    k = np.diag([a.stiffness for a in params.axes])
+    d = np.diag([a.damping for a in params.axes])
+    return n, jm, bv, k, d, params.link_inertia_matrix()
+
+
+def robot_frf(params: RobotParams, freq_hz: np.ndarray) -> np.ndarray:
+    """MIMO continuous FRF tau_m -> dq_m of the linearised robot, shape (n, n, n_freq).
+
+    (Jm s^2 + Bv s + Z - Z (M_o s^2 + Z)^-1 Z) q_m = tau with Z = K + D s, P = s q_m / tau.
+    Symmetric (reciprocal) for a symmetric link inertia matrix.
+    """
+    freq_hz = np.asarray(freq_hz, dtype=float)
+    n, jm, bv, k, d, mo = _link_stiffness_terms(params)
+    out = np.empty((n, n, freq_hz.size), dtype=complex)
+    for i, f in enumerate(freq_hz):
+        s = 2j * np.pi * f
+        z = k + d * s
+        dyn = jm * s ** 2 + bv * s + z - z @ np.linalg.solve(mo * s ** 2 + z, z)
+        out[:, :, i] = s * np.linalg.inv(dyn)
+    return out
+
+
+def _zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact zero-order-hold discretisation via the augmented matrix exponential."""
+    nx, nu = B.shape
+    M = np.zeros((nx + nu, nx + nu))
+    M[:nx, :nx] = A * dt
+    M[:nx, nx:] = B * dt
+    E = linalg.expm(M)
+    return E[:nx, :nx], E[:nx, nx:]
+
+
+def _delayed_zoh_input(A: np.ndarray, B: np.ndarray, dt: float, delay: float
+                       ) -> tuple[np.ndarray, np.ndarray, int]:
+    """ZOH with an input delay tau = (n_d + frac) dt: x+ = Ad x + B0 u[k-n_d] + B1 u[k-n_d-1]."""
+    nd = int(np.floor(delay / dt + 1e-12))
+    frac = delay - nd * dt
+    Ad, _ = _zoh(A, B, dt)
+    # over [0, frac) the older command acts, over [frac, dt) the newer one
+    Ad_rest, B_rest = _zoh(A, B, dt - frac)
+    Ad_frac, B_frac = _zoh(A, B, frac) if frac > 0 else (np.eye(A.shape[0]), np.zeros_like(B))
+    B_new = B_rest
+    B_old = Ad_rest @ B_frac
+    return Ad, np.stack([B_new, B_old]), nd
+
+
+def robot_frf_sampled(params: RobotParams, freq_hz: np.ndarray, *,
+                      output: str = 'velocity', delays: np.ndarray | None = None) -> np.ndarray:
+    """Exact FRF from sampled torque (zero-order hold) to sampled output, shape (n, n, n_freq).
+
+    This is what a digital controller sees and what the simulation realises: with
+    ``output='velocity'`` the sampled motor velocity, with ``'encoder'`` the difference of
+    motor positions over one sample divided by dt. ``delays`` (per input, seconds) defaults to
+    the axes' ``time_delay``.
+    """
+    freq_hz = np.asarray(freq_hz, dtype=float)
+    dt = params.dt
+    A, B, Cv, Cq = state_space(params)
+    n = params.n_axes
+    if delays is None:
+        delays = np.array([a.time_delay for a in params.axes])
+    z = np.exp(2j * np.pi * freq_hz * dt)
+    out = np.empty((n, n, freq_hz.size), dtype=complex)
+    nx = A.shape[0]
+    for j in range(n):
+        Ad, Bs, nd = _delayed_zoh_input(A, B[:, j:j + 1], dt, float(delays[j]))
+        for i, zi in enumerate(z):
+            bz = (Bs[0] + Bs[1] / zi) * zi ** (-nd)
+            x = np.linalg.solve(zi * np.eye(nx) - Ad, bz)
+            if output == 'velocity':
+                y = Cv @ x
+            elif output == 'encoder':
+                y = Cq @ x * (1 - 1 / zi) / dt
+            else:
+                raise ValueError(f"{output=} must be 'velocity' or 'encoder'")
+            out[:, j, i] = y[:, 0]
+    return out
+
+
+def closed_loop_frfs(P: np.ndarray, freq_hz: np.ndarray, kp: np.ndarray, ki: np.ndarray,
+                     dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Closed-loop r -> u and r -> y for the discrete velocity PI around plant P (n, n, n_freq).
+
+    The PI is discretised as the simulation runs it (integral updated before use):
+    K(z) = kp + ki dt z / (z - 1). Returns (S_u = (I + K P)^-1 K, T = P S_u).
+    """
+    freq_hz = np.asarray(freq_hz, dtype=float)
+    n = P.shape[0]
+    z = np.exp(2j * np.pi * freq_hz * dt)
+    Su = np.empty_like(P)
+    T = np.empty_like(P)
+    for i, zi in enumerate(z):
+        K = np.diag(kp + ki * dt * zi / (zi - 1))
+        Su[:, :, i] = np.linalg.solve(np.eye(n) + K @ P[:, :, i], K)
+        T[:, :, i] = P[:, :, i] @ Su[:, :, i]
+    return Su, T

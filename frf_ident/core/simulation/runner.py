@@ -1,0 +1,184 @@
+"""Offline runner: executes procedure phases in closed loop on a simulated or plug-in plant.
+
+The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` (run at compiled speed, the PI
+inside the kernel) or any docs/CONTRACT.md §4 plug-in with ``dt``, ``joint_names``, ``reset()``
+and ``step(torque) -> (position, velocity, effort)``, driven sample by sample through the same
+PI. Everything lands in one :class:`~frf_ident.core.recording.Recording` on a single timeline.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.core.excitation.procedures import (POSITION_GAIN, ChirpConfig, ChirpIteration,
+                                       MultisineConfig, Phase, move_plan, multisine_procedure)
+from frf_ident.core.recording import Recording, Segment
+from frf_ident.errors import FrfIdentInputError
+
+Progress = Callable[[str], None]
+
+
+class ClosedLoop:
+    """A plant in closed loop with the velocity PI; runs reference arrays and keeps the log."""
+
+    def __init__(self, plant: Any, controller: PIVelocity) -> None:
+        for attr in ('dt', 'joint_names', 'reset', 'step'):
+            if not hasattr(plant, attr):
+                raise FrfIdentInputError(f'plant {type(plant).__name__} lacks {attr!r} '
+                                         f'(docs/CONTRACT.md §4 plug-in interface)')
+        self.plant = plant
+        self.ctrl = controller
+        self.dt = float(plant.dt)
+        self.n = len(plant.joint_names)
+        if controller.n_axes != self.n:
+            raise FrfIdentInputError(f'controller has {controller.n_axes} axes, plant '
+                                     f'{self.n} joints {plant.joint_names}')
+        self.fast = isinstance(plant, FlexibleJointPlant)
+        plant.reset()
+        self.k = 0
+        if self.fast:
+            self.q_last = plant.state[0].copy()
+            self.y_last = np.zeros(self.n)
+        else:   # a plug-in reports a measurement only after a step: hold for one sample
+            hold = np.asarray(controller.integral, dtype=float)
+            q, v, _ = plant.step(hold)
+            self.q_last, self.y_last = np.asarray(q, float), np.asarray(v, float)
+        self.q0 = self.q_last.copy()
+        self.hold: np.ndarray | None = None     # position a settle phase holds after a move
+        self.log: dict[str, list[np.ndarray]] = {k: [] for k in ('q', 'v', 'u', 'r', 'x')}
+        self.segments: list[Segment] = []
+
+    @property
+    def t(self) -> float:
+        return self.k * self.dt
+
+    def run(self, reference: np.ndarray, excitation: np.ndarray | None = None,
+            plan: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Run the reference (N, n); returns and logs (position, velocity, effort).
+
+        With ``plan`` (N, n absolute positions) the reference gets position feedback
+        r + POSITION_GAIN (plan - q), as for moves; the reference actually used is logged.
+        """
+        r = np.ascontiguousarray(reference, dtype=float)
+        if self.fast:
+            res = self.plant.simulate(reference=r, controller=self.ctrl, position_plan=plan,
+                                      position_gain=POSITION_GAIN)
+            q, v, u, r = res.position, res.velocity, res.effort, res.reference
+            self.q_last = self.plant.state[0].copy()
+        else:
+            q, v, u = (np.empty_like(r) for _ in range(3))
+            r = r.copy()
+            for k in range(r.shape[0]):
+                q[k], v[k] = self.q_last, self.y_last
+                if plan is not None:
+                    r[k] += POSITION_GAIN * (plan[k] - self.q_last)
+                u[k] = self.ctrl.step(r[k], self.y_last)
+                qn, vn, _ = self.plant.step(u[k])
+                self.q_last, self.y_last = np.asarray(qn, float), np.asarray(vn, float)
+        self.log['q'].append(q)
+        self.log['v'].append(v)
+        self.log['u'].append(u)
+        self.log['r'].append(r)
+        self.log['x'].append(np.zeros_like(r) if excitation is None else excitation)
+        self.k += r.shape[0]
+        return q, v, u
+
+    def run_phase(self, ph: Phase) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if ph.kind == 'excite':
+            t0 = self.t
+            out = self.run(ph.reference, ph.excitation)
+            if ph.segment is not None:
+                self.segments.append(Segment(t0, self.t, dict(ph.segment)))
+            return out
+        if ph.kind == 'move':
+            ref, plan = move_plan(self.q_last, self.q0 + ph.target, ph.n_samples, self.dt)
+            self.hold = plan[-1]
+            return self.run(ref, plan=plan)
+        if ph.kind == 'settle':
+            hold = self.q_last if self.hold is None else self.hold
+            self.hold = None
+            return self.run(np.zeros((ph.n_samples, self.n)),
+                            plan=np.tile(hold, (ph.n_samples, 1)))
+        raise ValueError(f'unknown phase kind {ph.kind!r}')
+
+    def recording(self, meta: dict[str, Any] | None = None) -> Recording:
+        cat = {k: np.concatenate(v) if v else np.zeros((0, self.n)) for k, v in self.log.items()}
+        t = np.arange(cat['q'].shape[0]) * self.dt
+        return Recording(t, list(self.plant.joint_names), cat['q'], cat['v'], cat['u'],
+                         cat['r'], cat['x'], list(self.segments), dict(meta or {}))
+
+
+@dataclass
+class IdentificationConfig:
+    multisine: MultisineConfig | None = field(default_factory=MultisineConfig)
+    chirp: ChirpConfig | None = field(default_factory=ChirpConfig)
+
+
+def run_identification(plant: Any, controller: PIVelocity,
+                       config: IdentificationConfig | None = None, *,
+                       progress: Progress | None = None,
+                       meta: dict[str, Any] | None = None) -> Recording:
+    """Run the Section 7 procedures (multisine with compensation run, iterated chirps).
+
+    Returns the recording with all segments; ``meta['summary']`` holds per procedure the
+    experiment time and, for the chirp iteration, every iteration's error to u_des.
+    """
+    cfg = config or IdentificationConfig()
+    say = progress or (lambda _m: None)
+    loop = ClosedLoop(plant, controller)
+    fs = 1.0 / loop.dt
+    summary: dict[str, Any] = {}
+    wall0 = time.perf_counter()
+    if cfg.multisine is not None:
+        phases, design = multisine_procedure(cfg.multisine, loop.n, fs)
+        t_start = loop.t
+        n_exc = sum(1 for p in phases if p.segment)
+        done = 0
+        for ph in phases:
+            loop.run_phase(ph)
+            if ph.segment:
+                done += 1
+                say(f'multisine: segment {done}/{n_exc} '
+                    f'({ph.segment["design"]}, realisation {ph.segment["realisation"]}, '
+                    f'experiment {ph.segment["experiment"]})')
+        summary['multisine'] = {'experiment_time_s': loop.t - t_start,
+                                'segments': n_exc, 'lines': int(design.harmonics.size),
+                                'period_s': design.period,
+                                'constant_velocity':
+                                    next(p.segment for p in phases if p.segment)[
+                                        'constant_velocity']}
+    if cfg.chirp is not None:
+        it = ChirpIteration(cfg.chirp, loop.n, fs, controller.torque_limit)
+        t_start = loop.t
+        iterations = []
+        for _ in range(cfg.chirp.max_iterations):
+            r_runs, u_runs = [], []
+            for ph in it.phases():
+                _, _, u = loop.run_phase(ph)
+                if ph.segment:
+                    r_runs.append(ph.reference)
+                    u_runs.append(u)
+            s = it.update(r_runs, u_runs)
+            iterations.append(s)
+            say(f"chirp iteration {s['iteration']}: max |u - u_des| "
+                f"{s['max_abs_error_db']:.2f} dB, peak |u| "
+                f"{max(s['max_abs_torque']):.1f} N m"
+                + (' (converged)' if s['converged'] else ''))
+            if s['converged']:
+                break
+        summary['chirp'] = {'experiment_time_s': loop.t - t_start, 'iterations': iterations,
+                            'converged': bool(iterations[-1]['converged']),
+                            'final_iteration': iterations[-1]['iteration'],
+                            'analysis_freq_hz': it.freqs.tolist(),
+                            'torque_limit': controller.torque_limit.tolist()}
+    summary['total_experiment_time_s'] = loop.t
+    summary['wall_time_s'] = time.perf_counter() - wall0
+    m = dict(meta or {})
+    m['summary'] = summary
+    m['operating_point'] = loop.q0.tolist()
+    return loop.recording(m)

@@ -1,0 +1,38 @@
+"""Where the package's data files (config/, launch/) are: the installed share directory when
+the package is installed with colcon (found through ament_index), else the source checkout."""
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = ['PACKAGE', 'config_file', 'share_dir']
+
+PACKAGE = 'frf_ident'
+#: the checkout root when running from the source tree (setup.py beside the package)
+SOURCE_ROOT = Path(__file__).resolve().parents[2]
+
+
+def share_dir() -> Path:
+    """The directory holding ``config/`` and ``launch/``.
+
+    Returns
+    -------
+    Path
+        ``share/frf_ident`` of the colcon install when ament_index knows the package and this
+        module runs from that install; the source checkout otherwise.
+    """
+    if (SOURCE_ROOT / 'setup.py').is_file() and (SOURCE_ROOT / 'config').is_dir():
+        return SOURCE_ROOT
+    try:
+        from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
+    except ImportError:
+        return SOURCE_ROOT
+    try:
+        return Path(get_package_share_directory(PACKAGE))
+    except PackageNotFoundError:
+        return SOURCE_ROOT
+
+
+def config_file(name: str) -> Path | None:
+    """``config/NAME`` in :func:`share_dir`, or None when it does not exist."""
+    p = share_dir() / 'config' / name
+    return p if p.is_file() else None

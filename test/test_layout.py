@@ -1,0 +1,92 @@
+"""The package layout: layers (import-linter contracts in .importlinter), no import cycle
+between modules, and no module importing another module's private name."""
+import ast
+from pathlib import Path
+
+import grimp
+import numpy as np
+import pytest
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = 'frf_ident'
+
+
+@pytest.fixture(scope='module')
+def graph():
+    return grimp.build_graph(PACKAGE, include_external_packages=False, cache_dir=None)
+
+
+def import_cycles(graph) -> list[list[str]]:
+    """Strongly connected components of more than one module (a package's own
+    re-exports of its submodules count: they would be a cycle too)."""
+    mods = sorted(graph.modules)
+    index = {m: i for i, m in enumerate(mods)}
+    rows, cols = [], []
+    for m in mods:
+        for t in graph.find_modules_directly_imported_by(m):
+            if t in index:
+                rows.append(index[m])
+                cols.append(index[t])
+    adj = csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(mods), len(mods)))
+    n, labels = connected_components(adj, directed=True, connection='strong')
+    comps = [[mods[i] for i in np.flatnonzero(labels == k)] for k in range(n)]
+    return [c for c in comps if len(c) > 1]
+
+
+def private_imports(root: Path = ROOT) -> list[str]:
+    """``from frf_ident.x import _name`` in a module other than frf_ident.x."""
+    found = []
+    for path in sorted((root / PACKAGE).rglob('*.py')):
+        rel = path.relative_to(root).with_suffix('')
+        parts = list(rel.parts[:-1]) if rel.name == '__init__' else list(rel.parts)
+        me = '.'.join(parts)
+        pkg = parts if rel.name == '__init__' else parts[:-1]
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            if node.level:
+                base = pkg[:len(pkg) - node.level + 1]
+                target = '.'.join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ''
+            if not target.startswith(PACKAGE) or target == me:
+                continue
+            for alias in node.names:
+                if alias.name.startswith('_') and not alias.name.startswith('__'):
+                    found.append(f'{me}:{node.lineno} imports {target}.{alias.name}')
+    return found
+
+
+def test_no_import_cycles(graph):
+    assert import_cycles(graph) == []
+
+
+def test_cycle_detector_sees_a_cycle():
+    g = grimp.ImportGraph()
+    for m in ('p', 'p.a', 'p.b', 'p.c'):
+        g.add_module(m)
+    g.add_import(importer='p.a', imported='p.b')
+    g.add_import(importer='p.b', imported='p.a')
+    g.add_import(importer='p.c', imported='p.a')
+    assert import_cycles(g) == [['p.a', 'p.b']]
+
+
+def test_no_private_names_across_modules():
+    assert private_imports() == []
+
+
+def test_private_detector_sees_one(tmp_path):
+    (tmp_path / PACKAGE / 'sub').mkdir(parents=True)
+    (tmp_path / PACKAGE / '__init__.py').write_text('')
+    (tmp_path / PACKAGE / 'sub' / '__init__.py').write_text('from .a import _ok_in_pkg\n')
+    (tmp_path / PACKAGE / 'sub' / 'b.py').write_text('from frf_ident.sub.a import _bad, fine\n')
+    found = private_imports(tmp_path)
+    assert found == ['frf_ident.sub:1 imports frf_ident.sub.a._ok_in_pkg',
+                     'frf_ident.sub.b:1 imports frf_ident.sub.a._bad']
+
+
+def test_layer_contracts():
+    from importlinter.cli import lint_imports
+    assert lint_imports(config_filename=str(ROOT / '.importlinter'), no_cache=True) == 0
