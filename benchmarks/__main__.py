@@ -1,4 +1,5 @@
-"""`make bench`: speed and accuracy figures, each beside a baseline measured in the same run.
+"""
+`make bench`: speed and accuracy figures, each beside a baseline measured in the same run.
 
 Sections (run all, or name some: ``python -m benchmarks simulation estimation``):
 
@@ -38,7 +39,7 @@ def _timeit(fn: Callable[[], object], repeat: int = 3) -> tuple[float, object]:
 
 
 def bench_robot():
-    """The default 3-axis model with the effects a real robot has (friction, ripple)."""
+    """Return the default 3-axis model with the effects a real robot has (friction, ripple)."""
     from frf_ident.core.model.schema import default_robot
     rob = default_robot().with_axes(coulomb_friction=15.0)
     for a in rob.axes:
@@ -69,13 +70,12 @@ def bench_simulation() -> list[tuple[str, str, str, str]]:
 
 @section('estimation')
 def bench_estimation() -> list[tuple[str, str, str, str]]:
-    from scipy import signal
-
+    from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
+    from frf_ident.core.model.schema import default_robot
     from frf_ident.core.simulation.analytic import robot_frf
     from frf_ident.core.simulation.open_loop import stage_grid
-    from frf_ident.core.model.schema import default_robot
-    from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
     from frf_ident.core.simulation.plant import FlexibleJointPlant
+    from scipy import signal
     fs = 1000.0
     rob = default_robot().with_axes(viscous_friction=0.0, gravity_torque=0.0)
     d = design_odd_multisine(2.0, 60.0, bound=80.0, resolution_hz=0.25, fs=fs)
@@ -145,13 +145,17 @@ def _db_error(est, truth) -> float:
 
 @section('experiment_time')
 def bench_experiment_time() -> list[tuple[str, str, str, str]]:
-    """Simulated experiment time each procedure needs for the 3x3 FRF within 1 dB of truth
-    (nominal linear 3-axis model, 40 dB SNR output noise), against the paper's totals."""
-    from frf_ident.core.simulation.analytic import robot_frf_sampled
+    """
+    Measure the experiment time each procedure needs for a 3x3 FRF within 1 dB of truth.
+
+    Nominal linear 3-axis model, 40 dB SNR output noise; compared with the paper's totals.
+    """
     from frf_ident.core.estimation.described import chirp_frf, multisine_frf
-    from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
-    from frf_ident.core.simulation.plant import FlexibleJointPlant
     from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
+                                             robot_from_dict)
+    from frf_ident.core.simulation.analytic import robot_frf_sampled
+    from frf_ident.core.simulation.plant import FlexibleJointPlant
     from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
     d = default_model_dict()
     rob = robot_from_dict(d)
@@ -193,11 +197,11 @@ def bench_experiment_time() -> list[tuple[str, str, str, str]]:
 
 @section('bag_read')
 def bench_bag_read() -> list[tuple[str, str, str, str]]:
-    import tempfile
     from pathlib import Path
+    import tempfile
 
-    from frf_ident.bag import write_recording
     from benchmarks.bag_read import bench_read
+    from frf_ident.bag import write_recording
     from frf_ident.core.recording import Recording
     n, joints = 120_000, ['joint_1', 'joint_2', 'joint_3', 'joint_4', 'joint_5', 'joint_6']
     t = np.arange(n) * 1e-3
@@ -217,13 +221,17 @@ def bench_bag_read() -> list[tuple[str, str, str, str]]:
 
 
 def periodic_multisine_run(duration_s: float, seed: int = 0, fs: float = 1000.0):
-    """A long run without descriptors (as a robot's own bag would be): the 3-axis model in
-    closed loop, a periodic odd multisine velocity reference on joint_2 (2-60 Hz, 0.5 Hz
-    resolution), 1e-3 rad/s noise on the measured velocity."""
-    from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
+    """
+    Simulate a long run without descriptors, as a robot's own bag would be.
+
+    The 3-axis model in closed loop, a periodic odd multisine velocity reference on joint_2
+    (2-60 Hz, 0.5 Hz resolution), 1e-3 rad/s noise on the measured velocity.
+    """
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
-    from frf_ident.core.simulation.plant import FlexibleJointPlant
+    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
+                                             robot_from_dict)
     from frf_ident.core.recording import Recording
+    from frf_ident.core.simulation.plant import FlexibleJointPlant
     d = default_model_dict()
     rob = robot_from_dict(d)
     ctrl = controller_from_dict(d, rob)
@@ -241,15 +249,18 @@ def periodic_multisine_run(duration_s: float, seed: int = 0, fs: float = 1000.0)
 
 @section('stream')
 def bench_stream() -> list[tuple[str, str, str, str]]:
-    """Estimate of a bag without descriptors, streamed in 60 s blocks vs read into memory:
-    peak traced memory for a 5 min and a 20 min bag (the streamed one must stay flat)."""
-    import tempfile
-    from pathlib import Path
+    """
+    Compare peak memory of a streamed and an in-memory estimate of a descriptor-less bag.
 
-    from frf_ident.bag import read_recording, write_recording
+    Peak traced memory for a 5 min and a 20 min bag (the streamed one must stay flat).
+    """
+    from pathlib import Path
+    import tempfile
+
     from benchmarks.bag_read import measure
-    from frf_ident.core.estimation.described import estimate_recording
     from frf_ident.app.stream_estimate import stream_estimate
+    from frf_ident.bag import read_recording, write_recording
+    from frf_ident.core.estimation.described import estimate_recording
     rows = []
     mb = 1024 ** 2
     with tempfile.TemporaryDirectory() as tmp:
@@ -268,8 +279,12 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
 
 @section('diagnosis')
 def bench_diagnosis() -> list[tuple[str, str, str, str]]:
-    """Hidden-effect sweep: a seeded random effect (cycling over the seven names) and
-    parameters in a plug-in plant, identified and diagnosed against the nominal model."""
+    """
+    Run the hidden-effect sweep of the diagnosis.
+
+    A seeded random effect (cycling over the seven names) and parameters in a plug-in plant,
+    identified and diagnosed against the nominal model.
+    """
     from benchmarks.diagnosis import hit_rate
     r = hit_rate(28)
     rows = [(f"hidden effect ranked first ({r['n']} seeds)", f"{r['hits']}/{r['n']}",
@@ -283,8 +298,11 @@ def bench_diagnosis() -> list[tuple[str, str, str, str]]:
 
 @section('nodes')
 def bench_nodes() -> list[tuple[str, str, str, str]]:
-    """Lockstep closed-loop steps/s of the node graph (separate processes over DDS on
-    loopback) against a plain DDS ping-pong of the same backend in the same run (goal 50 %)."""
+    """
+    Measure the node graph's lockstep steps/s against a DDS ping-pong in the same run.
+
+    Separate processes over DDS on loopback; the ping-pong uses the same backend (goal 50 %).
+    """
     from benchmarks.graph import bench_lockstep
     r = bench_lockstep()
     pp = r['pingpong_per_s']

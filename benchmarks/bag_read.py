@@ -1,4 +1,5 @@
-"""Read benchmark: frf_ident's streaming reader vs a plain rosbags AnyReader loop.
+"""
+Read benchmark: frf_ident's streaming reader vs a plain rosbags AnyReader loop.
 
 ``bench_read(path)`` reads the same bag twice each way: once timed (no tracing), once under
 ``tracemalloc`` for the peak Python heap. The rosbags baseline deserialises every JointState
@@ -11,22 +12,21 @@ reader (which would still have to copy the values somewhere).
 from __future__ import annotations
 
 import json
+from pathlib import Path
 import sys
 import tempfile
 import time
 import tracemalloc
-from pathlib import Path
 from typing import Any, Callable
-
-import numpy as np
 
 from frf_ident.bag.reader import bag_info, read_recording
 from frf_ident.bag.topics import BagTopics
+import numpy as np
 
 
 def _rosbags_loop(path: Path, topic: str) -> int:
     from rosbags.highlevel import AnyReader
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import get_typestore, Stores
 
     n = 0
     paths = [path if path.is_dir() else path]
@@ -53,7 +53,7 @@ def measure(fn: Callable[[], Any]) -> tuple[float, int]:
 
 
 def bench_read(path: str | Path, *, topics: BagTopics | None = None) -> dict[str, Any]:
-    """JointState messages/s and peak memory of ``read_recording`` vs rosbags ``AnyReader``."""
+    """Measure JointState msgs/s and peak memory: ``read_recording`` vs rosbags ``AnyReader``."""
     topics = topics or BagTopics()
     path = Path(path)
     counts = {t['name']: t['count'] for t in bag_info(path)['topics']}
@@ -75,9 +75,8 @@ def bench_read(path: str | Path, *, topics: BagTopics | None = None) -> dict[str
 def synthetic_bag(path: Path, seconds: float = 60.0, n_joints: int = 6,
                   fs: float = 1000.0) -> Path:
     """Write a simulated run (sines on every topic) for benchmarking."""
-    from frf_ident.core.recording import Recording, Segment
-
     from frf_ident.bag.writer import write_recording
+    from frf_ident.core.recording import Recording, Segment
 
     t = np.arange(int(seconds * fs)) / fs
     w = 2 * np.pi * np.linspace(0.5, 3.0, n_joints)

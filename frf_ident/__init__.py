@@ -1,4 +1,5 @@
-"""frf_ident: closed-loop FRF identification of flexible-joint robots.
+"""
+frf_ident: closed-loop FRF identification of flexible-joint robots.
 
 Implements Saupe & Knoblach (2015), "Experimental determination of frequency response
 function estimates for flexible joint industrial manipulators with serial kinematics".

@@ -1,4 +1,5 @@
-"""Exception hierarchy of frf_ident.
+"""
+Exception hierarchy of frf_ident.
 
 Every error a user can cause derives from :class:`FrfIdentInputError`; the CLI turns it into
 one line on stderr and exit status 2. Everything else is a failure (exit 1).

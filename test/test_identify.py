@@ -1,9 +1,6 @@
 """`frf-ident identify` -> bag -> `frf-ident estimate`: the bag carries everything."""
+import argparse
 import json
-
-import numpy as np
-import pytest
-import yaml
 
 from frf_ident.bag import read_recording
 from frf_ident.cli import main
@@ -11,6 +8,9 @@ from frf_ident.cli.identify import identification_config
 from frf_ident.core.estimation.described import estimate_recording
 from frf_ident.core.simulation.runner import run_identification
 from frf_ident.io.model_file import load_model, load_plant
+import numpy as np
+import pytest
+import yaml
 
 ARGS = ['--realisations', '2', '--periods', '2', '--resolution', '0.5',
         '--chirp-duration', '8', '--max-iterations', '2']
@@ -53,9 +53,9 @@ def test_bag_is_rosbag2_mcap_v9_readable_by_rosbags_and_mcap(bag):
 
 def test_estimate_from_bag_equals_in_memory_run(bag, tmp_path):
     model, _, ctrl = load_model(None)
-    parser_args = type('A', (), dict(procedures='multisine,chirp', realisations=2, periods=2,
+    parser_args = argparse.Namespace(procedures='multisine,chirp', realisations=2, periods=2,
                                      resolution=0.5, no_compensation=False,
-                                     chirp_duration=8.0, max_iterations=2, seed=0))()
+                                     chirp_duration=8.0, max_iterations=2, seed=0)
     rec = run_identification(load_plant(None, model), ctrl, identification_config(parser_args))
     mem = estimate_recording(rec)
     from_bag = estimate_recording(read_recording(bag)[0])

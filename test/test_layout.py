@@ -1,5 +1,9 @@
-"""The package layout: layers (import-linter contracts in .importlinter), no import cycle
-between modules, and no module importing another module's private name."""
+"""
+The package layout.
+
+Layers (import-linter contracts in .importlinter), no import cycle between modules, and no
+module importing another module's private name.
+"""
 import ast
 from pathlib import Path
 
@@ -19,8 +23,11 @@ def graph():
 
 
 def import_cycles(graph) -> list[list[str]]:
-    """Strongly connected components of more than one module (a package's own
-    re-exports of its submodules count: they would be a cycle too)."""
+    """
+    Return the strongly connected components of more than one module.
+
+    A package's own re-exports of its submodules count: they would be a cycle too.
+    """
     mods = sorted(graph.modules)
     index = {m: i for i, m in enumerate(mods)}
     rows, cols = [], []
@@ -90,3 +97,16 @@ def test_private_detector_sees_one(tmp_path):
 def test_layer_contracts():
     from importlinter.cli import lint_imports
     assert lint_imports(config_filename=str(ROOT / '.importlinter'), no_cache=True) == 0
+
+
+def test_core_reexports_its_public_api():
+    import importlib
+
+    import frf_ident.core as core
+    for name in core.__all__:
+        obj = getattr(core, name)
+        assert not name.startswith('_')
+        home = importlib.import_module(obj.__module__) if hasattr(obj, '__module__') else None
+        assert home is not None and getattr(home, name) is obj, name
+    with pytest.raises(AttributeError):
+        core.not_a_name  # noqa: B018

@@ -1,11 +1,10 @@
 """`frf-ident reproduce paper`: the paper's findings as numbers computed from results.json."""
 import json
 
+from frf_ident.app.reproduce import analytic_linear
+from frf_ident.cli import main
 import numpy as np
 import pytest
-
-from frf_ident.cli import main
-from frf_ident.app.reproduce import analytic_linear
 
 
 @pytest.fixture(scope='module')

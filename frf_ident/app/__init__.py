@@ -1,1 +1,6 @@
-"""Application functions: identify, estimate, import, diagnose, reproduce, demo (used by the CLI and the nodes)."""
+"""
+Application functions used by both the CLI and the nodes.
+
+identify, estimate (in memory or streamed), import, diagnose, reproduce, demo, and the node-graph
+driver.
+"""

@@ -12,20 +12,27 @@ __all__ = ['run_identify']
 
 def run_identify(model_path: str | Path | None, plant_spec: str | None, config: Any,
                  out: Path, *, progress: Callable[[str], None] = say):
-    """Run the identification experiments in closed loop and write the bag.
+    """
+    Run the identification experiments in closed loop and write the bag.
 
     Parameters
     ----------
-    model_path : model file, or None for the embedded 3-axis model.
-    plant_spec : plant plug-in ``'package.module:Class'``, or None for the model's simulation.
-    config : :class:`~frf_ident.core.simulation.runner.IdentificationConfig`.
-    out : bag directory to create; an existing path is refused (nothing is overwritten).
-    progress : called with one line per step.
+    model_path
+        Model file, or None for the embedded 3-axis model.
+    plant_spec
+        Plant plug-in ``'package.module:Class'``, or None for the model's simulation.
+    config
+        :class:`~frf_ident.core.simulation.runner.IdentificationConfig`.
+    out
+        Bag directory to create; an existing path is refused (nothing is overwritten).
+    progress
+        Called with one line per step.
 
     Returns
     -------
     Recording
         The recorded run (also written to ``out``).
+
     """
     from frf_ident.bag import write_recording
     from frf_ident.core.simulation.runner import run_identification

@@ -1,4 +1,5 @@
-"""`frf-ident reproduce paper`: the academic example of Saupe & Knoblach (2015), Section 6.
+"""
+`frf-ident reproduce paper`: the academic example of Saupe & Knoblach (2015), Section 6.
 
 Single flexible joint (Jm 35, Jo 150, d 400, k1 1.5e5, bs 1e-3, torque limit 150 N m), open
 loop, no noise; three cases (linear, Fc = 50 N m, k2 = 1.7 k1) x two designs (odd random
@@ -12,18 +13,17 @@ import json
 from pathlib import Path
 from typing import Any, Callable
 
-import numpy as np
-
-from frf_ident.core.simulation.analytic import two_mass_frf
-from frf_ident.core.excitation.chirp import ChirpDesign, chirp_phase_flips
-from frf_ident.core.simulation.open_loop import (resonance_peak, run_open_loop_chirp,
-                                        run_open_loop_multisine)
+from frf_ident.core.excitation.chirp import chirp_phase_flips, ChirpDesign
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
 from frf_ident.core.model.params import AxisParams, RobotParams
+from frf_ident.core.simulation.analytic import two_mass_frf
+from frf_ident.core.simulation.open_loop import (resonance_peak, run_open_loop_chirp,
+                                                 run_open_loop_multisine)
 from frf_ident.core.simulation.plant import FlexibleJointPlant
+import numpy as np
 
-PAPER_AXIS = dict(name='joint_1', motor_inertia=35.0, link_inertia=150.0, stiffness=1.5e5,
-                  damping=400.0, torque_limit=150.0)
+PAPER_AXIS = {'name': 'joint_1', 'motor_inertia': 35.0, 'link_inertia': 150.0,
+              'stiffness': 1.5e5, 'damping': 400.0, 'torque_limit': 150.0}
 CASES = {
     'linear': {},
     'coulomb': {'coulomb_friction': 50.0},
@@ -48,9 +48,9 @@ PAPER_REALISATIONS = 30
 PAPER_SEED = 2015
 
 
-def reproduce_paper(*, n_realisations: int = PAPER_REALISATIONS, seed: int = PAPER_SEED, fs: float = 1000.0,
-                    substeps: int = 4, progress: Callable[[str], None] | None = None
-                    ) -> dict[str, Any]:
+def reproduce_paper(*, n_realisations: int = PAPER_REALISATIONS, seed: int = PAPER_SEED,
+                    fs: float = 1000.0, substeps: int = 4,
+                    progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Run all cases and designs; return the results.json content (see module doc)."""
     say = progress or (lambda _msg: None)
     design = design_odd_multisine(1.0, 60.0, bound=150.0, resolution_hz=0.1, fs=fs)
@@ -109,7 +109,7 @@ def _complex(entry: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def findings(results: dict[str, Any]) -> dict[str, Any]:
-    """The paper's findings as numbers computed from the estimates against the analytic FRF."""
+    """Return the paper's findings as numbers: the estimates against the analytic FRF."""
     f_lin = {}
     for design in ('multisine', 'chirp'):
         f, p = _complex(results['cases']['linear'][design])

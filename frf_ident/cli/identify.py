@@ -14,8 +14,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Arguments of ``identify``; defaults are those of MultisineConfig and ChirpConfig."""
     ms, ch = MultisineConfig, ChirpConfig
     p.add_argument('--model', type=Path, help='model file (default: the embedded 3-axis model)')
-    p.add_argument('--plant', help="plant plug-in 'package.module:Class' (default: the model's "
-                                   "own simulation)")
+    p.add_argument('--plant', help='plant plug-in "package.module:Class" (default: the '
+                                   "model's own simulation)")
     p.add_argument('--out', type=Path, required=True, help='bag directory to create')
     p.add_argument('--procedures', default='multisine,chirp',
                    help='comma list of multisine, chirp (default both)')
@@ -34,7 +34,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def identification_config(args: argparse.Namespace):
-    """The IdentificationConfig the arguments describe."""
+    """Return the IdentificationConfig the arguments describe."""
     from frf_ident.core.simulation.runner import IdentificationConfig
     procs = {s.strip() for s in args.procedures.split(',') if s.strip()}
     unknown = procs - {'multisine', 'chirp'}

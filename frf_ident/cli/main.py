@@ -1,4 +1,5 @@
-"""`frf-ident` command line: an explicit table of subcommands, one module each.
+"""
+`frf-ident` command line: an explicit table of subcommands, one module each.
 
 Each module in :mod:`frf_ident.cli` has ``HELP``, ``add_arguments(parser)`` and ``run(args)``;
 ``run`` translates the arguments and calls one application function of :mod:`frf_ident.app`.
@@ -29,14 +30,14 @@ COMMANDS = {
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """argparse that reports a usage error in one line with exit status 2."""
+    """Argparse that reports a usage error in one line with exit status 2."""
 
     def error(self, message: str) -> None:
         self.exit(2, f'{self.prog}: error: {message}\n')
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The parser of every subcommand in :data:`COMMANDS`."""
+    """Return the parser of every subcommand in :data:`COMMANDS`."""
     p = OneLineParser(prog='frf-ident', description='Closed-loop FRF identification of '
                                                     'flexible-joint robots (Saupe & Knoblach '
                                                     '2015).')

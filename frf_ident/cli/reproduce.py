@@ -9,6 +9,7 @@ from frf_ident.errors import FrfIdentInputError
 
 HELP = "reproduce the seed paper's Section 6 example"
 
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Arguments of ``reproduce``."""
     p.add_argument('what', choices=['paper'])

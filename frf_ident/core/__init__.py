@@ -1,1 +1,59 @@
-"""Pure numerical core of frf_ident (numpy/scipy/numba only; no ROS, DDS or bag imports)."""
+"""
+The numerical core of frf_ident: pure numpy/scipy/numba, no ROS, bag, YAML or plotting.
+
+The public API is re-exported here, as python-control does (``from frf_ident.core import
+FrequencyResponse, design_odd_multisine``); each name is loaded from its module on first use,
+so importing one part does not compile the plant kernels. Subpackages, by concept:
+
+- :mod:`frf_ident.core.model` — robot parameters and the model-file schema
+- :mod:`frf_ident.core.simulation` — plant, controller, closed-loop runner, analytic FRFs
+- :mod:`frf_ident.core.excitation` — multisine and chirp designs, procedures, detection
+- :mod:`frf_ident.core.estimation` — spectra, BLA, FRD objects, estimators, refusal checks
+- :mod:`frf_ident.core.diagnosis` — what a model lacks, fitted from data
+"""
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: public name -> module that defines it
+_API = {
+    'frf_ident.core.model.params': ['AxisParams', 'RobotParams'],
+    'frf_ident.core.model.schema': ['controller_from_dict', 'default_robot', 'robot_from_dict',
+                                    'robot_to_dict'],
+    'frf_ident.core.simulation.plant': ['FlexibleJointPlant'],
+    'frf_ident.core.simulation.controller': ['PIVelocity'],
+    'frf_ident.core.simulation.runner': ['IdentificationConfig', 'run_identification'],
+    'frf_ident.core.simulation.analytic': ['closed_loop_frfs', 'robot_frf', 'robot_frf_sampled',
+                                           'two_mass_frf'],
+    'frf_ident.core.excitation.multisine': ['MultisineDesign', 'design_odd_multisine',
+                                            'multisine_realisation'],
+    'frf_ident.core.excitation.chirp': ['ChirpDesign', 'exponential_chirp'],
+    'frf_ident.core.excitation.procedures': ['ChirpConfig', 'ChirpIteration', 'MultisineConfig'],
+    'frf_ident.core.excitation.detect': ['detect_chirp', 'detect_excitation', 'detect_multisine'],
+    'frf_ident.core.estimation.frd': ['FrequencyResponse'],
+    'frf_ident.core.estimation.spectra': ['best_linear_approximation',
+                                          'best_linear_approximation_reference',
+                                          'chirp_excerpt_dft', 'periodic_spectra'],
+    'frf_ident.core.estimation.described': ['chirp_frf', 'estimate_recording', 'multisine_frf'],
+    'frf_ident.core.estimation.detected': ['ExcitationOptions'],
+    'frf_ident.core.recording': ['Recording', 'Segment'],
+    'frf_ident.core.diagnosis': ['diagnose_experiments', 'diagnose_timeseries'],
+}
+_WHERE = {name: module for module, names in _API.items() for name in names}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name from its module on first access (PEP 562)."""
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

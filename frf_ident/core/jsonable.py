@@ -1,4 +1,4 @@
-"""numpy values as plain JSON values: the one conversion used by every file writer."""
+"""Numpy values as plain JSON values: the one conversion used by every file writer."""
 from __future__ import annotations
 
 from typing import Any
@@ -9,17 +9,20 @@ __all__ = ['json_default', 'jsonable']
 
 
 def jsonable(obj: Any) -> Any:
-    """Recursively convert numpy arrays and scalars (and complex numbers) to plain Python.
+    """
+    Recursively convert numpy arrays and scalars (and complex numbers) to plain Python.
 
     Parameters
     ----------
-    obj : dict, list, tuple, numpy array or scalar, complex, or a plain value.
+    obj
+        Dict, list, tuple, numpy array or scalar, complex, or a plain value.
 
     Returns
     -------
     object
         The same structure with lists for arrays, Python scalars for numpy scalars, and
         ``{'re': ..., 'im': ...}`` for complex values; dict keys become strings.
+
     """
     if isinstance(obj, dict):
         return {str(k): jsonable(v) for k, v in obj.items()}
@@ -37,12 +40,14 @@ def jsonable(obj: Any) -> Any:
 
 
 def json_default(obj: Any) -> Any:
-    """``default=`` of :func:`json.dumps` for numpy arrays and scalars.
+    """
+    Return ``default=`` of :func:`json.dumps` for numpy arrays and scalars.
 
     Raises
     ------
     TypeError
         For anything else, as json.dumps expects.
+
     """
     if isinstance(obj, (np.ndarray, np.generic)):
         return jsonable(obj)

@@ -1,4 +1,7 @@
-"""In-memory recording of an identification run: the neutral form between runner, bag and estimator.
+"""
+In-memory recording of an identification run.
+
+The neutral form between runner, bag and estimator.
 
 A :class:`Recording` holds uniformly sampled time series of all joints plus the experiment
 segments (what was excited when). The bag adapter writes it to the docs/CONTRACT.md §3 topics
@@ -7,18 +10,18 @@ estimation from the in-memory run.
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
+import json
 from typing import Any
 
-import numpy as np
-
 from frf_ident.core.jsonable import json_default
+import numpy as np
 
 
 @dataclass
 class Segment:
-    """One experiment segment (docs/CONTRACT.md §3, /frf/experiment descriptor).
+    """
+    One experiment segment (docs/CONTRACT.md §3, /frf/experiment descriptor).
 
     ``info`` carries everything estimation needs and is JSON-serialisable. Keys used by the
     estimators (see ``frf_ident.core.excitation.procedures``):
@@ -52,10 +55,10 @@ class Segment:
         return event, cls(t0, t1, d)
 
 
-
 @dataclass
 class Recording:
-    """Uniformly sampled closed-loop data.
+    """
+    Uniformly sampled closed-loop data.
 
     Attributes
     ----------
@@ -67,6 +70,7 @@ class Recording:
     excitation : (N, n) the excitation part of r (the reference minus offsets / constant velocity)
     segments : experiment segments, in time order
     meta : free-form (model, seed, summaries of procedures)
+
     """
 
     t: np.ndarray
@@ -107,7 +111,7 @@ class Recording:
         """Index of the sample at (or first after) time t."""
         return int(np.searchsorted(self.t, t - 0.25 * self.dt))
 
-    def slice(self, t_start: float, t_end: float) -> slice:
+    def slice(self, t_start: float, t_end: float) -> slice:  # noqa: A003
         """Sample slice covering [t_start, t_end)."""
         return slice(self.index_of(t_start), self.index_of(t_end))
 

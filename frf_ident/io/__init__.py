@@ -1,5 +1,9 @@
-"""Data exchange with other tools: import measured tables (CSV/MAT) as recordings, export
-frequency responses (python-control, MATLAB idfrd, CSV, JSON). See README_io.md."""
+"""
+Data exchange with other tools, model files and the package's data files.
+
+Import measured tables (CSV/MAT) as recordings, export frequency responses (python-control,
+MATLAB idfrd, CSV, JSON); see README_io.md.
+"""
 from .export import from_control, read_frf, to_control, write_frf
 
 __all__ = ['from_control', 'import_table', 'load_map', 'read_frf', 'to_control', 'write_frf']

@@ -1,4 +1,7 @@
-"""Export a :class:`~frf_ident.core.estimation.frd.FrequencyResponse` to other tools, and read it back.
+"""
+Export a FrequencyResponse to other tools, and read it back.
+
+The object is :class:`~frf_ident.core.estimation.frd.FrequencyResponse`.
 
 Formats (chosen by the file suffix in :func:`write_frf` / :func:`read_frf`):
 
@@ -37,11 +40,10 @@ import os
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.jsonable import jsonable
 from frf_ident.errors import FrfIdentInputError
+import numpy as np
 
 __all__ = ['FORMATS', 'from_control', 'read_csv', 'read_frf', 'read_json', 'read_mat',
            'to_control', 'write_csv', 'write_frf', 'write_json', 'write_mat']
@@ -60,7 +62,7 @@ def to_control(frf: FrequencyResponse):
 
 
 def from_control(obj: Any) -> FrequencyResponse:
-    """FrequencyResponse from a ``control.FrequencyResponseData`` (variances are not kept)."""
+    """Convert a ``control.FrequencyResponseData`` (variances are not kept)."""
     return FrequencyResponse.from_control(obj)
 
 
@@ -196,7 +198,8 @@ def write_csv(frf: FrequencyResponse, path: PathLike) -> Path:
 
 
 def read_csv(path: PathLike) -> FrequencyResponse:
-    """Read a long-format CSV FRF written by :func:`write_csv`.
+    """
+    Read a long-format CSV FRF written by :func:`write_csv`.
 
     Channels are ordered by first appearance; every channel must list the same frequencies.
     """

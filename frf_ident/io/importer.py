@@ -1,4 +1,5 @@
-"""Import measured data from other tools (CSV or MATLAB .mat tables) as a :class:`Recording`.
+"""
+Import measured data from other tools (CSV or MATLAB .mat tables) as a :class:`Recording`.
 
 ``frf-ident import FILE.csv|FILE.mat --map MAP.yaml --out BAG`` reads the table, applies the
 map and writes a rosbag2 MCAP bag (:func:`frf_ident.bag.write_recording`, never overwriting).
@@ -56,17 +57,16 @@ Every problem is one :class:`FrfIdentInputError` line naming the file, field and
 from __future__ import annotations
 
 import csv
+from dataclasses import dataclass
 import io
 import math
 import os
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-import numpy as np
-
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
+import numpy as np
 
 __all__ = ['UNITS', 'import_table', 'load_map', 'read_table']
 
@@ -101,7 +101,7 @@ class Table:
         return str(self.path)
 
     def column(self, ref: Any, where: str) -> np.ndarray:
-        """Raw column (CSV) or variable (MAT) named by ``ref``."""
+        """Return the raw CSV column or MAT variable named by ``ref``."""
         return self._csv_column(ref, where) if self.kind == 'csv' else self._mat_var(ref, where)
 
     def _csv_column(self, ref: Any, where: str) -> np.ndarray:
@@ -236,8 +236,12 @@ def _split_rows(lines: list[str], delimiter: str | None, path: Path) -> list[lis
 
 
 def _guess_delimiter(lines: list[str]) -> str | None:
-    """The first of , ; tab that occurs equally often (and at all) in every sampled line,
-    else the one most frequent in the first line, else None (whitespace)."""
+    """
+    Guess the CSV delimiter.
+
+    The first of , ; tab that occurs equally often (and at all) in every sampled line, else
+    the one most frequent in the first line, else None (whitespace).
+    """
     cands = (',', ';', '\t')
     for cand in cands:
         counts = {ln.count(cand) for ln in lines}
@@ -312,7 +316,7 @@ def check_map(doc: Any, where: str = 'map') -> None:
         for sig in SIGNALS:
             spec = j.get(sig)
             if spec is not None and isinstance(spec, dict):
-                _unknown(spec, SIGNAL_KEYS, f"{jw}.{sig}")
+                _unknown(spec, SIGNAL_KEYS, f'{jw}.{sig}')
 
 
 def _unknown(d: dict[str, Any], allowed: set[str], where: str) -> None:
@@ -445,7 +449,8 @@ def _integral(v: np.ndarray, dt: float) -> np.ndarray:
 # --------------------------------------------------------------------------- import
 
 def import_table(path: PathLike, map: dict[str, Any] | PathLike) -> Recording:  # noqa: A002
-    """Read a CSV or MAT table with a map (dict or YAML path) into a :class:`Recording`.
+    """
+    Read a CSV or MAT table with a map (dict or YAML path) into a :class:`Recording`.
 
     ``Recording.meta['import']`` records the source, the map, the time handling and which
     signals were derived (e.g. velocity by central differences of position).

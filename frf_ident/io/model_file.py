@@ -1,7 +1,8 @@
-"""Model files (docs/CONTRACT.md §5) and plant plug-ins (docs/CONTRACT.md §4): loading and saving.
+"""
+Model files (docs/CONTRACT.md §5) and plant plug-ins (docs/CONTRACT.md §4): loading and saving.
 
-YAML I/O lives here so :mod:`frf_ident.core.model.schema` stays free of file handling. Errors name the
-file and the field (one line, CLI exit status 2).
+YAML I/O lives here so :mod:`frf_ident.core.model.schema` stays free of file handling. Errors
+name the file and the field (one line, CLI exit status 2).
 """
 from __future__ import annotations
 
@@ -9,15 +10,14 @@ import importlib
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from frf_ident.core.simulation.controller import PIVelocity
-from frf_ident.core.model.schema import (controller_from_dict, default_model_dict, robot_from_dict,
-                                  robot_to_dict)
 from frf_ident.core.model.params import RobotParams
+from frf_ident.core.model.schema import (controller_from_dict, default_model_dict, robot_from_dict,
+                                         robot_to_dict)
+from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import FrfIdentInputError, ModelFileError
 from frf_ident.io.yamlio import load_yaml
+import yaml
 
 
 def read_model_dict(path: str | Path) -> dict[str, Any]:
@@ -63,8 +63,12 @@ def save_model(path: str | Path, robot: RobotParams, controller: PIVelocity | No
 
 
 def load_plant(spec: str | None, model: dict[str, Any]) -> Any:
-    """Instantiate the plant: the model's own simulation, or a plug-in 'package.module:Class'
-    constructed with the model mapping as its config (docs/CONTRACT.md §4)."""
+    """
+    Instantiate the plant: the model's own simulation or a plug-in.
+
+    A plug-in ``'package.module:Class'`` is constructed with the model mapping as its config
+    (docs/CONTRACT.md §4).
+    """
     if not spec:
         return FlexibleJointPlant(robot_from_dict(model))
     mod_name, sep, cls_name = spec.partition(':')

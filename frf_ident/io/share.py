@@ -1,5 +1,9 @@
-"""Where the package's data files (config/, launch/) are: the installed share directory when
-the package is installed with colcon (found through ament_index), else the source checkout."""
+"""
+Find the package's data files (config/, launch/).
+
+The installed share directory when the package is installed with colcon (found through
+ament_index), else the source checkout.
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -12,18 +16,20 @@ SOURCE_ROOT = Path(__file__).resolve().parents[2]
 
 
 def share_dir() -> Path:
-    """The directory holding ``config/`` and ``launch/``.
+    """
+    Return the directory holding ``config/`` and ``launch/``.
 
     Returns
     -------
     Path
         ``share/frf_ident`` of the colcon install when ament_index knows the package and this
         module runs from that install; the source checkout otherwise.
+
     """
     if (SOURCE_ROOT / 'setup.py').is_file() and (SOURCE_ROOT / 'config').is_dir():
         return SOURCE_ROOT
     try:
-        from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
+        from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
     except ImportError:
         return SOURCE_ROOT
     try:

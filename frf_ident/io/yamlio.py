@@ -1,4 +1,5 @@
-"""YAML reading shared by model files and ROS parameter files.
+"""
+YAML reading shared by model files and ROS parameter files.
 
 PyYAML implements YAML 1.1, which reads ``1.5e5`` (no dot, or no exponent sign) as a string;
 rcl and YAML 1.2 read it as a float, and the model-file contract's own example uses it.
@@ -17,11 +18,11 @@ class Yaml12FloatLoader(yaml.SafeLoader):
 
 Yaml12FloatLoader.add_implicit_resolver(
     'tag:yaml.org,2002:float',
-    re.compile(r'''^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+    re.compile(r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
                 |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
                 |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
                 |[-+]?\.(?:inf|Inf|INF)
-                |\.(?:nan|NaN|NAN))$''', re.X),
+                |\.(?:nan|NaN|NAN))$""", re.X),
     list('-+0123456789.'))
 
 

@@ -1,11 +1,10 @@
-"""frf_ident.core.estimation.checks against analytic cases: clipping, Nyquist band, periods, coverage."""
-import numpy as np
-import pytest
-
-from frf_ident.core.estimation.checks import (MIN_RUN, check_band, check_covers, check_not_clipped,
-                                   check_periods, clipping)
+"""Refusal checks against analytic cases: clipping, Nyquist band, periods, coverage."""
+from frf_ident.core.estimation.checks import (check_band, check_covers, check_not_clipped,
+                                              check_periods, clipping, MIN_RUN)
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
 from frf_ident.errors import EstimationError
+import numpy as np
+import pytest
 
 FS = 1000.0
 T = np.arange(int(2 * FS)) / FS
@@ -20,8 +19,12 @@ def _refused(fn, *args, **kw) -> str:
 
 
 def test_clipped_sine_fraction_and_run_length_match_the_analytic_values():
-    """1.3 x 150 N m sine at 3 Hz clipped at +-150: (2/pi) arccos(1/1.3) of the time at a
-    limit, each plateau 2 arccos(1/1.3) / (2 pi 3 Hz) long."""
+    """
+    Clip a 1.3 x 150 N m sine at 3 Hz at +-150 N m.
+
+    (2/pi) arccos(1/1.3) of the time is at a limit, each plateau 2 arccos(1/1.3) / (2 pi 3 Hz)
+    long.
+    """
     u = np.clip(195.0 * np.sin(2 * np.pi * 3.0 * T), -150.0, 150.0)
     s = clipping(u[:, None])[0]
     theta = np.arccos(1 / 1.3)
@@ -53,9 +56,13 @@ def test_noisy_multisine_torque_and_its_extremes_are_not_clipping():
 
 @pytest.mark.parametrize('quantum', [0.01, 0.1, 1.0])
 def test_quantised_slow_sine_is_not_clipping(quantum):
-    """A quantised 2 Hz, 150 N m sine repeats its top value over many samples at each peak
+    """
+    Keep a quantised sine apart from a clipped plateau.
+
+    A quantised 2 Hz, 150 N m sine repeats its top value over many samples at each peak
     (with 1 N m steps: ~18 samples, 2 % of the time) but is approached gradually: the
-    pile-up test keeps it apart from a plateau."""
+    pile-up test keeps it apart from a plateau.
+    """
     u = np.round(150.0 * np.sin(2 * np.pi * 2.0 * T) / quantum) * quantum
     lax = clipping(u[:, None], min_run=2, min_fraction=0.0)[0]
     assert not lax.clipped, lax

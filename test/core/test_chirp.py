@@ -1,8 +1,7 @@
-import numpy as np
-import pytest
-
 from frf_ident.core.excitation import chirp as ch
 from frf_ident.errors import DesignError
+import numpy as np
+import pytest
 
 
 def test_instantaneous_frequency_equals_eq16():

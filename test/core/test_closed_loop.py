@@ -1,14 +1,13 @@
 """Section 7 closed-loop procedures on the 3-axis robot against analytic truth."""
+from frf_ident.core.estimation.described import estimate_recording, multisine_frf
+from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
+from frf_ident.core.simulation.analytic import robot_frf_sampled
+from frf_ident.core.simulation.open_loop import resonance_peak
+from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
 import numpy as np
 import pytest
-
-from frf_ident.core.simulation.analytic import robot_frf_sampled
-from frf_ident.core.estimation.described import chirp_frf, estimate_recording, multisine_frf
-from frf_ident.core.simulation.open_loop import resonance_peak
-from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
-from frf_ident.core.simulation.plant import FlexibleJointPlant
-from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
-from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
 
 
 def _robot():
@@ -32,8 +31,11 @@ def _line_error(est, truth):
 
 @pytest.fixture(scope='module')
 def noisy_linear():
-    """Linear 3-axis model with 40 dB SNR output noise (noise rms = 1 % of the excited
-    velocity rms), paper's n_p = 10 x n_q = 5."""
+    """
+    Estimate the linear 3-axis model with 40 dB SNR output noise.
+
+    Noise rms = 1 % of the excited velocity rms; the paper's n_p = 10 x n_q = 5.
+    """
     rob, ctrl = _robot()
     quiet = _run(rob, ctrl, MultisineConfig(n_realisations=2, n_periods=1))
     segs = [s for s in quiet.segments if s.info['design'] == 'multisine']
@@ -86,8 +88,12 @@ def test_chirp_iteration_reaches_u_des_in_three_iterations_within_limits():
 
 
 def test_chirp_iteration_with_coulomb_friction_and_noise():
-    """r_1 = 0.006 rad/s leaves the axes stuck in friction, so P_r->u of iteration 1 is the
-    locked-robot transfer; the iteration still converges (4 iterations) within the limits."""
+    """
+    Converge the chirp iteration although the first iteration is stuck in friction.
+
+    r_1 = 0.006 rad/s leaves the axes stuck in friction, so P_r->u of iteration 1 is the
+    locked-robot transfer; the iteration still converges (4 iterations) within the limits.
+    """
     rob, ctrl = _robot()
     for a, fc in zip(rob.axes, (15.0, 20.0, 8.0)):
         a.coulomb_friction = fc
@@ -100,8 +106,12 @@ def test_chirp_iteration_with_coulomb_friction_and_noise():
 
 
 def test_torque_ripple_compensation_20db_at_ripple_lines():
-    """Position-periodic ripple on axis 1 (fundamental + 2 harmonics) at the constant velocity:
-    subtracting the constant-velocity run lowers the FRF error at the ripple lines >= 20 dB."""
+    """
+    Cancel position-periodic ripple by subtracting the constant-velocity run.
+
+    Ripple on axis 1 (fundamental + 2 harmonics) at the constant velocity: subtracting the
+    constant-velocity run lowers the FRF error at the ripple lines >= 20 dB.
+    """
     rob, ctrl = _robot()
     v_c = 0.00528146074094524            # the procedure's constant velocity at these settings
     f_r = 0.84                           # ripple fundamental [Hz] at v_c

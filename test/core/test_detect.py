@@ -1,12 +1,11 @@
 """Excitation detection against analytic truth: designed multisines and chirps."""
-import numpy as np
-import pytest
-
 from frf_ident.core.excitation import chirp as ch
 from frf_ident.core.excitation import multisine as ms
-from frf_ident.core.excitation.detect import (ChirpDetection, MultisineDetection, detect_chirp,
-                                   detect_excitation, detect_multisine)
+from frf_ident.core.excitation.detect import (ChirpDetection, detect_chirp, detect_excitation,
+                                              detect_multisine, MultisineDetection)
 from frf_ident.errors import EstimationError
+import numpy as np
+import pytest
 
 FS = 1000.0
 
@@ -100,7 +99,7 @@ def test_chirp_band_within_2_percent(f_low, f_high, duration, lead, phi, noise):
 
 
 def test_chirp_design_table1_amplitudes_mimo():
-    """ChirpDesign with Table 1 amplitude steps (100 / 50 below / above 40 Hz), eq. 26 phases."""
+    """Return a ChirpDesign with Table 1 amplitude steps (100 / 50 below / above 40 Hz)."""
     d = ch.ChirpDesign(2.0, 60.0, 20.0, np.array([[100.0, 50.0], [150.0, 75.0]]), [40.0], t0=1.0)
     t = np.arange(int(22.0 * FS)) / FS
     x = d.evaluate(t, ch.chirp_phase_flips(2))[1]          # experiment 2, (N, 2)

@@ -1,17 +1,15 @@
 """Estimators against analytic truth and Monte-Carlo truth."""
-import numpy as np
-import pytest
-
-from frf_ident.core.simulation.analytic import robot_frf
-from frf_ident.core.excitation.chirp import ChirpDesign, chirp_phase_flips
-from frf_ident.core.estimation.spectra import (best_linear_approximation, frf_from_reference,
-                                       frf_from_spectra)
-from frf_ident.core.simulation.open_loop import run_open_loop_chirp, run_open_loop_multisine
-from frf_ident.core.model.schema import default_robot
+from frf_ident.core.estimation.spectra import frf_from_reference, frf_from_spectra
+from frf_ident.core.excitation.chirp import chirp_phase_flips, ChirpDesign
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
 from frf_ident.core.model.params import AxisParams, RobotParams
+from frf_ident.core.model.schema import default_robot
+from frf_ident.core.simulation.analytic import robot_frf
+from frf_ident.core.simulation.open_loop import run_open_loop_chirp, run_open_loop_multisine
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import EstimationError
+import numpy as np
+import pytest
 
 FS = 1000.0
 
@@ -64,8 +62,12 @@ def _nonlinear_plant(seed):
 
 
 def test_bla_variances_agree_with_monte_carlo():
-    """Noise variance (from periods) and total variance (from realisations) of the BLA agree
-    with the Monte-Carlo spread of the BLA over repeated experiments within 25 %."""
+    """
+    Check the BLA variances against Monte-Carlo.
+
+    Noise variance (from periods) and total variance (from realisations) of the BLA agree
+    with the Monte-Carlo spread of the BLA over repeated experiments within 25 %.
+    """
     d = design_odd_multisine(2.0, 40.0, bound=60.0, resolution_hz=0.5, fs=FS)
     n_p, n_q, runs = 6, 4, 40
     fixed = [multisine_realisation(d, 1, np.random.default_rng(100 + p), fs=FS)

@@ -1,8 +1,7 @@
-import numpy as np
-import pytest
-
 from frf_ident.core.excitation import multisine as ms
 from frf_ident.errors import DesignError
+import numpy as np
+import pytest
 
 
 def test_paper_design_values():
@@ -13,7 +12,8 @@ def test_paper_design_values():
     assert d.period == pytest.approx(12.288)
     assert d.f0 == pytest.approx(1 / 12.288)
     assert np.all(d.harmonics % 2 == 1)
-    assert d.freq_hz[0] == pytest.approx(1.0, rel=0.1) and d.freq_hz[-1] == pytest.approx(60, rel=0.01)
+    assert d.freq_hz[0] == pytest.approx(1.0, rel=0.1)
+    assert d.freq_hz[-1] == pytest.approx(60, rel=0.01)
     # nearest odd multiple of f0 to each reference frequency
     ref = ms.reference_frequency_set(1, 60, 80)
     for f in ref:
@@ -61,12 +61,12 @@ def test_eq9_phase_shifts_condition_number_one():
 
 
 @pytest.mark.parametrize('kwargs, needle', [
-    (dict(f_low=1, f_high=600, bound=1, fs=1000), 'f_high=600'),
-    (dict(f_low=60, f_high=10, bound=1, fs=1000), 'f_high=10'),
-    (dict(f_low=1, f_high=60, bound=0, fs=1000), 'bound=0'),
-    (dict(f_low=1, f_high=60, bound=-3, fs=1000), 'bound=-3'),
-    (dict(f_low=-1, f_high=60, bound=1, fs=1000), 'f_low=-1'),
-    (dict(f_low=1, f_high=60, bound=1, fs=1000, resolution_hz=0), 'resolution_hz=0'),
+    ({'f_low': 1, 'f_high': 600, 'bound': 1, 'fs': 1000}, 'f_high=600'),
+    ({'f_low': 60, 'f_high': 10, 'bound': 1, 'fs': 1000}, 'f_high=10'),
+    ({'f_low': 1, 'f_high': 60, 'bound': 0, 'fs': 1000}, 'bound=0'),
+    ({'f_low': 1, 'f_high': 60, 'bound': -3, 'fs': 1000}, 'bound=-3'),
+    ({'f_low': -1, 'f_high': 60, 'bound': 1, 'fs': 1000}, 'f_low=-1'),
+    ({'f_low': 1, 'f_high': 60, 'bound': 1, 'fs': 1000, 'resolution_hz': 0}, 'resolution_hz=0'),
 ])
 def test_bad_design_names_value(kwargs, needle):
     with pytest.raises(DesignError, match=needle.replace('(', r'\(')):

@@ -1,14 +1,13 @@
 """The simulated plant against analytic truth (eqs. 20-22 in closed form)."""
-import numpy as np
-import pytest
-
-from frf_ident.core.simulation.analytic import robot_frf, robot_frf_sampled, two_mass_frf
 from frf_ident.core.estimation.spectra import periodic_spectra
-from frf_ident.core.simulation.open_loop import stage_grid
-from frf_ident.core.model.schema import default_robot
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
 from frf_ident.core.model.params import AxisParams, RobotParams
+from frf_ident.core.model.schema import default_robot
+from frf_ident.core.simulation.analytic import robot_frf, robot_frf_sampled, two_mass_frf
+from frf_ident.core.simulation.open_loop import stage_grid
 from frf_ident.core.simulation.plant import FlexibleJointPlant
+import numpy as np
+import pytest
 
 FS = 1000.0
 

@@ -2,13 +2,12 @@
 import json
 import warnings
 
-import numpy as np
-import pytest
-from scipy.io import loadmat
-
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.export import from_control, read_frf, to_control, write_frf
+import numpy as np
+import pytest
+from scipy.io import loadmat
 
 
 def _frf(n_out=2, n_in=3, n_freq=40, variances=True, seed=0):

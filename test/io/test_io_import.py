@@ -1,20 +1,18 @@
 """Import of CSV/MAT tables with map files, incl. the real EMPS and KUKA KR300 data sets."""
+from pathlib import Path
 import subprocess
 import sys
-
-from pathlib import Path
-
-import numpy as np
-import pytest
-import yaml
-from scipy import signal
-from scipy.io import loadmat, savemat
 
 from frf_ident.bag import read_recording
 from frf_ident.cli import main
 from frf_ident.core.excitation.detect import detect_excitation
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.importer import import_table, load_map
+import numpy as np
+import pytest
+from scipy import signal
+from scipy.io import loadmat, savemat
+import yaml
 
 ROOT = Path(__file__).resolve().parents[2]
 SHARED_DATA = ROOT.parent / 'shared' / 'data'
@@ -124,8 +122,8 @@ def _sine_csv(path, n=2001, dt=0.002, sep=',', header=True):
     t = np.arange(n) * dt
     q = 3.0 * np.sin(2 * np.pi * 1.5 * t)          # degrees
     tau = 10 * np.cos(2 * np.pi * 0.5 * t)
-    rows = [f'{1e3 * a!r}{sep}{b!r}{sep}{c!r}' for a, b, c in zip(t.tolist(), q.tolist(),
-                                                                 tau.tolist())]
+    rows = [f'{1e3 * a!r}{sep}{b!r}{sep}{c!r}'
+            for a, b, c in zip(t.tolist(), q.tolist(), tau.tolist())]
     path.write_text(('# exported by some tool\n' + f'time_ms{sep}q_deg{sep}tau\n' if header
                      else '') + '\n'.join(rows) + '\n')
     return t, q, tau

@@ -1,15 +1,14 @@
 """The HTML report: one report.html referencing every PNG written next to it."""
 import re
 
-import numpy as np
-import pytest
-
 from frf_ident.bag import TimingReport, TopicTiming
-from frf_ident.core.excitation import chirp as ch
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.excitation import chirp as ch
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import write_report
+import numpy as np
+import pytest
 
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
 

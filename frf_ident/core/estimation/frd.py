@@ -1,4 +1,5 @@
-"""Frequency response data: the result object of every estimator.
+"""
+Frequency response data: the result object of every estimator.
 
 Modelled on python-control's ``FrequencyResponseData``: the response is an array shaped
 ``(n_out, n_in, n_freq)``; frequencies are kept in Hz (``freq_hz``) with ``omega`` in rad/s
@@ -9,14 +10,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 from frf_ident.core.jsonable import jsonable
+import numpy as np
 
 
 @dataclass
 class FrequencyResponse:
-    """A MIMO frequency response estimate.
+    """
+    A MIMO frequency response estimate.
 
     Attributes
     ----------
@@ -27,6 +28,7 @@ class FrequencyResponse:
     total_variance : optional (n_out, n_in, n_freq) variance due to noise plus stochastic
         nonlinear distortions (multisine best linear approximation).
     meta : free-form description (design, method, condition numbers...).
+
     """
 
     freq_hz: np.ndarray
@@ -102,7 +104,7 @@ class FrequencyResponse:
         return 20.0 * np.log10(1.0 + rel)
 
     def select(self, mask: np.ndarray) -> 'FrequencyResponse':
-        """A copy restricted to the frequencies where ``mask`` is true."""
+        """Return a copy restricted to the frequencies where ``mask`` is true."""
         mask = np.asarray(mask, dtype=bool)
         return FrequencyResponse(
             self.freq_hz[mask], self.response[..., mask], list(self.inputs), list(self.outputs),
@@ -112,7 +114,11 @@ class FrequencyResponse:
 
     # --- serialisation -------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict: {inputs, outputs, freq_hz, re, im[, noise_variance, total_variance]}."""
+        """
+        Return a JSON-ready dict.
+
+        Keys: inputs, outputs, freq_hz, re, im [, noise_variance, total_variance].
+        """
         d: dict[str, Any] = {
             'inputs': list(self.inputs),
             'outputs': list(self.outputs),
@@ -150,4 +156,3 @@ class FrequencyResponse:
         resp = np.asarray(getattr(frd, 'frdata', None) if hasattr(frd, 'frdata') else frd.fresp,
                           dtype=complex)
         return cls(omega / (2 * np.pi), resp, list(frd.input_labels), list(frd.output_labels))
-

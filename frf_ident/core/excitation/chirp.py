@@ -1,4 +1,5 @@
-"""Exponential chirp excitation (Saupe & Knoblach 2015, Section 5).
+"""
+Exponential chirp excitation (Saupe & Knoblach 2015, Section 5).
 
 - :func:`exponential_chirp_coefficients` — a0, a1 of eq. 16 from f(t0) = fl, f(t1) = fu
 - :func:`chirp_instantaneous_frequency` — eq. 16, f(t) = exp(a0 t + a1)
@@ -13,9 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
-import numpy as np
-
 from frf_ident.errors import DesignError
+import numpy as np
 
 
 def exponential_chirp_coefficients(f_low: float, f_high: float, t0: float,
@@ -51,7 +51,8 @@ def chirp_time_at_frequency(f: np.ndarray, a0: float, a1: float) -> np.ndarray:
 def exponential_chirp(t: np.ndarray, a0: float, a1: float, t0: float, t1: float,
                       amplitude: float | np.ndarray | Callable[[np.ndarray], np.ndarray],
                       phi: float = 0.0) -> np.ndarray:
-    """Chirp r_c(t, phi) = A(t) sin(2 pi int_t0^t f + phi) on [t0, t1], zero outside (eq. 15).
+    """
+    Chirp r_c(t, phi) = A(t) sin(2 pi int_t0^t f + phi) on [t0, t1], zero outside (eq. 15).
 
     ``amplitude`` is a constant, an array aligned with t, or a callable A(t).
     """
@@ -63,7 +64,8 @@ def exponential_chirp(t: np.ndarray, a0: float, a1: float, t0: float, t1: float,
 
 def amplitude_schedule(breaks_hz: Sequence[float], levels: Sequence[float], *,
                        transition: float = 0.05) -> Callable[[np.ndarray], np.ndarray]:
-    """Frequency-dependent amplitude A(f) in the style of Table 1.
+    """
+    Frequency-dependent amplitude A(f) in the style of Table 1.
 
     ``levels[i]`` applies between ``breaks_hz[i-1]`` and ``breaks_hz[i]`` (e.g. breaks [40],
     levels [100, 50]: 100 below 40 Hz, 50 above). Steps are smoothed by a raised cosine over
@@ -92,7 +94,8 @@ def amplitude_schedule(breaks_hz: Sequence[float], levels: Sequence[float], *,
 
 
 def chirp_phase_flips(n_u: int) -> np.ndarray:
-    """MIMO chirp phases of eq. 26: phi~_lk = pi if l = k and l > 1, else 0.
+    """
+    MIMO chirp phases of eq. 26: phi~_lk = pi if l = k and l > 1, else 0.
 
     Returns (n_u, n_ex = n_u): in experiment k only input k is inverted (experiment 1 none).
     """
@@ -106,7 +109,8 @@ def chirp_phase_flips(n_u: int) -> np.ndarray:
 
 @dataclass
 class ChirpDesign:
-    """An exponential chirp design (eqs. 15-16) on [t0, t1] with a frequency-dependent amplitude.
+    """
+    An exponential chirp design (eqs. 15-16) on [t0, t1] with a frequency-dependent amplitude.
 
     ``amplitude`` is (n_u, n_breaks + 1) levels per channel with common ``breaks_hz``; a plain
     float gives one constant amplitude on every channel.
@@ -123,7 +127,7 @@ class ChirpDesign:
         if not (np.isfinite(self.duration) and self.duration > 0):
             raise DesignError(f'chirp duration={self.duration!r} s must be positive')
         self.a0, self.a1 = exponential_chirp_coefficients(self.f_low, self.f_high, self.t0,
-                                                           self.t1)
+                                                          self.t1)
         amp = np.atleast_2d(np.asarray(self.amplitude, dtype=float))
         if np.any(~np.isfinite(amp)) or np.any(amp <= 0):
             raise DesignError(f'chirp amplitude {amp.tolist()} must be positive and finite')

@@ -1,4 +1,5 @@
-"""Odd random-phase multisine excitation (Saupe & Knoblach 2015, Section 4).
+"""
+Odd random-phase multisine excitation (Saupe & Knoblach 2015, Section 4).
 
 One function per step of the paper's design (Section 4.2) so each can be checked on its own:
 
@@ -13,12 +14,11 @@ One function per step of the paper's design (Section 4.2) so each can be checked
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
-
-import numpy as np
+import math
 
 from frf_ident.errors import DesignError
+import numpy as np
 
 
 def _check_band(f_low: float, f_high: float) -> None:
@@ -35,7 +35,7 @@ def _check_positive(**values: float) -> None:
 
 
 def reference_frequency_set(f_low: float, f_high: float, n: int = 80) -> np.ndarray:
-    """Reference set F~ of ``n`` logarithmically distributed frequencies in [fl, fu] (Sec. 4.2)."""
+    """Return the reference set F~: ``n`` log-spaced frequencies in [fl, fu] (Sec. 4.2)."""
     _check_band(f_low, f_high)
     if n < 2:
         raise DesignError(f'{n=} reference frequencies: need at least 2')
@@ -43,7 +43,8 @@ def reference_frequency_set(f_low: float, f_high: float, n: int = 80) -> np.ndar
 
 
 def analysis_sample_time(f_high: float, dt: float | None = None) -> float:
-    """Analysis sample time Ts ~ 1/(5 fu) (Sec. 4.2).
+    """
+    Analysis sample time Ts ~ 1/(5 fu) (Sec. 4.2).
 
     With the recording's sample time ``dt`` given, Ts is the largest whole multiple of dt not
     above 1/(5 fu) (so the data are resampled by an integer factor): 1 kHz and fu = 60 Hz give
@@ -69,13 +70,14 @@ def dft_length(resolution_hz: float, ts: float) -> int:
 
 
 def fundamental_frequency(ts: float, nf: int) -> float:
-    """Frequency resolution of the DFT and fundamental of the multisine, f0 = 1/(Ts nf) (eq. 11)."""
+    """Return the DFT resolution and multisine fundamental f0 = 1/(Ts nf) (eq. 11)."""
     _check_positive(ts=ts, nf=nf)
     return 1.0 / (ts * nf)
 
 
 def odd_harmonics_nearest(f_ref: np.ndarray, f0: float) -> np.ndarray:
-    """Odd multiples of f0 nearest to each reference frequency, duplicates removed (Sec. 4.2).
+    """
+    Odd multiples of f0 nearest to each reference frequency, duplicates removed (Sec. 4.2).
 
     Returns the sorted unique odd harmonic numbers h (frequencies h * f0).
     """
@@ -88,7 +90,8 @@ def odd_harmonics_nearest(f_ref: np.ndarray, f0: float) -> np.ndarray:
 
 def multisine(t: np.ndarray, freq_hz: np.ndarray, amplitudes: np.ndarray,
               phases: np.ndarray, phi: float = 0.0) -> np.ndarray:
-    """Multisine r(t, phi) = sum_s A_s sin(2 pi f_s t + phi_rand,s + phi) (eq. 8).
+    """
+    Multisine r(t, phi) = sum_s A_s sin(2 pi f_s t + phi_rand,s + phi) (eq. 8).
 
     Evaluated in blocks so long signals stay within bounded memory.
     """
@@ -107,7 +110,8 @@ def multisine(t: np.ndarray, freq_hz: np.ndarray, amplitudes: np.ndarray,
 
 
 def mimo_phase_shifts(n_u: int) -> np.ndarray:
-    """Phase shifts phi_lm = 2 pi (l-1)(m-1) / n_u of channel l in experiment m (eq. 9).
+    """
+    Phase shifts phi_lm = 2 pi (l-1)(m-1) / n_u of channel l in experiment m (eq. 9).
 
     Returns an (n_u, n_ex = n_u) array. exp(j phi) is the DFT matrix, so the MIMO excitation
     matrix R(w_k) has condition number 1 on every excited line.
@@ -132,7 +136,8 @@ def random_phases(n_lines: int, rng: np.random.Generator) -> np.ndarray:
 
 @dataclass
 class MultisineDesign:
-    """An odd random-phase multisine design (Sec. 4.2).
+    """
+    An odd random-phase multisine design (Sec. 4.2).
 
     ``harmonics`` are the odd harmonic numbers h, excited frequencies ``h * f0``. ``bound`` is
     the peak value every realisation is scaled to (max |r| over all channels and experiments).
@@ -158,7 +163,7 @@ class MultisineDesign:
         return self.nf * self.ts
 
     def period_samples(self, fs: float) -> int:
-        """Samples per period at rate fs; raises unless the period is a whole number of samples."""
+        """Sample per period at rate fs; raises unless the period is a whole number of samples."""
         n = self.period * fs
         if abs(n - round(n)) > 1e-6 * max(1.0, n):
             raise DesignError(
@@ -180,18 +185,25 @@ class MultisineDesign:
 def design_odd_multisine(f_low: float, f_high: float, *, bound: float,
                          resolution_hz: float = 0.1, n_ref: int = 80,
                          fs: float | None = None) -> MultisineDesign:
-    """Design an odd random-phase multisine exactly as Section 4.2.
+    """
+    Design an odd random-phase multisine exactly as Section 4.2.
 
     Parameters
     ----------
-    f_low, f_high : band [fl~, fu~] in Hz.
-    bound : peak value max |r| of every realisation (e.g. torque limit or velocity amplitude).
-    resolution_hz : desired frequency resolution f0~ (eq. 12).
-    n_ref : size of the log-spaced reference set F~ (80 in the paper).
-    fs : sample rate of the recording; Ts becomes a whole multiple of 1/fs.
+    f_low, f_high
+        Band [fl~, fu~] in Hz.
+    bound
+        Peak value max |r| of every realisation (e.g. torque limit or velocity amplitude).
+    resolution_hz
+        Desired frequency resolution f0~ (eq. 12).
+    n_ref
+        Size of the log-spaced reference set F~ (80 in the paper).
+    fs
+        Sample rate of the recording; Ts becomes a whole multiple of 1/fs.
 
     Example: ``design_odd_multisine(1, 60, bound=150, fs=1000)`` gives Ts = 3 ms, nf = 4096,
     a period of 12.288 s (the paper's Section 6 design).
+
     """
     _check_band(f_low, f_high)
     _check_positive(bound=bound, resolution_hz=resolution_hz)
@@ -226,7 +238,11 @@ class MultisineRealisation:
         return self.shifts.shape[0]
 
     def evaluate(self, t: np.ndarray) -> np.ndarray:
-        """Signal at times t: shape (n_ex, len(t), n_u); channel l of experiment m is r(t, phi_lm)."""
+        """
+        Return the signal at times t.
+
+        Shape (n_ex, len(t), n_u); channel l of experiment m is r(t, phi_lm).
+        """
         t = np.asarray(t, dtype=float)
         out = np.empty((self.n_u, t.size, self.n_u))
         for m in range(self.n_u):
@@ -238,7 +254,8 @@ class MultisineRealisation:
 
 def multisine_realisation(design: MultisineDesign, n_u: int, rng: np.random.Generator, *,
                           fs: float, oversample: int = 8) -> MultisineRealisation:
-    """Draw one MIMO realisation (eq. 8 with eq. 9 shifts) scaled to ``design.bound``.
+    """
+    Draw one MIMO realisation (eq. 8 with eq. 9 shifts) scaled to ``design.bound``.
 
     The equal amplitudes are scaled so max |r| over all channels and experiments equals the
     bound, the peak being searched on a grid ``oversample`` times finer than ``fs`` so that the

@@ -1,4 +1,5 @@
-"""Closed-form frequency responses of the linear flexible-joint robot (analytic truth).
+"""
+Closed-form frequency responses of the linear flexible-joint robot (analytic truth).
 
 - :func:`two_mass_frf` — SISO dq_m / tau_m of eqs. 20-22 (linear):
   (Jo s^2 + d s + k1) / (s (Jm Jo s^2 + (Jm + Jo)(d s + k1)))   (+ viscous friction)
@@ -10,12 +11,10 @@
 """
 from __future__ import annotations
 
+from frf_ident.core.model.params import RobotParams
+from frf_ident.core.simulation.plant import state_space
 import numpy as np
 from scipy import linalg
-
-from frf_ident.core.model.params import RobotParams
-
-from frf_ident.core.simulation.plant import state_space
 
 
 def two_mass_frf(freq_hz: np.ndarray, motor_inertia: float, link_inertia: float,
@@ -39,7 +38,8 @@ def _link_stiffness_terms(params: RobotParams):
 
 
 def robot_frf(params: RobotParams, freq_hz: np.ndarray) -> np.ndarray:
-    """MIMO continuous FRF tau_m -> dq_m of the linearised robot, shape (n, n, n_freq).
+    """
+    MIMO continuous FRF tau_m -> dq_m of the linearised robot, shape (n, n, n_freq).
 
     (Jm s^2 + Bv s + Z - Z (M_o s^2 + Z)^-1 Z) q_m = tau with Z = K + D s, P = s q_m / tau.
     Symmetric (reciprocal) for a symmetric link inertia matrix.
@@ -81,7 +81,8 @@ def _delayed_zoh_input(A: np.ndarray, B: np.ndarray, dt: float, delay: float
 
 def robot_frf_sampled(params: RobotParams, freq_hz: np.ndarray, *,
                       output: str = 'velocity', delays: np.ndarray | None = None) -> np.ndarray:
-    """Exact FRF from sampled torque (zero-order hold) to sampled output, shape (n, n, n_freq).
+    """
+    Exact FRF from sampled torque (zero-order hold) to sampled output, shape (n, n, n_freq).
 
     This is what a digital controller sees and what the simulation realises: with
     ``output='velocity'`` the sampled motor velocity, with ``'encoder'`` the difference of
@@ -114,7 +115,8 @@ def robot_frf_sampled(params: RobotParams, freq_hz: np.ndarray, *,
 
 def closed_loop_frfs(P: np.ndarray, freq_hz: np.ndarray, kp: np.ndarray, ki: np.ndarray,
                      dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Closed-loop r -> u and r -> y for the discrete velocity PI around plant P (n, n, n_freq).
+    """
+    Closed-loop r -> u and r -> y for the discrete velocity PI around plant P (n, n, n_freq).
 
     The PI is discretised as the simulation runs it (integral updated before use):
     K(z) = kp + ki dt z / (z - 1). Returns (S_u = (I + K P)^-1 K, T = P S_u).

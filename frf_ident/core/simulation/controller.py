@@ -1,4 +1,5 @@
-"""Closed-loop velocity controller: PI with torque limit and anti-windup (Fig. 2 of the paper).
+"""
+Closed-loop velocity controller: PI with torque limit and anti-windup (Fig. 2 of the paper).
 
 The same compiled PI step runs inside the batch simulation and in the controller node, so the
 node graph and the offline runner compute identical torques.
@@ -11,10 +12,10 @@ import numba
 import numpy as np
 
 
-
 @numba.njit(cache=True, fastmath=True)
 def pi_step(e, integ, kp, ki, ff, k, ulim, dt, u):
-    """Velocity PI with torque limit and back-calculation anti-windup (per axis, in place).
+    """
+    Velocity PI with torque limit and back-calculation anti-windup (per axis, in place).
 
     u = kp e + I + ff[k], I += ki e dt; when u saturates, I is set so u sits at the limit.
     """
@@ -32,7 +33,8 @@ def pi_step(e, integ, kp, ki, ff, k, ulim, dt, u):
 
 @dataclass
 class PIVelocity:
-    """Velocity PI u = kp (r - y) + ki int (r - y) dt + ff, limited to +-torque_limit.
+    """
+    Velocity PI u = kp (r - y) + ki int (r - y) dt + ff, limited to +-torque_limit.
 
     Anti-windup by back-calculation: while saturated the integral is held so that u sits
     exactly at the limit. ``integral`` is the controller state (N m), initialised to the
@@ -74,7 +76,7 @@ class PIVelocity:
         ff = np.zeros(self.n_axes) if feedforward is None else np.asarray(feedforward, float)
         u = np.empty(self.n_axes)
         pi_step(e, self.integral, self.kp, self.ki, ff.reshape(1, -1), 0, self.torque_limit,
-                 self.dt, u)
+                self.dt, u)
         return u
 
     def copy(self) -> 'PIVelocity':

@@ -1,4 +1,5 @@
-"""Running excitation designs on a plant and estimating the FRF (open loop; the paper's Sec. 6).
+"""
+Running excitation designs on a plant and estimating the FRF (open loop; the paper's Sec. 6).
 
 These are the building blocks of the academic example: a multisine best linear approximation
 over n_p realisations x n_q periods and a chirp estimate with the Sec. 5.1 processing, both on
@@ -8,21 +9,21 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
-from frf_ident.core.excitation.chirp import ChirpDesign
-from frf_ident.core.estimation.spectra import (BLAResult, best_linear_approximation,
-                                       chirp_analysis_frequencies, chirp_spectra,
-                                       detection_line_levels, frf_from_spectra, periodic_spectra)
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.excitation.multisine import (MultisineDesign, MultisineRealisation,
-                                      multisine_realisation, reference_frequency_set)
+from frf_ident.core.estimation.spectra import (best_linear_approximation, BLAResult,
+                                               chirp_analysis_frequencies, chirp_spectra,
+                                               detection_line_levels, frf_from_spectra,
+                                               periodic_spectra)
+from frf_ident.core.excitation.chirp import ChirpDesign
+from frf_ident.core.excitation.multisine import (multisine_realisation, MultisineDesign,
+                                                 MultisineRealisation, reference_frequency_set)
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import DesignError
+import numpy as np
 
 
 def stage_grid(n_samples: int, fs: float, substeps: int, t_start: float = 0.0) -> np.ndarray:
-    """Times of the integrator's stage grid (2 m points per sample, plus the last end point)."""
+    """Time of the integrator's stage grid (2 m points per sample, plus the last end point)."""
     return t_start + np.arange(2 * substeps * n_samples + 1) / (2 * substeps * fs)
 
 
@@ -42,7 +43,8 @@ def run_open_loop_multisine(plant: FlexibleJointPlant, design: MultisineDesign, 
                             transient_periods: int = 1, rng: np.random.Generator,
                             realisations: list[MultisineRealisation] | None = None,
                             ) -> OpenLoopMultisineRun:
-    """Multisine BLA (eq. 14) with the torque injected directly at the plant input.
+    """
+    Multisine BLA (eq. 14) with the torque injected directly at the plant input.
 
     Each realisation starts from rest, runs ``transient_periods`` discarded periods then
     ``n_periods`` measured ones; the excitation is evaluated on the integrator's stage grid so
@@ -98,7 +100,8 @@ class OpenLoopChirpRun:
 def run_open_loop_chirp(plant: FlexibleJointPlant, design: ChirpDesign, phases: np.ndarray, *,
                         analysis_freqs: np.ndarray | None = None, n_ref: int = 80,
                         ) -> OpenLoopChirpRun:
-    """Chirp experiments (eqs. 15-16) injected at the plant input, estimated as Sec. 5.1.
+    """
+    Chirp experiments (eqs. 15-16) injected at the plant input, estimated as Sec. 5.1.
 
     ``phases`` is the (n_u, n_ex) MIMO phase matrix (eq. 9 or eq. 26). One experiment per
     column, each from rest; P = Y U^+ (eq. 7) per analysis frequency.
@@ -134,7 +137,8 @@ def run_open_loop_chirp(plant: FlexibleJointPlant, design: ChirpDesign, phases: 
 
 def resonance_peak(freq_hz: np.ndarray, response: np.ndarray, band: tuple[float, float]
                    ) -> tuple[float, float]:
-    """Frequency [Hz] and magnitude [dB] of the largest peak of |response| inside ``band``.
+    """
+    Frequency [Hz] and magnitude [dB] of the largest peak of |response| inside ``band``.
 
     Refined by a parabola through the three lines around the maximum in (log f, dB).
     """
