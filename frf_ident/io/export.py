@@ -45,8 +45,9 @@ from frf_ident.core.jsonable import jsonable
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
-__all__ = ['FORMATS', 'from_control', 'read_csv', 'read_frf', 'read_json', 'read_mat',
-           'to_control', 'write_csv', 'write_frf', 'write_json', 'write_mat']
+__all__ = ['CSV_COLUMNS', 'FORMATS', 'PathLike', 'VARIANCES', 'from_control', 'read_csv',
+           'read_frf', 'read_json', 'read_mat', 'to_control', 'write_csv', 'write_frf',
+           'write_json', 'write_mat']
 
 PathLike = str | os.PathLike[str]
 CSV_COLUMNS = ('output', 'input', 'freq_hz', 're', 'im')

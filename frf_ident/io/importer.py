@@ -68,7 +68,8 @@ from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
-__all__ = ['Table', 'UNITS', 'check_map', 'import_table', 'load_map', 'read_table']
+__all__ = ['JOINT_KEYS', 'PathLike', 'SIGNALS', 'SIGNAL_KEYS', 'TIME_KEYS', 'TOP_KEYS', 'Table',
+           'UNITS', 'check_map', 'import_table', 'load_map', 'read_table']
 
 PathLike = str | os.PathLike[str]
 SIGNALS = ('position', 'velocity', 'effort', 'reference', 'excitation')
