@@ -5,6 +5,9 @@ Every error a user can cause derives from :class:`FrfIdentInputError`; the CLI t
 one line on stderr and exit status 2. Everything else is a failure (exit 1).
 """
 
+__all__ = ['BagError', 'DesignError', 'EstimationError', 'FrfIdentError', 'FrfIdentInputError',
+           'ModelFileError', 'SafetyError']
+
 
 class FrfIdentError(Exception):
     """Base class of all frf_ident errors."""

@@ -17,21 +17,27 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
 
     Parameters
     ----------
-    model_path
+    model_path : str or Path or None
         Model file, or None for the embedded 3-axis model.
-    plant_spec
+    plant_spec : str or None
         Plant plug-in ``'package.module:Class'``, or None for the model's simulation.
-    config
-        :class:`~frf_ident.core.simulation.runner.IdentificationConfig`.
-    out
+    config : IdentificationConfig
+        The procedures (:class:`~frf_ident.core.simulation.runner.IdentificationConfig`).
+    out : Path
         Bag directory to create; an existing path is refused (nothing is overwritten).
-    progress
-        Called with one line per step.
+    progress : callable, optional
+        Called with one line per step; default :func:`~frf_ident.app.console.say`.
 
     Returns
     -------
     Recording
         The recorded run (also written to ``out``).
+
+    Raises
+    ------
+    FrfIdentInputError
+        ``out`` exists, the model file is invalid (:class:`~frf_ident.errors.ModelFileError`)
+        or the plant plug-in cannot be loaded.
 
     """
     from frf_ident.bag import write_recording

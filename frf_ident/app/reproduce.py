@@ -22,6 +22,9 @@ from frf_ident.core.simulation.open_loop import (resonance_peak, run_open_loop_c
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 import numpy as np
 
+__all__ = ['CASES', 'PAPER_AXIS', 'PAPER_REALISATIONS', 'PAPER_SEED', 'RESONANCE_BAND',
+           'analytic_linear', 'findings', 'paper_plant', 'reproduce_paper', 'write_results']
+
 PAPER_AXIS = {'name': 'joint_1', 'motor_inertia': 35.0, 'link_inertia': 150.0,
               'stiffness': 1.5e5, 'damping': 400.0, 'torque_limit': 150.0}
 CASES = {
@@ -33,11 +36,49 @@ RESONANCE_BAND = (6.0, 40.0)
 
 
 def paper_plant(case: str, fs: float = 1000.0, substeps: int = 4) -> FlexibleJointPlant:
+    """
+    Build the Section 6 single-joint plant of one case (eqs. 20-22).
+
+    Parameters
+    ----------
+    case : {'linear', 'coulomb', 'stiffness'}
+        A key of :data:`CASES`: no nonlinearity, Fc = 50 N m, or k2 = 1.7 k1 beyond
+        bs = 1e-3 rad.
+    fs : float, optional
+        Sample rate in Hz.
+    substeps : int, optional
+        Integrator substeps per sample.
+
+    Returns
+    -------
+    FlexibleJointPlant
+        The plant (open loop, no noise, torque limit 150 N m).
+
+    Raises
+    ------
+    KeyError
+        ``case`` is not one of :data:`CASES`.
+
+    """
     axis = AxisParams(**PAPER_AXIS, **CASES[case])
     return FlexibleJointPlant(RobotParams([axis], sample_rate=fs, substeps=substeps))
 
 
 def analytic_linear(freq_hz: np.ndarray) -> np.ndarray:
+    """
+    Return the analytic FRF dq_m / tau_m of the linear Section 6 plant.
+
+    Parameters
+    ----------
+    freq_hz : array_like
+        Frequencies in Hz.
+
+    Returns
+    -------
+    ndarray of complex
+        :func:`~frf_ident.core.simulation.analytic.two_mass_frf` with :data:`PAPER_AXIS`.
+
+    """
     a = PAPER_AXIS
     return two_mass_frf(freq_hz, a['motor_inertia'], a['link_inertia'], a['stiffness'],
                         a['damping'])
@@ -51,7 +92,39 @@ PAPER_SEED = 2015
 def reproduce_paper(*, n_realisations: int = PAPER_REALISATIONS, seed: int = PAPER_SEED,
                     fs: float = 1000.0, substeps: int = 4,
                     progress: Callable[[str], None] | None = None) -> dict[str, Any]:
-    """Run all cases and designs; return the results.json content (see module doc)."""
+    """
+    Run all cases and designs of Section 6; return the results.json content.
+
+    The multisine realisations are drawn once and used for every case, so the cases differ
+    only in the plant.
+
+    Parameters
+    ----------
+    n_realisations : int, optional
+        Multisine realisations n_p (the paper's 30); n_q = 1 after one transient period.
+    seed : int, optional
+        Seed of the random phases.
+    fs : float, optional
+        Sample rate of the simulation in Hz.
+    substeps : int, optional
+        Integrator substeps per sample.
+    progress : callable, optional
+        Called with one line per experiment; default silent.
+
+    Returns
+    -------
+    dict
+        ``paper``, ``plant``, ``multisine_design``, ``chirp_design``, ``cases`` (case ->
+        design -> estimate, input power ...), ``power_ratio`` (multisine over chirp input
+        power, linear case), ``power_ratio_per_realisation``, ``analytic`` (the linear FRF)
+        and ``findings`` (:func:`findings`).
+
+    Raises
+    ------
+    DesignError
+        ``n_realisations`` < 1.
+
+    """
     say = progress or (lambda _msg: None)
     design = design_odd_multisine(1.0, 60.0, bound=150.0, resolution_hz=0.1, fs=fs)
     rng = np.random.default_rng(seed)
@@ -109,7 +182,23 @@ def _complex(entry: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def findings(results: dict[str, Any]) -> dict[str, Any]:
-    """Return the paper's findings as numbers: the estimates against the analytic FRF."""
+    """
+    Return the paper's findings as numbers: the estimates against the analytic FRF.
+
+    Parameters
+    ----------
+    results : dict
+        The ``cases`` and ``power_ratio`` of :func:`reproduce_paper`'s result.
+
+    Returns
+    -------
+    dict
+        ``linear`` (median / max |error| in dB per design), the analytic resonance
+        frequency and peak, ``peaks`` per case/design, ``coulomb`` (drop of the resonance
+        peak in dB with Fc = 50 N m), ``stiffness`` (relative shift of the resonance with
+        k2 = 1.7 k1) and ``power_ratio``.
+
+    """
     f_lin = {}
     for design in ('multisine', 'chirp'):
         f, p = _complex(results['cases']['linear'][design])
@@ -145,7 +234,22 @@ def findings(results: dict[str, Any]) -> dict[str, Any]:
 
 
 def write_results(results: dict[str, Any], out_dir: Path) -> list[Path]:
-    """Write results.json and the Figure 4/5 style Bode plots into out_dir."""
+    """
+    Write results.json and the Figure 4/5 style Bode plots into ``out_dir``.
+
+    Parameters
+    ----------
+    results : dict
+        The result of :func:`reproduce_paper`.
+    out_dir : Path
+        Output directory (created if missing; files in it are overwritten).
+
+    Returns
+    -------
+    list of Path
+        results.json, figure4_coulomb.png and figure5_stiffness.png.
+
+    """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / 'results.json'

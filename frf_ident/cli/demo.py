@@ -4,11 +4,21 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+__all__ = ['HELP', 'add_arguments', 'run']
+
 HELP = 'the main job: node graph on the simulated robot, estimation, diagnosis'
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Arguments of ``demo``; defaults are the demo's short experiments."""
+    """
+    Add the arguments of ``demo``; defaults are the demo's short experiments.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser; the arguments are added to it.
+
+    """
     from frf_ident.app.demo import DEMO_CHIRP, DEMO_MODEL, DEMO_MULTISINE, DEMO_ROBOT
     ms, ch = DEMO_MULTISINE, DEMO_CHIRP
     p.add_argument('--out', type=Path, required=True, help='output directory')
@@ -24,7 +34,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the demo."""
+    """
+    Run the demo: node graph, estimation and diagnosis into ``--out``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit status: 0 (success).
+
+    Raises
+    ------
+    FrfIdentInputError
+        A model or robot file is missing, or ``--out`` already holds a bag.
+
+    """
     from dataclasses import replace
 
     from frf_ident.app.demo import DEMO_CHIRP, DEMO_MULTISINE, run_demo

@@ -4,12 +4,22 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+__all__ = ['HELP', 'add_arguments', 'run']
+
 HELP = ('compare data with the nominal model, name the effects it lacks, extend the model '
         '(report.json, extended_model.yaml, report.html)')
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Arguments of ``diagnose``."""
+    """
+    Add the arguments of ``diagnose``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser; the arguments are added to it.
+
+    """
     p.add_argument('data', type=Path, help='bag (identify or robot), or CSV/MAT (with --map; '
                                            'EMPS and KUKA KR300 .mat recognised without)')
     p.add_argument('--model', type=Path, required=True, help='nominal model file')
@@ -18,7 +28,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Diagnose and print the effects found and the held-out metrics."""
+    """
+    Diagnose and print the effects found and the held-out metrics.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit status: 0 (success).
+
+    Raises
+    ------
+    FrfIdentInputError
+        The data, map or model file is unusable (one line naming it).
+
+    """
     from frf_ident.app.console import say
     from frf_ident.app.diagnose import diagnose
     res = diagnose(args.data, args.model, args.out, map_path=args.map, progress=say)

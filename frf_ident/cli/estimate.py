@@ -4,11 +4,21 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+__all__ = ['HELP', 'add_arguments', 'excitation_options', 'run']
+
 HELP = 'estimate FRFs offline from a bag'
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Arguments of ``estimate``."""
+    """
+    Add the arguments of ``estimate``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser; the arguments are added to it.
+
+    """
     from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
     p.add_argument('bag', type=Path)
     p.add_argument('--out', type=Path, required=True, help='output directory')
@@ -42,7 +52,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def excitation_options(args: argparse.Namespace):
-    """The --input/--multisine-period/--band/--chirp/--chirp-time options as ExcitationOptions."""
+    """
+    Return the --input/--multisine-period/--band/--chirp/--chirp-time options.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+
+    Returns
+    -------
+    ExcitationOptions
+        :class:`~frf_ident.core.estimation.detected.ExcitationOptions` (None where an
+        option is not given).
+
+    """
     from frf_ident.core.estimation.detected import ExcitationOptions
 
     def tup(v):
@@ -53,7 +77,25 @@ def excitation_options(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    """Estimate and write the output directory."""
+    """
+    Estimate and write the output directory.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit status: 0 (success).
+
+    Raises
+    ------
+    FrfIdentInputError
+        The bag cannot be read or does not support an estimate (one line naming it).
+
+    """
     from frf_ident.app.estimate import estimate_bag
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
     estimate_bag(args.bag, args.out, joints=joints,

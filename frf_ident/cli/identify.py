@@ -7,11 +7,21 @@ from pathlib import Path
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 from frf_ident.errors import FrfIdentInputError
 
+__all__ = ['HELP', 'add_arguments', 'identification_config', 'run']
+
 HELP = 'run the identification experiments in closed loop, record a bag'
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Arguments of ``identify``; defaults are those of MultisineConfig and ChirpConfig."""
+    """
+    Add the arguments of ``identify``; defaults are those of MultisineConfig and ChirpConfig.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser; the arguments are added to it.
+
+    """
     ms, ch = MultisineConfig, ChirpConfig
     p.add_argument('--model', type=Path, help='model file (default: the embedded 3-axis model)')
     p.add_argument('--plant', help='plant plug-in "package.module:Class" (default: the '
@@ -34,7 +44,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def identification_config(args: argparse.Namespace):
-    """Return the IdentificationConfig the arguments describe."""
+    """
+    Return the IdentificationConfig the arguments describe.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+
+    Returns
+    -------
+    IdentificationConfig
+        Multisine and/or chirp configuration (None for a procedure not in ``--procedures``).
+
+    Raises
+    ------
+    FrfIdentInputError
+        ``--procedures`` is empty or names something other than multisine, chirp.
+
+    """
     from frf_ident.core.simulation.runner import IdentificationConfig
     procs = {s.strip() for s in args.procedures.split(',') if s.strip()}
     unknown = procs - {'multisine', 'chirp'}
@@ -50,7 +78,25 @@ def identification_config(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the experiments and print what they did."""
+    """
+    Run the experiments and print what they did.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit status: 0 (success).
+
+    Raises
+    ------
+    FrfIdentInputError
+        The procedures, model, plant or output path is invalid.
+
+    """
     from frf_ident.app.console import say
     from frf_ident.app.identify import run_identify
     rec = run_identify(args.model, args.plant, identification_config(args), args.out)

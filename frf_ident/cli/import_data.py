@@ -4,11 +4,21 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+__all__ = ['HELP', 'add_arguments', 'run']
+
 HELP = 'convert measured data (CSV or MAT table) into a bag, using a map file'
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Arguments of ``import``."""
+    """
+    Add the arguments of ``import``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser; the arguments are added to it.
+
+    """
     p.add_argument('file', type=Path, help='measured data: .csv or .mat')
     p.add_argument('--map', type=Path, required=True,
                    help='YAML map: time, joints and their columns/variables, unit scales '
@@ -17,7 +27,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Import the file and write the bag."""
+    """
+    Import the file and write the bag.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit status: 0 (success).
+
+    Raises
+    ------
+    FrfIdentInputError
+        The file or map is unusable, or the bag exists (one line naming it).
+
+    """
     from frf_ident.app.import_data import import_file
     import_file(args.file, args.map, args.out)
     return 0

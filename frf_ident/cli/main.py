@@ -16,7 +16,7 @@ import sys
 from frf_ident.cli import demo, diagnose, estimate, identify, import_data, reproduce
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['COMMANDS', 'build_parser', 'main']
+__all__ = ['COMMANDS', 'OneLineParser', 'build_parser', 'main']
 
 #: subcommand name -> its module (HELP, add_arguments, run); the order is the help order
 COMMANDS = {
@@ -33,11 +33,33 @@ class OneLineParser(argparse.ArgumentParser):
     """Argparse that reports a usage error in one line with exit status 2."""
 
     def error(self, message: str) -> None:
+        """
+        Print ``prog: error: message`` on stderr and exit with status 2 (no usage text).
+
+        Parameters
+        ----------
+        message : str
+            What argparse found wrong.
+
+        Raises
+        ------
+        SystemExit
+            Always, with status 2.
+
+        """
         self.exit(2, f'{self.prog}: error: {message}\n')
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """Return the parser of every subcommand in :data:`COMMANDS`."""
+    """
+    Return the parser of every subcommand in :data:`COMMANDS`.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        ``frf-ident`` with one subparser per command, in help order.
+
+    """
     p = OneLineParser(prog='frf-ident', description='Closed-loop FRF identification of '
                                                     'flexible-joint robots (Saupe & Knoblach '
                                                     '2015).')
@@ -48,7 +70,25 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run ``frf-ident`` with ``argv`` (default: ``sys.argv[1:]``); return the exit status."""
+    """
+    Run ``frf-ident`` with ``argv``; return the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        0 success, 2 input error (one line on stderr), 1 failure, 130 interrupted.
+
+    Raises
+    ------
+    SystemExit
+        From argparse: ``--help`` (status 0) or a usage error (status 2).
+
+    """
     args = build_parser().parse_args(argv)
     try:
         return COMMANDS[args.command].run(args)

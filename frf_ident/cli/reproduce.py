@@ -7,11 +7,21 @@ from pathlib import Path
 from frf_ident.app.reproduce import PAPER_REALISATIONS, PAPER_SEED
 from frf_ident.errors import FrfIdentInputError
 
+__all__ = ['HELP', 'add_arguments', 'run']
+
 HELP = "reproduce the seed paper's Section 6 example"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Arguments of ``reproduce``."""
+    """
+    Add the arguments of ``reproduce``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser; the arguments are added to it.
+
+    """
     p.add_argument('what', choices=['paper'])
     p.add_argument('--out', required=True, type=Path, help='output directory')
     p.add_argument('--realisations', type=int, default=PAPER_REALISATIONS,
@@ -20,7 +30,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Reproduce, write the figures and print the findings."""
+    """
+    Reproduce Section 6, write results.json and the figures, print the findings.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit status: 0 (success).
+
+    Raises
+    ------
+    FrfIdentInputError
+        ``--realisations`` < 2.
+
+    """
     from frf_ident.app.console import say
     from frf_ident.app.reproduce import reproduce_paper, write_results
     if args.realisations < 2:

@@ -26,9 +26,10 @@ _API = {
     'frf_ident.core.simulation.runner': ['IdentificationConfig', 'run_identification'],
     'frf_ident.core.simulation.analytic': ['closed_loop_frfs', 'robot_frf', 'robot_frf_sampled',
                                            'two_mass_frf'],
-    'frf_ident.core.excitation.multisine': ['MultisineDesign', 'design_odd_multisine',
+    'frf_ident.core.excitation.multisine': ['MultisineDesign', 'MultisineRealisation',
+                                            'design_odd_multisine', 'mimo_phase_shifts',
                                             'multisine_realisation'],
-    'frf_ident.core.excitation.chirp': ['ChirpDesign', 'exponential_chirp'],
+    'frf_ident.core.excitation.chirp': ['ChirpDesign', 'chirp_phase_flips', 'exponential_chirp'],
     'frf_ident.core.excitation.procedures': ['ChirpConfig', 'ChirpIteration', 'MultisineConfig'],
     'frf_ident.core.excitation.detect': ['detect_chirp', 'detect_excitation', 'detect_multisine'],
     'frf_ident.core.estimation.frd': ['FrequencyResponse'],
@@ -56,4 +57,5 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
+    """Return the module's names and the lazily loaded public API (for dir() and completion)."""
     return sorted(set(globals()) | set(__all__))

@@ -14,7 +14,7 @@ def jsonable(obj: Any) -> Any:
 
     Parameters
     ----------
-    obj
+    obj : object
         Dict, list, tuple, numpy array or scalar, complex, or a plain value.
 
     Returns
@@ -41,7 +41,17 @@ def jsonable(obj: Any) -> Any:
 
 def json_default(obj: Any) -> Any:
     """
-    Return ``default=`` of :func:`json.dumps` for numpy arrays and scalars.
+    Convert a numpy array or scalar for :func:`json.dumps` (its ``default=`` hook).
+
+    Parameters
+    ----------
+    obj : object
+        The value json could not serialise.
+
+    Returns
+    -------
+    object
+        :func:`jsonable` of ``obj`` for a numpy array or scalar.
 
     Raises
     ------

@@ -17,14 +17,24 @@ from typing import Any
 from frf_ident.core.jsonable import json_default
 import numpy as np
 
+__all__ = ['Recording', 'Segment']
+
 
 @dataclass
 class Segment:
     """
     One experiment segment (docs/CONTRACT.md §3, /frf/experiment descriptor).
 
-    ``info`` carries everything estimation needs and is JSON-serialisable. Keys used by the
-    estimators (see ``frf_ident.core.excitation.procedures``):
+    Parameters
+    ----------
+    t_start, t_end : float
+        The segment's time span [t_start, t_end) in s.
+    info : dict, optional
+        Everything estimation needs, JSON-serialisable (see below).
+
+    Notes
+    -----
+    Keys of ``info`` used by the estimators (see ``frf_ident.core.excitation.procedures``):
 
     - ``design``: 'multisine' | 'chirp' | 'constant_velocity' | 'idle'
     - ``procedure``: name of the procedure (e.g. 'multisine_bla', 'chirp_iteration')
@@ -34,6 +44,7 @@ class Segment:
     - ``freq_hz``: excited (multisine) or analysed (chirp) frequencies
     - ``f_low``, ``f_high``, ``t_sweep``: chirp design
     - ``iteration``: chirp iteration number (1-based)
+
     """
 
     t_start: float
@@ -41,13 +52,50 @@ class Segment:
     info: dict[str, Any] = field(default_factory=dict)
 
     def descriptor(self, event: str) -> str:
-        """JSON text published on /frf/experiment at segment start (event='start') or end."""
+        """
+        Return the JSON text published on /frf/experiment at the segment's start or end.
+
+        Parameters
+        ----------
+        event : str
+            ``'start'`` or ``'end'``.
+
+        Returns
+        -------
+        str
+            JSON object with ``event``, ``t_start``, ``t_end`` and the ``info`` keys, keys
+            sorted, numpy values converted.
+
+        """
         d = {'event': event, 't_start': float(self.t_start), 't_end': float(self.t_end)}
         d.update(self.info)
         return json.dumps(d, sort_keys=True, default=json_default)
 
     @classmethod
     def from_descriptor(cls, text: str) -> tuple[str, 'Segment']:
+        """
+        Parse a descriptor written by :meth:`descriptor`.
+
+        Parameters
+        ----------
+        text : str
+            The JSON text.
+
+        Returns
+        -------
+        event : str
+            The descriptor's ``event`` (``'start'`` when absent).
+        segment : Segment
+            The segment; every other key goes to ``info``.
+
+        Raises
+        ------
+        json.JSONDecodeError
+            ``text`` is not JSON.
+        KeyError
+            ``t_start`` or ``t_end`` is missing.
+
+        """
         d = json.loads(text)
         event = d.pop('event', 'start')
         t0 = float(d.pop('t_start'))
@@ -60,16 +108,29 @@ class Recording:
     """
     Uniformly sampled closed-loop data.
 
-    Attributes
+    The constructor converts the signals to float arrays; a 1-D signal is one joint.
+
+    Parameters
     ----------
-    t : (N,) sample times [s] (uniform, spacing ``dt``)
-    joint_names : names, length n
-    position, velocity, effort : (N, n) measured position [rad], velocity y [rad/s],
-        applied motor torque u [N m]
-    reference : (N, n) velocity reference r [rad/s] (NaN where none was commanded)
-    excitation : (N, n) the excitation part of r (the reference minus offsets / constant velocity)
-    segments : experiment segments, in time order
-    meta : free-form (model, seed, summaries of procedures)
+    t : array_like, shape (N,)
+        Sample times [s] (uniform, spacing ``dt``).
+    joint_names : list of str
+        Joint names, n of them.
+    position, velocity, effort : array_like, shape (N, n)
+        Measured position [rad], velocity y [rad/s], applied motor torque u [N m].
+    reference : array_like, shape (N, n), optional
+        Velocity reference r [rad/s] (NaN where none was commanded).
+    excitation : array_like, shape (N, n), optional
+        The excitation part of r (the reference minus offsets / constant velocity).
+    segments : list of Segment, optional
+        Experiment segments, in time order.
+    meta : dict, optional
+        Free-form (model, seed, summaries of procedures).
+
+    Raises
+    ------
+    ValueError
+        A signal is not shaped (N, n).
 
     """
 
@@ -99,22 +160,65 @@ class Recording:
 
     @property
     def dt(self) -> float:
+        """Return the sample time [s], the median spacing of ``t`` (ValueError below 2 samples)."""
         if self.t.size < 2:
             raise ValueError('recording has fewer than 2 samples')
         return float(np.median(np.diff(self.t)))
 
     @property
     def fs(self) -> float:
+        """Return the sample rate 1 / dt [Hz]."""
         return 1.0 / self.dt
 
     def index_of(self, t: float) -> int:
-        """Index of the sample at (or first after) time t."""
+        """
+        Return the index of the sample at (or first after) time t.
+
+        A sample up to a quarter sample before ``t`` counts as at ``t``.
+
+        Parameters
+        ----------
+        t : float
+            Time in s.
+
+        Returns
+        -------
+        int
+            The index (``N`` when t is after the last sample).
+
+        """
         return int(np.searchsorted(self.t, t - 0.25 * self.dt))
 
     def slice(self, t_start: float, t_end: float) -> slice:  # noqa: A003
-        """Sample slice covering [t_start, t_end)."""
+        """
+        Return the sample slice covering [t_start, t_end).
+
+        Parameters
+        ----------
+        t_start, t_end : float
+            Times in s (see :meth:`index_of`).
+
+        Returns
+        -------
+        slice
+            Indices of the samples in the span.
+
+        """
         return slice(self.index_of(t_start), self.index_of(t_end))
 
     def segments_where(self, **match: Any) -> list[Segment]:
-        """Segments whose info matches every given key/value."""
+        """
+        Return the segments whose info matches every given key/value.
+
+        Parameters
+        ----------
+        **match
+            ``info`` keys and the values they must equal (e.g. ``design='multisine'``).
+
+        Returns
+        -------
+        list of Segment
+            The matching segments, in time order.
+
+        """
         return [s for s in self.segments if all(s.info.get(k) == v for k, v in match.items())]

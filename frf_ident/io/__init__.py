@@ -10,6 +10,7 @@ __all__ = ['from_control', 'import_table', 'load_map', 'read_frf', 'to_control',
 
 
 def __getattr__(name: str):  # the importer pulls in yaml/scipy.io only when used
+    """Load ``import_table`` and ``load_map`` from :mod:`frf_ident.io.importer` on first use."""
     if name in ('import_table', 'load_map'):
         from . import importer
         return getattr(importer, name)

@@ -45,8 +45,9 @@ from frf_ident.core.jsonable import jsonable
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
-__all__ = ['FORMATS', 'from_control', 'read_csv', 'read_frf', 'read_json', 'read_mat',
-           'to_control', 'write_csv', 'write_frf', 'write_json', 'write_mat']
+__all__ = ['CSV_COLUMNS', 'FORMATS', 'PathLike', 'VARIANCES', 'from_control', 'read_csv',
+           'read_frf', 'read_json', 'read_mat', 'to_control', 'write_csv', 'write_frf',
+           'write_json', 'write_mat']
 
 PathLike = str | os.PathLike[str]
 CSV_COLUMNS = ('output', 'input', 'freq_hz', 're', 'im')
@@ -57,26 +58,91 @@ _MAT_VARIANCES = {'noise_variance': 'NoiseVariance', 'total_variance': 'TotalVar
 # --------------------------------------------------------------------------- python-control
 
 def to_control(frf: FrequencyResponse):
-    """``control.FrequencyResponseData`` of ``frf`` (omega in rad/s, labelled channels)."""
+    """
+    Convert ``frf`` to a python-control ``FrequencyResponseData``.
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        The response.
+
+    Returns
+    -------
+    control.FrequencyResponseData
+        Omega in rad/s, channels labelled with the names; variances are not kept.
+
+    Raises
+    ------
+    ImportError
+        The optional python-control package is not installed.
+
+    """
     return frf.to_control()
 
 
 def from_control(obj: Any) -> FrequencyResponse:
-    """Convert a ``control.FrequencyResponseData`` (variances are not kept)."""
+    """
+    Convert a python-control ``FrequencyResponseData`` to a FrequencyResponse.
+
+    Parameters
+    ----------
+    obj : control.FrequencyResponseData
+        The response (omega in rad/s, channel labels).
+
+    Returns
+    -------
+    FrequencyResponse
+        Frequencies in Hz, the labels as names, no variances.
+
+    """
     return FrequencyResponse.from_control(obj)
 
 
 # --------------------------------------------------------------------------- JSON
 
 def write_json(frf: FrequencyResponse, path: PathLike) -> Path:
-    """Write ``frf.to_dict()`` as JSON (exact: floats are written with repr)."""
+    """
+    Write ``frf.to_dict()`` as JSON (exact: floats are written with repr).
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        The response.
+    path : str or os.PathLike
+        File to write (overwritten; :func:`write_frf` refuses existing files).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    """
     path = Path(path)
     path.write_text(json.dumps(frf.to_dict()) + '\n')
     return path
 
 
 def read_json(path: PathLike) -> FrequencyResponse:
-    """Read a JSON FRF written by :func:`write_json` or ``frf-ident estimate``."""
+    """
+    Read a JSON FRF written by :func:`write_json` or ``frf-ident estimate``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The JSON file.
+
+    Returns
+    -------
+    FrequencyResponse
+        The response with its variances and ``meta``.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The file cannot be read, is not a JSON object with ``freq_hz``, ``re`` and ``im``, or
+        its shapes do not agree (the message names the file).
+
+    """
     path = Path(path)
     try:
         d = json.loads(path.read_text())
@@ -104,7 +170,22 @@ def _cellstr(names: list[str]) -> np.ndarray:
 
 
 def write_mat(frf: FrequencyResponse, path: PathLike) -> Path:
-    """Write a MATLAB v5 .mat file with the variables ``idfrd`` takes (see module doc)."""
+    """
+    Write a MATLAB v5 .mat file with the variables ``idfrd`` takes (see the module doc).
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        The response.
+    path : str or os.PathLike
+        File to write (overwritten; :func:`write_frf` refuses existing files).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    """
     from scipy.io import savemat
     path = Path(path)
     data: dict[str, Any] = {
@@ -140,7 +221,26 @@ def _mat_names(path: Path, d: dict[str, Any], key: str, n: int) -> list[str]:
 
 
 def read_mat(path: PathLike) -> FrequencyResponse:
-    """Read a .mat FRF written by :func:`write_mat` (or any file with ResponseData/Frequency)."""
+    """
+    Read a .mat FRF written by :func:`write_mat` (or any file with ResponseData/Frequency).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The MAT file; ``FrequencyUnit`` 'rad/s' (or 'rad/TimeUnit') is converted to Hz.
+
+    Returns
+    -------
+    FrequencyResponse
+        The response with the variances and ``Meta`` the file holds.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The file cannot be read, lacks ``ResponseData`` or ``Frequency``, has another
+        frequency unit, or its names or shapes do not agree (the message names the file).
+
+    """
     from scipy.io import loadmat
     path = Path(path)
     try:
@@ -181,7 +281,22 @@ def _mat_text(value: Any, default: str) -> str:
 # --------------------------------------------------------------------------- CSV
 
 def write_csv(frf: FrequencyResponse, path: PathLike) -> Path:
-    """Write the long-format CSV (one row per output, input and frequency)."""
+    """
+    Write the long-format CSV (one row per output, input and frequency).
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        The response; its ``meta`` is not stored.
+    path : str or os.PathLike
+        File to write (overwritten; :func:`write_frf` refuses existing files).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    """
     path = Path(path)
     extra = [v for v in VARIANCES if getattr(frf, v) is not None]
     with path.open('w', newline='') as fh:
@@ -202,6 +317,23 @@ def read_csv(path: PathLike) -> FrequencyResponse:
     Read a long-format CSV FRF written by :func:`write_csv`.
 
     Channels are ordered by first appearance; every channel must list the same frequencies.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+
+    Returns
+    -------
+    FrequencyResponse
+        The response with the variance columns the file has.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The file cannot be read, is empty, lacks a column, holds a non-number, or its
+        channels differ in frequencies or do not cover every output/input pair.
+
     """
     path = Path(path)
     try:
@@ -273,7 +405,32 @@ def _format(path: Path) -> str:
 
 
 def write_frf(frf: FrequencyResponse, path: PathLike, *, overwrite: bool = False) -> Path:
-    """Write ``frf`` in the format given by the suffix of ``path`` (.json, .mat, .csv)."""
+    """
+    Write ``frf`` in the format given by the suffix of ``path`` (.json, .mat, .csv).
+
+    Missing parent directories are created.
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        The response.
+    path : str or os.PathLike
+        File to write; its suffix selects the format.
+    overwrite : bool, optional
+        Replace an existing file (default: refuse).
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The suffix is not .json, .mat or .csv, or the file exists and ``overwrite`` is
+        false.
+
+    """
     path = Path(path)
     writer = FORMATS[_format(path)][0]
     if path.exists() and not overwrite:
@@ -284,7 +441,26 @@ def write_frf(frf: FrequencyResponse, path: PathLike, *, overwrite: bool = False
 
 
 def read_frf(path: PathLike) -> FrequencyResponse:
-    """Read an FRF file written by :func:`write_frf` (format from the suffix)."""
+    """
+    Read an FRF file written by :func:`write_frf` (format from the suffix).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A .json, .mat or .csv file.
+
+    Returns
+    -------
+    FrequencyResponse
+        The response.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The suffix is unknown, the file does not exist, or the reader refuses it (see
+        :func:`read_json`, :func:`read_mat`, :func:`read_csv`).
+
+    """
     path = Path(path)
     reader = FORMATS[_format(path)][1]
     if not path.is_file():

@@ -68,7 +68,8 @@ from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
-__all__ = ['UNITS', 'import_table', 'load_map', 'read_table']
+__all__ = ['JOINT_KEYS', 'PathLike', 'SIGNALS', 'SIGNAL_KEYS', 'TIME_KEYS', 'TOP_KEYS', 'Table',
+           'UNITS', 'check_map', 'import_table', 'load_map', 'read_table']
 
 PathLike = str | os.PathLike[str]
 SIGNALS = ('position', 'velocity', 'effort', 'reference', 'excitation')
@@ -90,7 +91,24 @@ UNITS: dict[str, float] = {
 
 @dataclass
 class Table:
-    """A loaded CSV or MAT file: ``get(spec_column, where)`` returns raw arrays."""
+    """
+    A loaded CSV or MAT file; :meth:`column` returns its raw arrays.
+
+    Made by :func:`read_table`.
+
+    Parameters
+    ----------
+    path : Path
+        The file (named in error messages).
+    kind : {'csv', 'mat'}
+        The format.
+    data : ndarray or dict
+        CSV: the values, shape (rows, columns), NaN for empty fields. MAT: the variables as
+        ``scipy.io.loadmat`` returns them (squeezed, structs as objects).
+    header : list of str, optional
+        CSV column names, None without a header row.
+
+    """
 
     path: Path
     kind: str  # 'csv' | 'mat'
@@ -98,10 +116,41 @@ class Table:
     header: list[str] | None = None
 
     def name(self) -> str:
+        """
+        Return the file name used in error messages.
+
+        Returns
+        -------
+        str
+            The path as text.
+
+        """
         return str(self.path)
 
     def column(self, ref: Any, where: str) -> np.ndarray:
-        """Return the raw CSV column or MAT variable named by ``ref``."""
+        """
+        Return the raw CSV column or MAT variable named by ``ref``.
+
+        Parameters
+        ----------
+        ref : str or int
+            CSV: header name or 0-based column index. MAT: variable name, a dotted path
+            reaching into structs.
+        where : str
+            The map field being read, for error messages.
+
+        Returns
+        -------
+        ndarray
+            The column (CSV) or the variable as a float array (MAT, any shape).
+
+        Raises
+        ------
+        FrfIdentInputError
+            ``ref`` is not found, out of range or not numeric (the message names the file,
+            the field and what exists).
+
+        """
         return self._csv_column(ref, where) if self.kind == 'csv' else self._mat_var(ref, where)
 
     def _csv_column(self, ref: Any, where: str) -> np.ndarray:
@@ -142,7 +191,28 @@ class Table:
                                      f'numeric ({type(obj).__name__})') from None
 
     def scalar(self, ref: str, where: str) -> float:
-        """Scalar MAT variable used as a scale factor."""
+        """
+        Return a scalar MAT variable used as a scale factor.
+
+        Parameters
+        ----------
+        ref : str
+            Variable name (dotted path into structs).
+        where : str
+            The map field being read, for error messages.
+
+        Returns
+        -------
+        float
+            The value.
+
+        Raises
+        ------
+        FrfIdentInputError
+            The table is a CSV file (no variables), or the variable is missing, not numeric
+            or not one finite value.
+
+        """
         if self.kind != 'mat':
             raise FrfIdentInputError(f'{where}: scale={ref!r} is not a unit '
                                      f'({", ".join(UNITS)}) and {self.name()} has no variables')
@@ -171,7 +241,28 @@ def _mat_members(data: dict[str, Any], path: list[str]) -> list[str]:
 
 
 def read_table(path: PathLike, csv_options: dict[str, Any] | None = None) -> Table:
-    """Load a .csv or .mat file (format from the suffix)."""
+    """
+    Load a .csv or .mat file (format from the suffix).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file: .mat, or .csv / .txt / .tsv / .dat for text tables.
+    csv_options : dict, optional
+        The map's ``csv`` section (``delimiter``, ``header``); default: sniffed.
+
+    Returns
+    -------
+    Table
+        The loaded table.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The file does not exist, has an unknown suffix or cannot be parsed (MATLAB v7.3,
+        ragged or non-numeric CSV rows, a bad delimiter).
+
+    """
     path = Path(path)
     if not path.is_file():
         raise FrfIdentInputError(f'data file {str(path)!r} does not exist')
@@ -262,7 +353,25 @@ def _numeric_row(row: list[str]) -> bool:
 # --------------------------------------------------------------------------- map
 
 def load_map(path: PathLike) -> dict[str, Any]:
-    """Read and check a map file (see the module docstring for the format)."""
+    """
+    Read and check a map file (see the module docstring for the format).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The YAML map file.
+
+    Returns
+    -------
+    dict
+        The map.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The file cannot be read, is not valid YAML, or fails :func:`check_map`.
+
+    """
     import yaml
     path = Path(path)
     try:
@@ -279,7 +388,25 @@ def load_map(path: PathLike) -> dict[str, Any]:
 
 
 def check_map(doc: Any, where: str = 'map') -> None:
-    """Validate the structure of a map dict; one-line error naming the field."""
+    """
+    Validate the structure of a map dict.
+
+    Checks the version, the known fields, the time specification (exactly one of a time
+    signal or ``sample_time``) and every joint (unique name, effort, position or velocity).
+
+    Parameters
+    ----------
+    doc : object
+        The loaded map.
+    where : str, optional
+        Name of the map in error messages (e.g. its path).
+
+    Raises
+    ------
+    FrfIdentInputError
+        The map is malformed (one line naming the field).
+
+    """
     if not isinstance(doc, dict):
         raise FrfIdentInputError(f'{where}: expected a mapping with frf_ident_map, time, '
                                  f'joints; got {type(doc).__name__}')
@@ -454,6 +581,26 @@ def import_table(path: PathLike, map: dict[str, Any] | PathLike) -> Recording:  
 
     ``Recording.meta['import']`` records the source, the map, the time handling and which
     signals were derived (e.g. velocity by central differences of position).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The data file (.csv or .mat).
+    map : dict or str or os.PathLike
+        The map (see the module docstring), or the path of its YAML file.
+
+    Returns
+    -------
+    Recording
+        Uniformly sampled signals of the mapped joints, without experiment segments.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The map or data are unusable: a missing or non-numeric signal, a wrong length,
+        non-finite values, a non-uniform time signal (the message names file, field and
+        value).
+
     """
     mp = load_map(map) if not isinstance(map, dict) else map
     map_name = str(map) if not isinstance(map, dict) else 'map'

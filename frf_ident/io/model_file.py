@@ -19,9 +19,32 @@ from frf_ident.errors import FrfIdentInputError, ModelFileError
 from frf_ident.io.yamlio import load_yaml
 import yaml
 
+__all__ = ['load_model', 'load_plant', 'read_model_dict', 'save_model']
+
 
 def read_model_dict(path: str | Path) -> dict[str, Any]:
-    """Parse a model file into a mapping (no validation beyond YAML syntax)."""
+    """
+    Parse a model file into a mapping (no validation beyond YAML syntax).
+
+    Floats follow YAML 1.2 (``1.5e5`` is a number, see :mod:`frf_ident.io.yamlio`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file.
+
+    Returns
+    -------
+    dict
+        The top-level mapping.
+
+    Raises
+    ------
+    ModelFileError
+        The file is missing or unreadable, not valid YAML (the line is named), or not a
+        mapping.
+
+    """
     p = Path(path)
     try:
         text = p.read_text()
@@ -42,7 +65,29 @@ def read_model_dict(path: str | Path) -> dict[str, Any]:
 
 
 def load_model(path: str | Path | None) -> tuple[dict[str, Any], RobotParams, PIVelocity]:
-    """Model file -> (mapping, robot parameters, controller). None: the embedded default."""
+    """
+    Load and validate a model file (docs/CONTRACT.md §5).
+
+    Parameters
+    ----------
+    path : str or Path or None
+        The model file; None loads the embedded default 3-axis model.
+
+    Returns
+    -------
+    model : dict
+        The mapping as read.
+    robot : RobotParams
+        The robot parameters.
+    controller : PIVelocity
+        The velocity controller the model describes.
+
+    Raises
+    ------
+    ModelFileError
+        The file cannot be read or a field is invalid (the message names file and field).
+
+    """
     d = default_model_dict() if path is None else read_model_dict(path)
     try:
         robot = robot_from_dict(d)
@@ -54,6 +99,26 @@ def load_model(path: str | Path | None) -> tuple[dict[str, Any], RobotParams, PI
 
 def save_model(path: str | Path, robot: RobotParams, controller: PIVelocity | None = None,
                extra: dict[str, Any] | None = None) -> Path:
+    """
+    Write a model file (docs/CONTRACT.md §5) that :func:`load_model` reads back.
+
+    Parameters
+    ----------
+    path : str or Path
+        File to write (overwritten).
+    robot : RobotParams
+        The robot parameters.
+    controller : PIVelocity, optional
+        The controller to store with them.
+    extra : dict, optional
+        Further top-level keys (e.g. a description), added last.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    """
     d = robot_to_dict(robot, controller)
     if extra:
         d.update(extra)
@@ -68,6 +133,26 @@ def load_plant(spec: str | None, model: dict[str, Any]) -> Any:
 
     A plug-in ``'package.module:Class'`` is constructed with the model mapping as its config
     (docs/CONTRACT.md §4).
+
+    Parameters
+    ----------
+    spec : str or None
+        ``'package.module:Class'``, or None / empty for the model's
+        :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant`.
+    model : dict
+        The model mapping (from :func:`load_model`).
+
+    Returns
+    -------
+    object
+        The plant, with ``dt``, ``joint_names``, ``reset`` and ``step``.
+
+    Raises
+    ------
+    FrfIdentInputError
+        ``spec`` is malformed, its module cannot be imported, lacks the class, or the plant
+        lacks one of the §4 attributes.
+
     """
     if not spec:
         return FlexibleJointPlant(robot_from_dict(model))

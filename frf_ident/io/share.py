@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ['PACKAGE', 'config_file', 'share_dir']
+__all__ = ['PACKAGE', 'SOURCE_ROOT', 'config_file', 'share_dir']
 
 PACKAGE = 'frf_ident'
 #: the checkout root when running from the source tree (setup.py beside the package)
@@ -39,6 +39,19 @@ def share_dir() -> Path:
 
 
 def config_file(name: str) -> Path | None:
-    """``config/NAME`` in :func:`share_dir`, or None when it does not exist."""
+    """
+    Return ``config/NAME`` in :func:`share_dir`.
+
+    Parameters
+    ----------
+    name : str
+        File name inside ``config/`` (e.g. ``'model_3axis.yaml'``).
+
+    Returns
+    -------
+    Path or None
+        The file, or None when it does not exist.
+
+    """
     p = share_dir() / 'config' / name
     return p if p.is_file() else None

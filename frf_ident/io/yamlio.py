@@ -11,6 +11,8 @@ from typing import Any
 
 import yaml
 
+__all__ = ['Yaml12FloatLoader', 'load_yaml']
+
 
 class Yaml12FloatLoader(yaml.SafeLoader):
     """SafeLoader that resolves floats as YAML 1.2 (and rcl) do."""
@@ -27,5 +29,23 @@ Yaml12FloatLoader.add_implicit_resolver(
 
 
 def load_yaml(text: str) -> Any:
-    """Parse YAML text with YAML 1.2 float rules."""
+    """
+    Parse YAML text with YAML 1.2 float rules.
+
+    Parameters
+    ----------
+    text : str
+        The YAML document.
+
+    Returns
+    -------
+    object
+        The parsed document (mapping, list or scalar).
+
+    Raises
+    ------
+    yaml.YAMLError
+        The text is not valid YAML.
+
+    """
     return yaml.load(text, Loader=Yaml12FloatLoader)

@@ -13,21 +13,39 @@ from typing import Any
 from frf_ident.core.jsonable import jsonable
 import numpy as np
 
+__all__ = ['FrequencyResponse']
+
 
 @dataclass
 class FrequencyResponse:
     """
-    A MIMO frequency response estimate.
+    A MIMO frequency response estimate P_hat(w_k) (eq. 7, or a best linear approximation).
 
-    Attributes
+    The constructor converts its arguments to numpy arrays and checks their shapes; a 1-D
+    ``response`` is taken as a SISO response. The variances are those of the complex
+    estimate, E|P_hat - P|^2.
+
+    Parameters
     ----------
-    freq_hz : (n_freq,) float array, strictly increasing.
-    response : (n_out, n_in, n_freq) complex array.
-    inputs, outputs : channel names (len n_in, n_out).
-    noise_variance : optional (n_out, n_in, n_freq) variance of the estimate due to noise.
-    total_variance : optional (n_out, n_in, n_freq) variance due to noise plus stochastic
-        nonlinear distortions (multisine best linear approximation).
-    meta : free-form description (design, method, condition numbers...).
+    freq_hz : array_like, shape (n_freq,)
+        Frequencies in Hz, in increasing order.
+    response : array_like, shape (n_out, n_in, n_freq) or (n_freq,)
+        Complex response of every output/input channel.
+    inputs, outputs : list of str, optional
+        Channel names (n_in and n_out of them); default ``u0, u1, ...`` and ``y0, y1, ...``.
+    noise_variance : array_like, shape (n_out, n_in, n_freq), optional
+        Variance of the estimate due to noise (from the periods of a multisine).
+    total_variance : array_like, shape (n_out, n_in, n_freq), optional
+        Variance due to noise plus stochastic nonlinear distortions (from the realisations
+        of a multisine best linear approximation, Sec. 4.3).
+    meta : dict, optional
+        Free-form description (design, method, condition numbers ...).
+
+    Raises
+    ------
+    ValueError
+        ``response`` is not shaped (n_out, n_in, n_freq), the number of names does not match
+        it, or a variance has another shape than ``response``.
 
     """
 
@@ -69,34 +87,98 @@ class FrequencyResponse:
     # --- shape helpers -------------------------------------------------------------------
     @property
     def ninputs(self) -> int:
+        """Return the number of inputs n_in (as ``control.FrequencyResponseData``)."""
         return self.response.shape[1]
 
     @property
     def noutputs(self) -> int:
+        """Return the number of outputs n_out (as ``control.FrequencyResponseData``)."""
         return self.response.shape[0]
 
     @property
     def omega(self) -> np.ndarray:
-        """Frequencies in rad/s."""
+        """Return the frequencies in rad/s, 2 pi ``freq_hz``."""
         return 2.0 * np.pi * self.freq_hz
 
     def magnitude_db(self) -> np.ndarray:
+        """
+        Return the magnitude 20 log10 |P| in dB.
+
+        Returns
+        -------
+        ndarray, shape (n_out, n_in, n_freq)
+            Magnitude in dB; a zero response gives -6000 dB instead of -inf.
+
+        """
         return 20.0 * np.log10(np.maximum(np.abs(self.response), 1e-300))
 
     def phase_deg(self, unwrap: bool = True) -> np.ndarray:
+        """
+        Return the phase of P in degrees.
+
+        Parameters
+        ----------
+        unwrap : bool, optional
+            Unwrap the phase along the frequency axis (default), else keep it in
+            (-180, 180].
+
+        Returns
+        -------
+        ndarray, shape (n_out, n_in, n_freq)
+            Phase in degrees.
+
+        """
         ph = np.angle(self.response)
         if unwrap:
             ph = np.unwrap(ph, axis=-1)
         return np.degrees(ph)
 
     def channel(self, out: int | str, inp: int | str) -> np.ndarray:
-        """Complex response of one channel ``inp -> out`` (index or name)."""
+        """
+        Return the complex response of one channel ``inp -> out``.
+
+        Parameters
+        ----------
+        out : int or str
+            Output index or name (one of ``outputs``).
+        inp : int or str
+            Input index or name (one of ``inputs``).
+
+        Returns
+        -------
+        ndarray, shape (n_freq,)
+            The response of that channel (a view, not a copy).
+
+        Raises
+        ------
+        ValueError
+            A name is not among ``outputs`` / ``inputs``.
+        IndexError
+            An index is out of range.
+
+        """
         o = self.outputs.index(out) if isinstance(out, str) else int(out)
         i = self.inputs.index(inp) if isinstance(inp, str) else int(inp)
         return self.response[o, i]
 
     def std_db(self, which: str = 'total') -> np.ndarray | None:
-        """1-sigma magnitude uncertainty in dB (first-order), or None without variances."""
+        """
+        Return the 1-sigma magnitude uncertainty in dB.
+
+        First-order: 20 log10(1 + sigma / |P|) with sigma the square root of the variance.
+
+        Parameters
+        ----------
+        which : str, optional
+            ``'total'`` (default) uses ``total_variance``; any other value (e.g. ``'noise'``)
+            uses ``noise_variance``.
+
+        Returns
+        -------
+        ndarray, shape (n_out, n_in, n_freq), or None
+            The uncertainty in dB, or None when the chosen variance is absent.
+
+        """
         var = self.total_variance if which == 'total' else self.noise_variance
         if var is None:
             return None
@@ -104,7 +186,20 @@ class FrequencyResponse:
         return 20.0 * np.log10(1.0 + rel)
 
     def select(self, mask: np.ndarray) -> 'FrequencyResponse':
-        """Return a copy restricted to the frequencies where ``mask`` is true."""
+        """
+        Return a copy restricted to the frequencies where ``mask`` is true.
+
+        Parameters
+        ----------
+        mask : array_like of bool, shape (n_freq,)
+            The frequencies to keep.
+
+        Returns
+        -------
+        FrequencyResponse
+            The selected lines with their variances; names are copied, ``meta`` shallowly.
+
+        """
         mask = np.asarray(mask, dtype=bool)
         return FrequencyResponse(
             self.freq_hz[mask], self.response[..., mask], list(self.inputs), list(self.outputs),
@@ -115,9 +210,15 @@ class FrequencyResponse:
     # --- serialisation -------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """
-        Return a JSON-ready dict.
+        Return a JSON-ready dict (the layout of ``frf.json``).
 
-        Keys: inputs, outputs, freq_hz, re, im [, noise_variance, total_variance].
+        Returns
+        -------
+        dict
+            Keys ``inputs``, ``outputs``, ``freq_hz``, ``re``, ``im`` (nested lists shaped
+            (n_out, n_in, n_freq)), plus ``noise_variance`` / ``total_variance`` when present
+            and ``meta`` (made JSON-ready) when not empty.
+
         """
         d: dict[str, Any] = {
             'inputs': list(self.inputs),
@@ -136,6 +237,28 @@ class FrequencyResponse:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> 'FrequencyResponse':
+        """
+        Build a FrequencyResponse from the dict of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            Needs ``freq_hz``, ``re`` and ``im``; ``inputs``, ``outputs``, the variances and
+            ``meta`` are optional.
+
+        Returns
+        -------
+        FrequencyResponse
+            The response the dict describes.
+
+        Raises
+        ------
+        KeyError
+            ``freq_hz``, ``re`` or ``im`` is missing.
+        ValueError
+            The shapes do not agree (see the class).
+
+        """
         resp = np.asarray(d['re'], dtype=float) + 1j * np.asarray(d['im'], dtype=float)
         return cls(
             np.asarray(d['freq_hz'], dtype=float), resp, list(d.get('inputs', [])),
@@ -145,13 +268,42 @@ class FrequencyResponse:
             dict(d.get('meta', {})))
 
     def to_control(self):
-        """Convert to ``control.FrequencyResponseData`` (needs the python-control package)."""
+        """
+        Convert to a python-control ``FrequencyResponseData``.
+
+        Returns
+        -------
+        control.FrequencyResponseData
+            Response ``response`` at ``omega`` [rad/s] with the channel names as labels;
+            variances and ``meta`` are not carried over.
+
+        Raises
+        ------
+        ImportError
+            The optional python-control package is not installed.
+
+        """
         import control  # optional dependency, imported lazily
         return control.FrequencyResponseData(
             self.response, self.omega, inputs=list(self.inputs), outputs=list(self.outputs))
 
     @classmethod
     def from_control(cls, frd) -> 'FrequencyResponse':
+        """
+        Convert a python-control ``FrequencyResponseData``.
+
+        Parameters
+        ----------
+        frd : control.FrequencyResponseData
+            Its ``omega`` [rad/s], response (``frdata``, else ``fresp``) and channel labels
+            are used.
+
+        Returns
+        -------
+        FrequencyResponse
+            The same response with frequencies in Hz and no variances.
+
+        """
         omega = np.asarray(frd.omega, dtype=float)
         resp = np.asarray(getattr(frd, 'frdata', None) if hasattr(frd, 'frdata') else frd.fresp,
                           dtype=complex)

@@ -17,10 +17,37 @@ from typing import Callable, Sequence
 from frf_ident.errors import DesignError
 import numpy as np
 
+__all__ = ['ChirpDesign', 'amplitude_schedule', 'chirp_instantaneous_frequency', 'chirp_phase',
+           'chirp_phase_flips', 'chirp_time_at_frequency', 'exponential_chirp',
+           'exponential_chirp_coefficients']
+
 
 def exponential_chirp_coefficients(f_low: float, f_high: float, t0: float,
                                    t1: float) -> tuple[float, float]:
-    """Coefficients (a0, a1) of f(t) = exp(a0 t + a1) with f(t0) = fl, f(t1) = fu (eq. 16)."""
+    """
+    Return the coefficients (a0, a1) of f(t) = exp(a0 t + a1) (eq. 16).
+
+    They follow from f(t0) = fl and f(t1) = fu: a0 = ln(fu / fl) / (t1 - t0),
+    a1 = ln fl - a0 t0.
+
+    Parameters
+    ----------
+    f_low, f_high : float
+        Band [fl, fu] in Hz, 0 < f_low < f_high.
+    t0, t1 : float
+        Start and end of the sweep in s, t0 < t1.
+
+    Returns
+    -------
+    tuple of float
+        (a0 in 1/s, a1).
+
+    Raises
+    ------
+    DesignError
+        The band is not positive and increasing, or t1 <= t0.
+
+    """
     if not (np.isfinite(f_low) and f_low > 0):
         raise DesignError(f'{f_low=} must be a positive frequency in Hz')
     if not (np.isfinite(f_high) and f_high > f_low):
@@ -33,18 +60,65 @@ def exponential_chirp_coefficients(f_low: float, f_high: float, t0: float,
 
 
 def chirp_instantaneous_frequency(t: np.ndarray, a0: float, a1: float) -> np.ndarray:
-    """Instantaneous frequency f(t) = exp(a0 t + a1) in Hz (eq. 16)."""
+    """
+    Return the instantaneous frequency f(t) = exp(a0 t + a1) in Hz (eq. 16).
+
+    Parameters
+    ----------
+    t : array_like
+        Times in s.
+    a0, a1 : float
+        Coefficients from :func:`exponential_chirp_coefficients`.
+
+    Returns
+    -------
+    ndarray
+        f(t) in Hz, same shape as ``t``.
+
+    """
     return np.exp(a0 * np.asarray(t, dtype=float) + a1)
 
 
 def chirp_phase(t: np.ndarray, a0: float, a1: float, t0: float) -> np.ndarray:
-    """Phase 2 pi int_t0^t f(tau) dtau = 2 pi (f(t) - f(t0)) / a0 of eq. 15 (radians)."""
+    """
+    Return the phase 2 pi int_t0^t f(tau) dtau = 2 pi (f(t) - f(t0)) / a0 of eq. 15.
+
+    Parameters
+    ----------
+    t : array_like
+        Times in s.
+    a0, a1 : float
+        Coefficients of eq. 16.
+    t0 : float
+        Start of the sweep in s (phase 0 there).
+
+    Returns
+    -------
+    ndarray
+        The phase in rad, same shape as ``t``.
+
+    """
     t = np.asarray(t, dtype=float)
     return 2.0 * np.pi * (np.exp(a0 * t + a1) - np.exp(a0 * t0 + a1)) / a0
 
 
 def chirp_time_at_frequency(f: np.ndarray, a0: float, a1: float) -> np.ndarray:
-    """Time at which frequency f is excited, t = (ln f - a1) / a0 (eq. 16 inverted)."""
+    """
+    Return the time at which frequency f is excited, t = (ln f - a1) / a0 (eq. 16 inverted).
+
+    Parameters
+    ----------
+    f : array_like
+        Frequencies in Hz (positive).
+    a0, a1 : float
+        Coefficients of eq. 16.
+
+    Returns
+    -------
+    ndarray
+        Times in s, same shape as ``f``.
+
+    """
     return (np.log(np.asarray(f, dtype=float)) - a1) / a0
 
 
@@ -52,9 +126,26 @@ def exponential_chirp(t: np.ndarray, a0: float, a1: float, t0: float, t1: float,
                       amplitude: float | np.ndarray | Callable[[np.ndarray], np.ndarray],
                       phi: float = 0.0) -> np.ndarray:
     """
-    Chirp r_c(t, phi) = A(t) sin(2 pi int_t0^t f + phi) on [t0, t1], zero outside (eq. 15).
+    Evaluate the chirp r_c(t, phi) = A(t) sin(2 pi int_t0^t f + phi) of eq. 15.
 
-    ``amplitude`` is a constant, an array aligned with t, or a callable A(t).
+    Parameters
+    ----------
+    t : array_like
+        Times in s.
+    a0, a1 : float
+        Coefficients of eq. 16.
+    t0, t1 : float
+        The sweep interval [t0, t1] in s.
+    amplitude : float, array_like or callable
+        A(t): a constant, an array aligned with ``t``, or a function of time.
+    phi : float, optional
+        Extra phase in rad (the MIMO phase of eq. 9 or eq. 26).
+
+    Returns
+    -------
+    ndarray
+        r_c at the times ``t`` on [t0, t1], zero outside; same shape as ``t``.
+
     """
     t = np.asarray(t, dtype=float)
     amp = amplitude(t) if callable(amplitude) else np.broadcast_to(amplitude, t.shape)
@@ -65,12 +156,33 @@ def exponential_chirp(t: np.ndarray, a0: float, a1: float, t0: float, t1: float,
 def amplitude_schedule(breaks_hz: Sequence[float], levels: Sequence[float], *,
                        transition: float = 0.05) -> Callable[[np.ndarray], np.ndarray]:
     """
-    Frequency-dependent amplitude A(f) in the style of Table 1.
+    Build a frequency-dependent amplitude A(f) in the style of Table 1.
 
     ``levels[i]`` applies between ``breaks_hz[i-1]`` and ``breaks_hz[i]`` (e.g. breaks [40],
     levels [100, 50]: 100 below 40 Hz, 50 above). Steps are smoothed by a raised cosine over
     +-``transition`` (relative) in frequency, so A(t) varies slowly compared to the excited
-    frequency as Section 5 assumes. Returns a vectorised function of frequency.
+    frequency as Section 5 assumes (footnote 6).
+
+    Parameters
+    ----------
+    breaks_hz : sequence of float
+        Positive, increasing break frequencies in Hz (may be empty).
+    levels : sequence of float
+        Finite, non-negative amplitudes, one more than ``breaks_hz``.
+    transition : float, optional
+        Relative half-width of each smoothed step (0.05: +-5 % around the break).
+
+    Returns
+    -------
+    callable
+        Vectorised A(f): array of frequencies in Hz -> array of amplitudes.
+
+    Raises
+    ------
+    DesignError
+        The lengths do not match, a level is negative or not finite, or the breaks are not
+        positive and increasing.
+
     """
     breaks = np.asarray(breaks_hz, dtype=float)
     lv = np.asarray(levels, dtype=float)
@@ -95,9 +207,26 @@ def amplitude_schedule(breaks_hz: Sequence[float], levels: Sequence[float], *,
 
 def chirp_phase_flips(n_u: int) -> np.ndarray:
     """
-    MIMO chirp phases of eq. 26: phi~_lk = pi if l = k and l > 1, else 0.
+    Return the MIMO chirp phases of eq. 26: phi~_lk = pi if l = k and l > 1, else 0.
 
-    Returns (n_u, n_ex = n_u): in experiment k only input k is inverted (experiment 1 none).
+    In experiment k only input k is inverted (experiment 1: none), the scheme Section 7.2
+    found better for chirps than the orthogonal shifts of eq. 9.
+
+    Parameters
+    ----------
+    n_u : int
+        Number of inputs (and of experiments, n_ex = n_u).
+
+    Returns
+    -------
+    ndarray, shape (n_u, n_u)
+        Phase in rad of input l (row) in experiment k (column).
+
+    Raises
+    ------
+    DesignError
+        ``n_u`` < 1.
+
     """
     if n_u < 1:
         raise DesignError(f'{n_u=} must be at least 1')
@@ -112,8 +241,32 @@ class ChirpDesign:
     """
     An exponential chirp design (eqs. 15-16) on [t0, t1] with a frequency-dependent amplitude.
 
-    ``amplitude`` is (n_u, n_breaks + 1) levels per channel with common ``breaks_hz``; a plain
-    float gives one constant amplitude on every channel.
+    Parameters
+    ----------
+    f_low, f_high : float
+        Band [fl, fu] in Hz.
+    duration : float
+        Sweep duration t1 - t0 in s.
+    amplitude : float or array_like, shape (n_u, n_breaks + 1)
+        Amplitude levels per channel (rows) between the common ``breaks_hz`` (see
+        :func:`amplitude_schedule`); a plain float gives one constant amplitude on every
+        channel, a single row applies to every channel.
+    breaks_hz : list of float, optional
+        Break frequencies of the amplitude schedule in Hz (default none).
+    t0 : float, optional
+        Start of the sweep in s.
+
+    Attributes
+    ----------
+    a0, a1 : float
+        Coefficients of f(t) = exp(a0 t + a1) (eq. 16).
+
+    Raises
+    ------
+    DesignError
+        The duration or an amplitude is not positive and finite, the band is invalid, or the
+        number of levels does not match ``breaks_hz``.
+
     """
 
     f_low: float
@@ -138,21 +291,65 @@ class ChirpDesign:
 
     @property
     def t1(self) -> float:
+        """Return the end of the sweep, t0 + duration [s]."""
         return self.t0 + self.duration
 
     def check_sample_rate(self, fs: float) -> None:
+        """
+        Check that the band lies below the Nyquist frequency of the sample rate.
+
+        Parameters
+        ----------
+        fs : float
+            Sample rate in Hz.
+
+        Raises
+        ------
+        DesignError
+            ``f_high`` is at or above fs / 2.
+
+        """
         if self.f_high >= 0.5 * fs:
             raise DesignError(f'chirp f_high={self.f_high:g} Hz is at or above the Nyquist '
                               f'frequency {0.5 * fs:g} Hz of fs={fs:g} Hz')
 
     def amplitude_of_channel(self, ch: int) -> Callable[[np.ndarray], np.ndarray]:
-        """A(t) of channel ch: the schedule evaluated at the instantaneous frequency."""
+        """
+        Return A(t) of one channel: its schedule at the instantaneous frequency f(t).
+
+        Parameters
+        ----------
+        ch : int
+            Channel index (0-based); beyond the rows of ``amplitude`` the last row applies.
+
+        Returns
+        -------
+        callable
+            Vectorised A(t): array of times in s -> array of amplitudes.
+
+        """
         levels = self.amplitude[min(ch, self.amplitude.shape[0] - 1)]
         sched = amplitude_schedule(self.breaks_hz, levels)
         return lambda t: sched(chirp_instantaneous_frequency(t, self.a0, self.a1))
 
     def evaluate(self, t: np.ndarray, phases: np.ndarray) -> np.ndarray:
-        """MIMO chirp for phase matrix (n_u, n_ex): shape (n_ex, len(t), n_u)."""
+        """
+        Return the MIMO chirp of every experiment and channel at the times ``t`` (eq. 15).
+
+        Parameters
+        ----------
+        t : array_like, shape (N,)
+            Times in s.
+        phases : ndarray, shape (n_u, n_ex)
+            Phase of each channel in each experiment in rad (:func:`chirp_phase_flips` or
+            eq. 9 shifts).
+
+        Returns
+        -------
+        ndarray, shape (n_ex, N, n_u)
+            The reference of channel l in experiment m; zero outside [t0, t1].
+
+        """
         n_u, n_ex = phases.shape
         t = np.asarray(t, dtype=float)
         base = np.sin(chirp_phase(t, self.a0, self.a1, self.t0))
@@ -167,15 +364,59 @@ class ChirpDesign:
         return out
 
     def time_at(self, f: np.ndarray) -> np.ndarray:
+        """
+        Return the time at which each frequency is excited (eq. 16 inverted).
+
+        Parameters
+        ----------
+        f : array_like
+            Frequencies in Hz.
+
+        Returns
+        -------
+        ndarray
+            Times in s, same shape as ``f``.
+
+        """
         return chirp_time_at_frequency(f, self.a0, self.a1)
 
     def to_dict(self) -> dict:
+        """
+        Return the design as a JSON-ready dict.
+
+        Returns
+        -------
+        dict
+            ``f_low``, ``f_high``, ``duration``, ``amplitude`` (nested list), ``breaks_hz``
+            and ``t0``.
+
+        """
         return {'f_low': self.f_low, 'f_high': self.f_high, 'duration': self.duration,
                 'amplitude': self.amplitude.tolist(), 'breaks_hz': list(self.breaks_hz),
                 't0': self.t0}
 
     @classmethod
     def from_dict(cls, d: dict) -> 'ChirpDesign':
+        """
+        Build a design from the dict of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            Needs ``f_low``, ``f_high``, ``duration`` and ``amplitude``; ``breaks_hz`` and
+            ``t0`` are optional.
+
+        Returns
+        -------
+        ChirpDesign
+            The design.
+
+        Raises
+        ------
+        DesignError
+            The values are out of range (see the class).
+
+        """
         return cls(float(d['f_low']), float(d['f_high']), float(d['duration']),
                    np.asarray(d['amplitude'], dtype=float), list(d.get('breaks_hz', [])),
                    float(d.get('t0', 0.0)))

@@ -20,6 +20,11 @@ import math
 from frf_ident.errors import DesignError
 import numpy as np
 
+__all__ = ['MultisineDesign', 'MultisineRealisation', 'analysis_sample_time', 'crest_factor',
+           'design_odd_multisine', 'dft_length', 'fundamental_frequency', 'mimo_phase_shifts',
+           'multisine', 'multisine_realisation', 'odd_harmonics_nearest', 'random_phases',
+           'reference_frequency_set']
+
 
 def _check_band(f_low: float, f_high: float) -> None:
     if not (np.isfinite(f_low) and f_low > 0):
@@ -35,7 +40,27 @@ def _check_positive(**values: float) -> None:
 
 
 def reference_frequency_set(f_low: float, f_high: float, n: int = 80) -> np.ndarray:
-    """Return the reference set F~: ``n`` log-spaced frequencies in [fl, fu] (Sec. 4.2)."""
+    """
+    Return the reference set F~: ``n`` log-spaced frequencies in [fl, fu] (Sec. 4.2).
+
+    Parameters
+    ----------
+    f_low, f_high : float
+        Band [fl~, fu~] in Hz, 0 < f_low < f_high.
+    n : int, optional
+        Number of frequencies (80 in the paper).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The frequencies in Hz, from f_low to f_high inclusive.
+
+    Raises
+    ------
+    DesignError
+        The band is not positive and increasing, or ``n`` < 2.
+
+    """
     _check_band(f_low, f_high)
     if n < 2:
         raise DesignError(f'{n=} reference frequencies: need at least 2')
@@ -44,11 +69,30 @@ def reference_frequency_set(f_low: float, f_high: float, n: int = 80) -> np.ndar
 
 def analysis_sample_time(f_high: float, dt: float | None = None) -> float:
     """
-    Analysis sample time Ts ~ 1/(5 fu) (Sec. 4.2).
+    Return the analysis sample time Ts ~ 1/(5 fu~) (eq. 10, Sec. 4.2).
 
     With the recording's sample time ``dt`` given, Ts is the largest whole multiple of dt not
-    above 1/(5 fu) (so the data are resampled by an integer factor): 1 kHz and fu = 60 Hz give
-    the paper's Ts = 3 ms.
+    above 1/(5 fu~) (so the data are resampled by an integer factor): 1 kHz and fu~ = 60 Hz
+    give the paper's Ts = 3 ms.
+
+    Parameters
+    ----------
+    f_high : float
+        Upper band edge fu~ in Hz.
+    dt : float, optional
+        Sample time of the recording in s; None returns 1/(5 fu~) itself.
+
+    Returns
+    -------
+    float
+        Ts in s (at least ``dt`` when dt is given).
+
+    Raises
+    ------
+    DesignError
+        ``f_high`` or ``dt`` is not positive, or ``f_high`` is at or above the Nyquist
+        frequency 1/(2 dt).
+
     """
     _check_positive(f_high=f_high)
     ts = 1.0 / (5.0 * f_high)
@@ -63,23 +107,77 @@ def analysis_sample_time(f_high: float, dt: float | None = None) -> float:
 
 
 def dft_length(resolution_hz: float, ts: float) -> int:
-    """DFT length nf = ceil(1/(f0~ Ts)) (eq. 12), zero-padded up to a power of two (footnote 3)."""
+    """
+    Return the DFT length nf = ceil(1/(f0~ Ts)) (eq. 12), padded to a power of two.
+
+    The zero padding to a power of two is the paper's footnote 3.
+
+    Parameters
+    ----------
+    resolution_hz : float
+        Desired frequency resolution f0~ in Hz.
+    ts : float
+        Analysis sample time Ts in s.
+
+    Returns
+    -------
+    int
+        nf, the smallest power of two (at least 2) not below ceil(1/(f0~ Ts)).
+
+    Raises
+    ------
+    DesignError
+        ``resolution_hz`` or ``ts`` is not a positive finite number.
+
+    """
     _check_positive(resolution_hz=resolution_hz, ts=ts)
     n = math.ceil(1.0 / (resolution_hz * ts) - 1e-9)
     return 1 << max(1, (n - 1).bit_length())
 
 
 def fundamental_frequency(ts: float, nf: int) -> float:
-    """Return the DFT resolution and multisine fundamental f0 = 1/(Ts nf) (eq. 11)."""
+    """
+    Return the DFT resolution and multisine fundamental f0 = 1/(Ts nf) (eq. 11).
+
+    Parameters
+    ----------
+    ts : float
+        Analysis sample time Ts in s.
+    nf : int
+        DFT length.
+
+    Returns
+    -------
+    float
+        f0 in Hz; also 1 / period of the multisine.
+
+    Raises
+    ------
+    DesignError
+        ``ts`` or ``nf`` is not positive.
+
+    """
     _check_positive(ts=ts, nf=nf)
     return 1.0 / (ts * nf)
 
 
 def odd_harmonics_nearest(f_ref: np.ndarray, f0: float) -> np.ndarray:
     """
-    Odd multiples of f0 nearest to each reference frequency, duplicates removed (Sec. 4.2).
+    Return the odd multiples of f0 nearest to the reference frequencies (Sec. 4.2).
 
-    Returns the sorted unique odd harmonic numbers h (frequencies h * f0).
+    Parameters
+    ----------
+    f_ref : array_like
+        Reference frequencies F~ in Hz.
+    f0 : float
+        Fundamental frequency in Hz.
+
+    Returns
+    -------
+    ndarray of int64
+        The sorted odd harmonic numbers h, duplicates removed (frequencies h * f0); at
+        least 1.
+
     """
     f_ref = np.asarray(f_ref, dtype=float)
     # nearest odd integer to x: 2*round((x-1)/2)+1
@@ -91,9 +189,28 @@ def odd_harmonics_nearest(f_ref: np.ndarray, f0: float) -> np.ndarray:
 def multisine(t: np.ndarray, freq_hz: np.ndarray, amplitudes: np.ndarray,
               phases: np.ndarray, phi: float = 0.0) -> np.ndarray:
     """
-    Multisine r(t, phi) = sum_s A_s sin(2 pi f_s t + phi_rand,s + phi) (eq. 8).
+    Evaluate the multisine r(t, phi) = sum_s A_s sin(2 pi f_s t + phi_rand,s + phi) (eq. 8).
 
     Evaluated in blocks so long signals stay within bounded memory.
+
+    Parameters
+    ----------
+    t : array_like
+        Times in s (any shape).
+    freq_hz : array_like, shape (n_s,)
+        Line frequencies f_s in Hz.
+    amplitudes : float or array_like, shape (n_s,)
+        Line amplitudes A_s (a scalar applies to every line).
+    phases : array_like, shape (n_s,)
+        Random phases phi_rand,s in rad.
+    phi : float, optional
+        Common extra phase in rad (the MIMO shift of eq. 9).
+
+    Returns
+    -------
+    ndarray
+        r at the times ``t``, same shape as ``t``.
+
     """
     t = np.asarray(t, dtype=float)
     freq_hz = np.asarray(freq_hz, dtype=float)
@@ -111,10 +228,26 @@ def multisine(t: np.ndarray, freq_hz: np.ndarray, amplitudes: np.ndarray,
 
 def mimo_phase_shifts(n_u: int) -> np.ndarray:
     """
-    Phase shifts phi_lm = 2 pi (l-1)(m-1) / n_u of channel l in experiment m (eq. 9).
+    Return the phase shifts phi_lm = 2 pi (l-1)(m-1) / n_u (eq. 9).
 
-    Returns an (n_u, n_ex = n_u) array. exp(j phi) is the DFT matrix, so the MIMO excitation
-    matrix R(w_k) has condition number 1 on every excited line.
+    exp(j phi) is the DFT matrix, so the MIMO excitation matrix R(w_k) has condition number
+    1 on every excited line (Sec. 4.1).
+
+    Parameters
+    ----------
+    n_u : int
+        Number of inputs (and of experiments, n_ex = n_u).
+
+    Returns
+    -------
+    ndarray, shape (n_u, n_u)
+        Shift in rad of channel l (row) in experiment m (column).
+
+    Raises
+    ------
+    DesignError
+        ``n_u`` < 1.
+
     """
     if n_u < 1:
         raise DesignError(f'{n_u=} must be at least 1')
@@ -123,24 +256,72 @@ def mimo_phase_shifts(n_u: int) -> np.ndarray:
 
 
 def crest_factor(x: np.ndarray, axis: int | None = None) -> np.ndarray | float:
-    """Crest factor max|x| / rms(x) (Sec. 4: peak over root-mean-square value)."""
+    """
+    Return the crest factor max|x| / rms(x) (Sec. 4: peak over root-mean-square value).
+
+    Parameters
+    ----------
+    x : array_like
+        Signal.
+    axis : int, optional
+        Axis along which to compute; None (default) uses the whole array.
+
+    Returns
+    -------
+    float or ndarray
+        The crest factor (an array when ``axis`` is given).
+
+    """
     x = np.asarray(x, dtype=float)
     rms = np.sqrt(np.mean(x ** 2, axis=axis))
     return np.max(np.abs(x), axis=axis) / rms
 
 
 def random_phases(n_lines: int, rng: np.random.Generator) -> np.ndarray:
-    """Independent uniform phases in [0, 2 pi): E[exp(j phi_rand)] = 0 (Sec. 4)."""
+    """
+    Draw independent uniform phases in [0, 2 pi), so E[exp(j phi_rand)] = 0 (Sec. 4).
+
+    Parameters
+    ----------
+    n_lines : int
+        Number of lines n_s.
+    rng : numpy.random.Generator
+        Source of the random numbers.
+
+    Returns
+    -------
+    ndarray, shape (n_lines,)
+        Phases in rad.
+
+    """
     return rng.uniform(0.0, 2.0 * np.pi, size=n_lines)
 
 
 @dataclass
 class MultisineDesign:
     """
-    An odd random-phase multisine design (Sec. 4.2).
+    An odd random-phase multisine design (Sec. 4.2); made by :func:`design_odd_multisine`.
 
-    ``harmonics`` are the odd harmonic numbers h, excited frequencies ``h * f0``. ``bound`` is
-    the peak value every realisation is scaled to (max |r| over all channels and experiments).
+    Parameters
+    ----------
+    f_low, f_high : float
+        Band [fl~, fu~] in Hz.
+    ts : float
+        Analysis sample time Ts in s (eq. 10).
+    nf : int
+        DFT length, samples of one period at Ts (eq. 12).
+    f0 : float
+        Fundamental frequency 1/(Ts nf) in Hz (eq. 11).
+    harmonics : ndarray of int
+        The odd harmonic numbers h; the excited frequencies are ``h * f0``.
+    bound : float
+        Peak value every realisation is scaled to (max |r| over all channels and
+        experiments).
+    n_ref : int, optional
+        Size of the reference set F~ (80).
+    f_ref : ndarray, optional
+        The reference set F~ in Hz (not stored by :meth:`to_dict`).
+
     """
 
     f_low: float
@@ -155,15 +336,34 @@ class MultisineDesign:
 
     @property
     def freq_hz(self) -> np.ndarray:
+        """Return the excited frequencies ``harmonics * f0`` in Hz."""
         return self.harmonics * self.f0
 
     @property
     def period(self) -> float:
-        """Duration of one period, nf * Ts = 1/f0 [s]."""
+        """Return the duration of one period, nf * Ts = 1/f0 [s]."""
         return self.nf * self.ts
 
     def period_samples(self, fs: float) -> int:
-        """Sample per period at rate fs; raises unless the period is a whole number of samples."""
+        """
+        Return the number of samples of one period at the sample rate ``fs``.
+
+        Parameters
+        ----------
+        fs : float
+            Sample rate in Hz.
+
+        Returns
+        -------
+        int
+            period * fs.
+
+        Raises
+        ------
+        DesignError
+            The period is not a whole number of samples at ``fs``.
+
+        """
         n = self.period * fs
         if abs(n - round(n)) > 1e-6 * max(1.0, n):
             raise DesignError(
@@ -171,12 +371,35 @@ class MultisineDesign:
         return int(round(n))
 
     def to_dict(self) -> dict:
+        """
+        Return the design as a JSON-ready dict.
+
+        Returns
+        -------
+        dict
+            The fields except ``f_ref``; ``harmonics`` as a list.
+
+        """
         return {'f_low': self.f_low, 'f_high': self.f_high, 'ts': self.ts, 'nf': self.nf,
                 'f0': self.f0, 'harmonics': self.harmonics.tolist(), 'bound': self.bound,
                 'n_ref': self.n_ref}
 
     @classmethod
     def from_dict(cls, d: dict) -> 'MultisineDesign':
+        """
+        Build a design from the dict of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            Needs every key :meth:`to_dict` writes; ``n_ref`` defaults to 80.
+
+        Returns
+        -------
+        MultisineDesign
+            The design (with an empty ``f_ref``).
+
+        """
         return cls(float(d['f_low']), float(d['f_high']), float(d['ts']), int(d['nf']),
                    float(d['f0']), np.asarray(d['harmonics'], dtype=np.int64),
                    float(d['bound']), int(d.get('n_ref', 80)))
@@ -188,21 +411,41 @@ def design_odd_multisine(f_low: float, f_high: float, *, bound: float,
     """
     Design an odd random-phase multisine exactly as Section 4.2.
 
+    Ts from eq. 10, nf from eq. 12 (power of two), f0 from eq. 11, the lines as the odd
+    multiples of f0 nearest to the log-spaced reference set F~.
+
     Parameters
     ----------
-    f_low, f_high
+    f_low, f_high : float
         Band [fl~, fu~] in Hz.
-    bound
+    bound : float
         Peak value max |r| of every realisation (e.g. torque limit or velocity amplitude).
-    resolution_hz
-        Desired frequency resolution f0~ (eq. 12).
-    n_ref
+    resolution_hz : float, optional
+        Desired frequency resolution f0~ in Hz (eq. 12).
+    n_ref : int, optional
         Size of the log-spaced reference set F~ (80 in the paper).
-    fs
-        Sample rate of the recording; Ts becomes a whole multiple of 1/fs.
+    fs : float, optional
+        Sample rate of the recording in Hz; Ts becomes a whole multiple of 1/fs.
 
-    Example: ``design_odd_multisine(1, 60, bound=150, fs=1000)`` gives Ts = 3 ms, nf = 4096,
-    a period of 12.288 s (the paper's Section 6 design).
+    Returns
+    -------
+    MultisineDesign
+        The design (Ts, nf, f0, harmonics, bound, F~).
+
+    Raises
+    ------
+    DesignError
+        A parameter is out of range (the message names it): the band is not positive and
+        increasing, ``f_high`` is at or above the Nyquist frequency of ``fs``, or no odd line
+        lies below the analysis Nyquist frequency 1/(2 Ts).
+
+    Examples
+    --------
+    The paper's Section 6 design: Ts = 3 ms, nf = 4096, a period of 12.288 s.
+
+    >>> d = design_odd_multisine(1.0, 60.0, bound=150.0, fs=1000.0)
+    >>> d.ts, d.nf, round(d.period, 3)
+    (0.003, 4096, 12.288)
 
     """
     _check_band(f_low, f_high)
@@ -226,7 +469,23 @@ def design_odd_multisine(f_low: float, f_high: float, *, bound: float,
 
 @dataclass
 class MultisineRealisation:
-    """One MIMO realisation: random phases, the eq. 9 shifts and the common line amplitude."""
+    """
+    One MIMO realisation: random phases, the eq. 9 shifts and the common line amplitude.
+
+    Made by :func:`multisine_realisation`.
+
+    Parameters
+    ----------
+    design : MultisineDesign
+        The design whose lines are excited.
+    phases : ndarray, shape (n_s,)
+        Random phases phi_rand,s in rad, one per line.
+    shifts : ndarray, shape (n_u, n_u)
+        MIMO phase shifts phi_lm (eq. 9), channel by experiment.
+    amplitude : float
+        Common amplitude A_s of every line.
+
+    """
 
     design: MultisineDesign
     phases: np.ndarray
@@ -235,13 +494,23 @@ class MultisineRealisation:
 
     @property
     def n_u(self) -> int:
+        """Return n_u, the number of channels (and of experiments)."""
         return self.shifts.shape[0]
 
     def evaluate(self, t: np.ndarray) -> np.ndarray:
         """
-        Return the signal at times t.
+        Return the signal of every experiment and channel at the times ``t``.
 
-        Shape (n_ex, len(t), n_u); channel l of experiment m is r(t, phi_lm).
+        Parameters
+        ----------
+        t : array_like, shape (N,)
+            Times in s.
+
+        Returns
+        -------
+        ndarray, shape (n_ex, N, n_u)
+            Channel l of experiment m is r(t, phi_lm) (eq. 8 with the eq. 9 shift).
+
         """
         t = np.asarray(t, dtype=float)
         out = np.empty((self.n_u, t.size, self.n_u))
@@ -260,6 +529,30 @@ def multisine_realisation(design: MultisineDesign, n_u: int, rng: np.random.Gene
     The equal amplitudes are scaled so max |r| over all channels and experiments equals the
     bound, the peak being searched on a grid ``oversample`` times finer than ``fs`` so that the
     continuous signal, not only its samples, respects the bound.
+
+    Parameters
+    ----------
+    design : MultisineDesign
+        The design.
+    n_u : int
+        Number of inputs (experiments n_ex = n_u).
+    rng : numpy.random.Generator
+        Source of the random phases.
+    fs : float
+        Sample rate in Hz.
+    oversample : int, optional
+        Refinement of the grid on which the peak is searched.
+
+    Returns
+    -------
+    MultisineRealisation
+        The realisation, its ``amplitude`` set so the peak equals the bound.
+
+    Raises
+    ------
+    DesignError
+        ``n_u`` < 1, or the period is not a whole number of samples at ``fs``.
+
     """
     if n_u < 1:
         raise DesignError(f'{n_u=} must be at least 1')

@@ -4,7 +4,8 @@ Closed-form frequency responses of the linear flexible-joint robot (analytic tru
 - :func:`two_mass_frf` — SISO dq_m / tau_m of eqs. 20-22 (linear):
   (Jo s^2 + d s + k1) / (s (Jm Jo s^2 + (Jm + Jo)(d s + k1)))   (+ viscous friction)
 - :func:`robot_frf` — MIMO continuous-time tau_m -> dq_m with link inertial coupling
-- :func:`state_space` — linear state-space model (A, B, C) of the robot
+- :func:`~frf_ident.core.simulation.plant.state_space` (defined with the plant) — linear
+  state-space model (A, B, C) of the robot, used by :func:`robot_frf_sampled`
 - :func:`robot_frf_sampled` — the exact FRF of the sampled plant as the simulation realises it:
   zero-order-hold input, input delay, velocity sampled (or differentiated encoder position)
 - :func:`closed_loop_frfs` — r -> u and r -> y through the velocity PI controller
@@ -16,10 +17,38 @@ from frf_ident.core.simulation.plant import state_space
 import numpy as np
 from scipy import linalg
 
+__all__ = ['closed_loop_frfs', 'robot_frf', 'robot_frf_sampled', 'two_mass_frf']
+
 
 def two_mass_frf(freq_hz: np.ndarray, motor_inertia: float, link_inertia: float,
                  stiffness: float, damping: float, viscous_friction: float = 0.0) -> np.ndarray:
-    """Linear two-mass FRF dq_m/tau_m of eqs. 20-22 at freq_hz (continuous time)."""
+    """
+    Return the linear two-mass FRF dq_m / tau_m of eqs. 20-22 (continuous time).
+
+    (Jo s^2 + d s + k1) / (s (Jm Jo s^2 + (Jm + Jo)(d s + k1))) without viscous friction;
+    the Section 6 plant has an antiresonance near 5.0 Hz and a resonance near 11.6 Hz.
+
+    Parameters
+    ----------
+    freq_hz : array_like
+        Frequencies in Hz.
+    motor_inertia : float
+        Jm in kg m^2.
+    link_inertia : float
+        Jo in kg m^2.
+    stiffness : float
+        k1 in N m/rad.
+    damping : float
+        d in N m s/rad.
+    viscous_friction : float, optional
+        Motor-side viscous friction b_v in N m s/rad.
+
+    Returns
+    -------
+    ndarray of complex
+        The FRF in rad/s per N m, same shape as ``freq_hz``.
+
+    """
     s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
     jm, jo, bv = motor_inertia, link_inertia, viscous_friction
     z = damping * s + stiffness
@@ -39,10 +68,24 @@ def _link_stiffness_terms(params: RobotParams):
 
 def robot_frf(params: RobotParams, freq_hz: np.ndarray) -> np.ndarray:
     """
-    MIMO continuous FRF tau_m -> dq_m of the linearised robot, shape (n, n, n_freq).
+    Return the MIMO continuous FRF tau_m -> dq_m of the linearised robot.
 
     (Jm s^2 + Bv s + Z - Z (M_o s^2 + Z)^-1 Z) q_m = tau with Z = K + D s, P = s q_m / tau.
     Symmetric (reciprocal) for a symmetric link inertia matrix.
+
+    Parameters
+    ----------
+    params : RobotParams
+        The robot (k1, d, viscous friction, link inertia and coupling; nonlinear terms are
+        ignored).
+    freq_hz : array_like, shape (n_freq,)
+        Frequencies in Hz.
+
+    Returns
+    -------
+    ndarray of complex, shape (n, n, n_freq)
+        P[i, j]: motor velocity of axis i per motor torque of axis j.
+
     """
     freq_hz = np.asarray(freq_hz, dtype=float)
     n, jm, bv, k, d, mo = _link_stiffness_terms(params)
@@ -82,12 +125,33 @@ def _delayed_zoh_input(A: np.ndarray, B: np.ndarray, dt: float, delay: float
 def robot_frf_sampled(params: RobotParams, freq_hz: np.ndarray, *,
                       output: str = 'velocity', delays: np.ndarray | None = None) -> np.ndarray:
     """
-    Exact FRF from sampled torque (zero-order hold) to sampled output, shape (n, n, n_freq).
+    Return the exact FRF from sampled torque (zero-order hold) to sampled output.
 
-    This is what a digital controller sees and what the simulation realises: with
-    ``output='velocity'`` the sampled motor velocity, with ``'encoder'`` the difference of
-    motor positions over one sample divided by dt. ``delays`` (per input, seconds) defaults to
-    the axes' ``time_delay``.
+    This is what a digital controller sees and what the simulation realises, at the
+    sample time ``params.dt``.
+
+    Parameters
+    ----------
+    params : RobotParams
+        The robot (its linear part).
+    freq_hz : array_like, shape (n_freq,)
+        Frequencies in Hz.
+    output : {'velocity', 'encoder'}, optional
+        ``'velocity'``: the sampled motor velocity; ``'encoder'``: the difference of motor
+        positions over one sample divided by dt.
+    delays : array_like, shape (n,), optional
+        Input delay per axis in s; default the axes' ``time_delay``.
+
+    Returns
+    -------
+    ndarray of complex, shape (n, n, n_freq)
+        P[i, j]: output of axis i per torque of axis j.
+
+    Raises
+    ------
+    ValueError
+        ``output`` is neither 'velocity' nor 'encoder'.
+
     """
     freq_hz = np.asarray(freq_hz, dtype=float)
     dt = params.dt
@@ -116,10 +180,29 @@ def robot_frf_sampled(params: RobotParams, freq_hz: np.ndarray, *,
 def closed_loop_frfs(P: np.ndarray, freq_hz: np.ndarray, kp: np.ndarray, ki: np.ndarray,
                      dt: float) -> tuple[np.ndarray, np.ndarray]:
     """
-    Closed-loop r -> u and r -> y for the discrete velocity PI around plant P (n, n, n_freq).
+    Return the closed-loop FRFs r -> u and r -> y for the discrete velocity PI around P.
 
     The PI is discretised as the simulation runs it (integral updated before use):
-    K(z) = kp + ki dt z / (z - 1). Returns (S_u = (I + K P)^-1 K, T = P S_u).
+    K(z) = kp + ki dt z / (z - 1), the loop of the paper's Fig. 2.
+
+    Parameters
+    ----------
+    P : ndarray, shape (n, n, n_freq)
+        Plant FRF tau_m -> dq_m (e.g. :func:`robot_frf_sampled`).
+    freq_hz : array_like, shape (n_freq,)
+        Frequencies in Hz.
+    kp, ki : ndarray, shape (n,)
+        Proportional and integral gains per axis.
+    dt : float
+        Controller sample time in s.
+
+    Returns
+    -------
+    S_u : ndarray, shape (n, n, n_freq)
+        r -> u, (I + K P)^-1 K.
+    T : ndarray, shape (n, n, n_freq)
+        r -> y, P S_u.
+
     """
     freq_hz = np.asarray(freq_hz, dtype=float)
     n = P.shape[0]

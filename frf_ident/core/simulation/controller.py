@@ -11,13 +11,41 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
+__all__ = ['PIVelocity', 'pi_step']
+
 
 @numba.njit(cache=True, fastmath=True)
 def pi_step(e, integ, kp, ki, ff, k, ulim, dt, u):
     """
-    Velocity PI with torque limit and back-calculation anti-windup (per axis, in place).
+    Compute one velocity PI step with torque limit and back-calculation anti-windup.
 
-    u = kp e + I + ff[k], I += ki e dt; when u saturates, I is set so u sits at the limit.
+    Per axis: I += ki e dt, then u = kp e + I + ff[k]; when u saturates, I is set so u sits
+    at the limit. Compiled with numba; works in place.
+
+    Parameters
+    ----------
+    e : ndarray, shape (n,)
+        Velocity error r - y [rad/s].
+    integ : ndarray, shape (n,)
+        Integral state I [N m]; updated in place.
+    kp, ki : ndarray, shape (n,)
+        Proportional and integral gains.
+    ff : ndarray, shape (K, n)
+        Feed-forward torque table [N m].
+    k : int
+        Row of ``ff`` to add.
+    ulim : ndarray, shape (n,)
+        Torque limit, positive [N m].
+    dt : float
+        Sample time in s.
+    u : ndarray, shape (n,)
+        Output: the torque command [N m], written in place.
+
+    Returns
+    -------
+    None
+        The results are ``u`` and ``integ``.
+
     """
     for i in range(e.shape[0]):
         integ[i] += ki[i] * e[i] * dt
@@ -36,9 +64,28 @@ class PIVelocity:
     """
     Velocity PI u = kp (r - y) + ki int (r - y) dt + ff, limited to +-torque_limit.
 
-    Anti-windup by back-calculation: while saturated the integral is held so that u sits
-    exactly at the limit. ``integral`` is the controller state (N m), initialised to the
-    holding torque (e.g. gravity) so the loop starts at rest.
+    The controller K of the closed loop (Fig. 2). Anti-windup by back-calculation: while
+    saturated the integral is held so that u sits exactly at the limit.
+
+    Parameters
+    ----------
+    kp : array_like, shape (n,)
+        Proportional gains, >= 0 [N m s/rad].
+    ki : float or array_like, shape (n,)
+        Integral gains, >= 0 [N m/rad].
+    torque_limit : float or array_like, shape (n,)
+        Torque limits, > 0 [N m].
+    dt : float
+        Sample time in s.
+    integral : array_like, shape (n,), optional
+        Controller state [N m], e.g. the holding (gravity) torque so the loop starts at rest;
+        default zero.
+
+    Raises
+    ------
+    ValueError
+        A gain is negative or a torque limit not positive.
+
     """
 
     kp: np.ndarray
@@ -63,15 +110,42 @@ class PIVelocity:
 
     @property
     def n_axes(self) -> int:
+        """Return the number of axes n."""
         return self.kp.size
 
     def reset(self, holding_torque: np.ndarray | None = None) -> None:
+        """
+        Reset the integral state.
+
+        Parameters
+        ----------
+        holding_torque : array_like, shape (n,), optional
+            New integral state [N m] (e.g. gravity); default zero.
+
+        """
         self.integral = np.zeros(self.n_axes) if holding_torque is None else \
             np.asarray(holding_torque, dtype=float).copy()
 
     def step(self, reference: np.ndarray, measured: np.ndarray,
              feedforward: np.ndarray | None = None) -> np.ndarray:
-        """One control step: torque command for velocity reference r and measured velocity y."""
+        """
+        Compute one control step: the torque command for reference r and measurement y.
+
+        Parameters
+        ----------
+        reference : array_like, shape (n,)
+            Velocity reference r [rad/s].
+        measured : array_like, shape (n,)
+            Measured velocity y [rad/s].
+        feedforward : array_like, shape (n,), optional
+            Torque added before the limit [N m]; default zero.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Torque command u [N m], within +-torque_limit; ``integral`` is updated.
+
+        """
         e = np.asarray(reference, dtype=float) - np.asarray(measured, dtype=float)
         ff = np.zeros(self.n_axes) if feedforward is None else np.asarray(feedforward, float)
         u = np.empty(self.n_axes)
@@ -80,5 +154,14 @@ class PIVelocity:
         return u
 
     def copy(self) -> 'PIVelocity':
+        """
+        Return a deep copy of the controller (gains, limits and state).
+
+        Returns
+        -------
+        PIVelocity
+            The copy.
+
+        """
         return PIVelocity(self.kp.copy(), self.ki.copy(), self.torque_limit.copy(), self.dt,
                           self.integral.copy())

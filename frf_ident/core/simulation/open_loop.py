@@ -21,15 +21,54 @@ from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import DesignError
 import numpy as np
 
+__all__ = ['OpenLoopChirpRun', 'OpenLoopMultisineRun', 'resonance_peak', 'run_open_loop_chirp',
+           'run_open_loop_multisine', 'stage_grid']
+
 
 def stage_grid(n_samples: int, fs: float, substeps: int, t_start: float = 0.0) -> np.ndarray:
-    """Time of the integrator's stage grid (2 m points per sample, plus the last end point)."""
+    """
+    Return the times of the integrator's stage grid (2 m points per sample, plus the end).
+
+    Parameters
+    ----------
+    n_samples : int
+        Number of samples N.
+    fs : float
+        Sample rate in Hz.
+    substeps : int
+        Integrator substeps m per sample.
+    t_start : float, optional
+        Time of the first point in s.
+
+    Returns
+    -------
+    ndarray, shape (2 m N + 1,)
+        Times in s, spacing 1 / (2 m fs).
+
+    """
     return t_start + np.arange(2 * substeps * n_samples + 1) / (2 * substeps * fs)
 
 
 @dataclass
 class OpenLoopMultisineRun:
-    """Result of an open-loop multisine experiment: the BLA and its raw material."""
+    """
+    Result of an open-loop multisine experiment: the BLA and its raw material.
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        The BLA tau_m -> dq_m at the excited lines, with noise and total variances.
+    bla : BLAResult
+        The full BLA result (per-realisation estimates, cond(U)).
+    input_power : float
+        Mean u^2 over the measured periods of every realisation and experiment [(N m)^2].
+    crest_factor : float
+        Mean crest factor of u over the realisations and experiments.
+    detection : dict
+        Output levels at excited, non-excited odd and even lines of the first experiment
+        (``DetectionLevels.to_dict()``).
+
+    """
 
     frf: FrequencyResponse
     bla: BLAResult
@@ -44,11 +83,42 @@ def run_open_loop_multisine(plant: FlexibleJointPlant, design: MultisineDesign, 
                             realisations: list[MultisineRealisation] | None = None,
                             ) -> OpenLoopMultisineRun:
     """
-    Multisine BLA (eq. 14) with the torque injected directly at the plant input.
+    Estimate the multisine BLA (eq. 14) with the torque injected directly at the plant input.
 
     Each realisation starts from rest, runs ``transient_periods`` discarded periods then
     ``n_periods`` measured ones; the excitation is evaluated on the integrator's stage grid so
-    the plant sees the continuous-time signal.
+    the plant sees the continuous-time signal. MIMO plants get n_u experiments per
+    realisation with the eq. 9 shifts.
+
+    Parameters
+    ----------
+    plant : FlexibleJointPlant
+        The plant, driven by torque (reset before every experiment).
+    design : MultisineDesign
+        The multisine design; its period must be a whole number of plant samples.
+    n_realisations : int
+        Number of realisations n_p.
+    n_periods : int, optional
+        Measured periods per realisation n_q.
+    transient_periods : int, optional
+        Periods discarded before the measured ones.
+    rng : numpy.random.Generator
+        Source of the random phases (unused for given ``realisations``).
+    realisations : list of MultisineRealisation, optional
+        Precomputed realisations (at least ``n_realisations``), used instead of drawing new
+        ones.
+
+    Returns
+    -------
+    OpenLoopMultisineRun
+        The BLA as a FrequencyResponse and its raw material.
+
+    Raises
+    ------
+    DesignError
+        ``n_realisations`` or ``n_periods`` < 1, or the period is not a whole number of
+        samples.
+
     """
     if n_realisations < 1 or n_periods < 1:
         raise DesignError(f'{n_realisations=} and {n_periods=} must be at least 1')
@@ -90,6 +160,24 @@ def run_open_loop_multisine(plant: FlexibleJointPlant, design: MultisineDesign, 
 
 @dataclass
 class OpenLoopChirpRun:
+    """
+    Result of open-loop chirp experiments: the estimate and the recorded signals.
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        The estimate tau_m -> dq_m at the analysis frequencies (no variances).
+    input_power : float
+        Mean u^2 over [t0, t1) of every experiment [(N m)^2].
+    u : ndarray, shape (n_ex, N, n_u)
+        Plant input (motor torque) of each experiment.
+    y : ndarray, shape (n_ex, N, n_u)
+        Plant output (motor velocity) of each experiment.
+    t : ndarray, shape (N,)
+        Sample times in s.
+
+    """
+
     frf: FrequencyResponse
     input_power: float
     u: np.ndarray
@@ -101,10 +189,37 @@ def run_open_loop_chirp(plant: FlexibleJointPlant, design: ChirpDesign, phases: 
                         analysis_freqs: np.ndarray | None = None, n_ref: int = 80,
                         ) -> OpenLoopChirpRun:
     """
-    Chirp experiments (eqs. 15-16) injected at the plant input, estimated as Sec. 5.1.
+    Run chirp experiments (eqs. 15-16) injected at the plant input, estimated as Sec. 5.1.
 
-    ``phases`` is the (n_u, n_ex) MIMO phase matrix (eq. 9 or eq. 26). One experiment per
-    column, each from rest; P = Y U^+ (eq. 7) per analysis frequency.
+    One experiment per column of ``phases``, each from rest; P = Y U^+ (eq. 7) per analysis
+    frequency.
+
+    Parameters
+    ----------
+    plant : FlexibleJointPlant
+        The plant, driven by torque.
+    design : ChirpDesign
+        The chirp design.
+    phases : ndarray, shape (n_u, n_ex)
+        MIMO phase matrix (eq. 9, or eq. 26 from
+        :func:`~frf_ident.core.excitation.chirp.chirp_phase_flips`).
+    analysis_freqs : array_like, optional
+        Candidate analysis frequencies in Hz; default the ``n_ref`` log-spaced frequencies
+        of the band. Only those with four periods inside the sweep are analysed.
+    n_ref : int, optional
+        Size of the default log-spaced set.
+
+    Returns
+    -------
+    OpenLoopChirpRun
+        The estimate and the recorded signals.
+
+    Raises
+    ------
+    DesignError
+        ``f_high`` is at or above the Nyquist frequency, or no analysis frequency has four
+        periods inside the chirp.
+
     """
     fs = 1.0 / plant.dt
     design.check_sample_rate(fs)
@@ -138,9 +253,30 @@ def run_open_loop_chirp(plant: FlexibleJointPlant, design: ChirpDesign, phases: 
 def resonance_peak(freq_hz: np.ndarray, response: np.ndarray, band: tuple[float, float]
                    ) -> tuple[float, float]:
     """
-    Frequency [Hz] and magnitude [dB] of the largest peak of |response| inside ``band``.
+    Return frequency [Hz] and magnitude [dB] of the largest peak of |response| in ``band``.
 
-    Refined by a parabola through the three lines around the maximum in (log f, dB).
+    Refined by a parabola through the three lines around the maximum in (log f, dB) when
+    that parabola has its vertex between them.
+
+    Parameters
+    ----------
+    freq_hz : array_like, shape (n_freq,)
+        Frequencies in Hz, increasing.
+    response : array_like, shape (n_freq,)
+        Complex (or magnitude) response at ``freq_hz``.
+    band : tuple of float
+        (low, high) in Hz, inclusive.
+
+    Returns
+    -------
+    tuple of float
+        (resonance frequency in Hz, peak magnitude in dB).
+
+    Raises
+    ------
+    ValueError
+        No line lies inside ``band``.
+
     """
     f = np.asarray(freq_hz, dtype=float)
     mag = 20 * np.log10(np.maximum(np.abs(response), 1e-300))
