@@ -25,7 +25,7 @@ demo: $(STAMP)
 	$(PY) -m frf_ident demo --out $(OUT)/demo
 
 test: $(STAMP)
-	$(PY) -m pytest -q -ra test
+	$(PY) -m pytest -q -ra --doctest-modules test frf_ident/core
 
 bench: $(STAMP)
 	$(PY) -m benchmarks

@@ -61,11 +61,11 @@ def test_eq9_phase_shifts_condition_number_one():
 
 
 @pytest.mark.parametrize('kwargs, needle', [
-    ({'f_low': 1, 'f_high': 600, 'bound': 1, 'fs': 1000}, 'f_high=600'),
-    ({'f_low': 60, 'f_high': 10, 'bound': 1, 'fs': 1000}, 'f_high=10'),
-    ({'f_low': 1, 'f_high': 60, 'bound': 0, 'fs': 1000}, 'bound=0'),
-    ({'f_low': 1, 'f_high': 60, 'bound': -3, 'fs': 1000}, 'bound=-3'),
-    ({'f_low': -1, 'f_high': 60, 'bound': 1, 'fs': 1000}, 'f_low=-1'),
+    ({'f_low': 1, 'f_high': 600, 'bound': 1, 'fs': 1000, 'resolution_hz': 0.1}, 'f_high=600'),
+    ({'f_low': 60, 'f_high': 10, 'bound': 1, 'fs': 1000, 'resolution_hz': 0.1}, 'f_high=10'),
+    ({'f_low': 1, 'f_high': 60, 'bound': 0, 'fs': 1000, 'resolution_hz': 0.1}, 'bound=0'),
+    ({'f_low': 1, 'f_high': 60, 'bound': -3, 'fs': 1000, 'resolution_hz': 0.1}, 'bound=-3'),
+    ({'f_low': -1, 'f_high': 60, 'bound': 1, 'fs': 1000, 'resolution_hz': 0.1}, 'f_low=-1'),
     ({'f_low': 1, 'f_high': 60, 'bound': 1, 'fs': 1000, 'resolution_hz': 0}, 'resolution_hz=0'),
 ])
 def test_bad_design_names_value(kwargs, needle):

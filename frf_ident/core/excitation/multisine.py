@@ -406,7 +406,7 @@ class MultisineDesign:
 
 
 def design_odd_multisine(f_low: float, f_high: float, *, bound: float,
-                         resolution_hz: float = 0.1, n_ref: int = 80,
+                         resolution_hz: float, n_ref: int = 80,
                          fs: float | None = None) -> MultisineDesign:
     """
     Design an odd random-phase multisine exactly as Section 4.2.
@@ -420,8 +420,9 @@ def design_odd_multisine(f_low: float, f_high: float, *, bound: float,
         Band [fl~, fu~] in Hz.
     bound : float
         Peak value max |r| of every realisation (e.g. torque limit or velocity amplitude).
-    resolution_hz : float, optional
-        Desired frequency resolution f0~ in Hz (eq. 12).
+    resolution_hz : float
+        Desired frequency resolution f0~ in Hz (eq. 12). No default here: the paper's
+        Section 6 design uses 0.1, the Section 7 procedures ``MultisineConfig.resolution_hz``.
     n_ref : int, optional
         Size of the log-spaced reference set F~ (80 in the paper).
     fs : float, optional
@@ -443,7 +444,7 @@ def design_odd_multisine(f_low: float, f_high: float, *, bound: float,
     --------
     The paper's Section 6 design: Ts = 3 ms, nf = 4096, a period of 12.288 s.
 
-    >>> d = design_odd_multisine(1.0, 60.0, bound=150.0, fs=1000.0)
+    >>> d = design_odd_multisine(1.0, 60.0, bound=150.0, resolution_hz=0.1, fs=1000.0)
     >>> d.ts, d.nf, round(d.period, 3)
     (0.003, 4096, 12.288)
 
