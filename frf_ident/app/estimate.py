@@ -45,10 +45,11 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
             'budget_bytes': budget}
     from frf_ident.bag import read_recording
     from frf_ident.core.estimation.described import estimate_recording
-    rec, timing = read_recording(bag, joints=joints, t_range=t_range)
+    rec, timing = read_recording(bag, joints=joints, t_range=t_range, gaps='mark')
     for line in timing.summary():
         progress(line)
-    return estimate_recording(rec, options=options), timing, rec.meta.get('summary', {}), None
+    return (estimate_recording(rec, options=options, block_s=window_s), timing,
+            rec.meta.get('summary', {}), None)
 
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,

@@ -444,22 +444,29 @@ def recovery_report(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str
 def read_recording(path: str | Path, *, joints: list[str] | None = None,
                    topics: BagTopics | None = None,
                    t_range: tuple[float, float] | None = None,
-                   progress: bool = False) -> tuple[Recording, tm.TimingReport]:
+                   progress: bool = False, gaps: str = 'refuse'
+                   ) -> tuple[Recording, tm.TimingReport]:
     """Read a bag into a uniformly sampled :class:`Recording` plus its :class:`TimingReport`.
 
     ``path`` is a rosbag2 directory, a directory holding .mcap files without metadata.yaml,
     or a bare .mcap file. ``joints`` selects joints by name (default: the names of the first
     joint state message, in its order). ``t_range`` = (t0, t1) in seconds of the bag clock
-    keeps only that window. Raises :class:`BagError` (one line) for every input problem.
+    keeps only that window. ``gaps``: a gap of more than
+    :data:`~frf_ident.bag.timing.MAX_GAP_SAMPLES` missing joint states is refused
+    ('refuse') or kept as missing data ('mark': NaN joint states on the grid inside it,
+    listed in the report's ``missing`` and ``rec.meta['gaps']``). Raises :class:`BagError`
+    (one line) for every input problem.
     """
     topics = topics or BagTopics()
     if joints is not None and (isinstance(joints, str) or not joints):
         raise BagError(f'{joints=}: expected a non-empty list of joint names')
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
         raise BagError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
+    if gaps not in tm.GAP_MODES:
+        raise ValueError(f'{gaps=}: expected one of {tm.GAP_MODES}')
     bag = locate(path)
     try:
-        return _read(bag, joints, topics, t_range, progress)
+        return _read(bag, joints, topics, t_range, progress, gaps)
     except BagError:
         raise
     except (struct.error, ValueError, KeyError, IndexError, TypeError, UnicodeDecodeError,
@@ -469,7 +476,7 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
 
 def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
           t_range: tuple[float, float] | None,
-          progress: bool) -> tuple[Recording, tm.TimingReport]:
+          progress: bool, gaps: str) -> tuple[Recording, tm.TimingReport]:
     expected = expected_counts(bag)
     col = Collector(bag, topics, joints, expected)
     stats = _scan(bag, set(col.expected), progress, col.feed)
@@ -485,7 +492,7 @@ def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
                        f'{JOINT_STATE}; topics present: {present or "none"})'
                        f'{_lost_hint(recovery)}')
     meta, segments, warnings = read_descriptors(col.events, bag, topics)
-    return assemble(bag, col, topics, meta, segments, warnings, recovery, t_range)
+    return assemble(bag, col, topics, meta, segments, warnings, recovery, t_range, gaps)
 
 
 def _lost_hint(recovery: dict[str, Any]) -> str:
@@ -543,7 +550,10 @@ def _window(ns: np.ndarray, t_range: tuple[float, float] | None) -> np.ndarray:
 
 def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, Any],
               segments: list[Segment], warnings: list[str], recovery: dict[str, Any],
-              t_range: tuple[float, float] | None) -> tuple[Recording, tm.TimingReport]:
+              t_range: tuple[float, float] | None, gaps: str = 'refuse'
+              ) -> tuple[Recording, tm.TimingReport]:
+    """The joint states (and commands) on a uniform grid as a Recording, with the timing
+    report; ``gaps`` as in :func:`read_recording`."""
     assert col.js.data is not None and col.js.joints is not None
     joint_names = list(col.js.joints)
     frf = meta.pop(FRF_BAG_KEY, None)
@@ -564,7 +574,7 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
     exact_t = _frf_grid(frf, st)
     exact = exact_t is not None or tm.on_exact_grid(st)
     if not exact:
-        tm.check_resampling(st, bag.name)
+        tm.check_resampling(st, bag.name, gaps)
     k_last = int(st.k[-1])
     grid_ns = st.ns[0] + np.arange(k_last + 1) * st.dt_ns  # float ns
     t = exact_t if exact_t is not None else grid_ns * 1e-9
@@ -576,11 +586,17 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
         x = (st.ns - st.ns[0]).astype(float)
         xg = grid_ns - st.ns[0]
         cols = np.column_stack([np.interp(xg, x, values[:, j]) for j in range(values.shape[1])])
+    missing = []
+    for a, b in zip(*tm.long_gaps(st)):        # only with gaps='mark' (else refused above)
+        cols[a:b + 1] = np.nan
+        missing.append([float(t[a]), float(t[b])])
+    if missing:
+        meta['gaps'] = missing
     report = tm.TimingReport(dt_s=st.dt_ns * 1e-9, n_samples=int(t.size), t_start_s=float(t[0]),
                              t_end_s=float(t[-1]), resampled=not exact,
                              grid='exact' if exact else 'resampled',
                              topics={topics.joint_states: st.timing}, recovery=recovery,
-                             warnings=warnings)
+                             warnings=warnings, missing=missing)
     per_sample = bool(frf and frf.get('reference') == 'per_sample' and exact_t is not None)
     reference = _reference(bag, col, topics, joint_names, frf, grid_ns, st, per_sample, report)
     excitation = _excitation(bag, col, topics, grid_ns, st, per_sample, report, t_range)

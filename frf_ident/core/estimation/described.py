@@ -315,20 +315,23 @@ class SegmentEstimator:
         return out
 
 
-def estimate_recording(rec: Recording, *, options=None) -> dict[str, FrequencyResponse]:
+def estimate_recording(rec: Recording, *, options=None, block_s: float | None = None
+                       ) -> dict[str, FrequencyResponse]:
     """Every estimate the recording supports, keyed by name: 'multisine' (reference-based,
     compensated when a constant-velocity run exists), 'multisine_plain',
     'multisine_uncompensated', 'chirp', 'chirp_reference'; without descriptors the
     detected ones (:func:`estimate_detected`). The data are checked first
     (:func:`frf_ident.core.estimation.checks.check_descriptor_recording`: band, periods, clipping).
     ``options`` (:class:`frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in a
-    recording without descriptors; a recording with descriptors refuses them."""
+    recording without descriptors; a recording with descriptors refuses them. ``block_s``:
+    block length of detection (default
+    :data:`frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`)."""
     check_recording(rec, options)
     est = SegmentEstimator(rec.segments)
     est.add_window(rec)
     out = est.results()
     if not out:
-        out = estimate_detected(rec, options)
+        out = estimate_detected(rec, options, block_s=block_s)
     return out
 
 
@@ -342,12 +345,15 @@ def check_recording(rec: Recording, options=None) -> None:
         check_descriptor_recording(rec)
 
 
-def estimate_detected(rec: Recording, options=None) -> dict[str, FrequencyResponse]:
+def estimate_detected(rec: Recording, options=None, *, block_s: float | None = None
+                      ) -> dict[str, FrequencyResponse]:
     """Estimates of a recording without descriptors: the excitation is detected per joint
-    (:mod:`frf_ident.core.estimation.detected`; ``options`` replace detection where given) and checked;
-    one entry 'detected/<joint>' per excited input, the detection sentences in each
-    estimate's meta['detected']."""
-    from frf_ident.core.estimation.detected import DetectedEstimator
-    est = DetectedEstimator()
-    est.add_detected(rec, options)
-    return est.results()
+    in blocks of ``block_s`` seconds, as a streamed bag is
+    (:func:`frf_ident.core.estimation.detected.estimate_in_blocks`; ``options`` replace
+    detection where given) and checked; one entry 'detected/<joint>' per excited input, the
+    detection sentences in each estimate's meta['detected']."""
+    from frf_ident.core.estimation.detected import (DEFAULT_BLOCK_S, RecordingBlocks,
+                                                    estimate_in_blocks)
+    block_s = DEFAULT_BLOCK_S if block_s is None else block_s
+    blocks = RecordingBlocks(rec, block_s)
+    return estimate_in_blocks(blocks, options, resume=blocks.continue_from, block_s=block_s)

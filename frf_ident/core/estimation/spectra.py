@@ -245,7 +245,8 @@ def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
     ``samples_per_period`` samples per period (polyphase FIR, zero phase), applies a Hann window
     and evaluates the DFT at exactly f_x.
 
-    ``x`` : (N, ...) samples at rate fs, the first at time ``t_first``. Returns (...) complex.
+    ``x`` : (N, ...) samples at rate fs, the first at time ``t_first``. Returns (...) complex,
+    NaN when the excerpt holds a missing (NaN) sample: a gap removes that frequency only.
     """
     x = np.asarray(x, dtype=float)
     half = 0.5 * n_periods / f_x
@@ -255,6 +256,8 @@ def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
         raise EstimationError(f'excerpt for f_x={f_x:g} Hz around t={t_center:g} s is outside '
                               f'the record [{t_first:g}, {t_first + x.shape[0] / fs:g}] s')
     seg = x[i0:i1]
+    if not np.all(np.isfinite(seg)):
+        return np.full(seg.shape[1:], np.nan + 0j)
     seg = seg - seg.mean(axis=0)
     q = max(1, int(np.floor(fs / (samples_per_period * f_x))))
     if q > 1:

@@ -1,0 +1,147 @@
+"""Closed-loop runs and the bags a real robot would record of them (issue 12 tests).
+
+:func:`multisine_run` simulates the default 3-axis plant under its PI velocity controller with
+a periodic odd multisine velocity reference on joint_2 (no descriptors: a ros2_control-style
+experiment). :func:`write_robot_bag` writes it as /joint_states plus
+/velocity_controller/commands with the imperfections real recordings have, and returns what
+it did so tests can compare with the truth (:func:`truth_frf`, the plant's exact sampled FRF).
+
+Timing model: sample k is taken at s_k = t0 + k dt + U(+-jitter dt); the joint states carry
+the true (spline-interpolated) signals at s_k and the header stamp s_k; the receive (log)
+time is s_k + 250 us + Exp(50 us). Commands have no header: their log time is their stamp.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from frf_ident.core.recording import Recording
+
+FS = 1000.0
+T0 = 100.0                 # bag clock of the first sample [s]
+EXCITED = 1                # joint_2
+
+
+def multisine_run(n_periods: int = 6, f_high: float = 80.0, bound: float = 0.01,
+                  seed: int = 0, lead_s: float = 0.0, tail_s: float = 0.0) -> Recording:
+    """n_periods x 8192 samples at 1 kHz (f_high 80 Hz: Ts 2 ms, 4096 lines per period) of
+    the default plant in closed loop, the multisine on joint_2's velocity reference; ``lead_s``
+    / ``tail_s`` of a partial period before / after (the reference runs on periodically)."""
+    from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
+    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
+                                             robot_from_dict)
+    from frf_ident.core.simulation.plant import FlexibleJointPlant
+    d = default_model_dict()
+    rob = robot_from_dict(d)
+    ctrl = controller_from_dict(d, rob)
+    des = design_odd_multisine(2.0, f_high, bound=bound, resolution_hz=FS / 8192, fs=FS)
+    real = multisine_realisation(des, 1, np.random.default_rng(seed), fs=FS)
+    n = des.period_samples(FS)
+    one = real.evaluate(np.arange(n) / FS)[0][:, 0]
+    n_lead, n_tail = int(round(lead_s * FS)), int(round(tail_s * FS))
+    total = n_lead + n_periods * n + n_tail
+    r = np.zeros((total, 3))
+    r[:, EXCITED] = np.resize(np.roll(one, n_lead), total)
+    res = FlexibleJointPlant(rob).simulate(reference=r, controller=ctrl)
+    rec = Recording(res.t, rob.joint_names, res.position, res.velocity, res.effort, r)
+    rec.meta['robot'] = rob
+    rec.meta['period_samples'] = n
+    return rec
+
+
+def truth_frf(rec: Recording, freq_hz: np.ndarray) -> np.ndarray:
+    """Exact FRF column of joint_2 (outputs x lines) of the simulated plant."""
+    from frf_ident.core.simulation.analytic import robot_frf_sampled
+    return robot_frf_sampled(rec.meta['robot'], np.asarray(freq_hz))[:, EXCITED, :]
+
+
+@dataclass
+class Imperfections:
+    """What a recording does to the messages (all optional).
+
+    jitter : stamp jitter, fraction of dt (uniform +-).
+    drop : fraction of single joint states lost at random (never first/last).
+    bursts : (t_start [s from the first sample], duration [s]) lost on every topic.
+    duplicates : fraction of joint states written twice (same stamp).
+    reorder : fraction of joint states swapped with their successor in file order.
+    head_cut / tail_cut : seconds cut from the start / end (partial periods).
+    log_offset : receive time minus header stamp [s] (added to the 250 us latency).
+    """
+
+    jitter: float = 0.0
+    drop: float = 0.0
+    bursts: list[tuple[float, float]] = field(default_factory=list)
+    duplicates: float = 0.0
+    reorder: float = 0.0
+    head_cut: float = 0.0
+    tail_cut: float = 0.0
+    log_offset: float = 0.0
+
+
+def _sample_plan(rec: Recording, imp: Imperfections, rng: np.random.Generator):
+    n = rec.t.size
+    dt = 1.0 / FS
+    s = rec.t + rng.uniform(-imp.jitter, imp.jitter, n) * dt
+    s[0], s[-1] = rec.t[0], rec.t[-1]
+    keep = rng.random(n) >= imp.drop
+    keep[[0, -1]] = True
+    lost = np.zeros(n, dtype=bool)
+    for a, dur in imp.bursts:
+        lost |= (rec.t - rec.t[0] >= a) & (rec.t - rec.t[0] < a + dur)
+    keep &= ~lost
+    span = (rec.t - rec.t[0] >= imp.head_cut) & (rec.t[-1] - rec.t >= imp.tail_cut)
+    return s, keep & span, lost
+
+
+def write_robot_bag(path, rec: Recording, imp: Imperfections | None = None, *, seed: int = 1,
+                    commands: bool = True, shuffle: bool = False) -> dict:
+    """Write ``rec`` as a robot's rosbag2 MCAP bag (rosbags writer; see the module docstring).
+
+    The joint states name the joints in the controller's order (as joint_state_broadcaster
+    does; the command arrays follow it), or in a new random order per message (``shuffle``).
+
+    Returns the sample times, the kept mask and the burst mask (for the tests' truth)."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+    imp = imp or Imperfections()
+    rng = np.random.default_rng(seed)
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    JointState = ts.types['sensor_msgs/msg/JointState']
+    Header = ts.types['std_msgs/msg/Header']
+    Time = ts.types['builtin_interfaces/msg/Time']
+    F64 = ts.types['std_msgs/msg/Float64MultiArray']
+    Layout = ts.types['std_msgs/msg/MultiArrayLayout']
+    s, keep, lost = _sample_plan(rec, imp, rng)
+    vals = {k: CubicSpline(rec.t, getattr(rec, k), axis=0)(s)
+            for k in ('position', 'velocity', 'effort')}
+    stamps = np.round((s + T0) * 1e9).astype(np.int64)
+    logs = stamps + int(round(imp.log_offset * 1e9)) + 250_000 \
+        + rng.exponential(50_000, s.size).astype(np.int64)
+    idx = list(np.flatnonzero(keep))
+    dups = set(np.flatnonzero(rng.random(len(idx)) < imp.duplicates).tolist())
+    order = []
+    for i, k in enumerate(idx):
+        order.append(k)
+        if i in dups:
+            order.append(k)
+    for i in np.flatnonzero(rng.random(len(order) - 1) < imp.reorder):
+        order[i], order[i + 1] = order[i + 1], order[i]
+    names = list(rec.joint_names)
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        js = w.add_connection('/joint_states', JointState.__msgtype__, typestore=ts)
+        cmd = w.add_connection('/velocity_controller/commands', F64.__msgtype__,
+                               typestore=ts) if commands else None
+        for k in order:
+            perm = rng.permutation(len(names)) if shuffle else np.arange(len(names))
+            sec, nsec = divmod(int(stamps[k]), 10 ** 9)
+            msg = JointState(header=Header(stamp=Time(sec=sec, nanosec=nsec), frame_id=''),
+                             name=[names[j] for j in perm],
+                             **{f: v[k, perm] for f, v in vals.items()})
+            w.write(js, int(logs[k]), ts.serialize_cdr(msg, JointState.__msgtype__))
+            if cmd is not None:
+                c = F64(layout=Layout(dim=[], data_offset=0),
+                        data=np.asarray(rec.reference[k], dtype=float))
+                w.write(cmd, int(stamps[k]) + 100_000, ts.serialize_cdr(c, F64.__msgtype__))
+    return {'s': s, 'keep': keep, 'lost': lost, 'written': len(order)}
