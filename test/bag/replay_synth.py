@@ -145,3 +145,25 @@ def write_robot_bag(path, rec: Recording, imp: Imperfections | None = None, *, s
                         data=np.asarray(rec.reference[k], dtype=float))
                 w.write(cmd, int(stamps[k]) + 100_000, ts.serialize_cdr(c, F64.__msgtype__))
     return {'s': s, 'keep': keep, 'lost': lost, 'written': len(order)}
+
+
+def drop_bursts(src, dst, bursts: list[tuple[float, float]], *,
+                keep: tuple[str, ...] = ('/frf/experiment',)) -> int:
+    """Copy the bag ``src`` to ``dst`` without the messages whose log time falls in one of
+    the ``bursts`` (t_start [s of the bag clock], duration [s]), on every topic but ``keep``
+    (a recorder that stalls loses all streams alike). Returns how many were lost."""
+    from frf_ident.bag import BagRecorder
+    from frf_ident.bag.reader import iter_raw
+    spans = [(int(round(a * 1e9)), int(round((a + d) * 1e9))) for a, d in bursts]
+    lost = 0
+    rec = BagRecorder(chunk_bytes=1 << 20, flush_period_s=1e9)
+    rec.open(dst)
+    try:
+        for topic, msgtype, log, data in iter_raw(src):
+            if topic not in keep and any(a <= log < b for a, b in spans):
+                lost += 1
+                continue
+            rec.write(topic, msgtype, log, data)
+    finally:
+        rec.close()
+    return lost
