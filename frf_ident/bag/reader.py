@@ -576,7 +576,10 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
     if not exact:
         tm.check_resampling(st, bag.name, gaps)
     k_last = int(st.k[-1])
-    grid_ns = st.ns[0] + np.arange(k_last + 1) * st.dt_ns  # float ns
+    # the grid is the least-squares line through the stamps, not the first (jittered) stamp:
+    # a window of a streamed bag then lies on the grid of the whole bag up to the fit's noise
+    offset = 0.0 if exact else tm.grid_offset(st)
+    grid_ns = st.ns[0] + offset + np.arange(k_last + 1) * st.dt_ns  # float ns
     t = exact_t if exact_t is not None else grid_ns * 1e-9
     values = vals if _is_identity(st.order, vals.shape[0]) else vals[st.order]
     _check_finite(bag, topics, joint_names, values, st.ns)

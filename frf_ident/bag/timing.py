@@ -10,6 +10,8 @@ all of that per topic and decides whether the joint states may be resampled:
 - sample indices k accumulate the rounded intervals ``round(diff(s) / dt)``, and the period
   ``dt`` is the least-squares slope of stamps over k; a gap is a step of k by more than one;
 - ``jitter`` = std of the intervals between consecutive (non-gap) samples relative to dt;
+- the uniform grid is s0 + k dt with s0 the least-squares intercept (:func:`grid_offset`),
+  so it does not depend on the jitter of the first stamp of a bag or of a window;
 - resampling (linear interpolation of joint states, zero-order hold of references) is
   applied only if jitter < 5 % of dt; a gap of at most 3 missing samples is interpolated, a
   longer one is either refused (``gaps='refuse'``: :class:`~frf_ident.errors.BagError`
@@ -262,6 +264,14 @@ def check_resampling(st: Stamps, where: str, gaps: str = 'refuse') -> None:
         raise BagError(f'gap of {n * tt.dt_s:.3f} s ({n} samples) at t={tt.longest_gap_at_s:.3f} '
                        f's in {tt.topic} of {where} exceeds {MAX_GAP_SAMPLES} samples; refusing '
                        f'to resample (pass t_range to read around it)')
+
+
+def grid_offset(st: Stamps) -> float:
+    """Intercept [ns] of the least-squares grid s = ns[0] + offset + k dt through the stamps
+    (0 for stamps exactly on their grid): the uniform grid that jitter does not move."""
+    if st.ns.size < 2:
+        return 0.0
+    return float(np.mean((st.ns - st.ns[0]).astype(float) - st.k * st.dt_ns))
 
 
 def long_gaps(st: Stamps) -> tuple[np.ndarray, np.ndarray]:
