@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import struct
-from contextlib import nullcontext
+import tempfile
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from operator import itemgetter
 from pathlib import Path
@@ -26,7 +28,8 @@ from frf_ident.errors import BagError
 from . import timing as tm
 from .cdr import (CdrError, JointStateDecoder, decode_float64_array,
                   decode_float64_array_batch, decode_joint_state_batch, decode_string)
-from .mcapio import Batch, ChannelInfo, McapFormatError, McapScanner, ScanStats, read_summary
+from .mcapio import (Batch, ChannelInfo, McapFormatError, McapScanner, ScanStats, read_summary,
+                     zstd_module)
 from .topics import JOINT_STATE, BagTopics
 from .writer import FRF_BAG_KEY, grid_times
 
@@ -38,16 +41,73 @@ _NAN = float('nan')
 
 @dataclass
 class BagFiles:
-    """Where a bag's data is: MCAP files in order, plus metadata.yaml contents if present."""
+    """Where a bag's data is: MCAP files in order, plus metadata.yaml contents if present.
+
+    ``compression`` is rosbag2's own compression from metadata.yaml ('' none, 'file': each
+    file is a zstd-compressed MCAP, 'message': each message's data is zstd-compressed);
+    MCAP chunk compression (zstd, lz4) is the scanner's business and needs nothing here.
+    """
 
     path: Path
     files: list[Path]
     metadata: dict[str, Any] | None = None
+    compression: str = ''
 
     @property
     def name(self) -> str:
         """Display name for messages."""
         return str(self.path)
+
+
+def _compression(meta_path: Path, info: dict[str, Any]) -> str:
+    """rosbag2's compression mode of a bag ('', 'file', 'message'); other formats refused."""
+    mode = str(info.get('compression_mode') or '').strip().lower()
+    fmt = str(info.get('compression_format') or '').strip().lower()
+    if mode in ('', 'none') or not fmt:
+        return ''
+    if fmt != 'zstd' or mode not in ('file', 'message'):
+        raise BagError(f'{meta_path}: compression {fmt!r} in mode {mode!r} is not supported; '
+                       f'expected zstd in file or message mode (or MCAP chunk compression)')
+    return mode
+
+
+@contextmanager
+def _readable(bag: BagFiles, f: Path) -> Iterator[Path]:
+    """An MCAP path for the file ``f`` of ``bag``: itself, or (rosbag2 file compression) a
+    temporary decompressed copy, streamed so memory stays bounded."""
+    if bag.compression != 'file':
+        yield f
+        return
+    with tempfile.TemporaryDirectory(prefix='frf_bag_') as tmp:
+        out = Path(tmp) / f.name.removesuffix('.zstd')
+        try:
+            with zstd_module().open(f, 'rb') as src, out.open('wb') as dst:
+                shutil.copyfileobj(src, dst, 1 << 20)
+        except (OSError, ValueError, EOFError) as exc:
+            raise BagError(f'{f}: not a readable zstd-compressed file ({type(exc).__name__}: '
+                           f'{exc})') from None
+        yield out
+
+
+def _decompressed(batch: Batch) -> Batch:
+    """A batch whose messages are each zstd-compressed (rosbag2 message compression),
+    decompressed."""
+    dec = zstd_module()
+    mv = memoryview(batch.buf)
+    parts, starts, ends, pos = [], [], [], 0
+    for a, b in zip(batch.starts, batch.ends):
+        try:
+            data = dec.decompress(mv[a:b])
+        except Exception as exc:     # the zstd module raises its own ZstdError
+            raise BagError(f'{batch.channel.topic}: a message near log time '
+                           f'{batch.logs[0] * 1e-9:.6f} s is not zstd-compressed data '
+                           f'({type(exc).__name__}) although metadata.yaml says message '
+                           f'compression') from None
+        parts.append(data)
+        starts.append(pos)
+        pos += len(data)
+        ends.append(pos)
+    return Batch(batch.channel, b''.join(parts), batch.logs, starts, ends)
 
 
 def locate(path: str | Path) -> BagFiles:
@@ -64,13 +124,14 @@ def locate(path: str | Path) -> BagFiles:
         if storage != 'mcap':
             raise BagError(f'{meta_path}: storage_identifier {storage!r} is not supported; '
                            f'expected mcap')
+        compression = _compression(meta_path, info)
         rel = info.get('relative_file_paths') or []
         files = [p / str(f) for f in rel if (p / str(f)).is_file()]
         if not files:
-            files = sorted(p.glob('*.mcap'))
+            files = sorted(p.glob('*.mcap.zstd' if compression == 'file' else '*.mcap'))
         if not files:
             raise BagError(f'{meta_path}: none of the files {rel} exist in {str(p)!r}')
-        return BagFiles(p, files, info)
+        return BagFiles(p, files, info, compression)
     files = sorted(p.glob('*.mcap'))
     if not files:
         raise BagError(f'bag directory {str(p)!r} holds neither metadata.yaml nor an .mcap file')
@@ -402,12 +463,15 @@ def iter_batches(bag: BagFiles, topics: set[str] | None, progress: bool,
         bar_cm = tqdm(total=total, unit='B', unit_scale=True, desc=bag.path.name)
     with bar_cm as bar:
         for f in bag.files:
-            scanner = McapScanner(f, topics, on_bytes=bar.update if bar is not None else None)
-            try:
-                yield from scanner.batches()
-            except McapFormatError as exc:
-                raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
-            stats.append(scanner.stats)
+            with _readable(bag, f) as path:
+                scanner = McapScanner(path, topics,
+                                      on_bytes=bar.update if bar is not None else None)
+                try:
+                    for batch in scanner.batches():
+                        yield _decompressed(batch) if bag.compression == 'message' else batch
+                except McapFormatError as exc:
+                    raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
+                stats.append(scanner.stats)
 
 
 def _scan(bag: BagFiles, topics: set[str] | None, progress: bool,
@@ -853,13 +917,11 @@ def iter_raw(path: str | Path, topics: set[str] | None = None) -> Iterator[tuple
                                                                                  bytes]]:
     """(topic, type, log_time_ns, cdr) of every readable message, streaming."""
     bag = locate(path)
-    for f in bag.files:
-        scanner = McapScanner(f, topics)
-        try:
-            for ch, log, data in scanner.messages():
-                yield ch.topic, ch.msgtype, log, bytes(data)
-        except McapFormatError as exc:
-            raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
+    stats: list[ScanStats] = []
+    for batch in iter_batches(bag, topics, False, stats):
+        ch = batch.channel
+        for log, a, b in zip(batch.logs, batch.starts, batch.ends):
+            yield ch.topic, ch.msgtype, log, bytes(batch.buf[a:b])
 
 
 __all__ = ['BagFiles', 'bag_info', 'iter_raw', 'locate', 'read_recording', 'reindex']

@@ -25,10 +25,12 @@ EXCITED = 1                # joint_2
 
 
 def multisine_run(n_periods: int = 6, f_high: float = 80.0, bound: float = 0.01,
-                  seed: int = 0, lead_s: float = 0.0, tail_s: float = 0.0) -> Recording:
-    """n_periods x 8192 samples at 1 kHz (f_high 80 Hz: Ts 2 ms, 4096 lines per period) of
-    the default plant in closed loop, the multisine on joint_2's velocity reference; ``lead_s``
-    / ``tail_s`` of a partial period before / after (the reference runs on periodically)."""
+                  seed: int = 0, lead_s: float = 0.0, tail_s: float = 0.0,
+                  period_samples: int = 8192, period_scale: float = 1.0) -> Recording:
+    """n_periods x ``period_samples`` at 1 kHz (f_high 80 Hz: Ts 2 ms) of the default plant
+    in closed loop, the multisine on joint_2's velocity reference; ``lead_s`` / ``tail_s`` of
+    a partial period before / after (the reference runs on periodically). ``period_scale``
+    stretches the multisine's period in time (1.0002: 8193.6 samples, not a whole number)."""
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
     from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
                                              robot_from_dict)
@@ -36,18 +38,19 @@ def multisine_run(n_periods: int = 6, f_high: float = 80.0, bound: float = 0.01,
     d = default_model_dict()
     rob = robot_from_dict(d)
     ctrl = controller_from_dict(d, rob)
-    des = design_odd_multisine(2.0, f_high, bound=bound, resolution_hz=FS / 8192, fs=FS)
+    des = design_odd_multisine(2.0, f_high, bound=bound, resolution_hz=FS / period_samples,
+                               fs=FS)
     real = multisine_realisation(des, 1, np.random.default_rng(seed), fs=FS)
     n = des.period_samples(FS)
-    one = real.evaluate(np.arange(n) / FS)[0][:, 0]
     n_lead, n_tail = int(round(lead_s * FS)), int(round(tail_s * FS))
-    total = n_lead + n_periods * n + n_tail
+    total = n_lead + int(round(n_periods * n * period_scale)) + n_tail
     r = np.zeros((total, 3))
-    r[:, EXCITED] = np.resize(np.roll(one, n_lead), total)
+    t = (np.arange(total) - n_lead) / FS / period_scale
+    r[:, EXCITED] = real.evaluate(t)[0][:, 0]
     res = FlexibleJointPlant(rob).simulate(reference=r, controller=ctrl)
     rec = Recording(res.t, rob.joint_names, res.position, res.velocity, res.effort, r)
     rec.meta['robot'] = rob
-    rec.meta['period_samples'] = n
+    rec.meta['period_samples'] = n * period_scale
     return rec
 
 
@@ -167,3 +170,62 @@ def drop_bursts(src, dst, bursts: list[tuple[float, float]], *,
     finally:
         rec.close()
     return lost
+
+
+def write_rosbag2(path, rec: Recording, imp: Imperfections | None = None, *, seed: int = 1,
+                  preset: str = '', config: str = '', max_size: int = 0,
+                  max_duration_s: int = 0, compression_mode: str = '') -> dict:
+    """Write ``rec`` with rosbag2 itself (``rosbag2_py.SequentialWriter``, storage 'mcap'),
+    as ``ros2 bag record`` stores what it receives: the log time is the receive time, the
+    header stamp the sample time (they disagree by ``imp.log_offset`` + 250 us + Exp(50 us)).
+
+    ``preset``: MCAP storage preset ('zstd_fast', 'zstd_small': chunk compression);
+    ``config``: storage config file (e.g. ``compression: Lz4``); ``max_size`` [bytes] /
+    ``max_duration_s``: split into several files; ``compression_mode``: rosbag2's own
+    compression ('file' or 'message', zstd). Needs ROS 2 (rosbag2_py, rclpy) importable.
+    """
+    import rosbag2_py
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import Float64MultiArray
+    imp = imp or Imperfections()
+    rng = np.random.default_rng(seed)
+    s, keep, lost = _sample_plan(rec, imp, rng)
+    vals = {k: CubicSpline(rec.t, getattr(rec, k), axis=0)(s)
+            for k in ('position', 'velocity', 'effort')}
+    stamps = np.round((s + T0) * 1e9).astype(np.int64)
+    logs = stamps + int(round(imp.log_offset * 1e9)) + 250_000 \
+        + rng.exponential(50_000, s.size).astype(np.int64)
+    opts = rosbag2_py.StorageOptions(uri=str(path), storage_id='mcap',
+                                     max_bagfile_size=int(max_size),
+                                     max_bagfile_duration=int(max_duration_s),
+                                     storage_preset_profile=preset,
+                                     storage_config_uri=str(config))
+    if compression_mode:
+        copts = rosbag2_py.CompressionOptions()
+        copts.compression_format = 'zstd'
+        copts.compression_mode = rosbag2_py.compression_mode_from_string(compression_mode)
+        writer = rosbag2_py.SequentialCompressionWriter(copts)
+    else:
+        writer = rosbag2_py.SequentialWriter()
+    writer.open(opts, rosbag2_py.ConverterOptions('cdr', 'cdr'))
+    writer.create_topic(rosbag2_py.TopicMetadata(0, '/joint_states', 'sensor_msgs/msg/JointState',
+                                                 'cdr'))
+    writer.create_topic(rosbag2_py.TopicMetadata(1, '/velocity_controller/commands',
+                                                 'std_msgs/msg/Float64MultiArray', 'cdr'))
+    names = list(rec.joint_names)
+    for k in np.flatnonzero(keep):
+        msg = JointState()
+        sec, nsec = divmod(int(stamps[k]), 10 ** 9)
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nsec
+        msg.name = names
+        msg.position = vals['position'][k].tolist()
+        msg.velocity = vals['velocity'][k].tolist()
+        msg.effort = vals['effort'][k].tolist()
+        writer.write('/joint_states', serialize_message(msg), int(logs[k]))
+        cmd = Float64MultiArray()
+        cmd.data = rec.reference[k].tolist()
+        writer.write('/velocity_controller/commands', serialize_message(cmd),
+                     int(stamps[k]) + 100_000)
+    del writer                                       # closes the bag, writes metadata.yaml
+    return {'s': s, 'keep': keep, 'lost': lost}
