@@ -15,7 +15,7 @@ from frf_ident.app import stream_estimate
 from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['estimate_bag', 'read_estimates']
+__all__ = ['dropped_text', 'estimate_bag', 'read_estimates']
 
 
 def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max_memory_mb,
@@ -45,10 +45,11 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
             'budget_bytes': budget}
     from frf_ident.bag import read_recording
     from frf_ident.core.estimation.described import estimate_recording
-    rec, timing = read_recording(bag, joints=joints, t_range=t_range)
+    rec, timing = read_recording(bag, joints=joints, t_range=t_range, gaps='mark')
     for line in timing.summary():
         progress(line)
-    return estimate_recording(rec, options=options), timing, rec.meta.get('summary', {}), None
+    return (estimate_recording(rec, options=options, block_s=window_s), timing,
+            rec.meta.get('summary', {}), None)
 
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,
@@ -103,8 +104,14 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     (out / 'frf.json').write_text(json.dumps(doc))
     (out / 'estimates.json').write_text(json.dumps({k: v.to_dict()
                                                     for k, v in estimates.items()}))
+    dropped = {k: v.meta['dropped'] for k, v in estimates.items() if v.meta.get('dropped')}
+    for k, d in dropped.items():
+        line = dropped_text(d)
+        if line:
+            progress(f'{k}: {line}')
     summary = {'bag': str(bag), 'primary': key, 'estimates': sorted(estimates),
-               'timing': timing.to_dict(), 'experiment': experiment, 'streaming': streamed}
+               'timing': timing.to_dict(), 'experiment': experiment, 'streaming': streamed,
+               'gaps': timing.missing, 'dropped': dropped}
     (out / 'summary.json').write_text(json.dumps(summary, indent=1, default=str))
     pairs = [(k, v) for k, v in estimates.items() if k in ('multisine', 'chirp')]
     bode_figure(dict(pairs or [(key, frf)]), out / 'bode.png',
@@ -112,3 +119,39 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
              f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
     return estimates
+
+
+def dropped_text(d: dict) -> str:
+    """One line saying what gaps removed from an estimate (its meta['dropped']), '' if nothing.
+
+    Parameters
+    ----------
+    d : {'periods', 'items' | 'times'} of a multisine or {'lines', 'freq_hz'} of a chirp.
+
+    Returns
+    -------
+    str
+        e.g. '2 periods dropped for gaps (realisation 0 period 1 at 28.43..31.50 s, ...)'.
+    """
+    if d.get('lines'):
+        f = ', '.join(f'{x:.4g}' for x in d['freq_hz'][:8])
+        more = ' ...' if len(d['freq_hz']) > 8 else ''
+        return f'{d["lines"]} analysis lines dropped for gaps in their excerpts ({f}{more} Hz)'
+    if not d.get('periods'):
+        return ''
+    if 'items' in d:
+        seen, parts = set(), []
+        for it in d['items']:
+            k = (it['realisation'], it['period'])
+            if k not in seen:
+                seen.add(k)
+                parts.append(f'realisation {k[0]} period {k[1]} at '
+                             f'{it["t_start"]:.2f}..{it["t_end"]:.2f} s')
+        gone = d.get('realisations') or []
+        tail = f'; realisation(s) {gone} left without a period' if gone else ''
+    else:
+        parts = [f'{a:.2f}..{b:.2f} s' for a, b in d.get('times', [])]
+        tail = ''
+    more = ' ...' if len(parts) > 6 else ''
+    return (f'{d["periods"]} multisine period(s) dropped for gaps ({", ".join(parts[:6])}'
+            f'{more}){tail}')

@@ -10,7 +10,8 @@ from frf_ident.errors import FrfIdentInputError
 __all__ = ['import_file']
 
 
-def import_file(file: Path, map_path: Path, out: Path, *, progress: Callable[[str], None] = say) -> Path:
+def import_file(file: Path, map_path: Path, out: Path, *,
+                progress: Callable[[str], None] = say) -> Path:
     """Import a measured table as a bag and say what excitation each joint carries.
 
     Parameters
@@ -26,7 +27,7 @@ def import_file(file: Path, map_path: Path, out: Path, *, progress: Callable[[st
         ``out``.
     """
     from frf_ident.bag import write_recording
-    from frf_ident.core.excitation.detect import detect_excitation
+    from frf_ident.core.excitation.detect import detect_excitation, excitation_source
     from frf_ident.errors import EstimationError
     from frf_ident.io.importer import import_table
     if out.exists():
@@ -38,9 +39,9 @@ def import_file(file: Path, map_path: Path, out: Path, *, progress: Callable[[st
              f'(t = {rec.t[0]:.3f} .. {rec.t[-1]:.3f} s), joints {", ".join(rec.joint_names)}')
     for key, how in info['derived'].items():
         progress(f'  {key}: {how}')
+    # the signal `estimate` will detect the excitation on (one rule for both)
+    sig, what = excitation_source(rec.reference, rec.effort)
     for j, name in enumerate(rec.joint_names):
-        sig, what = (rec.reference, 'reference') if rec.reference is not None \
-            and not all_nan(rec.reference[:, j]) else (rec.effort, 'effort')
         try:
             progress(f'  {name} {what}: {detect_excitation(sig[:, j], rec.fs).describe()}')
         except EstimationError:
@@ -48,9 +49,3 @@ def import_file(file: Path, map_path: Path, out: Path, *, progress: Callable[[st
     write_recording(rec, out)
     progress(f'wrote {out}')
     return out
-
-
-def all_nan(x) -> bool:
-    """True when every sample of ``x`` is NaN."""
-    import numpy as np
-    return bool(np.isnan(x).all())

@@ -6,7 +6,11 @@ core's segment-wise estimators.
   equal the in-memory ones;
 - bags without descriptors: blocks of ``block_s`` seconds; each block's excitation is
   detected and its periods added to the H1 sums of that excitation
-  (:class:`~frf_ident.core.estimation.detected.DetectedEstimator`), so every period of the bag counts.
+  (:func:`~frf_ident.core.estimation.detected.estimate_in_blocks`, which the in-memory
+  estimate runs on the same blocks, so both take the same decisions).
+
+Gaps longer than the resampling limit are kept as missing data (``gaps='mark'``): they cost
+only the periods and chirp excerpts they touch.
 
 Memory is bounded by the longest window, not by the bag.
 """
@@ -20,17 +24,13 @@ from typing import Any, Callable
 from frf_ident.bag import windows as bs
 from frf_ident.bag import timing as tm
 from frf_ident.core.estimation.described import SegmentEstimator, check_recording
-from frf_ident.core.estimation.detected import DetectedEstimator
+from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, estimate_in_blocks
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.errors import EstimationError
 
 #: in-memory arrays take about this many bytes per byte of MCAP data (measured: 3-joint
 #: JointState bags, float64 columns plus the copies of timing repair and assembly)
 MEMORY_PER_BAG_BYTE = 3.0
-
-#: block length for bags without experiment descriptors [s]: a few multisine periods or
-#: a whole chirp must fit in one block
-DEFAULT_BLOCK_S = 300.0
 
 
 @dataclass
@@ -97,7 +97,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         windows = _in_range(bs.segment_windows(segments), t_range)
         say(f'streaming: {len(segments)} experiment segments in {len(windows)} windows')
         reader = bs.WindowReader(bag, windows=windows, joints=joints, experiment=exp,
-                                 progress=bar)
+                                 progress=bar, gaps='mark')
         est = SegmentEstimator(segments)
         for rec, report in reader:
             check_recording(rec, options)
@@ -115,24 +115,14 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
             f'{block_s:g} s')
         span = None if t_range is None else tuple(int(round(x * 1e9)) for x in t_range)
         reader = bs.WindowReader(bag, block_s=block_s, joints=joints, experiment=exp,
-                                 span=span, progress=bar)
-        det = DetectedEstimator()
-        for rec, report in reader:
-            reports.append(report)
-            try:
-                det.add_detected(rec, options)
-            except EstimationError as exc:
-                notes.append(f'block {rec.t[0]:.3f}..{rec.t[-1]:.3f} s: {exc}')
-                continue
-            if det.used_until is not None:      # next block on the period grid: no loss
-                reader.continue_from(det.used_until)
-        if not det.entries:
-            raise EstimationError(f'no multisine or chirp found in any {block_s:g} s block '
-                                  f'({len(reports)} blocks; first: '
-                                  f'{notes[0] if notes else "no joint states"})')
-        estimates = det.results()
-        for frf in estimates.values():
-            frf.meta['detected'] = frf.meta['detected'] + notes
+                                 span=span, progress=bar, gaps='mark')
+
+        def blocks():
+            for rec, report in reader:
+                reports.append(report)
+                yield rec
+        estimates = estimate_in_blocks(blocks(), options, resume=reader.continue_from,
+                                       block_s=block_s)
     if not reports:
         raise EstimationError(f'{bag}: no joint states inside the analysed windows')
     timing = tm.merge_reports(reports, reader.stats.recovery)
@@ -141,5 +131,5 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     return StreamedEstimate(estimates, timing, reader.stats, meta, notes)
 
 
-__all__ = ['MEMORY_PER_BAG_BYTE', 'StreamedEstimate', 'default_memory_budget',
+__all__ = ['DEFAULT_BLOCK_S', 'MEMORY_PER_BAG_BYTE', 'StreamedEstimate', 'default_memory_budget',
            'needs_streaming', 'stream_estimate']

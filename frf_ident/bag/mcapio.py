@@ -101,17 +101,22 @@ def _string_map(buf: bytes | memoryview, off: int) -> tuple[dict[str, str], int]
     return out, end
 
 
+def zstd_module():
+    """The zstd module: ``compression.zstd`` (Python >= 3.14) or its backport."""
+    try:
+        from compression import zstd  # type: ignore[import-not-found]  # Python >= 3.14
+    except ImportError:
+        from backports import zstd
+    return zstd
+
+
 def _decompress(compression: str, data: bytes, size: int) -> bytes:
     if size > MAX_CHUNK_BYTES:
         raise McapFormatError(f'chunk claims {size} uncompressed bytes')
     if compression == '':
         return data
     if compression == 'zstd':
-        try:
-            from compression import zstd  # type: ignore[import-not-found]  # Python >= 3.14
-        except ImportError:
-            from backports import zstd
-        out = zstd.ZstdDecompressor().decompress(data, max_length=size)
+        out = zstd_module().ZstdDecompressor().decompress(data, max_length=size)
     elif compression == 'lz4':
         import lz4.frame
         out = lz4.frame.decompress(data)

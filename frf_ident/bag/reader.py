@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import struct
-from contextlib import nullcontext
+import tempfile
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from operator import itemgetter
 from pathlib import Path
@@ -26,7 +28,8 @@ from frf_ident.errors import BagError
 from . import timing as tm
 from .cdr import (CdrError, JointStateDecoder, decode_float64_array,
                   decode_float64_array_batch, decode_joint_state_batch, decode_string)
-from .mcapio import Batch, ChannelInfo, McapFormatError, McapScanner, ScanStats, read_summary
+from .mcapio import (Batch, ChannelInfo, McapFormatError, McapScanner, ScanStats, read_summary,
+                     zstd_module)
 from .topics import JOINT_STATE, BagTopics
 from .writer import FRF_BAG_KEY, grid_times
 
@@ -38,16 +41,73 @@ _NAN = float('nan')
 
 @dataclass
 class BagFiles:
-    """Where a bag's data is: MCAP files in order, plus metadata.yaml contents if present."""
+    """Where a bag's data is: MCAP files in order, plus metadata.yaml contents if present.
+
+    ``compression`` is rosbag2's own compression from metadata.yaml ('' none, 'file': each
+    file is a zstd-compressed MCAP, 'message': each message's data is zstd-compressed);
+    MCAP chunk compression (zstd, lz4) is the scanner's business and needs nothing here.
+    """
 
     path: Path
     files: list[Path]
     metadata: dict[str, Any] | None = None
+    compression: str = ''
 
     @property
     def name(self) -> str:
         """Display name for messages."""
         return str(self.path)
+
+
+def _compression(meta_path: Path, info: dict[str, Any]) -> str:
+    """rosbag2's compression mode of a bag ('', 'file', 'message'); other formats refused."""
+    mode = str(info.get('compression_mode') or '').strip().lower()
+    fmt = str(info.get('compression_format') or '').strip().lower()
+    if mode in ('', 'none') or not fmt:
+        return ''
+    if fmt != 'zstd' or mode not in ('file', 'message'):
+        raise BagError(f'{meta_path}: compression {fmt!r} in mode {mode!r} is not supported; '
+                       f'expected zstd in file or message mode (or MCAP chunk compression)')
+    return mode
+
+
+@contextmanager
+def _readable(bag: BagFiles, f: Path) -> Iterator[Path]:
+    """An MCAP path for the file ``f`` of ``bag``: itself, or (rosbag2 file compression) a
+    temporary decompressed copy, streamed so memory stays bounded."""
+    if bag.compression != 'file':
+        yield f
+        return
+    with tempfile.TemporaryDirectory(prefix='frf_bag_') as tmp:
+        out = Path(tmp) / f.name.removesuffix('.zstd')
+        try:
+            with zstd_module().open(f, 'rb') as src, out.open('wb') as dst:
+                shutil.copyfileobj(src, dst, 1 << 20)
+        except (OSError, ValueError, EOFError) as exc:
+            raise BagError(f'{f}: not a readable zstd-compressed file ({type(exc).__name__}: '
+                           f'{exc})') from None
+        yield out
+
+
+def _decompressed(batch: Batch) -> Batch:
+    """A batch whose messages are each zstd-compressed (rosbag2 message compression),
+    decompressed."""
+    dec = zstd_module()
+    mv = memoryview(batch.buf)
+    parts, starts, ends, pos = [], [], [], 0
+    for a, b in zip(batch.starts, batch.ends):
+        try:
+            data = dec.decompress(mv[a:b])
+        except Exception as exc:     # the zstd module raises its own ZstdError
+            raise BagError(f'{batch.channel.topic}: a message near log time '
+                           f'{batch.logs[0] * 1e-9:.6f} s is not zstd-compressed data '
+                           f'({type(exc).__name__}) although metadata.yaml says message '
+                           f'compression') from None
+        parts.append(data)
+        starts.append(pos)
+        pos += len(data)
+        ends.append(pos)
+    return Batch(batch.channel, b''.join(parts), batch.logs, starts, ends)
 
 
 def locate(path: str | Path) -> BagFiles:
@@ -64,13 +124,14 @@ def locate(path: str | Path) -> BagFiles:
         if storage != 'mcap':
             raise BagError(f'{meta_path}: storage_identifier {storage!r} is not supported; '
                            f'expected mcap')
+        compression = _compression(meta_path, info)
         rel = info.get('relative_file_paths') or []
         files = [p / str(f) for f in rel if (p / str(f)).is_file()]
         if not files:
-            files = sorted(p.glob('*.mcap'))
+            files = sorted(p.glob('*.mcap.zstd' if compression == 'file' else '*.mcap'))
         if not files:
             raise BagError(f'{meta_path}: none of the files {rel} exist in {str(p)!r}')
-        return BagFiles(p, files, info)
+        return BagFiles(p, files, info, compression)
     files = sorted(p.glob('*.mcap'))
     if not files:
         raise BagError(f'bag directory {str(p)!r} holds neither metadata.yaml nor an .mcap file')
@@ -402,12 +463,15 @@ def iter_batches(bag: BagFiles, topics: set[str] | None, progress: bool,
         bar_cm = tqdm(total=total, unit='B', unit_scale=True, desc=bag.path.name)
     with bar_cm as bar:
         for f in bag.files:
-            scanner = McapScanner(f, topics, on_bytes=bar.update if bar is not None else None)
-            try:
-                yield from scanner.batches()
-            except McapFormatError as exc:
-                raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
-            stats.append(scanner.stats)
+            with _readable(bag, f) as path:
+                scanner = McapScanner(path, topics,
+                                      on_bytes=bar.update if bar is not None else None)
+                try:
+                    for batch in scanner.batches():
+                        yield _decompressed(batch) if bag.compression == 'message' else batch
+                except McapFormatError as exc:
+                    raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
+                stats.append(scanner.stats)
 
 
 def _scan(bag: BagFiles, topics: set[str] | None, progress: bool,
@@ -444,22 +508,29 @@ def recovery_report(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str
 def read_recording(path: str | Path, *, joints: list[str] | None = None,
                    topics: BagTopics | None = None,
                    t_range: tuple[float, float] | None = None,
-                   progress: bool = False) -> tuple[Recording, tm.TimingReport]:
+                   progress: bool = False, gaps: str = 'refuse'
+                   ) -> tuple[Recording, tm.TimingReport]:
     """Read a bag into a uniformly sampled :class:`Recording` plus its :class:`TimingReport`.
 
     ``path`` is a rosbag2 directory, a directory holding .mcap files without metadata.yaml,
     or a bare .mcap file. ``joints`` selects joints by name (default: the names of the first
     joint state message, in its order). ``t_range`` = (t0, t1) in seconds of the bag clock
-    keeps only that window. Raises :class:`BagError` (one line) for every input problem.
+    keeps only that window. ``gaps``: a gap of more than
+    :data:`~frf_ident.bag.timing.MAX_GAP_SAMPLES` missing joint states is refused
+    ('refuse') or kept as missing data ('mark': NaN joint states on the grid inside it,
+    listed in the report's ``missing`` and ``rec.meta['gaps']``). Raises :class:`BagError`
+    (one line) for every input problem.
     """
     topics = topics or BagTopics()
     if joints is not None and (isinstance(joints, str) or not joints):
         raise BagError(f'{joints=}: expected a non-empty list of joint names')
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
         raise BagError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
+    if gaps not in tm.GAP_MODES:
+        raise ValueError(f'{gaps=}: expected one of {tm.GAP_MODES}')
     bag = locate(path)
     try:
-        return _read(bag, joints, topics, t_range, progress)
+        return _read(bag, joints, topics, t_range, progress, gaps)
     except BagError:
         raise
     except (struct.error, ValueError, KeyError, IndexError, TypeError, UnicodeDecodeError,
@@ -469,7 +540,7 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
 
 def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
           t_range: tuple[float, float] | None,
-          progress: bool) -> tuple[Recording, tm.TimingReport]:
+          progress: bool, gaps: str) -> tuple[Recording, tm.TimingReport]:
     expected = expected_counts(bag)
     col = Collector(bag, topics, joints, expected)
     stats = _scan(bag, set(col.expected), progress, col.feed)
@@ -485,7 +556,7 @@ def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
                        f'{JOINT_STATE}; topics present: {present or "none"})'
                        f'{_lost_hint(recovery)}')
     meta, segments, warnings = read_descriptors(col.events, bag, topics)
-    return assemble(bag, col, topics, meta, segments, warnings, recovery, t_range)
+    return assemble(bag, col, topics, meta, segments, warnings, recovery, t_range, gaps)
 
 
 def _lost_hint(recovery: dict[str, Any]) -> str:
@@ -543,7 +614,10 @@ def _window(ns: np.ndarray, t_range: tuple[float, float] | None) -> np.ndarray:
 
 def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, Any],
               segments: list[Segment], warnings: list[str], recovery: dict[str, Any],
-              t_range: tuple[float, float] | None) -> tuple[Recording, tm.TimingReport]:
+              t_range: tuple[float, float] | None, gaps: str = 'refuse'
+              ) -> tuple[Recording, tm.TimingReport]:
+    """The joint states (and commands) on a uniform grid as a Recording, with the timing
+    report; ``gaps`` as in :func:`read_recording`."""
     assert col.js.data is not None and col.js.joints is not None
     joint_names = list(col.js.joints)
     frf = meta.pop(FRF_BAG_KEY, None)
@@ -564,9 +638,12 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
     exact_t = _frf_grid(frf, st)
     exact = exact_t is not None or tm.on_exact_grid(st)
     if not exact:
-        tm.check_resampling(st, bag.name)
+        tm.check_resampling(st, bag.name, gaps)
     k_last = int(st.k[-1])
-    grid_ns = st.ns[0] + np.arange(k_last + 1) * st.dt_ns  # float ns
+    # the grid is the least-squares line through the stamps, not the first (jittered) stamp:
+    # a window of a streamed bag then lies on the grid of the whole bag up to the fit's noise
+    offset = 0.0 if exact else tm.grid_offset(st)
+    grid_ns = st.ns[0] + offset + np.arange(k_last + 1) * st.dt_ns  # float ns
     t = exact_t if exact_t is not None else grid_ns * 1e-9
     values = vals if _is_identity(st.order, vals.shape[0]) else vals[st.order]
     _check_finite(bag, topics, joint_names, values, st.ns)
@@ -576,11 +653,17 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
         x = (st.ns - st.ns[0]).astype(float)
         xg = grid_ns - st.ns[0]
         cols = np.column_stack([np.interp(xg, x, values[:, j]) for j in range(values.shape[1])])
+    missing = []
+    for a, b in zip(*tm.long_gaps(st)):        # only with gaps='mark' (else refused above)
+        cols[a:b + 1] = np.nan
+        missing.append([float(t[a]), float(t[b])])
+    if missing:
+        meta['gaps'] = missing
     report = tm.TimingReport(dt_s=st.dt_ns * 1e-9, n_samples=int(t.size), t_start_s=float(t[0]),
                              t_end_s=float(t[-1]), resampled=not exact,
                              grid='exact' if exact else 'resampled',
                              topics={topics.joint_states: st.timing}, recovery=recovery,
-                             warnings=warnings)
+                             warnings=warnings, missing=missing)
     per_sample = bool(frf and frf.get('reference') == 'per_sample' and exact_t is not None)
     reference = _reference(bag, col, topics, joint_names, frf, grid_ns, st, per_sample, report)
     excitation = _excitation(bag, col, topics, grid_ns, st, per_sample, report, t_range)
@@ -834,13 +917,11 @@ def iter_raw(path: str | Path, topics: set[str] | None = None) -> Iterator[tuple
                                                                                  bytes]]:
     """(topic, type, log_time_ns, cdr) of every readable message, streaming."""
     bag = locate(path)
-    for f in bag.files:
-        scanner = McapScanner(f, topics)
-        try:
-            for ch, log, data in scanner.messages():
-                yield ch.topic, ch.msgtype, log, bytes(data)
-        except McapFormatError as exc:
-            raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
+    stats: list[ScanStats] = []
+    for batch in iter_batches(bag, topics, False, stats):
+        ch = batch.channel
+        for log, a, b in zip(batch.logs, batch.starts, batch.ends):
+            yield ch.topic, ch.msgtype, log, bytes(batch.buf[a:b])
 
 
 __all__ = ['BagFiles', 'bag_info', 'iter_raw', 'locate', 'read_recording', 'reindex']

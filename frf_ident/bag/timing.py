@@ -10,9 +10,14 @@ all of that per topic and decides whether the joint states may be resampled:
 - sample indices k accumulate the rounded intervals ``round(diff(s) / dt)``, and the period
   ``dt`` is the least-squares slope of stamps over k; a gap is a step of k by more than one;
 - ``jitter`` = std of the intervals between consecutive (non-gap) samples relative to dt;
+- the uniform grid is s0 + k dt with s0 the least-squares intercept (:func:`grid_offset`),
+  so it does not depend on the jitter of the first stamp of a bag or of a window;
 - resampling (linear interpolation of joint states, zero-order hold of references) is
-  applied only if jitter < 5 % of dt and every gap is <= 3 missing samples, otherwise
-  :class:`~frf_ident.errors.BagError` explains which rule failed where.
+  applied only if jitter < 5 % of dt; a gap of at most 3 missing samples is interpolated, a
+  longer one is either refused (``gaps='refuse'``: :class:`~frf_ident.errors.BagError`
+  explains which rule failed where) or kept as missing data (``gaps='mark'``: the grid
+  samples inside it are NaN and :func:`long_gaps` lists them, so an estimator drops only
+  the periods or excerpts a gap touches).
 """
 from __future__ import annotations
 
@@ -25,6 +30,8 @@ from frf_ident.errors import BagError
 
 MAX_JITTER = 0.05
 MAX_GAP_SAMPLES = 3
+#: what a gap longer than MAX_GAP_SAMPLES does: 'refuse' the bag or 'mark' it missing (NaN)
+GAP_MODES = ('refuse', 'mark')
 
 
 @dataclass
@@ -78,6 +85,9 @@ class TimingReport:
     topics: dict[str, TopicTiming] = field(default_factory=dict)
     recovery: dict[str, Any] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    #: gaps longer than MAX_GAP_SAMPLES kept as missing data: [t_first, t_last] of the
+    #: missing grid samples [s], one pair per gap
+    missing: list[list[float]] = field(default_factory=list)
 
     def summary(self) -> list[str]:
         """Human-readable lines (for logs and reports)."""
@@ -90,6 +100,13 @@ class TimingReport:
             lines.append(f'recovered a damaged/unfinished bag: {r.get("bytes_lost", 0)} bytes '
                          f'lost, {r.get("chunks_lost", 0)} chunks lost, messages lost: '
                          f'{r.get("messages_lost", "unknown")}')
+        if self.missing:
+            n = sum(int(round((b - a) / self.dt_s)) + 1 for a, b in self.missing)
+            where = ', '.join(f'{a:.3f}..{b:.3f} s' for a, b in self.missing[:6])
+            more = f' and {len(self.missing) - 6} more' if len(self.missing) > 6 else ''
+            lines.append(f'{len(self.missing)} gaps longer than {MAX_GAP_SAMPLES} samples kept '
+                         f'as missing data ({n} samples: {where}{more}); the periods and '
+                         f'excerpts they touch are dropped')
         lines += [f'warning: {w}' for w in self.warnings]
         return lines
 
@@ -133,7 +150,19 @@ def merge_reports(reports: list[TimingReport], recovery: dict[str, Any] | None =
                         t_end_s=max(r.t_end_s for r in reports),
                         resampled=any(r.resampled for r in reports),
                         grid='exact' if all(r.grid == 'exact' for r in reports) else 'resampled',
-                        topics=topics, recovery=recovery or {}, warnings=warnings)
+                        topics=topics, recovery=recovery or {}, warnings=warnings,
+                        missing=_merge_spans([g for r in reports for g in r.missing]))
+
+
+def _merge_spans(spans: list[list[float]]) -> list[list[float]]:
+    """Sorted spans, the same gap seen by overlapping windows once."""
+    out: list[list[float]] = []
+    for a, b in sorted(spans):
+        if out and a <= out[-1][1]:
+            out[-1][1] = max(out[-1][1], b)
+        else:
+            out.append([a, b])
+    return out
 
 
 @dataclass
@@ -220,18 +249,37 @@ def _measure(tt: TopicTiming, s: np.ndarray, k: np.ndarray, dt: float) -> None:
     tt.jitter = max(tt.jitter, float(np.count_nonzero(dk == 0)) / max(dk.size, 1))
 
 
-def check_resampling(st: Stamps, where: str) -> None:
-    """Raise BagError when the stamps of ``st`` violate the resampling rules."""
+def check_resampling(st: Stamps, where: str, gaps: str = 'refuse') -> None:
+    """Raise BagError when the stamps of ``st`` violate the resampling rules (with
+    ``gaps='mark'`` long gaps are allowed: :func:`long_gaps`)."""
+    if gaps not in GAP_MODES:
+        raise ValueError(f'{gaps=}: expected one of {GAP_MODES}')
     tt = st.timing
     if tt.jitter >= MAX_JITTER:
         raise BagError(f'stamp jitter of {100 * tt.jitter:.1f} % of dt ({tt.dt_s * 1e3:.3f} ms) '
                        f'in {tt.topic} of {where} exceeds {100 * MAX_JITTER:.0f} %; refusing to '
                        f'resample')
-    if tt.longest_gap_samples > MAX_GAP_SAMPLES:
+    if gaps == 'refuse' and tt.longest_gap_samples > MAX_GAP_SAMPLES:
         n = tt.longest_gap_samples
         raise BagError(f'gap of {n * tt.dt_s:.3f} s ({n} samples) at t={tt.longest_gap_at_s:.3f} '
                        f's in {tt.topic} of {where} exceeds {MAX_GAP_SAMPLES} samples; refusing '
                        f'to resample (pass t_range to read around it)')
+
+
+def grid_offset(st: Stamps) -> float:
+    """Intercept [ns] of the least-squares grid s = ns[0] + offset + k dt through the stamps
+    (0 for stamps exactly on their grid): the uniform grid that jitter does not move."""
+    if st.ns.size < 2:
+        return 0.0
+    return float(np.mean((st.ns - st.ns[0]).astype(float) - st.k * st.dt_ns))
+
+
+def long_gaps(st: Stamps) -> tuple[np.ndarray, np.ndarray]:
+    """Grid index ranges [first, last] of the samples missing in gaps longer than
+    MAX_GAP_SAMPLES (two int arrays, one entry per gap)."""
+    dk = np.diff(st.k)
+    i = np.flatnonzero(dk > MAX_GAP_SAMPLES + 1)
+    return st.k[i] + 1, st.k[i + 1] - 1
 
 
 def on_exact_grid(st: Stamps) -> bool:

@@ -23,6 +23,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from frf_ident.core.estimation.detected import MIN_ADVANCE_S
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import BagError
 
@@ -87,8 +88,8 @@ class WindowReader:
     ``windows`` are (start_ns, end_ns) in the bag's sample time (header stamps when valid);
     ``block_s`` instead cuts consecutive blocks from the first sample (within ``span`` =
     (start_ns, end_ns) when given). ``joints`` selects joints as in :func:`read_recording`;
-    ``experiment`` is the first pass (:func:`read_experiment`, run here when not given).
-    After the iteration :attr:`stats` holds the counts and the recovery summary of damaged
+    ``experiment`` is the first pass (:func:`read_experiment`, run here when not given);
+    ``gaps`` as in :func:`read_recording`. After the iteration :attr:`stats` holds the counts and the recovery summary of damaged
     files.
     """
 
@@ -97,7 +98,7 @@ class WindowReader:
                  topics: BagTopics | None = None, experiment: ExperimentIndex | None = None,
                  span: tuple[int, int] | None = None,
                  margin_s: float = 1.0, drain_rows: int = 1 << 16,
-                 progress: bool = False) -> None:
+                 progress: bool = False, gaps: str = 'refuse') -> None:
         if (windows is None) == (block_s is None):
             raise ValueError('give exactly one of windows= or block_s=')
         if block_s is not None and not block_s > 0:
@@ -114,6 +115,9 @@ class WindowReader:
         self.drain_rows = int(drain_rows)
         self.span = span
         self.progress = progress
+        if gaps not in tm.GAP_MODES:
+            raise ValueError(f'{gaps=}: expected one of {tm.GAP_MODES}')
+        self.gaps = gaps
         self.stats = StreamStats()
         self._next = 0
         self._origin: int | None = None
@@ -124,12 +128,14 @@ class WindowReader:
     def continue_from(self, t_s: float) -> None:
         """Block mode: start the next block at ``t_s`` [s] (e.g. where the last whole
         multisine period of the current block ends) instead of right after it; ignored
-        unless it lies inside the block just read (the scan only moves forward)."""
+        unless it lies more than ``MIN_ADVANCE_S`` inside the block just read (the scan only
+        moves forward; the in-memory blocks follow the same rule)."""
         if self.block_ns is None or not self._starts:
             return
         ns = int(round(t_s * 1e9))
         lo = self._starts[-1]
-        if lo + self.margin_ns // 2 < ns <= lo + self.block_ns and len(self._starts) == self._next:
+        if lo + int(MIN_ADVANCE_S * 1e9) < ns <= lo + self.block_ns and \
+                len(self._starts) == self._next:
             self._resume = ns
 
     # ------------------------------------------------------------------ windows
@@ -231,7 +237,7 @@ class WindowReader:
         segs = [s for s in ex.segments
                 if s.t_end * 1e9 >= lo and s.t_start * 1e9 <= hi]
         rec, report = assemble(self.bag, view, self.topics, copy.deepcopy(ex.meta), segs,
-                                list(ex.warnings), {}, None)
+                                list(ex.warnings), {}, None, self.gaps)
         self.stats.windows += 1
         return rec, report
 

@@ -10,6 +10,9 @@ stretch of data, so an estimator can apply them segment by segment or window by 
 - :func:`check_band` — every analysed frequency below the Nyquist frequency fs / 2.
 - :func:`check_periods` — enough whole steady-state periods of a multisine.
 - :func:`check_covers` — a segment lies inside the recorded time span.
+- :func:`missing_rows` — the samples a gap removed (NaN rows of a recording read with
+  ``gaps='mark'``); :func:`check_remaining` — enough periods or lines are left after
+  dropping the ones such gaps touch.
 
 Clipping thresholds (see :func:`clipping`): a side of a channel is clipped when samples equal
 to its extreme value (within ``1e-9`` of the channel's range) come in runs of at least
@@ -30,7 +33,8 @@ import numpy as np
 from frf_ident.errors import EstimationError
 
 __all__ = ['MIN_FRACTION', 'MIN_RUN', 'PILEUP_BAND', 'Clipping', 'check_band',
-           'check_covers', 'check_not_clipped', 'check_periods', 'clipping']
+           'check_covers', 'check_not_clipped', 'check_periods', 'check_remaining', 'clipping',
+           'missing_rows']
 
 MIN_RUN = 5            # consecutive samples at the extreme value
 MIN_FRACTION = 1e-3    # of all samples, in such runs
@@ -183,6 +187,34 @@ def check_periods(n_periods: int, *, need: int = 2, where: str, hint: str = '') 
         raise EstimationError(f'{where}: {n_periods} whole steady-state period'
                               f'{"" if n_periods == 1 else "s"}; expected at least {need=}'
                               f'{f" — {hint}" if hint else ""}')
+
+
+def missing_rows(*series: np.ndarray) -> np.ndarray:
+    """(N,) True where a sample is missing: NaN in any column of the (N, n) ``series`` that
+    holds data elsewhere (a column that is NaN throughout is an interface the robot does
+    not publish, not a gap)."""
+    out = np.zeros(np.asarray(series[0]).shape[0], dtype=bool)
+    for x in series:
+        bad = ~np.isfinite(np.asarray(x, dtype=float))
+        if bad.ndim == 1:
+            bad = bad[:, None]
+        present = ~np.all(bad, axis=0)
+        out |= np.any(bad[:, present], axis=1)
+    return out
+
+
+def check_remaining(n_used: int, n_dropped: int, *, need: int, what: str, where: str,
+                    dropped_at: Sequence[tuple[float, float]] = (), hint: str = '') -> None:
+    """Refuse when fewer than ``need`` ``what`` (e.g. 'periods') remain after dropping
+    ``n_dropped`` that gaps touched; the message says when the first dropped ones were."""
+    if n_used >= need:
+        return
+    at = ', '.join(f'{a:.3f}..{b:.3f} s' for a, b in list(dropped_at)[:4])
+    more = ' ...' if len(dropped_at) > 4 else ''
+    raise EstimationError(f'{where}: {n_used} {what} without missing samples remain of '
+                          f'{n_used + n_dropped} ({n_dropped} dropped for gaps'
+                          f'{f" at {at}{more}" if at else ""}); expected at least {need}'
+                          f'{f" — {hint}" if hint else ""}')
 
 
 def check_covers(t_first: float, t_last: float, t_start: float, t_end: float, *,

@@ -20,6 +20,7 @@ from frf_ident.core.estimation.spectra import (BLAResult, best_linear_approximat
                                        best_linear_approximation_reference, chirp_spectra,
                                        detection_levels_from_spectra, detection_line_spectra,
                                        frf_from_reference, frf_from_spectra, periodic_spectra)
+from frf_ident.core.estimation.checks import EXPERIMENT, check_remaining, missing_rows
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
@@ -51,11 +52,15 @@ def _disturbance_at(cv: dict[str, np.ndarray], key: str, q: np.ndarray,
         return x
     out = np.empty_like(x)
     for i in range(q.shape[1]):
-        qc = cv['q'][:, i]
-        if np.all(np.diff(qc) > 0):
-            out[:, i] = np.interp(q[:, i], qc, cv[key][:, i])
-        elif np.all(np.diff(qc) < 0):
-            out[:, i] = np.interp(q[::-1, i][::-1], qc[::-1], cv[key][::-1, i])
+        ok = np.flatnonzero(np.isfinite(cv['q'][:, i]) & np.isfinite(cv[key][:, i]))
+        qc, vc = cv['q'][ok, i], cv[key][ok, i]
+        if qc.size >= 2 and (np.all(np.diff(qc) > 0) or np.all(np.diff(qc) < 0)):
+            rev = qc[0] > qc[-1]
+            qs, vs, idx = (qc[::-1], vc[::-1], ok[::-1]) if rev else (qc, vc, ok)
+            out[:, i] = np.interp(q[:, i], qs, vs)
+            # a position the run passed during a gap has no value to subtract
+            k = np.clip(np.searchsorted(qs, q[:, i]), 1, qs.size - 1)
+            out[np.abs(idx[k] - idx[k - 1]) > 1, i] = np.nan
         else:
             out[:, i] = x[:, i]          # not monotonic: fall back to time alignment
     return out
@@ -102,30 +107,73 @@ class MultisineSpectra:
         shape = (self.n_q, self.n_per, len(rec.joint_names))
 
         def lines(x: np.ndarray) -> np.ndarray:          # (n_q, F, n)
-            return periodic_spectra(x[steady].reshape(shape), self.bins, axis=1)
-        out = {k: lines(a[k][:need]) for k in ('u', 'y', 'r')}
+            return periodic_spectra(np.nan_to_num(x[steady]).reshape(shape), self.bins, axis=1)
+        series = {k: a[k][:need] for k in ('u', 'y', 'r')}
         det = {'y': a['y'][:need]}
         if self.cv is not None:
             for k in ('u', 'y'):
-                d = _disturbance_at(self.cv, k, a['q'][:need], self.align)
-                out['d' + k] = lines(d)
+                series['d' + k] = _disturbance_at(self.cv, k, a['q'][:need], self.align)
                 if k == 'y':
-                    det['dy'] = d
+                    det['dy'] = series['dy']
+        # a period with a missing sample in any series is dropped (NaN rows: gaps); the
+        # others are transformed with those samples zeroed, then never used
+        gone = missing_rows(*(x[steady] for x in series.values()))
+        out = {k: lines(x) for k, x in series.items()}
+        out['valid'] = ~gone.reshape(self.n_q, self.n_per).any(axis=1)
+        t_first = seg.t_start + self.n_tr * self.n_per / rec.fs
+        out['t'] = t_first + np.arange(self.n_q + 1) * self.n_per / rec.fs
         if seg.info['experiment'] == 0:                 # detection lines (Sec. 4.3 remark)
             for k, x in det.items():
                 _, out['det_' + k] = detection_line_spectra(
-                    x[steady].reshape(shape), int(self.bins[-1]), axis=1)
+                    np.nan_to_num(x[steady]).reshape(shape), int(self.bins[-1]), axis=1)
         self.spec[(seg.info['realisation'], seg.info['experiment'])] = out
 
-    def _stack(self, key: str, compensate: bool) -> np.ndarray:
+    def _check_complete(self) -> tuple[int, int]:
         n_p = 1 + max(p for p, _ in self.spec)
         n_ex = 1 + max(m for _, m in self.spec)
         missing = [(p, m) for p in range(n_p) for m in range(n_ex) if (p, m) not in self.spec]
         if missing:
             raise EstimationError(f'multisine segments incomplete: expected {n_p} realisations '
                                   f'x {n_ex} experiments, missing (p, m) = {missing[:4]}')
-        rows = []
+        return n_p, n_ex
+
+    def used_periods(self) -> dict[int, np.ndarray]:
+        """Realisation p -> indices of its periods without missing samples in any of its
+        experiments (period q of a MIMO realisation is one estimate made of the n_ex
+        experiments' period q, so a gap in one removes it); realisations left without a
+        period are absent."""
+        n_p, n_ex = self._check_complete()
+        out = {}
         for p in range(n_p):
+            ok = np.all([self.spec[(p, m)]['valid'] for m in range(n_ex)], axis=0)
+            if np.any(ok):
+                out[p] = np.flatnonzero(ok)
+        return out
+
+    def dropped(self) -> dict[str, Any]:
+        """What gaps removed: the count and, per dropped period, realisation, period index and
+        times [s] of the segment whose samples were missing."""
+        n_p, n_ex = self._check_complete()
+        used = self.used_periods()
+        items = []
+        for p in range(n_p):
+            for q in range(self.n_q):
+                if p in used and q in used[p]:
+                    continue
+                for m in range(n_ex):
+                    s = self.spec[(p, m)]
+                    if not s['valid'][q]:
+                        items.append({'realisation': p, 'experiment': m, 'period': q,
+                                      't_start': float(s['t'][q]),
+                                      't_end': float(s['t'][q + 1])})
+        return {'periods': n_p * self.n_q - sum(v.size for v in used.values()),
+                'realisations': [p for p in range(n_p) if p not in used], 'items': items}
+
+    def _stack(self, key: str, compensate: bool) -> list[np.ndarray]:
+        """One (n_q_p, F, n, n_ex) array per realisation that kept periods."""
+        _, n_ex = self._check_complete()
+        rows = []
+        for p, qs in self.used_periods().items():
             row = []
             for m in range(n_ex):
                 s = self.spec[(p, m)]
@@ -135,39 +183,49 @@ class MultisineSpectra:
                         raise EstimationError('compensation requested but the recording has '
                                               'no constant-velocity run')
                     x = x - s['d' + key]
-                row.append(x)
-            rows.append(row)
-        return np.array(rows)                          # (n_p, n_ex, n_q, F, n)
+                row.append(x[qs])
+            rows.append(np.stack(row, axis=-1))          # (n_q_p, F, n, n_ex)
+        return rows
 
     def frf(self, *, compensate: bool = True, method: str = 'reference'
             ) -> tuple[FrequencyResponse, BLAResult]:
         """Multisine best linear approximation (eq. 14) of the gathered segments.
 
         method 'reference': P_p = (sum_q Y R^H)(sum_q U R^H)^-1 per realisation, averaged
-        over p; 'plain': P[p,q] = Y U^+ (eq. 7) per period, averaged over p and q.
+        over p; 'plain': P[p,q] = Y U^+ (eq. 7) per period, averaged over p and q. Only the
+        periods without missing samples are used (:meth:`used_periods`); fewer than two in
+        all is refused.
         """
         if not self.spec:
             raise EstimationError('recording has no multisine segments')
-        spec = {k: np.moveaxis(self._stack(k, compensate), 1, -1)
-                for k in ('y', 'u', 'r')}                 # (p, q, F, n, n_ex)
+        used = self.used_periods()
+        drop = self.dropped()
+        n_used = sum(v.size for v in used.values())
+        check_remaining(n_used, drop['periods'], need=2, what='multisine periods',
+                        where=f'{EXPERIMENT} multisine',
+                        dropped_at=[(d['t_start'], d['t_end']) for d in drop['items']],
+                        hint='record again or more realisations')
+        spec = {k: self._stack(k, compensate) for k in ('y', 'u', 'r')}
         if method == 'reference':
             bla = best_linear_approximation_reference(spec['y'], spec['u'], spec['r'])
         elif method == 'plain':
             bla = best_linear_approximation(spec['y'], spec['u'])
         else:
             raise ValueError(f"{method=} must be 'reference' or 'plain'")
-        n_p = spec['u'].shape[0]
-        first = [self.spec[(p, 0)] for p in range(n_p)]
-        Yd = np.array([s['det_y'] - s['det_dy'] if compensate else s['det_y'] for s in first])
+        first = [(self.spec[(p, 0)], qs) for p, qs in used.items()]
+        Yd = [(s['det_y'] - s['det_dy'] if compensate else s['det_y'])[qs] for s, qs in first]
         det = detection_levels_from_spectra(
-            Yd, np.arange(1, Yd.shape[2] + 1), self.bins)
+            Yd, np.arange(1, Yd[0].shape[1] + 1), self.bins)
         ins, outs = _names(self.joint_names)
         f0 = self.info['design_params']['f0']
         frf = FrequencyResponse(self.bins * f0, bla.response, ins, outs, bla.noise_variance,
                                 bla.total_variance, {
                                     'design': 'multisine', 'method': method,
                                     'compensated': compensate, 'alignment': self.align,
-                                    'n_p': int(n_p), 'n_q': int(self.n_q),
+                                    'n_p': len(used), 'n_q': int(self.n_q),
+                                    'periods_used': {int(p): int(v.size)
+                                                     for p, v in used.items()},
+                                    'dropped': drop,
                                     'cond_max': float(np.max(bla.cond)),
                                     'detection_lines': det.to_dict()})
         return frf, bla
@@ -224,6 +282,15 @@ class ChirpSpectra:
         exps = self.spec[it]
         Y, U, R = (np.stack([exps[m][k] for m in sorted(exps)], axis=-1)
                    for k in ('y', 'u', 'r'))
+        freqs = np.asarray(self.info[it]['freq_hz'])
+        # an analysis frequency whose excerpt held a missing sample (NaN) is dropped
+        ok = np.all(np.isfinite(Y), axis=(1, 2)) & np.all(np.isfinite(U), axis=(1, 2)) \
+            & np.all(np.isfinite(R), axis=(1, 2))
+        check_remaining(int(ok.sum()), int((~ok).sum()), need=1, what='chirp analysis lines',
+                        where=f'{EXPERIMENT} chirp iteration {it}',
+                        hint='the sweep must be recorded without gaps somewhere')
+        Y, U, R = Y[ok], U[ok], R[ok]
+        dropped = {'lines': int((~ok).sum()), 'freq_hz': freqs[~ok].tolist()}
         ins, outs = _names(self.joint_names)
         if path == 'r->u':
             P, cond = frf_from_spectra(U, R)
@@ -235,9 +302,9 @@ class ChirpSpectra:
             P, cond = frf_from_spectra(Y, U)
         else:
             raise ValueError(f"{method=} must be 'reference' or 'plain'")
-        return FrequencyResponse(np.asarray(self.info[it]['freq_hz']), P, ins, outs, meta={
+        return FrequencyResponse(freqs[ok], P, ins, outs, meta={
             'design': 'chirp', 'iteration': it, 'method': method, 'path': path,
-            'cond_max': float(np.max(cond))})
+            'cond_max': float(np.max(cond)), 'dropped': dropped})
 
 
 def chirp_iterations(rec: Recording) -> list[int]:
@@ -315,20 +382,23 @@ class SegmentEstimator:
         return out
 
 
-def estimate_recording(rec: Recording, *, options=None) -> dict[str, FrequencyResponse]:
+def estimate_recording(rec: Recording, *, options=None, block_s: float | None = None
+                       ) -> dict[str, FrequencyResponse]:
     """Every estimate the recording supports, keyed by name: 'multisine' (reference-based,
     compensated when a constant-velocity run exists), 'multisine_plain',
     'multisine_uncompensated', 'chirp', 'chirp_reference'; without descriptors the
     detected ones (:func:`estimate_detected`). The data are checked first
     (:func:`frf_ident.core.estimation.checks.check_descriptor_recording`: band, periods, clipping).
     ``options`` (:class:`frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in a
-    recording without descriptors; a recording with descriptors refuses them."""
+    recording without descriptors; a recording with descriptors refuses them. ``block_s``:
+    block length of detection (default
+    :data:`frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`)."""
     check_recording(rec, options)
     est = SegmentEstimator(rec.segments)
     est.add_window(rec)
     out = est.results()
     if not out:
-        out = estimate_detected(rec, options)
+        out = estimate_detected(rec, options, block_s=block_s)
     return out
 
 
@@ -342,12 +412,15 @@ def check_recording(rec: Recording, options=None) -> None:
         check_descriptor_recording(rec)
 
 
-def estimate_detected(rec: Recording, options=None) -> dict[str, FrequencyResponse]:
+def estimate_detected(rec: Recording, options=None, *, block_s: float | None = None
+                      ) -> dict[str, FrequencyResponse]:
     """Estimates of a recording without descriptors: the excitation is detected per joint
-    (:mod:`frf_ident.core.estimation.detected`; ``options`` replace detection where given) and checked;
-    one entry 'detected/<joint>' per excited input, the detection sentences in each
-    estimate's meta['detected']."""
-    from frf_ident.core.estimation.detected import DetectedEstimator
-    est = DetectedEstimator()
-    est.add_detected(rec, options)
-    return est.results()
+    in blocks of ``block_s`` seconds, as a streamed bag is
+    (:func:`frf_ident.core.estimation.detected.estimate_in_blocks`; ``options`` replace
+    detection where given) and checked; one entry 'detected/<joint>' per excited input, the
+    detection sentences in each estimate's meta['detected']."""
+    from frf_ident.core.estimation.detected import (DEFAULT_BLOCK_S, RecordingBlocks,
+                                                    estimate_in_blocks)
+    block_s = DEFAULT_BLOCK_S if block_s is None else block_s
+    blocks = RecordingBlocks(rec, block_s)
+    return estimate_in_blocks(blocks, options, resume=blocks.continue_from, block_s=block_s)

@@ -9,19 +9,30 @@ inputs that share lines, so those are refused with the reason).
 What detection would find can also be given (:class:`ExcitationOptions`, the options of
 `frf-ident estimate`): the excited joint, a multisine period (and the band of its lines), or a
 chirp's band and sweep times; the given parts replace the respective detection.
+
+Missing samples (NaN rows of a recording read with ``gaps='mark'``) cost only what they
+touch: a multisine period holding one is dropped, as is a chirp analysis frequency whose
+excerpt holds one; the estimate's meta lists what was dropped, and the estimate is refused
+only when fewer than two periods (or no line) remain.
+
+A recording is estimated block by block (:func:`estimate_in_blocks`, blocks of
+``DEFAULT_BLOCK_S``), in memory (:class:`RecordingBlocks`) and when a bag is streamed alike,
+so both take the same decisions whatever the size of the bag.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
-from frf_ident.core.estimation.checks import (JOINT_STATES, check_band, check_covers, check_not_clipped,
-                                   check_periods)
+from frf_ident.core.estimation.checks import (JOINT_STATES, check_band, check_covers,
+                                              check_not_clipped, check_periods, check_remaining,
+                                              missing_rows)
 from frf_ident.core.excitation.chirp import ChirpDesign
-from frf_ident.core.excitation.detect import (ChirpDetection, MultisineDetection, detect_excitation,
-                                   multisine_at_period)
+from frf_ident.core.excitation.detect import (ChirpDetection, MultisineDetection,
+                                              detect_excitation, excitation_source,
+                                              multisine_at_period)
 from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
                                        periodic_spectra)
 from frf_ident.core.estimation.frd import FrequencyResponse
@@ -29,12 +40,20 @@ from frf_ident.core.excitation.multisine import reference_frequency_set
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
 
+__all__ = ['DEFAULT_BLOCK_S', 'MIN_ADVANCE_S', 'DetectedEstimator', 'ExcitationOptions',
+           'RecordingBlocks', 'check_detected_segment', 'detect_segments', 'detected_frf',
+           'estimate_in_blocks']
 
-def _source(rec: Recording) -> tuple[np.ndarray, str]:
-    ref = rec.reference
-    if ref is not None and np.all(np.isfinite(ref)) and np.any(np.std(ref, axis=0) > 0):
-        return ref, 'velocity reference'
-    return rec.effort, 'torque'
+#: block length [s] in which recordings without descriptors are detected and estimated (in
+#: memory and streamed alike): a few multisine periods or a whole chirp must fit in one block
+DEFAULT_BLOCK_S = 300.0
+
+#: a block that used data up to t starts the next block there (no period lost at the
+#: boundary), unless t is less than this far [s] into the block (the scan must move on)
+MIN_ADVANCE_S = 0.5
+
+#: fewest multisine periods an estimate needs (mean and noise variance over periods)
+MIN_PERIODS = 2
 
 
 @dataclass(frozen=True)
@@ -156,9 +175,11 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
     one sentence per detection."""
     opts = options or ExcitationOptions()
     opts.check(rec)
-    x, source = _source(rec)
+    x, source = excitation_source(rec.reference, rec.effort)
     fs = rec.fs
-    level = np.std(x, axis=0)
+    present = np.isfinite(x)
+    level = np.array([np.std(x[present[:, j], j]) if np.any(present[:, j]) else 0.0
+                      for j in range(x.shape[1])])
     found: list[tuple[int, MultisineDetection | ChirpDetection]] = []
     notes: list[str] = []
     order = ([rec.joint_names.index(opts.input)] if opts.input is not None
@@ -189,7 +210,7 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
         if isinstance(det, MultisineDetection):
             i0 = det.start
             info = {'design': 'detected_multisine', 'input': j, 'period_samples':
-                    det.period_samples, 'periods': det.n_periods,
+                    det.period_samples, 'periods': det.n_periods, 'start': int(i0),
                     'harmonics': np.asarray(det.harmonics).tolist(), 'f0': det.f0}
             t1 = rec.t[0] + (i0 + det.n_periods * det.period_samples) / fs
         else:
@@ -223,12 +244,13 @@ def check_detected_segment(rec: Recording, seg: Segment) -> None:
 def _strongest_channel(x: np.ndarray, det: MultisineDetection | ChirpDetection,
                        fs: float) -> int:
     """The channel with the most power at the detected excitation (lines or sweep)."""
+    # missing samples (NaN in every channel alike) count as zero in this comparison only
     if isinstance(det, MultisineDetection):
-        seg = x[det.start:det.start + det.period_samples]
+        seg = np.nan_to_num(x[det.start:det.start + det.period_samples])
         p = np.abs(periodic_spectra(seg, np.asarray(det.harmonics), axis=0)) ** 2
         return int(np.argmax(p.sum(axis=0)))
     i0, i1 = int(det.t0 * fs), int(det.t1 * fs)
-    return int(np.argmax(np.std(x[i0:i1], axis=0)))
+    return int(np.argmax(np.std(np.nan_to_num(x[i0:i1]), axis=0)))
 
 
 def _check_single_input(u_lines: np.ndarray, j: int, name: str) -> None:
@@ -283,17 +305,21 @@ class DetectedEstimator:
             # and the periods that block used are not used again
             going_on = e is not None and seg.t_start - e['t_end'] < 1.5 * info[
                 'period_samples'] / rec.fs
-            bins, U, Y, skip = _multisine_periods(rec, seg, used_until=e['t_end'] if going_on
-                                                  else None)
+            bins, U, Y, skip, dropped = _multisine_periods(
+                rec, seg, used_until=e['t_end'] if going_on else None)
+            if e is None:
+                e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
+                                         'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
+                                         'm2': 0.0, 'skip': 0, 'blocks': 0, 'dropped': [],
+                                         'period_s': info['period_samples'] / rec.fs}
+            e['t_end'] = max(seg.t_end, e.get('t_end', seg.t_end))
+            e['dropped'].extend(d for d in dropped if d not in e['dropped'])
+            e['skip'] += skip
+            e['blocks'] += 1
             if U.shape[0] == 0:
                 return
             _check_single_input(U.mean(axis=0)[_strong_lines(U[:, :, j])], j,
                                 rec.joint_names[j])
-            if e is None:
-                e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
-                                         'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
-                                         'm2': 0.0, 'skip': 0, 'blocks': 0}
-            e['t_end'] = seg.t_end
             Uj = U[:, :, j]
             e['syu'] = e['syu'] + np.einsum('qfo,qf->fo', Y, np.conj(Uj))
             e['suu'] = e['suu'] + np.sum(np.abs(Uj) ** 2, axis=0)
@@ -302,20 +328,22 @@ class DetectedEstimator:
                 d = Pq - e['mean']
                 e['mean'] = e['mean'] + d / e['n']
                 e['m2'] = e['m2'] + np.abs(d * np.conj(Pq - e['mean']))
-            e['skip'] += skip
-            e['blocks'] += 1
             return
         freqs, U, Y = _chirp_lines(rec, seg)
-        _check_single_input(U, j, rec.joint_names[j])
+        ok = np.isfinite(U[:, j]) & np.all(np.isfinite(Y), axis=1)
+        if np.any(ok):
+            _check_single_input(U[ok], j, rec.joint_names[j])
         key = (j, 'chirp', round(info['f_low'], 1), round(info['f_high'], 1))
         e = self.entries.setdefault(key, {'names': names, 'freqs': freqs, 'syu': 0.0,
-                                          'suu': 0.0, 'blocks': 0})
+                                          'suu': 0.0, 'cnt': 0, 'blocks': 0})
         if e['freqs'].shape != freqs.shape:
             key = key + (len(self.entries),)
             e = self.entries.setdefault(key, {'names': names, 'freqs': freqs, 'syu': 0.0,
-                                              'suu': 0.0, 'blocks': 0})
-        e['syu'] = e['syu'] + Y * np.conj(U[:, j:j + 1])
-        e['suu'] = e['suu'] + np.abs(U[:, j:j + 1]) ** 2
+                                              'suu': 0.0, 'cnt': 0, 'blocks': 0})
+        Uj = np.where(ok[:, None], U[:, j:j + 1], 0.0)
+        e['syu'] = e['syu'] + np.where(ok[:, None], Y, 0.0) * np.conj(Uj)
+        e['suu'] = e['suu'] + np.abs(Uj) ** 2
+        e['cnt'] = e['cnt'] + ok
         e['blocks'] += 1
 
     def results(self) -> dict[str, FrequencyResponse]:
@@ -323,6 +351,8 @@ class DetectedEstimator:
         (a second excitation of the same joint: 'detected/<joint>#2'), the detection
         sentences in meta['detected']."""
         out: dict[str, FrequencyResponse] = {}
+        for e in self.entries.values():
+            _check_enough(e)
         for e in self.entries.values():
             name = 'detected/' + e['names'][0].split('/', 1)[1]
             n = sum(1 for k in out if k == name or k.startswith(name + '#'))
@@ -335,9 +365,12 @@ class DetectedEstimator:
     def _response(e: dict[str, Any]) -> FrequencyResponse:
         name_in, names_out = e['names']
         if 'freqs' in e:
-            P = (e['syu'] / e['suu']).T[:, None, :]
-            return FrequencyResponse(e['freqs'], P, [name_in], names_out, meta={
-                'design': 'detected_chirp', 'blocks': e['blocks']})
+            ok = np.asarray(e['cnt']) > 0
+            P = (e['syu'][ok] / e['suu'][ok]).T[:, None, :]
+            lost = e['freqs'][~ok]
+            return FrequencyResponse(e['freqs'][ok], P, [name_in], names_out, meta={
+                'design': 'detected_chirp', 'blocks': e['blocks'],
+                'dropped': {'lines': int(lost.size), 'freq_hz': lost.tolist()}})
         keep = _strong_lines(e['suu'][None, :])
         P = (e['syu'][keep] / e['suu'][keep, None]).T[:, None, :]
         var = None
@@ -345,34 +378,61 @@ class DetectedEstimator:
             var = (e['m2'][keep] / (e['n'] - 1) / e['n']).T[:, None, :]
         return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
             'design': 'detected_multisine', 'periods': e['n'],
-            'transient_periods': e['skip'], 'blocks': e['blocks']})
+            'transient_periods': e['skip'], 'blocks': e['blocks'],
+            'dropped': {'periods': len(e['dropped']), 'times': [list(d) for d in e['dropped']]}})
+
+
+def _check_enough(e: dict[str, Any]) -> None:
+    """Refuse an excitation of which gaps left too little (one line, how much is needed)."""
+    name = e['names'][0].split('/', 1)[1]
+    if 'freqs' in e:
+        n_ok = int(np.count_nonzero(np.asarray(e['cnt']) > 0))
+        check_remaining(n_ok, e['freqs'].size - n_ok, need=1, what='chirp analysis lines',
+                        where=f'detected chirp of {name}',
+                        hint='the sweep must be recorded without gaps somewhere')
+        return
+    check_remaining(e['n'], len(e['dropped']), need=MIN_PERIODS,
+                    what='multisine periods', where=f'detected multisine of {name}',
+                    dropped_at=e['dropped'], hint='record more periods')
 
 
 def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None = None
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """Excited bins and the period spectra U, Y (n_q, F, n) of a detected multisine.
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int,
+                                  list[tuple[float, float]]]:
+    """Excited bins, the period spectra U, Y (n_q, F, n) of a detected multisine's periods
+    without missing samples, the transient periods skipped and the (t_start, t_end) of the
+    periods dropped for missing samples.
 
     The first period is skipped as start-up transient when there are at least three, unless
     the excitation was already running (``used_until``: the end [s] of the periods an
     earlier block used; periods starting before it are skipped instead, so overlapping
-    blocks never count a period twice)."""
+    blocks never count a period twice). Only whole periods inside the data are used."""
     info = seg.info
-    sl = rec.slice(seg.t_start, seg.t_end)
-    u, y = rec.effort[sl], rec.velocity[sl]
-    n_per, n_q = info['period_samples'], info['periods']
+    i0 = int(info.get('start', rec.index_of(seg.t_start)))
+    n_per = int(info['period_samples'])
+    n_q = max(0, min(int(info['periods']), (rec.t.size - i0) // n_per))
+    starts = rec.t[0] + (i0 + np.arange(n_q) * n_per) / rec.fs
     if used_until is None:
         skip = 1 if n_q >= 3 else 0
     else:
-        starts = seg.t_start + np.arange(n_q) * n_per / rec.fs
         skip = int(np.count_nonzero(starts < used_until - 0.5 / rec.fs))
-    if skip >= n_q:
-        return np.asarray(info['harmonics']), np.empty((0, 0, 0)), np.empty((0, 0, 0)), skip
-    n_q -= skip
-    x0 = skip * n_per
     bins = np.asarray(info['harmonics'])
-    U = periodic_spectra(u[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
-    Y = periodic_spectra(y[x0:x0 + n_q * n_per].reshape(n_q, n_per, -1), bins, axis=1)
-    return bins, U, Y, skip
+    j = int(info['input'])
+    gone = missing_rows(rec.effort[:, j], rec.velocity)
+    use, dropped = [], []
+    for q in range(skip, n_q):
+        a = i0 + q * n_per
+        if np.any(gone[a:a + n_per]):
+            dropped.append((float(starts[q]), float(starts[q] + n_per / rec.fs)))
+        else:
+            use.append(a)
+    if not use:
+        empty = np.empty((0, bins.size, rec.velocity.shape[1]), dtype=complex)
+        return bins, empty, empty, skip, dropped
+    idx = np.asarray(use)[:, None] + np.arange(n_per)         # (n_used, n_per)
+    U = periodic_spectra(rec.effort[idx], bins, axis=1)
+    Y = periodic_spectra(rec.velocity[idx], bins, axis=1)
+    return bins, U, Y, skip, dropped
 
 
 def _strong_lines(uj: np.ndarray) -> np.ndarray:
@@ -403,3 +463,119 @@ def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
     frf = next(iter(est.results().values()))
     frf.meta.pop('detected')
     return frf
+
+
+class RecordingBlocks:
+    """The blocks of an in-memory recording, cut as a streamed bag is cut
+    (:class:`frf_ident.bag.windows.WindowReader` with ``block_s``): from the first sample,
+    ``block_s`` long, the next one from where the last used data ended
+    (:meth:`continue_from`) or else right after the block.
+
+    Parameters
+    ----------
+    rec : the recording.
+    block_s : block length [s].
+    """
+
+    def __init__(self, rec: Recording, block_s: float = DEFAULT_BLOCK_S) -> None:
+        if not block_s > 0:
+            raise EstimationError(f'{block_s=}: expected a block length > 0 s')
+        self.rec = rec
+        self.block_ns = int(round(block_s * 1e9))
+        self._lo: int | None = None
+        self._resume: int | None = None
+
+    def continue_from(self, t_s: float) -> None:
+        """Start the next block at ``t_s`` [s] if that lies more than ``MIN_ADVANCE_S`` into
+        the block just given and not beyond it."""
+        ns = int(round(t_s * 1e9))
+        lo = self._lo
+        if lo is not None and lo + int(MIN_ADVANCE_S * 1e9) < ns <= lo + self.block_ns:
+            self._resume = ns
+
+    def __iter__(self) -> Iterator[Recording]:
+        rec = self.rec
+        t_ns = np.round(rec.t * 1e9).astype(np.int64)
+        lo = int(t_ns[0])
+        while lo <= t_ns[-1]:
+            self._lo, self._resume = lo, None
+            hi = lo + self.block_ns - 1
+            a = int(np.searchsorted(t_ns, lo, side='left'))
+            b = int(np.searchsorted(t_ns, hi, side='right'))
+            if b - a >= 2:
+                yield _sub_recording(rec, slice(a, b))
+            lo = self._resume if self._resume is not None else lo + self.block_ns
+
+
+def _sub_recording(rec: Recording, sl: slice) -> Recording:
+    """The samples ``sl`` of ``rec`` (views), with the segments and meta."""
+    def cut(x):
+        return None if x is None else x[sl]
+    return Recording(rec.t[sl], list(rec.joint_names), rec.position[sl], rec.velocity[sl],
+                     rec.effort[sl], cut(rec.reference), cut(rec.excitation),
+                     list(rec.segments), rec.meta)
+
+
+def _leftover(det: DetectedEstimator, rec: Recording) -> bool:
+    """True for a block that starts where the periods of the block before ended and is too
+    short for two periods of that multisine (nothing detectable is expected there)."""
+    periods = [e['period_s'] for e in det.entries.values() if 'period_s' in e]
+    return bool(periods and det.used_until is not None
+                and rec.t[0] >= det.used_until - 2 * rec.dt
+                and rec.t[-1] - rec.t[0] + rec.dt < 2 * max(periods))
+
+
+def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions | None = None,
+                       *, resume: Callable[[float], None] | None = None,
+                       block_s: float = DEFAULT_BLOCK_S) -> dict[str, FrequencyResponse]:
+    """Detect and estimate block by block (:class:`DetectedEstimator`).
+
+    A block whose detection or checks fail is left out with a note (in each estimate's
+    meta['detected']); when no block contributes, the reason is raised (the only block's,
+    or the first of several). ``resume`` is told where the data used by a block end (the
+    next block starts there); ``block_s`` only names the block length in messages.
+
+    Parameters
+    ----------
+    blocks : recordings in time order (:class:`RecordingBlocks` or a streamed bag's windows).
+    options : :class:`ExcitationOptions` replacing detection.
+    resume : e.g. ``RecordingBlocks.continue_from``.
+    block_s : block length [s], for messages.
+
+    Returns
+    -------
+    dict
+        'detected/<joint>' -> :class:`FrequencyResponse` (see :meth:`DetectedEstimator.results`).
+
+    Raises
+    ------
+    EstimationError
+        No block holds an estimable excitation, or gaps left too little of one.
+    """
+    det = DetectedEstimator()
+    notes: list[str] = []
+    first: EstimationError | None = None
+    n = 0
+    for rec in blocks:
+        n += 1
+        try:
+            det.add_detected(rec, options)
+        except EstimationError as exc:
+            if _leftover(det, rec):
+                notes.append(f'block {rec.t[0]:.3f}..{rec.t[-1]:.3f} s: the rest after the '
+                             f'last whole period, shorter than two periods')
+                continue
+            first = first or exc
+            notes.append(f'block {rec.t[0]:.3f}..{rec.t[-1]:.3f} s: {exc}')
+            continue
+        if det.used_until is not None and resume is not None:
+            resume(det.used_until)
+    if not det.entries:
+        if n == 1 and first is not None:
+            raise first
+        raise EstimationError(f'no multisine or chirp found in any {block_s:g} s block '
+                              f'({n} blocks; first: {notes[0] if notes else "no joint states"})')
+    estimates = det.results()
+    for frf in estimates.values():
+        frf.meta['detected'] = frf.meta['detected'] + notes
+    return estimates

@@ -99,43 +99,62 @@ class BLAResult:
     per_realisation: np.ndarray
 
 
-def best_linear_approximation(Y: np.ndarray, U: np.ndarray) -> BLAResult:
+def _realisations(X, name: str, ndim: int = 4) -> list[np.ndarray]:
+    """Per-realisation arrays (n_q_p, ...) of a (n_p, n_q, ...) array or of a sequence of
+    them (realisations may keep different numbers of periods when gaps removed some)."""
+    out = [np.asarray(x, dtype=complex) for x in X]
+    if not out or any(x.ndim != ndim for x in out):
+        raise EstimationError(f'{name}: expected (n_p, n_q, n_freq, n, n_ex) spectra or one '
+                              f'(n_q, n_freq, n, n_ex) array per realisation, got '
+                              f'{[x.shape for x in out]}')
+    return out
+
+
+def best_linear_approximation(Y, U) -> BLAResult:
     """Multisine BLA P_l = 1/(n_p n_q) sum_p sum_q P[p,q] (eq. 14) with variances.
 
     Parameters
     ----------
-    Y : (n_p, n_q, n_freq, n_y, n_ex) output spectra per realisation p and period q.
-    U : (n_p, n_q, n_freq, n_u, n_ex) input spectra.
+    Y : (n_p, n_q, n_freq, n_y, n_ex) output spectra per realisation p and period q, or one
+        (n_q_p, n_freq, n_y, n_ex) array per realisation (periods removed by gaps).
+    U : input spectra, shaped alike with n_u.
 
-    The spectra of each period give P[p,q] by eq. 7. Following Pintelon & Schoukens' robust
-    method, the sample variance over q (n_q >= 2) gives the noise variance and the sample
-    variance over p of the period means (n_p >= 2) the total variance of the estimate.
+    Returns
+    -------
+    BLAResult
+        The spectra of each period give P[p,q] by eq. 7 and P_p is their mean over q.
+        Following Pintelon & Schoukens' robust method, the spread over q (pooled over the
+        realisations, each with its own n_q) gives the noise variance and the sample
+        variance over p of the P_p the total variance of the estimate.
     """
-    Y = np.asarray(Y, dtype=complex)
-    U = np.asarray(U, dtype=complex)
-    if Y.ndim != 5 or U.ndim != 5 or Y.shape[:3] != U.shape[:3]:
-        raise EstimationError(f'spectra shapes {Y.shape=} {U.shape=} must be '
-                              f'(n_p, n_q, n_freq, n_y|n_u, n_ex)')
-    n_p, n_q, n_freq = Y.shape[:3]
-    Ppq = np.empty((n_p, n_q, Y.shape[3], U.shape[3], n_freq), dtype=complex)
-    cond = np.empty((n_p, n_freq))
-    for p in range(n_p):
-        for q in range(n_q):
-            Ppq[p, q], c = frf_from_spectra(Y[p, q], U[p, q])
-            cond[p] = np.maximum(cond[p], c) if q else c
-    Pp = Ppq.mean(axis=1)
-    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), cond, Pp)
+    Ys, Us = _realisations(Y, 'Y'), _realisations(U, 'U')
+    if len(Ys) != len(Us) or any(y.shape[:2] != u.shape[:2] for y, u in zip(Ys, Us)):
+        raise EstimationError(f'spectra shapes {[y.shape for y in Ys]} and '
+                              f'{[u.shape for u in Us]} do not match')
+    Ppq, cond = [], []
+    for Yp, Up in zip(Ys, Us):
+        per = [frf_from_spectra(Yq, Uq) for Yq, Uq in zip(Yp, Up)]
+        Ppq.append(np.array([P for P, _ in per]))
+        cond.append(np.max([c for _, c in per], axis=0))
+    Pp = np.array([P.mean(axis=0) for P in Ppq])
+    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), np.array(cond), Pp)
 
 
-def _bla_variances(Ppq: np.ndarray, Pp: np.ndarray):
+def _bla_variances(Ppq, Pp: np.ndarray):
     """(noise, total, nonlinear) variances of the eq. 14 mean from per-period estimates Ppq
-    (n_p, n_q, ...) and per-realisation estimates Pp (n_p, ...); None where n < 2."""
-    n_p, n_q = Ppq.shape[:2]
+    (one (n_q_p, ...) array per realisation) and per-realisation estimates Pp (n_p, ...);
+    None where fewer than two periods / realisations.
+
+    The per-period variance is pooled over the realisations (sum of squares over
+    sum(n_q_p - 1)); the variance of P_p is that over n_q_p, of the mean over p the sum over
+    p divided by n_p^2 (equal n_q: the usual sum_p var_q / (n_q (n_q - 1)) / n_p^2)."""
+    n_p = Pp.shape[0]
+    nq = np.array([P.shape[0] for P in Ppq])
     noise_var = total_var = nl_var = None
-    if n_q >= 2:
-        var_q = np.sum(np.abs(Ppq - Ppq.mean(axis=1, keepdims=True)) ** 2, axis=1) \
-            / (n_q - 1) / n_q
-        noise_var = var_q.sum(axis=0) / n_p ** 2
+    dof = int(np.sum(nq - 1))
+    if dof >= 1:
+        ss = sum(np.sum(np.abs(P - P.mean(axis=0)) ** 2, axis=0) for P in Ppq)
+        noise_var = ss / dof * np.sum(1.0 / nq) / n_p ** 2
     if n_p >= 2:
         total_var = np.sum(np.abs(Pp - Pp.mean(axis=0)) ** 2, axis=0) / (n_p - 1) / n_p
         if noise_var is not None:
@@ -143,27 +162,28 @@ def _bla_variances(Ppq: np.ndarray, Pp: np.ndarray):
     return noise_var, total_var, nl_var
 
 
-def best_linear_approximation_reference(Y: np.ndarray, U: np.ndarray,
-                                        R: np.ndarray) -> BLAResult:
+def best_linear_approximation_reference(Y, U, R) -> BLAResult:
     """Closed-loop BLA through the reference: P_p = (sum_q Y R^H)(sum_q U R^H)^-1, then eq. 14
     over realisations.
 
-    Shapes as :func:`best_linear_approximation`, R : (n_p, n_q, n_freq, n_r, n_ex). Averaging
-    the cross spectra with r over the periods before inverting removes the noise that the
-    controller feeds back into u (uncorrelated with r), which biases the per-period Y U^+.
-    Noise variance from the spread of the per-period estimates, total variance from the spread
-    over realisations.
+    Shapes as :func:`best_linear_approximation` (arrays or one array per realisation), R with
+    n_r. Averaging the cross spectra with r over the periods before inverting removes the
+    noise that the controller feeds back into u (uncorrelated with r), which biases the
+    per-period Y U^+. Noise variance from the spread of the per-period estimates, total
+    variance from the spread over realisations.
     """
-    Y, U, R = (np.asarray(a, dtype=complex) for a in (Y, U, R))
-    n_p, n_q, n_freq = Y.shape[:3]
-    RH = np.conj(np.swapaxes(R, -1, -2))
-    Syr = Y @ RH                                        # (p, q, F, n_y, n_r)
-    Sur = U @ RH
-    Pp = np.moveaxis(Syr.mean(axis=1) @ np.linalg.pinv(Sur.mean(axis=1)), 1, -1)
-    sv = np.linalg.svd(Sur.mean(axis=1), compute_uv=False)
-    cond = sv[..., 0] / np.maximum(sv[..., -1], 1e-300)
-    Ppq = np.moveaxis(Syr @ np.linalg.pinv(Sur), 2, -1)        # (p, q, n_y, n_u, F)
-    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), cond, Pp)
+    Ys, Us, Rs = _realisations(Y, 'Y'), _realisations(U, 'U'), _realisations(R, 'R')
+    Pp, cond, Ppq = [], [], []
+    for Yp, Up, Rp in zip(Ys, Us, Rs):
+        RH = np.conj(np.swapaxes(Rp, -1, -2))
+        Syr = Yp @ RH                                   # (q, F, n_y, n_r)
+        Sur = Up @ RH
+        Pp.append(np.moveaxis(Syr.mean(axis=0) @ np.linalg.pinv(Sur.mean(axis=0)), 0, -1))
+        sv = np.linalg.svd(Sur.mean(axis=0), compute_uv=False)
+        cond.append(sv[..., 0] / np.maximum(sv[..., -1], 1e-300))
+        Ppq.append(np.moveaxis(Syr @ np.linalg.pinv(Sur), 1, -1))     # (q, n_y, n_u, F)
+    Pp = np.array(Pp)
+    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), np.array(cond), Pp)
 
 
 @dataclass
@@ -214,18 +234,21 @@ def detection_line_spectra(y_periods: np.ndarray, max_bin: int, *, axis: int = -
     return bins, periodic_spectra(y, bins, axis=axis)
 
 
-def detection_levels_from_spectra(Y: np.ndarray, bins: np.ndarray,
+def detection_levels_from_spectra(Y, bins: np.ndarray,
                                   excited_bins: np.ndarray) -> DetectionLevels:
-    """Detection-line levels from period spectra ``Y`` (n_p, n_q, n_bins, n_y) at ``bins``."""
-    n_q, n_y = Y.shape[1], Y.shape[3]
-    Ym = Y.mean(axis=1)
+    """Detection-line levels from period spectra ``Y`` (n_p, n_q, n_bins, n_y), or one
+    (n_q_p, n_bins, n_y) array per realisation, at ``bins``."""
+    Ys = _realisations(Y, 'Y', ndim=3)
+    n_y = Ys[0].shape[2]
+    Ym = np.array([y.mean(axis=0) for y in Ys])
     power = np.mean(np.abs(Ym) ** 2, axis=0)
     excited = np.isin(bins, excited_bins)
     odd = (bins % 2 == 1) & ~excited
     even = bins % 2 == 0
     noise = None
-    if n_q >= 2:
-        noise = (np.var(Y, axis=1, ddof=1).real / n_q).mean(axis=0).mean(axis=0)
+    if all(y.shape[0] >= 2 for y in Ys):
+        noise = np.mean([(np.var(y, axis=0, ddof=1).real / y.shape[0]).mean(axis=0)
+                         for y in Ys], axis=0)
         noise = np.broadcast_to(noise, (n_y,)).copy()
 
     def level(mask):
@@ -245,7 +268,8 @@ def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
     ``samples_per_period`` samples per period (polyphase FIR, zero phase), applies a Hann window
     and evaluates the DFT at exactly f_x.
 
-    ``x`` : (N, ...) samples at rate fs, the first at time ``t_first``. Returns (...) complex.
+    ``x`` : (N, ...) samples at rate fs, the first at time ``t_first``. Returns (...) complex,
+    NaN when the excerpt holds a missing (NaN) sample: a gap removes that frequency only.
     """
     x = np.asarray(x, dtype=float)
     half = 0.5 * n_periods / f_x
@@ -255,6 +279,8 @@ def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
         raise EstimationError(f'excerpt for f_x={f_x:g} Hz around t={t_center:g} s is outside '
                               f'the record [{t_first:g}, {t_first + x.shape[0] / fs:g}] s')
     seg = x[i0:i1]
+    if not np.all(np.isfinite(seg)):
+        return np.full(seg.shape[1:], np.nan + 0j)
     seg = seg - seg.mean(axis=0)
     q = max(1, int(np.floor(fs / (samples_per_period * f_x))))
     if q > 1:

@@ -13,7 +13,13 @@ signal itself (pure numpy/scipy, no bag or ROS imports).
 - :func:`detect_excitation` — tries both, returns whichever was found.
 
 Signals are ``(N,)`` arrays sampled uniformly at ``fs``; ``(N, n)`` arrays are reduced to the
-channel with the largest RMS (all channels of a MIMO experiment share the design).
+channel with the largest RMS (all channels of a MIMO experiment share the design). NaN marks
+missing samples (gaps in a recording): they are bridged linearly for the search and never
+count against the periodicity of the data around them.
+
+:func:`excitation_source` decides which signal of a recording the excitation is detected on
+(the commanded velocity reference when there is one, else the torque); the estimators and the
+importer both use it.
 """
 from __future__ import annotations
 
@@ -26,8 +32,12 @@ from scipy import signal
 
 from frf_ident.errors import EstimationError
 
-__all__ = ['ChirpDetection', 'MultisineDetection', 'detect_chirp', 'detect_excitation',
-           'detect_multisine', 'multisine_at_period']
+__all__ = ['MIN_FINITE', 'ChirpDetection', 'MultisineDetection', 'detect_chirp',
+           'detect_excitation', 'detect_multisine', 'excitation_source', 'multisine_at_period']
+
+#: share of finite samples a signal needs: a reference that is commanded less often than
+#: this is not the excitation source, and detection refuses sparser signals
+MIN_FINITE = 0.5
 
 
 # --------------------------------------------------------------------------- results
@@ -163,8 +173,68 @@ class ChirpDetection:
 
 # --------------------------------------------------------------------------- input checks
 
-def _prepare(x: np.ndarray, fs: float, min_samples: int = 16) -> tuple[np.ndarray, int]:
-    """Validate, pick the strongest channel, remove the median. Returns (x, channel)."""
+def excitation_source(reference: np.ndarray | None, effort: np.ndarray
+                      ) -> tuple[np.ndarray, str]:
+    """The signal to detect the excitation on and its name.
+
+    The velocity reference r when it was commanded (finite in at least ``MIN_FINITE`` of the
+    samples; NaN where no command was held, e.g. before the first one or in a gap) and moves
+    on some joint, else the torque u (the plant input, which carries the excitation too).
+
+    Parameters
+    ----------
+    reference : (N, n) velocity reference or None.
+    effort : (N, n) motor torque.
+
+    Returns
+    -------
+    tuple
+        ((N, n) array, 'velocity reference' | 'torque').
+    """
+    if reference is not None:
+        r = np.asarray(reference, dtype=float)
+        finite = np.isfinite(r)
+        if r.size and np.mean(finite) >= MIN_FINITE:
+            spread = [np.std(r[finite[:, j], j]) if np.any(finite[:, j]) else 0.0
+                      for j in range(r.shape[1])]
+            if max(spread, default=0.0) > 0:
+                return r, 'velocity reference'
+    return np.asarray(effort, dtype=float), 'torque'
+
+
+def _bridge(x: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    """``x`` with the invalid samples linearly interpolated (held at the ends)."""
+    if np.all(valid):
+        return x
+    idx = np.arange(x.size)
+    return np.interp(idx, idx[valid], x[valid])
+
+
+def _periodic_fill(x: np.ndarray, valid: np.ndarray, p: int) -> np.ndarray:
+    """``x`` with each missing sample replaced by the mean of the present samples at the same
+    phase (index modulo ``p``) in the other periods: for a periodic signal its value."""
+    if np.all(valid) or p < 1:
+        return x
+    n = x.size
+    m = -(-n // p)
+    xv = np.zeros(m * p)
+    vv = np.zeros(m * p)
+    xv[:n] = np.where(valid, x, 0.0)
+    vv[:n] = valid
+    count = vv.reshape(m, p).sum(axis=0)
+    mean = xv.reshape(m, p).sum(axis=0) / np.maximum(count, 1.0)
+    phase = np.arange(n) % p
+    fill = ~valid & (count[phase] > 0)
+    out = x.copy()
+    out[fill] = mean[phase[fill]]
+    return out
+
+
+def _prepare(x: np.ndarray, fs: float, min_samples: int = 16
+             ) -> tuple[np.ndarray, int, np.ndarray]:
+    """Validate, pick the strongest channel, bridge NaN gaps, remove the median.
+
+    Returns (x, channel, valid): ``valid`` marks the samples that were finite."""
     if not (np.isfinite(fs) and fs > 0):
         raise EstimationError(f'{fs=} must be a positive sample rate in Hz')
     x = np.asarray(x, dtype=float)
@@ -172,14 +242,22 @@ def _prepare(x: np.ndarray, fs: float, min_samples: int = 16) -> tuple[np.ndarra
         raise EstimationError(f'signal must be (N,) or (N, n_channels), got {x.shape=}')
     if x.shape[0] < min_samples:
         raise EstimationError(f'signal has {x.shape[0]} samples; need at least {min_samples}')
-    if not np.all(np.isfinite(x)):
-        raise EstimationError(f'signal has {int(np.sum(~np.isfinite(x)))} non-finite samples')
+    if np.any(np.isinf(x)):
+        raise EstimationError(f'signal has {int(np.sum(np.isinf(x)))} infinite samples')
     channel = 0
     if x.ndim == 2:
-        centred = x - np.median(x, axis=0)
-        channel = int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))
+        centred = x - np.nanmedian(x, axis=0) if np.any(np.isfinite(x)) else x
+        with np.errstate(invalid='ignore'):
+            rms = np.array([np.sqrt(np.mean(c[np.isfinite(c)] ** 2)) if np.any(np.isfinite(c))
+                            else 0.0 for c in centred.T])
+        channel = int(np.argmax(rms))
         x = x[:, channel]
-    return x - np.median(x), channel
+    valid = np.isfinite(x)
+    if np.mean(valid) < MIN_FINITE:
+        raise EstimationError(f'signal has {int(np.sum(~valid))} non-finite (missing) of {x.size} '
+                              f'samples; expected at least {100 * MIN_FINITE:.0f} % present')
+    x = _bridge(x, valid)
+    return x - np.median(x), channel, valid
 
 
 # --------------------------------------------------------------------------- multisine
@@ -220,23 +298,31 @@ def _moving_mean(v: np.ndarray, w: int) -> np.ndarray:
     return np.convolve(v, kernel, mode='same') / np.convolve(np.ones(v.size), kernel, mode='same')
 
 
-def _periodic_block(x: np.ndarray, p: int) -> tuple[int, int]:
+def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
+                    ) -> tuple[int, int]:
     """(start, n_periods) of the longest run in which x[n + P] matches x[n].
 
     rho[n] = mean (x[n+P] - x[n])^2 over P/16 samples, divided by the mean of x[n]^2 + x[n+P]^2
     over a whole period (constant for a periodic signal): 0 for identical periods, about 1
     for unrelated signals or noise alone, noise / (signal + noise) in a noisy steady state.
     The run must carry signal (idle parts match trivially); its edges are then refined to
-    the sample (:func:`_refine_edges`).
+    the sample (:func:`_refine_edges`). Comparisons that involve a missing sample (``valid``
+    false) are left out of the means; where a whole window is missing the run goes on (a gap
+    says nothing against periodicity).
     """
     w = max(1, p // 16)
     e2 = (x[p:] - x[:-p]) ** 2
-    ee = _moving_mean(e2, w)
+    both = np.ones(e2.size) if valid is None else (valid[p:] & valid[:-p]).astype(float)
+    e2 = e2 * both
+    seen = _moving_mean(both, w)
+    ee = _moving_mean(e2, w) / np.maximum(seen, 1e-12)
     xx = _moving_mean(x[p:] ** 2 + x[:-p] ** 2, p)
     active = xx > 0.05 * np.quantile(xx, 0.9)
     rho = ee / np.maximum(xx, 1e-300)
-    ref = float(np.quantile(rho[active], 0.25)) if np.any(active) else 1.0
-    ok = active & (rho < min(0.5 * (1.0 + ref), max(3.0 * ref, 0.05)))
+    measured = seen > 1e-9
+    sel = active & measured
+    ref = float(np.quantile(rho[sel], 0.25)) if np.any(sel) else 1.0
+    ok = active & ((rho < min(0.5 * (1.0 + ref), max(3.0 * ref, 0.05))) | ~measured)
     a, b = _longest_run(ok)
     if b <= a:
         return 0, 0
@@ -250,14 +336,24 @@ def _refine_edges(e2: np.ndarray, a: int, b: int, w: int, *,
     """Move the edges [a, b) of the smoothed run to the sample where the variance of the
     period difference e changes (maximum-likelihood change point within +-w samples); an edge
     stays where it is unless the variance outside is at least three times the inside one.
-    ``floor`` keeps rounding errors of a noise-free signal from counting as variance."""
+    ``floor`` keeps rounding errors of a noise-free signal from counting as variance. A run
+    that reaches the end of the data keeps its end (nothing after it to compare with; a
+    start-up transient at the beginning is a change inside the data and is found).
+    Isolated outliers (a held command where one was dropped) are median-filtered away first:
+    only a sustained change of variance moves an edge."""
     lo, hi = max(0, a - w), min(e2.size, a + w)
-    k = _variance_change(e2[lo:hi], floor, inside_after=True)
+    k = _variance_change(_despike(e2[lo:hi]), floor, inside_after=True)
     a_new = a if k is None else lo + k
     lo, hi = max(0, b - w), min(e2.size, b + w)
-    k = _variance_change(e2[lo:hi], floor, inside_after=False)
+    k = _variance_change(_despike(e2[lo:hi]), floor, inside_after=False) \
+        if b < e2.size else None
     b_new = b if k is None else lo + k
     return (a_new, b_new) if b_new > a_new else (a, b)
+
+
+def _despike(e2: np.ndarray, k: int = 5) -> np.ndarray:
+    """Running median over ``k`` samples (outliers of up to k // 2 samples removed)."""
+    return signal.medfilt(e2, k) if e2.size >= k else e2
 
 
 def _variance_change(e2: np.ndarray, floor: float, *, inside_after: bool) -> int | None:
@@ -317,7 +413,7 @@ def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
 
     Raises :class:`EstimationError` (one line) if no ``min_periods`` whole periods are found.
     """
-    x, channel = _prepare(x, fs)
+    x, channel, valid = _prepare(x, fs)
     n = x.size
     max_lag = n // max(2, int(min_periods))
     if max_lag < 4:
@@ -328,12 +424,15 @@ def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
         best = f'{corr:.2f}' if np.isfinite(corr) else 'none'
         raise EstimationError(f'no periodicity: best autocorrelation {best} beyond the main '
                               f'lobe is below {min_correlation=} (lags up to {max_lag} samples)')
-    start, n_per = _periodic_block(x, p)
+    bridged = x
+    x = _periodic_fill(bridged, valid, p)
+    start, n_per = _periodic_block(x, p, valid)
     if n_per >= 2:
         q = _refine_period(x[start:start + n_per * p + 2], p)
         if q != p:
             p = q
-            start, n_per = _periodic_block(x, p)
+            x = _periodic_fill(bridged, valid, p)
+            start, n_per = _periodic_block(x, p, valid)
     if n_per < min_periods:
         raise EstimationError(f'period {p} samples ({p / fs:.4g} s) found but only {n_per} '
                               f'whole periods repeat; need {min_periods=}')
@@ -365,7 +464,7 @@ def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods:
     """
     if not (np.isfinite(period) and period > 0):
         raise EstimationError(f'{period=} must be a positive duration in seconds')
-    x, channel = _prepare(x, fs, min_samples=1)
+    x, channel, valid = _prepare(x, fs, min_samples=1)
     p0 = int(round(period * fs))
     if p0 < 4 or x.size // p0 < min_periods:
         raise EstimationError(f'{period=:g} s ({p0} samples) leaves {x.size // max(p0, 1)} '
@@ -373,7 +472,8 @@ def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods:
                               f'expected at least {min_periods=}')
     whole = abs(period * fs - p0) <= 1e-3        # given to the sample: keep it as is
     p = p0 if whole or x.size // (p0 + 2) < 2 else _refine_period(x, p0)
-    start, n_per = _periodic_block(x, p)
+    x = _periodic_fill(x, valid, p)
+    start, n_per = _periodic_block(x, p, valid)
     if n_per < min_periods:
         raise EstimationError(f'{period=:g} s ({p} samples): only {n_per} whole periods '
                               f'repeat in the data; expected at least {min_periods=}')
@@ -503,7 +603,7 @@ def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
 
     Raises :class:`EstimationError` (one line) otherwise.
     """
-    x, channel = _prepare(x, fs)
+    x, channel, _ = _prepare(x, fs)
     h = hysteresis * float(np.quantile(np.abs(x), 0.99))
     if h <= 0:
         raise EstimationError('no chirp: the signal is constant')
