@@ -48,7 +48,6 @@ setup(
             'controller_node = frf_ident.nodes.controller_node:main',
             'excitation_node = frf_ident.nodes.excitation_node:main',
             'estimator_node = frf_ident.nodes.estimator_node:main',
-            'iteration_service = frf_ident.nodes.iteration_service:main',
         ],
     },
 )

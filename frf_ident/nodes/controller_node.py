@@ -28,6 +28,7 @@ class ControllerNode:
         self.node = node
         model_path = c.param(node, 'model', '')
         self.lockstep = bool(c.param(node, 'lockstep', True))
+        c.refuse_lockstep_without_sim(node, self.lockstep)
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic'))
         model, robot, self.ctrl = load_model(model_path or None)
         self.joints = list(robot.joint_names)
@@ -104,19 +105,8 @@ class ControllerNode:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    c.init(argv)
-    stop = c.StopOnSignal()
-    node = mw.create_node('controller_node')
-    stop.nodes.append(node)
-    ctl = ControllerNode(node)
-    node.get_logger().info(f'velocity PI on {ctl.joints}, torque limit '
-                           f'{ctl.ctrl.torque_limit.tolist()}, lockstep={ctl.lockstep}')
-    c.announce_ready('controller_node')
-    try:
-        mw.spin(node, stop.event)
-    finally:
-        mw.shutdown()
-    return 0
+    """``ros2 run frf_ident controller_node``."""
+    return c.run_node('controller_node', ControllerNode, argv)
 
 
 if __name__ == '__main__':

@@ -44,6 +44,7 @@ class Estimator:
         self.out_dir = Path(c.param(node, 'output_dir', '') or f'{bag}_frf')
         self.estimate = bool(c.param(node, 'estimate', True))
         self.lockstep = bool(c.param(node, 'lockstep', True))
+        c.refuse_lockstep_without_sim(node, self.lockstep)
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic',
                             'excitation_topic', 'experiment_topic'))
         self.t = t
@@ -182,21 +183,18 @@ class Estimator:
         self.log.info(f'bag closed: {self.bag} ({json.dumps(self.counts)})')
 
 
+    def close(self) -> None:
+        """Drain, finalise the bag and report its path."""
+        try:
+            self.drain_and_close(self.node)
+            print(f'FRF_BAG {self.bag}', flush=True)
+        finally:
+            self.rec.close()
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    c.init(argv)
-    stop = c.StopOnSignal()
-    node = mw.create_node('estimator_node')
-    stop.nodes.append(node)
-    est = Estimator(node)
-    c.announce_ready('estimator_node')
-    try:
-        mw.spin(node, stop.event)
-        est.drain_and_close(node)
-        print(f'FRF_BAG {est.bag}', flush=True)
-    finally:
-        est.rec.close()
-        mw.shutdown()
-    return 0
+    """``ros2 run frf_ident estimator_node``."""
+    return c.run_node('estimator_node', Estimator, argv)
 
 
 if __name__ == '__main__':

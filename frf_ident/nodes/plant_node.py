@@ -9,7 +9,9 @@ lockstep: true  -- one sample per received command (deterministic, faster than r
                    no command comes, so late subscribers still get it (same stamp: consumers
                    skip stamps they have seen).
 lockstep: false -- free-running on a wall timer at the model's sample rate, zero-order holding
-                   the last command.
+                   the last command. Like a robot's hardware interface, joint state k then
+                   reports in ``effort`` the torque applied from t_k (the held command), so a
+                   consumer pairs state k with its own effort (see frf_ident.app.excitation).
 
 Run: ``python -m frf_ident.nodes.plant_node --ros-args -p model:=config/model_3axis.yaml``.
 """
@@ -60,9 +62,11 @@ class PlantNode:
         node.create_subscription(mw.msg('std_msgs/msg/Float64MultiArray'), t['effort_topic'],
                                  self._on_command, mw.qos_default(c.DEEP))
         self.last_pub = 0.0
-        if not self.lockstep:
+        if self.lockstep:
+            self._publish()
+        else:   # the node clock is wall time here (the plant is the clock source)
+            self.q, self.v = q0, v0
             node.create_timer(float(self.plant.dt), self._tick)
-        self._publish()
 
     def _publish(self) -> None:
         ns = self.k * self.dt_ns
@@ -94,29 +98,36 @@ class PlantNode:
             self.hold[:] = data
 
     def _tick(self) -> None:
-        self._advance(self.hold)
+        """Free-running sample k: publish (q_k, v_k, torque applied from t_k), then step."""
+        q, v, e = self.plant.step(self.hold)
+        js = self.js
+        js.position = np.asarray(self.q, float).tolist()
+        js.velocity = np.asarray(self.v, float).tolist()
+        js.effort = np.asarray(e, float).tolist()
+        self._publish()
+        self.q, self.v = q, v
+        self.k += 1
 
     def idle(self) -> None:
         if self.lockstep and time.monotonic() - self.last_pub > self.idle_republish_s:
             self._publish()
 
+    def spin(self, stop: Any) -> None:
+        """Spin until ``stop`` is set, re-sending the joint state while idle (lockstep)."""
+        self.node.get_logger().info(f'plant {type(self.plant).__name__} '
+                                    f'{self.plant.joint_names}, dt {self.plant.dt} s, '
+                                    f'lockstep={self.lockstep}')
+        if not self.lockstep:
+            mw.spin(self.node, stop)
+            return
+        while not stop.is_set():
+            mw.spin_once(self.node, 0.05)
+            self.idle()
+
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    c.init(argv)
-    stop = c.StopOnSignal()
-    node = mw.create_node('plant_node', use_sim_time=False)   # it is the clock source
-    stop.nodes.append(node)
-    plant = PlantNode(node)
-    node.get_logger().info(f'plant {type(plant.plant).__name__} {plant.plant.joint_names}, '
-                           f'dt {plant.plant.dt} s, lockstep={plant.lockstep}')
-    c.announce_ready('plant_node')
-    try:
-        while not stop.event.is_set():
-            mw.spin_once(node, 0.05)
-            plant.idle()
-    finally:
-        mw.shutdown()
-    return 0
+    """``ros2 run frf_ident plant_node``; the plant is the clock source (no sim time)."""
+    return c.run_node('plant_node', PlantNode, argv, use_sim_time=False)
 
 
 if __name__ == '__main__':
