@@ -2,7 +2,10 @@
 
 Subscribes the effort commands (Float64MultiArray, joint order), publishes /joint_states
 (position, velocity = plant output y, effort = the torque applied over the sample that just
-ended; header.stamp = sample time k*dt) and /clock.
+ended; header.stamp = sample time k*dt) and /clock every ``clock_every`` samples (every node
+with use_sim_time takes each /clock message in Python: one per sample would cost more than the
+joint state itself; node clocks and timers only need it coarse, sample indices come from the
+stamps).
 
 lockstep: true  -- one sample per received command (deterministic, faster than real time); the
                    current joint state is re-sent every ``idle_republish_s`` wall seconds while
@@ -35,6 +38,7 @@ class PlantNode:
         plant_spec = c.param(node, 'plant', '')
         self.lockstep = bool(c.param(node, 'lockstep', True))
         self.idle_republish_s = float(c.param(node, 'idle_republish_s', 0.2))
+        self.clock_every = max(1, int(c.param(node, 'clock_every', 10)))
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'clock_topic'))
         model, _robot, ctrl = load_model(model_path or None)
         self.plant = load_plant(plant_spec or None, model)
@@ -70,10 +74,11 @@ class PlantNode:
 
     def _publish(self) -> None:
         ns = self.k * self.dt_ns
-        st = self.clock.clock
-        st.sec, st.nanosec = divmod(ns, 1_000_000_000)
+        if self.k % self.clock_every == 0:
+            st = self.clock.clock
+            st.sec, st.nanosec = divmod(ns, 1_000_000_000)
+            self.clock_pub.publish(self.clock)
         c.set_stamp(self.js, ns)
-        self.clock_pub.publish(self.clock)
         self.js_pub.publish(self.js)
         self.last_pub = time.monotonic()
 
