@@ -32,7 +32,10 @@ setup(
         'cyclonedds>=0.10.5',
     ],
     extras_require={
-        'test': ['pytest>=7.4', 'hypothesis>=6.80', 'control>=0.10', 'import-linter>=2.1'],
+        'test': ['pytest>=7.4', 'hypothesis>=6.80', 'control>=0.10', 'import-linter>=2.1',
+                 'wheel',   # test/ros installs the package into a prefix as colcon would
+                 'flake8-builtins', 'flake8-comprehensions', 'flake8-docstrings',
+                 'flake8-import-order', 'flake8-quotes'],
         'control': ['control>=0.10'],
     },
     zip_safe=True,

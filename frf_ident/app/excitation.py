@@ -72,7 +72,7 @@ class Outputs(Protocol):
 class SessionSettings:
     """Parameters of the excitation node (defaults are the node's parameter defaults)."""
 
-    lockstep: bool = True
+    lockstep: bool = False         # free-running unless the simulation says otherwise
     lookahead: int = 20            # lockstep: references published ahead [samples]
     stale_s: float = 0.5           # watchdog, lockstep: wall s without /joint_states
     stale_samples: int = 10        # watchdog, free-running: in samples

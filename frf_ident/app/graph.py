@@ -117,15 +117,18 @@ class Graph:
                  lockstep: bool = True, domain_id: Optional[int] = None,
                  params: Optional[dict[str, dict[str, Any]]] = None,
                  log: Any = None, nodes: Sequence[str] = NODES,
-                 middleware: Optional[str] = None) -> None:
+                 middleware: Optional[str | dict[str, str]] = None) -> None:
         self.nodes = tuple(nodes)
         self.out = Path(out_dir)
         self.out.mkdir(parents=True, exist_ok=True)
         self.bag = self.out / 'bag'
         self.frf_dir = self.out / 'frf_live'
         self.domain_id = domain_id if domain_id is not None else default_domain_id()
-        self.env = graph_env(self.domain_id, middleware=middleware)
+        per_node = middleware if isinstance(middleware, dict) else {}
+        self.env = graph_env(self.domain_id, middleware=None if per_node else middleware)
         self.middleware = self.env[mw.ENV_BACKEND]
+        #: backend of each node process (a dict ``middleware`` mixes rclpy and DDS nodes)
+        self.node_middleware = {n: per_node.get(n, self.middleware) for n in nodes}
         self.robot = str(robot or model or '')
         self.say = log or (lambda m: None)
         # lockstep is the simulation's mode; free-running runs on wall time like a robot
@@ -163,7 +166,8 @@ class Graph:
             cmd = [sys.executable, '-m', f'frf_ident.nodes.{name}', '--ros-args',
                    '--params-file', str(self.params_file)]
             errf = open(self.out / f'{name}.log', 'w')
-            proc = subprocess.Popen(cmd, env=self.env, stdout=subprocess.PIPE, stderr=errf,
+            env = dict(self.env, **{mw.ENV_BACKEND: self.node_middleware[name]})
+            proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=errf,
                                     text=True, cwd=str(SOURCE_ROOT))
             self.procs[name], self.logs[name] = proc, []
             self._ready[name] = threading.Event()
@@ -178,8 +182,8 @@ class Graph:
                 if time.monotonic() > deadline:
                     self.stop()
                     raise TimeoutError(f'{name} not ready within {timeout_s} s')
-        self.say(f'graph up on ROS_DOMAIN_ID={self.domain_id} ({self.middleware}): '
-                 f'{", ".join(self.nodes)}')
+        self.say(f'graph up on ROS_DOMAIN_ID={self.domain_id}: ' + ', '.join(
+            f'{n} ({self.node_middleware[n]})' for n in self.nodes))
         return self
 
     def driver(self, *, multisine: Optional[bool] = None, iterations: Optional[int] = None,

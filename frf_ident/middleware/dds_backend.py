@@ -51,6 +51,10 @@ _SERVICE_REPLY_MATCH_TIMEOUT_S = 0.1  # rmw_cyclonedds waits at most 100 ms too
 _CALL_WAIT_SLICE_NS = 50_000_000
 
 
+#: what a node raises for a bad parameter value (this backend converts values as declared)
+PARAMETER_ERRORS: tuple = (ValueError, TypeError)
+
+
 def domain_id_from_env() -> int:
     """``ROS_DOMAIN_ID`` as rcl reads it (unset or empty -> 0)."""
     text = os.environ.get('ROS_DOMAIN_ID', '').strip()

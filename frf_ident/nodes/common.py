@@ -7,6 +7,8 @@ import threading
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
+from frf_ident.app.excitation import SessionSettings
+from frf_ident.errors import FrfIdentInputError
 
 #: Topic defaults (docs/CONTRACT.md §3); every one is a node parameter.
 TOPICS = {
@@ -19,6 +21,9 @@ TOPICS = {
     'progress_topic': '/frf/progress',
 }
 READY = mw.READY
+#: default of the ``lockstep`` parameter of every node: free-running, the mode that is safe on a
+#: real robot; the simulation (config/frf_ident.yaml, launch sim:=true, app.graph) sets true
+LOCKSTEP = SessionSettings.lockstep
 #: deep queues: lockstep references are published ahead, recorders must never drop a sample
 DEEP = 20000
 
@@ -61,6 +66,9 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
             wired = wiring(node)
         except Refused as exc:
             print(f'{name}: refused: {exc}', file=sys.stderr, flush=True)
+            return 2
+        except (FrfIdentInputError, ValueError) + mw.parameter_errors() as exc:
+            print(f'{name}: bad parameter: {exc}', file=sys.stderr, flush=True)
             return 2
         announce_ready(name)
         try:

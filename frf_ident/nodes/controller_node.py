@@ -27,7 +27,7 @@ class ControllerNode:
         from frf_ident.io.model_file import load_model
         self.node = node
         model_path = c.param(node, 'model', '')
-        self.lockstep = bool(c.param(node, 'lockstep', True))
+        self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
         c.refuse_lockstep_without_sim(node, self.lockstep)
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic'))
         model, robot, self.ctrl = load_model(model_path or None)

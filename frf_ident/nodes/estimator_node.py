@@ -43,7 +43,7 @@ class Estimator:
         bag = c.param(node, 'bag', '') or f'frf_bag_{time.strftime("%Y%m%d_%H%M%S")}'
         self.out_dir = Path(c.param(node, 'output_dir', '') or f'{bag}_frf')
         self.estimate = bool(c.param(node, 'estimate', True))
-        self.lockstep = bool(c.param(node, 'lockstep', True))
+        self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
         c.refuse_lockstep_without_sim(node, self.lockstep)
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic',
                             'excitation_topic', 'experiment_topic'))

@@ -36,7 +36,7 @@ class PlantNode:
         self.node = node
         model_path = c.param(node, 'model', '')
         plant_spec = c.param(node, 'plant', '')
-        self.lockstep = bool(c.param(node, 'lockstep', True))
+        self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
         self.idle_republish_s = float(c.param(node, 'idle_republish_s', 0.2))
         self.clock_every = max(1, int(c.param(node, 'clock_every', 10)))
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'clock_topic'))

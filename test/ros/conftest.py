@@ -29,6 +29,12 @@ def pytest_collection_modifyitems(config, items):
                 item.add_marker(skip)
 
 
+@pytest.fixture(scope='session')
+def new_domain():
+    """:func:`next_domain` as a fixture (test modules here are not importable packages)."""
+    return next_domain
+
+
 @pytest.fixture
 def ros_env():
     """Environment of the ROS processes a test starts: loopback, its own domain, rclpy."""
