@@ -283,17 +283,9 @@ def bench_diagnosis() -> list[tuple[str, str, str, str]]:
 
 @section('nodes')
 def bench_nodes() -> list[tuple[str, str, str, str]]:
-    """Lockstep closed-loop steps/s of the node graph (separate processes over DDS on
-    loopback) against a plain DDS ping-pong of the same backend in the same run (goal 50 %)."""
-    from benchmarks.graph import bench_lockstep
-    r = bench_lockstep()
-    pp = r['pingpong_per_s']
-    return [('node graph lockstep (plant, controller, excitation)',
-             f"{r['graph_steps_per_s']:,.0f} steps/s", f'DDS ping-pong {pp:,.0f}/s',
-             f"{100 * r['graph_steps_per_s'] / pp:.0f} % (goal 50 %)"),
-            ('... with the estimator recording the bag',
-             f"{r['graph_with_recorder_steps_per_s']:,.0f} steps/s", f'DDS ping-pong {pp:,.0f}/s',
-             f"{100 * r['graph_with_recorder_steps_per_s'] / pp:.0f} %")]
+    """Lockstep steps/s of the node graph beside the ping-pong of the same backend (rclpy, DDS)."""
+    from benchmarks.graph import rows
+    return rows()
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,10 +1,11 @@
 """ROS 2 tests: run only where ROS 2 Jazzy is sourced (rclpy importable), else skipped.
 
-Each test gets its own ROS_DOMAIN_ID from :func:`next_domain` (a counter over 110..149, so
-sequential tests never share a domain with a leftover of an earlier one).
+Each test gets its own ROS_DOMAIN_ID from :func:`next_domain`: a domain in 110..149 that no
+other test process holds (an flock on /tmp/frf_ident_ros_domain_<id>.lock, kept until this
+session ends), so neither sequential tests nor concurrent test sessions share a domain.
 """
+import fcntl
 import importlib.util
-import itertools
 import os
 from pathlib import Path
 
@@ -12,12 +13,23 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 HAVE_ROS = importlib.util.find_spec('rclpy') is not None and bool(os.environ.get('ROS_DISTRO'))
-_domains = itertools.cycle(range(110, 150))
+_held: list = []
 
 
 def next_domain() -> int:
-    """A ROS domain id not used by the previous 39 calls in this test session."""
-    return next(_domains)
+    """A ROS domain id in 110..149 held by no other test session and not used before here."""
+    for d in range(110, 150):
+        if any(h[0] == d for h in _held):
+            continue
+        f = open(f'/tmp/frf_ident_ros_domain_{d}.lock', 'w')
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            f.close()
+            continue
+        _held.append((d, f))
+        return d
+    raise RuntimeError('no free ROS domain in 110..149')
 
 
 def pytest_collection_modifyitems(config, items):

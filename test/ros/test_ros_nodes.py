@@ -84,10 +84,16 @@ def test_every_node_on_rclpy_unique_names_and_quick_service_reply(ros_env, rcl, 
         assert sorted(n for n in names if n != 'frf_test_observer') == sorted(NODES), names
         client = rcl.create_client(Trigger, '/frf/run_iteration')
         assert client.wait_for_service(timeout_sec=15.0)
-        t0 = time.monotonic()
-        fut = client.call_async(Trigger.Request())
-        rcl.test_executor.spin_until_future_complete(fut, timeout_sec=10.0)
-        answered = time.monotonic() - t0
+        deadline = time.monotonic() + 20.0
+        while True:    # until the plant's joint state (re-sent every 0.2 s) has arrived
+            t0 = time.monotonic()
+            fut = client.call_async(Trigger.Request())
+            rcl.test_executor.spin_until_future_complete(fut, timeout_sec=10.0)
+            answered = time.monotonic() - t0
+            if (not fut.done() or fut.result().success or time.monotonic() > deadline
+                    or 'joint_states' not in fut.result().message):
+                break
+            time.sleep(0.2)
         assert fut.done(), 'no answer within 10 s'
         reply = json.loads(fut.result().message)
         assert fut.result().success and reply['accepted'], reply
