@@ -12,8 +12,8 @@ Run: ``python -m benchmarks.graph``.
 from __future__ import annotations
 
 import json
-import tempfile
 from pathlib import Path
+import tempfile
 from typing import Any, Optional
 
 from frf_ident.app.graph import Graph
@@ -36,7 +36,7 @@ def _graph_rate(out: Path, nodes: tuple[str, ...], model: Optional[str],
 
 
 def bench_lockstep(model: Optional[str] = None, n_pingpong: int = 3000) -> dict[str, Any]:
-    """{'graph_steps_per_s', 'graph_with_recorder_steps_per_s', 'pingpong_per_s', 'ratio', ...}"""
+    """Measure the DDS graph: {'graph_steps_per_s', 'pingpong_per_s', 'ratio', ...}."""
     from benchmarks.pingpong import dds_pingpong
     with tempfile.TemporaryDirectory(prefix='frf_bench_') as tmp:
         bare = _graph_rate(Path(tmp) / 'bare', ('plant_node', 'controller_node',
@@ -55,8 +55,10 @@ def bench_lockstep(model: Optional[str] = None, n_pingpong: int = 3000) -> dict[
 
 
 def bench_backends(model: Optional[str] = None, n_pingpong: int = 3000) -> list[dict]:
-    """Per backend (rclpy when importable, DDS always): graph rates beside that backend's
-    ping-pong, measured back to back in the same run."""
+    """Measure per backend (rclpy when importable, DDS always) graph and ping-pong rates.
+
+    Both are measured back to back in the same run.
+    """
     import importlib.util
     from benchmarks.pingpong import pingpong
     backends = (['rclpy'] if importlib.util.find_spec('rclpy') else []) + ['dds']

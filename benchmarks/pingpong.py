@@ -9,11 +9,11 @@ Run: ``python -m benchmarks.pingpong [-n N]``.
 
 import argparse
 import os
+from pathlib import Path
 import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 from typing import Any, Optional
 
 _CONFIG = Path(__file__).resolve().parents[1] / 'config' / 'cyclonedds-localhost.xml'
@@ -110,7 +110,8 @@ def _mw_pong(tag: str) -> None:
     """As :func:`_pong`, through frf_ident.middleware (backend from FRF_IDENT_MIDDLEWARE)."""
     from frf_ident import middleware as mw
     ping_topic, pong_topic = _topics(tag)
-    JointState, F64 = mw.msg('sensor_msgs/msg/JointState'), mw.msg('std_msgs/msg/Float64MultiArray')
+    JointState = mw.msg('sensor_msgs/msg/JointState')
+    F64 = mw.msg('std_msgs/msg/Float64MultiArray')
     node = mw.create_node(f'frf_pong_{tag}')
     pub = node.create_publisher(JointState, pong_topic, mw.qos_default(10))
     names = [f'joint{i + 1}' for i in range(_N_JOINTS)]
@@ -131,7 +132,8 @@ def _mw_ping(tag: str, n: int, timeout_sec: float) -> None:
     """Ping side in its own process; prints the round trips per second."""
     from frf_ident import middleware as mw
     ping_topic, pong_topic = _topics(tag)
-    JointState, F64 = mw.msg('sensor_msgs/msg/JointState'), mw.msg('std_msgs/msg/Float64MultiArray')
+    JointState = mw.msg('sensor_msgs/msg/JointState')
+    F64 = mw.msg('std_msgs/msg/Float64MultiArray')
     node = mw.create_node(f'frf_ping_{tag}')
     replies: list[float] = []
     node.create_subscription(JointState, pong_topic, lambda m: replies.append(m.position[0]),

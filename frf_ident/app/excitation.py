@@ -24,19 +24,19 @@ reference ramps to zero, a zero reference is published and an ``aborted`` descri
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+import json
 import math
 import threading
 import time
-from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Protocol
 
-import numpy as np
-
 from frf_ident.core.excitation.engine import PhaseEngine, PhaseStream, SegmentEvent
-from frf_ident.core.excitation.procedures import (ChirpConfig, ChirpIteration,
-                                                  check_position_bound, MultisineConfig,
-                                                  multisine_procedure)
+from frf_ident.core.excitation.procedures import (check_position_bound, ChirpConfig,
+                                                  ChirpIteration, multisine_procedure,
+                                                  MultisineConfig)
 from frf_ident.core.recording import Segment
+import numpy as np
 
 __all__ = ['ExcitationSession', 'Outputs', 'SessionSettings', 'torque_sample_offset']
 
@@ -264,7 +264,7 @@ class ExcitationSession:
         return self._start('multisine', phases, False, end)
 
     def chirp_iteration(self) -> ChirpIteration:
-        """The chirp iteration (created on first use)."""
+        """Return the chirp iteration (created on first use)."""
         if self.chirp is None:
             self.chirp = ChirpIteration(self.s.chirp, self.n, self.fs, self.torque_limit)
         return self.chirp
@@ -338,5 +338,4 @@ class ExcitationSession:
 
 
 def _json(**d: Any) -> str:
-    import json
     return json.dumps(d, sort_keys=True)

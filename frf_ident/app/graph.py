@@ -21,20 +21,19 @@ import argparse
 import dataclasses
 import json
 import os
+from pathlib import Path
 import random
 import signal
 import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 from typing import Any, Optional, Sequence
 
+from frf_ident import middleware as mw
+from frf_ident.io.share import share_dir, SOURCE_ROOT
 import numpy as np
 import yaml
-
-from frf_ident import middleware as mw
-from frf_ident.io.share import SOURCE_ROOT, share_dir
 
 NODES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node')
 

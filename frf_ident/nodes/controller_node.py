@@ -1,4 +1,4 @@
-"""controller_node: the velocity PI of the model file between /joint_states and the effort commands.
+"""controller_node: the model file's velocity PI between /joint_states and the effort commands.
 
 Subscribes /joint_states (y = velocity) and /velocity_controller/commands (r), publishes
 /effort_controller/commands (u = PI(r, y), always within +-torque_limit: the PI saturates with
@@ -12,14 +12,13 @@ Joint states with a stamp not newer than the last one are ignored (the idle re-s
 """
 from __future__ import annotations
 
-import math
 from collections import deque
+import math
 from typing import Any, Optional, Sequence
-
-import numpy as np
 
 from frf_ident import middleware as mw
 from frf_ident.nodes import common as c
+import numpy as np
 
 
 class ControllerNode:

@@ -21,17 +21,18 @@ the bag is flushed and estimated (``read_recording`` + ``estimate_recording``, a
 """
 from __future__ import annotations
 
+from collections import deque
 import json
+from pathlib import Path
 import threading
 import time
-from collections import deque
-from pathlib import Path
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
 from frf_ident.nodes import common as c
 
-JS, F64, STR = 'sensor_msgs/msg/JointState', 'std_msgs/msg/Float64MultiArray', 'std_msgs/msg/String'
+JS, F64 = 'sensor_msgs/msg/JointState', 'std_msgs/msg/Float64MultiArray'
+STR = 'std_msgs/msg/String'
 
 
 class Estimator:
@@ -181,7 +182,6 @@ class Estimator:
             self.worker.join(60.0)
         self.rec.close()
         self.log.info(f'bag closed: {self.bag} ({json.dumps(self.counts)})')
-
 
     def close(self) -> None:
         """Drain, finalise the bag and report its path."""

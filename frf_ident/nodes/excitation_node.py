@@ -24,18 +24,17 @@ import threading
 import time
 from typing import Any, Optional, Sequence
 
-import numpy as np
-
 from frf_ident import middleware as mw
 from frf_ident.app.excitation import ExcitationSession, SessionSettings
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 from frf_ident.nodes import common as c
+import numpy as np
 
 __all__ = ['ExcitationNode', 'main']
 
 
 def _config(node: Any, prefix: str, cls: type) -> Any:
-    """A procedure config dataclass from parameters ``prefix.<field>`` (scalars and 1-D lists)."""
+    """Build a procedure config from parameters ``prefix.<field>`` (scalars and 1-D lists)."""
     kw = {}
     proto = cls()
     for f in dataclasses.fields(cls):
@@ -55,7 +54,7 @@ def _config(node: Any, prefix: str, cls: type) -> Any:
 
 
 def settings_from_parameters(node: Any) -> SessionSettings:
-    """SessionSettings from the node's parameters (defaults: SessionSettings' own)."""
+    """Build the SessionSettings from the node's parameters (defaults: its own)."""
     proto = SessionSettings()
     kw = {f.name: c.param(node, f.name, getattr(proto, f.name))
           for f in dataclasses.fields(SessionSettings) if f.name not in ('multisine', 'chirp')}
@@ -123,7 +122,14 @@ class ExcitationNode:
         self.progress_pub.publish(self.String(data=json.dumps(event, sort_keys=True)))
 
     def log(self, level: str, text: str) -> None:
-        getattr(self.node.get_logger(), level)(text)
+        # one call site per severity: rclpy refuses a severity change at the same call site
+        logger = self.node.get_logger()
+        if level == 'error':
+            logger.error(text)
+        elif level == 'warn':
+            logger.warn(text)
+        else:
+            logger.info(text)
 
     # -- wiring ----------------------------------------------------------------------------
     def refuse_second_publisher(self, wait_s: float) -> None:

@@ -1,4 +1,4 @@
-"""plant_node: the simulated robot (model file) or a docs/CONTRACT.md §4 plug-in plant on ROS topics.
+"""plant_node: the simulated robot (model file) or a docs/CONTRACT.md §4 plug-in plant.
 
 Subscribes the effort commands (Float64MultiArray, joint order), publishes /joint_states
 (position, velocity = plant output y, effort = the torque applied over the sample that just
@@ -23,10 +23,9 @@ from __future__ import annotations
 import time
 from typing import Any, Optional, Sequence
 
-import numpy as np
-
 from frf_ident import middleware as mw
 from frf_ident.nodes import common as c
+import numpy as np
 
 
 class PlantNode:

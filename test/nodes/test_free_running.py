@@ -7,10 +7,9 @@ joint state k with its own effort. The multisine FRF from the bag must match the
 sampled FRF: a one-sample error in the torque pairing would show as a phase error of
 360 f dt (21.6 deg at 60 Hz) and a relative error |exp(j 2 pi f dt) - 1| (38 % at 60 Hz).
 """
-import numpy as np
-
 from frf_ident.app.graph import Graph
 from frf_ident.core.excitation.procedures import MultisineConfig
+import numpy as np
 
 
 def test_free_running_frf_unbiased(tmp_path):

@@ -17,7 +17,7 @@ _held: list = []
 
 
 def next_domain() -> int:
-    """A ROS domain id in 110..149 held by no other test session and not used before here."""
+    """Return a ROS domain id in 110..149 held by no other test session, unused here."""
     for d in range(110, 150):
         if any(h[0] == d for h in _held):
             continue

@@ -6,11 +6,10 @@ excitation + estimator, and the reverse) must record the same bag: the FRFs agre
 """
 import json
 
-import numpy as np
-import pytest
-
 from frf_ident.app.graph import Graph
 from frf_ident.core.excitation.procedures import MultisineConfig
+import numpy as np
+import pytest
 
 SIM = ('plant_node', 'controller_node')
 REST = ('excitation_node', 'estimator_node')

@@ -9,13 +9,13 @@ says with ``ros_distro: jazzy``, and ``sim:=false`` (free-running, wall time) st
 """
 import json
 import os
+from pathlib import Path
 import signal
 import subprocess
 import sys
 import sysconfig
 import threading
 import time
-from pathlib import Path
 
 import pytest
 import yaml
@@ -165,6 +165,7 @@ def test_launch_sim(ros_env, prefix, tmp_path):
     finally:
         _stop(proc, log)
         obs.close()
+        print(log[0][-4000:])
     meta = (bag / 'metadata.yaml').read_text()
     assert 'ros_distro: jazzy' in meta, meta[-300:]
     assert not list(cwd.glob('frf_bag_*')), 'bag:= was ignored'

@@ -8,9 +8,8 @@ import subprocess
 import sys
 import time
 
-import pytest
-
 from frf_ident.middleware import READY
+import pytest
 
 NODES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node')
 

@@ -16,9 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 from frf_ident.core.excitation.procedures import move_plan, Phase, POSITION_GAIN
+import numpy as np
 
 __all__ = ['PhaseEngine', 'PhaseSamples', 'PhaseStream', 'SegmentEvent', 'StreamSample']
 
@@ -39,7 +38,7 @@ class PhaseSamples:
 
     @property
     def held(self) -> bool:
-        """True when each sample needs the position measured at that sample (move, settle)."""
+        """Tell whether each sample needs the position measured at it (move, settle)."""
         return self.plan is not None
 
     def command(self, i: int, q: np.ndarray | None) -> np.ndarray:
@@ -76,7 +75,7 @@ class PhaseEngine:
         self.hold: np.ndarray | None = None    # position a settle holds after a move
 
     def expand(self, ph: Phase, q_now: np.ndarray) -> PhaseSamples:
-        """The samples of phase ``ph`` starting at the measured position ``q_now``.
+        """Expand phase ``ph`` into samples, starting at the measured position ``q_now``.
 
         Parameters
         ----------
@@ -148,11 +147,11 @@ class PhaseStream:
 
     @property
     def done(self) -> bool:
-        """True once every sample has been produced."""
+        """Tell whether every sample has been produced."""
         return self._i_phase >= len(self.phases)
 
     def needs_measurement(self) -> bool:
-        """True when the next sample needs the position measured at that very sample."""
+        """Tell whether the next sample needs the position measured at that very sample."""
         if self.done:
             return False
         if self._cur is not None:

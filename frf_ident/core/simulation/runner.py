@@ -1,25 +1,26 @@
 """Offline runner: executes procedure phases in closed loop on a simulated or plug-in plant.
 
-The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` (run at compiled speed, the PI
-inside the kernel) or any docs/CONTRACT.md §4 plug-in with ``dt``, ``joint_names``, ``reset()``
-and ``step(torque) -> (position, velocity, effort)``, driven sample by sample through the same
+The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` (run at compiled
+speed, the PI inside the kernel) or any docs/CONTRACT.md §4 plug-in with ``dt``,
+``joint_names``, ``reset()`` and ``step(torque) -> (position, velocity, effort)``, driven sample
+by sample through the same
 PI. Everything lands in one :class:`~frf_ident.core.recording.Recording` on a single timeline.
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
+import time
 from typing import Any, Callable
 
-import numpy as np
-
 from frf_ident.core.excitation.engine import PhaseEngine
-from frf_ident.core.excitation.procedures import (ChirpConfig, ChirpIteration, MultisineConfig,
-                                                  multisine_procedure, Phase, POSITION_GAIN)
+from frf_ident.core.excitation.procedures import (ChirpConfig, ChirpIteration,
+                                                  multisine_procedure, MultisineConfig, Phase,
+                                                  POSITION_GAIN)
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import FrfIdentInputError
+import numpy as np
 
 Progress = Callable[[str], None]
 
