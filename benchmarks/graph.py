@@ -1,4 +1,5 @@
-"""Lockstep closed-loop speed of the node graph vs plain DDS ping-pong, in the same run.
+"""
+Lockstep closed-loop speed of the node graph vs plain DDS ping-pong, in the same run.
 
 ``bench_lockstep()`` starts plant, controller and excitation node (and, for the second figure,
 the estimator recording everything) as processes on a private loopback domain, runs a
@@ -55,7 +56,8 @@ def bench_lockstep(model: Optional[str] = None, n_pingpong: int = 3000) -> dict[
 
 
 def bench_backends(model: Optional[str] = None, n_pingpong: int = 3000) -> list[dict]:
-    """Measure per backend (rclpy when importable, DDS always) graph and ping-pong rates.
+    """
+    Measure per backend (rclpy when importable, DDS always) graph and ping-pong rates.
 
     Both are measured back to back in the same run.
     """

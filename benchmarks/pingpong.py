@@ -1,4 +1,5 @@
-"""Round-trip benchmark of the Cyclone DDS backend between two processes on loopback.
+"""
+Round-trip benchmark of the Cyclone DDS backend between two processes on loopback.
 
 The ping is a ``std_msgs/Float64MultiArray`` (like a torque command) and the pong a
 ``sensor_msgs/JointState`` (like the plant's answer), i.e. one lockstep-simulation step.
@@ -56,7 +57,8 @@ def _pong(tag: str) -> None:
 
 
 def dds_pingpong(n: int = 2000, timeout_sec: float = 30.0) -> float:
-    """Round trips per second of ping/pong over Cyclone DDS between this and a child process.
+    """
+    Round trips per second of ping/pong over Cyclone DDS between this and a child process.
 
     The child gets the loopback environment of :func:`loopback_env`; this process must already
     run with it (or be about to create its first participant with ROS_AUTOMATIC_DISCOVERY_RANGE
@@ -159,18 +161,23 @@ def _mw_ping(tag: str, n: int, timeout_sec: float) -> None:
 
 
 def pingpong(backend: str, n: int = 2000, timeout_sec: float = 60.0) -> float:
-    """Round trips per second between two processes on ``backend`` ('rclpy' or 'dds').
+    """
+    Round trips per second between two processes on ``backend`` ('rclpy' or 'dds').
 
     Parameters
     ----------
-    backend : frf_ident middleware backend of both processes.
-    n : round trips.
-    timeout_sec : give up after this long.
+    backend
+        Frf_ident middleware backend of both processes.
+    n
+        Round trips.
+    timeout_sec
+        Give up after this long.
 
     Returns
     -------
     float
         Round trips per second (the same messages as one lockstep step).
+
     """
     env = loopback_env()
     env['FRF_IDENT_MIDDLEWARE'] = backend

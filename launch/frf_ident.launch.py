@@ -11,7 +11,8 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Launch the frf_ident nodes: plant, controller (sim only), excitation, estimator.
+"""
+Launch the frf_ident nodes: plant, controller (sim only), excitation, estimator.
 
     ros2 launch frf_ident frf_ident.launch.py model:=/path/model.yaml bag:=/tmp/run1
     ros2 service call /frf/run_multisine std_srvs/srv/Trigger     # answers at once

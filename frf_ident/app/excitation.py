@@ -1,4 +1,18 @@
-"""The excitation session behind ``excitation_node``: procedures streamed over the node graph.
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The excitation session behind ``excitation_node``: procedures streamed over the node graph.
 
 :class:`ExcitationSession` owns the run state (operating point, the streamed
 :class:`~frf_ident.core.excitation.engine.PhaseStream`, the chirp iteration, the watchdog
@@ -42,16 +56,19 @@ __all__ = ['ExcitationSession', 'Outputs', 'SessionSettings', 'torque_sample_off
 
 
 def torque_sample_offset(lockstep: bool) -> int:
-    """Joint state k carries the torque of sample ``k - offset`` (see the module docstring).
+    """
+    Joint state k carries the torque of sample ``k - offset`` (see the module docstring).
 
     Parameters
     ----------
-    lockstep : True for the lockstep simulation, False free-running (real robot).
+    lockstep
+        True for the lockstep simulation, False free-running (real robot).
 
     Returns
     -------
     int
         1 in lockstep, 0 free-running.
+
     """
     return 1 if lockstep else 0
 
@@ -104,15 +121,22 @@ class Run:
 
 
 class ExcitationSession:
-    """Procedures streamed as references, one joint state at a time.
+    """
+    Procedures streamed as references, one joint state at a time.
 
     Parameters
     ----------
-    settings : node parameters.
-    joints : joint names (model order).
-    dt : sample time [s].
-    torque_limit : per joint [N m] (chirp iteration scaling and refusal).
-    out : where references, descriptors, events and log lines go.
+    settings
+        Node parameters.
+    joints
+        Joint names (model order).
+    dt
+        Sample time [s].
+    torque_limit
+        Per joint [N m] (chirp iteration scaling and refusal).
+    out
+        Where references, descriptors, events and log lines go.
+
     """
 
     def __init__(self, settings: SessionSettings, joints: list[str], dt: float,

@@ -1,4 +1,5 @@
-"""Start the node graph as separate OS processes and drive an identification.
+"""
+Start the node graph as separate OS processes and drive an identification.
 
 :class:`Graph` writes a ROS parameter file, starts plant, controller, excitation and estimator
 as ``python -m frf_ident.nodes.<node> --ros-args --params-file F`` with a loopback-only
@@ -43,16 +44,19 @@ RANDOM_DOMAINS = (100, 149)
 
 
 def default_domain_id(env: Optional[dict] = None) -> int:
-    """ROS_DOMAIN_ID of ``env`` (default os.environ) when set, else a random one.
+    """
+    ROS_DOMAIN_ID of ``env`` (default os.environ) when set, else a random one.
 
     Parameters
     ----------
-    env : environment to read.
+    env
+        Environment to read.
 
     Returns
     -------
     int
         The domain id.
+
     """
     value = (os.environ if env is None else env).get('ROS_DOMAIN_ID', '').strip()
     return int(value) if value else random.randint(*RANDOM_DOMAINS)
@@ -69,18 +73,23 @@ def default_middleware() -> str:
 
 def graph_env(domain_id: int, base: Optional[dict] = None,
               middleware: Optional[str] = None) -> dict[str, str]:
-    """Environment of the node processes: loopback, ``domain_id``, the chosen middleware.
+    """
+    Environment of the node processes: loopback, ``domain_id``, the chosen middleware.
 
     Parameters
     ----------
-    domain_id : ROS_DOMAIN_ID.
-    base : environment to start from (default os.environ).
-    middleware : 'rclpy' or 'dds' (default :func:`default_middleware`).
+    domain_id
+        ROS_DOMAIN_ID.
+    base
+        Environment to start from (default os.environ).
+    middleware
+        'rclpy' or 'dds' (default :func:`default_middleware`).
 
     Returns
     -------
     dict
         The environment.
+
     """
     env = dict(os.environ if base is None else base)
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'

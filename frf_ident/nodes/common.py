@@ -42,20 +42,26 @@ def refuse_lockstep_without_sim(node: Any, lockstep: bool) -> None:
 
 def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
              use_sim_time: Optional[bool] = None) -> int:
-    """Create node ``name``, wire it with ``wiring(node)``, announce readiness and spin.
+    """
+    Create node ``name``, wire it with ``wiring(node)``, announce readiness and spin.
 
     Parameters
     ----------
-    name : node name.
-    wiring : class (or callable) taking the node; its ``close()`` runs at shutdown, its
+    name
+        Node name.
+    wiring
+        Class (or callable) taking the node; its ``close()`` runs at shutdown, its
         ``spin(stop_event)`` replaces the default spin when it has one.
-    argv : command line (``--ros-args`` ...); default sys.argv.
-    use_sim_time : forced value (the plant is the clock source), None: from parameters.
+    argv
+        Command line (``--ros-args`` ...); default sys.argv.
+    use_sim_time
+        Forced value (the plant is the clock source), None: from parameters.
 
     Returns
     -------
     int
         0, or 2 when the node refused its parameters (one line on stderr).
+
     """
     init(argv)
     stop = StopOnSignal()
@@ -84,6 +90,16 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
     finally:
         mw.shutdown()
     return 0
+
+
+def control_qos(lockstep: bool) -> Any:
+    """QoS of what a node acts on (joint states, commands).
+
+    Lockstep: deep (every sample is consumed in order). Free-running: the newest only, as in a
+    real-time loop: a node that fell behind acts on the present, never works through a backlog
+    (which would add a growing delay to the control loop).
+    """
+    return mw.qos_default(DEEP if lockstep else 1)
 
 
 def param(node: Any, name: str, default: Any) -> Any:

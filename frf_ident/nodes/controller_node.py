@@ -1,4 +1,5 @@
-"""controller_node: the model file's velocity PI between /joint_states and the effort commands.
+"""
+controller_node: the model file's velocity PI between /joint_states and the effort commands.
 
 Subscribes /joint_states (y = velocity) and /velocity_controller/commands (r), publishes
 /effort_controller/commands (u = PI(r, y), always within +-torque_limit: the PI saturates with
@@ -43,9 +44,10 @@ class ControllerNode:
         self.last_stamp = -1
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None
-        node.create_subscription(F64, t['velocity_topic'], self._on_ref, mw.qos_default(c.DEEP))
+        node.create_subscription(F64, t['velocity_topic'], self._on_ref,
+                                 c.control_qos(self.lockstep))
         node.create_subscription(mw.msg('sensor_msgs/msg/JointState'), t['joint_states_topic'],
-                                 self._on_state, mw.qos_default(c.DEEP))
+                                 self._on_state, c.control_qos(self.lockstep))
 
     def _ref(self, data: Any) -> np.ndarray:
         r = np.asarray(data, dtype=float)

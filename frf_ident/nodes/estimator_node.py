@@ -1,4 +1,5 @@
-"""estimator_node: records the experiment topics to a rosbag2 MCAP bag and estimates the FRF.
+"""
+estimator_node: records the experiment topics to a rosbag2 MCAP bag and estimates the FRF.
 
 Recorded (docs/CONTRACT.md §3): /joint_states, /velocity_controller/commands,
 /effort_controller/commands, /frf/excitation, /frf/experiment, with

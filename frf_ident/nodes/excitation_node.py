@@ -1,4 +1,5 @@
-"""excitation_node: streams the identification procedures as velocity references.
+"""
+excitation_node: streams the identification procedures as velocity references.
 
 One node, one process. Publishes /velocity_controller/commands (Float64MultiArray), the
 excitation part with its sample stamp on /frf/excitation (JointState), ``Segment.descriptor``
@@ -94,7 +95,7 @@ class ExcitationNode:
         self.names: Optional[list[str]] = None
         self.refuse_second_publisher(float(c.param(node, 'discovery_wait_s', 0.5)))
         node.create_subscription(JointState, t['joint_states_topic'], self._on_state,
-                                 mw.qos_default(c.DEEP))
+                                 c.control_qos(settings.lockstep))
         Trigger = mw.srv('std_srvs/srv/Trigger')
         node.create_service(Trigger, '/frf/run_multisine', self._on_run_multisine)
         node.create_service(Trigger, '/frf/run_iteration', self._on_run_iteration)

@@ -1,4 +1,5 @@
-"""plant_node: the simulated robot (model file) or a docs/CONTRACT.md §4 plug-in plant.
+"""
+plant_node: the simulated robot (model file) or a docs/CONTRACT.md §4 plug-in plant.
 
 Subscribes the effort commands (Float64MultiArray, joint order), publishes /joint_states
 (position, velocity = plant output y, effort = the torque applied over the sample that just
@@ -63,7 +64,7 @@ class PlantNode:
                                             mw.qos_default(c.DEEP))
         self.clock_pub = node.create_publisher(Clock, t['clock_topic'], mw.qos_clock())
         node.create_subscription(mw.msg('std_msgs/msg/Float64MultiArray'), t['effort_topic'],
-                                 self._on_command, mw.qos_default(c.DEEP))
+                                 self._on_command, c.control_qos(self.lockstep))
         self.last_pub = 0.0
         if self.lockstep:
             self._publish()

@@ -1,4 +1,18 @@
-"""ROS 2 tests: run only where ROS 2 Jazzy is sourced (rclpy importable), else skipped.
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+ROS 2 tests: run only where ROS 2 Jazzy is sourced (rclpy importable), else skipped.
 
 Each test gets its own ROS_DOMAIN_ID from :func:`next_domain`: a domain in 110..149 that no
 other test process holds (an flock on /tmp/frf_ident_ros_domain_<id>.lock, kept until this

@@ -1,4 +1,18 @@
-"""Every node on real rclpy: names, parameters (types as rclpy enforces them), refusals, services.
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Every node on real rclpy: names, parameters (types as rclpy enforces them), refusals, services.
 
 The nodes run as ``python -m frf_ident.nodes.<node>`` with FRF_IDENT_MIDDLEWARE=rclpy; this test
 process looks at the graph with its own rclpy context on the same domain.

@@ -1,4 +1,18 @@
-"""The one move/settle/excite phase engine, used offline (runner) and streamed (excitation node).
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The one move/settle/excite phase engine, used offline (runner) and streamed (excitation node).
 
 A procedure is a list of :class:`~frf_ident.core.excitation.procedures.Phase`. What a phase
 sends depends on where the robot is when it starts: a 'move' plans from the measured position to
@@ -24,7 +38,8 @@ __all__ = ['PhaseEngine', 'PhaseSamples', 'PhaseStream', 'SegmentEvent', 'Stream
 
 @dataclass
 class PhaseSamples:
-    """What one phase sends, sample by sample.
+    """
+    What one phase sends, sample by sample.
 
     ``reference`` (N, n) is the feed-forward velocity reference, ``excitation`` (N, n) its
     excitation part, ``plan`` (N, n absolute positions, or None) the position plan the reference
@@ -42,17 +57,21 @@ class PhaseSamples:
         return self.plan is not None
 
     def command(self, i: int, q: np.ndarray | None) -> np.ndarray:
-        """Velocity reference of sample ``i`` given the position ``q`` measured at it.
+        """
+        Velocity reference of sample ``i`` given the position ``q`` measured at it.
 
         Parameters
         ----------
-        i : sample index within the phase.
-        q : measured position at that sample (used only when the phase has a plan).
+        i
+            Sample index within the phase.
+        q
+            Measured position at that sample (used only when the phase has a plan).
 
         Returns
         -------
         np.ndarray
             The reference to send, (n,).
+
         """
         if self.plan is None:
             return self.reference[i]
@@ -60,12 +79,16 @@ class PhaseSamples:
 
 
 class PhaseEngine:
-    """Expands phases into samples around the operating point ``q0``.
+    """
+    Expands phases into samples around the operating point ``q0``.
 
     Parameters
     ----------
-    q0 : operating point (absolute position [rad], the first measurement).
-    dt : sample time [s].
+    q0
+        Operating point (absolute position [rad], the first measurement).
+    dt
+        Sample time [s].
+
     """
 
     def __init__(self, q0: np.ndarray, dt: float) -> None:
@@ -75,17 +98,21 @@ class PhaseEngine:
         self.hold: np.ndarray | None = None    # position a settle holds after a move
 
     def expand(self, ph: Phase, q_now: np.ndarray) -> PhaseSamples:
-        """Expand phase ``ph`` into samples, starting at the measured position ``q_now``.
+        """
+        Expand phase ``ph`` into samples, starting at the measured position ``q_now``.
 
         Parameters
         ----------
-        ph : the phase.
-        q_now : position measured at the phase's first sample.
+        ph
+            The phase.
+        q_now
+            Position measured at the phase's first sample.
 
         Returns
         -------
         PhaseSamples
             Reference, excitation and (move/settle) position plan.
+
         """
         if ph.kind == 'excite':
             exc = ph.excitation if ph.excitation is not None else np.zeros_like(ph.reference)
@@ -124,13 +151,18 @@ class StreamSample:
 
 
 class PhaseStream:
-    """A procedure streamed one sample at a time from sample index ``start_k``.
+    """
+    A procedure streamed one sample at a time from sample index ``start_k``.
 
     Parameters
     ----------
-    engine : the phase engine (operating point, move/settle bookkeeping).
-    phases : the procedure.
-    start_k : sample index of the first sample.
+    engine
+        The phase engine (operating point, move/settle bookkeeping).
+    phases
+        The procedure.
+    start_k
+        Sample index of the first sample.
+
     """
 
     def __init__(self, engine: PhaseEngine, phases: list[Phase], start_k: int) -> None:
@@ -159,16 +191,19 @@ class PhaseStream:
         return self.phases[self._i_phase].kind in ('move', 'settle')
 
     def next_sample(self, q: np.ndarray | None) -> StreamSample:
-        """Produce the next sample, given the newest measured position ``q``.
+        """
+        Produce the next sample, given the newest measured position ``q``.
 
         Parameters
         ----------
-        q : position measured at the sample (required when :meth:`needs_measurement`).
+        q
+            Position measured at the sample (required when :meth:`needs_measurement`).
 
         Returns
         -------
         StreamSample
             Index, reference, excitation and segment start/end events.
+
         """
         if self.done:
             raise IndexError('the procedure has no more samples')
