@@ -13,8 +13,9 @@ from typing import Any, Callable, Optional, Sequence
 
 from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
-import rclpy.exceptions
 from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
+                              ParameterException)
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node as RclpyNode
 from rclpy.parameter import Parameter
@@ -24,9 +25,8 @@ from frf_ident.middleware.qos import as_qos_spec, QosSpec
 
 BACKEND_NAME = 'rclpy'
 #: what rclpy raises for a parameter value of the wrong type or an invalid one
-PARAMETER_ERRORS: tuple = (rclpy.exceptions.ParameterException,
-                           rclpy.exceptions.InvalidParameterTypeException,
-                           rclpy.exceptions.InvalidParameterValueException)
+PARAMETER_ERRORS: tuple = (ParameterException, InvalidParameterTypeException,
+                           InvalidParameterValueException)
 
 
 def to_qos_profile(qos: 'QosSpec | int | QoSProfile') -> QoSProfile:

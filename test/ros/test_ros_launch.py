@@ -42,9 +42,11 @@ SHORT = {'n_realisations': 1, 'n_periods': 2, 'resolution_hz': 2.0, 'compensate'
 @pytest.fixture(scope='module')
 def prefix(tmp_path_factory):
     pre = tmp_path_factory.mktemp('install')
+    # --ignore-installed: without it pip would first uninstall the package from the running
+    # environment (an editable install of the checkout) before installing into the prefix
     subprocess.run([sys.executable, '-m', 'pip', 'install', '--quiet', '--no-deps',
-                    '--no-build-isolation', '--prefix', str(pre), str(ROOT)], check=True,
-                   cwd=str(pre), timeout=300)
+                    '--no-build-isolation', '--ignore-installed', '--prefix', str(pre),
+                    str(ROOT)], check=True, cwd=str(pre), timeout=300)
     lib = pre / 'lib' / 'frf_ident'
     lib.mkdir(parents=True)
     for exe in ('plant_node', 'controller_node', 'excitation_node', 'estimator_node'):
