@@ -5,8 +5,10 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= out
 
-# Every DDS participant we start stays on loopback (docs/CONTRACT.md §2).
+# Every DDS participant we start stays on loopback (docs/CONTRACT.md §2). With ROS 2 sourced
+# (.ci/run does it when ../shared/ros2 exists) the ROS tests run on rmw_cyclonedds_cpp.
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
+export RMW_IMPLEMENTATION := rmw_cyclonedds_cpp
 export CYCLONEDDS_URI := file://$(CURDIR)/config/cyclonedds-localhost.xml
 export NUMBA_CACHE_DIR := $(CURDIR)/$(VENV)/numba_cache
 export MPLBACKEND := Agg

@@ -36,7 +36,8 @@ setup(
                  # the linters as ROS 2 Jazzy (Ubuntu 24.04) ships them, for ament_flake8/pep257
                  'flake8==7.0.0', 'flake8-builtins==2.1.0', 'flake8-comprehensions==3.14.0',
                  'flake8-docstrings==1.6.0', 'flake8-import-order==0.18.2',
-                 'flake8-quotes==3.3.2', 'pydocstyle==6.3.0'],
+                 'flake8-quotes==3.3.2', 'pydocstyle==6.3.0',
+                 'wheel'],   # test/ros installs the package into a prefix as colcon would
         'control': ['control>=0.10'],
     },
     zip_safe=True,
@@ -52,7 +53,6 @@ setup(
             'controller_node = frf_ident.nodes.controller_node:main',
             'excitation_node = frf_ident.nodes.excitation_node:main',
             'estimator_node = frf_ident.nodes.estimator_node:main',
-            'iteration_service = frf_ident.nodes.iteration_service:main',
         ],
     },
 )

@@ -342,20 +342,9 @@ def bench_diagnosis() -> list[tuple[str, str, str, str]]:
 
 @section('nodes')
 def bench_nodes() -> list[tuple[str, str, str, str]]:
-    """
-    Measure the node graph's lockstep steps/s against a DDS ping-pong in the same run.
-
-    Separate processes over DDS on loopback; the ping-pong uses the same backend (goal 50 %).
-    """
-    from benchmarks.graph import bench_lockstep
-    r = bench_lockstep()
-    pp = r['pingpong_per_s']
-    return [('node graph lockstep (plant, controller, excitation)',
-             f"{r['graph_steps_per_s']:,.0f} steps/s", f'DDS ping-pong {pp:,.0f}/s',
-             f"{100 * r['graph_steps_per_s'] / pp:.0f} % (goal 50 %)"),
-            ('... with the estimator recording the bag',
-             f"{r['graph_with_recorder_steps_per_s']:,.0f} steps/s", f'DDS ping-pong {pp:,.0f}/s',
-             f"{100 * r['graph_with_recorder_steps_per_s'] / pp:.0f} %")]
+    """Measure the node graph's lockstep steps/s beside the same backend's ping-pong."""
+    from benchmarks.graph import rows
+    return rows()
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,4 +1,5 @@
-"""Lockstep closed-loop speed of the node graph vs plain DDS ping-pong, in the same run.
+"""
+Lockstep closed-loop speed of the node graph vs plain DDS ping-pong, in the same run.
 
 ``bench_lockstep()`` starts plant, controller and excitation node (and, for the second figure,
 the estimator recording everything) as processes on a private loopback domain, runs a
@@ -12,17 +13,18 @@ Run: ``python -m benchmarks.graph``.
 from __future__ import annotations
 
 import json
-import tempfile
 from pathlib import Path
+import tempfile
 from typing import Any, Optional
 
 from frf_ident.app.graph import Graph
 
 
-def _graph_rate(out: Path, nodes: tuple[str, ...], model: Optional[str]) -> dict[str, Any]:
+def _graph_rate(out: Path, nodes: tuple[str, ...], model: Optional[str],
+                middleware: Optional[str] = None) -> dict[str, Any]:
     from frf_ident.core.excitation.procedures import MultisineConfig
     ms = MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0, compensate=False)
-    g = Graph(out, model=model, multisine=ms, nodes=nodes,
+    g = Graph(out, model=model, multisine=ms, nodes=nodes, middleware=middleware,
               params={'excitation_node': {'stale_s': 2.0}})
     g.start()
     try:
@@ -35,7 +37,7 @@ def _graph_rate(out: Path, nodes: tuple[str, ...], model: Optional[str]) -> dict
 
 
 def bench_lockstep(model: Optional[str] = None, n_pingpong: int = 3000) -> dict[str, Any]:
-    """{'graph_steps_per_s', 'graph_with_recorder_steps_per_s', 'pingpong_per_s', 'ratio', ...}"""
+    """Measure the DDS graph: {'graph_steps_per_s', 'pingpong_per_s', 'ratio', ...}."""
     from benchmarks.pingpong import dds_pingpong
     with tempfile.TemporaryDirectory(prefix='frf_bench_') as tmp:
         bare = _graph_rate(Path(tmp) / 'bare', ('plant_node', 'controller_node',
@@ -53,8 +55,47 @@ def bench_lockstep(model: Optional[str] = None, n_pingpong: int = 3000) -> dict[
             'goal_ratio': 0.5}
 
 
+def bench_backends(model: Optional[str] = None, n_pingpong: int = 3000) -> list[dict]:
+    """
+    Measure per backend (rclpy when importable, DDS always) graph and ping-pong rates.
+
+    Both are measured back to back in the same run.
+    """
+    import importlib.util
+    from benchmarks.pingpong import pingpong
+    backends = (['rclpy'] if importlib.util.find_spec('rclpy') else []) + ['dds']
+    rows = []
+    for be in backends:
+        with tempfile.TemporaryDirectory(prefix='frf_bench_') as tmp:
+            bare = _graph_rate(Path(tmp) / 'bare', ('plant_node', 'controller_node',
+                                                    'excitation_node'), model, be)
+            full = _graph_rate(Path(tmp) / 'full', ('plant_node', 'controller_node',
+                                                    'excitation_node', 'estimator_node'),
+                               model, be)
+        pp = pingpong(be, n_pingpong)
+        rows.append({'backend': be, 'graph_steps_per_s': bare['steps_per_s'],
+                     'graph_with_recorder_steps_per_s': full['steps_per_s'],
+                     'pingpong_per_s': pp, 'ratio': bare['steps_per_s'] / pp,
+                     'ratio_with_recorder': full['steps_per_s'] / pp})
+    return rows
+
+
+def rows() -> list[tuple[str, str, str, str]]:
+    """``make bench`` rows: per backend, graph samples/s beside that backend's ping-pong."""
+    out = []
+    for r in bench_backends():
+        be, pp = r['backend'], r['pingpong_per_s']
+        out.append((f'{be} graph lockstep (plant, controller, excitation)',
+                    f"{r['graph_steps_per_s']:,.0f} samples/s", f'{be} ping-pong {pp:,.0f}/s',
+                    f"{100 * r['ratio']:.0f} %"))
+        out.append((f'{be} graph ... with the estimator recording',
+                    f"{r['graph_with_recorder_steps_per_s']:,.0f} samples/s",
+                    f'{be} ping-pong {pp:,.0f}/s', f"{100 * r['ratio_with_recorder']:.0f} %"))
+    return out
+
+
 def main() -> None:
-    print(json.dumps(bench_lockstep(), indent=1))
+    print(json.dumps(bench_backends(), indent=1))
 
 
 if __name__ == '__main__':

@@ -1,12 +1,29 @@
-"""Launch the frf_ident node suite on real ROS 2 (rclpy): plant, controller, excitation with the
-chirp iteration service, estimator; parameters from config/frf_ident.yaml, use_sim_time.
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Launch the frf_ident nodes: plant, controller (sim only), excitation, estimator.
 
     ros2 launch frf_ident frf_ident.launch.py model:=/path/model.yaml bag:=/tmp/run1
-    ros2 service call /frf/run_multisine std_srvs/srv/Trigger
-    ros2 service call /frf/run_iteration std_srvs/srv/Trigger
+    ros2 service call /frf/run_multisine std_srvs/srv/Trigger     # answers at once
+    ros2 topic echo /frf/progress                                 # progress and the end
 
-On a real robot leave out the plant (``sim:=false``): the robot's joint_state_broadcaster and
-effort/velocity controllers take its place.
+Arguments: ``model`` (model file; '' = the package's default), ``bag`` (bag directory the
+estimator creates; '' = ./frf_bag_<date>_<time>), ``sim`` (true: simulated plant and
+controller in lockstep on sim time; false: a real robot, the nodes run free on wall time and
+the robot's joint_state_broadcaster and velocity controller take the plant's place),
+``use_sim_time`` (default: the value of ``sim``). Parameters come from the package's
+config/frf_ident.yaml; ``lockstep`` always equals ``sim``.
 """
 import os
 
@@ -16,25 +33,32 @@ from launch.actions import DeclareLaunchArgument
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
+from launch_ros.parameter_descriptions import ParameterValue
 
 
 def generate_launch_description():
+    """Four nodes, one per process, each with its own name."""
     params = os.path.join(get_package_share_directory('frf_ident'), 'config', 'frf_ident.yaml')
-    model = LaunchConfiguration('model')
     sim = LaunchConfiguration('sim')
-    bag = LaunchConfiguration('bag')
-    common = [params, {'use_sim_time': LaunchConfiguration('use_sim_time'), 'model': model}]
+    common = [params, {
+        'use_sim_time': ParameterValue(LaunchConfiguration('use_sim_time'), value_type=bool),
+        'lockstep': ParameterValue(sim, value_type=bool),
+        'model': ParameterValue(LaunchConfiguration('model'), value_type=str)}]
+    bag = {'bag': ParameterValue(LaunchConfiguration('bag'), value_type=str)}
+
+    def node(executable, extra=(), condition=None):
+        return Node(package='frf_ident', executable=executable, name=executable,
+                    parameters=common + list(extra), output='screen', condition=condition)
+
     return LaunchDescription([
-        DeclareLaunchArgument('model', default_value=''),
-        DeclareLaunchArgument('sim', default_value='true'),
-        DeclareLaunchArgument('use_sim_time', default_value='true'),
-        DeclareLaunchArgument('bag', default_value=''),
-        Node(package='frf_ident', executable='plant_node', name='plant_node',
-             parameters=common, output='screen', condition=IfCondition(sim)),
-        Node(package='frf_ident', executable='controller_node', name='controller_node',
-             parameters=common, output='screen', condition=IfCondition(sim)),
-        Node(package='frf_ident', executable='excitation_node', name='excitation_node',
-             parameters=common, output='screen'),
-        Node(package='frf_ident', executable='estimator_node', name='estimator_node',
-             parameters=common + [{'bag': bag}], output='screen'),
+        DeclareLaunchArgument('model', default_value='', description='model file'),
+        DeclareLaunchArgument('sim', default_value='true',
+                              description='simulated robot (lockstep) or a real one'),
+        DeclareLaunchArgument('use_sim_time', default_value=sim,
+                              description='default: the value of sim'),
+        DeclareLaunchArgument('bag', default_value='', description='bag directory'),
+        node('plant_node', condition=IfCondition(sim)),
+        node('controller_node', condition=IfCondition(sim)),
+        node('excitation_node'),
+        node('estimator_node', [bag]),
     ])

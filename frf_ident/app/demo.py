@@ -61,4 +61,3 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
     diagnose(Path(bag), Path(model), out / 'diagnosis', progress=progress)
     progress(f'demo: diagnosis in {out / "diagnosis"}')
     return 0
-

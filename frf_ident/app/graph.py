@@ -1,12 +1,18 @@
-"""Start the node graph as separate OS processes on the DDS backend and drive an identification.
+"""
+Start the node graph as separate OS processes and drive an identification.
 
-:class:`Graph` writes a ROS parameter file, starts plant, controller, excitation (+ iteration
-service) and estimator as ``python -m frf_ident.nodes.<node> --ros-args --params-file F``
-with a loopback-only environment (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, CYCLONEDDS_URI =
-config/cyclonedds-localhost.xml, FRF_IDENT_MIDDLEWARE=dds) and its own ROS_DOMAIN_ID, waits
-until every node reports ready, then drives the identification from a driver process
-(``/frf/run_multisine``, then ``/frf/run_iteration`` until converged or max_iterations) and
-stops the graph with SIGINT (the estimator drains and finalises the bag).
+:class:`Graph` writes a ROS parameter file, starts plant, controller, excitation and estimator
+as ``python -m frf_ident.nodes.<node> --ros-args --params-file F`` with a loopback-only
+environment (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, CYCLONEDDS_URI =
+config/cyclonedds-localhost.xml), waits until every node reports ready, then drives the
+identification from a driver process (``/frf/run_multisine``, then ``/frf/run_iteration`` until
+converged or max_iterations; each service answers at once and the driver waits for the run's
+``finished`` event on /frf/progress) and stops the graph with SIGINT (the estimator drains and
+finalises the bag).
+
+Middleware: rclpy when ROS 2 is sourced, else the Cyclone DDS backend (``middleware=`` or
+FRF_IDENT_MIDDLEWARE choose). Domain: ``domain_id=``, else ROS_DOMAIN_ID when set (so
+``ros2 topic echo`` in the user's shell sees the graph), else a random one in 100..149.
 
     bag, results = run_graph('out/run', multisine=MultisineConfig(...), chirp=ChirpConfig(...))
 """
@@ -16,28 +22,79 @@ import argparse
 import dataclasses
 import json
 import os
+from pathlib import Path
 import random
 import signal
 import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 from typing import Any, Optional, Sequence
 
+from frf_ident import middleware as mw
+from frf_ident.io.share import share_dir, SOURCE_ROOT
 import numpy as np
 import yaml
-
-from frf_ident import middleware as mw
-from frf_ident.io.share import SOURCE_ROOT, share_dir
 
 NODES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node')
 
 
-def graph_env(domain_id: int, base: Optional[dict] = None) -> dict[str, str]:
+#: random domains (when neither domain_id nor ROS_DOMAIN_ID is given) come from this range
+RANDOM_DOMAINS = (100, 149)
+
+
+def default_domain_id(env: Optional[dict] = None) -> int:
+    """
+    ROS_DOMAIN_ID of ``env`` (default os.environ) when set, else a random one.
+
+    Parameters
+    ----------
+    env
+        Environment to read.
+
+    Returns
+    -------
+    int
+        The domain id.
+
+    """
+    value = (os.environ if env is None else env).get('ROS_DOMAIN_ID', '').strip()
+    return int(value) if value else random.randint(*RANDOM_DOMAINS)
+
+
+def default_middleware() -> str:
+    """FRF_IDENT_MIDDLEWARE when set, else 'rclpy' when ROS 2 is sourced, else 'dds'."""
+    forced = os.environ.get(mw.ENV_BACKEND, '').strip().lower()
+    if forced:
+        return forced
+    import importlib.util
+    return 'rclpy' if importlib.util.find_spec('rclpy') is not None else 'dds'
+
+
+def graph_env(domain_id: int, base: Optional[dict] = None,
+              middleware: Optional[str] = None) -> dict[str, str]:
+    """
+    Environment of the node processes: loopback, ``domain_id``, the chosen middleware.
+
+    Parameters
+    ----------
+    domain_id
+        ROS_DOMAIN_ID.
+    base
+        Environment to start from (default os.environ).
+    middleware
+        'rclpy' or 'dds' (default :func:`default_middleware`).
+
+    Returns
+    -------
+    dict
+        The environment.
+
+    """
     env = dict(os.environ if base is None else base)
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    env['FRF_IDENT_MIDDLEWARE'] = 'dds'
+    env[mw.ENV_BACKEND] = middleware or default_middleware()
+    env.setdefault('RMW_IMPLEMENTATION', 'rmw_cyclonedds_cpp')
     env['ROS_DOMAIN_ID'] = str(int(domain_id))
     cfg = share_dir() / 'config' / 'cyclonedds-localhost.xml'
     if cfg.is_file():
@@ -67,17 +124,23 @@ class Graph:
                  robot: Optional[str | Path] = None, multisine: Any = None, chirp: Any = None,
                  lockstep: bool = True, domain_id: Optional[int] = None,
                  params: Optional[dict[str, dict[str, Any]]] = None,
-                 log: Any = None, nodes: Sequence[str] = NODES) -> None:
+                 log: Any = None, nodes: Sequence[str] = NODES,
+                 middleware: Optional[str | dict[str, str]] = None) -> None:
         self.nodes = tuple(nodes)
         self.out = Path(out_dir)
         self.out.mkdir(parents=True, exist_ok=True)
         self.bag = self.out / 'bag'
         self.frf_dir = self.out / 'frf_live'
-        self.domain_id = domain_id if domain_id is not None else random.randint(100, 200)
-        self.env = graph_env(self.domain_id)
+        self.domain_id = domain_id if domain_id is not None else default_domain_id()
+        per_node = middleware if isinstance(middleware, dict) else {}
+        self.env = graph_env(self.domain_id, middleware=None if per_node else middleware)
+        self.middleware = self.env[mw.ENV_BACKEND]
+        #: backend of each node process (a dict ``middleware`` mixes rclpy and DDS nodes)
+        self.node_middleware = {n: per_node.get(n, self.middleware) for n in nodes}
         self.robot = str(robot or model or '')
         self.say = log or (lambda m: None)
-        common: dict[str, Any] = {'use_sim_time': True, 'lockstep': bool(lockstep),
+        # lockstep is the simulation's mode; free-running runs on wall time like a robot
+        common: dict[str, Any] = {'use_sim_time': bool(lockstep), 'lockstep': bool(lockstep),
                                   'model': self.robot}
         exc: dict[str, Any] = {}
         if multisine is not None:
@@ -87,7 +150,7 @@ class Graph:
         self.max_iterations = int(chirp.max_iterations) if chirp is not None else 0
         self.run_multisine = multisine is not None
         sections = {'/**': common, 'plant_node': {}, 'controller_node': {},
-                    'excitation_node': exc, 'iteration_service': {'bag': str(self.bag)},
+                    'excitation_node': exc,
                     'estimator_node': {'bag': str(self.bag), 'output_dir': str(self.frf_dir)}}
         for name, extra in (params or {}).items():
             sections.setdefault(name, {}).update(extra)
@@ -111,7 +174,8 @@ class Graph:
             cmd = [sys.executable, '-m', f'frf_ident.nodes.{name}', '--ros-args',
                    '--params-file', str(self.params_file)]
             errf = open(self.out / f'{name}.log', 'w')
-            proc = subprocess.Popen(cmd, env=self.env, stdout=subprocess.PIPE, stderr=errf,
+            env = dict(self.env, **{mw.ENV_BACKEND: self.node_middleware[name]})
+            proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=errf,
                                     text=True, cwd=str(SOURCE_ROOT))
             self.procs[name], self.logs[name] = proc, []
             self._ready[name] = threading.Event()
@@ -126,7 +190,8 @@ class Graph:
                 if time.monotonic() > deadline:
                     self.stop()
                     raise TimeoutError(f'{name} not ready within {timeout_s} s')
-        self.say(f'graph up on ROS_DOMAIN_ID={self.domain_id}: {", ".join(self.nodes)}')
+        self.say(f'graph up on ROS_DOMAIN_ID={self.domain_id}: ' + ', '.join(
+            f'{n} ({self.node_middleware[n]})' for n in self.nodes))
         return self
 
     def driver(self, *, multisine: Optional[bool] = None, iterations: Optional[int] = None,
@@ -184,10 +249,11 @@ class Graph:
 def run_graph(out_dir: str | Path, *, model: Optional[str | Path] = None,
               robot: Optional[str | Path] = None, multisine: Any = None, chirp: Any = None,
               domain_id: Optional[int] = None, log: Any = None,
-              params: Optional[dict[str, dict[str, Any]]] = None) -> tuple[Path, dict]:
+              params: Optional[dict[str, dict[str, Any]]] = None,
+              middleware: Optional[str] = None) -> tuple[Path, dict]:
     """Full identification over the node graph; returns (bag path, driver results)."""
     g = Graph(out_dir, model=model, robot=robot, multisine=multisine, chirp=chirp,
-              domain_id=domain_id, log=log, params=params)
+              domain_id=domain_id, log=log, params=params, middleware=middleware)
     g.start()
     try:
         results = g.drive()
@@ -197,10 +263,55 @@ def run_graph(out_dir: str | Path, *, model: Optional[str | Path] = None,
     return bag, results
 
 
+class _Waiter:
+    """The driver's view of /frf/progress: the ``finished`` event of each run."""
+
+    def __init__(self, node: Any) -> None:
+        self.cond = threading.Condition()
+        self.finished: dict[int, dict] = {}
+        node.create_subscription(mw.msg('std_msgs/msg/String'), '/frf/progress', self._on,
+                                 mw.qos_transient_local(10))
+
+    def _on(self, msg: Any) -> None:
+        d = json.loads(msg.data)
+        if d.get('event') == 'finished':
+            with self.cond:
+                self.finished[int(d['run'])] = d
+                self.cond.notify_all()
+
+    def wait(self, run_id: int, timeout_s: float) -> dict:
+        with self.cond:
+            if not self.cond.wait_for(lambda: run_id in self.finished, timeout_s):
+                raise TimeoutError(f'run {run_id} did not finish within {timeout_s} s')
+            return self.finished[run_id]
+
+
+def _run(client: Any, Trigger: Any, waiter: _Waiter, timeout_s: float) -> tuple[bool, dict]:
+    """Start a procedure (the service answers at once) and wait for its end."""
+    deadline = time.monotonic() + 10.0
+    while True:
+        rep = client.call(Trigger.Request(), 30.0)
+        ack = json.loads(rep.message)
+        if rep.success or time.monotonic() > deadline or 'joint_states' not in ack.get(
+                'error', ''):
+            break
+        time.sleep(0.2)       # the plant's first joint state has not arrived yet
+    if not rep.success:
+        return False, ack
+    end = waiter.wait(int(ack['run']), timeout_s)
+    if not end.get('success'):
+        return False, {'error': end.get('error', 'failed'), 'run': ack['run']}
+    return True, dict(end['result'], run=ack['run'])
+
+
 def _drive(args: argparse.Namespace) -> int:
-    """Driver process: call the services in order, print one FRF_RESULT line per reply."""
+    """Driver process: call the services in order, print one FRF_RESULT line per run."""
     mw.init([])
     node = mw.create_node('frf_graph_driver')
+    stop = threading.Event()
+    spinner = threading.Thread(target=mw.spin, args=(node, stop), daemon=True)
+    waiter = _Waiter(node)
+    spinner.start()
     Trigger = mw.srv('std_srvs/srv/Trigger')
     cl_ms = node.create_client(Trigger, '/frf/run_multisine')
     cl_it = node.create_client(Trigger, '/frf/run_iteration')
@@ -210,22 +321,23 @@ def _drive(args: argparse.Namespace) -> int:
                 raise TimeoutError(f'{cl.service_name} not available')
         time.sleep(0.5)   # the plant re-sends its joint state: every recorder has sample 0
         if args.multisine:
-            rep = cl_ms.call(Trigger.Request(), args.timeout)
-            print('FRF_RESULT ' + json.dumps({'kind': 'multisine', 'success': rep.success,
-                                              'reply': json.loads(rep.message)}), flush=True)
-            if not rep.success:
+            ok, reply = _run(cl_ms, Trigger, waiter, args.timeout)
+            print('FRF_RESULT ' + json.dumps({'kind': 'multisine', 'success': ok,
+                                              'reply': reply}), flush=True)
+            if not ok:
                 return 1
         for _ in range(args.iterations):
-            rep = cl_it.call(Trigger.Request(), args.timeout)
-            reply = json.loads(rep.message)
-            print('FRF_RESULT ' + json.dumps({'kind': 'iteration', 'success': rep.success,
+            ok, reply = _run(cl_it, Trigger, waiter, args.timeout)
+            print('FRF_RESULT ' + json.dumps({'kind': 'iteration', 'success': ok,
                                               'reply': reply}), flush=True)
-            if not rep.success:
+            if not ok:
                 return 1
             if reply.get('converged'):
                 break
         return 0
     finally:
+        stop.set()
+        spinner.join(2.0)
         mw.shutdown()
 
 

@@ -236,8 +236,22 @@ class _FlushingMcapWriter(McapWriter):
         self._last_flush = time.monotonic()
 
 
+    def close(self, version: int, metadata: str) -> None:
+        super().close(version, _with_distro(metadata))
+
+
+def _with_distro(metadata: str) -> str:
+    """rosbags writes ``ros_distro: rosbags``; name the sourced ROS 2 distro when there is one."""
+    distro = os.environ.get('ROS_DISTRO', '').strip()
+    return metadata.replace('ros_distro: rosbags', f'ros_distro: {distro}') if distro else metadata
+
+
 class _FlushingWriter(Writer):
     STORAGE_PLUGINS = {StoragePlugin.MCAP: _FlushingMcapWriter}
+
+    def close(self) -> None:
+        super().close()
+        self.metapath.write_text(_with_distro(self.metapath.read_text('utf8')), 'utf8')
 
 
 class BagRecorder:

@@ -25,7 +25,7 @@ from frf_ident.middleware.qos import (QosSpec, qos_clock, qos_default, qos_senso
 
 __all__ = [
     'READY', 'QosSpec', 'backend', 'backend_name', 'create_node', 'init', 'load_params_file', 'msg', 'ok',
-    'parse_ros_args', 'qos_clock', 'qos_default', 'qos_sensor_data', 'qos_transient_local',
+    'parameter_errors', 'parse_ros_args', 'qos_clock', 'qos_default', 'qos_sensor_data', 'qos_transient_local',
     'shutdown', 'spin', 'spin_once', 'srv', 'strip_ros_args',
 ]
 
@@ -101,6 +101,11 @@ def spin(node: Any, stop_event: Optional[threading.Event] = None) -> None:
 def spin_once(node: Any, timeout_sec: Optional[float] = None) -> None:
     """Wait up to ``timeout_sec`` for work and run the ready callbacks of ``node``."""
     backend().spin_once(node, timeout_sec)
+
+
+def parameter_errors() -> tuple:
+    """Exception types a node raises for a parameter of the wrong type or value."""
+    return backend().PARAMETER_ERRORS
 
 
 def msg(type_name: str) -> type:

@@ -51,6 +51,10 @@ _SERVICE_REPLY_MATCH_TIMEOUT_S = 0.1  # rmw_cyclonedds waits at most 100 ms too
 _CALL_WAIT_SLICE_NS = 50_000_000
 
 
+#: what a node raises for a bad parameter value (this backend converts values as declared)
+PARAMETER_ERRORS: tuple = (ValueError, TypeError)
+
+
 def domain_id_from_env() -> int:
     """``ROS_DOMAIN_ID`` as rcl reads it (unset or empty -> 0)."""
     text = os.environ.get('ROS_DOMAIN_ID', '').strip()
@@ -143,6 +147,7 @@ class _Context:
         self.participant = DomainParticipant(
             self.domain_id, qos=Qos(Policy.Userdata(_user_data(enclave='/'))))
         self._topics: dict[tuple[str, type], Topic] = {}
+        self._pub_reader: Any = None
         self._graph_writer = DataWriter(
             self.participant,
             self.topic('ros_discovery_info', ros_types.ParticipantEntitiesInfo),
@@ -166,10 +171,27 @@ class _Context:
             self._graph_writer.write(ros_types.ParticipantEntitiesInfo(
                 gid=_gid(self.participant), node_entities_info_seq=infos))
 
+    def count_publishers(self, topic_name: str) -> int:
+        """Alive DDS writers on ROS topic ``topic_name`` in the domain (discovery data)."""
+        from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
+        from cyclonedds.core import InstanceState
+        with self.lock:
+            if self._pub_reader is None:
+                self._pub_reader = BuiltinDataReader(self.participant,
+                                                     BuiltinTopicDcpsPublication)
+            samples = self._pub_reader.read(N=100000)
+        alive = {}
+        for smp in samples:
+            if smp.topic_name == 'rt' + topic_name:
+                alive[smp.key] = smp.sample_info.instance_state == InstanceState.Alive
+        return sum(alive.values())
+
     def close(self) -> None:
         for node in list(self.nodes):
             node.destroy_node()
         _delete(self._graph_writer)
+        if self._pub_reader is not None:
+            _delete(self._pub_reader)
         _delete(self.participant)
         if self._domain is not None:
             _delete(self._domain)
@@ -678,6 +700,10 @@ class Node:
 
     def create_client(self, srv_type: ros_types.ServiceType, name: str) -> Client:
         return self._add(self._clients, Client(self, srv_type, name))
+
+    def count_publishers(self, topic: str) -> int:
+        """Publishers on ``topic`` in the domain, this node's own included (as rclpy)."""
+        return self._ctx.count_publishers(resolve_name(topic, self._name, self._namespace))
 
     def _graph_readers(self) -> list:
         return ([s._reader for s in self._subscriptions] + [s._reader for s in self._services]

@@ -14,7 +14,9 @@ from typing import Any, Callable, Optional, Sequence
 from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import MultiThreadedExecutor
+from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
+                              ParameterException)
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node as RclpyNode
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -22,6 +24,9 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from frf_ident.middleware.qos import as_qos_spec, QosSpec
 
 BACKEND_NAME = 'rclpy'
+#: what rclpy raises for a parameter value of the wrong type or an invalid one
+PARAMETER_ERRORS: tuple = (ParameterException, InvalidParameterTypeException,
+                           InvalidParameterValueException)
 
 
 def to_qos_profile(qos: 'QosSpec | int | QoSProfile') -> QoSProfile:
@@ -63,12 +68,15 @@ class Client:
         if not self._client.wait_for_service(timeout_sec=timeout_sec):
             raise TimeoutError(f'service not available: {self.service_name=} {timeout_sec=}')
         if self._node.is_spinning():
-            # Another thread (or this one, inside a callback of the MultiThreadedExecutor of
-            # spin(); clients use a reentrant group) delivers the reply.
+            # another thread spins the node and delivers the reply
             response = self._client.call(request, timeout_sec=timeout_sec)
         else:
             future = self._client.call_async(request)
-            rclpy.spin_until_future_complete(self._node, future, timeout_sec=timeout_sec)
+            self._node._spinning(+1)
+            try:
+                self._node.own_executor().spin_until_future_complete(future, timeout_sec=timeout_sec)
+            finally:
+                self._node._spinning(-1)
             if not future.done():
                 self._client.remove_pending_request(future)
             response = future.result()
@@ -94,6 +102,14 @@ class Node(RclpyNode):
         self._client_group = ReentrantCallbackGroup()
         self._spinners = 0
         self._spinners_lock = threading.Lock()
+        self._own_executor: Optional[SingleThreadedExecutor] = None
+
+    def own_executor(self) -> SingleThreadedExecutor:
+        """The node's own single-threaded executor (created once: no per-call set-up)."""
+        if self._own_executor is None:
+            self._own_executor = SingleThreadedExecutor()
+            self._own_executor.add_node(self)
+        return self._own_executor
 
     def is_spinning(self) -> bool:
         """True while :func:`spin` or :func:`spin_once` of this module runs this node."""
@@ -150,23 +166,25 @@ def create_node(name: str, *, namespace: str = '/',
 def spin_once(node: Node, timeout_sec: Optional[float] = None) -> None:
     node._spinning(+1)
     try:
-        rclpy.spin_once(node, timeout_sec=timeout_sec)
+        node.own_executor().spin_once(timeout_sec=timeout_sec)
     finally:
         node._spinning(-1)
 
 
 def spin(node: Node, stop_event: Optional[threading.Event] = None) -> None:
-    """Spin with a MultiThreadedExecutor until ``stop_event`` is set or rclpy shuts down."""
-    executor = MultiThreadedExecutor()
-    executor.add_node(node)
+    """Spin the node's SingleThreadedExecutor until ``stop_event`` is set or rclpy shuts down.
+
+    One thread runs every callback, in order, as rclpy's own ``rclpy.spin`` (the
+    MultiThreadedExecutor costs several times more per message). A client's ``call`` works
+    from another thread while this one spins, not from inside a callback (use ``call_async``).
+    """
+    executor = node.own_executor()
     node._spinning(+1)
     try:
         while rclpy.ok() and not (stop_event is not None and stop_event.is_set()):
             executor.spin_once(timeout_sec=0.1)
     finally:
         node._spinning(-1)
-        executor.remove_node(node)
-        executor.shutdown()
 
 
 def msg(type_name: str) -> type:

@@ -7,6 +7,8 @@ import threading
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
+from frf_ident.app.excitation import SessionSettings
+from frf_ident.errors import FrfIdentInputError
 
 #: Topic defaults (docs/CONTRACT.md §3); every one is a node parameter.
 TOPICS = {
@@ -16,10 +18,88 @@ TOPICS = {
     'excitation_topic': '/frf/excitation',
     'experiment_topic': '/frf/experiment',
     'clock_topic': '/clock',
+    'progress_topic': '/frf/progress',
 }
 READY = mw.READY
+#: default of the ``lockstep`` parameter of every node: free-running, the mode that is safe on a
+#: real robot; the simulation (config/frf_ident.yaml, launch sim:=true, app.graph) sets true
+LOCKSTEP = SessionSettings.lockstep
 #: deep queues: lockstep references are published ahead, recorders must never drop a sample
 DEEP = 20000
+
+
+class Refused(Exception):
+    """A parameter combination a node refuses to start with (one line, exit 2)."""
+
+
+def refuse_lockstep_without_sim(node: Any, lockstep: bool) -> None:
+    """Lockstep exists only with the simulated plant, which is the /clock source."""
+    sim_time = node.get_parameter('use_sim_time').value
+    if lockstep and not sim_time:
+        raise Refused('lockstep: true needs the simulated plant (use_sim_time: true); on a real '
+                      'robot set lockstep: false (ros2 launch ... sim:=false does)')
+
+
+def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
+             use_sim_time: Optional[bool] = None) -> int:
+    """
+    Create node ``name``, wire it with ``wiring(node)``, announce readiness and spin.
+
+    Parameters
+    ----------
+    name
+        Node name.
+    wiring
+        Class (or callable) taking the node; its ``close()`` runs at shutdown, its
+        ``spin(stop_event)`` replaces the default spin when it has one.
+    argv
+        Command line (``--ros-args`` ...); default sys.argv.
+    use_sim_time
+        Forced value (the plant is the clock source), None: from parameters.
+
+    Returns
+    -------
+    int
+        0, or 2 when the node refused its parameters (one line on stderr).
+
+    """
+    init(argv)
+    stop = StopOnSignal()
+    try:
+        node = mw.create_node(name, use_sim_time=use_sim_time)
+        stop.nodes.append(node)
+        try:
+            wired = wiring(node)
+        except Refused as exc:
+            print(f'{name}: refused: {exc}', file=sys.stderr, flush=True)
+            return 2
+        except (FrfIdentInputError, ValueError) + mw.parameter_errors() as exc:
+            print(f'{name}: bad parameter: {exc}', file=sys.stderr, flush=True)
+            return 2
+        announce_ready(name)
+        try:
+            spin = getattr(wired, 'spin', None)
+            if spin is not None:
+                spin(stop.event)
+            else:
+                mw.spin(node, stop.event)
+        finally:
+            close = getattr(wired, 'close', None)
+            if close is not None:
+                close()
+    finally:
+        mw.shutdown()
+    return 0
+
+
+def control_qos(lockstep: bool) -> Any:
+    """QoS of what a node acts on (joint states, commands).
+
+    Lockstep: deep (every sample is consumed in order). Free-running: the newest only, as in a
+    real-time loop: a node that fell behind acts on the present, never works through a backlog
+    (which would add a growing delay to the control loop).
+    """
+    return mw.qos_default(DEEP if lockstep else 1)
 
 
 def param(node: Any, name: str, default: Any) -> Any:

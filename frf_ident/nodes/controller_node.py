@@ -1,4 +1,5 @@
-"""controller_node: the velocity PI of the model file between /joint_states and the effort commands.
+"""
+controller_node: the model file's velocity PI between /joint_states and the effort commands.
 
 Subscribes /joint_states (y = velocity) and /velocity_controller/commands (r), publishes
 /effort_controller/commands (u = PI(r, y), always within +-torque_limit: the PI saturates with
@@ -12,14 +13,13 @@ Joint states with a stamp not newer than the last one are ignored (the idle re-s
 """
 from __future__ import annotations
 
-import math
 from collections import deque
+import math
 from typing import Any, Optional, Sequence
-
-import numpy as np
 
 from frf_ident import middleware as mw
 from frf_ident.nodes import common as c
+import numpy as np
 
 
 class ControllerNode:
@@ -27,7 +27,8 @@ class ControllerNode:
         from frf_ident.io.model_file import load_model
         self.node = node
         model_path = c.param(node, 'model', '')
-        self.lockstep = bool(c.param(node, 'lockstep', True))
+        self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
+        c.refuse_lockstep_without_sim(node, self.lockstep)
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic'))
         model, robot, self.ctrl = load_model(model_path or None)
         self.joints = list(robot.joint_names)
@@ -43,9 +44,10 @@ class ControllerNode:
         self.last_stamp = -1
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None
-        node.create_subscription(F64, t['velocity_topic'], self._on_ref, mw.qos_default(c.DEEP))
+        node.create_subscription(F64, t['velocity_topic'], self._on_ref,
+                                 c.control_qos(self.lockstep))
         node.create_subscription(mw.msg('sensor_msgs/msg/JointState'), t['joint_states_topic'],
-                                 self._on_state, mw.qos_default(c.DEEP))
+                                 self._on_state, c.control_qos(self.lockstep))
 
     def _ref(self, data: Any) -> np.ndarray:
         r = np.asarray(data, dtype=float)
@@ -104,19 +106,8 @@ class ControllerNode:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    c.init(argv)
-    stop = c.StopOnSignal()
-    node = mw.create_node('controller_node')
-    stop.nodes.append(node)
-    ctl = ControllerNode(node)
-    node.get_logger().info(f'velocity PI on {ctl.joints}, torque limit '
-                           f'{ctl.ctrl.torque_limit.tolist()}, lockstep={ctl.lockstep}')
-    c.announce_ready('controller_node')
-    try:
-        mw.spin(node, stop.event)
-    finally:
-        mw.shutdown()
-    return 0
+    """``ros2 run frf_ident controller_node``."""
+    return c.run_node('controller_node', ControllerNode, argv)
 
 
 if __name__ == '__main__':

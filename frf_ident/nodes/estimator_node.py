@@ -1,4 +1,5 @@
-"""estimator_node: records the experiment topics to a rosbag2 MCAP bag and estimates the FRF.
+"""
+estimator_node: records the experiment topics to a rosbag2 MCAP bag and estimates the FRF.
 
 Recorded (docs/CONTRACT.md §3): /joint_states, /velocity_controller/commands,
 /effort_controller/commands, /frf/excitation, /frf/experiment, with
@@ -21,17 +22,18 @@ the bag is flushed and estimated (``read_recording`` + ``estimate_recording``, a
 """
 from __future__ import annotations
 
+from collections import deque
 import json
+from pathlib import Path
 import threading
 import time
-from collections import deque
-from pathlib import Path
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
 from frf_ident.nodes import common as c
 
-JS, F64, STR = 'sensor_msgs/msg/JointState', 'std_msgs/msg/Float64MultiArray', 'std_msgs/msg/String'
+JS, F64 = 'sensor_msgs/msg/JointState', 'std_msgs/msg/Float64MultiArray'
+STR = 'std_msgs/msg/String'
 
 
 class Estimator:
@@ -43,7 +45,8 @@ class Estimator:
         bag = c.param(node, 'bag', '') or f'frf_bag_{time.strftime("%Y%m%d_%H%M%S")}'
         self.out_dir = Path(c.param(node, 'output_dir', '') or f'{bag}_frf')
         self.estimate = bool(c.param(node, 'estimate', True))
-        self.lockstep = bool(c.param(node, 'lockstep', True))
+        self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
+        c.refuse_lockstep_without_sim(node, self.lockstep)
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic',
                             'excitation_topic', 'experiment_topic'))
         self.t = t
@@ -181,22 +184,18 @@ class Estimator:
         self.rec.close()
         self.log.info(f'bag closed: {self.bag} ({json.dumps(self.counts)})')
 
+    def close(self) -> None:
+        """Drain, finalise the bag and report its path."""
+        try:
+            self.drain_and_close(self.node)
+            print(f'FRF_BAG {self.bag}', flush=True)
+        finally:
+            self.rec.close()
+
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    c.init(argv)
-    stop = c.StopOnSignal()
-    node = mw.create_node('estimator_node')
-    stop.nodes.append(node)
-    est = Estimator(node)
-    c.announce_ready('estimator_node')
-    try:
-        mw.spin(node, stop.event)
-        est.drain_and_close(node)
-        print(f'FRF_BAG {est.bag}', flush=True)
-    finally:
-        est.rec.close()
-        mw.shutdown()
-    return 0
+    """``ros2 run frf_ident estimator_node``."""
+    return c.run_node('estimator_node', Estimator, argv)
 
 
 if __name__ == '__main__':

@@ -1,15 +1,21 @@
-"""plant_node: the simulated robot (model file) or a docs/CONTRACT.md §4 plug-in plant on ROS topics.
+"""
+plant_node: the simulated robot (model file) or a docs/CONTRACT.md §4 plug-in plant.
 
 Subscribes the effort commands (Float64MultiArray, joint order), publishes /joint_states
 (position, velocity = plant output y, effort = the torque applied over the sample that just
-ended; header.stamp = sample time k*dt) and /clock.
+ended; header.stamp = sample time k*dt) and /clock every ``clock_every`` samples (every node
+with use_sim_time takes each /clock message in Python: one per sample would cost more than the
+joint state itself; node clocks and timers only need it coarse, sample indices come from the
+stamps).
 
 lockstep: true  -- one sample per received command (deterministic, faster than real time); the
                    current joint state is re-sent every ``idle_republish_s`` wall seconds while
                    no command comes, so late subscribers still get it (same stamp: consumers
                    skip stamps they have seen).
 lockstep: false -- free-running on a wall timer at the model's sample rate, zero-order holding
-                   the last command.
+                   the last command. Like a robot's hardware interface, joint state k then
+                   reports in ``effort`` the torque applied from t_k (the held command), so a
+                   consumer pairs state k with its own effort (see frf_ident.app.excitation).
 
 Run: ``python -m frf_ident.nodes.plant_node --ros-args -p model:=config/model_3axis.yaml``.
 """
@@ -18,10 +24,9 @@ from __future__ import annotations
 import time
 from typing import Any, Optional, Sequence
 
-import numpy as np
-
 from frf_ident import middleware as mw
 from frf_ident.nodes import common as c
+import numpy as np
 
 
 class PlantNode:
@@ -31,8 +36,9 @@ class PlantNode:
         self.node = node
         model_path = c.param(node, 'model', '')
         plant_spec = c.param(node, 'plant', '')
-        self.lockstep = bool(c.param(node, 'lockstep', True))
+        self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
         self.idle_republish_s = float(c.param(node, 'idle_republish_s', 0.2))
+        self.clock_every = max(1, int(c.param(node, 'clock_every', 10)))
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'clock_topic'))
         model, _robot, ctrl = load_model(model_path or None)
         self.plant = load_plant(plant_spec or None, model)
@@ -58,18 +64,21 @@ class PlantNode:
                                             mw.qos_default(c.DEEP))
         self.clock_pub = node.create_publisher(Clock, t['clock_topic'], mw.qos_clock())
         node.create_subscription(mw.msg('std_msgs/msg/Float64MultiArray'), t['effort_topic'],
-                                 self._on_command, mw.qos_default(c.DEEP))
+                                 self._on_command, c.control_qos(self.lockstep))
         self.last_pub = 0.0
-        if not self.lockstep:
+        if self.lockstep:
+            self._publish()
+        else:   # the node clock is wall time here (the plant is the clock source)
+            self.q, self.v = q0, v0
             node.create_timer(float(self.plant.dt), self._tick)
-        self._publish()
 
     def _publish(self) -> None:
         ns = self.k * self.dt_ns
-        st = self.clock.clock
-        st.sec, st.nanosec = divmod(ns, 1_000_000_000)
+        if self.k % self.clock_every == 0:
+            st = self.clock.clock
+            st.sec, st.nanosec = divmod(ns, 1_000_000_000)
+            self.clock_pub.publish(self.clock)
         c.set_stamp(self.js, ns)
-        self.clock_pub.publish(self.clock)
         self.js_pub.publish(self.js)
         self.last_pub = time.monotonic()
 
@@ -94,29 +103,36 @@ class PlantNode:
             self.hold[:] = data
 
     def _tick(self) -> None:
-        self._advance(self.hold)
+        """Free-running sample k: publish (q_k, v_k, torque applied from t_k), then step."""
+        q, v, e = self.plant.step(self.hold)
+        js = self.js
+        js.position = np.asarray(self.q, float).tolist()
+        js.velocity = np.asarray(self.v, float).tolist()
+        js.effort = np.asarray(e, float).tolist()
+        self._publish()
+        self.q, self.v = q, v
+        self.k += 1
 
     def idle(self) -> None:
         if self.lockstep and time.monotonic() - self.last_pub > self.idle_republish_s:
             self._publish()
 
+    def spin(self, stop: Any) -> None:
+        """Spin until ``stop`` is set, re-sending the joint state while idle (lockstep)."""
+        self.node.get_logger().info(f'plant {type(self.plant).__name__} '
+                                    f'{self.plant.joint_names}, dt {self.plant.dt} s, '
+                                    f'lockstep={self.lockstep}')
+        if not self.lockstep:
+            mw.spin(self.node, stop)
+            return
+        while not stop.is_set():
+            mw.spin_once(self.node, 0.05)
+            self.idle()
+
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    c.init(argv)
-    stop = c.StopOnSignal()
-    node = mw.create_node('plant_node', use_sim_time=False)   # it is the clock source
-    stop.nodes.append(node)
-    plant = PlantNode(node)
-    node.get_logger().info(f'plant {type(plant.plant).__name__} {plant.plant.joint_names}, '
-                           f'dt {plant.plant.dt} s, lockstep={plant.lockstep}')
-    c.announce_ready('plant_node')
-    try:
-        while not stop.event.is_set():
-            mw.spin_once(node, 0.05)
-            plant.idle()
-    finally:
-        mw.shutdown()
-    return 0
+    """``ros2 run frf_ident plant_node``; the plant is the clock source (no sim time)."""
+    return c.run_node('plant_node', PlantNode, argv, use_sim_time=False)
 
 
 if __name__ == '__main__':

@@ -51,7 +51,11 @@ def rclpy_backend(monkeypatch):
         'rclpy.parameter': types.SimpleNamespace(
             Parameter=lambda name, value=None: types.SimpleNamespace(name=name, value=value)),
         'rclpy.callback_groups': types.SimpleNamespace(ReentrantCallbackGroup=object),
-        'rclpy.executors': types.SimpleNamespace(MultiThreadedExecutor=object),
+        'rclpy.executors': types.SimpleNamespace(SingleThreadedExecutor=object),
+        'rclpy.exceptions': types.SimpleNamespace(
+            ParameterException=type('PE', (Exception,), {}),
+            InvalidParameterTypeException=type('IPTE', (Exception,), {}),
+            InvalidParameterValueException=type('IPVE', (Exception,), {})),
         'rcl_interfaces': types.ModuleType('rcl_interfaces'),
         'rcl_interfaces.msg': types.SimpleNamespace(
             ParameterDescriptor=lambda **kw: ('descriptor', kw)),

@@ -1,24 +1,26 @@
 """Offline runner: executes procedure phases in closed loop on a simulated or plug-in plant.
 
-The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` (run at compiled speed, the PI
-inside the kernel) or any docs/CONTRACT.md §4 plug-in with ``dt``, ``joint_names``, ``reset()``
-and ``step(torque) -> (position, velocity, effort)``, driven sample by sample through the same
+The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` (run at compiled
+speed, the PI inside the kernel) or any docs/CONTRACT.md §4 plug-in with ``dt``,
+``joint_names``, ``reset()`` and ``step(torque) -> (position, velocity, effort)``, driven sample
+by sample through the same
 PI. Everything lands in one :class:`~frf_ident.core.recording.Recording` on a single timeline.
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
+import time
 from typing import Any, Callable
 
-import numpy as np
-
+from frf_ident.core.excitation.engine import PhaseEngine
+from frf_ident.core.excitation.procedures import (ChirpConfig, ChirpIteration,
+                                                  multisine_procedure, MultisineConfig, Phase,
+                                                  POSITION_GAIN)
+from frf_ident.core.recording import Recording, Segment
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
-from frf_ident.core.excitation.procedures import (POSITION_GAIN, ChirpConfig, ChirpIteration,
-                                       MultisineConfig, Phase, move_plan, multisine_procedure)
-from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import FrfIdentInputError
+import numpy as np
 
 Progress = Callable[[str], None]
 
@@ -49,7 +51,7 @@ class ClosedLoop:
             q, v, _ = plant.step(hold)
             self.q_last, self.y_last = np.asarray(q, float), np.asarray(v, float)
         self.q0 = self.q_last.copy()
-        self.hold: np.ndarray | None = None     # position a settle phase holds after a move
+        self.engine = PhaseEngine(self.q0, self.dt)   # the same engine the excitation node streams
         self.log: dict[str, list[np.ndarray]] = {k: [] for k in ('q', 'v', 'u', 'r', 'x')}
         self.segments: list[Segment] = []
 
@@ -89,22 +91,13 @@ class ClosedLoop:
         return q, v, u
 
     def run_phase(self, ph: Phase) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        if ph.kind == 'excite':
-            t0 = self.t
-            out = self.run(ph.reference, ph.excitation)
-            if ph.segment is not None:
-                self.segments.append(Segment(t0, self.t, dict(ph.segment)))
-            return out
-        if ph.kind == 'move':
-            ref, plan = move_plan(self.q_last, self.q0 + ph.target, ph.n_samples, self.dt)
-            self.hold = plan[-1]
-            return self.run(ref, plan=plan)
-        if ph.kind == 'settle':
-            hold = self.q_last if self.hold is None else self.hold
-            self.hold = None
-            return self.run(np.zeros((ph.n_samples, self.n)),
-                            plan=np.tile(hold, (ph.n_samples, 1)))
-        raise ValueError(f'unknown phase kind {ph.kind!r}')
+        """Run one procedure phase from the current position; returns (q, v, u)."""
+        t0 = self.t
+        s = self.engine.expand(ph, self.q_last)
+        out = self.run(s.reference, s.excitation, plan=s.plan)
+        if ph.kind == 'excite' and ph.segment is not None:
+            self.segments.append(Segment(t0, self.t, dict(ph.segment)))
+        return out
 
     def recording(self, meta: dict[str, Any] | None = None) -> Recording:
         cat = {k: np.concatenate(v) if v else np.zeros((0, self.n)) for k, v in self.log.items()}

@@ -1,0 +1,365 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The excitation session behind ``excitation_node``: procedures streamed over the node graph.
+
+:class:`ExcitationSession` owns the run state (operating point, the streamed
+:class:`~frf_ident.core.excitation.engine.PhaseStream`, the chirp iteration, the watchdog
+decision); it does no I/O itself. The node hands it every joint state (:meth:`on_state`) and
+a periodic :meth:`watch`; the session answers through the :class:`Outputs` it was given
+(publish a reference, a descriptor, a progress or end event, a log line).
+
+Timing: sample k has stamp k*dt. ``lockstep`` (simulation): references go up to ``lookahead``
+samples ahead of the newest joint state and the controller consumes them in order; a 'move' or
+'settle' sample waits for the joint state of that very sample. Free-running (a real robot, or
+the plant on a wall timer): on joint state k the reference of sample k+1 goes out, computed from
+the position at k.
+
+Sample pairing of the torque (what the chirp iteration collects and the estimator records):
+lockstep -- the simulated plant answers command k with joint state k+1, whose effort is the
+torque applied from t_k, so the torque of sample k is the effort of joint state k+1;
+free-running -- the effort of joint state k is the torque applied at t_k (a robot's measured
+torque; the free-running plant node reports it so), so the torque of sample k is in joint state k.
+
+Safety: a plan is checked before it runs (position bound; for chirps the predicted torque); a
+run aborts when /joint_states is stale or a measured position leaves the live bound: the
+reference ramps to zero, a zero reference is published and an ``aborted`` descriptor sent.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import json
+import math
+import threading
+import time
+from typing import Any, Callable, Optional, Protocol
+
+from frf_ident.core.excitation.engine import PhaseEngine, PhaseStream, SegmentEvent
+from frf_ident.core.excitation.procedures import (check_position_bound, ChirpConfig,
+                                                  ChirpIteration, multisine_procedure,
+                                                  MultisineConfig)
+from frf_ident.core.recording import Segment
+import numpy as np
+
+__all__ = ['ExcitationSession', 'Outputs', 'SessionSettings', 'torque_sample_offset']
+
+
+def torque_sample_offset(lockstep: bool) -> int:
+    """
+    Joint state k carries the torque of sample ``k - offset`` (see the module docstring).
+
+    Parameters
+    ----------
+    lockstep
+        True for the lockstep simulation, False free-running (real robot).
+
+    Returns
+    -------
+    int
+        1 in lockstep, 0 free-running.
+
+    """
+    return 1 if lockstep else 0
+
+
+class Outputs(Protocol):
+    """What the session sends; the node implements it with publishers and its logger."""
+
+    def reference(self, k: int, r: np.ndarray, x: np.ndarray) -> None: ...
+
+    def experiment(self, text: str) -> None: ...
+
+    def progress(self, event: dict[str, Any]) -> None: ...
+
+    def log(self, level: str, text: str) -> None: ...
+
+
+@dataclass
+class SessionSettings:
+    """Parameters of the excitation node (defaults are the node's parameter defaults)."""
+
+    lockstep: bool = False         # free-running unless the simulation says otherwise
+    lookahead: int = 20            # lockstep: references published ahead [samples]
+    stale_s: float = 0.5           # watchdog, lockstep: wall s without /joint_states
+    stale_samples: int = 10        # watchdog, free-running: in samples
+    start_grace_s: float = 0.2     # the first answer of a run may take this long
+    abort_ramp_s: float = 0.01     # ramp to zero reference within this wall time
+    position_bound_deg: float = 4.0        # planned position bound around the operating point
+    live_position_bound_deg: float = 8.0   # measured position bound (abort)
+    progress_period_s: float = 0.5         # wall s between progress events
+    multisine: MultisineConfig = field(default_factory=MultisineConfig)
+    chirp: ChirpConfig = field(default_factory=ChirpConfig)
+
+
+class Run:
+    """One streamed procedure."""
+
+    def __init__(self, run_id: int, name: str, stream: PhaseStream, collect: bool,
+                 on_end: Callable[['Run'], dict]) -> None:
+        self.id, self.name, self.stream, self.collect = run_id, name, stream, collect
+        self.on_end = on_end
+        self.start_k = stream.k
+        self.u: dict[int, np.ndarray] = {}     # segment index -> torque (collect)
+        self.end_k: Optional[int] = None
+        self.done = threading.Event()
+        self.result: Optional[dict] = None
+        self.error: Optional[str] = None
+        self.max_gap = 0.0
+        self.t0 = time.monotonic()
+        self.t_progress = self.t0
+
+
+class ExcitationSession:
+    """
+    Procedures streamed as references, one joint state at a time.
+
+    Parameters
+    ----------
+    settings
+        Node parameters.
+    joints
+        Joint names (model order).
+    dt
+        Sample time [s].
+    torque_limit
+        Per joint [N m] (chirp iteration scaling and refusal).
+    out
+        Where references, descriptors, events and log lines go.
+
+    """
+
+    def __init__(self, settings: SessionSettings, joints: list[str], dt: float,
+                 torque_limit: np.ndarray, out: Outputs) -> None:
+        self.s = settings
+        self.joints = list(joints)
+        self.n = len(self.joints)
+        self.dt = float(dt)
+        self.fs = 1.0 / self.dt
+        self.dt_ns = int(round(self.dt * 1e9))
+        self.torque_limit = np.asarray(torque_limit, float)
+        self.out = out
+        self.lookahead = int(settings.lookahead) if settings.lockstep else 1
+        self.lag = 0 if settings.lockstep else 1       # held samples: next_k - k_js allowed
+        self.offset = torque_sample_offset(settings.lockstep)
+        self.bound = math.radians(settings.position_bound_deg)
+        self.live_bound = math.radians(settings.live_position_bound_deg)
+        self.lock = threading.RLock()
+        self.k_js = -1
+        self.q_js: Optional[np.ndarray] = None
+        self.q0: Optional[np.ndarray] = None
+        self.engine: Optional[PhaseEngine] = None
+        self.t_js = time.monotonic()
+        self.next_k = -1
+        self.last_ref = np.zeros(self.n)
+        self.run: Optional[Run] = None
+        self.runs = 0
+        self.chirp: Optional[ChirpIteration] = None
+
+    # -- measurements -------------------------------------------------------------------------
+    def on_state(self, k: int, q: np.ndarray, effort: Optional[np.ndarray]) -> None:
+        """Joint state of sample ``k`` (position ``q``, effort or None) in model joint order."""
+        with self.lock:
+            if k <= self.k_js:
+                return
+            now = time.monotonic()
+            run = self.run
+            if run is not None and k > run.start_k + 1:
+                run.max_gap = max(run.max_gap, now - self.t_js)
+            self.k_js, self.q_js, self.t_js = k, q, now
+            if self.q0 is None:
+                self.q0 = q.copy()
+                self.engine = PhaseEngine(self.q0, self.dt)
+            if self.next_k < 0:
+                self.next_k = k
+            if run is None or run.done.is_set():
+                return
+            if np.any(np.abs(q - self.q0) > self.live_bound):
+                self._abort(f'measured position {np.degrees(q - self.q0).round(2).tolist()} deg '
+                            f'from the operating point exceeds the live bound '
+                            f'{math.degrees(self.live_bound):.2f} deg')
+                return
+            if run.collect and effort is not None and len(effort):
+                j = k - self.offset
+                for idx, (k0, k1, _r) in enumerate(run.stream.segments):
+                    if k0 <= j < k1:
+                        run.u[idx][j - k0] = effort
+            self._stream()
+            if run.end_k is not None and k >= run.end_k:   # the plant applied the last one
+                self._finish(run)
+            elif now - run.t_progress >= self.s.progress_period_s:
+                run.t_progress = now
+                self.out.progress(self._progress(run, 'progress'))
+
+    # -- streaming ----------------------------------------------------------------------------
+    def _segment(self, ev: SegmentEvent) -> None:
+        text = Segment(ev.k0 * self.dt, ev.k1 * self.dt, ev.info).descriptor(ev.event)
+        self.out.experiment(text)
+        if self.run is not None and self.run.collect and ev.event == 'start':
+            self.run.u[ev.index] = np.full((ev.k1 - ev.k0, self.n), np.nan)
+
+    def _publish(self, k: int, r: np.ndarray, x: np.ndarray) -> None:
+        self.out.reference(k, r, x)
+        self.last_ref = r
+
+    def _stream(self) -> None:
+        """Publish the references the newest joint state allows (lookahead window)."""
+        run = self.run
+        st = run.stream
+        while run.end_k is None and self.next_k <= self.k_js + self.lookahead - 1 + self.lag:
+            if st.done:
+                run.end_k = self.next_k
+                break
+            if st.needs_measurement() and self.next_k - self.k_js > self.lag:
+                break
+            sample = st.next_sample(self.q_js)
+            for ev in sample.events:
+                if ev.event == 'start':
+                    self._segment(ev)
+            self._publish(sample.k, sample.reference, sample.excitation)
+            for ev in sample.events:
+                if ev.event == 'end':
+                    self._segment(ev)
+            self.next_k = st.k
+
+    def _progress(self, run: Run, event: str, **extra: Any) -> dict:
+        wall = time.monotonic() - run.t0
+        st = run.stream
+        return dict(event=event, run=run.id, procedure=run.name, samples=st.sent,
+                    of=st.total, fraction=st.sent / max(st.total, 1), wall_s=wall, **extra)
+
+    def _finish(self, run: Run) -> None:
+        wall = time.monotonic() - run.t0
+        steps = run.end_k - run.start_k
+        rate = steps / max(wall, 1e-9)
+        self.out.log('info', f'{run.name}: {steps} samples in {wall:.2f} s wall ({rate:.0f} '
+                             f'steps/s), longest joint-state gap {1e3 * run.max_gap:.1f} ms')
+        self.out.experiment(_json(event='procedure_end', procedure=run.name,
+                                  t_start=run.start_k * self.dt, t_end=run.end_k * self.dt,
+                                  steps_per_s=rate))
+        base = {'steps_per_s': rate, 'max_gap_ms': 1e3 * run.max_gap,
+                'experiment_time_s': steps * self.dt}
+        try:
+            result = dict(run.on_end(run), **base)
+            run.result = result
+            self.out.progress(self._progress(run, 'finished', success=True, result=result))
+        except Exception as exc:   # reported on the progress topic, never raised into DDS
+            run.error = f'{type(exc).__name__}: {exc}'
+            self.out.log('error', f'{run.name} failed: {run.error}')
+            self.out.progress(self._progress(run, 'finished', success=False, error=run.error))
+        run.done.set()
+
+    # -- starting runs ------------------------------------------------------------------------
+    def _start(self, name: str, phases: list, collect: bool,
+               on_end: Callable[[Run], dict]) -> Run:
+        with self.lock:
+            if self.q0 is None:
+                raise RuntimeError('no /joint_states received yet: is the robot (plant) running?')
+            if self.run is not None and not self.run.done.is_set():
+                raise RuntimeError(f'experiment {self.run.name!r} is still running')
+            check_position_bound(phases, np.zeros(self.n), self.bound, self.dt)
+            self.next_k = max(self.next_k, self.k_js + self.lag)
+            self.runs += 1
+            run = Run(self.runs, name, PhaseStream(self.engine, phases, self.next_k), collect,
+                      on_end)
+            self.run = run
+            self.t_js = time.monotonic()
+            self.out.progress(self._progress(run, 'started'))
+            self._stream()
+        return run
+
+    def start_multisine(self) -> Run:
+        """Start the multisine procedure; returns at once (the end comes as an event)."""
+        phases, design = multisine_procedure(self.s.multisine, self.n, self.fs)
+
+        def end(run: Run) -> dict:
+            return {'procedure': 'multisine', 'segments': len(run.stream.segments),
+                    'lines': int(design.harmonics.size)}
+        return self._start('multisine', phases, False, end)
+
+    def chirp_iteration(self) -> ChirpIteration:
+        """Return the chirp iteration (created on first use)."""
+        if self.chirp is None:
+            self.chirp = ChirpIteration(self.s.chirp, self.n, self.fs, self.torque_limit)
+        return self.chirp
+
+    def start_chirp_iteration(self) -> Run:
+        """Start one chirp-iteration step; the update runs when its last sample is in."""
+        it = self.chirp_iteration()
+        if it.history and it.history[-1].get('converged'):
+            raise RuntimeError('the chirp iteration has already converged')
+        last = it.history[-1] if it.history else {}
+        pred = last.get('predicted_peak_torque')
+        if pred is not None and np.any(np.asarray(pred) > self.torque_limit + 1e-9):
+            raise RuntimeError(f'predicted torque {pred} exceeds the limit '
+                               f'{self.torque_limit.tolist()}; refusing to run')
+
+        def end(run: Run) -> dict:
+            r_runs = [r for (_k0, _k1, r) in run.stream.segments]
+            u_runs = [run.u[i] for i in range(len(run.stream.segments))]
+            if any(np.isnan(u).any() for u in u_runs):
+                raise RuntimeError('torque samples missing from /joint_states')
+            s = it.update(r_runs, u_runs)
+            return {'procedure': 'chirp_iteration', 'iteration': s['iteration'],
+                    'error_db': s['max_abs_error_db'],
+                    'error_db_per_channel': np.asarray(s['error_db_per_channel']).tolist(),
+                    'converged': bool(s['converged']),
+                    'max_abs_torque': np.asarray(s['max_abs_torque']).tolist()}
+        return self._start(f'chirp_iteration_{it.iteration}', it.phases(), True, end)
+
+    # -- safety -------------------------------------------------------------------------------
+    def _abort(self, reason: str) -> None:
+        """Ramp the reference to zero within abort_ramp_s (wall), publish zero, report."""
+        run = self.run
+        if run is None or run.done.is_set():
+            return
+        run.error = reason
+        run.end_k = self.next_k
+        self.out.log('error', f'experiment {run.name!r} aborted: {reason}')
+        steps = 4
+        r0 = self.last_ref.copy()
+        for s in range(1, steps + 1):
+            self._publish(self.next_k, r0 * (1.0 - s / steps), np.zeros(self.n))
+            self.next_k += 1
+            if s < steps:
+                time.sleep(self.s.abort_ramp_s / steps)
+        self.out.experiment(_json(event='aborted', procedure=run.name, reason=reason,
+                                  t_start=run.start_k * self.dt, t_end=self.next_k * self.dt))
+        self.out.progress(self._progress(run, 'finished', success=False, error=reason,
+                                         aborted=True))
+        run.done.set()
+
+    def watch(self) -> None:
+        """Watchdog tick: abort the running procedure when the joint states went stale."""
+        with self.lock:
+            run = self.run
+            if run is None or run.done.is_set():
+                return
+            limit = self.s.stale_s if self.s.lockstep else self.s.stale_samples * self.dt
+            if self.k_js <= run.start_k:
+                limit = max(limit, self.s.start_grace_s)
+            waiting = self.next_k > self.k_js or not self.s.lockstep
+            age = time.monotonic() - self.t_js
+            if waiting and age > limit:
+                self._abort(f'/joint_states stale for {1e3 * age:.0f} ms (limit '
+                            f'{1e3 * limit:.0f} ms)')
+
+    def close(self) -> None:
+        """Abort a running procedure (shutdown)."""
+        with self.lock:
+            if self.run is not None and not self.run.done.is_set():
+                self._abort('shutdown')
+
+
+def _json(**d: Any) -> str:
+    return json.dumps(d, sort_keys=True)

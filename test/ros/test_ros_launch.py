@@ -1,0 +1,213 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+``ros2 launch frf_ident frf_ident.launch.py`` from an installed package (as colcon installs it).
+
+The package is pip-installed into a temporary prefix (the setup.py data_files give
+share/frf_ident/{package.xml, launch, config} and the ament index marker; the console scripts
+are linked into lib/frf_ident as ``ros2 run`` expects), the prefix goes on AMENT_PREFIX_PATH and
+PYTHONPATH, and the installed config is shortened to a 16 s multisine. Checked: unique node
+names, the service answers at once, progress and the end on topics, the bag where ``bag:=``
+says with ``ros_distro: jazzy``, and ``sim:=false`` (free-running, wall time) starts.
+"""
+import json
+import os
+from pathlib import Path
+import signal
+import subprocess
+import sys
+import sysconfig
+import threading
+import time
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[2]
+SHORT = {'n_realisations': 1, 'n_periods': 2, 'resolution_hz': 2.0, 'compensate': False,
+         'return_s': 1.0, 'settle_s': 0.3}
+
+
+@pytest.fixture(scope='module')
+def prefix(tmp_path_factory):
+    pre = tmp_path_factory.mktemp('install')
+    # --ignore-installed: without it pip would first uninstall the package from the running
+    # environment (an editable install of the checkout) before installing into the prefix
+    subprocess.run([sys.executable, '-m', 'pip', 'install', '--quiet', '--no-deps',
+                    '--no-build-isolation', '--ignore-installed', '--prefix', str(pre),
+                    str(ROOT)], check=True, cwd=str(pre), timeout=300)
+    lib = pre / 'lib' / 'frf_ident'
+    lib.mkdir(parents=True)
+    for exe in ('plant_node', 'controller_node', 'excitation_node', 'estimator_node'):
+        (lib / exe).symlink_to(pre / 'bin' / exe)
+    share = pre / 'share' / 'frf_ident'
+    assert (pre / 'share' / 'ament_index' / 'resource_index' / 'packages' / 'frf_ident').is_file()
+    assert (share / 'launch' / 'frf_ident.launch.py').is_file()
+    cfg = share / 'config' / 'frf_ident.yaml'
+    params = yaml.safe_load(cfg.read_text())
+    params['excitation_node']['ros__parameters']['multisine'].update(SHORT)
+    cfg.write_text(yaml.safe_dump(params))
+    site = sysconfig.get_path('purelib', vars={'base': str(pre), 'platbase': str(pre)})
+    return pre, site
+
+
+def _env(ros_env, prefix):
+    pre, site = prefix
+    env = dict(ros_env)
+    env['AMENT_PREFIX_PATH'] = os.pathsep.join([str(pre), env.get('AMENT_PREFIX_PATH', '')])
+    parts = [site] + [p for p in env.get('PYTHONPATH', '').split(os.pathsep)
+                      if p and Path(p).resolve() != ROOT]
+    env['PYTHONPATH'] = os.pathsep.join(parts)
+    return env
+
+
+def _launch(env, cwd, *args):
+    return subprocess.Popen(['ros2', 'launch', 'frf_ident', 'frf_ident.launch.py', *args],
+                            env=env, cwd=str(cwd), stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
+
+
+def _stop(proc, log):
+    if proc.poll() is None:
+        os.killpg(proc.pid, signal.SIGINT)
+        try:
+            proc.wait(60)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    log.append(proc.stdout.read())
+
+
+class _Observer:
+    def __init__(self, domain):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from std_msgs.msg import String
+        self.ctx = rclpy.Context()
+        rclpy.init(context=self.ctx, domain_id=domain)
+        self.node = rclpy.create_node('frf_launch_observer', context=self.ctx)
+        latched = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.progress, self.experiment = [], []
+        self.node.create_subscription(String, '/frf/progress',
+                                      lambda m: self.progress.append(json.loads(m.data)), latched)
+        self.node.create_subscription(String, '/frf/experiment',
+                                      lambda m: self.experiment.append(json.loads(m.data)),
+                                      latched)
+        self.ex = SingleThreadedExecutor(context=self.ctx)
+        self.ex.add_node(self.node)
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self):
+        while not self.stop.is_set():
+            self.ex.spin_once(timeout_sec=0.05)
+
+    def names(self, want, timeout=60.0):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            names = [n for n, _ in self.node.get_node_names_and_namespaces()
+                     if n != 'frf_launch_observer']
+            if set(want) <= set(names):
+                return names
+            time.sleep(0.3)
+        return names
+
+    def close(self):
+        import rclpy
+        self.stop.set()
+        self.thread.join(2.0)
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.ctx)
+
+
+def _until(pred, timeout, what):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if pred():
+            return
+        time.sleep(0.1)
+    pytest.fail(f'timed out waiting for {what}')
+
+
+def test_launch_sim(ros_env, prefix, tmp_path):
+    env = _env(ros_env, prefix)
+    bag = tmp_path / 'run1'
+    cwd = tmp_path / 'cwd'
+    cwd.mkdir()
+    obs = _Observer(int(env['ROS_DOMAIN_ID']))
+    proc = _launch(env, cwd, f'bag:={bag}')
+    log = []
+    try:
+        nodes = ['plant_node', 'controller_node', 'excitation_node', 'estimator_node']
+        names = obs.names(nodes)
+        assert sorted(names) == sorted(nodes), names          # no duplicates, nothing else
+        listed = subprocess.run(['ros2', 'node', 'list', '--no-daemon'], env=env, text=True,
+                                capture_output=True, timeout=60).stdout.split()
+        assert len(listed) == len(set(listed)), listed
+        deadline = time.monotonic() + 120.0
+        while True:    # the plant may still be loading its kernels: "no /joint_states yet"
+            t0 = time.monotonic()
+            call = subprocess.run(['ros2', 'service', 'call', '/frf/run_multisine',
+                                   'std_srvs/srv/Trigger'], env=env, text=True,
+                                  capture_output=True, timeout=120)
+            took = time.monotonic() - t0
+            if 'joint_states' not in call.stdout or time.monotonic() > deadline:
+                break
+            time.sleep(1.0)
+        assert 'success=True' in call.stdout and 'accepted' in call.stdout, call.stdout
+        assert took < 15.0, f'ros2 service call took {took:.1f} s'   # CLI start-up included
+        _until(lambda: any(e.get('event') == 'finished' for e in obs.progress), 300,
+               'the finished event on /frf/progress')
+        end = next(e for e in obs.progress if e.get('event') == 'finished')
+        assert end['success'], end
+        assert {e.get('event') for e in obs.progress} >= {'started', 'finished'}
+        _until(lambda: any(e.get('event') == 'procedure_end' for e in obs.experiment), 30,
+               'procedure_end on /frf/experiment')
+        _until(lambda: (Path(f'{bag}_frf') / 'frf.json').is_file(), 120, 'frf.json')
+    finally:
+        _stop(proc, log)
+        obs.close()
+        print(log[0][-4000:])
+    meta = (bag / 'metadata.yaml').read_text()
+    assert 'ros_distro: jazzy' in meta, meta[-300:]
+    assert not list(cwd.glob('frf_bag_*')), 'bag:= was ignored'
+
+
+def test_launch_real_robot_mode(ros_env, prefix, tmp_path):
+    """sim:=false: no plant or controller; excitation and estimator run free on wall time."""
+    env = _env(ros_env, prefix)
+    obs = _Observer(int(env['ROS_DOMAIN_ID']))
+    proc = _launch(env, tmp_path, 'sim:=false', f'bag:={tmp_path / "robot_bag"}')
+    log = []
+    try:
+        names = obs.names(['excitation_node', 'estimator_node'])
+        time.sleep(1.0)
+        assert proc.poll() is None, 'launch ended (a node refused its parameters?)'
+        assert sorted(names) == ['estimator_node', 'excitation_node'], names
+        from rcl_interfaces.srv import GetParameters
+        import rclpy
+        cl = obs.node.create_client(GetParameters, '/excitation_node/get_parameters')
+        assert cl.wait_for_service(timeout_sec=20.0)
+        fut = cl.call_async(GetParameters.Request(names=['lockstep', 'use_sim_time']))
+        _until(fut.done, 20, 'get_parameters')
+        values = [v.bool_value for v in fut.result().values]
+        assert values == [False, False], values
+        del rclpy
+    finally:
+        _stop(proc, log)
+        obs.close()
+    assert 'refused' not in log[0], log[0][-1000:]
