@@ -266,19 +266,7 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
     return rows
 
 
-@section('diagnosis')
-def bench_diagnosis() -> list[tuple[str, str, str, str]]:
-    """Hidden-effect sweep: a seeded random effect (cycling over the seven names) and
-    parameters in a plug-in plant, identified and diagnosed against the nominal model."""
-    from benchmarks.diagnosis import hit_rate
-    r = hit_rate(28)
-    rows = [(f"hidden effect ranked first ({r['n']} seeds)", f"{r['hits']}/{r['n']}",
-             'chance 1/7', f"{r['rate'] * 7:.1f}x chance"),
-            ('... and parameter within 20 % / held-out gain', f"{r['param_ok']}/{r['n']}",
-             f"{r['gain_ok']}/{r['n']}", '')]
-    rows += [(f'  {name}', f'{sum(hits)}/{len(hits)}', '', '')
-             for name, hits in r['per_effect'].items()]
-    return rows
+SECTIONS['diagnosis'] = lambda: __import__('benchmarks.diagnosis').diagnosis.bench_rows()
 
 
 @section('nodes')
