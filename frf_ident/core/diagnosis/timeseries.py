@@ -78,8 +78,9 @@ def _gravity_sets(n: int, i: int) -> list[tuple[int, ...]]:
     return [tuple(range(a, b + 1)) for a in range(0, i + 1) for b in range(i, n)]
 
 
-def _groups(q, v, a, fs, fc, i, ripple_s):
-    """Candidate regressor groups of axis i: name -> (columns (N, k), key)."""
+def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None):
+    """Candidate regressor groups of axis i: name -> low-passed columns (N, k). Gravity sets
+    only over the ``bearing`` axes (all when None)."""
     n = q.shape[1]
     g: dict[str, np.ndarray] = {
         'gravity_torque': np.ones((q.shape[0], 1)),
@@ -89,7 +90,8 @@ def _groups(q, v, a, fs, fc, i, ripple_s):
     if ripple_s:
         g['torque_ripple'] = np.column_stack([np.sin(ripple_s * q[:, i]),
                                               np.cos(ripple_s * q[:, i])])
-    sets = [js for js in _gravity_sets(n, i) if np.ptp(q[:, list(js)].sum(axis=1)) > 1e-3]
+    sets = [js for js in _gravity_sets(n, i) if np.ptp(q[:, list(js)].sum(axis=1)) > 1e-3
+            and (bearing is None or set(js) <= set(bearing))]
     # one gravity group per single set and per pair of sets: a coupled arm's axis carries the
     # weight of its own link and of the links beyond (G1 sin(q2) + G2 sin(q2 + q3)), which a
     # single set approximates with the wrong joints when the motion correlates them
@@ -110,6 +112,45 @@ def _lstsq(cols: list[np.ndarray], y: np.ndarray) -> tuple[np.ndarray, float]:
     c, *_ = np.linalg.lstsq(X, y, rcond=None)
     r = y - X @ c
     return c, float(r @ r)
+
+
+def _axis_masks(rec, f, vh, i, fit_m, val_m, fc):
+    """(low-passed residual, fit mask, held-out mask, effective samples) of axis i: sticking
+    samples (Coulomb force undetermined) and the filter's edges around reversals are left out
+    of fit and validation alike."""
+    fs = rec.fs
+    ff = lowpass(f[:, i], fs, fc)
+    vl = lowpass(vh[:, i], fs, fc)
+    vnoise = float(np.std(np.diff(rec.velocity[:, i]))) / math.sqrt(2)
+    use = np.abs(vl) > 0.3 * vnoise
+    sg = np.sign(vl)
+    guard = int(0.5 * fs / fc)
+    for c in np.flatnonzero(np.diff(sg) != 0):
+        use[max(c - guard, 0):c + guard + 1] = False
+    fit_i, val_i = fit_m & use, val_m & use
+    return ff, fit_i, val_i, max(fit_i.sum() * 2 * fc / fs, 10.0)
+
+
+def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
+    """Axes whose own angle carries a configuration-dependent load: G sin(q_i + phi) passes
+    the F test (p < ALPHA) on top of offset, friction and inertia. Only these angles may enter
+    gravity arguments: a joint whose axis carries no gravity (a vertical axis) does not tilt
+    the links beyond it."""
+    out = []
+    for i, (ff, fit_i, val_i, n_eff) in enumerate(prep):
+        g = _groups(q, v, a, fs, fc, i, 0.0, [i])
+        base = [g[k][fit_i] for k in ('gravity_torque', 'coulomb_friction', 'viscous_friction',
+                                      'motor_inertia')]
+        key = f'gravity:{i}'
+        if key not in g:
+            continue
+        _, rss0 = _lstsq(base, ff[fit_i])
+        _, rss1 = _lstsq(base + [g[key][fit_i]], ff[fit_i])
+        dof = max(n_eff - 6, 1.0)
+        F = ((rss0 - rss1) / 2) / max(rss1 / dof, 1e-300) * (n_eff / max(fit_i.sum(), 1))
+        if F > 0 and stats.f.sf(F, 2, dof) < ALPHA:
+            out.append(i)
+    return out
 
 
 def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
@@ -202,26 +243,19 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     rejected: list[dict[str, Any]] = []
     ext_axes = list(robot.axes)
     names = robot.joint_names
+    prep = [_axis_masks(rec, f, vh, i, fit_m, val_m, fc) for i in range(robot.n_axes)]
+    bearing = gravity_bearing(qh, vh, ah, fs, fc, prep)
+    say(f'axes whose own angle carries a configuration-dependent load: '
+        f'{[names[i] for i in bearing] or "none"}')
     for i, ax in enumerate(robot.axes):
-        ff = lowpass(f[:, i], fs, fc)
-        vl = lowpass(vh[:, i], fs, fc)
-        # sticking samples (Coulomb force undetermined) and the filter's edges around
-        # reversals are left out of fit and validation alike
-        vnoise = float(np.std(np.diff(rec.velocity[:, i]))) / math.sqrt(2)
-        use = np.abs(vl) > 0.3 * vnoise
-        sg = np.sign(vl)
-        guard = int(0.5 * fs / fc)
-        for c in np.flatnonzero(np.diff(sg) != 0):
-            use[max(c - guard, 0):c + guard + 1] = False
-        fit_i, val_i = fit_m & use, val_m & use
-        n_eff = max(fit_i.sum() * 2 * fc / fs, 10.0)
-        g0 = _groups(qh, vh, ah, fs, fc, i, 0.0)
+        ff, fit_i, val_i, n_eff = prep[i]
+        g0 = _groups(qh, vh, ah, fs, fc, i, 0.0, bearing)
         X0 = np.column_stack(list(g0.values()))
         c0, *_ = np.linalg.lstsq(X0[fit_i], ff[fit_i], rcond=None)
         wide = lowpass(f[:, i], fs, 0.45 * fs) - np.column_stack(
-            [x for x in _groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0).values()]) @ c0
+            [x for x in _groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0, bearing).values()]) @ c0
         s, peak, thr = find_ripple(wide, qh[:, i], fit_i)
-        groups = _groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0)
+        groups = _groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0, bearing)
         chosen, info = select_groups(groups, ff, fit_i, val_i, n_eff)
         while True:
             coef, _ = _lstsq([groups[k][fit_i] for k in chosen], ff[fit_i])
