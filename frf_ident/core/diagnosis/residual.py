@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import signal
+from scipy.ndimage import median_filter
 
 from frf_ident.core.model.params import RobotParams
 
@@ -103,15 +104,16 @@ RIPPLE_FALSE_ALARM = 1e-3  # probability that noise alone passes the ripple scan
 
 def ripple_range(q: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
     """Spatial frequencies [1/rad] the recorded motion resolves: from RIPPLE_MIN_CYCLES
-    cycles over the travel in ``mask`` up to the sample limit pi / (95th percentile of the
-    position step per sample), i.e. half a ripple period per sample at the usual speed."""
+    cycles over the travel in ``mask`` up to the sample limit 0.9 pi / (95th percentile of
+    the position step per sample), i.e. a ripple period of 2.2 samples at the usual speed
+    (at exactly 2 samples the sine regressor vanishes and the scan statistic degenerates)."""
     qm = q[mask]
     span = float(np.ptp(qm)) if qm.size else 0.0
     if span <= 0:
         return 0.0, 0.0
     steps = np.abs(np.diff(q))[mask[1:] & mask[:-1]]
     dq = float(np.percentile(steps, 95)) if steps.size else 0.0
-    s_max = math.pi / dq if dq > 0 else 0.0
+    s_max = 0.9 * math.pi / dq if dq > 0 else 0.0
     return RIPPLE_MIN_CYCLES * 2 * math.pi / span, s_max
 
 
@@ -137,8 +139,15 @@ def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray) -> tuple[float, 
     for k in range(0, grid.size, chunk):
         ph = np.outer(grid[k:k + chunk], qm)
         pw[k:k + chunk] = (np.cos(ph) @ fm) ** 2 + (np.sin(ph) @ fm) ** 2
-    from scipy.ndimage import median_filter
-    level = median_filter(pw, size=min(161, 2 * (grid.size // 2) - 1), mode='nearest') / math.log(2)
+    # local noise level: running median over +-80 grid points (+-20 resolution cells); the
+    # first and last half windows take the level of the first / last full window, so a peak
+    # at the edge of the range is not measured against copies of itself
+    w = min(161, 2 * (grid.size // 2) - 1)
+    h = w // 2
+    level = median_filter(pw, size=w, mode='nearest')
+    level[:h] = level[h]
+    level[grid.size - h:] = level[grid.size - h - 1]
+    level = level / math.log(2)
     ratio = pw / np.maximum(level, 1e-300)
     i = int(np.argmax(ratio))
     fine = np.linspace(grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)], 41)

@@ -132,24 +132,27 @@ def _axis_masks(rec, f, vh, i, fit_m, val_m, fc):
 
 
 def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
-    """Axes whose own angle carries a configuration-dependent load: G sin(q_i + phi) passes
-    the F test (p < ALPHA) on top of offset, friction and inertia. Only these angles may enter
-    gravity arguments: a joint whose axis carries no gravity (a vertical axis) does not tilt
-    the links beyond it."""
+    """Axes that carry a configuration-dependent load: G sin(sum of a contiguous joint set
+    containing the axis + phi) passes the F test (p < ALPHA) on top of offset, friction and
+    inertia. Only these axes' angles may enter gravity arguments: a joint whose axis carries no
+    gravity (a vertical axis) does not tilt the links beyond it."""
     out = []
+    n = q.shape[1]
     for i, (ff, fit_i, val_i, n_eff) in enumerate(prep):
-        g = _groups(q, v, a, fs, fc, i, 0.0, [i])
+        g = _groups(q, v, a, fs, fc, i, 0.0, None)
         base = [g[k][fit_i] for k in ('gravity_torque', 'coulomb_friction', 'viscous_friction',
                                       'motor_inertia')]
-        key = f'gravity:{i}'
-        if key not in g:
-            continue
         _, rss0 = _lstsq(base, ff[fit_i])
-        _, rss1 = _lstsq(base + [g[key][fit_i]], ff[fit_i])
         dof = max(n_eff - 6, 1.0)
-        F = ((rss0 - rss1) / 2) / max(rss1 / dof, 1e-300) * (n_eff / max(fit_i.sum(), 1))
-        if F > 0 and stats.f.sf(F, 2, dof) < ALPHA:
-            out.append(i)
+        for js in _gravity_sets(n, i):
+            key = 'gravity:' + ','.join(map(str, js))
+            if key not in g:
+                continue
+            _, rss1 = _lstsq(base + [g[key][fit_i]], ff[fit_i])
+            F = ((rss0 - rss1) / 2) / max(rss1 / dof, 1e-300) * (n_eff / max(fit_i.sum(), 1))
+            if F > 0 and stats.f.sf(F, 2, dof) < ALPHA:
+                out.append(i)
+                break
     return out
 
 
