@@ -411,8 +411,10 @@ def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
         if sel.any() and p[sel].sum() > 0:
             c = np.cumsum(p[sel]) / p[sel].sum()
             fsel = fr[sel]
-            out['band_hz'] = [round(float(fsel[np.searchsorted(c, 0.25)]), 2),
-                              round(float(fsel[min(np.searchsorted(c, 0.75), fsel.size - 1)]), 2)]
+            df = float(fr[1] - fr[0])      # a spectral line stands for its bin's width
+            out['band_hz'] = [round(max(float(fsel[np.searchsorted(c, 0.25)]) - df, 0.0), 2),
+                              round(float(fsel[min(np.searchsorted(c, 0.75), fsel.size - 1)])
+                                    + df, 2)]
     best, rb = None, 0.3
     rr = r - r.mean()
     for name, x in (('position', q), ('velocity', v), ('acceleration', a), ('time', t)):
