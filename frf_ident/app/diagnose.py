@@ -118,9 +118,10 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         res['metrics']['validation_records'] = [
             validate_on(str(p), o, robot, res['extended'], ctrl) for p, o in others]
     out.mkdir(parents=True, exist_ok=True)
+    found = ', '.join(e.name for e in res['effects']) or 'none'
     save_model(out / 'extended_model.yaml', res['extended'], ctrl,
                extra={'description': f'{model.get("description", "nominal model")} + diagnosed '
-                                     f'effects: {", ".join(e.name for e in res["effects"]) or "none"}'})
+                                     f'effects: {found}'})
     report = {'effects': [e.to_dict() for e in res['effects']],
               'metrics': _plain_metrics(res['metrics']),
               'unexplained': res.get('unexplained', []),

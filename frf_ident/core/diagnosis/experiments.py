@@ -365,7 +365,7 @@ def fit_backlash(ev: Evaluator, robot: RobotParams, axis: int, scales_ms, scales
     losses = [ev.loss(_with(robot, axis, backlash=math.exp(g)), axis) for g in grid]
     i = int(np.argmin(losses))
     sol = optimize.minimize_scalar(lambda g: ev.loss(_with(robot, axis, backlash=math.exp(g)),
-                                                         axis),
+                                                     axis),
                                    bounds=(grid[max(i - 1, 0)], grid[min(i + 1, 6)]),
                                    method='bounded', options={'xatol': 0.03, 'maxiter': 8})
     gap = math.exp(sol.x)
@@ -382,7 +382,8 @@ def _with(robot: RobotParams, axis: int, **kw) -> RobotParams:
 
 
 def _refine(ev: Evaluator, mk: Callable, x0: np.ndarray, bounds, axis: int) -> np.ndarray:
-    sol = optimize.minimize(lambda x: ev.loss(mk(x), axis), x0, method='Nelder-Mead', bounds=bounds,
+    sol = optimize.minimize(lambda x: ev.loss(mk(x), axis), x0, method='Nelder-Mead',
+                            bounds=bounds,
                             options={'xatol': 0.01, 'fatol': 1e-3, 'maxfev': 35,
                                      'initial_simplex': np.array([x0, x0 + [0.3, 0],
                                                                   x0 + [0, 0.7]])})

@@ -186,8 +186,9 @@ def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
         if best is None:
             break
         chosen.append(best)
-    # held-out pruning, joint refit each time
+
     def held(names):
+        """Held-out residual energy of the groups ``names`` refitted jointly."""
         c, _ = _lstsq([groups[k][fit] for k in names], yf)
         if not names:
             r = y[val]
@@ -220,7 +221,8 @@ def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
     return ~held & ~near, held & ~near
 
 
-def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ, progress: Callable[[str], None] | None = None
+def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
+                        progress: Callable[[str], None] | None = None
                         ) -> dict[str, Any]:
     """Per axis: residual regression on the fit blocks of :func:`split_blocks`, effects
     selected by F test and held-out error, the extended model, metrics on the held-out blocks.

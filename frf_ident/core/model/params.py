@@ -2,7 +2,8 @@
 :class:`RobotParams` of the whole arm (Saupe & Knoblach 2015, eqs. 1, 2, 20-22).
 
 The model file (docs/CONTRACT.md, "Model file") is converted to and from these classes by
-:mod:`frf_ident.core.model.schema`; the simulation reads them in :mod:`frf_ident.core.simulation.plant`.
+:mod:`frf_ident.core.model.schema`; the simulation reads them in
+:mod:`frf_ident.core.simulation.plant`.
 """
 from __future__ import annotations
 

@@ -2,7 +2,8 @@
 
 Per axis i, motor position q_m, link position q_o, deflection dq = q_m - q_o (eq. 20):
 
-    Jm  ddq_m = tau_m + tau_ripple(q_m) - tau_fc(dq_m) - b_v dq_m - tau_s(dq) - d (dq_m - dq_o)  (eq. 21)
+    Jm  ddq_m = tau_m + tau_ripple(q_m) - tau_fc(dq_m) - b_v dq_m - tau_s(dq)
+                - d (dq_m - dq_o)                                                  (eq. 21)
     M_o ddq_o = tau_s(dq) + d (dq_m - dq_o) - tau_g                                             (eq. 22)
 
 with Coulomb friction tau_fc = Fc sgn(dq_m) (eq. 1), the deflection-dependent spring tau_s of
@@ -222,8 +223,8 @@ def _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, row):
     sc[row, n:2n] = link side (tau_s - k1 dq) + (tau_d - d dv), with tau_s of eq. 2 behind the
     backlash dead zone and the transmission damping acting only in contact, minus the
     configuration-dependent gravity G sin(sum_j q_o,j + phi) on the link side. The constant
-    gravity torque is an input (see _exp_substep). Kernels index preallocated rows instead of slicing, as
-    array views cost reference counting in the hot loop.
+    gravity torque is an input (see _exp_substep). Kernels index preallocated rows instead of
+    slicing, as array views cost reference counting in the hot loop.
     """
     n = prm.shape[0]
     for i in range(n):
@@ -359,8 +360,8 @@ def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
 @numba.njit(cache=True, fastmath=True)
 def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, m, dt,
               offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph, gsel,
-              nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v, out_u, out_x,
-              out_r):
+              nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v,
+              out_u, out_x, out_r):
     """Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
 
     With a position plan (``has_plan``) the velocity reference gets position feedback,
@@ -596,7 +597,7 @@ class FlexibleJointPlant:
         q, v = np.empty(self.n_axes), np.empty(self.n_axes)
         _step_one(self.x, self.qprev, self.buf, u, p.offsets, p.nbuf, int(self.params.substeps),
                   self.dt, p.prm, p.ad, p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs,
-                  p.rp, p.gamp, p.gph, p.gsel, p.nonlinear, p.enc, bool(self.params.velocity_from_encoder), vn,
-                  self._scratch, q, v)
+                  p.rp, p.gamp, p.gph, p.gsel, p.nonlinear, p.enc,
+                  bool(self.params.velocity_from_encoder), vn, self._scratch, q, v)
         self.k += 1
         return q, v, u + tn[0]
