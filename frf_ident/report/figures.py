@@ -342,7 +342,11 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
         ext = nom - (r['pred_extended'][:, i] - r['pred_baseline'][:, i])
         ax[0, i].plot(r['t'], nom, 'k', lw=0.6, label='nominal residual')
         ax[0, i].plot(r['t'], ext, color='tab:green', lw=0.6, label='extended residual')
-        ax[0, i].axvspan(r['t'][r['val_mask']][0], r['t'][-1], color='0.9', label='held out')
+        vm = np.r_[False, r['val_mask'], False].astype(int)
+        starts, ends = np.flatnonzero(np.diff(vm) == 1), np.flatnonzero(np.diff(vm) == -1)
+        for k, (a, b) in enumerate(zip(starts, ends)):
+            ax[0, i].axvspan(r['t'][a], r['t'][b - 1], color='0.9',
+                             label='held out' if k == 0 else None)
         ax[0, i].set_title(rec.joint_names[i])
         ax[0, i].set_xlabel('t [s]')
         ax[0, i].legend(fontsize=6)

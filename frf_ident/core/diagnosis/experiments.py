@@ -532,6 +532,14 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
                 stage2.append(e)
     ext, cur = _accept(ev, robot, kept, stage2, cur, say)
     cands += stage2
+    # second pass: a torque-residual effect masked by a large FRF-shape effect on the same
+    # axis (viscous friction next to backlash) gets another chance on top of the model so far
+    again = [c for c in stage1 if c not in kept and c.axis_index in
+             {k.axis_index for k in kept if k in stage2}
+             and not any(k.name == c.name and k.axis == c.axis for k in kept)]
+    if again:
+        say('second pass over the torque-residual candidates of axes with FRF-shape effects')
+        ext, cur = _accept(ev, robot, kept, again, cur, say)
     # held-out check: an effect stays only if removing it worsens its axis' held-out misfit
     sim_ext = ev._sim(ext)
     val_ext = ev.misfit(ev.terms(ext, sim_ext, held_out=True))
