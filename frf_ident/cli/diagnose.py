@@ -20,11 +20,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The subcommand's parser; the arguments are added to it.
 
     """
-    p.add_argument('data', type=Path, help='bag (identify or robot), or CSV/MAT (with --map; '
-                                           'EMPS and KUKA KR300 .mat recognised without)')
+    p.add_argument('data', type=Path, help='bag (identify or robot), or CSV/MAT with --map')
     p.add_argument('--model', type=Path, required=True, help='nominal model file')
     p.add_argument('--out', type=Path, required=True, help='output directory')
-    p.add_argument('--map', type=Path, default=None, help='import map for CSV/MAT data')
+    p.add_argument('--map', type=Path, default=None,
+                   help='import map for CSV/MAT data (config/map_*.yaml), used for --validate too')
+    p.add_argument('--validate', type=Path, action='append', default=[], metavar='OTHER',
+                   help='another record of the same robot (any supported format): report '
+                        'baseline and extended metrics on it; repeatable')
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,16 +52,23 @@ def run(args: argparse.Namespace) -> int:
     """
     from frf_ident.app.console import say
     from frf_ident.app.diagnose import diagnose
-    res = diagnose(args.data, args.model, args.out, map_path=args.map, progress=say)
+    res = diagnose(args.data, args.model, args.out, map_path=args.map, validate=args.validate,
+                   progress=say)
     rep = res['report']
     for k, e in enumerate(rep['effects']):
         print(f"{k + 1}. {e['name']} ({e['axis']}, score {e['score']:.2f}): {e['parameters']}")
     if not rep['effects']:
-        print('no effects: the nominal model explains the data within its noise')
+        print('no effects: none of the candidates improves the held-out data')
+    for u in rep['unexplained']:
+        print(f"unexplained on {u['axis']}: {100 * u['misfit_share']:.0f} % of the nominal "
+              f"misfit left, signature {u['signature']}")
     m = rep['metrics']
     print(f"held-out error: nominal {m['baseline']['frf_error_db']} dB / time NRMSE "
           f"{m['baseline']['time_nrmse']}, extended {m['extended']['frf_error_db']} dB / "
           f"{m['extended']['time_nrmse']} ({m['validation']})")
+    for v in m.get('validation_records', []):
+        print(f"on {v['record']}: nominal time NRMSE {v['baseline']['time_nrmse']}, extended "
+              f"{v['extended']['time_nrmse']}")
     print(f'wrote {args.out / "report.json"}, {args.out / "extended_model.yaml"}, '
           f'{args.out / "report.html"}')
     return 0

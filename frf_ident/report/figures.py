@@ -273,3 +273,93 @@ def paper_figure(results: dict[str, Any], case: str, path: Path) -> Path:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
+
+
+def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
+                      ) -> list[tuple[str, str]]:
+    """Figures of ``frf-ident diagnose``: (file name, caption) pairs written into ``out``.
+
+    Experiments: measured vs nominal vs extended FRF (diagonal) with the residual spectrum,
+    and the torque residual against velocity and position. Time series: the inverse-dynamics
+    residual in time, against velocity and against position."""
+    figs: list[tuple[str, str]] = []
+    if mode == 'experiments':
+        est = res['estimates']
+        n = rec.velocity.shape[1]
+        fig, ax = plt.subplots(3, n, figsize=(5 * n, 9), squeeze=False, sharex=True)
+        for i in range(n):
+            for key, style in (('multisine', '-'), ('chirp', '--')):
+                if key not in est['measured']:
+                    continue
+                f = est['measured'][key].freq_hz
+                for lab, col in (('measured', 'k'), ('nominal', 'tab:red'),
+                                 ('extended', 'tab:green')):
+                    p = est[lab][key].response[i, i]
+                    ax[0, i].semilogx(f, _db(p), style, color=col, label=f'{lab} {key}')
+                    ax[1, i].semilogx(f, np.degrees(np.unwrap(np.angle(p))), style, color=col)
+                for lab, col in (('nominal', 'tab:red'), ('extended', 'tab:green')):
+                    r = est['measured'][key].response[i, i] / est[lab][key].response[i, i]
+                    ax[2, i].semilogx(f, _db(r), style, color=col,
+                                      label=f'{key}: measured/{lab}')
+            for u in res.get('unexplained', []):
+                if u['axis'] == rec.joint_names[i] and 'band_hz' in u['signature']:
+                    ax[2, i].axvspan(*u['signature']['band_hz'], color='tab:orange', alpha=0.2,
+                                     label='unexplained band')
+            ax[0, i].set_title(f'{rec.joint_names[i]}: dq_m/tau_m (held-out data)')
+            ax[0, i].set_ylabel('dB')
+            ax[1, i].set_ylabel('deg')
+            ax[2, i].set_ylabel('residual dB')
+            ax[2, i].set_xlabel('Hz')
+            ax[0, i].legend(fontsize=6)
+            ax[2, i].legend(fontsize=6)
+        _save(fig, out / 'bode.png')
+        figs.append(('bode.png', 'Measured vs nominal vs extended FRF (diagonal), and the '
+                                 'residual spectrum |P_measured / P_model|'))
+        sims = res['sims']
+        fig, ax = plt.subplots(2, n, figsize=(5 * n, 6), squeeze=False)
+        step = max(1, rec.t.size // 20000)
+        for i in range(n):
+            for lab, col in (('nominal', 'tab:red'), ('extended', 'tab:green')):
+                du = rec.effort[::step, i] - sims[lab].effort[::step, i]
+                ax[0, i].plot(rec.velocity[::step, i], du, '.', ms=1, color=col, label=lab)
+                ax[1, i].plot(rec.position[::step, i], du, '.', ms=1, color=col, label=lab)
+            ax[0, i].set_xlabel('motor velocity [rad/s]')
+            ax[1, i].set_xlabel('motor position [rad]')
+            ax[0, i].set_ylabel('torque residual [N m]')
+            ax[0, i].legend(markerscale=8, fontsize=7)
+            ax[0, i].set_title(rec.joint_names[i])
+        _save(fig, out / 'residual.png')
+        figs.append(('residual.png', 'Measured minus simulated torque (same reference, same '
+                                     'controller) against velocity and position'))
+        return figs
+    r = res['residual']
+    n = r['f'].shape[1]
+    fig, ax = plt.subplots(3, n, figsize=(5 * n, 9), squeeze=False)
+    for i in range(n):
+        nom = r['f'][:, i]
+        sos = signal.butter(4, min(20.0, 0.45 * rec.fs), fs=rec.fs, output='sos')
+        nom = signal.sosfiltfilt(sos, nom)
+        ext = nom - (r['pred_extended'][:, i] - r['pred_baseline'][:, i])
+        ax[0, i].plot(r['t'], nom, 'k', lw=0.6, label='nominal residual')
+        ax[0, i].plot(r['t'], ext, color='tab:green', lw=0.6, label='extended residual')
+        vm = np.r_[False, r['val_mask'], False].astype(int)
+        starts, ends = np.flatnonzero(np.diff(vm) == 1), np.flatnonzero(np.diff(vm) == -1)
+        for k, (a, b) in enumerate(zip(starts, ends)):
+            ax[0, i].axvspan(r['t'][a], r['t'][b - 1], color='0.9',
+                             label='held out' if k == 0 else None)
+        ax[0, i].set_title(rec.joint_names[i])
+        ax[0, i].set_xlabel('t [s]')
+        ax[0, i].legend(fontsize=6)
+        ax[1, i].plot(r['v'][:, i], nom, '.', ms=1, color='tab:red')
+        ax[1, i].plot(r['v'][:, i], ext, '.', ms=1, color='tab:green')
+        ax[1, i].set_xlabel('velocity')
+        ax[1, i].set_ylabel('inverse-dynamics residual')
+        ax[2, i].plot(r['q'][:, i], nom, '.', ms=1, color='tab:red')
+        ax[2, i].plot(r['q'][:, i], ext, '.', ms=1, color='tab:green')
+        ax[2, i].set_xlabel('position')
+    _save(fig, out / 'residual.png')
+    figs.append(('residual.png', 'Inverse-dynamics residual (measured torque minus the torque '
+                                 'the model needs for the measured motion, low-passed) of the '
+                                 'nominal (black/red) and extended (green) model, in time, '
+                                 'against velocity and position; grey: held-out part'))
+    return figs

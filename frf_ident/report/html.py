@@ -26,7 +26,7 @@ from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import figures
 
-__all__ = ['write_report']
+__all__ = ['write_diagnosis_report', 'write_report']
 
 REPORT_NAME = 'report.html'
 
@@ -296,3 +296,88 @@ def _timing_section(t: Mapping[str, Any]) -> str:
     else:
         parts.append('<p class="ok">No timing warnings.</p>')
     return '\n'.join(parts)
+
+
+# --------------------------------------------------------------------------- diagnosis
+
+def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
+                           res: Mapping[str, Any], rec: Recording, mode: str,
+                           data: str | Path) -> Path:
+    """``out_dir/report.html`` of ``frf-ident diagnose``: ranked effects with evidence, what is
+    left unexplained and where, held-out metrics (also per axis and per --validate record),
+    rejected candidates and the figures of :func:`figures.diagnosis_figures`.
+
+    Parameters
+    ----------
+    out_dir : directory of report.json (created if missing).
+    report : the report.json content (docs/CONTRACT.md §7).
+    res : the diagnosis result (estimates, simulations or residuals for the figures).
+    rec : the diagnosed recording.
+    mode : 'experiments' or 'timeseries'.
+    data : the diagnosed file (shown in the title).
+
+    Returns
+    -------
+    Path of report.html.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    evidence = ('identification experiments (FRF of multisine and chirp, closed-loop '
+                'simulation of the same reference)' if mode == 'experiments' else
+                'time series (inverse-dynamics residual regression)')
+    eff = report['effects']
+    if eff:
+        eff_html = _table(['#', 'effect', 'axis', 'score', 'parameters', 'evidence'],
+                          [[k + 1, x['name'], x['axis'], x['score'],
+                            _json_short(x['parameters']), x['evidence']]
+                           for k, x in enumerate(eff)])
+    else:
+        eff_html = '<p>none of the candidate effects improves the held-out data.</p>'
+    une = report.get('unexplained', [])
+    if une:
+        une_html = ('<p>The extended model leaves these axes clearly above their noise floor; '
+                    'the signature says where the rest of the misfit lives.</p>'
+                    + _table(['axis', 'share of the nominal misfit left', 'band [Hz]',
+                              'residual correlates with'],
+                             [[u['axis'], u['misfit_share'],
+                               str(u['signature'].get('band_hz', '-')),
+                               u['signature'].get('correlates_with', '-')] for u in une]))
+    else:
+        une_html = '<p>nothing: every axis is explained to within its noise floor.</p>'
+    m = report['metrics']
+    rows = [['nominal', m['baseline']['frf_error_db'], m['baseline']['time_nrmse']],
+            ['extended', m['extended']['frf_error_db'], m['extended']['time_nrmse']]]
+    for ax, v in m['baseline'].get('per_axis', {}).items():
+        e = m['extended']['per_axis'][ax]
+        rows += [[f'{ax}: nominal', v['frf_error_db'], v['time_nrmse']],
+                 [f'{ax}: extended', e['frf_error_db'], e['time_nrmse']]]
+    met = (_table(['model', 'frf_error_db', 'time_nrmse'], rows)
+           + f'<p>{html.escape(str(m["validation"]))}</p>')
+    for v in m.get('validation_records', []):
+        met += (f'<h3>other record {html.escape(str(v["record"]))}</h3>'
+                + _table(['model', 'frf_error_db', 'time_nrmse'],
+                         [['nominal', v['baseline']['frf_error_db'],
+                           v['baseline']['time_nrmse']],
+                          ['extended', v['extended']['frf_error_db'],
+                           v['extended']['time_nrmse']]]))
+    rej = report.get('rejected', [])
+    rej_html = (_table(list(rej[0].keys()), [list(r.values()) for r in rej]) if rej else
+                '<p>none.</p>')
+    figs = figures.diagnosis_figures(out, res, rec, mode)
+    fig_html = '\n'.join(_figure(fn, html.escape(cap), cap) for fn, cap in figs)
+    sections = [
+        ('effects', 'Effects (most likely first)',
+         f'<p>Evidence: {html.escape(evidence)}.</p>' + eff_html
+         + '<p>Extended model: <a href="extended_model.yaml">extended_model.yaml</a></p>'),
+        ('unexplained', 'Unexplained', une_html),
+        ('metrics', 'Gain on held-out data', met),
+        ('rejected', 'Rejected candidates', rej_html),
+        ('figures', 'Figures', fig_html)]
+    p = out / 'report.html'
+    p.write_text(_page(f'Diagnosis of {data}', sections, rec))
+    return p
+
+
+def _json_short(x: Any) -> str:
+    import json
+    return json.dumps(x, default=float)

@@ -15,7 +15,7 @@ from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.core.recording import Recording, Segment
 
 EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'backlash',
-           'torque_ripple', 'time_delay', 'parameter_mismatch')
+           'torque_ripple', 'time_delay', 'gravity', 'parameter_mismatch')
 
 
 @dataclass
@@ -70,7 +70,10 @@ def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recor
     c = ctrl.copy()
     c.dt = rec.dt
     c.reset(plant.equilibrium_torque())
-    r = np.nan_to_num(rec.reference)
+    # where the reference is missing the controller's input is unknown: the simulation follows
+    # the measured velocity there, and the diagnosis leaves these stretches out of every
+    # comparison (experiments.missing_reference) instead of commanding zero velocity
+    r = np.where(np.isfinite(rec.reference), rec.reference, rec.velocity)
     res = plant.simulate(reference=r, controller=c)
     return Recording(rec.t.copy(), list(rec.joint_names), res.position, res.velocity,
                      res.effort, rec.reference, rec.excitation, list(rec.segments),
@@ -134,9 +137,11 @@ def diag_ratio(pm, ps) -> np.ndarray:
     return pm.response[idx, idx] / ps.response[idx, idx]
 
 
-def frf_error_db(pairs) -> float:
-    """docs/CONTRACT.md §7: RMS over the analysed lines of 20 log10 |P_measured / P_model|."""
-    vals = [20 * np.log10(np.abs(diag_ratio(pm, ps))).ravel() for pm, ps in pairs]
+def frf_error_db(pairs, axis: int | None = None) -> float:
+    """docs/CONTRACT.md §7: RMS over the analysed lines of 20 log10 |P_measured / P_model|
+    (diagonal elements; only that of ``axis`` when given)."""
+    sel = slice(None) if axis is None else slice(axis, axis + 1)
+    vals = [20 * np.log10(np.abs(diag_ratio(pm, ps)[sel])).ravel() for pm, ps in pairs]
     v = np.concatenate(vals) if vals else np.array([np.nan])
     v = v[np.isfinite(v)]
     return float(np.sqrt(np.mean(v ** 2))) if v.size else float('nan')

@@ -2,9 +2,9 @@
 
 Every candidate effect is fitted from the evidence it leaves (one function per effect), then
 the candidate model is simulated on the recorded excitation through the same controller and
-estimated exactly like the measurement. Its gain is the relative drop of the fit loss (FRF
-misfit of multisine and chirp, torque and velocity output errors, each relative to the
-nominal model's). Effects are ranked by gain; ones below ``MIN_GAIN`` are noise.
+estimated exactly like the measurement. Its gain is the share of its own axis' misfit above
+the noise floor that it removes (FRF misfit of multisine and chirp, torque and velocity output
+errors, each in units of the noise the data show); see :func:`diagnose_experiments`.
 """
 from __future__ import annotations
 
@@ -26,8 +26,10 @@ from .common import (Effect, apply_effect, diag_ratio, frf_error_db, nrmse, segm
                      simulate_like, split_recording)
 from .residual import inverse_dynamics_residual, regress_axis
 
-MIN_GAIN = 0.12      # an effect must remove this share of the nominal model's misfit
-KEEP_GAIN = 0.04     # ... and, when combined, still this share of what is left
+MIN_SHARE = 0.10     # an effect must remove this share of its axis' misfit above the noise floor
+MIN_Z = 3.0          # ... and more than MIN_Z standard deviations of that misfit under noise
+FLOOR_MIN = 1e-6     # relative noise floor assumed when the data give none (noise-free data)
+SETTLE_S = 0.5       # samples this long after a stretch without reference are not compared
 
 
 def estimates(rec: Recording) -> dict[str, Any]:
@@ -41,63 +43,151 @@ def estimates(rec: Recording) -> dict[str, Any]:
     return out
 
 
+def missing_reference(rec: Recording) -> np.ndarray:
+    """Samples whose reference is missing (NaN), widened by SETTLE_S after each stretch: the
+    controller's input there is unknown, so simulation and measurement are not compared."""
+    bad = ~np.all(np.isfinite(rec.reference), axis=1)
+    if bad.any():
+        settle = int(SETTLE_S * rec.fs)
+        idx = np.flatnonzero(bad)
+        out = bad.copy()
+        ends = idx[np.r_[np.diff(idx) > 1, True]]
+        for e in ends:
+            out[e:e + settle + 1] = True
+        return out
+    return bad
+
+
+def period_noise(rec: Recording, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Noise variance of velocity and effort per axis measured from the multisine periods:
+    half the mean square difference of consecutive steady-state periods (periodic signal
+    cancels, noise doubles). NaN where the recording has no repeated periods."""
+    dv, du = [], []
+    for s in rec.segments:
+        info = s.info
+        if info.get('design') != 'multisine' or int(info.get('periods', 0)) < 2:
+            continue
+        P = int(info.get('period_samples', 0))
+        sl = rec.slice(s.t_start, s.t_end)
+        k0 = sl.start + P * int(info.get('transient_periods', 0))
+        k1 = min(sl.stop, sl.start + P * (int(info.get('transient_periods', 0))
+                                          + int(info['periods'])))
+        if P < 2 or k1 - k0 < 2 * P or not mask[k0:k1].all():
+            continue
+        dv.append(rec.velocity[k0 + P:k1] - rec.velocity[k0:k1 - P])
+        du.append(rec.effort[k0 + P:k1] - rec.effort[k0:k1 - P])
+    n = rec.velocity.shape[1]
+    if not dv:
+        return np.full(n, np.nan), np.full(n, np.nan)
+    return (0.5 * np.mean(np.concatenate(dv) ** 2, axis=0),
+            0.5 * np.mean(np.concatenate(du) ** 2, axis=0))
+
+
 class Evaluator:
-    """Simulates candidate models on the recorded excitation and scores them."""
+    """Simulates candidate models on the recorded excitation and scores them per axis.
+
+    Every loss term of an axis (diagonal FRF misfit of multisine and chirp, torque and velocity
+    output error) is expressed in units of its noise floor measured in the data: the BLA noise
+    variance from the multisine periods for the FRFs, the period-to-period variance of the
+    measured torque and velocity for the time signals. A model that explains the axis to its
+    noise scores about 1."""
 
     def __init__(self, rec: Recording, ctrl: PIVelocity) -> None:
         self.rec, self.ctrl = rec, ctrl
-        self.fit, self.val, self.validation_text = split_recording(rec)
+        self.missing = missing_reference(rec)
+        fit, val, self.validation_text = split_recording(rec)
+        self.fit, self.val = (drop_segments(fit, self.missing), drop_segments(val, self.missing))
         self.meas_fit = estimates(self.fit)
         self.meas_val = estimates(self.val) if self.val.segments else {}
-        self.fit_mask = segment_mask(self.fit)
-        self.val_mask = segment_mask(self.val)
-        self.base_terms: dict[str, float] | None = None
-        # noise yardsticks of the loss terms: the BLA variance of the measured multisine
-        # (relative, per line), 1e-4 (0.09 dB / 1 %) elsewhere
-        self.floors = {'multisine': 1e-4, 'chirp': 1e-4, 'effort': 1e-4, 'velocity': 1e-4}
+        self.fit_mask = segment_mask(self.fit) & ~self.missing
+        self.val_mask = segment_mask(self.val) & ~self.missing
+        n = rec.velocity.shape[1]
+        self.n = n
+        self.base_terms: dict[str, np.ndarray] | None = None
+        fl: dict[str, np.ndarray] = {}
+        count: dict[str, float] = {}
         ms = self.meas_fit.get('multisine')
+        rel = np.full(n, np.nan)
         if ms is not None and ms.noise_variance is not None:
-            n = min(ms.response.shape[:2])
-            idx = np.arange(n)
-            rel = ms.noise_variance[idx, idx] / np.abs(ms.response[idx, idx]) ** 2
-            self.floors['multisine'] = max(float(np.mean(rel)), 1e-4)
+            idx = np.arange(min(ms.response.shape[:2]))
+            rel = np.mean(ms.noise_variance[idx, idx] / np.abs(ms.response[idx, idx]) ** 2,
+                          axis=-1)
+        for k, est in self.meas_fit.items():
+            fl[k] = np.where(np.isfinite(rel), rel, FLOOR_MIN)
+            count[k] = float(est.freq_hz.size)
+        nv, nu = period_noise(rec, ~self.missing)
+        m = self.fit_mask
+        for key, var, x in (('effort', nu, rec.effort), ('velocity', nv, rec.velocity)):
+            sig = np.var(x[m], axis=0) if m.any() else np.ones(n)
+            fl[key] = np.where(np.isfinite(var), var / np.maximum(sig, 1e-300), FLOOR_MIN)
+            # filtered closed-loop signals: about one independent sample per 10 ms
+            count[key] = max(m.sum() * rec.dt / 0.01, 10.0)
+        self.floors = {k: np.maximum(v, FLOOR_MIN) for k, v in fl.items()}
+        self.counts = count
         self.n_sims = 0
 
     def _sim(self, robot: RobotParams) -> Recording:
         self.n_sims += 1
         return simulate_like(self.rec, robot, self.ctrl)
 
-    def terms(self, robot: RobotParams, sim: Recording | None = None) -> dict[str, float]:
-        """Raw fit-loss terms of a model: mean |ln(P_meas/P_model)|^2 per estimate (diagonal),
-        torque and velocity NRMSE^2 on the fit segments."""
+    def terms(self, robot: RobotParams, sim: Recording | None = None, *, held_out: bool = False
+              ) -> dict[str, np.ndarray]:
+        """Loss terms per axis (arrays of n): mean |ln(P_meas/P_model)|^2 over the lines of the
+        diagonal element, torque and velocity NRMSE^2, on the fit (or held-out) part."""
         sim = sim if sim is not None else self._sim(robot)
-        s = replace_segments(sim, self.fit)
-        est = estimates(s)
+        part = self.val if held_out and self.val.segments else self.fit
+        meas = self.meas_val if held_out and self.meas_val else self.meas_fit
+        m = self.val_mask if held_out and self.val_mask.any() else self.fit_mask
+        est = estimates(replace_segments(sim, part))
         out = {}
-        for k, pm in self.meas_fit.items():
+        for k, pm in meas.items():
             r = np.log(diag_ratio(pm, est[k]))
-            out[k] = float(np.mean(np.abs(r) ** 2))
-        m = self.fit_mask
-        out['effort'] = nrmse(self.rec.effort, sim.effort, m) ** 2
-        out['velocity'] = nrmse(self.rec.velocity, sim.velocity, m) ** 2
+            out[k] = np.mean(np.abs(r) ** 2, axis=-1)
+        out['effort'] = np.array([nrmse(self.rec.effort[:, i], sim.effort[:, i], m) ** 2
+                                  for i in range(self.n)])
+        out['velocity'] = np.array([nrmse(self.rec.velocity[:, i], sim.velocity[:, i], m) ** 2
+                                    for i in range(self.n)])
         return out
 
-    def loss(self, robot: RobotParams) -> float:
-        """Fit loss relative to the nominal model (1 = as bad as nominal)."""
-        t = self.terms(robot)
-        b = self.base_terms or t
-        fl = self.floors
-        return float(np.mean([(t[k] + fl[k]) / (b[k] + fl[k]) for k in b]))
+    def loss(self, robot: RobotParams, axis: int) -> float:
+        """Misfit of one axis (units of its noise floor) of a model, on the fit part."""
+        return float(self.misfit(self.terms(robot))[axis])
 
-    def metrics(self, robot: RobotParams) -> dict[str, float]:
-        """docs/CONTRACT.md §7 metrics on the held-out part."""
-        sim = self._sim(robot)
+    def misfit(self, terms: dict[str, np.ndarray]) -> np.ndarray:
+        """Per axis: mean over the loss terms of term / noise floor (1 = at the noise)."""
+        return np.mean([terms[k] / self.floors[k] for k in terms], axis=0)
+
+    def misfit_sd(self) -> float:
+        """Standard deviation of :meth:`misfit` under noise alone (exponentially distributed
+        terms averaged over their independent lines / samples)."""
+        return float(np.sqrt(np.mean([1.0 / self.counts[k] for k in self.floors])
+                             / len(self.floors)))
+
+    def metrics(self, robot: RobotParams, sim: Recording | None = None) -> dict[str, Any]:
+        """docs/CONTRACT.md §7 metrics on the held-out part, plus per axis."""
+        sim = sim if sim is not None else self._sim(robot)
         sv = replace_segments(sim, self.val if self.val.segments else self.fit)
         mv = self.meas_val if self.meas_val else self.meas_fit
         est = estimates(sv)
         mask = self.val_mask if self.val_mask.any() else self.fit_mask
+        per = {}
+        for i, name in enumerate(self.rec.joint_names):
+            per[name] = {'frf_error_db': round(frf_error_db([(mv[k], est[k]) for k in mv],
+                                                            axis=i), 4),
+                         'time_nrmse': round(nrmse(self.rec.velocity[:, i],
+                                                   sim.velocity[:, i], mask), 5)}
         return {'frf_error_db': round(frf_error_db([(mv[k], est[k]) for k in mv]), 4),
-                'time_nrmse': round(nrmse(self.rec.velocity, sim.velocity, mask), 5)}
+                'time_nrmse': round(nrmse(self.rec.velocity, sim.velocity, mask), 5),
+                'per_axis': per}
+
+
+def drop_segments(rec: Recording, missing: np.ndarray) -> Recording:
+    """The recording without the segments that overlap samples without reference."""
+    if not missing.any():
+        return rec
+    keep = [s for s in rec.segments if not missing[rec.slice(s.t_start, s.t_end)].any()]
+    return replace_segments(rec, Recording(rec.t, rec.joint_names, rec.position, rec.velocity,
+                                           rec.effort, segments=keep))
 
 
 def replace_segments(rec: Recording, like: Recording) -> Recording:
@@ -107,17 +197,19 @@ def replace_segments(rec: Recording, like: Recording) -> Recording:
 
 # --- evidence and fits, one function per effect ------------------------------------------------
 
-def friction_regression(ev: Evaluator, robot: RobotParams, axis: int):
+def friction_regression(ev: Evaluator, robot: RobotParams, axis: int):  # noqa: D401
     """Motor-side inverse-dynamics residual of the nominal model regressed on sgn(v), v and
     motor-position harmonics, on the fit segments plus the constant-velocity run."""
     rec = ev.rec
     f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, rec.effort, rec.dt,
                                               robot)
-    mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity')))[:-1]
+    mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity'))
+            & ~ev.missing)[:-1]
     noise = max(robot.axes[axis].velocity_noise, 1e-6)
     return regress_axis(f[:, axis], qh[:, axis], vh[:, axis], ah[:, axis],
                         rec.effort[:-1, axis], mask, rec.fs, v_eps=5 * noise + 1e-4,
-                        ripple_mask=segment_mask(ev.fit, ('constant_velocity',))[:-1])
+                        ripple_mask=(segment_mask(ev.fit, ('constant_velocity',))
+                                     & ~ev.missing)[:-1])
 
 
 def fit_coulomb(reg, robot: RobotParams, axis: int) -> Effect | None:
@@ -147,7 +239,7 @@ def fit_viscous(reg, robot: RobotParams, axis: int) -> Effect | None:
 
 
 def fit_ripple(reg, robot: RobotParams, axis: int) -> Effect | None:
-    if not reg.ripple or reg.ripple_peak_ratio < 30:
+    if not reg.ripple or reg.ripple_peak_ratio < reg.ripple_threshold:
         return None
     r = reg.ripple[0]
     a = robot.axes[axis]
@@ -156,9 +248,9 @@ def fit_ripple(reg, robot: RobotParams, axis: int) -> Effect | None:
                                     'phase': r['phase']}]
     return Effect('torque_ripple', a.name, 0.0, {'torque_ripple': rip},
                   f'torque residual periodic in motor position: {r["amplitude"]:.3g} N m at '
-                  f'{r["spatial_frequency"]:.4g} cycles*2pi/rad (peak {reg.ripple_peak_ratio:.0f}x '
-                  f'the median of the position spectrum), held by the constant-velocity '
-                  f'compensation run', axis)
+                  f'{r["spatial_frequency"]:.4g} /rad (scan peak {reg.ripple_peak_ratio:.0f}x '
+                  f'the local noise level, above the false-alarm level '
+                  f'{reg.ripple_threshold:.0f}), held by the constant-velocity run', axis)
 
 
 def fit_time_delay(ev: Evaluator, sim_est: dict, robot: RobotParams, axis: int) -> Effect | None:
@@ -250,7 +342,7 @@ def fit_stiffness_nonlinearity(ev: Evaluator, robot: RobotParams, axis: int, sca
     def mk(x):
         return _with(robot, axis, stiffness_k2=k1 * math.exp(x[0]),
                      stiffness_breakpoint=math.exp(x[1]))
-    x = _refine(ev, mk, x0, [(0.0, 1.5), (x0[1] - 2.5, x0[1] + 2.0)])
+    x = _refine(ev, mk, x0, [(0.0, 1.5), (x0[1] - 2.5, x0[1] + 2.0)], axis)
     return Effect('stiffness_nonlinearity', a.name, 0.0,
                   {'stiffness_k2': k1 * math.exp(x[0]), 'stiffness_breakpoint': math.exp(x[1])},
                   f'resonance moves up with load: stiffness fitted to the chirp (high load) is '
@@ -270,9 +362,10 @@ def fit_backlash(ev: Evaluator, robot: RobotParams, axis: int, scales_ms, scales
     lo = math.log(1e-3 * tau / a.stiffness)
     hi = math.log(20 * tau / a.stiffness)
     grid = np.linspace(lo, hi, 7)
-    losses = [ev.loss(_with(robot, axis, backlash=math.exp(g))) for g in grid]
+    losses = [ev.loss(_with(robot, axis, backlash=math.exp(g)), axis) for g in grid]
     i = int(np.argmin(losses))
-    sol = optimize.minimize_scalar(lambda g: ev.loss(_with(robot, axis, backlash=math.exp(g))),
+    sol = optimize.minimize_scalar(lambda g: ev.loss(_with(robot, axis, backlash=math.exp(g)),
+                                                     axis),
                                    bounds=(grid[max(i - 1, 0)], grid[min(i + 1, 6)]),
                                    method='bounded', options={'xatol': 0.03, 'maxiter': 8})
     gap = math.exp(sol.x)
@@ -288,8 +381,9 @@ def _with(robot: RobotParams, axis: int, **kw) -> RobotParams:
     return replace(robot, axes=axes)
 
 
-def _refine(ev: Evaluator, mk: Callable, x0: np.ndarray, bounds) -> np.ndarray:
-    sol = optimize.minimize(lambda x: ev.loss(mk(x)), x0, method='Nelder-Mead', bounds=bounds,
+def _refine(ev: Evaluator, mk: Callable, x0: np.ndarray, bounds, axis: int) -> np.ndarray:
+    sol = optimize.minimize(lambda x: ev.loss(mk(x), axis), x0, method='Nelder-Mead',
+                            bounds=bounds,
                             options={'xatol': 0.01, 'fatol': 1e-3, 'maxfev': 35,
                                      'initial_simplex': np.array([x0, x0 + [0.3, 0],
                                                                   x0 + [0, 0.7]])})
@@ -298,60 +392,186 @@ def _refine(ev: Evaluator, mk: Callable, x0: np.ndarray, bounds) -> np.ndarray:
 
 # --- the diagnosis --------------------------------------------------------------------------
 
+def _rebuild(robot: RobotParams, effects: list[Effect]) -> RobotParams:
+    for e in effects:
+        robot = apply_effect(robot, e)
+    return robot
+
+
+def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Effect],
+            cur: np.ndarray, say: Callable[[str], None]) -> tuple[RobotParams, np.ndarray]:
+    """Greedy per axis: in each round every axis takes its candidate that removes the largest
+    share of the axis' misfit above noise (own-axis attribution: a small effect on a weak axis
+    competes only with that axis' misfit), if the share is >= MIN_SHARE and the drop exceeds
+    MIN_Z standard deviations of the misfit under noise. The rest are re-evaluated on top."""
+    sd = ev.misfit_sd()
+    ext = _rebuild(base, kept)
+    pending = list(cands)
+    while pending:
+        scored = []
+        for c in pending:
+            e_c = ev.misfit(ev.terms(apply_effect(ext, c)))
+            i = c.axis_index
+            gain = cur[i] - e_c[i]
+            share = gain / max(cur[i] - 1.0, 1e-12)
+            c.gain = float(share)
+            say(f'  {c.axis} {c.name}: misfit {cur[i]:.4g} -> {e_c[i]:.4g} '
+                f'(share {share:.3f}) {c.parameters}')
+            if share >= MIN_SHARE and gain >= MIN_Z * sd:
+                scored.append((share, c))
+        best: dict[int, Effect] = {}
+        for share, c in sorted(scored, key=lambda x: -x[0]):
+            best.setdefault(c.axis_index, c)
+        if not best:
+            break
+        for c in best.values():
+            c.score = float(np.clip(c.gain, 0.0, 1.0))
+            kept.append(c)
+        ext = _rebuild(base, kept)
+        cur = ev.misfit(ev.terms(ext))
+        pending = [c for c in pending if c.axis_index in best and c not in best.values()
+                   and not any(k.name == c.name and k.axis == c.axis for k in kept)]
+    return ext, cur
+
+
+def _signature(ev: Evaluator, sim: Recording, axis: int) -> dict[str, Any]:
+    """Where the held-out residual of one axis lives: the band [f1, f2] Hz holding the middle
+    of the FRF misfit above noise (quartiles of its distribution over frequency) and the
+    signal the torque residual correlates with most (|r| >= 0.3)."""
+    part = ev.val if ev.val.segments else ev.fit
+    meas = ev.meas_val if ev.meas_val else ev.meas_fit
+    est = estimates(replace_segments(sim, part))
+    fr, w = [], []
+    for k, pm in meas.items():
+        r = np.abs(np.log(diag_ratio(pm, est[k])[axis])) ** 2
+        fr.append(pm.freq_hz)
+        w.append(np.maximum(r - ev.floors[k][axis], 0.0))
+    out: dict[str, Any] = {}
+    if fr:
+        f, wt = np.concatenate(fr), np.concatenate(w)
+        o = np.argsort(f)
+        f, wt = f[o], wt[o]
+        if wt.sum() > 0:
+            c = np.cumsum(wt) / wt.sum()
+            out['band_hz'] = [round(float(f[np.searchsorted(c, 0.25)]), 2),
+                              round(float(f[min(np.searchsorted(c, 0.75), f.size - 1)]), 2)]
+    m = ev.val_mask if ev.val_mask.any() else ev.fit_mask
+    res = (ev.rec.effort[:, axis] - sim.effort[:, axis])[m]
+    sigs = {'position': ev.rec.position[:, axis], 'velocity': ev.rec.velocity[:, axis],
+            'acceleration': np.gradient(ev.rec.velocity[:, axis], ev.rec.dt),
+            'time': ev.rec.t}
+    best, rbest = None, 0.3
+    for name, x in sigs.items():
+        xm = x[m] - x[m].mean()
+        den = math.sqrt(float(xm @ xm) * float((res - res.mean()) @ (res - res.mean())))
+        r = abs(float(xm @ (res - res.mean())) / den) if den > 0 else 0.0
+        if r >= rbest:
+            best, rbest = name, r
+    if best:
+        out['correlates_with'] = best
+    return out
+
+
+UNEXPLAINED_RATIO = 4.0   # held-out misfit energy above this many noise floors is unexplained
+
+
 def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
                          progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Diagnose an identification recording against the nominal ``robot``.
 
-    Returns {'effects': [Effect], 'extended': RobotParams, 'metrics': {...}, 'estimates':
-    {'measured', 'nominal', 'extended'} for the plots, 'sims': {...}, 'evaluator': ev}."""
+    Two stages, every candidate judged on its own axis' misfit (in units of the noise floor):
+    first the torque-residual effects (Coulomb and viscous friction, torque ripple) from one
+    joint regression per axis; then, against the simulation of that model, the FRF-shape
+    effects (time delay, parameter mismatch, stiffening, backlash), so friction does not pose
+    as stiffness. Kept effects whose removal does not worsen the held-out misfit are dropped.
+
+    Returns {'effects': [Effect], 'extended': RobotParams, 'metrics': {...}, 'unexplained':
+    [...], 'candidates': [...], 'estimates': {'measured', 'nominal', 'extended'} for the plots,
+    'sims': {...}, 'evaluator': ev}."""
     say = progress or (lambda _m: None)
     if rec.reference is None:
         raise EstimationError('recording has no velocity reference: use the time-series '
                               'diagnosis')
     ev = Evaluator(rec, ctrl)
+    if ev.missing.any():
+        say(f'{ev.missing.mean():.1%} of the samples lack a reference (or follow such a '
+            f'stretch): left out of the comparison')
     sim0 = ev._sim(robot)
     ev.base_terms = ev.terms(robot, sim0)
-    sim_est = estimates(replace_segments(sim0, ev.fit))
-    say('nominal model misfit: ' + ', '.join(f'{k} {v:.3g}' for k, v in ev.base_terms.items()))
+    e0 = ev.misfit(ev.base_terms)
+    say('nominal misfit per axis (1 = noise floor): ' + ', '.join(
+        f'{a.name} {v:.4g}' for a, v in zip(robot.axes, e0)) + f' (noise sd {ev.misfit_sd():.3g})')
     cands: list[Effect] = []
+    kept: list[Effect] = []
+    stage1 = []
     for i in range(robot.n_axes):
         reg = friction_regression(ev, robot, i)
-        s_ms, s_ch = (stiffness_seen(ev.meas_fit, sim_est, robot, i, k)
+        say(f'{robot.axes[i].name}: residual regression '
+            f'{ {k: round(v, 4) for k, v in reg.coef.items()} }, ripple scan peak '
+            f'{reg.ripple_peak_ratio:.1f} (threshold {reg.ripple_threshold:.1f})')
+        for fn in (fit_coulomb, fit_viscous, fit_ripple):
+            e = fn(reg, robot, i)
+            if e is not None:
+                stage1.append(e)
+    ext, cur = _accept(ev, robot, kept, stage1, e0, say)
+    cands += stage1
+    sim1 = ev._sim(ext) if kept else sim0
+    sim_est = estimates(replace_segments(sim1, ev.fit))
+    stage2 = []
+    for i in range(robot.n_axes):
+        s_ms, s_ch = (stiffness_seen(ev.meas_fit, sim_est, ext, i, k)
                       for k in ('multisine', 'chirp'))
         say(f'{robot.axes[i].name}: stiffness seen by multisine x{math.exp(s_ms):.3f}, chirp '
-            f'x{math.exp(s_ch):.3f}; residual regression {reg.coef}')
-        for fn in (lambda: fit_coulomb(reg, robot, i), lambda: fit_viscous(reg, robot, i),
-                   lambda: fit_ripple(reg, robot, i),
-                   lambda: fit_time_delay(ev, sim_est, robot, i),
-                   lambda: fit_parameter_mismatch(ev, robot, i, s_ms, s_ch),
-                   lambda: fit_stiffness_nonlinearity(ev, robot, i, s_ms, s_ch),
-                   lambda: fit_backlash(ev, robot, i, s_ms, s_ch)):
+            f'x{math.exp(s_ch):.3f} (against the model so far)')
+        for fn in (lambda: fit_time_delay(ev, sim_est, ext, i),
+                   lambda: fit_parameter_mismatch(ev, ext, i, s_ms, s_ch),
+                   lambda: fit_stiffness_nonlinearity(ev, ext, i, s_ms, s_ch),
+                   lambda: fit_backlash(ev, ext, i, s_ms, s_ch)):
             e = fn()
             if e is not None:
-                e.gain = 1.0 - ev.loss(apply_effect(robot, e))
-                say(f'  candidate {e.name}: gain {e.gain:.3f} {e.parameters}')
-                cands.append(e)
-    cands = sorted((c for c in cands if c.gain >= MIN_GAIN), key=lambda c: -c.gain)
-    # combine greedily: keep an effect only if it still helps on top of the stronger ones
-    ext, kept, cur = robot, [], 1.0
-    for c in cands:
-        if any(k.name == c.name and k.axis == c.axis for k in kept):
-            continue
-        trial = apply_effect(ext, c)
-        lt = ev.loss(trial)
-        if not kept or lt <= cur * (1 - KEEP_GAIN):
-            ext, cur = trial, lt
-            kept.append(c)
-    for c in kept:
-        c.score = float(np.clip(c.gain, 0, 1))
-    metrics = {'baseline': ev.metrics(robot), 'extended': ev.metrics(ext),
-               'validation': ev.validation_text}
+                stage2.append(e)
+    ext, cur = _accept(ev, robot, kept, stage2, cur, say)
+    cands += stage2
+    # second pass: a torque-residual effect masked by a large FRF-shape effect on the same
+    # axis (viscous friction next to backlash) gets another chance on top of the model so far
+    again = [c for c in stage1 if c not in kept and c.axis_index in
+             {k.axis_index for k in kept if k in stage2}
+             and not any(k.name == c.name and k.axis == c.axis for k in kept)]
+    if again:
+        say('second pass over the torque-residual candidates of axes with FRF-shape effects')
+        ext, cur = _accept(ev, robot, kept, again, cur, say)
+    # held-out check: an effect stays only if removing it worsens its axis' held-out misfit
     sim_ext = ev._sim(ext)
+    val_ext = ev.misfit(ev.terms(ext, sim_ext, held_out=True))
+    for c in list(kept):
+        others = [k for k in kept if k is not c]
+        v = ev.misfit(ev.terms(_rebuild(robot, others), held_out=True))
+        if v[c.axis_index] <= val_ext[c.axis_index]:
+            say(f'  dropped {c.axis} {c.name}: held-out misfit without it '
+                f'{v[c.axis_index]:.4g} <= {val_ext[c.axis_index]:.4g} with it')
+            kept.remove(c)
+            c.gain = 0.0
+    if len(kept) != len([c for c in cands if c.score > 0]):
+        ext = _rebuild(robot, kept)
+        sim_ext = ev._sim(ext)
+        val_ext = ev.misfit(ev.terms(ext, sim_ext, held_out=True))
+    kept.sort(key=lambda c: -c.score)
+    val_base = ev.misfit(ev.terms(robot, sim0, held_out=True))
+    unexplained = []
+    for i, a in enumerate(robot.axes):
+        share = float(np.clip((val_ext[i] - 1) / max(val_base[i] - 1, 1e-12), 0, 1))
+        if val_ext[i] > UNEXPLAINED_RATIO and share >= MIN_SHARE:
+            unexplained.append({'axis': a.name, 'misfit_share': round(share, 3),
+                                'signature': _signature(ev, sim_ext, i)})
+    metrics = {'baseline': ev.metrics(robot, sim0), 'extended': ev.metrics(ext, sim_ext),
+               'validation': ev.validation_text}
     plots = {'measured': ev.meas_val or ev.meas_fit,
              'nominal': estimates(replace_segments(sim0, ev.val if ev.val.segments else ev.fit)),
              'extended': estimates(replace_segments(sim_ext,
                                                     ev.val if ev.val.segments else ev.fit))}
     say(f'{ev.n_sims} simulations of the recorded excitation')
-    return {'effects': kept, 'candidates': cands, 'extended': ext, 'metrics': metrics,
+    return {'effects': kept, 'candidates': [c for c in cands if c not in kept],
+            'extended': ext, 'metrics': metrics, 'unexplained': unexplained,
+            'misfit': {'baseline': val_base.tolist(), 'extended': val_ext.tolist()},
             'estimates': plots, 'sims': {'nominal': sim0, 'extended': sim_ext},
-            'evaluator': ev}
+            'evaluator': ev, 'n_sims': ev.n_sims}

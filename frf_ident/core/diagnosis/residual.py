@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import signal
+from scipy.ndimage import median_filter
 
 from frf_ident.core.model.params import RobotParams
 
@@ -81,6 +82,7 @@ class Regression:
     partial_r2: dict[str, float]
     ripple: list[dict[str, float]] = field(default_factory=list)
     ripple_peak_ratio: float = 0.0
+    ripple_threshold: float = math.inf
     rms_residual: float = 0.0
     rms_effort: float = 0.0
     n_eff: float = 0.0
@@ -96,29 +98,69 @@ def _ls(X: np.ndarray, y: np.ndarray, n_eff: float):
     return coef, coef / se, res
 
 
-def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray, *, s_max: float = 3000.0
-                ) -> tuple[float, float]:
-    """Spatial frequency [1/rad] whose sin/cos in motor position explain most of the residual
-    f (already mean-free); returns (s, peak power / median power of the scan)."""
-    qm, fm = q[mask], f[mask]
+RIPPLE_MIN_CYCLES = 1.5    # lowest spatial frequency: this many cycles over the analysed travel
+RIPPLE_FALSE_ALARM = 1e-3  # probability that noise alone passes the ripple scan's threshold
+
+
+def ripple_range(q: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
+    """Spatial frequencies [1/rad] the recorded motion resolves: from RIPPLE_MIN_CYCLES
+    cycles over the travel in ``mask`` up to the sample limit 0.9 pi / (95th percentile of
+    the position step per sample), i.e. a ripple period of 2.2 samples at the usual speed
+    (at exactly 2 samples the sine regressor vanishes and the scan statistic degenerates)."""
+    qm = q[mask]
     span = float(np.ptp(qm)) if qm.size else 0.0
     if span <= 0:
         return 0.0, 0.0
-    s_min = 4 * 2 * math.pi / span
-    grid = np.arange(s_min, s_max, 0.1 * 2 * math.pi / span)
-    if grid.size < 8:
-        return 0.0, 0.0
-    step = max(1, qm.size // 20000)
-    qs, fs_ = qm[::step], fm[::step]
-    pw = np.empty(grid.size)
-    for i, s in enumerate(grid):
-        c, sn = np.cos(s * qs), np.sin(s * qs)
-        pw[i] = (fs_ @ c) ** 2 + (fs_ @ sn) ** 2
-    i = int(np.argmax(pw))
-    # refine the peak on a finer grid
+    steps = np.abs(np.diff(q))[mask[1:] & mask[:-1]]
+    dq = float(np.percentile(steps, 95)) if steps.size else 0.0
+    s_max = 0.9 * math.pi / dq if dq > 0 else 0.0
+    return RIPPLE_MIN_CYCLES * 2 * math.pi / span, s_max
+
+
+def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
+    """Spatial frequency [1/rad] whose sin/cos in motor position explain most of the residual
+    f, scanned over :func:`ripple_range` with 4x oversampling of the resolution 2 pi / travel.
+
+    Returns (s, peak ratio, threshold): the peak power over the local noise level of the scan
+    (running median / ln 2, the mean of an exponentially distributed periodogram) and the level
+    that noise alone exceeds with probability RIPPLE_FALSE_ALARM over the scan's independent
+    frequencies (ln(M / alpha)). s = 0 when the motion resolves no range."""
+    qm, fm = q[mask], f[mask] - np.mean(f[mask]) if mask.any() else f[mask]
+    s_min, s_max = ripple_range(q, mask)
+    if s_min <= 0 or s_max <= 2 * s_min:
+        return 0.0, 0.0, math.inf
+    span = float(np.ptp(qm))
+    res = 2 * math.pi / span
+    # spatial periodogram by gridding: the residual summed in position bins of a quarter of
+    # the shortest resolvable period's step, then one zero-padded FFT (4x oversampled in s);
+    # the peak is refined below on the samples themselves
+    width = math.pi / s_max / 4
+    idx = ((qm - qm.min()) / width).astype(np.int64)
+    binned = np.bincount(idx, weights=fm, minlength=int(idx.max()) + 1)
+    nfft = 1 << int(math.ceil(math.log2(4 * binned.size)))
+    spec = np.fft.rfft(binned, nfft)
+    s_all = 2 * math.pi * np.arange(spec.size) / (nfft * width)
+    sel = (s_all >= s_min) & (s_all <= s_max)
+    grid = s_all[sel]
+    if grid.size < 16:
+        return 0.0, 0.0, math.inf
+    pw = np.abs(spec[sel]) ** 2
+    # local noise level: running median over +-80 grid points (+-20 resolution cells); the
+    # first and last half windows take the level of the first / last full window, so a peak
+    # at the edge of the range is not measured against copies of itself
+    w = min(161, 2 * (grid.size // 2) - 1)
+    h = w // 2
+    level = median_filter(pw, size=w, mode='nearest')
+    level[:h] = level[h]
+    level[grid.size - h:] = level[grid.size - h - 1]
+    level = level / math.log(2)
+    ratio = pw / np.maximum(level, 1e-300)
+    i = int(np.argmax(ratio))
     fine = np.linspace(grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)], 41)
-    pf = [(fs_ @ np.cos(s * qs)) ** 2 + (fs_ @ np.sin(s * qs)) ** 2 for s in fine]
-    return float(fine[int(np.argmax(pf))]), float(pw[i] / max(np.median(pw), 1e-300))
+    pf = [(fm @ np.cos(s * qm)) ** 2 + (fm @ np.sin(s * qm)) ** 2 for s in fine]
+    n_indep = max((s_max - s_min) / res, 1.0)
+    return (float(fine[int(np.argmax(pf))]), float(ratio[i]),
+            math.log(n_indep / RIPPLE_FALSE_ALARM))
 
 
 def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: np.ndarray,
@@ -146,11 +188,14 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
     ff = lowpass(f, fs, fc)
     n_eff = max(m.sum() * 2 * fc / fs, 10.0)
     rip: list[dict[str, float]] = []
-    peak = 0.0
+    peak, thr = 0.0, math.inf
     if ripple:
+        # the scan sees the residual low-passed only at 0.45 fs: a ripple reaches up to the
+        # sample limit, above the regression's fc
         X0 = np.column_stack([lowpass(c, fs, fc) for c in cols.values()])
         c0, *_ = np.linalg.lstsq(X0[m], ff[m], rcond=None)
-        s, peak = find_ripple(ff - X0 @ c0, q, m if ripple_mask is None else ripple_mask)
+        wide = lowpass(f, fs, 0.45 * fs) - np.column_stack(list(cols.values())) @ c0
+        s, peak, thr = find_ripple(wide, q, m if ripple_mask is None else ripple_mask)
         if s > 0:
             cols['ripple_sin'] = np.sin(s * q)
             cols['ripple_cos'] = np.cos(s * q)
@@ -185,5 +230,5 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
         # f = u - model = -(ripple torque): the ripple is the negated harmonic
         rip = [{'amplitude': amp, 'spatial_frequency': s,
                 'phase': math.atan2(-cf['ripple_cos'], -cf['ripple_sin']), 't': tr}]
-    return Regression(cf, ts, pr2, rip, peak, float(np.sqrt(np.mean(res ** 2))),
+    return Regression(cf, ts, pr2, rip, peak, thr, float(np.sqrt(np.mean(res ** 2))),
                       float(np.std(lowpass(u, fs, fc)[m])), n_eff)

@@ -1,12 +1,29 @@
 """Diagnosis of plain time series (recorded trajectories, imported CSV/MAT): no identification
-experiments, so the evidence is the inverse-dynamics residual regression of
-:mod:`.residual` (tau - M ddq - Fv dq against sgn(dq), dq, ddq and motor-position harmonics),
-fitted on the first part of the record and validated on the rest.
+experiments, so the evidence is the motor-side inverse-dynamics residual of the nominal model
+(:mod:`.residual`), regressed per axis on the signatures of the candidate effects:
 
-``time_nrmse`` here is the error of the torque predicted by inverse dynamics from the measured
-motion (the output of the inverse model) over the RMS of the measured torque, both low-pass
-filtered; ``frf_error_db`` compares the measured u -> dq FRF (Welch H1) with the one of the
-predicted torque, on the lines with coherence > 0.5.
+=====================  =====================================================================
+group                  regressors (low-passed like the residual)
+=====================  =====================================================================
+coulomb_friction       sgn(dq)                                           (eq. 1)
+viscous_friction       dq
+parameter_mismatch     ddq (inertia)
+torque_ripple          sin / cos (s q) at the spatial frequency of the position scan
+gravity                1 (constant load) and sin / cos (sum of q over a contiguous set of
+                       joints containing the axis): G sin(q_i + phi) of a link about its own
+                       joint, or sums over the joints it depends on for a coupled arm
+=====================  =====================================================================
+
+Groups enter by forward selection with an F test at the data's own noise (residual variance,
+effective sample count of the filtered signals, false-alarm probability ``ALPHA``), all selected
+groups are refitted jointly, and a group is dropped when removing it does not worsen the
+held-out error. Held out: every third block of 0.5 s (:func:`split_blocks`).
+
+``time_nrmse`` is the error of the torque the model predicts from the measured motion
+(inverse dynamics) over the RMS of the measured torque, both low-pass filtered; the model is
+the model file itself (nominal or extended), so the same number can be computed on any other
+record (``--validate``). ``frf_error_db`` compares the measured u -> dq FRF (Welch H1) with the
+one of the predicted torque, on the lines with coherence > 0.5.
 """
 from __future__ import annotations
 
@@ -15,135 +32,438 @@ from dataclasses import replace
 from typing import Any, Callable
 
 import numpy as np
-from scipy import signal
+from scipy import signal, stats
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 
 from .common import Effect
-from .residual import inverse_dynamics_residual, lowpass, regress_axis
+from .residual import find_ripple, inverse_dynamics_residual, is_rigid, lowpass
 
-MIN_T = 5.0          # |t| an effect's coefficient must exceed
-MIN_R2 = 0.02        # share of the residual variance it must explain
+__all__ = ['ALPHA', 'FC_HZ', 'diagnose_timeseries', 'model_residual', 'predict_metrics']
+
+ALPHA = 1e-3          # false-alarm probability of the F test that admits a regressor group
+FC_HZ = 20.0          # low-pass of residual and regressors [Hz]
+EDGE = 0.02           # share of the record left out at each end of fit and held-out parts
+BLOCK_S = 0.5         # fit / held-out blocks [s]
+HOLD_EVERY = 3        # every third block is held out
+UNEXPLAINED_RATIO = 4.0   # held-out misfit energy above this many noise floors is unexplained
+MIN_SHARE = 0.10          # ... when it is also at least this share of the nominal misfit
 
 
-def _design(f, q, v, a, fs, fc, nuisance, ripple_s):
-    cols = [np.ones_like(v), np.sign(lowpass(v, fs, fc)), v, a]
-    if nuisance is not None:
-        cols += list(nuisance.T)
+def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]:
+    """u - (torque the model needs for the measured motion), between samples.
+
+    Linear part from :func:`.residual.inverse_dynamics_residual`, plus the model's own Coulomb
+    friction, torque ripple and gravity (link positions taken as the motor positions: the
+    deflection is far below the gravity terms' angular scale). Returns (f, q, v, a), each
+    (N-1, n)."""
+    f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, rec.effort, rec.dt,
+                                              robot)
+    g_const = np.array([a.gravity_torque for a in robot.axes])
+    grav = robot.gravity_load(qh)
+    if not is_rigid(robot, rec.fs):
+        grav = grav - g_const           # the flexible inverse dynamics carries the constant
+    fc = np.array([a.coulomb_friction for a in robot.axes])
+    rip = np.zeros_like(f)
+    for i, a in enumerate(robot.axes):
+        for r in a.torque_ripple:
+            rip[:, i] += r['amplitude'] * np.sin(r['spatial_frequency'] * qh[:, i]
+                                                 + r.get('phase', 0.0))
+    return f - fc * np.sign(vh) + rip - grav, qh, vh, ah
+
+
+def _gravity_sets(n: int, i: int) -> list[tuple[int, ...]]:
+    """Contiguous joint sets containing axis i (the coupled-arm sums)."""
+    return [tuple(range(a, b + 1)) for a in range(0, i + 1) for b in range(i, n)]
+
+
+def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None):
+    """Candidate regressor groups of axis i: name -> low-passed columns (N, k). Gravity sets
+    only over the ``bearing`` axes (all when None)."""
+    n = q.shape[1]
+    g: dict[str, np.ndarray] = {
+        'gravity_torque': np.ones((q.shape[0], 1)),
+        'coulomb_friction': np.sign(lowpass(v[:, i], fs, fc))[:, None],
+        'viscous_friction': v[:, i:i + 1],
+        'motor_inertia': a[:, i:i + 1]}
     if ripple_s:
-        cols += [np.sin(ripple_s * q), np.cos(ripple_s * q)]
-    return np.column_stack([lowpass(c, fs, fc) for c in cols])
+        g['torque_ripple'] = np.column_stack([np.sin(ripple_s * q[:, i]),
+                                              np.cos(ripple_s * q[:, i])])
+    sets = [js for js in _gravity_sets(n, i) if np.ptp(q[:, list(js)].sum(axis=1)) > 1e-3
+            and (bearing is None or set(js) <= set(bearing))]
+    # one gravity group per single set and per pair of sets: a coupled arm's axis carries the
+    # weight of its own link and of the links beyond (G1 sin(q2) + G2 sin(q2 + q3)), which a
+    # single set approximates with the wrong joints when the motion correlates them
+    combos = [(js,) for js in sets] + [(a, b) for k, a in enumerate(sets) for b in sets[k + 1:]]
+    for combo in combos:
+        cols = []
+        for js in combo:
+            arg = q[:, list(js)].sum(axis=1)
+            cols += [np.sin(arg), np.cos(arg)]
+        g['gravity:' + '|'.join(','.join(map(str, js)) for js in combo)] = np.column_stack(cols)
+    return {k: lowpass(x, fs, fc) for k, x in g.items()}
 
 
-def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fit_fraction: float = 0.7,
-                        fc: float = 20.0, nuisance: np.ndarray | None = None,
-                        link_position: np.ndarray | None = None,
-                        progress: Callable[[str], None] | None = None) -> dict[str, Any]:
-    """Per axis: residual regression on the first ``fit_fraction`` of the record, effects with
-    significant coefficients, extended model, metrics on the rest. ``nuisance`` (N, m):
-    extra regressors fitted for baseline and extension alike (e.g. gravity terms)."""
+def _lstsq(cols: list[np.ndarray], y: np.ndarray) -> tuple[np.ndarray, float]:
+    if not cols:
+        return np.zeros(0), float(y @ y)
+    X = np.column_stack(cols)
+    c, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ c
+    return c, float(r @ r)
+
+
+def _axis_masks(rec, f, vh, i, fit_m, val_m, fc):
+    """(low-passed residual, fit mask, held-out mask, effective samples) of axis i: sticking
+    samples (Coulomb force undetermined) and the filter's edges around reversals are left out
+    of fit and validation alike."""
+    fs = rec.fs
+    ff = lowpass(f[:, i], fs, fc)
+    vl = lowpass(vh[:, i], fs, fc)
+    vnoise = float(np.std(np.diff(rec.velocity[:, i]))) / math.sqrt(2)
+    use = np.abs(vl) > 0.3 * vnoise
+    sg = np.sign(vl)
+    guard = int(0.5 * fs / fc)
+    for c in np.flatnonzero(np.diff(sg) != 0):
+        use[max(c - guard, 0):c + guard + 1] = False
+    fit_i, val_i = fit_m & use, val_m & use
+    return ff, fit_i, val_i, max(fit_i.sum() * 2 * fc / fs, 10.0)
+
+
+def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
+    """Axes that carry a configuration-dependent load: G sin(sum of a contiguous joint set
+    containing the axis + phi) passes the F test (p < ALPHA) on top of offset, friction and
+    inertia. Only these axes' angles may enter gravity arguments: a joint whose axis carries no
+    gravity (a vertical axis) does not tilt the links beyond it."""
+    out = []
+    n = q.shape[1]
+    for i, (ff, fit_i, val_i, n_eff) in enumerate(prep):
+        g = _groups(q, v, a, fs, fc, i, 0.0, None)
+        base = [g[k][fit_i] for k in ('gravity_torque', 'coulomb_friction', 'viscous_friction',
+                                      'motor_inertia')]
+        _, rss0 = _lstsq(base, ff[fit_i])
+        dof = max(n_eff - 6, 1.0)
+        for js in _gravity_sets(n, i):
+            key = 'gravity:' + ','.join(map(str, js))
+            if key not in g:
+                continue
+            _, rss1 = _lstsq(base + [g[key][fit_i]], ff[fit_i])
+            F = ((rss0 - rss1) / 2) / max(rss1 / dof, 1e-300) * (n_eff / max(fit_i.sum(), 1))
+            if F > 0 and stats.f.sf(F, 2, dof) < ALPHA:
+                out.append(i)
+                break
+    return out
+
+
+def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
+                  val: np.ndarray, n_eff: float) -> tuple[list[str], dict[str, dict]]:
+    """Forward selection by F test (p < ALPHA at ``n_eff`` effective samples), then removal of
+    every group whose absence does not worsen the held-out residual. Returns the selected
+    names and per candidate {'p', 'share', 'held_out_gain'} for the report."""
+    chosen: list[str] = []
+    info: dict[str, dict] = {}
+    yf = y[fit]
+    tot = float((yf - yf.mean()) @ (yf - yf.mean())) or 1e-300
+    while True:
+        _, rss0 = _lstsq([groups[k][fit] for k in chosen], yf)
+        best, bp = None, ALPHA
+        for k, x in groups.items():
+            if k in chosen or (k.startswith('gravity:')
+                               and any(c.startswith('gravity:') for c in chosen)):
+                continue
+            cols = [groups[c][fit] for c in chosen] + [x[fit]]
+            _, rss1 = _lstsq(cols, yf)
+            q = x.shape[1]
+            p_tot = sum(groups[c].shape[1] for c in chosen) + q
+            dof = max(n_eff - p_tot, 1.0)
+            F = ((rss0 - rss1) / q) / max(rss1 / dof, 1e-300) * (n_eff / max(fit.sum(), 1))
+            p = float(stats.f.sf(F, q, dof)) if F > 0 else 1.0
+            info.setdefault(k, {})
+            info[k].update(p=p, share=(rss0 - rss1) / tot)
+            if p < bp:
+                best, bp = k, p
+        if best is None:
+            break
+        chosen.append(best)
+
+    def held(names):
+        """Held-out residual energy of the groups ``names`` refitted jointly."""
+        c, _ = _lstsq([groups[k][fit] for k in names], yf)
+        if not names:
+            r = y[val]
+        else:
+            r = y[val] - np.column_stack([groups[k][val] for k in names]) @ c
+        return float(r @ r)
+    for k in list(chosen):
+        with_k = held(chosen)
+        without = held([c for c in chosen if c != k])
+        info[k]['held_out_gain'] = (without - with_k) / max(without, 1e-300)
+        if without <= with_k:
+            chosen.remove(k)
+    return chosen, info
+
+
+def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
+    """Fit and held-out masks: the record cut into blocks of BLOCK_S, every HOLD_EVERY-th
+    held out (interleaved, so held-out data cover the same configurations as the fit instead
+    of extrapolating to the end of a short trajectory), a guard of half a filter period
+    dropped at every block boundary and EDGE of the record at both ends."""
+    blk = max(int(BLOCK_S * fs), 8)
+    k = np.arange(n)
+    held = (k // blk) % HOLD_EVERY == HOLD_EVERY - 1
+    guard = int(0.5 * fs / fc)
+    near = np.zeros(n, bool)
+    for b in range(blk, n, blk):
+        near[max(b - guard, 0):b + guard] = True
+    e = int(EDGE * n)
+    near[:e] = near[n - e:] = True
+    return ~held & ~near, held & ~near
+
+
+def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
+                        progress: Callable[[str], None] | None = None
+                        ) -> dict[str, Any]:
+    """Per axis: residual regression on the fit blocks of :func:`split_blocks`, effects
+    selected by F test and held-out error, the extended model, metrics on the held-out blocks.
+
+    Parameters
+    ----------
+    rec : the recording (positions, velocities, efforts of the model's axes).
+    robot : the nominal model.
+    fc : low-pass cut-off of residual and regressors [Hz].
+    progress : callback for progress lines.
+
+    Returns
+    -------
+    dict with 'effects' (ranked), 'extended' (RobotParams), 'metrics' (docs/CONTRACT.md §7),
+    'unexplained', 'rejected' (candidates with their numbers), 'residual' (for the plots).
+    """
     say = progress or (lambda _m: None)
-    fs, dt = rec.fs, rec.dt
+    fs = rec.fs
     N = rec.t.size
-    n_fit = int(fit_fraction * N)
-    f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, rec.effort, dt, robot)
-    nu = None if nuisance is None else 0.5 * (nuisance[1:] + nuisance[:-1])
-    fit_m = np.zeros(N - 1, bool)
-    fit_m[int(0.02 * N):n_fit] = True
-    val_m = np.zeros(N - 1, bool)
-    val_m[n_fit + int(0.02 * N):-int(0.02 * N)] = True
+    f, qh, vh, ah = model_residual(rec, robot)
+    fit_m, val_m = split_blocks(N - 1, fs, fc)
     effects: list[Effect] = []
+    rejected: list[dict[str, Any]] = []
     ext_axes = list(robot.axes)
-    pred = {'baseline': np.zeros_like(f), 'extended': np.zeros_like(f)}
-    details = []
+    names = robot.joint_names
+    prep = [_axis_masks(rec, f, vh, i, fit_m, val_m, fc) for i in range(robot.n_axes)]
+    bearing = gravity_bearing(qh, vh, ah, fs, fc, prep)
+    say(f'axes whose own angle carries a configuration-dependent load: '
+        f'{[names[i] for i in bearing] or "none"}')
     for i, ax in enumerate(robot.axes):
-        vnoise = 3 * float(np.std(np.diff(rec.velocity[:, i]))) / math.sqrt(2) * 0.1
-        reg = regress_axis(f[:, i], qh[:, i], vh[:, i], ah[:, i], rec.effort[:-1, i], fit_m,
-                           fs, fc=fc, v_eps=vnoise, with_inertia=True, nuisance=nu)
-        say(f'{ax.name}: residual regression {({k: round(v, 4) for k, v in reg.coef.items()})}'
-            f', t {({k: round(v, 1) for k, v in reg.tstat.items()})}, partial R2 '
-            f'{({k: round(v, 3) for k, v in reg.partial_r2.items()})}')
-        details.append(reg)
+        ff, fit_i, val_i, n_eff = prep[i]
+        g0 = _groups(qh, vh, ah, fs, fc, i, 0.0, bearing)
+        X0 = np.column_stack(list(g0.values()))
+        c0, *_ = np.linalg.lstsq(X0[fit_i], ff[fit_i], rcond=None)
+        wide = lowpass(f[:, i], fs, 0.45 * fs) - np.column_stack(
+            [x for x in _groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0, bearing).values()]) @ c0
+        s, peak, thr = find_ripple(wide, qh[:, i], fit_i)
+        groups = _groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0, bearing)
+        chosen, info = select_groups(groups, ff, fit_i, val_i, n_eff)
+        while True:
+            coef, _ = _lstsq([groups[k][fit_i] for k in chosen], ff[fit_i])
+            cf, k0 = {}, 0
+            for k in chosen:
+                w = groups[k].shape[1]
+                cf[k] = coef[k0:k0 + w]
+                k0 += w
+            # a fit that leaves the physical range (negative friction or inertia) is no
+            # evidence of that effect: drop the group and refit the rest
+            bad = [k for k, base in (('coulomb_friction', ax.coulomb_friction),
+                                     ('viscous_friction', ax.viscous_friction),
+                                     ('motor_inertia', ax.motor_inertia))
+                   if k in cf and base + float(cf[k][0]) <= 0]
+            if not bad:
+                break
+            for k in bad:
+                chosen.remove(k)
+                info[k]['unphysical'] = True
+        say(f'{ax.name}: selected {chosen} (ripple scan peak {peak:.1f}, threshold {thr:.1f}); '
+            + ', '.join(f'{k} p={v.get("p", 1):.2g} share={v.get("share", 0):.3f}'
+                        for k, v in info.items()))
         ch: dict[str, Any] = {}
-        jtot = ax.motor_inertia + ax.link_inertia
-
-        def ok(key, group):
-            return abs(reg.tstat.get(key, 0)) >= MIN_T and reg.partial_r2.get(group, 0) >= MIN_R2
-        if ok('coulomb_friction', 'coulomb_friction') and reg.coef['coulomb_friction'] > 0:
-            fcoul = ax.coulomb_friction + reg.coef['coulomb_friction']
-            ch['coulomb_friction'] = fcoul
-            effects.append(Effect('coulomb_friction', ax.name, reg.partial_r2['coulomb_friction'],
-                                  {'coulomb_friction': fcoul},
-                                  f'inverse-dynamics residual steps by {2 * reg.coef["coulomb_friction"]:.3g} '
-                                  f'(torque units) at each velocity reversal (t = '
-                                  f'{reg.tstat["coulomb_friction"]:.1f}; explains '
-                                  f'{100 * reg.partial_r2["coulomb_friction"]:.0f} % of the residual '
-                                  f'variance; offset {reg.coef["offset"]:+.3g})', i))
-        if ok('viscous_friction', 'viscous_friction') and \
-                ax.viscous_friction + reg.coef['viscous_friction'] > 0:
-            fv = ax.viscous_friction + reg.coef['viscous_friction']
-            ch['viscous_friction'] = fv
-            effects.append(Effect('viscous_friction', ax.name, reg.partial_r2['viscous_friction'],
-                                  {'viscous_friction': fv},
-                                  f'residual proportional to velocity: '
-                                  f'{reg.coef["viscous_friction"]:+.4g} per unit velocity (t = '
-                                  f'{reg.tstat["viscous_friction"]:.1f}; explains '
-                                  f'{100 * reg.partial_r2["viscous_friction"]:.0f} %)', i))
-        if reg.ripple and reg.ripple_peak_ratio >= 30 and \
-                reg.partial_r2.get('torque_ripple', 0) >= MIN_R2 and reg.ripple[0]['t'] >= MIN_T:
-            r = reg.ripple[0]
-            rip = list(ax.torque_ripple) + [{k: r[k] for k in ('amplitude', 'spatial_frequency',
-                                                               'phase')}]
-            ch['torque_ripple'] = rip
-            effects.append(Effect('torque_ripple', ax.name, reg.partial_r2['torque_ripple'],
-                                  {'torque_ripple': rip},
-                                  f'residual periodic in position, amplitude {r["amplitude"]:.3g} at '
-                                  f'spatial frequency {r["spatial_frequency"]:.4g} 1/rad', i))
-        dj = reg.coef.get('inertia', 0.0)
-        if ok('inertia', 'inertia') and abs(dj) > 0.05 * jtot:
-            jm = max(ax.motor_inertia + dj, 1e-6 * jtot)
-            ch['motor_inertia'] = jm
-            effects.append(Effect('parameter_mismatch', ax.name, reg.partial_r2['inertia'],
-                                  {'motor_inertia': jm},
-                                  f'residual proportional to acceleration: inertia '
-                                  f'{jtot:.4g} -> {jtot + dj:.4g} (t = {reg.tstat["inertia"]:.1f})', i))
+        for k, v in info.items():
+            if k not in chosen:
+                rejected.append({'name': k.split(':')[0], 'axis': ax.name,
+                                 'p_value': float(f'{v.get("p", 1.0):.3g}'),
+                                 'residual_share': round(float(v.get('share', 0.0)), 4),
+                                 'held_out_gain': round(float(v.get('held_out_gain', 0.0)), 4)})
+        score = {k: float(np.clip(info[k].get('held_out_gain', 0.0), 0, 1)) for k in chosen}
+        if 'coulomb_friction' in cf:
+            c = float(cf['coulomb_friction'][0])
+            ch['coulomb_friction'] = ax.coulomb_friction + c
+            effects.append(Effect(
+                'coulomb_friction', ax.name, score['coulomb_friction'],
+                {'coulomb_friction': ch['coulomb_friction']},
+                f'inverse-dynamics residual steps by {2 * c:.3g} (torque units) at each velocity '
+                f'reversal (F test p = {info["coulomb_friction"]["p"]:.2g}; removing it raises '
+                f'the held-out residual energy by '
+                f'{100 * info["coulomb_friction"]["held_out_gain"]:.0f} %)', i))
+        if 'viscous_friction' in cf:
+            c = float(cf['viscous_friction'][0])
+            ch['viscous_friction'] = ax.viscous_friction + c
+            effects.append(Effect(
+                'viscous_friction', ax.name, score['viscous_friction'],
+                {'viscous_friction': ch['viscous_friction']},
+                f'residual proportional to velocity: {c:+.4g} per unit velocity (p = '
+                f'{info["viscous_friction"]["p"]:.2g})', i))
+        if 'motor_inertia' in cf:
+            c = float(cf['motor_inertia'][0])
+            ch['motor_inertia'] = ax.motor_inertia + c
+            effects.append(Effect(
+                'parameter_mismatch', ax.name, score['motor_inertia'],
+                {'motor_inertia': ch['motor_inertia']},
+                f'residual proportional to acceleration: inertia {ax.motor_inertia:.4g} -> '
+                f'{ch["motor_inertia"]:.4g} (p = {info["motor_inertia"]["p"]:.2g})', i))
+        if 'torque_ripple' in cf:
+            a_s, a_c = (float(x) for x in cf['torque_ripple'])
+            amp = math.hypot(a_s, a_c)
+            rip = {'amplitude': amp, 'spatial_frequency': s, 'phase': math.atan2(-a_c, -a_s)}
+            ch['torque_ripple'] = list(ax.torque_ripple) + [rip]
+            effects.append(Effect(
+                'torque_ripple', ax.name, score['torque_ripple'],
+                {'torque_ripple': ch['torque_ripple']},
+                f'residual periodic in position: amplitude {amp:.3g} at {s:.4g} /rad (scan '
+                f'peak {peak:.0f}x the local noise level, false-alarm level {thr:.0f})', i))
+        if 'gravity_torque' in cf:
+            # f = u - model: a constant residual is a load the model lacks
+            c = float(cf['gravity_torque'][0])
+            ch['gravity_torque'] = ax.gravity_torque + c
+            effects.append(Effect(
+                'parameter_mismatch', ax.name, score['gravity_torque'],
+                {'gravity_torque': ch['gravity_torque']},
+                f'constant torque residual {c:+.3g} (a load or friction asymmetry the model '
+                f'lacks; p = {info["gravity_torque"]["p"]:.2g})', i))
+        gk = [k for k in chosen if k.startswith('gravity:')]
+        if gk:
+            terms = list(ax.gravity)
+            parts = []
+            for k in gk:
+                for t_i, set_text in enumerate(k.split(':')[1].split('|')):
+                    js = [int(x) for x in set_text.split(',')]
+                    a_s, a_c = (float(x) for x in cf[k][2 * t_i:2 * t_i + 2])
+                    # residual = +G sin(arg + phi) = G cos(phi) sin(arg) + G sin(phi) cos(arg)
+                    term = {'amplitude': math.hypot(a_s, a_c), 'phase': math.atan2(a_c, a_s),
+                            'joints': [names[j] for j in js]}
+                    terms.append(term)
+                    parts.append(f'{term["amplitude"]:.3g} sin('
+                                 f'{" + ".join("q_" + names[j] for j in js)} '
+                                 f'{term["phase"]:+.2f})')
+            ch['gravity'] = terms
+            effects.append(Effect(
+                'gravity', ax.name, max(score[k] for k in gk), {'gravity': terms},
+                f'residual follows the configuration: {", ".join(parts)} (torque units; '
+                f'held-out gain {100 * max(score[k] for k in gk):.0f} %)', i))
         ext_axes[i] = replace(ax, **ch)
-        # predictions on the whole record: baseline = nominal + offset/nuisance fitted on the
-        # fit part; extended = nominal + all accepted terms fitted on the fit part
-        s = reg.ripple[0]['spatial_frequency'] if 'torque_ripple' in ch else 0.0
-        X = _design(f[:, i], qh[:, i], vh[:, i], ah[:, i], fs, fc, nu, s)
-        ff = lowpass(f[:, i], fs, fc)
-        n_nu = 0 if nu is None else nu.shape[1]
-        base_cols = [0] + list(range(4, 4 + n_nu))
-        use = base_cols + [c for c, k in ((1, 'coulomb_friction'), (2, 'viscous_friction'),
-                                          (3, 'motor_inertia')) if k in ch]
-        if s:
-            use += [X.shape[1] - 2, X.shape[1] - 1]
-        for key, cols in (('baseline', base_cols), ('extended', sorted(use))):
-            c, *_ = np.linalg.lstsq(X[fit_m][:, cols], ff[fit_m], rcond=None)
-            pred[key][:, i] = X[:, cols] @ c
-    effects.sort(key=lambda e: -e.score)
+    effects.sort(key=lambda x: -x.score)
     ext = replace(robot, axes=ext_axes)
-    uf = lowpass(rec.effort[:-1], fs, fc)
-    ff_all = lowpass(f, fs, fc)
     metrics: dict[str, Any] = {}
-    for key in ('baseline', 'extended'):
-        u_model = uf - ff_all + pred[key]          # nominal inverse dynamics + fitted terms
-        e = (uf - u_model)[val_m]
-        den = np.sqrt(np.mean((uf[val_m] - uf[val_m].mean(0)) ** 2))
-        metrics[key] = {'frf_error_db': round(_frf_error(rec.velocity[:-1][val_m],
-                                                         uf[val_m], u_model[val_m], fs), 4),
-                        'time_nrmse': round(float(np.sqrt(np.mean(e ** 2)) / den), 5)}
-    metrics['validation'] = (f'fitted on the first {100 * fit_fraction:.0f} % of the record '
-                             f'(0-{rec.t[n_fit]:.2f} s), validated on the remaining '
-                             f'{rec.t[-1] - rec.t[n_fit]:.2f} s; time_nrmse = error of the '
-                             f'inverse-dynamics torque over the RMS of the measured torque '
-                             f'({fc:g} Hz low-pass)')
-    return {'effects': effects, 'extended': ext, 'metrics': metrics, 'regressions': details,
+    val = {}
+    for key, model in (('baseline', robot), ('extended', ext)):
+        val[key] = predict_metrics(rec, model, fc=fc, mask=val_m)
+        metrics[key] = {k: val[key][k] for k in ('frf_error_db', 'time_nrmse', 'per_axis')}
+    metrics['validation'] = (f'held out (not used for fitting): every {HOLD_EVERY}rd block of '
+                             f'{BLOCK_S:g} s ({val_m.sum() / fs:.2f} s of {N / fs:.2f} s); '
+                             f'time_nrmse = error of the '
+                             f'inverse-dynamics torque of the model file over the RMS of the '
+                             f'measured torque ({fc:g} Hz low-pass)')
+    unexplained = []
+    floor = noise_floor(rec, f, fc)
+    for i, ax in enumerate(robot.axes):
+        b = val['baseline']['per_axis'][ax.name]['time_nrmse'] ** 2
+        x = val['extended']['per_axis'][ax.name]['time_nrmse'] ** 2
+        share = float(np.clip((x - floor[i]) / max(b - floor[i], 1e-300), 0, 1))
+        if x > UNEXPLAINED_RATIO * floor[i] and share >= MIN_SHARE:
+            unexplained.append({'axis': ax.name, 'misfit_share': round(share, 3),
+                                'signature': signature(val['extended']['residual'][:, i],
+                                                       qh[:, i], vh[:, i], ah[:, i],
+                                                       rec.t[:-1], val_m, fs, fc)})
+    return {'effects': effects, 'extended': ext, 'metrics': metrics, 'unexplained': unexplained,
+            'rejected': rejected, 'noise_floor_nrmse2': floor.tolist(),
             'residual': {'t': rec.t[:-1], 'f': f, 'q': qh, 'v': vh,
-                         'pred_baseline': pred['baseline'], 'pred_extended': pred['extended'],
+                         'pred_baseline': lowpass(f, fs, fc) - val['baseline']['residual'],
+                         'pred_extended': lowpass(f, fs, fc) - val['extended']['residual'],
                          'val_mask': val_m}}
+
+
+def noise_floor(rec: Recording, f: np.ndarray, fc: float) -> np.ndarray:
+    """Per axis NRMSE^2 that torque noise alone leaves after the fc low-pass: the white level
+    of the residual's spectrum between 0.6 and 0.95 of the Nyquist frequency (where motion
+    leaves little), times the bandwidth fc, over the variance of the low-passed torque."""
+    fs = rec.fs
+    nper = int(min(2 ** int(math.log2(max(f.shape[0] // 8, 64))), 4096))
+    fr, p = signal.welch(f, fs=fs, nperseg=nper, axis=0)
+    sel = (fr > 0.6 * fs / 2) & (fr < 0.95 * fs / 2)
+    level = np.median(p[sel], axis=0) if sel.any() else np.zeros(f.shape[1])
+    var_u = np.var(lowpass(rec.effort[:-1], fs, fc), axis=0)
+    return level * min(fc, fs / 2) / np.maximum(var_u, 1e-300)
+
+
+def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
+    """Where a held-out residual lives: the band [f1, f2] Hz holding the middle half of its
+    power (quartiles below fc) and the signal it correlates with most (|r| >= 0.3)."""
+    out: dict[str, Any] = {}
+    r = res[mask]
+    if r.size >= 64:
+        nper = int(min(2 ** int(math.log2(r.size // 4)), 4096))
+        fr, p = signal.welch(r, fs=fs, nperseg=nper)
+        sel = (fr > 0) & (fr <= fc)
+        if sel.any() and p[sel].sum() > 0:
+            c = np.cumsum(p[sel]) / p[sel].sum()
+            fsel = fr[sel]
+            df = float(fr[1] - fr[0])      # a spectral line stands for its bin's width
+            out['band_hz'] = [round(max(float(fsel[np.searchsorted(c, 0.25)]) - df, 0.0), 2),
+                              round(float(fsel[min(np.searchsorted(c, 0.75), fsel.size - 1)])
+                                    + df, 2)]
+    best, rb = None, 0.3
+    rr = r - r.mean()
+    for name, x in (('position', q), ('velocity', v), ('acceleration', a), ('time', t)):
+        xm = x[mask] - x[mask].mean()
+        den = math.sqrt(float(xm @ xm) * float(rr @ rr))
+        c = abs(float(xm @ rr)) / den if den > 0 else 0.0
+        if c >= rb:
+            best, rb = name, c
+    if best:
+        out['correlates_with'] = best
+    return out
+
+
+def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
+                    mask: np.ndarray | None = None) -> dict[str, Any]:
+    """Held-out metrics of a model file on a recording: the torque the model predicts from
+    the measured motion against the measured torque (both low-passed at fc), on ``mask``
+    (between samples, N-1; default all but the ends).
+
+    Returns
+    -------
+    dict with 'frf_error_db', 'time_nrmse', 'per_axis' {name: {...}} and 'residual' (N-1, n)
+    (measured minus predicted torque, low-passed).
+    """
+    fs = rec.fs
+    f, *_ = model_residual(rec, robot)
+    N = rec.t.size
+    if mask is None:
+        mask = np.zeros(N - 1, bool)
+        mask[int(EDGE * N):N - 1 - int(EDGE * N)] = True
+    uf = lowpass(rec.effort[:-1], fs, fc)
+    ff = lowpass(f, fs, fc)
+    u_model = uf - ff
+    per = {}
+    for i, name in enumerate(robot.joint_names):
+        e = ff[mask, i]
+        den = float(np.std(uf[mask, i]))
+        per[name] = {'frf_error_db': round(_frf_error(rec.velocity[:-1][mask][:, [i]],
+                                                      uf[mask][:, [i]], u_model[mask][:, [i]],
+                                                      fs), 4),
+                     'time_nrmse': round(float(np.sqrt(np.mean(e ** 2)) / max(den, 1e-300)), 5)}
+    e = ff[mask]
+    den = np.sqrt(np.mean((uf[mask] - uf[mask].mean(0)) ** 2))
+    return {'frf_error_db': round(_frf_error(rec.velocity[:-1][mask], uf[mask], u_model[mask],
+                                             fs), 4),
+            'time_nrmse': round(float(np.sqrt(np.mean(e ** 2)) / max(den, 1e-300)), 5),
+            'per_axis': per, 'residual': ff}
 
 
 def _frf_error(v: np.ndarray, u_meas: np.ndarray, u_model: np.ndarray, fs: float) -> float:

@@ -2,7 +2,8 @@
 :class:`RobotParams` of the whole arm (Saupe & Knoblach 2015, eqs. 1, 2, 20-22).
 
 The model file (docs/CONTRACT.md, "Model file") is converted to and from these classes by
-:mod:`frf_ident.core.model.schema`; the simulation reads them in :mod:`frf_ident.core.simulation.plant`.
+:mod:`frf_ident.core.model.schema`; the simulation reads them in
+:mod:`frf_ident.core.simulation.plant`.
 """
 from __future__ import annotations
 
@@ -22,8 +23,12 @@ class AxisParams:
     """Parameters of one flexible joint; keys and units of the model file (docs/CONTRACT.md §5).
 
     Extensions beyond the contract (documented in README): ``gravity_torque`` [N m] constant
-    link-side load, ``encoder_resolution`` [rad/count] (0 = ideal), ``velocity_noise`` [rad/s]
-    and ``torque_noise`` [N m] standard deviations of additive measurement noise.
+    link-side load, ``gravity`` configuration-dependent link-side load (a list of terms
+    ``{amplitude: G [N m], phase: phi [rad], joints: [names]}``, each adding
+    ``G sin(sum of the named joints' link positions + phi)``; ``joints`` defaults to the axis
+    itself, several names give the coupled-arm case, e.g. ``G sin(q2 + q3 + phi)``),
+    ``encoder_resolution`` [rad/count] (0 = ideal), ``velocity_noise`` [rad/s] and
+    ``torque_noise`` [N m] standard deviations of additive measurement noise.
     """
 
     name: str = 'joint_1'
@@ -40,6 +45,7 @@ class AxisParams:
     time_delay: float = 0.0
     torque_limit: float = 150.0
     gravity_torque: float = 0.0
+    gravity: list[dict[str, Any]] = field(default_factory=list)
     encoder_resolution: float = 0.0
     velocity_noise: float = 0.0
     torque_noise: float = 0.0
@@ -69,10 +75,32 @@ class AxisParams:
                 raise ModelFileError(f'axis {self.name}: torque_ripple[{i}] lacks '
                                      f'{sorted(missing)}')
 
+        for i, g in enumerate(self.gravity):
+            if not isinstance(g, dict) or 'amplitude' not in g:
+                raise ModelFileError(f'axis {self.name}: gravity[{i}] must be a mapping with '
+                                     f'amplitude [N m], optional phase [rad] and joints '
+                                     f'[names], got {g!r}')
+            unknown = set(g) - {'amplitude', 'phase', 'joints'}
+            if unknown:
+                raise ModelFileError(f'axis {self.name}: gravity[{i}] has unknown key(s) '
+                                     f'{sorted(unknown)}; expected amplitude, phase, joints')
+
     @property
     def is_linear(self) -> bool:
         return (self.coulomb_friction == 0 and self.backlash == 0 and not self.torque_ripple
+                and not self.gravity
                 and (self.stiffness_k2 is None or self.stiffness_k2 == self.stiffness))
+
+    def gravity_joints(self, names: list[str], k: int) -> list[int]:
+        """Axis indices whose link positions are summed in gravity term ``k``."""
+        sel = self.gravity[k].get('joints') or [self.name]
+        out = []
+        for j in sel:
+            if j not in names:
+                raise ModelFileError(f'axis {self.name}: gravity[{k}].joints names {j!r}, '
+                                     f'which is not one of the axes {names}')
+            out.append(names.index(j))
+        return out
 
 
 @dataclass
@@ -104,6 +132,9 @@ class RobotParams:
                 raise ModelFileError(f'link_coupling must be a symmetric {n}x{n} matrix, '
                                      f'got shape {c.shape}')
             self.link_coupling = c
+        for a in self.axes:
+            for k in range(len(a.gravity)):
+                a.gravity_joints(self.joint_names, k)
         if np.any(np.linalg.eigvalsh(self.link_inertia_matrix()) <= 0):
             raise ModelFileError('link inertia matrix (link_inertia + link_coupling) must be '
                                  'positive definite')
@@ -127,6 +158,18 @@ class RobotParams:
             m = m + off
         return m
 
+    def gravity_load(self, q_link: np.ndarray) -> np.ndarray:
+        """Link-side load torque of every axis [N m] at link positions ``q_link`` (..., n):
+        constant ``gravity_torque`` plus the ``gravity`` terms G sin(sum q_j + phi)."""
+        q = np.asarray(q_link, dtype=float)
+        out = np.zeros(q.shape) + np.array([a.gravity_torque for a in self.axes])
+        names = self.joint_names
+        for i, a in enumerate(self.axes):
+            for k, g in enumerate(a.gravity):
+                arg = sum(q[..., j] for j in a.gravity_joints(names, k))
+                out[..., i] += float(g['amplitude']) * np.sin(arg + float(g.get('phase', 0.0)))
+        return out
+
     def torque_limits(self) -> np.ndarray:
         return np.array([a.torque_limit for a in self.axes], dtype=float)
 
@@ -137,4 +180,4 @@ class RobotParams:
     def linear(self) -> 'RobotParams':
         """The linear part: no Coulomb friction, backlash, ripple, nonlinear stiffness."""
         return self.with_axes(coulomb_friction=0.0, backlash=0.0, torque_ripple=[],
-                              stiffness_k2=None, stiffness_breakpoint=None)
+                              stiffness_k2=None, stiffness_breakpoint=None, gravity=[])

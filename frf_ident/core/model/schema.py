@@ -7,7 +7,8 @@ what was expected.
 Extensions beyond the contract (all optional, documented in README):
 - top level ``link_coupling``: symmetric n x n off-diagonal link inertia [kg m^2]
 - top level ``simulation``: {substeps, velocity_from_encoder, seed}
-- per axis ``gravity_torque``, ``encoder_resolution``, ``velocity_noise``, ``torque_noise``
+- per axis ``gravity_torque``, ``gravity`` (configuration-dependent load, list of
+  {amplitude, phase, joints}), ``encoder_resolution``, ``velocity_noise``, ``torque_noise``
 """
 from __future__ import annotations
 
@@ -59,12 +60,41 @@ def axis_from_dict(d: dict[str, Any], index: int) -> AxisParams:
                     raise ModelFileError(f'{where}[{j}]: expected a mapping, got {r!r}')
                 rip.append({k: _number(f'{where}[{j}].{k}', v) for k, v in r.items()})
             kw[key] = rip
+        elif key == 'gravity':
+            kw[key] = _gravity_terms(where, val)
         elif key in ('stiffness_k2', 'stiffness_breakpoint'):
             kw[key] = _number(where, val, allow_none=True)
         else:
             kw[key] = _number(where, val)
     kw.setdefault('name', f'joint_{index + 1}')
     return AxisParams(**kw)
+
+
+def _gravity_terms(where: str, val: Any) -> list[dict[str, Any]]:
+    """``gravity``: list of {amplitude [N m], phase [rad], joints [names]}."""
+    if not isinstance(val, list):
+        raise ModelFileError(f'{where}: expected a list of {{amplitude, phase, joints}}, got '
+                             f'{val!r}')
+    out = []
+    for j, g in enumerate(val):
+        w = f'{where}[{j}]'
+        if not isinstance(g, dict) or 'amplitude' not in g:
+            raise ModelFileError(f'{w}: expected a mapping with amplitude [N m], optional '
+                                 f'phase [rad] and joints [names], got {g!r}')
+        unknown = set(g) - {'amplitude', 'phase', 'joints'}
+        if unknown:
+            raise ModelFileError(f'{w}: unknown key(s) {sorted(unknown)}; expected amplitude, '
+                                 f'phase, joints')
+        term: dict[str, Any] = {'amplitude': _number(f'{w}.amplitude', g['amplitude']),
+                                'phase': _number(f'{w}.phase', g.get('phase', 0.0))}
+        if g.get('joints') is not None:
+            js = g['joints']
+            if not isinstance(js, list) or not js or not all(isinstance(x, str) for x in js):
+                raise ModelFileError(f'{w}.joints: expected a non-empty list of axis names, '
+                                     f'got {js!r}')
+            term['joints'] = list(js)
+        out.append(term)
+    return out
 
 
 def robot_from_dict(d: dict[str, Any]) -> RobotParams:
@@ -118,7 +148,7 @@ def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
             raise ModelFileError(f'controller.{key}: gains must be >= 0, got '
                                  f'{gains[key].tolist()}')
     ctrl = PIVelocity(gains['kp'], gains['ki'], robot.torque_limits(), robot.dt)
-    ctrl.reset(np.array([a.gravity_torque for a in robot.axes]))
+    ctrl.reset(robot.gravity_load(np.zeros(robot.n_axes)))
     return ctrl
 
 
@@ -128,6 +158,9 @@ def robot_to_dict(robot: RobotParams, controller: PIVelocity | None = None) -> d
     for a in robot.axes:
         ad = asdict(a)
         ad['torque_ripple'] = [dict(r) for r in a.torque_ripple]
+        ad['gravity'] = [dict(g) for g in a.gravity]
+        if not ad['gravity']:
+            del ad['gravity']
         axes.append(ad)
     d: dict[str, Any] = {'frf_ident_model': MODEL_VERSION, 'sample_rate': robot.sample_rate,
                          'axes': axes}

@@ -2,13 +2,16 @@
 
 Per axis i, motor position q_m, link position q_o, deflection dq = q_m - q_o (eq. 20):
 
-    Jm  ddq_m = tau_m + tau_ripple(q_m) - tau_fc(dq_m) - b_v dq_m - tau_s(dq) - d (dq_m - dq_o)  (eq. 21)
+    Jm  ddq_m = tau_m + tau_ripple(q_m) - tau_fc(dq_m) - b_v dq_m - tau_s(dq)
+                - d (dq_m - dq_o)                                                  (eq. 21)
     M_o ddq_o = tau_s(dq) + d (dq_m - dq_o) - tau_g                                             (eq. 22)
 
 with Coulomb friction tau_fc = Fc sgn(dq_m) (eq. 1), the deflection-dependent spring tau_s of
 eq. 2 (k1 up to the breakpoint bs, k2 beyond), an optional backlash dead zone of total width
 ``backlash`` in front of the spring, position-periodic torque ripple
-sum a sin(s q_m + phase), a constant link-side gravity torque, an input delay and a torque limit.
+sum a sin(s q_m + phase), a constant link-side gravity torque plus configuration-dependent
+gravity terms G sin(sum_j q_o,j + phi) (a link's weight about its own joint, or summed over the
+joints it depends on for a coupled arm), an input delay and a torque limit.
 ``M_o`` is the link inertia matrix: diagonal ``link_inertia`` plus optional symmetric coupling,
 which makes the MIMO FRF non-diagonal and reciprocal.
 
@@ -59,6 +62,9 @@ class _Packed:
     ra: np.ndarray        # (n, R) ripple amplitudes
     rs: np.ndarray        # (n, R) spatial frequencies
     rp: np.ndarray        # (n, R) phases
+    gamp: np.ndarray      # (n, G) gravity amplitudes G
+    gph: np.ndarray       # (n, G) gravity phases phi
+    gsel: np.ndarray      # (n, G, n) 1 where joint j's link position enters term g of axis i
     offsets: np.ndarray   # (m, 2, n) int: sample offsets of the older / newer command
     nbuf: int
     enc: np.ndarray       # (n,) encoder resolution
@@ -72,7 +78,13 @@ def _pack(params: RobotParams) -> _Packed:
     n_rip = max([len(a.torque_ripple) for a in params.axes] + [1])
     ra, rs, rp = np.zeros((n, n_rip)), np.zeros((n, n_rip)), np.zeros((n, n_rip))
     dt, m = params.dt, int(params.substeps)
+    n_g = max([len(a.gravity) for a in params.axes] + [1])
+    gamp, gph, gsel = np.zeros((n, n_g)), np.zeros((n, n_g)), np.zeros((n, n_g, n))
     for i, a in enumerate(params.axes):
+        for j, g in enumerate(a.gravity):
+            gamp[i, j] = float(g['amplitude'])
+            gph[i, j] = float(g.get('phase', 0.0))
+            gsel[i, j, a.gravity_joints(params.joint_names, j)] = 1.0
         prm[i, JM] = a.motor_inertia
         prm[i, K1] = a.stiffness
         nonlinear = a.stiffness_k2 is not None and a.stiffness_breakpoint is not None
@@ -91,10 +103,11 @@ def _pack(params: RobotParams) -> _Packed:
     ad, ga, gm, gb, gw = _substep_matrices(params, dt / m)
     offsets, gold, gnew = _delayed_hold_matrices(params)
     nbuf = int(-offsets.min()) + 2
-    nonlinear = bool(np.any(ra != 0) or np.any(prm[:, BL] > 0)
+    nonlinear = bool(np.any(ra != 0) or np.any(prm[:, BL] > 0) or np.any(gamp != 0)
                      or np.any((prm[:, BS] > 0) & (prm[:, K2] != prm[:, K1])))
     cg = gw[:, n:] @ (-prm[:, GRAV])
-    return _Packed(prm, ad, ga, gm, gb, gw, cg, nonlinear, gold, gnew, ra, rs, rp, offsets, nbuf,
+    return _Packed(prm, ad, ga, gm, gb, gw, cg, nonlinear, gold, gnew, ra, rs, rp, gamp, gph,
+                   gsel, offsets, nbuf,
                    np.array([a.encoder_resolution for a in params.axes]),
                    np.array([a.velocity_noise for a in params.axes]),
                    np.array([a.torque_noise for a in params.axes]))
@@ -203,14 +216,15 @@ def _spring(e, k1, k2, bs):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _residual(x, prm, ra, rs, rp, sc, row):
+def _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, row):
     """Nonlinear residual torques beyond the linear model (k1, d) at flat state x.
 
     Writes sc[row, :n] = motor side ripple - (tau_s - k1 dq) - (tau_d - d dv) and
     sc[row, n:2n] = link side (tau_s - k1 dq) + (tau_d - d dv), with tau_s of eq. 2 behind the
-    backlash dead zone and the transmission damping acting only in contact. Gravity is a
-    constant input (see _exp_substep). Kernels index preallocated rows instead of slicing, as
-    array views cost reference counting in the hot loop.
+    backlash dead zone and the transmission damping acting only in contact, minus the
+    configuration-dependent gravity G sin(sum_j q_o,j + phi) on the link side. The constant
+    gravity torque is an input (see _exp_substep). Kernels index preallocated rows instead of
+    slicing, as array views cost reference counting in the hot loop.
     """
     n = prm.shape[0]
     for i in range(n):
@@ -234,8 +248,17 @@ def _residual(x, prm, ra, rs, rp, sc, row):
             a = ra[i, j]
             if a != 0.0:
                 rip += a * math.sin(rs[i, j] * qm + rp[i, j])
+        grav = 0.0
+        for j in range(gamp.shape[1]):
+            g = gamp[i, j]
+            if g != 0.0:
+                arg = gph[i, j]
+                for c in range(n):
+                    if gsel[i, j, c] != 0.0:
+                        arg += x[2 * n + c]
+                grav += g * math.sin(arg)
         sc[row, i] = rip - res
-        sc[row, n + i] = res
+        sc[row, n + i] = res - grav
 
 
 # rows of the kernels' scratch array
@@ -244,7 +267,7 @@ _UO, _UN, _FA, _FM, _FB, _LIN, _XP, _W1, _W2, _NSCRATCH = range(10)
 
 @numba.njit(cache=True, fastmath=True)
 def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp,
-                 nonlinear, h):
+                 gamp, gph, gsel, nonlinear, h):
     """One substep of the exponential integrator, then Coulomb friction.
 
     Linear part exact: x+ = Ad x + Go uo + Gn un + cg for the delayed zero-order-held command
@@ -266,13 +289,13 @@ def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, 
                 acc += ga[r, c] * sc[_FA, c] + gm[r, c] * sc[_FM, c] + gb[r, c] * sc[_FB, c]
         sc[_LIN, r] = acc
     if nonlinear:
-        _residual(x, prm, ra, rs, rp, sc, _W1)
+        _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, _W1)
         for r in range(nx):
             acc = sc[_LIN, r]
             for c in range(2 * n):
                 acc += gw[r, c] * sc[_W1, c]
             sc[_XP, r] = acc
-        _residual(sc[_XP], prm, ra, rs, rp, sc, _W2)
+        _residual(sc[_XP], prm, ra, rs, rp, gamp, gph, gsel, sc, _W2)
         for r in range(nx):
             acc = sc[_LIN, r]
             for c in range(2 * n):
@@ -295,7 +318,7 @@ def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, 
 
 @numba.njit(cache=True, fastmath=True)
 def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
-             cg, ra, rs, rp, nonlinear, sc):
+             cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc):
     """Advance the plant over [t_k, t_k+dt): delayed zero-order-held commands from the ring
     buffer plus an optional feed-forward torque on the stage grid uff[2 m k ... 2 m k + 2 m].
     The total torque is limited to +-torque_limit (the feed-forward is cut where it would
@@ -315,7 +338,7 @@ def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, 
                 sc[_FM, i] = min(max(b + uff[base + 1, i], -lim), lim) - b
                 sc[_FB, i] = min(max(b + uff[base + 2, i], -lim), lim) - b
         _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp,
-                     nonlinear, h)
+                     gamp, gph, gsel, nonlinear, h)
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -336,9 +359,9 @@ def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
 
 @numba.njit(cache=True, fastmath=True)
 def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, m, dt,
-              offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, nonlinear, enc,
-              from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v, out_u, out_x,
-              out_r):
+              offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph, gsel,
+              nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v,
+              out_u, out_x, out_r):
     """Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
 
     With a position plan (``has_plan``) the velocity reference gets position feedback,
@@ -383,12 +406,12 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
             for s in range(4):
                 out_x[k, s, i] = x[s * n + i]
         _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb,
-                 gw, cg, ra, rs, rp, nonlinear, sc)
+                 gw, cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc)
 
 
 @numba.njit(cache=True, fastmath=True)
 def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw, cg,
-              ra, rs, rp, nonlinear, enc, from_encoder, vnoise, sc, q, v):
+              ra, rs, rp, gamp, gph, gsel, nonlinear, enc, from_encoder, vnoise, sc, q, v):
     """One sample of :func:`_simulate` for a command u given from outside (plug-in step):
     the start position becomes qprev, u enters the delay buffer, the plant advances and the
     measurement at the end of the sample goes to q, v. The buffer is left rebased (latest
@@ -399,7 +422,7 @@ def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, g
         qprev[i] = q[i]
         buf[0, i] = u[i]
     _advance(x, buf, 0, offsets, nbuf, buf, False, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
-             cg, ra, rs, rp, nonlinear, sc)
+             cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc)
     for r in range(nbuf - 1):
         for i in range(n):
             buf[r, i], buf[r + 1, i] = buf[r + 1, i], buf[r, i]
@@ -421,9 +444,10 @@ class SimResult:
     reference: np.ndarray | None = None
 
 
-def static_deflection(axis: AxisParams) -> float:
-    """Spring deflection that carries the gravity torque (eq. 2 inverted, backlash added)."""
-    g = axis.gravity_torque
+def static_deflection(axis: AxisParams, load: float | None = None) -> float:
+    """Spring deflection that carries the static link-side load (eq. 2 inverted, backlash
+    added); ``load`` defaults to the constant ``gravity_torque``."""
+    g = axis.gravity_torque if load is None else load
     if g == 0:
         return 0.0
     k1, bs = axis.stiffness, axis.stiffness_breakpoint
@@ -470,8 +494,8 @@ class FlexibleJointPlant:
         return self.x.reshape(4, self.n_axes)
 
     def equilibrium_torque(self) -> np.ndarray:
-        """Motor torque that holds the robot at rest against gravity."""
-        return np.array([a.gravity_torque for a in self.params.axes], dtype=float)
+        """Motor torque that holds the robot at rest against gravity (links at q_o = 0)."""
+        return self.params.gravity_load(np.zeros(self.n_axes))
 
     def reset(self, seed: int | None = None) -> None:
         """Back to rest at the static equilibrium under gravity.
@@ -479,7 +503,8 @@ class FlexibleJointPlant:
         The noise generator continues (new noise in every run) unless ``seed`` is given."""
         n = self.n_axes
         self.x = np.zeros(4 * n)  # flat [q_m, v_m, q_o, v_o]; see ``state``
-        self.x[:n] = [static_deflection(a) for a in self.params.axes]
+        self.x[:n] = [static_deflection(a, g) for a, g in zip(self.params.axes,
+                                                               self.equilibrium_torque())]
         self.qprev = self.x[:n].copy()
         enc = self._packed.enc
         self.qprev = np.where(enc > 0, enc * np.floor(self.qprev / np.where(enc > 0, enc, 1)
@@ -542,7 +567,8 @@ class FlexibleJointPlant:
             ulim, integ, closed = self.params.torque_limits(), np.zeros(n), False
         _simulate(self.x, self.qprev, integ, self.buf, r, u_ext, uff, has_ff, kp, ki, ulim,
                   closed, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm, p.ad,
-                  p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.nonlinear,
+                  p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.gamp, p.gph,
+                  p.gsel, p.nonlinear,
                   p.enc, bool(self.params.velocity_from_encoder), vn, tn, qplan, kpos, has_plan,
                   out_q, out_v, out_u, out_x, out_r)
         t = (self.k + np.arange(N)) * self.dt
@@ -571,7 +597,7 @@ class FlexibleJointPlant:
         q, v = np.empty(self.n_axes), np.empty(self.n_axes)
         _step_one(self.x, self.qprev, self.buf, u, p.offsets, p.nbuf, int(self.params.substeps),
                   self.dt, p.prm, p.ad, p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs,
-                  p.rp, p.nonlinear, p.enc, bool(self.params.velocity_from_encoder), vn,
-                  self._scratch, q, v)
+                  p.rp, p.gamp, p.gph, p.gsel, p.nonlinear, p.enc,
+                  bool(self.params.velocity_from_encoder), vn, self._scratch, q, v)
         self.k += 1
         return q, v, u + tn[0]
