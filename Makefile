@@ -27,7 +27,7 @@ demo: $(STAMP)
 	$(PY) -m frf_ident demo --out $(OUT)/demo
 
 test: $(STAMP)
-	$(PY) -m pytest -q -ra --doctest-modules test frf_ident/core
+	$(PY) -m pytest -q -ra test
 
 bench: $(STAMP)
 	$(PY) -m benchmarks

@@ -4,6 +4,7 @@ coupled arm, friction), missing reference samples, and one route for CSV, MAT an
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
 
-from conftest import ROOT
+ROOT = Path(__file__).resolve().parents[2]
 
 RIGID = {'frf_ident_model': 1, 'sample_rate': 500.0, 'axes': [
     {'name': f'joint_{i + 1}', 'motor_inertia': j, 'link_inertia': 1e-3, 'stiffness': 1e9,

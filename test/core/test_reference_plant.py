@@ -2,6 +2,7 @@
 implementations written apart (RK4 + Karnopp vs exponential integrator + set-valued friction)
 must agree where the physics is the same; and the gravity keys of the model file."""
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from frf_ident.errors import ModelFileError
 from frf_ident.io.model_file import load_model
 from plants import reference
 
-from conftest import ROOT
+ROOT = Path(__file__).resolve().parents[2]
 
 MODEL = ROOT / 'config' / 'model_3axis.yaml'
 
