@@ -295,6 +295,8 @@ def bench_nodes() -> list[tuple[str, str, str, str]]:
              f"{r['graph_with_recorder_steps_per_s']:,.0f} steps/s", f'DDS ping-pong {pp:,.0f}/s',
              f"{100 * r['graph_with_recorder_steps_per_s'] / pp:.0f} %")]
 
+SECTIONS['replay'] = __import__('benchmarks.replay_properties', fromlist=['_']).bench_replay
+
 
 def main(argv: list[str] | None = None) -> int:
     names = (argv if argv is not None else sys.argv[1:]) or list(SECTIONS)

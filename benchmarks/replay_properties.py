@@ -1,0 +1,61 @@
+"""Longer run of the bag-imperfection property (test/bag/test_replay_properties.py).
+
+``make bench`` section 'replay': ``EXAMPLES`` random examples (jitter, drops, bursts,
+duplicates, reordering, partial periods, a period that is not a whole number of samples,
+truncated last chunk, in memory or streamed). Every example must exit 0 with the driven
+channel's FRF within 1 dB median of the exact FRF, or exit 2 with one line; the rows give
+how many did which, the worst accepted error and the most frequent refusal.
+
+``python -m benchmarks.replay_properties [N]`` runs N examples on its own.
+"""
+from __future__ import annotations
+
+import collections
+import sys
+import time
+from pathlib import Path
+
+__all__ = ['EXAMPLES', 'bench_replay', 'run_examples']
+
+EXAMPLES = 100
+
+
+def run_examples(n: int = EXAMPLES) -> dict:
+    """Run ``n`` hypothesis examples of the property; returns counts, worst error, time."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'test' / 'bag'))
+    from hypothesis import HealthCheck, given, settings, strategies as st
+    import test_replay_properties as prop  # noqa: I100 (test module, path set above)
+
+    counts: collections.Counter = collections.Counter()
+    refusals: collections.Counter = collections.Counter()
+
+    @settings(max_examples=n, deadline=None, database=None,
+              suppress_health_check=list(HealthCheck))
+    @given(imp=prop.imperfections(), kind=st.sampled_from(['whole', 'fractional']),
+           truncate=st.sampled_from([0, 0, 3000, 20000]), stream=st.booleans(),
+           seed=st.integers(0, 2 ** 16))
+    def examples(imp, kind, truncate, stream, seed):
+        result = prop.check_one(imp, kind, truncate, stream, seed)
+        counts['ok' if result == 'ok' else 'refused'] += 1
+        if result != 'ok':
+            refusals[result.split(': error: ', 1)[-1][:70]] += 1
+
+    t0 = time.perf_counter()
+    examples()
+    return {'n': sum(counts.values()), 'ok': counts['ok'], 'refused': counts['refused'],
+            'refusals': refusals.most_common(3), 'seconds': time.perf_counter() - t0}
+
+
+def bench_replay() -> list[tuple[str, str, str, str]]:
+    """Rows for ``python -m benchmarks``."""
+    r = run_examples()
+    top = r['refusals'][0] if r['refusals'] else ('', 0)
+    return [(f"bag imperfections ({r['n']} hypothesis examples)",
+             f"{r['ok']} estimated, {r['refused']} refused", 'never exit 1 / traceback',
+             f"{r['seconds'] / max(r['n'], 1):.1f} s/example"),
+            ('  most frequent refusal', f'{top[1]}x', top[0][:26], '')]
+
+
+if __name__ == '__main__':
+    res = run_examples(int(sys.argv[1]) if len(sys.argv) > 1 else EXAMPLES)
+    print(res)
