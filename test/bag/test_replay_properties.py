@@ -103,8 +103,9 @@ def test_estimate_exits_0_close_to_the_truth_or_2_with_one_line(imp, kind, trunc
     check_one(imp, kind, truncate, stream, seed)
 
 
-def test_clean_and_fractional_period_bags_are_estimated():
-    """The two runs without imperfections: both estimated (a period of 1024.3 samples is
-    detected as 1024 and its slow drift stays within the tolerance)."""
-    for kind in ('whole', 'fractional'):
-        assert check_one(Imperfections(), kind, 0, False, 0) == 'ok'
+def test_clean_bag_estimated_and_fractional_period_refused():
+    """Without imperfections: the whole-sample run is estimated; a period of 1024.3 samples
+    (the excitation on another clock) is refused with one line naming the period."""
+    assert check_one(Imperfections(), 'whole', 0, False, 0) == 'ok'
+    got = check_one(Imperfections(), 'fractional', 0, False, 0)
+    assert 'the period is 1024.31 samples, not a whole number' in got, got

@@ -10,6 +10,8 @@ stretch of data, so an estimator can apply them segment by segment or window by 
 - :func:`check_band` — every analysed frequency below the Nyquist frequency fs / 2.
 - :func:`check_periods` — enough whole steady-state periods of a multisine.
 - :func:`check_covers` — a segment lies inside the recorded time span.
+- :func:`check_whole_period` — a detected multisine period is a whole number of samples
+  (within ``MAX_DRIFT`` samples): otherwise every period's DFT leaks.
 - :func:`missing_rows` — the samples a gap removed (NaN rows of a recording read with
   ``gaps='mark'``); :func:`check_remaining` — enough periods or lines are left after
   dropping the ones such gaps touch.
@@ -32,10 +34,11 @@ import numpy as np
 
 from frf_ident.errors import EstimationError
 
-__all__ = ['MIN_FRACTION', 'MIN_RUN', 'PILEUP_BAND', 'Clipping', 'check_band',
+__all__ = ['MAX_DRIFT', 'MIN_FRACTION', 'MIN_RUN', 'PILEUP_BAND', 'Clipping', 'check_band',
            'check_covers', 'check_not_clipped', 'check_periods', 'check_remaining', 'clipping',
-           'missing_rows']
+           'check_whole_period', 'missing_rows']
 
+MAX_DRIFT = 0.05       # samples per period a detected multisine period may be off whole
 MIN_RUN = 5            # consecutive samples at the extreme value
 MIN_FRACTION = 1e-3    # of all samples, in such runs
 PILEUP_BAND = 0.01     # of the peak-to-peak range: the band just inside the extreme
@@ -187,6 +190,20 @@ def check_periods(n_periods: int, *, need: int = 2, where: str, hint: str = '') 
         raise EstimationError(f'{where}: {n_periods} whole steady-state period'
                               f'{"" if n_periods == 1 else "s"}; expected at least {need=}'
                               f'{f" — {hint}" if hint else ""}')
+
+
+def check_whole_period(drift: float, period_samples: int, *, where: str,
+                       max_drift: float = MAX_DRIFT) -> None:
+    """Refuse a multisine whose true period is ``period_samples + drift`` samples with
+    |drift| > ``max_drift``: whole-period DFTs of it leak into the neighbouring lines (the
+    excitation was generated on another clock than the one the joint states are sampled on).
+    """
+    if abs(drift) > max_drift:
+        raise EstimationError(f'{where}: the period is {period_samples + drift:.2f} samples, '
+                              f'not a whole number (off by {abs(drift):.2f} samples per period, '
+                              f'at most {max_drift:g} allowed): whole-period DFTs would leak; '
+                              f'expected a period of whole samples — resample the recording to '
+                              f'the excitation\'s clock or give --multisine-period')
 
 
 def missing_rows(*series: np.ndarray) -> np.ndarray:

@@ -28,7 +28,7 @@ import numpy as np
 
 from frf_ident.core.estimation.checks import (JOINT_STATES, check_band, check_covers,
                                               check_not_clipped, check_periods, check_remaining,
-                                              missing_rows)
+                                              check_whole_period, missing_rows)
 from frf_ident.core.excitation.chirp import ChirpDesign
 from frf_ident.core.excitation.detect import (ChirpDetection, MultisineDetection,
                                               detect_excitation, excitation_source,
@@ -211,7 +211,8 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
             i0 = det.start
             info = {'design': 'detected_multisine', 'input': j, 'period_samples':
                     det.period_samples, 'periods': det.n_periods, 'start': int(i0),
-                    'harmonics': np.asarray(det.harmonics).tolist(), 'f0': det.f0}
+                    'harmonics': np.asarray(det.harmonics).tolist(), 'f0': det.f0,
+                    'drift': float(det.drift)}
             t1 = rec.t[0] + (i0 + det.n_periods * det.period_samples) / fs
         else:
             info = {'design': 'detected_chirp', 'input': j, 'f_low': det.f_low,
@@ -233,6 +234,8 @@ def check_detected_segment(rec: Recording, seg: Segment) -> None:
         check_band(np.asarray(info['harmonics']) * info['f0'], rec.fs, where=what)
         check_periods(int(info['periods']), need=2, where=what,
                       hint='record more periods or give a shorter multisine period')
+        check_whole_period(float(info.get('drift', 0.0)), int(info['period_samples']),
+                           where=what)
     else:
         what = f'chirp of {name} ({seg.t_start:.3f}..{seg.t_end:.3f} s)'
         check_band([info['f_low'], info['f_high']], rec.fs, where=what)
@@ -299,8 +302,13 @@ class DetectedEstimator:
         j = int(info['input'])
         names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{n}' for n in rec.joint_names])
         if info['design'] == 'detected_multisine':
-            key = (j, 'multisine', int(info['period_samples']), tuple(info['harmonics']))
+            # one excitation per input and period: a later block's detection may pick a
+            # slightly different set of weak lines; the first block's lines are used
+            key = (j, 'multisine', int(info['period_samples']))
             e = self.entries.get(key)
+            if e is not None:
+                seg = Segment(seg.t_start, seg.t_end, dict(info, harmonics=e['bins'].tolist()))
+                info = seg.info
             # the excitation goes on from an earlier block: no start-up transient to skip,
             # and the periods that block used are not used again
             going_on = e is not None and seg.t_start - e['t_end'] < 1.5 * info[

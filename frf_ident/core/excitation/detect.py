@@ -33,7 +33,8 @@ from scipy import signal
 from frf_ident.errors import EstimationError
 
 __all__ = ['MIN_FINITE', 'ChirpDetection', 'MultisineDetection', 'detect_chirp',
-           'detect_excitation', 'detect_multisine', 'excitation_source', 'multisine_at_period']
+           'detect_excitation', 'detect_multisine', 'excitation_source', 'multisine_at_period',
+           'period_drift']
 
 #: share of finite samples a signal needs: a reference that is commanded less often than
 #: this is not the excitation source, and detection refuses sparser signals
@@ -58,6 +59,9 @@ class MultisineDetection:
     correlation : normalised autocorrelation at lag P (1 = identical periods).
     line_level_db : weakest excited line over the median non-excited line [dB].
     channel : column of a 2-D input that was analysed.
+    drift : how far the true period exceeds ``period_samples`` [samples] (measured from the
+        phase of the excited lines between the first and last period; 0 for a period of
+        whole samples).
     """
 
     fs: float
@@ -70,6 +74,7 @@ class MultisineDetection:
     correlation: float
     line_level_db: float
     channel: int = 0
+    drift: float = 0.0
     kind: str = field(default='multisine', init=False)
 
     @property
@@ -104,7 +109,8 @@ class MultisineDetection:
                 'n_periods': self.n_periods, 'start': self.start, 'f0': self.f0,
                 'harmonics': self.harmonics.tolist(), 'freq_hz': self.freq_hz.tolist(),
                 'odd': self.odd, 'correlation': self.correlation,
-                'line_level_db': self.line_level_db, 'channel': self.channel}
+                'line_level_db': self.line_level_db, 'channel': self.channel,
+                'drift': self.drift}
 
 
 @dataclass
@@ -441,12 +447,13 @@ def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
     if bins.size == 0:
         raise EstimationError(f'period {p} samples found but no DFT line stands '
                               f'{min_line_db=} dB above the rest')
+    drift = period_drift(block, bins)
     g = int(np.gcd.reduce(bins))
     if g > 1 and p % g == 0:
-        p, bins, n_per = p // g, bins // g, n_per * g
+        p, bins, n_per, drift = p // g, bins // g, n_per * g, drift / g
     return MultisineDetection(float(fs), int(p), int(n_per), int(start), float(fs) / p,
                               bins.astype(np.int64), bool(np.all(bins % 2 == 1)),
-                              float(r[min(p, r.size - 1)]), level, channel)
+                              float(r[min(p, r.size - 1)]), level, channel, drift)
 
 
 def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods: int = 2,
@@ -489,7 +496,34 @@ def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods:
     corr = float(a @ b / max(np.sqrt((a @ a) * (b @ b)), 1e-300))
     return MultisineDetection(float(fs), int(p), int(n_per), int(start), float(fs) / p,
                               bins.astype(np.int64), bool(np.all(bins % 2 == 1)), corr, level,
-                              channel)
+                              channel, period_drift(block, bins))
+
+
+def period_drift(block: np.ndarray, bins: np.ndarray) -> float:
+    """By how many samples the true period exceeds the ``block``'s row length P.
+
+    ``block`` (n_periods, P) holds consecutive periods. A period of P + d samples shifts each
+    period d samples later on the grid: line h of the last period lags the first by the phase
+    2 pi h (n - 1) d / P. d is the weighted least-squares slope of those phases over h, the
+    phases unwrapped around a first fit on the lowest quarter of the lines. 0 with fewer
+    than two periods or no lines.
+    """
+    n, P = block.shape
+    if n < 2 or bins.size == 0:
+        return 0.0
+    X0 = np.fft.rfft(block[0])[bins]
+    XL = np.fft.rfft(block[-1])[bins]
+    w = np.abs(X0 * XL)
+    if not np.any(w > 0):
+        return 0.0
+    phi = -np.angle(XL * np.conj(X0))                 # 2 pi h D / P, D = (n - 1) d
+    h = bins.astype(float)
+    low = h <= np.quantile(h, 0.25)
+    slope = float(np.sum(w[low] * h[low] * phi[low]) / max(np.sum(w[low] * h[low] ** 2),
+                                                           1e-300))
+    phi = phi + 2 * np.pi * np.round((slope * h - phi) / (2 * np.pi))
+    slope = float(np.sum(w * h * phi) / max(np.sum(w * h ** 2), 1e-300))
+    return slope * P / (2 * np.pi) / (n - 1)
 
 
 def _refine_period(x: np.ndarray, p: int, reach: int = 2) -> int:
