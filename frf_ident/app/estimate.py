@@ -34,9 +34,9 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     budget = stream_estimate.default_memory_budget() if max_memory_mb is None else \
         int(max_memory_mb * (1 << 20))
     if stream or stream_estimate.needs_streaming(bag, budget):
-        res = stream_estimate.stream_estimate(bag, joints=joints, t_range=t_range, block_s=window_s,
-                                        options=options, progress=progress,
-                                        bar=sys.stderr.isatty())
+        res = stream_estimate.stream_estimate(bag, joints=joints, t_range=t_range,
+                                              block_s=window_s, options=options,
+                                              progress=progress, bar=sys.stderr.isatty())
         st = res.stats
         progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
                  f'at most {st.peak_rows} held at once')

@@ -75,9 +75,11 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                     bar: bool = False) -> StreamedEstimate:
     """Every estimate the bag supports, read window by window (see the module docstring).
 
-    Each window is checked as :func:`~frf_ident.core.estimation.described.estimate_recording` checks a
-    whole recording (band, periods, clipping); ``options``
-    (:class:`~frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in every block.
+    Each window is checked as
+    :func:`~frf_ident.core.estimation.described.estimate_recording` checks a whole recording
+    (band, periods, clipping); ``options``
+    (:class:`~frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in
+    every block.
     Only the last chirp iteration is read (the one estimated)."""
     say = progress or (lambda _msg: None)
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
@@ -123,6 +125,8 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                 yield rec
         estimates = estimate_in_blocks(blocks(), options, resume=reader.continue_from,
                                        block_s=block_s)
+        notes = [n for n in next(iter(estimates.values())).meta['detected']
+                 if n.startswith('block ')]
     if not reports:
         raise EstimationError(f'{bag}: no joint states inside the analysed windows')
     timing = tm.merge_reports(reports, reader.stats.recovery)

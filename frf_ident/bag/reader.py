@@ -483,7 +483,7 @@ def _scan(bag: BagFiles, topics: set[str] | None, progress: bool,
 
 
 def recovery_report(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str, int],
-              expected: dict[str, int]) -> dict[str, Any]:
+                    expected: dict[str, int]) -> dict[str, Any]:
     rec: dict[str, Any] = {
         'complete': all(s.complete for s in stats),
         'bytes_lost': sum(s.bytes_lost for s in stats),
@@ -566,7 +566,7 @@ def _lost_hint(recovery: dict[str, Any]) -> str:
 
 
 def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
-                topics: BagTopics) -> tuple[dict[str, Any], list[Segment], list[str]]:
+                     topics: BagTopics) -> tuple[dict[str, Any], list[Segment], list[str]]:
     """recording_meta and segments (start/end events paired) from /frf/experiment."""
     meta: dict[str, Any] = {}
     segs: dict[str, Segment] = {}
@@ -613,9 +613,9 @@ def _window(ns: np.ndarray, t_range: tuple[float, float] | None) -> np.ndarray:
 
 
 def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, Any],
-              segments: list[Segment], warnings: list[str], recovery: dict[str, Any],
-              t_range: tuple[float, float] | None, gaps: str = 'refuse'
-              ) -> tuple[Recording, tm.TimingReport]:
+             segments: list[Segment], warnings: list[str], recovery: dict[str, Any],
+             t_range: tuple[float, float] | None, gaps: str = 'refuse'
+             ) -> tuple[Recording, tm.TimingReport]:
     """The joint states (and commands) on a uniform grid as a Recording, with the timing
     report; ``gaps`` as in :func:`read_recording`."""
     assert col.js.data is not None and col.js.joints is not None

@@ -89,8 +89,8 @@ class WindowReader:
     ``block_s`` instead cuts consecutive blocks from the first sample (within ``span`` =
     (start_ns, end_ns) when given). ``joints`` selects joints as in :func:`read_recording`;
     ``experiment`` is the first pass (:func:`read_experiment`, run here when not given);
-    ``gaps`` as in :func:`read_recording`. After the iteration :attr:`stats` holds the counts and the recovery summary of damaged
-    files.
+    ``gaps`` as in :func:`read_recording`. After the iteration :attr:`stats` holds the counts
+    and the recovery summary of damaged files.
     """
 
     def __init__(self, path: str | Path, *, windows: list[tuple[int, int]] | None = None,
@@ -237,7 +237,7 @@ class WindowReader:
         segs = [s for s in ex.segments
                 if s.t_end * 1e9 >= lo and s.t_start * 1e9 <= hi]
         rec, report = assemble(self.bag, view, self.topics, copy.deepcopy(ex.meta), segs,
-                                list(ex.warnings), {}, None, self.gaps)
+                               list(ex.warnings), {}, None, self.gaps)
         self.stats.windows += 1
         return rec, report
 

@@ -203,7 +203,8 @@ def check_whole_period(drift: float, period_samples: int, *, where: str,
                               f'not a whole number (off by {abs(drift):.2f} samples per period, '
                               f'at most {max_drift:g} allowed): whole-period DFTs would leak; '
                               f'expected a period of whole samples — resample the recording to '
-                              f'the excitation\'s clock or give --multisine-period')
+                              f'the excitation\'s clock, or give the excitation if detection '
+                              f'misread it (--chirp, --multisine-period)')
 
 
 def missing_rows(*series: np.ndarray) -> np.ndarray:
@@ -272,8 +273,9 @@ def _covered(rec) -> str:
 
 def check_multisine_segments(rec, segments) -> list:
     """Band, sample rate and whole steady-state periods of descriptor multisine segments
-    (``info`` keys of :func:`frf_ident.core.excitation.procedures.multisine_procedure`); returns the
-    analysed (steady-state) effort of each segment, (N_i, n) arrays, for the clipping check."""
+    (``info`` keys of :func:`frf_ident.core.excitation.procedures.multisine_procedure`);
+    returns the analysed (steady-state) effort of each segment, (N_i, n) arrays, for the
+    clipping check."""
     info = segments[0].info
     dp = info['design_params']
     where = f'{EXPERIMENT} multisine design'
@@ -314,8 +316,9 @@ def check_chirp_segments(rec, segments) -> list:
 
 def check_descriptor_recording(rec) -> None:
     """Every check of a recording with /frf/experiment descriptors: the multisine segments and
-    the last chirp iteration (the ones :func:`frf_ident.core.estimation.described.estimate_recording`
-    analyses), then clipping of the effort in each design's analysed samples."""
+    the last chirp iteration (the ones
+    :func:`frf_ident.core.estimation.described.estimate_recording` analyses), then clipping
+    of the effort in each design's analysed samples."""
     ms = [s for s in rec.segments if s.info.get('design') == 'multisine']
     ch = [s for s in rec.segments if s.info.get('design') == 'chirp']
     designs = []

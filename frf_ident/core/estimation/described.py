@@ -17,9 +17,10 @@ import numpy as np
 
 from frf_ident.core.excitation.chirp import ChirpDesign
 from frf_ident.core.estimation.spectra import (BLAResult, best_linear_approximation,
-                                       best_linear_approximation_reference, chirp_spectra,
-                                       detection_levels_from_spectra, detection_line_spectra,
-                                       frf_from_reference, frf_from_spectra, periodic_spectra)
+                                               best_linear_approximation_reference,
+                                               chirp_spectra, detection_levels_from_spectra,
+                                               detection_line_spectra, frf_from_reference,
+                                               frf_from_spectra, periodic_spectra)
 from frf_ident.core.estimation.checks import EXPERIMENT, check_remaining, missing_rows
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording, Segment
@@ -363,8 +364,8 @@ class SegmentEstimator:
 
     def missing(self) -> list[Segment]:
         """Segments no window covered completely."""
-        return [s for i, s in enumerate(self.segments) if i not in self.done and
-                s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
+        return [s for i, s in enumerate(self.segments) if i not in self.done
+                and s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
 
     def results(self) -> dict[str, FrequencyResponse]:
         """Every estimate, keyed as :func:`estimate_recording` documents."""
@@ -388,10 +389,10 @@ def estimate_recording(rec: Recording, *, options=None, block_s: float | None = 
     compensated when a constant-velocity run exists), 'multisine_plain',
     'multisine_uncompensated', 'chirp', 'chirp_reference'; without descriptors the
     detected ones (:func:`estimate_detected`). The data are checked first
-    (:func:`frf_ident.core.estimation.checks.check_descriptor_recording`: band, periods, clipping).
-    ``options`` (:class:`frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in a
-    recording without descriptors; a recording with descriptors refuses them. ``block_s``:
-    block length of detection (default
+    (:func:`frf_ident.core.estimation.checks.check_descriptor_recording`: band, periods,
+    clipping). ``options`` (:class:`frf_ident.core.estimation.detected.ExcitationOptions`)
+    replace detection in a recording without descriptors; a recording with descriptors
+    refuses them. ``block_s``: block length of detection (default
     :data:`frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`)."""
     check_recording(rec, options)
     est = SegmentEstimator(rec.segments)

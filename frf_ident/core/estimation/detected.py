@@ -1,7 +1,8 @@
 """Estimation from recordings that carry no experiment descriptors (foreign bags, imports).
 
-The excitation is detected in the data (:mod:`frf_ident.core.excitation.detect`): a periodic multisine or
-an exponential chirp, on the velocity reference when the bag has one, else on the torque.
+The excitation is detected in the data (:mod:`frf_ident.core.excitation.detect`): a periodic
+multisine or an exponential chirp, on the velocity reference when the bag has one, else on
+the torque (:func:`~frf_ident.core.excitation.detect.excitation_source`).
 Each detection becomes a :class:`~frf_ident.core.recording.Segment`, and the FRF is estimated
 column by column for the excited inputs (one experiment cannot separate simultaneously excited
 inputs that share lines, so those are refused with the reason).
@@ -34,7 +35,7 @@ from frf_ident.core.excitation.detect import (ChirpDetection, MultisineDetection
                                               detect_excitation, excitation_source,
                                               multisine_at_period)
 from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
-                                       periodic_spectra)
+                                               periodic_spectra)
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.excitation.multisine import reference_frequency_set
 from frf_ident.core.recording import Recording, Segment
@@ -270,8 +271,8 @@ class DetectedEstimator:
     """Column estimates of detected excitations, gathered block by block.
 
     A long recording without descriptors is cut into blocks; each block's detections are
-    added here and the same excitation (same input, same period and lines, or the same chirp
-    band) found again in a later block adds its periods: the H1 sums sum_q Y conj(U_j) and
+    added here and the same excitation (same input and period, analysed at the lines of its
+    first detection, or the same chirp band) found again in a later block adds its periods: the H1 sums sum_q Y conj(U_j) and
     sum_q |U_j|^2 and the spread of the per-period ratios (for the variance) are kept, not the
     data. One block alone gives exactly :func:`detected_frf`.
     """

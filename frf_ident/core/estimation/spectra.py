@@ -47,8 +47,8 @@ def frf_from_spectra(Y: np.ndarray, U: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return np.moveaxis(P, 0, -1), cond
 
 
-def frf_from_reference(Y: np.ndarray, U: np.ndarray, R: np.ndarray) -> tuple[np.ndarray,
-                                                                              np.ndarray]:
+def frf_from_reference(Y: np.ndarray, U: np.ndarray,
+                       R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Closed-loop FRF through the reference: P = (Y R^H)(U R^H)^-1 per line.
 
     Equivalent to P = S_yr S_ur^-1 (indirect / joint input-output method): noise that the
