@@ -62,15 +62,21 @@ def test_ros2_bag_record_of_the_demo_topics(tmp_path, capsys):
     rec_bag = tmp_path / 'recorded'
     env = _ros_env()
     log = open(tmp_path / 'ros2.log', 'w')
+    # deep reliable queues on both sides, as one records 1 kHz topics on a busy machine
+    qos = tmp_path / 'qos.yaml'
+    qos.write_text(''.join(f'{t}:\n  history: keep_last\n  depth: 5000\n  reliability: '
+                           f'reliable\n  durability: volatile\n' for t in TOPICS))
     recorder = subprocess.Popen(['ros2', 'bag', 'record', '-s', 'mcap', '-o', str(rec_bag),
-                                 *TOPICS], env=env, stdout=log, stderr=subprocess.STDOUT,
+                                 '--qos-profile-overrides-path', str(qos), *TOPICS],
+                                env=env, stdout=log, stderr=subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL)
     player = None
     try:
         time.sleep(4.0)                       # discovery before the first descriptor
         # half speed: a loaded machine (2 cores, parallel tests) drops less; the header
         # stamps keep the bag's time, so the rate does not change the data
-        player = subprocess.Popen(['ros2', 'bag', 'play', '--rate', '0.5', str(demo)],
+        player = subprocess.Popen(['ros2', 'bag', 'play', '--rate', '0.5',
+                                   '--qos-profile-overrides-path', str(qos), str(demo)],
                                   env=env, stdout=log,
                                   stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
         player.wait(timeout=600)
