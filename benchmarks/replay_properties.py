@@ -36,24 +36,37 @@ def run_examples(n: int = EXAMPLES) -> dict:
            seed=st.integers(0, 2 ** 16))
     def examples(imp, kind, truncate, stream, seed):
         result = prop.check_one(imp, kind, truncate, stream, seed)
-        counts['ok' if result == 'ok' else 'refused'] += 1
+        counts[(kind, 'ok' if result == 'ok' else 'refused')] += 1
         if result != 'ok':
-            refusals[result.split(': error: ', 1)[-1][:70]] += 1
+            reason = result.split('/bag: ', 1)[-1]
+            for tag in ('not a whole number', 'without missing samples remain',
+                        'no multisine or chirp found', 'whole steady-state period'):
+                if tag in reason:
+                    reason = tag
+                    break
+            refusals[f'{kind}: {reason[:60]}'] += 1
 
     t0 = time.perf_counter()
     examples()
-    return {'n': sum(counts.values()), 'ok': counts['ok'], 'refused': counts['refused'],
-            'refusals': refusals.most_common(3), 'seconds': time.perf_counter() - t0}
+    n = sum(counts.values())
+    return {'n': n, 'counts': dict(counts), 'refusals': refusals.most_common(4),
+            'ok': sum(v for (_, r), v in counts.items() if r == 'ok'),
+            'refused': sum(v for (_, r), v in counts.items() if r == 'refused'),
+            'seconds': time.perf_counter() - t0}
 
 
 def bench_replay() -> list[tuple[str, str, str, str]]:
     """Rows for ``python -m benchmarks``."""
     r = run_examples()
-    top = r['refusals'][0] if r['refusals'] else ('', 0)
-    return [(f"bag imperfections ({r['n']} hypothesis examples)",
+    c = r['counts']
+    rows = [(f"bag imperfections ({r['n']} hypothesis examples)",
              f"{r['ok']} estimated, {r['refused']} refused", 'never exit 1 / traceback',
-             f"{r['seconds'] / max(r['n'], 1):.1f} s/example"),
-            ('  most frequent refusal', f'{top[1]}x', top[0][:26], '')]
+             f"{r['seconds'] / max(r['n'], 1):.1f} s/example")]
+    for kind in ('whole', 'fractional'):
+        rows.append((f'  {kind}-sample period: estimated / refused',
+                     f"{c.get((kind, 'ok'), 0)} / {c.get((kind, 'refused'), 0)}", '', ''))
+    rows += [(f'  refused: {why[:44]}', f'{k}x', '', '') for why, k in r['refusals']]
+    return rows
 
 
 if __name__ == '__main__':
