@@ -133,3 +133,22 @@ def test_slow_commands_are_zero_order_held(tmp_path: Path) -> None:
     assert np.isnan(rec.reference[-1, 0])  # held 30 ms (3 command periods), then NaN
     assert any('unequal rates' in w for w in rep.warnings)
     assert rep.topics['/velocity_controller/commands'].rate_hz == pytest.approx(100.0)
+
+
+def test_long_gap_kept_as_missing_data(tmp_path: Path) -> None:
+    """gaps='mark': the grid goes through the gap, its samples are NaN, the rest as usual."""
+    write_robot_bag(tmp_path / 'gap', seconds=5.0, drop=0.0, gap=(2.3, 120))
+    rec, rep = read_recording(tmp_path / 'gap', gaps='mark')
+    assert rec.t.size == 5000 and rep.resampled
+    nan = np.flatnonzero(np.isnan(rec.velocity[:, 0]))
+    np.testing.assert_array_equal(nan, np.arange(2300, 2420))
+    assert np.all(np.isnan(rec.effort[nan])) and not np.any(np.isnan(np.delete(rec.effort, nan,
+                                                                             axis=0)))
+    assert rep.missing == rec.meta['gaps'] == [[pytest.approx(102.3, abs=2e-5),
+                                                pytest.approx(102.419, abs=2e-5)]]
+    assert any('1 gaps longer than 3 samples kept as missing data (120 samples' in line
+               for line in rep.summary())
+    pos, vel, eff = truth(np.delete(rec.t, nan))
+    np.testing.assert_allclose(np.delete(rec.velocity, nan, axis=0), vel, atol=2e-4)
+    with pytest.raises(ValueError, match="gaps='skip'"):
+        read_recording(tmp_path / 'gap', gaps='skip')
