@@ -1,4 +1,5 @@
-"""Longer run of the bag-imperfection property (test/bag/test_replay_properties.py).
+"""
+Longer run of the bag-imperfection property (test/bag/test_replay_properties.py).
 
 ``make bench`` section 'replay': ``EXAMPLES`` random examples (jitter, drops, bursts,
 duplicates, reordering, partial periods, a period that is not a whole number of samples,
@@ -11,9 +12,9 @@ how many did which, the worst accepted error and the most frequent refusal.
 from __future__ import annotations
 
 import collections
+from pathlib import Path
 import sys
 import time
-from pathlib import Path
 
 __all__ = ['EXAMPLES', 'bench_replay', 'run_examples']
 
@@ -23,7 +24,8 @@ EXAMPLES = 100
 def run_examples(n: int = EXAMPLES) -> dict:
     """Run ``n`` hypothesis examples of the property; returns counts, worst error, time."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'test' / 'bag'))
-    from hypothesis import HealthCheck, given, settings, strategies as st
+    from hypothesis import given, HealthCheck, settings
+    from hypothesis import strategies as st
     import test_replay_properties as prop  # noqa: I100 (test module, path set above)
 
     counts: collections.Counter = collections.Counter()

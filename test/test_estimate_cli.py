@@ -1,22 +1,23 @@
-"""`frf-ident estimate` on bad input (one line, exit 2, nothing lost) and with the excitation
-given as options for bags without /frf/experiment descriptors."""
+"""
+`frf-ident estimate` on bad input (one line, exit 2, nothing lost) and with the excitation
+given as options for bags without /frf/experiment descriptors.
+"""
 import hashlib
 import json
 import re
 
-import numpy as np
-import pytest
-
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
 from frf_ident.core.excitation.chirp import chirp_phase
-from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
-from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
 from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
 from frf_ident.io.model_file import load_model, load_plant
+import numpy as np
+import pytest
 
 FS = 1000.0
 
@@ -54,7 +55,7 @@ def _copy_rec(rec, **kw):
 
 @pytest.fixture(scope='module')
 def ms_rec():
-    """A short frf_ident multisine run: 1 realisation x 2 periods of 1 s, no compensation."""
+    """Return a short frf_ident multisine run: 1 realisation x 2 periods of 1 s, no compensation."""
     model, _, ctrl = load_model(None)
     cfg = IdentificationConfig(MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0,
                                                compensate=False), None)
@@ -184,9 +185,11 @@ def test_printed_detection_given_back_gives_the_same_frf(foreign_ms_bag, tmp_pat
 
 
 def test_narrow_chirp_needs_its_band_given(plant_loop, foreign_ms_bag, tmp_path, capsys):
-    """A 10-14 Hz exponential chirp spans a frequency ratio of 1.4, below the chirp detector's
+    """
+    A 10-14 Hz exponential chirp spans a frequency ratio of 1.4, below the chirp detector's
     1.5: detection takes it for a 2-line periodic signal whose period is not a whole number
-    of samples, which is refused. Given band and times fix that."""
+    of samples, which is refused. Given band and times fix that.
+    """
     t = np.arange(int(12 * FS)) / FS
     a0 = np.log(14.0 / 10.0) / 10.0
     r2 = 0.01 * np.sin(chirp_phase(t, a0, np.log(10.0) - a0 * 1.0, 1.0))

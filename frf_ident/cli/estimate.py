@@ -42,7 +42,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def excitation_options(args: argparse.Namespace):
-    """The --input/--multisine-period/--band/--chirp/--chirp-time options as ExcitationOptions."""
+    """Return the --input/--multisine-period/--band/--chirp/--chirp-time options as ExcitationOptions."""
     from frf_ident.core.estimation.detected import ExcitationOptions
 
     def tup(v):

@@ -3,13 +3,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-import pytest
 from bag_synth import JOINTS, truth, write_robot_bag
-
 from frf_ident.bag import read_recording
 from frf_ident.bag.timing import MAX_GAP_SAMPLES
 from frf_ident.errors import BagError
+import numpy as np
+import pytest
 
 
 def test_jitter_and_drops_resampled(tmp_path: Path) -> None:
@@ -83,10 +82,9 @@ def test_missing_interface_duplicates_and_reordering(tmp_path: Path) -> None:
 
 
 def test_header_stamps_unset_use_log_time(tmp_path: Path) -> None:
-    from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
-
     from frf_ident.bag.topics import QOS_DEFAULT
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import get_typestore, Stores
 
     store = get_typestore(Stores.ROS2_JAZZY)
     js = store.types['sensor_msgs/msg/JointState']

@@ -1,4 +1,5 @@
-"""A bag written by the real `ros2 bag record -s mcap` while the topics of a demo bag are
+"""
+A bag written by the real `ros2 bag record -s mcap` while the topics of a demo bag are
 published by `ros2 bag play`: with whatever the recorder drops, it is estimated and agrees
 with the estimate of the played bag within 0.5 dB (issue 12).
 
@@ -9,16 +10,15 @@ participant stays on loopback in ROS_DOMAIN_ID 158.
 """
 import json
 import os
+from pathlib import Path
 import shutil
 import signal
 import subprocess
 import time
-from pathlib import Path
-
-import numpy as np
-import pytest
 
 from frf_ident.cli import main
+import numpy as np
+import pytest
 
 TOPICS = ['/joint_states', '/velocity_controller/commands', '/effort_controller/commands',
           '/frf/excitation', '/frf/experiment']

@@ -1,4 +1,5 @@
-"""Checks that the data support an FRF estimate (pure numpy; scipy.signal-style signatures).
+"""
+Checks that the data support an FRF estimate (pure numpy; scipy.signal-style signatures).
 
 Each check takes the data first and keyword options, returns nothing when the data are fine
 and raises :class:`~frf_ident.errors.EstimationError` with one line naming ``where`` (the
@@ -30,9 +31,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
-import numpy as np
-
 from frf_ident.errors import EstimationError
+import numpy as np
 
 __all__ = ['MAX_DRIFT', 'MIN_FRACTION', 'MIN_RUN', 'PILEUP_BAND', 'Clipping', 'check_band',
            'check_covers', 'check_not_clipped', 'check_periods', 'check_remaining', 'clipping',
@@ -46,7 +46,8 @@ PILEUP_BAND = 0.01     # of the peak-to-peak range: the band just inside the ext
 
 @dataclass
 class Clipping:
-    """Saturation statistics of one channel over the given stretches of data.
+    """
+    Saturation statistics of one channel over the given stretches of data.
 
     Attributes
     ----------
@@ -55,6 +56,7 @@ class Clipping:
         module thresholds.
     fraction : share of all samples in qualifying runs at a clipped side (0 if none).
     longest_run : longest run of samples at a clipped side (0 if none).
+
     """
 
     low: float
@@ -66,11 +68,11 @@ class Clipping:
 
     @property
     def clipped(self) -> bool:
-        """True when either side is clipped."""
+        """Return true when either side is clipped."""
         return self.clipped_low or self.clipped_high
 
     def level(self, unit: str = '') -> str:
-        """The clipping level(s) as text: '+-150 N m', '+150 N m' or '-150 and +148 N m'."""
+        """Return the clipping level(s) as text: '+-150 N m', '+150 N m' or '-150 and +148 N m'."""
         u = f' {unit}' if unit else ''
         lo, hi = self.low, self.high
         if self.clipped_low and self.clipped_high:
@@ -105,7 +107,8 @@ def _side(parts: list[np.ndarray], extreme: float, sign: float, span: float,
 
 def clipping(x: np.ndarray | Sequence[np.ndarray], *, min_run: int = MIN_RUN,
              min_fraction: float = MIN_FRACTION) -> list[Clipping]:
-    """Saturation statistics per channel of ``x``: an (N, n) array or a sequence of them
+    """
+    Saturation statistics per channel of ``x``: an (N, n) array or a sequence of them
     (stretches such as segments; runs never continue from one stretch into the next).
 
     Channels that are constant or not finite everywhere count as not clipped (a constant
@@ -140,7 +143,8 @@ def check_not_clipped(u: np.ndarray | Sequence[np.ndarray], *, joint_names: Sequ
                       where: str, span: str = 'the analysed segments', field: str = 'effort',
                       unit: str = 'N m', min_run: int = MIN_RUN,
                       min_fraction: float = MIN_FRACTION) -> None:
-    """Refuse a plant input that is clipped (saturated) in ``u``.
+    """
+    Refuse a plant input that is clipped (saturated) in ``u``.
 
     ``u``: (N, n) torque per joint, or a sequence of such stretches (see :func:`clipping`);
     ``where`` names the data (e.g. 'bag: /joint_states'), ``span`` the stretch analysed,
@@ -161,8 +165,10 @@ def check_not_clipped(u: np.ndarray | Sequence[np.ndarray], *, joint_names: Sequ
 
 
 def check_band(freq_hz: np.ndarray | Sequence[float], fs: float, *, where: str) -> None:
-    """Refuse analysed frequencies at or above the Nyquist frequency ``fs / 2`` (or not
-    positive): such lines alias in data sampled at ``fs`` Hz."""
+    """
+    Refuse analysed frequencies at or above the Nyquist frequency ``fs / 2`` (or not
+    positive): such lines alias in data sampled at ``fs`` Hz.
+    """
     f = np.asarray(freq_hz, dtype=float).reshape(-1)
     if f.size == 0:
         raise EstimationError(f'{where}: no frequencies to analyse')
@@ -183,9 +189,11 @@ def check_band(freq_hz: np.ndarray | Sequence[float], fs: float, *, where: str) 
 
 
 def check_periods(n_periods: int, *, need: int = 2, where: str, hint: str = '') -> None:
-    """Refuse fewer than ``need`` whole steady-state periods (averaging over periods and the
+    """
+    Refuse fewer than ``need`` whole steady-state periods (averaging over periods and the
     noise estimate need at least two). ``hint`` is appended to the message (e.g. how to get
-    more data)."""
+    more data).
+    """
     if n_periods < need:
         raise EstimationError(f'{where}: {n_periods} whole steady-state period'
                               f'{"" if n_periods == 1 else "s"}; expected at least {need=}'
@@ -194,7 +202,8 @@ def check_periods(n_periods: int, *, need: int = 2, where: str, hint: str = '') 
 
 def check_whole_period(drift: float, period_samples: int, *, where: str,
                        max_drift: float = MAX_DRIFT) -> None:
-    """Refuse a multisine whose true period is ``period_samples + drift`` samples with
+    """
+    Refuse a multisine whose true period is ``period_samples + drift`` samples with
     |drift| > ``max_drift``: whole-period DFTs of it leak into the neighbouring lines (the
     excitation was generated on another clock than the one the joint states are sampled on).
     """
@@ -208,9 +217,11 @@ def check_whole_period(drift: float, period_samples: int, *, where: str,
 
 
 def missing_rows(*series: np.ndarray) -> np.ndarray:
-    """(N,) True where a sample is missing: NaN in any column of the (N, n) ``series`` that
+    """
+    (N,) True where a sample is missing: NaN in any column of the (N, n) ``series`` that
     holds data elsewhere (a column that is NaN throughout is an interface the robot does
-    not publish, not a gap)."""
+    not publish, not a gap).
+    """
     out = np.zeros(np.asarray(series[0]).shape[0], dtype=bool)
     for x in series:
         bad = ~np.isfinite(np.asarray(x, dtype=float))
@@ -223,8 +234,10 @@ def missing_rows(*series: np.ndarray) -> np.ndarray:
 
 def check_remaining(n_used: int, n_dropped: int, *, need: int, what: str, where: str,
                     dropped_at: Sequence[tuple[float, float]] = (), hint: str = '') -> None:
-    """Refuse when fewer than ``need`` ``what`` (e.g. 'periods') remain after dropping
-    ``n_dropped`` that gaps touched; the message says when the first dropped ones were."""
+    """
+    Refuse when fewer than ``need`` ``what`` (e.g. 'periods') remain after dropping
+    ``n_dropped`` that gaps touched; the message says when the first dropped ones were.
+    """
     if n_used >= need:
         return
     at = ', '.join(f'{a:.3f}..{b:.3f} s' for a, b in list(dropped_at)[:4])
@@ -237,8 +250,10 @@ def check_remaining(n_used: int, n_dropped: int, *, need: int, what: str, where:
 
 def check_covers(t_first: float, t_last: float, t_start: float, t_end: float, *,
                  where: str, dt: float = 0.0, hint: str = '') -> None:
-    """Refuse a segment [t_start, t_end] that the recorded span [t_first, t_last] (sample
-    times, spacing ``dt``) does not cover; half a sample of slack at either end."""
+    """
+    Refuse a segment [t_start, t_end] that the recorded span [t_first, t_last] (sample
+    times, spacing ``dt``) does not cover; half a sample of slack at either end.
+    """
     slack = 0.5 * dt
     if t_start < t_first - slack or t_end > t_last + dt + slack:
         raise EstimationError(f'{where}: segment {t_start:.3f}..{t_end:.3f} s but the data '
@@ -247,8 +262,10 @@ def check_covers(t_first: float, t_last: float, t_start: float, t_end: float, *,
 
 
 def check_rate(fs: float, design_fs: float, *, where: str, rtol: float = 1e-3) -> None:
-    """Refuse data sampled at ``fs`` when the design counts samples at ``design_fs``
-    (e.g. /joint_states decimated after the experiment): periods would not line up."""
+    """
+    Refuse data sampled at ``fs`` when the design counts samples at ``design_fs``
+    (e.g. /joint_states decimated after the experiment): periods would not line up.
+    """
     if not abs(fs - design_fs) <= rtol * design_fs:
         raise EstimationError(f'{where}: designed for {design_fs:.6g} Hz sampling but the '
                               f'recording is sampled at {fs:.6g} Hz; expected the design rate '
@@ -272,10 +289,12 @@ def _covered(rec) -> str:
 
 
 def check_multisine_segments(rec, segments) -> list:
-    """Band, sample rate and whole steady-state periods of descriptor multisine segments
+    """
+    Band, sample rate and whole steady-state periods of descriptor multisine segments
     (``info`` keys of :func:`frf_ident.core.excitation.procedures.multisine_procedure`);
     returns the analysed (steady-state) effort of each segment, (N_i, n) arrays, for the
-    clipping check."""
+    clipping check.
+    """
     info = segments[0].info
     dp = info['design_params']
     where = f'{EXPERIMENT} multisine design'
@@ -315,10 +334,12 @@ def check_chirp_segments(rec, segments) -> list:
 
 
 def check_descriptor_recording(rec) -> None:
-    """Every check of a recording with /frf/experiment descriptors: the multisine segments and
+    """
+    Every check of a recording with /frf/experiment descriptors: the multisine segments and
     the last chirp iteration (the ones
     :func:`frf_ident.core.estimation.described.estimate_recording` analyses), then clipping
-    of the effort in each design's analysed samples."""
+    of the effort in each design's analysed samples.
+    """
     ms = [s for s in rec.segments if s.info.get('design') == 'multisine']
     ch = [s for s in rec.segments if s.info.get('design') == 'chirp']
     designs = []
