@@ -1,4 +1,6 @@
 """
+Test ``frf-ident estimate`` on bad input and with excitation options.
+
 `frf-ident estimate` on bad input (one line, exit 2, nothing lost) and with the excitation
 given as options for bags without /frf/experiment descriptors.
 """
@@ -186,6 +188,8 @@ def test_printed_detection_given_back_gives_the_same_frf(foreign_ms_bag, tmp_pat
 
 def test_narrow_chirp_needs_its_band_given(plant_loop, foreign_ms_bag, tmp_path, capsys):
     """
+    Test that a narrow chirp needs its band given.
+
     A 10-14 Hz exponential chirp spans a frequency ratio of 1.4, below the chirp detector's
     1.5: detection takes it for a 2-line periodic signal whose period is not a whole number
     of samples, which is refused. Given band and times fix that.

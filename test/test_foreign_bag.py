@@ -30,6 +30,8 @@ def clean_run():
 
 def _write_joint_states_bag(path, rec, rng, jitter=0.01, drop=0.005):
     """
+    Write a jittered /joint_states-only bag with the rosbags writer.
+
     rosbags writer, /joint_states only, shuffled joint order; sample k is taken at
     k dt + U(+-jitter) dt (values interpolated there), 0.5 % of the messages dropped.
     """

@@ -1,4 +1,6 @@
 """
+Test estimating robot bags with jitter, drops and bursts of lost messages.
+
 Issue 12: robot bags with jitter, drops and bursts of lost messages are estimated; a gap
 costs only the periods it touches; in memory and streamed give one verdict.
 
@@ -54,6 +56,8 @@ def burst_bags(run10, tmp_path_factory):
 
 def test_jittered_ros2_control_bag_within_1_db_of_the_plant(tmp_path, capsys):
     """
+    Test that a jittered ros2_control bag is within 1 dB of the plant.
+
     6 periods x 8192 samples at 1 kHz, 1 % stamp jitter, 0.5 % single drops (it crashed
     with 'cannot reshape array' before).
     """
@@ -100,6 +104,8 @@ def test_bursts_cost_only_the_periods_they_touch(run10, burst_bags, tmp_path, ca
 
 def test_streamed_and_in_memory_take_the_same_decisions(burst_bags, tmp_path):
     """
+    Test that streamed and in-memory estimation take the same decisions.
+
     Blocks of 30 s, in memory and streamed: the same periods used and dropped, the same
     FRF up to the resampling of each window on its own timing fit (the least-squares grid of
     a window and of the whole bag agree to a fraction of a microsecond).

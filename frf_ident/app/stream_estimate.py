@@ -1,4 +1,6 @@
 """
+Estimate bags larger than memory window by window.
+
 Estimation of bags larger than memory: windows from :mod:`frf_ident.bag.windows` fed to the
 core's segment-wise estimators.
 
@@ -47,6 +49,8 @@ class StreamedEstimate:
 
 def default_memory_budget() -> int:
     """
+    Return the memory budget of the in-memory reader.
+
     Bytes the in-memory reader may use before ``estimate`` streams: a quarter of the
     physical memory, at most 4 GiB.
     """

@@ -75,6 +75,8 @@ def _compression(meta_path: Path, info: dict[str, Any]) -> str:
 @contextmanager
 def _readable(bag: BagFiles, f: Path) -> Iterator[Path]:
     """
+    Yield a readable MCAP path for one file of a bag.
+
     An MCAP path for the file ``f`` of ``bag``: itself, or (rosbag2 file compression) a
     temporary decompressed copy, streamed so memory stays bounded.
     """
@@ -458,6 +460,8 @@ def expected_counts(bag: BagFiles) -> dict[str, int]:
 def iter_batches(bag: BagFiles, topics: set[str] | None, progress: bool,
                  stats: list[ScanStats]) -> Iterator[Batch]:
     """
+    Yield the wanted messages of every file of a bag in chunks.
+
     The wanted messages of every file of ``bag``, chunk by chunk; each file's
     :class:`ScanStats` is appended to ``stats`` when its scan ends.
     """
@@ -623,6 +627,8 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
              t_range: tuple[float, float] | None, gaps: str = 'refuse'
              ) -> tuple[Recording, tm.TimingReport]:
     """
+    Assemble the collected messages into a Recording on a uniform grid.
+
     The joint states (and commands) on a uniform grid as a Recording, with the timing
     report; ``gaps`` as in :func:`read_recording`.
     """
@@ -692,6 +698,8 @@ def _is_identity(order: np.ndarray, n: int) -> bool:
 
 def _frf_grid(frf: Any, st: tm.Stamps) -> np.ndarray | None:
     """
+    Return the writer's exact time grid if the stamps lie on it.
+
     The writer's exact float time grid, if the bag's stamps are exactly on it (computed
     for the samples at hand only, so a window of a long bag costs its own size).
     """
@@ -730,6 +738,8 @@ def _check_joints(bag: BagFiles, topics: BagTopics, joint_names: list[str], vals
 def _check_finite(bag: BagFiles, topics: BagTopics, joint_names: list[str], values: np.ndarray,
                   ns: np.ndarray) -> None:
     """
+    Check the values of one topic for inf and partial NaN.
+
     inf anywhere, or NaN in part of a column, is an error; a column all NaN is a missing
     interface (ros2_control convention) and stays NaN.
     """
@@ -752,6 +762,8 @@ def _check_finite(bag: BagFiles, topics: BagTopics, joint_names: list[str], valu
 def _hold(c_ns: np.ndarray, c_vals: np.ndarray, grid_ns: np.ndarray,
           hold_ns: float) -> np.ndarray:
     """
+    Hold a command series onto a time grid (zero-order hold).
+
     Zero-order hold of (c_ns, c_vals) onto grid_ns, NaN before the first value and where
     the last value is older than ``hold_ns``.
     """
@@ -821,6 +833,8 @@ def _excitation(bag: BagFiles, col: Collector, topics: BagTopics, grid_ns: np.nd
 def _onto_grid(src: tm.Stamps, v: np.ndarray, st: tm.Stamps, grid_ns: np.ndarray,
                per_sample: bool) -> np.ndarray:
     """
+    Put a command-like series onto the /joint_states grid.
+
     A command-like series on the /joint_states grid: matched by exact stamp for our own
     bags, else held for at most 3 sample or command periods (NaN beyond).
     """
@@ -913,6 +927,8 @@ def _info_from_metadata(bag: BagFiles) -> dict[str, Any]:
 
 def reindex(path: str | Path, out: str | Path) -> Path:
     """
+    Rewrite a damaged or unfinished bag as a complete one.
+
     Rewrite a damaged or unfinished bag as a complete one at ``out`` (all readable messages,
     summary, footer and metadata.yaml), like ``ros2 bag reindex`` plus recovery.
     """

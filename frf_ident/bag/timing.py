@@ -120,6 +120,8 @@ class TimingReport:
 def merge_reports(reports: list[TimingReport], recovery: dict[str, Any] | None = None
                   ) -> TimingReport:
     """
+    Merge the timing reports of the windows of a streamed bag.
+
     One report for the windows of a streamed bag: counts and losses add up, jitter and
     offsets take the worst window, warnings are kept once each.
     """
@@ -255,6 +257,8 @@ def _measure(tt: TopicTiming, s: np.ndarray, k: np.ndarray, dt: float) -> None:
 
 def check_resampling(st: Stamps, where: str, gaps: str = 'refuse') -> None:
     """
+    Check the stamps against the resampling rules.
+
     Raise BagError when the stamps of ``st`` violate the resampling rules (with
     ``gaps='mark'`` long gaps are allowed: :func:`long_gaps`).
     """
@@ -274,6 +278,8 @@ def check_resampling(st: Stamps, where: str, gaps: str = 'refuse') -> None:
 
 def grid_offset(st: Stamps) -> float:
     """
+    Return the intercept of the least-squares grid through the stamps.
+
     Intercept [ns] of the least-squares grid s = ns[0] + offset + k dt through the stamps
     (0 for stamps exactly on their grid): the uniform grid that jitter does not move.
     """
@@ -284,6 +290,8 @@ def grid_offset(st: Stamps) -> float:
 
 def long_gaps(st: Stamps) -> tuple[np.ndarray, np.ndarray]:
     """
+    Return the grid index ranges of the samples lost in long gaps.
+
     Grid index ranges [first, last] of the samples missing in gaps longer than
     MAX_GAP_SAMPLES (two int arrays, one entry per gap).
     """

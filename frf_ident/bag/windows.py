@@ -128,6 +128,8 @@ class WindowReader:
 
     def continue_from(self, t_s: float) -> None:
         """
+        Start the next block at a given time.
+
         Block mode: start the next block at ``t_s`` [s] (e.g. where the last whole
         multisine period of the current block ends) instead of right after it; ignored
         unless it lies more than ``MIN_ADVANCE_S`` inside the block just read (the scan only
@@ -219,6 +221,8 @@ class WindowReader:
     def _emit(self, col: Collector, w: tuple[int, int], t: np.ndarray
               ) -> tuple[Recording, tm.TimingReport] | None:
         """
+        Assemble one window from the rows held.
+
         Assemble window ``w`` from the rows held, whose times are ``t`` (None if it
         holds no joint state).
         """

@@ -28,6 +28,8 @@ def multisine_run(n_periods: int = 6, f_high: float = 80.0, bound: float = 0.01,
                   seed: int = 0, lead_s: float = 0.0, tail_s: float = 0.0,
                   period_samples: int = 8192, period_scale: float = 1.0) -> Recording:
     """
+    Simulate a closed-loop multisine run of the default plant.
+
     n_periods x ``period_samples`` at 1 kHz (f_high 80 Hz: Ts 2 ms) of the default plant
     in closed loop, the multisine on joint_2's velocity reference; ``lead_s`` / ``tail_s`` of
     a partial period before / after (the reference runs on periodically). ``period_scale``
@@ -158,6 +160,8 @@ def write_robot_bag(path, rec: Recording, imp: Imperfections | None = None, *, s
 def drop_bursts(src, dst, bursts: list[tuple[float, float]], *,
                 keep: tuple[str, ...] = ('/frf/experiment',)) -> int:
     """
+    Copy a bag without the messages logged in bursts.
+
     Copy the bag ``src`` to ``dst`` without the messages whose log time falls in one of
     the ``bursts`` (t_start [s of the bag clock], duration [s]), on every topic but ``keep``
     (a recorder that stalls loses all streams alike). Returns how many were lost.
@@ -183,6 +187,8 @@ def write_rosbag2(path, rec: Recording, imp: Imperfections | None = None, *, see
                   preset: str = '', config: str = '', max_size: int = 0,
                   max_duration_s: int = 0, compression_mode: str = '') -> dict:
     """
+    Write a recording with rosbag2 itself.
+
     Write ``rec`` with rosbag2 itself (``rosbag2_py.SequentialWriter``, storage 'mcap'),
     as ``ros2 bag record`` stores what it receives: the log time is the receive time, the
     header stamp the sample time (they disagree by ``imp.log_offset`` + 250 us + Exp(50 us)).

@@ -1,4 +1,6 @@
 """
+Test that any imperfection of a recorded bag gives an FRF or a one-line refusal.
+
 Property: whatever a recording does to a bag, `frf-ident estimate` exits 0 with an FRF
 close to the plant's, or 2 with one line; never 1, never a traceback (issue 12).
 
@@ -45,6 +47,8 @@ def run(kind: str):
 @st.composite
 def imperfections(draw):
     """
+    Draw realistic imperfections of a recording.
+
     Realistic sizes: jitter up to 3 % of dt, up to 1 % single drops, up to 4 bursts of
     2-300 ms, up to 1 % duplicates and reordered pairs, up to 2.5 periods cut at each end.
     """
@@ -108,6 +112,8 @@ def test_estimate_exits_0_close_to_the_truth_or_2_with_one_line(imp, kind, trunc
 
 def test_clean_bag_estimated_and_fractional_period_refused():
     """
+    Test that a clean bag is estimated and a fractional period refused.
+
     Without imperfections: the whole-sample run is estimated; a period of 1024.3 samples
     (the excitation on another clock) is refused with one line naming the period.
     """

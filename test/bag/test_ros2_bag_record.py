@@ -1,4 +1,6 @@
 """
+Test estimating a bag written by the real ``ros2 bag record``.
+
 A bag written by the real `ros2 bag record -s mcap` while the topics of a demo bag are
 published by `ros2 bag play`: with whatever the recorder drops, it is estimated and agrees
 with the estimate of the played bag within 0.5 dB (issue 12).

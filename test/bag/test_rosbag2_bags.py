@@ -1,4 +1,6 @@
 """
+Test reading bags written by rosbag2 itself.
+
 Bags written by rosbag2 itself (rosbag2_py, as `ros2 bag record` stores them): MCAP
 uncompressed, with zstd and lz4 chunk compression, split into several files, rosbag2's own
 file and message compression; receive-time log stamps that disagree with the header stamps.
@@ -84,6 +86,8 @@ def test_rosbag2_bag_estimates_like_the_rosbags_one(case, run, reference, tmp_pa
 
 def test_lz4_chunks_without_ros(run, reference, tmp_path):
     """
+    Test reading an MCAP with lz4-compressed chunks without ROS.
+
     An MCAP with lz4-compressed chunks written by the `mcap` package (the writer rosbag2
     uses is the C++ twin of it): read like the rosbags bag.
     """

@@ -108,6 +108,8 @@ def _side(parts: list[np.ndarray], extreme: float, sign: float, span: float,
 def clipping(x: np.ndarray | Sequence[np.ndarray], *, min_run: int = MIN_RUN,
              min_fraction: float = MIN_FRACTION) -> list[Clipping]:
     """
+    Compute saturation statistics per channel.
+
     Saturation statistics per channel of ``x``: an (N, n) array or a sequence of them
     (stretches such as segments; runs never continue from one stretch into the next).
 
@@ -166,6 +168,8 @@ def check_not_clipped(u: np.ndarray | Sequence[np.ndarray], *, joint_names: Sequ
 
 def check_band(freq_hz: np.ndarray | Sequence[float], fs: float, *, where: str) -> None:
     """
+    Refuse analysed frequencies at or above the Nyquist frequency.
+
     Refuse analysed frequencies at or above the Nyquist frequency ``fs / 2`` (or not
     positive): such lines alias in data sampled at ``fs`` Hz.
     """
@@ -190,6 +194,8 @@ def check_band(freq_hz: np.ndarray | Sequence[float], fs: float, *, where: str) 
 
 def check_periods(n_periods: int, *, need: int = 2, where: str, hint: str = '') -> None:
     """
+    Refuse fewer than ``need`` whole steady-state periods.
+
     Refuse fewer than ``need`` whole steady-state periods (averaging over periods and the
     noise estimate need at least two). ``hint`` is appended to the message (e.g. how to get
     more data).
@@ -203,6 +209,8 @@ def check_periods(n_periods: int, *, need: int = 2, where: str, hint: str = '') 
 def check_whole_period(drift: float, period_samples: int, *, where: str,
                        max_drift: float = MAX_DRIFT) -> None:
     """
+    Refuse a multisine whose period is not a whole number of samples.
+
     Refuse a multisine whose true period is ``period_samples + drift`` samples with
     |drift| > ``max_drift``: whole-period DFTs of it leak into the neighbouring lines (the
     excitation was generated on another clock than the one the joint states are sampled on).
@@ -218,6 +226,8 @@ def check_whole_period(drift: float, period_samples: int, *, where: str,
 
 def missing_rows(*series: np.ndarray) -> np.ndarray:
     """
+    Mark the samples missing from the given series.
+
     (N,) True where a sample is missing: NaN in any column of the (N, n) ``series`` that
     holds data elsewhere (a column that is NaN throughout is an interface the robot does
     not publish, not a gap).
@@ -235,6 +245,8 @@ def missing_rows(*series: np.ndarray) -> np.ndarray:
 def check_remaining(n_used: int, n_dropped: int, *, need: int, what: str, where: str,
                     dropped_at: Sequence[tuple[float, float]] = (), hint: str = '') -> None:
     """
+    Refuse when too few periods remain after dropping those gaps touched.
+
     Refuse when fewer than ``need`` ``what`` (e.g. 'periods') remain after dropping
     ``n_dropped`` that gaps touched; the message says when the first dropped ones were.
     """
@@ -251,6 +263,8 @@ def check_remaining(n_used: int, n_dropped: int, *, need: int, what: str, where:
 def check_covers(t_first: float, t_last: float, t_start: float, t_end: float, *,
                  where: str, dt: float = 0.0, hint: str = '') -> None:
     """
+    Refuse a segment that the recorded span does not cover.
+
     Refuse a segment [t_start, t_end] that the recorded span [t_first, t_last] (sample
     times, spacing ``dt``) does not cover; half a sample of slack at either end.
     """
@@ -263,6 +277,8 @@ def check_covers(t_first: float, t_last: float, t_start: float, t_end: float, *,
 
 def check_rate(fs: float, design_fs: float, *, where: str, rtol: float = 1e-3) -> None:
     """
+    Refuse data sampled at another rate than the design's.
+
     Refuse data sampled at ``fs`` when the design counts samples at ``design_fs``
     (e.g. /joint_states decimated after the experiment): periods would not line up.
     """
@@ -290,6 +306,8 @@ def _covered(rec) -> str:
 
 def check_multisine_segments(rec, segments) -> list:
     """
+    Check the descriptor multisine segments of a recording.
+
     Band, sample rate and whole steady-state periods of descriptor multisine segments
     (``info`` keys of :func:`frf_ident.core.excitation.procedures.multisine_procedure`);
     returns the analysed (steady-state) effort of each segment, (N_i, n) arrays, for the
@@ -335,6 +353,8 @@ def check_chirp_segments(rec, segments) -> list:
 
 def check_descriptor_recording(rec) -> None:
     """
+    Run every check of a recording with /frf/experiment descriptors.
+
     Every check of a recording with /frf/experiment descriptors: the multisine segments and
     the last chirp iteration (the ones
     :func:`frf_ident.core.estimation.described.estimate_recording` analyses), then clipping

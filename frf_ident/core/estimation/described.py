@@ -142,6 +142,8 @@ class MultisineSpectra:
 
     def used_periods(self) -> dict[int, np.ndarray]:
         """
+        Return the periods of each realisation without missing samples.
+
         Realisation p -> indices of its periods without missing samples in any of its
         experiments (period q of a MIMO realisation is one estimate made of the n_ex
         experiments' period q, so a gap in one removes it); realisations left without a
@@ -157,6 +159,8 @@ class MultisineSpectra:
 
     def dropped(self) -> dict[str, Any]:
         """
+        Report the periods that gaps removed.
+
         What gaps removed: the count and, per dropped period, realisation, period index and
         times [s] of the segment whose samples were missing.
         """
@@ -242,6 +246,8 @@ class MultisineSpectra:
 def multisine_frf(rec: Recording, *, compensate: bool = True, method: str = 'reference',
                   align: str = 'position') -> tuple[FrequencyResponse, BLAResult]:
     """
+    Estimate the multisine best linear approximation of closed-loop data.
+
     Multisine best linear approximation (eq. 14) of the closed-loop data (see
     :meth:`MultisineSpectra.frf`); ``align`` see :func:`_disturbance_at`.
     """
@@ -254,6 +260,8 @@ def multisine_frf(rec: Recording, *, compensate: bool = True, method: str = 'ref
 
 class ChirpSpectra:
     """
+    Gather the spectra of chirp experiments one segment at a time.
+
     Sec. 5.1 spectra (u, y, r at the analysis frequencies) of chirp experiments, per
     iteration, gathered one segment at a time.
     """
@@ -358,6 +366,8 @@ class SegmentEstimator:
 
     def add_window(self, rec: Recording, *, compensate: bool = True) -> int:
         """
+        Process the segments that a window overlaps.
+
         Process the not yet processed segments that ``rec`` overlaps (a segment it holds
         only in part is an error); returns how many.
         """
@@ -401,6 +411,8 @@ class SegmentEstimator:
 def estimate_recording(rec: Recording, *, options=None, block_s: float | None = None
                        ) -> dict[str, FrequencyResponse]:
     """
+    Compute every estimate the recording supports.
+
     Every estimate the recording supports, keyed by name: 'multisine' (reference-based,
     compensated when a constant-velocity run exists), 'multisine_plain',
     'multisine_uncompensated', 'chirp', 'chirp_reference'; without descriptors the
@@ -433,6 +445,8 @@ def check_recording(rec: Recording, options=None) -> None:
 def estimate_detected(rec: Recording, options=None, *, block_s: float | None = None
                       ) -> dict[str, FrequencyResponse]:
     """
+    Estimate a recording without descriptors from the detected excitation.
+
     Estimates of a recording without descriptors: the excitation is detected per joint
     in blocks of ``block_s`` seconds, as a streamed bag is
     (:func:`frf_ident.core.estimation.detected.estimate_in_blocks`; ``options`` replace

@@ -174,6 +174,8 @@ def _describe(det: MultisineDetection | ChirpDetection, opts: ExcitationOptions)
 def detect_segments(rec: Recording, options: ExcitationOptions | None = None
                     ) -> tuple[list[Segment], list[str]]:
     """
+    Detect the excitation per joint.
+
     Detect the excitation per joint (or take it from ``options``); returns segments and
     one sentence per detection.
     """
@@ -230,6 +232,8 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
 
 def check_detected_segment(rec: Recording, seg: Segment) -> None:
     """
+    Check a detected segment before it is estimated.
+
     Band below Nyquist, at least two whole periods (multisine) or the sweep inside the
     data (chirp), and no clipped torque in the segment: refused with one line otherwise.
     """
@@ -292,6 +296,8 @@ class DetectedEstimator:
 
     def add_detected(self, rec: Recording, options: ExcitationOptions | None = None) -> int:
         """
+        Detect, check and add the excitations in a recording.
+
         Detect the excitation in ``rec`` (:func:`detect_segments`; ``options`` replace
         detection where given), check and add every detection; the sentences go to
         :attr:`notes` (each once). Returns how many.
@@ -365,6 +371,8 @@ class DetectedEstimator:
 
     def results(self) -> dict[str, FrequencyResponse]:
         """
+        Return one FrequencyResponse per detected excitation.
+
         One FrequencyResponse per detected excitation, keyed 'detected/<input joint>'
         (a second excitation of the same joint: 'detected/<joint>#2'), the detection
         sentences in meta['detected'].
@@ -419,6 +427,8 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int,
                                   list[tuple[float, float]]]:
     """
+    Compute the period spectra of a detected multisine.
+
     Excited bins, the period spectra U, Y (n_q, F, n) of a detected multisine's periods
     without missing samples, the transient periods skipped and the (t_start, t_end) of the
     periods dropped for missing samples.
@@ -458,6 +468,8 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
 
 def _strong_lines(uj: np.ndarray) -> np.ndarray:
     """
+    Select the lines the input really excites.
+
     The lines the input really excites (a detection may add weak leakage lines): power
     over the periods ``uj`` (n_q, F) at least 1 % of the median line's.
     """
@@ -479,6 +491,8 @@ def _chirp_lines(rec: Recording, seg: Segment) -> tuple[np.ndarray, np.ndarray, 
 
 def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
     """
+    Estimate one column of P from a detected excitation.
+
     Column j of P (all outputs / input j) from a detected excitation of input j: H1 over
     the periods at each line, sum Y conj(U_j) / sum |U_j|^2 (multisine), or Y / U_j at the
     Sec. 5.1 analysis frequencies (chirp).
@@ -492,6 +506,8 @@ def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
 
 class RecordingBlocks:
     """
+    Cut an in-memory recording into blocks as a streamed bag is cut.
+
     The blocks of an in-memory recording, cut as a streamed bag is cut
     (:class:`frf_ident.bag.windows.WindowReader` with ``block_s``): from the first sample,
     ``block_s`` long, the next one from where the last used data ended
@@ -516,6 +532,8 @@ class RecordingBlocks:
 
     def continue_from(self, t_s: float) -> None:
         """
+        Start the next block at a given time.
+
         Start the next block at ``t_s`` [s] if that lies more than ``MIN_ADVANCE_S`` into
         the block just given and not beyond it.
         """
@@ -549,6 +567,8 @@ def _sub_recording(rec: Recording, sl: slice) -> Recording:
 
 def _leftover(det: DetectedEstimator, rec: Recording) -> bool:
     """
+    Tell whether a block is a leftover too short for detection.
+
     True for a block that starts where the periods of the block before ended and is too
     short for two periods of that multisine (nothing detectable is expected there).
     """

@@ -108,6 +108,8 @@ class BLAResult:
 
 def _realisations(X, name: str, ndim: int = 4) -> list[np.ndarray]:
     """
+    Split an array into per-realisation arrays.
+
     Per-realisation arrays (n_q_p, ...) of a (n_p, n_q, ...) array or of a sequence of
     them (realisations may keep different numbers of periods when gaps removed some).
     """
@@ -154,6 +156,8 @@ def best_linear_approximation(Y, U) -> BLAResult:
 
 def _bla_variances(Ppq, Pp: np.ndarray):
     """
+    Compute the variances of the eq. 14 mean.
+
     (noise, total, nonlinear) variances of the eq. 14 mean from per-period estimates Ppq
     (one (n_q_p, ...) array per realisation) and per-realisation estimates Pp (n_p, ...);
     None where fewer than two periods / realisations.
@@ -178,6 +182,8 @@ def _bla_variances(Ppq, Pp: np.ndarray):
 
 def best_linear_approximation_reference(Y, U, R) -> BLAResult:
     """
+    Estimate the closed-loop BLA through the reference.
+
     Closed-loop BLA through the reference: P_p = (sum_q Y R^H)(sum_q U R^H)^-1, then eq. 14
     over realisations.
 
@@ -244,6 +250,8 @@ def detection_line_levels(y_periods: np.ndarray, excited_bins: np.ndarray,
 def detection_line_spectra(y_periods: np.ndarray, max_bin: int, *, axis: int = -2
                            ) -> tuple[np.ndarray, np.ndarray]:
     """
+    Compute the DFT of whole periods at the detection bins.
+
     Bins 1..min(max_bin, N/2) and the DFT of whole periods there (the input of
     :func:`detection_levels_from_spectra`; computable one segment at a time).
     """
@@ -256,6 +264,8 @@ def detection_line_spectra(y_periods: np.ndarray, max_bin: int, *, axis: int = -
 def detection_levels_from_spectra(Y, bins: np.ndarray,
                                   excited_bins: np.ndarray) -> DetectionLevels:
     """
+    Compute detection-line levels from period spectra.
+
     Detection-line levels from period spectra ``Y`` (n_p, n_q, n_bins, n_y), or one
     (n_q_p, n_bins, n_y) array per realisation, at ``bins``.
     """

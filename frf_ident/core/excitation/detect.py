@@ -226,6 +226,8 @@ def _bridge(x: np.ndarray, valid: np.ndarray) -> np.ndarray:
 
 def _periodic_fill(x: np.ndarray, valid: np.ndarray, p: int) -> np.ndarray:
     """
+    Fill missing samples from the same phase of other periods.
+
     ``x`` with each missing sample replaced by the mean of the present samples at the same
     phase (index modulo ``p``) in the other periods: for a periodic signal its value.
     """
@@ -282,6 +284,8 @@ def _prepare(x: np.ndarray, fs: float, min_samples: int = 16
 
 def _lag_correlation(x: np.ndarray, max_lag: int) -> np.ndarray:
     """
+    Compute a Pearson-like autocorrelation per lag.
+
     Pearson-like autocorrelation per lag: sum x[n] x[n+k] over the overlap, normalised by
     the energies of both overlapping parts (1 exactly for a noise-free periodic signal).
     """
@@ -355,6 +359,8 @@ def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
 def _refine_edges(e2: np.ndarray, a: int, b: int, w: int, *,
                   floor: float) -> tuple[int, int]:
     """
+    Move the edges of a run to variance change points.
+
     Move the edges [a, b) of the smoothed run to the sample where the variance of the
     period difference e changes (maximum-likelihood change point within +-w samples); an edge
     stays where it is unless the variance outside is at least three times the inside one.
@@ -381,6 +387,8 @@ def _despike(e2: np.ndarray, k: int = 5) -> np.ndarray:
 
 def _variance_change(e2: np.ndarray, floor: float, *, inside_after: bool) -> int | None:
     """
+    Find the index where the variance of e2 changes.
+
     Index k splitting e2 into two parts of different mean (Gaussian variance change point),
     or None if the outside part is not clearly (3x) larger than the inside part.
     """
@@ -480,6 +488,8 @@ def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods:
                         band: tuple[float, float] | None = None, min_line_db: float = 20.0,
                         dynamic_range_db: float = 80.0) -> MultisineDetection:
     """
+    Detect a multisine of known period.
+
     A multisine of known ``period`` [s] in ``x``: no autocorrelation search, so it works
     on data too short for :func:`detect_multisine` (two periods suffice).
 
