@@ -135,13 +135,13 @@ def _float64_array_layout(data: bytes | memoryview) -> tuple[int, int]:
 
 
 def decode_float64_array(data: bytes | memoryview) -> tuple[float, ...]:
-    """Return ``data`` field of a ``std_msgs/msg/Float64MultiArray`` (layout is skipped)."""
+    """Return the ``data`` field of a ``std_msgs/msg/Float64MultiArray`` (layout skipped)."""
     start, n = _float64_array_layout(data)
     return _doubles(n).unpack_from(data, start) if n else ()
 
 
 def decode_string(data: bytes | memoryview) -> str:
-    """Return ``data`` field of a ``std_msgs/msg/String``."""
+    """Return the ``data`` field of a ``std_msgs/msg/String``."""
     try:
         _check_header(data)
         text, _ = _read_string(data, 4)

@@ -40,7 +40,7 @@ class McapFormatError(ValueError):
 class ChannelInfo:
     """One MCAP channel (a rosbag2 topic connection)."""
 
-    id: int
+    id: int  # noqa: A003
     topic: str
     msgtype: str
     encoding: str
@@ -303,7 +303,11 @@ class McapScanner:
         return True
 
     def _finish(self, f: BinaryIO, pos: int, length: int) -> None:
-        """Return data section ended: the rest (summary, footer) is intact iff the magic closes it."""
+        """
+        Finish the scan after the data section ended.
+
+        The rest (summary, footer) is intact iff the magic closes it.
+        """
         st = self.stats
         st.bytes_ok = st.file_bytes  # summary bytes are not message data
         f.seek(st.file_bytes - 8)

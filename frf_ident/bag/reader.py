@@ -95,7 +95,11 @@ def _readable(bag: BagFiles, f: Path) -> Iterator[Path]:
 
 
 def _decompressed(batch: Batch) -> Batch:
-    """Return a batch whose messages are each zstd-compressed (rosbag2 message compression), decompressed."""
+    """
+    Decompress the messages of a batch.
+
+    Each message of the batch is zstd-compressed (rosbag2 message compression).
+    """
     dec = zstd_module()
     mv = memoryview(batch.buf)
     parts, starts, ends, pos = [], [], [], 0
@@ -228,7 +232,7 @@ class _Table:
         return self.stamps[:self.n], self.logs[:self.n], self.vals[:self.n]
 
     def times(self) -> np.ndarray:
-        """Header stamps when they are valid, else log times (ns) of the rows held."""
+        """Return the header stamps of the rows held when valid, else their log times in ns."""
         stamps, logs, _ = self.arrays()
         return stamps if tm.valid_header_stamps(stamps) else logs
 
@@ -724,7 +728,7 @@ def _frf_grid(frf: Any, st: tm.Stamps) -> np.ndarray | None:
 
 def _check_joints(bag: BagFiles, topics: BagTopics, joint_names: list[str], vals: np.ndarray,
                   col: Collector) -> None:
-    """Return a selected joint that no message carries is an error naming what is there."""
+    """Refuse a selected joint that no message carries, naming the joints that are there."""
     nj = len(joint_names)
     seen = set(col.js_first_names or ()) | col.js.names_seen
     for j, name in enumerate(joint_names):

@@ -44,12 +44,11 @@ _TYPESTORE: Typestore | None = None
 
 
 def typestore() -> Typestore:
-    """Return the shared ROS 2 Jazzy typestore (built once)."""
+    """Return the shared ROS 2 Jazzy typestore, built once."""
     global _TYPESTORE
     if _TYPESTORE is None:
         _TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
     return _TYPESTORE
-
 
 
 # --------------------------------------------------------------------------- write_recording
@@ -286,7 +285,7 @@ class BagRecorder:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def open(self, path: str | os.PathLike[str]) -> 'BagRecorder':
+    def open(self, path: str | os.PathLike[str]) -> 'BagRecorder':  # noqa: A003
         """Create the bag directory ``path`` (which must not exist)."""
         path = Path(path)
         if self._writer is not None:

@@ -42,7 +42,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def excitation_options(args: argparse.Namespace):
-    """Return the --input/--multisine-period/--band/--chirp/--chirp-time options as ExcitationOptions."""
+    """
+    Return the excitation options given on the command line as ExcitationOptions.
+
+    The options are --input, --multisine-period, --band, --chirp and --chirp-time.
+    """
     from frf_ident.core.estimation.detected import ExcitationOptions
 
     def tup(v):

@@ -72,7 +72,11 @@ class Clipping:
         return self.clipped_low or self.clipped_high
 
     def level(self, unit: str = '') -> str:
-        """Return the clipping level(s) as text: '+-150 N m', '+150 N m' or '-150 and +148 N m'."""
+        """
+        Return the clipping level or levels as text.
+
+        For example '+-150 N m', '+150 N m' or '-150 and +148 N m'.
+        """
         u = f' {unit}' if unit else ''
         lo, hi = self.low, self.high
         if self.clipped_low and self.clipped_high:
@@ -220,7 +224,7 @@ def check_whole_period(drift: float, period_samples: int, *, where: str,
                               f'not a whole number (off by {abs(drift):.2f} samples per period, '
                               f'at most {max_drift:g} allowed): whole-period DFTs would leak; '
                               f'expected a period of whole samples — resample the recording to '
-                              f'the excitation\'s clock, or give the excitation if detection '
+                              f"the excitation's clock, or give the excitation if detection "
                               f'misread it (--chirp, --multisine-period)')
 
 

@@ -72,7 +72,7 @@ class ExcitationOptions:
 
     """
 
-    input: str | None = None
+    input: str | None = None  # noqa: A003
     multisine_period: float | None = None
     band: tuple[float, float] | None = None
     chirp: tuple[float, float] | None = None
@@ -282,9 +282,10 @@ class DetectedEstimator:
 
     A long recording without descriptors is cut into blocks; each block's detections are
     added here and the same excitation (same input and period, analysed at the lines of its
-    first detection, or the same chirp band) found again in a later block adds its periods: the H1 sums sum_q Y conj(U_j) and
-    sum_q |U_j|^2 and the spread of the per-period ratios (for the variance) are kept, not the
-    data. One block alone gives exactly :func:`detected_frf`.
+    first detection, or the same chirp band) found again in a later block adds its periods:
+    the H1 sums sum_q Y conj(U_j) and sum_q |U_j|^2 and the spread of the per-period ratios
+    (for the variance) are kept, not the data. One block alone gives exactly
+    :func:`detected_frf`.
     """
 
     def __init__(self) -> None:

@@ -381,7 +381,7 @@ def _refine_edges(e2: np.ndarray, a: int, b: int, w: int, *,
 
 
 def _despike(e2: np.ndarray, k: int = 5) -> np.ndarray:
-    """Run median over ``k`` samples (outliers of up to k // 2 samples removed)."""
+    """Return the running median over ``k`` samples (outliers of up to k // 2 samples removed)."""
     return signal.medfilt(e2, k) if e2.size >= k else e2
 
 
