@@ -46,9 +46,9 @@ def refused(bag, capsys, *args, match=()):
 
 
 def _copy_rec(rec, **kw):
-    d = dict(t=rec.t, joint_names=rec.joint_names, position=rec.position,
-             velocity=rec.velocity, effort=rec.effort, reference=rec.reference,
-             excitation=rec.excitation, segments=rec.segments, meta=dict(rec.meta))
+    d = {'t': rec.t, 'joint_names': rec.joint_names, 'position': rec.position,
+         'velocity': rec.velocity, 'effort': rec.effort, 'reference': rec.reference,
+         'excitation': rec.excitation, 'segments': rec.segments, 'meta': dict(rec.meta)}
     d.update(kw)
     return Recording(**d)
 
@@ -57,7 +57,7 @@ def _copy_rec(rec, **kw):
 
 @pytest.fixture(scope='module')
 def ms_rec():
-    """Return a short frf_ident multisine run: 1 realisation x 2 periods of 1 s, no compensation."""
+    """Return a short frf_ident multisine run: 1 realisation x 2 periods of 1 s, uncompensated."""
     model, _, ctrl = load_model(None)
     cfg = IdentificationConfig(MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0,
                                                compensate=False), None)

@@ -12,11 +12,11 @@ import json
 from pathlib import Path
 import sys
 
+from frf_ident.cli import main
 import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent / 'bag'))
-from frf_ident.cli import main  # noqa: E402
 from replay_synth import Imperfections, multisine_run, truth_frf, write_robot_bag  # noqa: E402
 
 #: 6 bursts of 90 ms, drawn once (uniform over the first 80 s of a 10-period run)

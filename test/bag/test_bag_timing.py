@@ -140,8 +140,8 @@ def test_long_gap_kept_as_missing_data(tmp_path: Path) -> None:
     assert rec.t.size == 5000 and rep.resampled
     nan = np.flatnonzero(np.isnan(rec.velocity[:, 0]))
     np.testing.assert_array_equal(nan, np.arange(2300, 2420))
-    assert np.all(np.isnan(rec.effort[nan])) and not np.any(np.isnan(np.delete(rec.effort, nan,
-                                                                             axis=0)))
+    assert np.all(np.isnan(rec.effort[nan]))
+    assert not np.any(np.isnan(np.delete(rec.effort, nan, axis=0)))
     assert rep.missing == rec.meta['gaps'] == [[pytest.approx(102.3, abs=2e-5),
                                                 pytest.approx(102.419, abs=2e-5)]]
     assert any('1 gaps longer than 3 samples kept as missing data (120 samples' in line

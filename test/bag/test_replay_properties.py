@@ -19,12 +19,12 @@ from pathlib import Path
 import shutil
 import tempfile
 
+from frf_ident.cli import main
 import numpy as np
 import pytest
 
 hypothesis = pytest.importorskip('hypothesis')
-from frf_ident.cli import main  # noqa: E402
-from hypothesis import given, HealthCheck, settings
+from hypothesis import given, HealthCheck, settings  # noqa: E402, I100
 from hypothesis import strategies as st  # noqa: E402
 from replay_synth import Imperfections, multisine_run, truth_frf, write_robot_bag  # noqa: E402
 

@@ -42,11 +42,11 @@ def _frf(out):
 
 
 CASES = {
-    'split_by_size': dict(max_size=300_000),
-    'zstd_chunks_split_by_duration': dict(preset='zstd_fast', max_duration_s=3),
-    'lz4_chunks': dict(config='lz4'),
-    'rosbag2_message_compression': dict(compression_mode='message'),
-    'rosbag2_file_compression': dict(compression_mode='file'),
+    'split_by_size': {'max_size': 300_000},
+    'zstd_chunks_split_by_duration': {'preset': 'zstd_fast', 'max_duration_s': 3},
+    'lz4_chunks': {'config': 'lz4'},
+    'rosbag2_message_compression': {'compression_mode': 'message'},
+    'rosbag2_file_compression': {'compression_mode': 'file'},
 }
 
 
