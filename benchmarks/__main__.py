@@ -334,6 +334,8 @@ def bench_nodes() -> list[tuple[str, str, str, str]]:
     from benchmarks.graph import rows
     return rows()
 
+SECTIONS['replay'] = __import__('benchmarks.replay_properties', fromlist=['_']).bench_replay
+
 
 def main(argv: list[str] | None = None) -> int:
     names = (argv if argv is not None else sys.argv[1:]) or list(SECTIONS)

@@ -1,15 +1,14 @@
 """Bags that did not come from frf_ident: only /joint_states, robot-like timing."""
-import numpy as np
-import pytest
-from scipy.interpolate import CubicSpline
-
 from frf_ident.bag import read_recording
 from frf_ident.cli import main
 from frf_ident.core.estimation.described import estimate_recording
-from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
-from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
 from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.plant import FlexibleJointPlant
+import numpy as np
+import pytest
+from scipy.interpolate import CubicSpline
 
 FS = 1000.0
 
@@ -30,10 +29,14 @@ def clean_run():
 
 
 def _write_joint_states_bag(path, rec, rng, jitter=0.01, drop=0.005):
-    """rosbags writer, /joint_states only, shuffled joint order; sample k is taken at
-    k dt + U(+-jitter) dt (values interpolated there), 0.5 % of the messages dropped."""
+    """
+    Write a jittered /joint_states-only bag with the rosbags writer.
+
+    rosbags writer, /joint_states only, shuffled joint order; sample k is taken at
+    k dt + U(+-jitter) dt (values interpolated there), 0.5 % of the messages dropped.
+    """
     from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import get_typestore, Stores
     ts = get_typestore(Stores.ROS2_JAZZY)
     JointState = ts.types['sensor_msgs/msg/JointState']
     Header = ts.types['std_msgs/msg/Header']

@@ -1,4 +1,7 @@
-"""Issue 12: robot bags with jitter, drops and bursts of lost messages are estimated; a gap
+"""
+Test estimating robot bags with jitter, drops and bursts of lost messages.
+
+Issue 12: robot bags with jitter, drops and bursts of lost messages are estimated; a gap
 costs only the periods it touches; in memory and streamed give one verdict.
 
 Truth: the simulated plant's exact sampled FRF (robot_frf_sampled). The bags are written like
@@ -6,16 +9,15 @@ a ros2_control robot records them (test/bag/replay_synth.py): /joint_states and
 /velocity_controller/commands only, no /frf/experiment.
 """
 import json
-import sys
 from pathlib import Path
+import sys
 
+from frf_ident.cli import main
 import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent / 'bag'))
 from replay_synth import Imperfections, multisine_run, truth_frf, write_robot_bag  # noqa: E402
-
-from frf_ident.cli import main  # noqa: E402
 
 #: 6 bursts of 90 ms, drawn once (uniform over the first 80 s of a 10-period run)
 BURSTS = [(7.77, 0.09), (8.44, 0.09), (19.71, 0.09), (35.22, 0.09), (46.99, 0.09),
@@ -53,8 +55,12 @@ def burst_bags(run10, tmp_path_factory):
 
 
 def test_jittered_ros2_control_bag_within_1_db_of_the_plant(tmp_path, capsys):
-    """6 periods x 8192 samples at 1 kHz, 1 % stamp jitter, 0.5 % single drops (it crashed
-    with 'cannot reshape array' before)."""
+    """
+    Test that a jittered ros2_control bag is within 1 dB of the plant.
+
+    6 periods x 8192 samples at 1 kHz, 1 % stamp jitter, 0.5 % single drops (it crashed
+    with 'cannot reshape array' before).
+    """
     rec = multisine_run(6)
     write_robot_bag(tmp_path / 'rc', rec, Imperfections(jitter=0.01, drop=0.005))
     f, P, d = _estimate(tmp_path / 'rc', tmp_path / 'out')
@@ -97,9 +103,13 @@ def test_bursts_cost_only_the_periods_they_touch(run10, burst_bags, tmp_path, ca
 
 
 def test_streamed_and_in_memory_take_the_same_decisions(burst_bags, tmp_path):
-    """Blocks of 30 s, in memory and streamed: the same periods used and dropped, the same
+    """
+    Test that streamed and in-memory estimation take the same decisions.
+
+    Blocks of 30 s, in memory and streamed: the same periods used and dropped, the same
     FRF up to the resampling of each window on its own timing fit (the least-squares grid of
-    a window and of the whole bag agree to a fraction of a microsecond)."""
+    a window and of the whole bag agree to a fraction of a microsecond).
+    """
     _, burst, _ = burst_bags
     _, Pm, dm = _estimate(burst, tmp_path / 'mem', '--window', '30')
     _, Ps, ds = _estimate(burst, tmp_path / 'str', '--window', '30', '--stream')

@@ -1,4 +1,5 @@
-"""Bags longer than memory: windowed reading and estimation in bounded memory (issue 6.7).
+"""
+Bags longer than memory: windowed reading and estimation in bounded memory (issue 6.7).
 
 The streamed estimate must equal the in-memory one (own bags: bit for bit; bags without
 descriptors: every period of every block in the H1 sums), and the memory held must not grow
@@ -7,15 +8,14 @@ with the length of the bag while the in-memory reader's does.
 import json
 import tracemalloc
 
-import numpy as np
-import pytest
-
-from frf_ident.bag import read_recording, write_recording
-from frf_ident.bag.windows import WindowReader, read_experiment, segment_windows
 from benchmarks.__main__ import periodic_multisine_run
+from frf_ident.app.stream_estimate import stream_estimate
+from frf_ident.bag import read_recording, write_recording
+from frf_ident.bag.windows import read_experiment, segment_windows, WindowReader
 from frf_ident.cli import main
 from frf_ident.core.estimation.described import estimate_recording
-from frf_ident.app.stream_estimate import stream_estimate
+import numpy as np
+import pytest
 
 
 @pytest.fixture(scope='module')

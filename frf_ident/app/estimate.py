@@ -1,4 +1,5 @@
-"""Offline FRF estimation from a bag: every estimate the bag supports, written to a directory.
+"""
+Offline FRF estimation from a bag: every estimate the bag supports, written to a directory.
 
 Bags that would not fit the memory budget are read window by window
 (:mod:`frf_ident.app.stream_estimate`); both paths give the same estimates.
@@ -6,12 +7,12 @@ Bags that would not fit the memory budget are read window by window
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
+import sys
 from typing import Callable
 
-from frf_ident.app.console import say
 from frf_ident.app import stream_estimate
+from frf_ident.app.console import say
 from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
 from frf_ident.errors import FrfIdentInputError
 
@@ -20,12 +21,14 @@ __all__ = ['dropped_text', 'estimate_bag', 'read_estimates']
 
 def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max_memory_mb,
                    window_s: float, progress: Callable[[str], None]):
-    """Read the bag (in memory or streamed) and estimate.
+    """
+    Read the bag (in memory or streamed) and estimate.
 
     Returns
     -------
     tuple
         (estimates by name, timing report, experiment summary, streaming stats or None).
+
     """
     if max_memory_mb is not None and not max_memory_mb > 0:
         raise FrfIdentInputError(f'--max-memory {max_memory_mb}: expected a size in MB > 0')
@@ -34,9 +37,9 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     budget = stream_estimate.default_memory_budget() if max_memory_mb is None else \
         int(max_memory_mb * (1 << 20))
     if stream or stream_estimate.needs_streaming(bag, budget):
-        res = stream_estimate.stream_estimate(bag, joints=joints, t_range=t_range, block_s=window_s,
-                                        options=options, progress=progress,
-                                        bar=sys.stderr.isatty())
+        res = stream_estimate.stream_estimate(bag, joints=joints, t_range=t_range,
+                                              block_s=window_s, options=options,
+                                              progress=progress, bar=sys.stderr.isatty())
         st = res.stats
         progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
                  f'at most {st.peak_rows} held at once')
@@ -56,21 +59,31 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
                  options=None, stream: bool | None = None, max_memory_mb: float | None = None,
                  window_s: float = DEFAULT_BLOCK_S,
                  progress: Callable[[str], None] = say) -> dict:
-    """Estimate every FRF the bag supports; write frf.json, estimates.json, summary.json, bode.png.
+    """
+    Estimate every FRF the bag supports; write frf.json, estimates.json, summary.json, bode.png.
 
     Parameters
     ----------
-    bag : bag directory or .mcap file.
-    out : output directory (created; untouched when the bag is refused).
-    joints : joint names to analyse (default: all).
-    t_range : (start, end) in s: analyse only this time range.
-    primary : which estimate goes to frf.json (default: multisine, else chirp).
+    bag
+        Bag directory or .mcap file.
+    out
+        Output directory (created; untouched when the bag is refused).
+    joints
+        Joint names to analyse (default: all).
+    t_range
+        (start, end) in s: analyse only this time range.
+    primary
+        Which estimate goes to frf.json (default: multisine, else chirp).
     options : :class:`~frf_ident.core.estimation.detected.ExcitationOptions` replacing
         detection in bags without experiment descriptors.
-    stream : read window by window; None: only when the bag exceeds ``max_memory_mb``.
-    max_memory_mb : memory budget of the in-memory reader (default: a quarter of RAM).
-    window_s : streaming block length for bags without experiment descriptors [s].
-    progress : called with one line per step.
+    stream
+        Read window by window; None: only when the bag exceeds ``max_memory_mb``.
+    max_memory_mb
+        Memory budget of the in-memory reader (default: a quarter of RAM).
+    window_s
+        Streaming block length for bags without experiment descriptors [s].
+    progress
+        Called with one line per step.
 
     Returns
     -------
@@ -81,6 +94,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     ------
     EstimationError
         The data do not support an estimate (the message names the bag).
+
     """
     from frf_ident.errors import EstimationError
     from frf_ident.report.figures import bode_figure
@@ -122,16 +136,19 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
 
 
 def dropped_text(d: dict) -> str:
-    """One line saying what gaps removed from an estimate (its meta['dropped']), '' if nothing.
+    """
+    One line saying what gaps removed from an estimate (its meta['dropped']), '' if nothing.
 
     Parameters
     ----------
-    d : {'periods', 'items' | 'times'} of a multisine or {'lines', 'freq_hz'} of a chirp.
+    d
+        {'periods', 'items' | 'times'} of a multisine or {'lines', 'freq_hz'} of a chirp.
 
     Returns
     -------
     str
         e.g. '2 periods dropped for gaps (realisation 0 period 1 at 28.43..31.50 s, ...)'.
+
     """
     if d.get('lines'):
         f = ', '.join(f'{x:.4g}' for x in d['freq_hz'][:8])

@@ -12,19 +12,25 @@ __all__ = ['import_file']
 
 def import_file(file: Path, map_path: Path, out: Path, *,
                 progress: Callable[[str], None] = say) -> Path:
-    """Import a measured table as a bag and say what excitation each joint carries.
+    """
+    Import a measured table as a bag and say what excitation each joint carries.
 
     Parameters
     ----------
-    file : measured data, .csv or .mat.
-    map_path : YAML map naming the time, joints, columns and unit scales (see README, "Files").
-    out : bag directory to create; an existing path is refused (nothing is overwritten).
-    progress : called with one line per step.
+    file
+        Measured data, .csv or .mat.
+    map_path
+        YAML map naming the time, joints, columns and unit scales (see README, "Files").
+    out
+        Bag directory to create; an existing path is refused (nothing is overwritten).
+    progress
+        Called with one line per step.
 
     Returns
     -------
     Path
         ``out``.
+
     """
     from frf_ident.bag import write_recording
     from frf_ident.core.excitation.detect import detect_excitation, excitation_source

@@ -1,4 +1,7 @@
-"""Estimation of bags larger than memory: windows from :mod:`frf_ident.bag.windows` fed to the
+"""
+Estimate bags larger than memory window by window.
+
+Estimation of bags larger than memory: windows from :mod:`frf_ident.bag.windows` fed to the
 core's segment-wise estimators.
 
 - bags with /frf/experiment descriptors: one window per experiment segment, the spectra of
@@ -16,14 +19,14 @@ Memory is bounded by the longest window, not by the bag.
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
+import os
 from pathlib import Path
 from typing import Any, Callable
 
-from frf_ident.bag import windows as bs
 from frf_ident.bag import timing as tm
-from frf_ident.core.estimation.described import SegmentEstimator, check_recording
+from frf_ident.bag import windows as bs
+from frf_ident.core.estimation.described import check_recording, SegmentEstimator
 from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, estimate_in_blocks
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.errors import EstimationError
@@ -45,8 +48,12 @@ class StreamedEstimate:
 
 
 def default_memory_budget() -> int:
-    """Bytes the in-memory reader may use before ``estimate`` streams: a quarter of the
-    physical memory, at most 4 GiB."""
+    """
+    Return the memory budget of the in-memory reader.
+
+    Bytes the in-memory reader may use before ``estimate`` streams: a quarter of the
+    physical memory, at most 4 GiB.
+    """
     try:
         phys = os.sysconf('SC_PAGE_SIZE') * os.sysconf('SC_PHYS_PAGES')
     except (ValueError, OSError, AttributeError):
@@ -55,7 +62,7 @@ def default_memory_budget() -> int:
 
 
 def needs_streaming(bag: str | Path, budget_bytes: int) -> bool:
-    """True when reading the bag into memory would exceed ``budget_bytes``."""
+    """Return true when reading the bag into memory would exceed ``budget_bytes``."""
     from frf_ident.bag.reader import locate
     size = sum(f.stat().st_size for f in locate(bag).files)
     return size * MEMORY_PER_BAG_BYTE > budget_bytes
@@ -73,12 +80,16 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                     t_range: tuple[float, float] | None = None, block_s: float = DEFAULT_BLOCK_S,
                     options: Any = None, progress: Callable[[str], None] | None = None,
                     bar: bool = False) -> StreamedEstimate:
-    """Every estimate the bag supports, read window by window (see the module docstring).
+    """
+    Every estimate the bag supports, read window by window (see the module docstring).
 
-    Each window is checked as :func:`~frf_ident.core.estimation.described.estimate_recording` checks a
-    whole recording (band, periods, clipping); ``options``
-    (:class:`~frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in every block.
-    Only the last chirp iteration is read (the one estimated)."""
+    Each window is checked as
+    :func:`~frf_ident.core.estimation.described.estimate_recording` checks a whole recording
+    (band, periods, clipping); ``options``
+    (:class:`~frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in
+    every block.
+    Only the last chirp iteration is read (the one estimated).
+    """
     say = progress or (lambda _msg: None)
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
         raise EstimationError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
@@ -123,6 +134,8 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                 yield rec
         estimates = estimate_in_blocks(blocks(), options, resume=reader.continue_from,
                                        block_s=block_s)
+        notes = [n for n in next(iter(estimates.values())).meta['detected']
+                 if n.startswith('block ')]
     if not reports:
         raise EstimationError(f'{bag}: no joint states inside the analysed windows')
     timing = tm.merge_reports(reports, reader.stats.recovery)

@@ -1,4 +1,5 @@
-"""Hand-rolled little-endian CDR (XCDR1) codecs for the few message types frf_ident bags hold.
+"""
+Hand-rolled little-endian CDR (XCDR1) codecs for the few message types frf_ident bags hold.
 
 Why: per message, rosbags' generic ``deserialize_cdr`` builds Python objects for every field;
 these codecs read exactly what the reader needs with ``struct.unpack_from`` and reuse the
@@ -11,8 +12,8 @@ are 8-aligned only when non-empty, as rosbags and rmw do.
 """
 from __future__ import annotations
 
-import struct
 from functools import lru_cache
+import struct
 from typing import Sequence
 
 import numpy as np
@@ -70,7 +71,8 @@ def _read_doubles(data: bytes | memoryview, off: int) -> tuple[tuple[float, ...]
 
 
 class JointStateDecoder:
-    """Decode ``sensor_msgs/msg/JointState`` CDR into stamp, names and value tuples.
+    """
+    Decode ``sensor_msgs/msg/JointState`` CDR into stamp, names and value tuples.
 
     Keeps the names of the previous message: if the next message starts with the same bytes
     up to the end of its ``name`` sequence, the names are not decoded again.
@@ -133,13 +135,13 @@ def _float64_array_layout(data: bytes | memoryview) -> tuple[int, int]:
 
 
 def decode_float64_array(data: bytes | memoryview) -> tuple[float, ...]:
-    """``data`` field of a ``std_msgs/msg/Float64MultiArray`` (layout is skipped)."""
+    """Return the ``data`` field of a ``std_msgs/msg/Float64MultiArray`` (layout skipped)."""
     start, n = _float64_array_layout(data)
     return _doubles(n).unpack_from(data, start) if n else ()
 
 
 def decode_string(data: bytes | memoryview) -> str:
-    """``data`` field of a ``std_msgs/msg/String``."""
+    """Return the ``data`` field of a ``std_msgs/msg/String``."""
     try:
         _check_header(data)
         text, _ = _read_string(data, 4)
@@ -243,7 +245,8 @@ def _doubles_layout(data: bytes | memoryview, off: int) -> tuple[int, int, int]:
 
 def decode_joint_state_batch(buf: bytes, starts: Sequence[int], ends: Sequence[int]) -> tuple[
         np.ndarray, tuple[str, ...], list[np.ndarray]] | None:
-    """Vectorised decode of JointStates that share names, frame_id and array lengths.
+    """
+    Vectorised decode of JointStates that share names, frame_id and array lengths.
 
     Returns ``(stamps_ns (m,), names, [position, velocity, effort] each (m, count))`` or
     None when the messages differ in structure (the caller then decodes one by one).

@@ -1,4 +1,5 @@
-"""A small, streaming, fault-tolerant MCAP record scanner (read side only).
+"""
+A small, streaming, fault-tolerant MCAP record scanner (read side only).
 
 Why not ``mcap.reader``: its seeking reader needs an intact summary section and its stream
 reader raises on the first damaged byte and parses each message into an object. A recorder
@@ -12,11 +13,11 @@ Spec: https://mcap.dev/spec (records, opcodes, field order).
 """
 from __future__ import annotations
 
-import struct
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
+import struct
 from typing import BinaryIO, Callable, Iterator
+import zlib
 
 MAGIC = b'\x89MCAP0\r\n'
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 1, 2, 3, 4, 5, 6
@@ -39,7 +40,7 @@ class McapFormatError(ValueError):
 class ChannelInfo:
     """One MCAP channel (a rosbag2 topic connection)."""
 
-    id: int
+    id: int  # noqa: A003
     topic: str
     msgtype: str
     encoding: str
@@ -102,7 +103,7 @@ def _string_map(buf: bytes | memoryview, off: int) -> tuple[dict[str, str], int]
 
 
 def zstd_module():
-    """The zstd module: ``compression.zstd`` (Python >= 3.14) or its backport."""
+    """Return the zstd module: ``compression.zstd`` (Python >= 3.14) or its backport."""
     try:
         from compression import zstd  # type: ignore[import-not-found]  # Python >= 3.14
     except ImportError:
@@ -128,7 +129,8 @@ def _decompress(compression: str, data: bytes, size: int) -> bytes:
 
 
 class McapScanner:
-    """Stream the messages of one MCAP file in file order, recovering what is readable.
+    """
+    Stream the messages of one MCAP file in file order, recovering what is readable.
 
     Use :meth:`messages` once; afterwards :attr:`stats`, :attr:`channels`, :attr:`schemas`
     and :attr:`metadata` describe the file. ``topics`` restricts which messages are yielded
@@ -169,7 +171,8 @@ class McapScanner:
         self.metadata[name], _ = _string_map(buf, off)
 
     def _records(self, buf: bytes) -> Iterator[Batch]:
-        """Batches (one per wanted channel) of a chunk body; also parses schemas/channels.
+        """
+        Batches (one per wanted channel) of a chunk body; also parses schemas/channels.
 
         Messages before a damaged record are still yielded; the error is raised afterwards.
         """
@@ -225,7 +228,8 @@ class McapScanner:
 
     # ------------------------------------------------------------------ main loop
     def batches(self) -> Iterator[Batch]:
-        """Yield the wanted messages chunk by chunk, one :class:`Batch` per channel.
+        """
+        Yield the wanted messages chunk by chunk, one :class:`Batch` per channel.
 
         Raises McapFormatError only when not even the MCAP magic is present.
         """
@@ -299,7 +303,11 @@ class McapScanner:
         return True
 
     def _finish(self, f: BinaryIO, pos: int, length: int) -> None:
-        """Data section ended: the rest (summary, footer) is intact iff the magic closes it."""
+        """
+        Finish the scan after the data section ended.
+
+        The rest (summary, footer) is intact iff the magic closes it.
+        """
         st = self.stats
         st.bytes_ok = st.file_bytes  # summary bytes are not message data
         f.seek(st.file_bytes - 8)
@@ -313,7 +321,8 @@ Summary = tuple[dict[int, ChannelInfo], dict[int, int], int, int]
 
 
 def read_summary(path: Path | str) -> Summary | None:
-    """Channels, per-channel message counts and start/end log time from the MCAP summary.
+    """
+    Channels, per-channel message counts and start/end log time from the MCAP summary.
 
     Returns None when the file has no intact summary with a statistics record (then the
     caller scans the data section instead).

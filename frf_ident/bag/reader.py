@@ -1,4 +1,5 @@
-"""Read rosbag2 MCAP bags (frf_ident's own or any robot's) into a :class:`Recording`.
+"""
+Read rosbag2 MCAP bags (frf_ident's own or any robot's) into a :class:`Recording`.
 
 Streaming: messages are decoded one MCAP chunk at a time straight into numpy blocks, so
 memory is bounded by the output arrays, not by the bag. Damaged or unfinished files are
@@ -8,29 +9,28 @@ and repaired by :mod:`frf_ident.bag.timing`. Every problem with the input ends i
 """
 from __future__ import annotations
 
+from contextlib import contextmanager, nullcontext
+from dataclasses import dataclass
 import json
 import math
+from operator import itemgetter
+from pathlib import Path
 import shutil
 import struct
 import tempfile
-from contextlib import contextmanager, nullcontext
-from dataclasses import dataclass
-from operator import itemgetter
-from pathlib import Path
 from typing import Any, Callable, Iterator
-
-import numpy as np
-import yaml
 
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import BagError
+import numpy as np
+import yaml
 
 from . import timing as tm
-from .cdr import (CdrError, JointStateDecoder, decode_float64_array,
-                  decode_float64_array_batch, decode_joint_state_batch, decode_string)
-from .mcapio import (Batch, ChannelInfo, McapFormatError, McapScanner, ScanStats, read_summary,
+from .cdr import (CdrError, decode_float64_array, decode_float64_array_batch,
+                  decode_joint_state_batch, decode_string, JointStateDecoder)
+from .mcapio import (Batch, ChannelInfo, McapFormatError, McapScanner, read_summary, ScanStats,
                      zstd_module)
-from .topics import JOINT_STATE, BagTopics
+from .topics import BagTopics, JOINT_STATE
 from .writer import FRF_BAG_KEY, grid_times
 
 _BLOCK = 8192
@@ -41,7 +41,8 @@ _NAN = float('nan')
 
 @dataclass
 class BagFiles:
-    """Where a bag's data is: MCAP files in order, plus metadata.yaml contents if present.
+    """
+    Where a bag's data is: MCAP files in order, plus metadata.yaml contents if present.
 
     ``compression`` is rosbag2's own compression from metadata.yaml ('' none, 'file': each
     file is a zstd-compressed MCAP, 'message': each message's data is zstd-compressed);
@@ -73,8 +74,12 @@ def _compression(meta_path: Path, info: dict[str, Any]) -> str:
 
 @contextmanager
 def _readable(bag: BagFiles, f: Path) -> Iterator[Path]:
-    """An MCAP path for the file ``f`` of ``bag``: itself, or (rosbag2 file compression) a
-    temporary decompressed copy, streamed so memory stays bounded."""
+    """
+    Yield a readable MCAP path for one file of a bag.
+
+    An MCAP path for the file ``f`` of ``bag``: itself, or (rosbag2 file compression) a
+    temporary decompressed copy, streamed so memory stays bounded.
+    """
     if bag.compression != 'file':
         yield f
         return
@@ -90,8 +95,11 @@ def _readable(bag: BagFiles, f: Path) -> Iterator[Path]:
 
 
 def _decompressed(batch: Batch) -> Batch:
-    """A batch whose messages are each zstd-compressed (rosbag2 message compression),
-    decompressed."""
+    """
+    Decompress the messages of a batch.
+
+    Each message of the batch is zstd-compressed (rosbag2 message compression).
+    """
     dec = zstd_module()
     mv = memoryview(batch.buf)
     parts, starts, ends, pos = [], [], [], 0
@@ -163,7 +171,8 @@ def _metadata_counts(meta: dict[str, Any] | None) -> dict[str, int]:
 # --------------------------------------------------------------------------- accumulation
 
 class _Table:
-    """Stamps, log times and value rows of one topic in preallocated, growing numpy arrays.
+    """
+    Stamps, log times and value rows of one topic in preallocated, growing numpy arrays.
 
     Preallocated from the message count in the summary/metadata when known, so memory is the
     output arrays plus one chunk; otherwise capacity doubles as needed.
@@ -223,12 +232,12 @@ class _Table:
         return self.stamps[:self.n], self.logs[:self.n], self.vals[:self.n]
 
     def times(self) -> np.ndarray:
-        """Header stamps when they are valid, else log times (ns) of the rows held."""
+        """Return the header stamps of the rows held when valid, else their log times in ns."""
         stamps, logs, _ = self.arrays()
         return stamps if tm.valid_header_stamps(stamps) else logs
 
     def subset(self, mask: np.ndarray) -> '_Table':
-        """A new table holding the rows where ``mask`` is true (streaming windows)."""
+        """Return a new table holding the rows where ``mask`` is true (streaming windows)."""
         stamps, logs, vals = self.arrays()
         out = _Table(self.width, int(np.count_nonzero(mask)))
         out.add_block(stamps[mask], logs[mask], vals[mask])
@@ -454,8 +463,12 @@ def expected_counts(bag: BagFiles) -> dict[str, int]:
 
 def iter_batches(bag: BagFiles, topics: set[str] | None, progress: bool,
                  stats: list[ScanStats]) -> Iterator[Batch]:
-    """The wanted messages of every file of ``bag``, chunk by chunk; each file's
-    :class:`ScanStats` is appended to ``stats`` when its scan ends."""
+    """
+    Yield the wanted messages of every file of a bag in chunks.
+
+    The wanted messages of every file of ``bag``, chunk by chunk; each file's
+    :class:`ScanStats` is appended to ``stats`` when its scan ends.
+    """
     total = sum(f.stat().st_size for f in bag.files)
     bar_cm: Any = nullcontext(None)
     if progress:
@@ -483,7 +496,7 @@ def _scan(bag: BagFiles, topics: set[str] | None, progress: bool,
 
 
 def recovery_report(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str, int],
-              expected: dict[str, int]) -> dict[str, Any]:
+                    expected: dict[str, int]) -> dict[str, Any]:
     rec: dict[str, Any] = {
         'complete': all(s.complete for s in stats),
         'bytes_lost': sum(s.bytes_lost for s in stats),
@@ -510,7 +523,8 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
                    t_range: tuple[float, float] | None = None,
                    progress: bool = False, gaps: str = 'refuse'
                    ) -> tuple[Recording, tm.TimingReport]:
-    """Read a bag into a uniformly sampled :class:`Recording` plus its :class:`TimingReport`.
+    """
+    Read a bag into a uniformly sampled :class:`Recording` plus its :class:`TimingReport`.
 
     ``path`` is a rosbag2 directory, a directory holding .mcap files without metadata.yaml,
     or a bare .mcap file. ``joints`` selects joints by name (default: the names of the first
@@ -566,7 +580,7 @@ def _lost_hint(recovery: dict[str, Any]) -> str:
 
 
 def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
-                topics: BagTopics) -> tuple[dict[str, Any], list[Segment], list[str]]:
+                     topics: BagTopics) -> tuple[dict[str, Any], list[Segment], list[str]]:
     """recording_meta and segments (start/end events paired) from /frf/experiment."""
     meta: dict[str, Any] = {}
     segs: dict[str, Segment] = {}
@@ -613,11 +627,15 @@ def _window(ns: np.ndarray, t_range: tuple[float, float] | None) -> np.ndarray:
 
 
 def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, Any],
-              segments: list[Segment], warnings: list[str], recovery: dict[str, Any],
-              t_range: tuple[float, float] | None, gaps: str = 'refuse'
-              ) -> tuple[Recording, tm.TimingReport]:
-    """The joint states (and commands) on a uniform grid as a Recording, with the timing
-    report; ``gaps`` as in :func:`read_recording`."""
+             segments: list[Segment], warnings: list[str], recovery: dict[str, Any],
+             t_range: tuple[float, float] | None, gaps: str = 'refuse'
+             ) -> tuple[Recording, tm.TimingReport]:
+    """
+    Assemble the collected messages into a Recording on a uniform grid.
+
+    The joint states (and commands) on a uniform grid as a Recording, with the timing
+    report; ``gaps`` as in :func:`read_recording`.
+    """
     assert col.js.data is not None and col.js.joints is not None
     joint_names = list(col.js.joints)
     frf = meta.pop(FRF_BAG_KEY, None)
@@ -683,8 +701,12 @@ def _is_identity(order: np.ndarray, n: int) -> bool:
 
 
 def _frf_grid(frf: Any, st: tm.Stamps) -> np.ndarray | None:
-    """The writer's exact float time grid, if the bag's stamps are exactly on it (computed
-    for the samples at hand only, so a window of a long bag costs its own size)."""
+    """
+    Return the writer's exact time grid if the stamps lie on it.
+
+    The writer's exact float time grid, if the bag's stamps are exactly on it (computed
+    for the samples at hand only, so a window of a long bag costs its own size).
+    """
     if not isinstance(frf, dict) or not isinstance(frf.get('time'), dict):
         return None
     try:
@@ -706,7 +728,7 @@ def _frf_grid(frf: Any, st: tm.Stamps) -> np.ndarray | None:
 
 def _check_joints(bag: BagFiles, topics: BagTopics, joint_names: list[str], vals: np.ndarray,
                   col: Collector) -> None:
-    """A selected joint that no message carries is an error naming what is there."""
+    """Refuse a selected joint that no message carries, naming the joints that are there."""
     nj = len(joint_names)
     seen = set(col.js_first_names or ()) | col.js.names_seen
     for j, name in enumerate(joint_names):
@@ -719,8 +741,12 @@ def _check_joints(bag: BagFiles, topics: BagTopics, joint_names: list[str], vals
 
 def _check_finite(bag: BagFiles, topics: BagTopics, joint_names: list[str], values: np.ndarray,
                   ns: np.ndarray) -> None:
-    """inf anywhere, or NaN in part of a column, is an error; a column all NaN is a missing
-    interface (ros2_control convention) and stays NaN."""
+    """
+    Check the values of one topic for inf and partial NaN.
+
+    inf anywhere, or NaN in part of a column, is an error; a column all NaN is a missing
+    interface (ros2_control convention) and stays NaN.
+    """
     nj = len(joint_names)
     bad = ~np.isfinite(values)
     if not bad.any():
@@ -739,8 +765,12 @@ def _check_finite(bag: BagFiles, topics: BagTopics, joint_names: list[str], valu
 
 def _hold(c_ns: np.ndarray, c_vals: np.ndarray, grid_ns: np.ndarray,
           hold_ns: float) -> np.ndarray:
-    """Zero-order hold of (c_ns, c_vals) onto grid_ns, NaN before the first value and where
-    the last value is older than ``hold_ns``."""
+    """
+    Hold a command series onto a time grid (zero-order hold).
+
+    Zero-order hold of (c_ns, c_vals) onto grid_ns, NaN before the first value and where
+    the last value is older than ``hold_ns``.
+    """
     idx = np.searchsorted(c_ns, grid_ns, side='right') - 1
     out = np.full((grid_ns.size, c_vals.shape[1]), np.nan)
     ok = idx >= 0
@@ -806,8 +836,12 @@ def _excitation(bag: BagFiles, col: Collector, topics: BagTopics, grid_ns: np.nd
 
 def _onto_grid(src: tm.Stamps, v: np.ndarray, st: tm.Stamps, grid_ns: np.ndarray,
                per_sample: bool) -> np.ndarray:
-    """A command-like series on the /joint_states grid: matched by exact stamp for our own
-    bags, else held for at most 3 sample or command periods (NaN beyond)."""
+    """
+    Put a command-like series onto the /joint_states grid.
+
+    A command-like series on the /joint_states grid: matched by exact stamp for our own
+    bags, else held for at most 3 sample or command periods (NaN beyond).
+    """
     if per_sample:
         return _exact_match(src.ns, v, st, grid_ns.size)
     hold = 3.0 * max(st.dt_ns, src.dt_ns if src.ns.size > 1 else 0.0)
@@ -826,7 +860,8 @@ def _rate_warnings(report: tm.TimingReport, master: str) -> None:
 # --------------------------------------------------------------------------- bag_info
 
 def bag_info(path: str | Path) -> dict[str, Any]:
-    """Topics, types, message counts, start and duration of a bag (like ``ros2 bag info``).
+    """
+    Topics, types, message counts, start and duration of a bag (like ``ros2 bag info``).
 
     Uses metadata.yaml when present, else the MCAP summary, else scans the file (then also
     reporting what could not be read).
@@ -895,8 +930,12 @@ def _info_from_metadata(bag: BagFiles) -> dict[str, Any]:
 # --------------------------------------------------------------------------- repair
 
 def reindex(path: str | Path, out: str | Path) -> Path:
-    """Rewrite a damaged or unfinished bag as a complete one at ``out`` (all readable messages,
-    summary, footer and metadata.yaml), like ``ros2 bag reindex`` plus recovery."""
+    """
+    Rewrite a damaged or unfinished bag as a complete one.
+
+    Rewrite a damaged or unfinished bag as a complete one at ``out`` (all readable messages,
+    summary, footer and metadata.yaml), like ``ros2 bag reindex`` plus recovery.
+    """
     from .writer import BagRecorder
 
     bag = locate(path)

@@ -1,4 +1,5 @@
-"""Timing analysis of recorded topics and the rules for resampling onto a uniform grid.
+"""
+Timing analysis of recorded topics and the rules for resampling onto a uniform grid.
 
 Robots do not sample perfectly: header stamps jitter, messages get dropped or duplicated,
 arrive out of order, and the receive (log) time lags the header stamp. This module measures
@@ -24,9 +25,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-import numpy as np
-
 from frf_ident.errors import BagError
+import numpy as np
 
 MAX_JITTER = 0.05
 MAX_GAP_SAMPLES = 3
@@ -119,8 +119,12 @@ class TimingReport:
 
 def merge_reports(reports: list[TimingReport], recovery: dict[str, Any] | None = None
                   ) -> TimingReport:
-    """One report for the windows of a streamed bag: counts and losses add up, jitter and
-    offsets take the worst window, warnings are kept once each."""
+    """
+    Merge the timing reports of the windows of a streamed bag.
+
+    One report for the windows of a streamed bag: counts and losses add up, jitter and
+    offsets take the worst window, warnings are kept once each.
+    """
     if not reports:
         raise ValueError('no timing reports to merge')
     topics: dict[str, TopicTiming] = {}
@@ -177,7 +181,8 @@ class Stamps:
 
 
 def valid_header_stamps(ns: np.ndarray) -> bool:
-    """Header stamps are usable unless several are zero (unset) or all are equal.
+    """
+    Header stamps are usable unless several are zero (unset) or all are equal.
 
     One zero stamp is allowed: a simulation's first sample is stamped t = 0.
     """
@@ -211,7 +216,8 @@ def analyse(topic: str, stamps: np.ndarray, log: np.ndarray, source: str,
 
 
 def _fit_period(s: np.ndarray, dt_hint_ns: float | None) -> tuple[float, np.ndarray]:
-    """Sample period and per-stamp sample index.
+    """
+    Sample period and per-stamp sample index.
 
     Indices accumulate the rounded interval lengths (robust to drops and to a slightly wrong
     first guess); the period is then the least-squares slope of stamps over indices.
@@ -250,8 +256,12 @@ def _measure(tt: TopicTiming, s: np.ndarray, k: np.ndarray, dt: float) -> None:
 
 
 def check_resampling(st: Stamps, where: str, gaps: str = 'refuse') -> None:
-    """Raise BagError when the stamps of ``st`` violate the resampling rules (with
-    ``gaps='mark'`` long gaps are allowed: :func:`long_gaps`)."""
+    """
+    Check the stamps against the resampling rules.
+
+    Raise BagError when the stamps of ``st`` violate the resampling rules (with
+    ``gaps='mark'`` long gaps are allowed: :func:`long_gaps`).
+    """
     if gaps not in GAP_MODES:
         raise ValueError(f'{gaps=}: expected one of {GAP_MODES}')
     tt = st.timing
@@ -267,23 +277,31 @@ def check_resampling(st: Stamps, where: str, gaps: str = 'refuse') -> None:
 
 
 def grid_offset(st: Stamps) -> float:
-    """Intercept [ns] of the least-squares grid s = ns[0] + offset + k dt through the stamps
-    (0 for stamps exactly on their grid): the uniform grid that jitter does not move."""
+    """
+    Return the intercept of the least-squares grid through the stamps.
+
+    Intercept [ns] of the least-squares grid s = ns[0] + offset + k dt through the stamps
+    (0 for stamps exactly on their grid): the uniform grid that jitter does not move.
+    """
     if st.ns.size < 2:
         return 0.0
     return float(np.mean((st.ns - st.ns[0]).astype(float) - st.k * st.dt_ns))
 
 
 def long_gaps(st: Stamps) -> tuple[np.ndarray, np.ndarray]:
-    """Grid index ranges [first, last] of the samples missing in gaps longer than
-    MAX_GAP_SAMPLES (two int arrays, one entry per gap)."""
+    """
+    Return the grid index ranges of the samples lost in long gaps.
+
+    Grid index ranges [first, last] of the samples missing in gaps longer than
+    MAX_GAP_SAMPLES (two int arrays, one entry per gap).
+    """
     dk = np.diff(st.k)
     i = np.flatnonzero(dk > MAX_GAP_SAMPLES + 1)
     return st.k[i] + 1, st.k[i + 1] - 1
 
 
 def on_exact_grid(st: Stamps) -> bool:
-    """True if the stamps are gap-free and within 1 ns of s0 + k * dt."""
+    """Return true if the stamps are gap-free and within 1 ns of s0 + k * dt."""
     if st.ns.size < 2:
         return True
     if np.any(np.diff(st.k) != 1):

@@ -3,14 +3,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rosbags.interfaces import (
-    Qos,
-    QosDurability,
-    QosHistory,
-    QosLiveliness,
-    QosReliability,
-    QosTime,
-)
+from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, QosReliability,
+                                QosTime)
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
 FLOAT64_ARRAY = 'std_msgs/msg/Float64MultiArray'
@@ -21,7 +15,7 @@ _INFINITE = QosTime(9223372036, 854775807)
 
 
 def make_qos(*, depth: int = 10, reliable: bool = True, transient_local: bool = False) -> Qos:
-    """A rosbags ``Qos`` with KEEP_LAST(depth) and infinite deadline/lifespan/lease."""
+    """Return a rosbags ``Qos`` with KEEP_LAST(depth) and infinite deadline/lifespan/lease."""
     return Qos(
         history=QosHistory.KEEP_LAST,
         depth=depth,

@@ -1,4 +1,5 @@
-"""Bounded-memory reading of bags longer than memory: the recording window by window.
+"""
+Bounded-memory reading of bags longer than memory: the recording window by window.
 
 :func:`read_recording` builds the whole recording's arrays; for a 10 GB /joint_states bag that
 is more than a machine holds. Here the bag is scanned once (after a first pass over the small
@@ -21,16 +22,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterator
 
-import numpy as np
-
 from frf_ident.core.estimation.detected import MIN_ADVANCE_S
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import BagError
+import numpy as np
 
 from . import timing as tm
 from .mcapio import ScanStats
-from .reader import (BagFiles, assemble, Collector, read_descriptors, expected_counts,
-                     recovery_report, iter_batches, locate)
+from .reader import (assemble, BagFiles, Collector, expected_counts, iter_batches, locate,
+                     read_descriptors, recovery_report)
 from .topics import BagTopics
 
 _PAD_NS = 10_000_000          # windows reach 10 ms beyond their segment
@@ -83,14 +83,15 @@ class StreamStats:
 
 
 class WindowReader:
-    """Iterate ``(Recording, TimingReport)`` per window of a bag, in one scan.
+    """
+    Iterate ``(Recording, TimingReport)`` per window of a bag, in one scan.
 
     ``windows`` are (start_ns, end_ns) in the bag's sample time (header stamps when valid);
     ``block_s`` instead cuts consecutive blocks from the first sample (within ``span`` =
     (start_ns, end_ns) when given). ``joints`` selects joints as in :func:`read_recording`;
     ``experiment`` is the first pass (:func:`read_experiment`, run here when not given);
-    ``gaps`` as in :func:`read_recording`. After the iteration :attr:`stats` holds the counts and the recovery summary of damaged
-    files.
+    ``gaps`` as in :func:`read_recording`. After the iteration :attr:`stats` holds the counts
+    and the recovery summary of damaged files.
     """
 
     def __init__(self, path: str | Path, *, windows: list[tuple[int, int]] | None = None,
@@ -126,10 +127,14 @@ class WindowReader:
         self._resume: int | None = None
 
     def continue_from(self, t_s: float) -> None:
-        """Block mode: start the next block at ``t_s`` [s] (e.g. where the last whole
+        """
+        Start the next block at a given time.
+
+        Block mode: start the next block at ``t_s`` [s] (e.g. where the last whole
         multisine period of the current block ends) instead of right after it; ignored
         unless it lies more than ``MIN_ADVANCE_S`` inside the block just read (the scan only
-        moves forward; the in-memory blocks follow the same rule)."""
+        moves forward; the in-memory blocks follow the same rule).
+        """
         if self.block_ns is None or not self._starts:
             return
         ns = int(round(t_s * 1e9))
@@ -215,8 +220,12 @@ class WindowReader:
 
     def _emit(self, col: Collector, w: tuple[int, int], t: np.ndarray
               ) -> tuple[Recording, tm.TimingReport] | None:
-        """Assemble window ``w`` from the rows held, whose times are ``t`` (None if it
-        holds no joint state)."""
+        """
+        Assemble one window from the rows held.
+
+        Assemble window ``w`` from the rows held, whose times are ``t`` (None if it
+        holds no joint state).
+        """
         lo, hi = w
         assert col.js.data is not None
         sel = (t >= lo) & (t <= hi)
@@ -237,7 +246,7 @@ class WindowReader:
         segs = [s for s in ex.segments
                 if s.t_end * 1e9 >= lo and s.t_start * 1e9 <= hi]
         rec, report = assemble(self.bag, view, self.topics, copy.deepcopy(ex.meta), segs,
-                                list(ex.warnings), {}, None, self.gaps)
+                               list(ex.warnings), {}, None, self.gaps)
         self.stats.windows += 1
         return rec, report
 

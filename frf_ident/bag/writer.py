@@ -1,4 +1,5 @@
-"""Write frf_ident recordings as rosbag2 MCAP bags (metadata.yaml version 9).
+"""
+Write frf_ident recordings as rosbag2 MCAP bags (metadata.yaml version 9).
 
 Two writers:
 
@@ -15,26 +16,25 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 import shutil
 import tempfile
 import threading
 import time
-from pathlib import Path
 from typing import Any, Mapping
-
-import numpy as np
-from rosbags.interfaces import Connection, Qos
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.rosbag2.storage_mcap import McapWriter
-from rosbags.typesys import Stores, get_typestore
-from rosbags.typesys.store import Typestore
 
 from frf_ident.core.jsonable import json_default
 from frf_ident.core.recording import Recording
 from frf_ident.errors import BagError
+import numpy as np
+from rosbags.interfaces import Connection, Qos
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2.storage_mcap import McapWriter
+from rosbags.typesys import get_typestore, Stores
+from rosbags.typesys.store import Typestore
 
 from . import cdr
-from .topics import FLOAT64_ARRAY, JOINT_STATE, STRING, BagTopics
+from .topics import BagTopics, FLOAT64_ARRAY, JOINT_STATE, STRING
 
 #: key of the recording_meta event that lets the reader rebuild the exact float time grid.
 FRF_BAG_KEY = '_frf_bag'
@@ -44,19 +44,19 @@ _TYPESTORE: Typestore | None = None
 
 
 def typestore() -> Typestore:
-    """The shared ROS 2 Jazzy typestore (built once)."""
+    """Return the shared ROS 2 Jazzy typestore, built once."""
     global _TYPESTORE
     if _TYPESTORE is None:
         _TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
     return _TYPESTORE
 
 
-
 # --------------------------------------------------------------------------- write_recording
 
 def write_recording(rec: Recording, path: str | os.PathLike[str], *,
                     topics: BagTopics | None = None, overwrite: bool = False) -> Path:
-    """Write ``rec`` as a rosbag2 MCAP bag directory at ``path`` and return the path.
+    """
+    Write ``rec`` as a rosbag2 MCAP bag directory at ``path`` and return the path.
 
     Topics (names from ``topics``): joint states per sample, velocity commands (finite
     reference rows only), effort commands, the excitation as JointState.velocity, experiment
@@ -112,7 +112,8 @@ def _stamps_ns(rec: Recording) -> np.ndarray:
 
 
 def _time_grid(t: np.ndarray) -> dict[str, Any] | None:
-    """A formula that reproduces ``t`` bit-exactly (see :func:`grid_times`), or None.
+    """
+    Return a formula that reproduces ``t`` bit-exactly (see :func:`grid_times`), or None.
 
     Tried: ``t0 + k*dt`` ('mul'), ``t0 + k/fs`` ('div') and ``(k0 + k)*dt`` ('idx'), the
     ways simulations build their time vectors.
@@ -133,8 +134,12 @@ def _time_grid(t: np.ndarray) -> dict[str, Any] | None:
 
 
 def grid_times(spec: dict[str, Any], n: int, start: int = 0) -> np.ndarray:
-    """The float times of samples ``start .. start + n - 1`` of a ``_time_grid`` spec (each
-    element identical to the same element of the whole grid)."""
+    """
+    Return the float times of samples ``start ..
+
+    start + n - 1`` of a ``_time_grid`` spec (each element identical to the same element of the
+    whole grid).
+    """
     k = np.arange(start, start + n)
     if spec['grid'] == 'mul':
         return float(spec['t0']) + k * float(spec['dt'])
@@ -255,7 +260,8 @@ class _FlushingWriter(Writer):
 
 
 class BagRecorder:
-    """Incremental rosbag2 MCAP recorder for a running node.
+    """
+    Incremental rosbag2 MCAP recorder for a running node.
 
     ``open(path)``, then ``write(topic, msg_type, stamp_ns, data)`` with CDR bytes or a dict
     of message fields, ``flush()`` now and then, ``close()`` at the end (idempotent; safe to
@@ -293,7 +299,7 @@ class BagRecorder:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def open(self, path: str | os.PathLike[str]) -> 'BagRecorder':
+    def open(self, path: str | os.PathLike[str]) -> 'BagRecorder':  # noqa: A003
         """Create the bag directory ``path`` (which must not exist)."""
         path = Path(path)
         if self._writer is not None:
@@ -312,7 +318,7 @@ class BagRecorder:
 
     @property
     def is_open(self) -> bool:
-        """True between open() and close()."""
+        """Return true between open() and close()."""
         return self._writer is not None
 
     def write(self, topic: str, msg_type: str, stamp_ns: int,

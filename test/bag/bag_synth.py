@@ -1,9 +1,8 @@
 """Synthetic recordings for the bag tests (3 joints of sines, built with numpy)."""
 from __future__ import annotations
 
-import numpy as np
-
 from frf_ident.core.recording import Recording, Segment
+import numpy as np
 
 JOINTS = ['joint_1', 'joint_2', 'joint_3']
 FREQS = np.array([0.7, 1.3, 2.1])  # Hz
@@ -30,7 +29,7 @@ def make_recording(seconds: float = 5.0, fs: float = 1000.0, t0: float = 0.0) ->
 
 
 def truth(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The clean (position, velocity, effort) of make_recording at arbitrary times t."""
+    """Return the clean (position, velocity, effort) of make_recording at arbitrary times t."""
     w = 2 * np.pi * FREQS
     return (np.sin(np.outer(t, w)) / w, np.cos(np.outer(t, w)),
             3.0 * np.sin(np.outer(t, w) + 0.3))
@@ -39,7 +38,8 @@ def truth(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def write_robot_bag(path, *, seconds: float = 10.0, fs: float = 1000.0, jitter: float = 0.01,
                     drop: float = 0.005, gap: tuple[float, int] | None = None,
                     seed: int = 1, effort: bool = True, extra=None):
-    """A /joint_states-only bag as a real robot records it, written with rosbags.
+    """
+    Return a /joint_states-only bag as a real robot records it, written with rosbags.
 
     Timing model (documented in README_bag.md): the controller samples at
     s_k = t0 + k*dt + u_k with u_k ~ U(-jitter*dt, +jitter*dt) (scheduling jitter) and stamps
@@ -48,10 +48,9 @@ def write_robot_bag(path, *, seconds: float = 10.0, fs: float = 1000.0, jitter: 
     n consecutive samples starting at time t. Receive (log) time = s_k + 250 us + Exp(50 us)
     transport latency. The joint order is shuffled in every message.
     """
-    from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
-
     from frf_ident.bag.topics import QOS_DEFAULT
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import get_typestore, Stores
 
     store = get_typestore(Stores.ROS2_JAZZY)
     js_t = store.types['sensor_msgs/msg/JointState']

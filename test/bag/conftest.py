@@ -3,11 +3,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
 from bag_synth import make_recording
-
 from frf_ident.bag import write_recording
 from frf_ident.core.recording import Recording
+import pytest
 
 
 @pytest.fixture(scope='session')

@@ -1,4 +1,5 @@
-"""Closed-loop runs and the bags a real robot would record of them (issue 12 tests).
+"""
+Closed-loop runs and the bags a real robot would record of them (issue 12 tests).
 
 :func:`multisine_run` simulates the default 3-axis plant under its PI velocity controller with
 a periodic odd multisine velocity reference on joint_2 (no descriptors: a ros2_control-style
@@ -14,10 +15,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from frf_ident.core.recording import Recording
 import numpy as np
 from scipy.interpolate import CubicSpline
-
-from frf_ident.core.recording import Recording
 
 FS = 1000.0
 T0 = 100.0                 # bag clock of the first sample [s]
@@ -27,10 +27,14 @@ EXCITED = 1                # joint_2
 def multisine_run(n_periods: int = 6, f_high: float = 80.0, bound: float = 0.01,
                   seed: int = 0, lead_s: float = 0.0, tail_s: float = 0.0,
                   period_samples: int = 8192, period_scale: float = 1.0) -> Recording:
-    """n_periods x ``period_samples`` at 1 kHz (f_high 80 Hz: Ts 2 ms) of the default plant
+    """
+    Simulate a closed-loop multisine run of the default plant.
+
+    n_periods x ``period_samples`` at 1 kHz (f_high 80 Hz: Ts 2 ms) of the default plant
     in closed loop, the multisine on joint_2's velocity reference; ``lead_s`` / ``tail_s`` of
     a partial period before / after (the reference runs on periodically). ``period_scale``
-    stretches the multisine's period in time (1.0002: 8193.6 samples, not a whole number)."""
+    stretches the multisine's period in time (1.0002: 8193.6 samples, not a whole number).
+    """
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
     from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
                                              robot_from_dict)
@@ -62,7 +66,8 @@ def truth_frf(rec: Recording, freq_hz: np.ndarray) -> np.ndarray:
 
 @dataclass
 class Imperfections:
-    """What a recording does to the messages (all optional).
+    """
+    What a recording does to the messages (all optional).
 
     jitter : stamp jitter, fraction of dt (uniform +-).
     drop : fraction of single joint states lost at random (never first/last).
@@ -100,14 +105,16 @@ def _sample_plan(rec: Recording, imp: Imperfections, rng: np.random.Generator):
 
 def write_robot_bag(path, rec: Recording, imp: Imperfections | None = None, *, seed: int = 1,
                     commands: bool = True, shuffle: bool = False) -> dict:
-    """Write ``rec`` as a robot's rosbag2 MCAP bag (rosbags writer; see the module docstring).
+    """
+    Write ``rec`` as a robot's rosbag2 MCAP bag (rosbags writer; see the module docstring).
 
     The joint states name the joints in the controller's order (as joint_state_broadcaster
     does; the command arrays follow it), or in a new random order per message (``shuffle``).
 
-    Returns the sample times, the kept mask and the burst mask (for the tests' truth)."""
+    Returns the sample times, the kept mask and the burst mask (for the tests' truth).
+    """
     from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import get_typestore, Stores
     imp = imp or Imperfections()
     rng = np.random.default_rng(seed)
     ts = get_typestore(Stores.ROS2_JAZZY)
@@ -152,9 +159,13 @@ def write_robot_bag(path, rec: Recording, imp: Imperfections | None = None, *, s
 
 def drop_bursts(src, dst, bursts: list[tuple[float, float]], *,
                 keep: tuple[str, ...] = ('/frf/experiment',)) -> int:
-    """Copy the bag ``src`` to ``dst`` without the messages whose log time falls in one of
+    """
+    Copy a bag without the messages logged in bursts.
+
+    Copy the bag ``src`` to ``dst`` without the messages whose log time falls in one of
     the ``bursts`` (t_start [s of the bag clock], duration [s]), on every topic but ``keep``
-    (a recorder that stalls loses all streams alike). Returns how many were lost."""
+    (a recorder that stalls loses all streams alike). Returns how many were lost.
+    """
     from frf_ident.bag import BagRecorder
     from frf_ident.bag.reader import iter_raw
     spans = [(int(round(a * 1e9)), int(round((a + d) * 1e9))) for a, d in bursts]
@@ -175,7 +186,10 @@ def drop_bursts(src, dst, bursts: list[tuple[float, float]], *,
 def write_rosbag2(path, rec: Recording, imp: Imperfections | None = None, *, seed: int = 1,
                   preset: str = '', config: str = '', max_size: int = 0,
                   max_duration_s: int = 0, compression_mode: str = '') -> dict:
-    """Write ``rec`` with rosbag2 itself (``rosbag2_py.SequentialWriter``, storage 'mcap'),
+    """
+    Write a recording with rosbag2 itself.
+
+    Write ``rec`` with rosbag2 itself (``rosbag2_py.SequentialWriter``, storage 'mcap'),
     as ``ros2 bag record`` stores what it receives: the log time is the receive time, the
     header stamp the sample time (they disagree by ``imp.log_offset`` + 250 us + Exp(50 us)).
 
@@ -184,8 +198,8 @@ def write_rosbag2(path, rec: Recording, imp: Imperfections | None = None, *, see
     ``max_duration_s``: split into several files; ``compression_mode``: rosbag2's own
     compression ('file' or 'message', zstd). Needs ROS 2 (rosbag2_py, rclpy) importable.
     """
-    import rosbag2_py
     from rclpy.serialization import serialize_message
+    import rosbag2_py
     from sensor_msgs.msg import JointState
     from std_msgs.msg import Float64MultiArray
     imp = imp or Imperfections()

@@ -4,14 +4,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
-import pytest
+from benchmarks.bag_read import bench_read
+from frf_ident.bag import cdr, read_recording
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rosbags.typesys import Stores, get_typestore
-
-from frf_ident.bag import cdr, read_recording
-from benchmarks.bag_read import bench_read
+import numpy as np
+import pytest
+from rosbags.typesys import get_typestore, Stores
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
 JS = STORE.types['sensor_msgs/msg/JointState']

@@ -2,20 +2,19 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 import signal
 import subprocess
 import sys
 import textwrap
 import time
-from pathlib import Path
 
+from frf_ident.bag import bag_info, BagRecorder, read_recording, reindex
+from frf_ident.bag.cdr import JointStateEncoder
+from frf_ident.errors import BagError
 import numpy as np
 import pytest
 import yaml
-
-from frf_ident.bag import BagRecorder, bag_info, read_recording, reindex
-from frf_ident.bag.cdr import JointStateEncoder
-from frf_ident.errors import BagError
 
 CHILD = textwrap.dedent("""
     import signal, sys, time

@@ -2,23 +2,22 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 import shutil
 import tempfile
-from pathlib import Path
 
-import numpy as np
-import pytest
 from bag_synth import make_recording
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
-
-from frf_ident.bag import BagRecorder, bag_info, read_recording, write_recording
+from frf_ident.bag import bag_info, BagRecorder, read_recording, write_recording
 from frf_ident.bag.reader import iter_raw
 from frf_ident.bag.topics import QOS_DEFAULT
 from frf_ident.core.recording import Recording
 from frf_ident.errors import BagError
+from hypothesis import given, HealthCheck, settings
+from hypothesis import strategies as st
+import numpy as np
+import pytest
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import get_typestore, Stores
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
 

@@ -4,17 +4,15 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
-import pytest
-import yaml
-from rosbags.highlevel import AnyReader
-from rosbags.typesys import Stores, get_typestore
-
-from frf_ident.bag import BagTopics, bag_info, read_recording, write_recording
+from bag_synth import JOINTS, make_recording
+from frf_ident.bag import bag_info, BagTopics, read_recording, write_recording
 from frf_ident.core.recording import Recording
 from frf_ident.errors import BagError
-
-from bag_synth import JOINTS, make_recording
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
+from rosbags.typesys import get_typestore, Stores
+import yaml
 
 ARRAYS = ('t', 'position', 'velocity', 'effort', 'reference', 'excitation')
 

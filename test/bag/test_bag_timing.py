@@ -3,13 +3,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-import pytest
 from bag_synth import JOINTS, truth, write_robot_bag
-
 from frf_ident.bag import read_recording
 from frf_ident.bag.timing import MAX_GAP_SAMPLES
 from frf_ident.errors import BagError
+import numpy as np
+import pytest
 
 
 def test_jitter_and_drops_resampled(tmp_path: Path) -> None:
@@ -83,10 +82,9 @@ def test_missing_interface_duplicates_and_reordering(tmp_path: Path) -> None:
 
 
 def test_header_stamps_unset_use_log_time(tmp_path: Path) -> None:
-    from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
-
     from frf_ident.bag.topics import QOS_DEFAULT
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import get_typestore, Stores
 
     store = get_typestore(Stores.ROS2_JAZZY)
     js = store.types['sensor_msgs/msg/JointState']
@@ -133,3 +131,22 @@ def test_slow_commands_are_zero_order_held(tmp_path: Path) -> None:
     assert np.isnan(rec.reference[-1, 0])  # held 30 ms (3 command periods), then NaN
     assert any('unequal rates' in w for w in rep.warnings)
     assert rep.topics['/velocity_controller/commands'].rate_hz == pytest.approx(100.0)
+
+
+def test_long_gap_kept_as_missing_data(tmp_path: Path) -> None:
+    """gaps='mark': the grid goes through the gap, its samples are NaN, the rest as usual."""
+    write_robot_bag(tmp_path / 'gap', seconds=5.0, drop=0.0, gap=(2.3, 120))
+    rec, rep = read_recording(tmp_path / 'gap', gaps='mark')
+    assert rec.t.size == 5000 and rep.resampled
+    nan = np.flatnonzero(np.isnan(rec.velocity[:, 0]))
+    np.testing.assert_array_equal(nan, np.arange(2300, 2420))
+    assert np.all(np.isnan(rec.effort[nan]))
+    assert not np.any(np.isnan(np.delete(rec.effort, nan, axis=0)))
+    assert rep.missing == rec.meta['gaps'] == [[pytest.approx(102.3, abs=2e-5),
+                                                pytest.approx(102.419, abs=2e-5)]]
+    assert any('1 gaps longer than 3 samples kept as missing data (120 samples' in line
+               for line in rep.summary())
+    pos, vel, eff = truth(np.delete(rec.t, nan))
+    np.testing.assert_allclose(np.delete(rec.velocity, nan, axis=0), vel, atol=2e-4)
+    with pytest.raises(ValueError, match="gaps='skip'"):
+        read_recording(tmp_path / 'gap', gaps='skip')

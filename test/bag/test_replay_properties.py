@@ -1,4 +1,7 @@
-"""Property: whatever a recording does to a bag, `frf-ident estimate` exits 0 with an FRF
+"""
+Test that any imperfection of a recorded bag gives an FRF or a one-line refusal.
+
+Property: whatever a recording does to a bag, `frf-ident estimate` exits 0 with an FRF
 close to the plant's, or 2 with one line; never 1, never a traceback (issue 12).
 
 Imperfections drawn by hypothesis: stamp jitter, single drops, bursts of lost messages on
@@ -12,18 +15,18 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+from pathlib import Path
 import shutil
 import tempfile
-from pathlib import Path
 
+from frf_ident.cli import main
 import numpy as np
 import pytest
 
 hypothesis = pytest.importorskip('hypothesis')
-from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
+from hypothesis import given, HealthCheck, settings  # noqa: E402, I100
+from hypothesis import strategies as st  # noqa: E402
 from replay_synth import Imperfections, multisine_run, truth_frf, write_robot_bag  # noqa: E402
-
-from frf_ident.cli import main  # noqa: E402
 
 PERIOD = 1024          # samples (1.024 s): short bags keep an example to a second or two
 N_PERIODS = 8
@@ -34,7 +37,7 @@ _RUNS: dict[str, object] = {}
 
 
 def run(kind: str):
-    """The simulated runs, made once: whole-sample period or 1024.3 samples."""
+    """Return the simulated runs, made once: whole-sample period or 1024.3 samples."""
     if kind not in _RUNS:
         scale = 1.0 if kind == 'whole' else 1.0003
         _RUNS[kind] = multisine_run(N_PERIODS, period_samples=PERIOD, period_scale=scale)
@@ -43,8 +46,12 @@ def run(kind: str):
 
 @st.composite
 def imperfections(draw):
-    """Realistic sizes: jitter up to 3 % of dt, up to 1 % single drops, up to 4 bursts of
-    2-300 ms, up to 1 % duplicates and reordered pairs, up to 2.5 periods cut at each end."""
+    """
+    Draw realistic imperfections of a recording.
+
+    Realistic sizes: jitter up to 3 % of dt, up to 1 % single drops, up to 4 bursts of
+    2-300 ms, up to 1 % duplicates and reordered pairs, up to 2.5 periods cut at each end.
+    """
     dur = N_PERIODS * PERIOD / 1000.0
     bursts = draw(st.lists(st.tuples(st.floats(0.0, dur), st.floats(0.002, 0.3)),
                            max_size=4))
@@ -103,8 +110,13 @@ def test_estimate_exits_0_close_to_the_truth_or_2_with_one_line(imp, kind, trunc
     check_one(imp, kind, truncate, stream, seed)
 
 
-def test_clean_and_fractional_period_bags_are_estimated():
-    """The two runs without imperfections: both estimated (a period of 1024.3 samples is
-    detected as 1024 and its slow drift stays within the tolerance)."""
-    for kind in ('whole', 'fractional'):
-        assert check_one(Imperfections(), kind, 0, False, 0) == 'ok'
+def test_clean_bag_estimated_and_fractional_period_refused():
+    """
+    Test that a clean bag is estimated and a fractional period refused.
+
+    Without imperfections: the whole-sample run is estimated; a period of 1024.3 samples
+    (the excitation on another clock) is refused with one line naming the period.
+    """
+    assert check_one(Imperfections(), 'whole', 0, False, 0) == 'ok'
+    got = check_one(Imperfections(), 'fractional', 0, False, 0)
+    assert 'the period is 1024.31 samples, not a whole number' in got, got

@@ -1,4 +1,7 @@
-"""Bags written by rosbag2 itself (rosbag2_py, as `ros2 bag record` stores them): MCAP
+"""
+Test reading bags written by rosbag2 itself.
+
+Bags written by rosbag2 itself (rosbag2_py, as `ros2 bag record` stores them): MCAP
 uncompressed, with zstd and lz4 chunk compression, split into several files, rosbag2's own
 file and message compression; receive-time log stamps that disagree with the header stamps.
 
@@ -9,13 +12,11 @@ rosbags (independent writer).
 """
 import json
 
-import numpy as np
-import pytest
-from replay_synth import (Imperfections, multisine_run, truth_frf, write_robot_bag,
-                          write_rosbag2)
-
 from frf_ident.bag import read_recording
 from frf_ident.cli import main
+import numpy as np
+import pytest
+from replay_synth import Imperfections, multisine_run, truth_frf, write_robot_bag, write_rosbag2
 
 IMP = Imperfections(jitter=0.01, drop=0.005, log_offset=0.004)
 
@@ -27,7 +28,7 @@ def run():
 
 @pytest.fixture(scope='module')
 def reference(run, tmp_path_factory):
-    """The same run, imperfections and seed written by rosbags: the estimate to match."""
+    """Return the same run, imperfections and seed written by rosbags: the estimate to match."""
     bag = tmp_path_factory.mktemp('rosbags') / 'bag'
     write_robot_bag(bag, run, IMP, seed=1)
     out = bag.parent / 'out'
@@ -41,11 +42,11 @@ def _frf(out):
 
 
 CASES = {
-    'split_by_size': dict(max_size=300_000),
-    'zstd_chunks_split_by_duration': dict(preset='zstd_fast', max_duration_s=3),
-    'lz4_chunks': dict(config='lz4'),
-    'rosbag2_message_compression': dict(compression_mode='message'),
-    'rosbag2_file_compression': dict(compression_mode='file'),
+    'split_by_size': {'max_size': 300_000},
+    'zstd_chunks_split_by_duration': {'preset': 'zstd_fast', 'max_duration_s': 3},
+    'lz4_chunks': {'config': 'lz4'},
+    'rosbag2_message_compression': {'compression_mode': 'message'},
+    'rosbag2_file_compression': {'compression_mode': 'file'},
 }
 
 
@@ -84,11 +85,14 @@ def test_rosbag2_bag_estimates_like_the_rosbags_one(case, run, reference, tmp_pa
 
 
 def test_lz4_chunks_without_ros(run, reference, tmp_path):
-    """An MCAP with lz4-compressed chunks written by the `mcap` package (the writer rosbag2
-    uses is the C++ twin of it): read like the rosbags bag."""
-    from mcap.writer import CompressionType, Writer
+    """
+    Test reading an MCAP with lz4-compressed chunks without ROS.
 
+    An MCAP with lz4-compressed chunks written by the `mcap` package (the writer rosbag2
+    uses is the C++ twin of it): read like the rosbags bag.
+    """
     from frf_ident.bag.reader import iter_raw
+    from mcap.writer import CompressionType, Writer
     src = tmp_path / 'src'
     write_robot_bag(src, run, IMP, seed=1)
     dst = tmp_path / 'lz4.mcap'

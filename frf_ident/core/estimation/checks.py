@@ -1,4 +1,5 @@
-"""Checks that the data support an FRF estimate (pure numpy; scipy.signal-style signatures).
+"""
+Checks that the data support an FRF estimate (pure numpy; scipy.signal-style signatures).
 
 Each check takes the data first and keyword options, returns nothing when the data are fine
 and raises :class:`~frf_ident.errors.EstimationError` with one line naming ``where`` (the
@@ -10,6 +11,8 @@ stretch of data, so an estimator can apply them segment by segment or window by 
 - :func:`check_band` — every analysed frequency below the Nyquist frequency fs / 2.
 - :func:`check_periods` — enough whole steady-state periods of a multisine.
 - :func:`check_covers` — a segment lies inside the recorded time span.
+- :func:`check_whole_period` — a detected multisine period is a whole number of samples
+  (within ``MAX_DRIFT`` samples): otherwise every period's DFT leaks.
 - :func:`missing_rows` — the samples a gap removed (NaN rows of a recording read with
   ``gaps='mark'``); :func:`check_remaining` — enough periods or lines are left after
   dropping the ones such gaps touch.
@@ -28,14 +31,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
+from frf_ident.errors import EstimationError
 import numpy as np
 
-from frf_ident.errors import EstimationError
-
-__all__ = ['MIN_FRACTION', 'MIN_RUN', 'PILEUP_BAND', 'Clipping', 'check_band',
+__all__ = ['MAX_DRIFT', 'MIN_FRACTION', 'MIN_RUN', 'PILEUP_BAND', 'Clipping', 'check_band',
            'check_covers', 'check_not_clipped', 'check_periods', 'check_remaining', 'clipping',
-           'missing_rows']
+           'check_whole_period', 'missing_rows']
 
+MAX_DRIFT = 0.05       # samples per period a detected multisine period may be off whole
 MIN_RUN = 5            # consecutive samples at the extreme value
 MIN_FRACTION = 1e-3    # of all samples, in such runs
 PILEUP_BAND = 0.01     # of the peak-to-peak range: the band just inside the extreme
@@ -43,7 +46,8 @@ PILEUP_BAND = 0.01     # of the peak-to-peak range: the band just inside the ext
 
 @dataclass
 class Clipping:
-    """Saturation statistics of one channel over the given stretches of data.
+    """
+    Saturation statistics of one channel over the given stretches of data.
 
     Attributes
     ----------
@@ -52,6 +56,7 @@ class Clipping:
         module thresholds.
     fraction : share of all samples in qualifying runs at a clipped side (0 if none).
     longest_run : longest run of samples at a clipped side (0 if none).
+
     """
 
     low: float
@@ -63,11 +68,15 @@ class Clipping:
 
     @property
     def clipped(self) -> bool:
-        """True when either side is clipped."""
+        """Return true when either side is clipped."""
         return self.clipped_low or self.clipped_high
 
     def level(self, unit: str = '') -> str:
-        """The clipping level(s) as text: '+-150 N m', '+150 N m' or '-150 and +148 N m'."""
+        """
+        Return the clipping level or levels as text.
+
+        For example '+-150 N m', '+150 N m' or '-150 and +148 N m'.
+        """
         u = f' {unit}' if unit else ''
         lo, hi = self.low, self.high
         if self.clipped_low and self.clipped_high:
@@ -102,7 +111,10 @@ def _side(parts: list[np.ndarray], extreme: float, sign: float, span: float,
 
 def clipping(x: np.ndarray | Sequence[np.ndarray], *, min_run: int = MIN_RUN,
              min_fraction: float = MIN_FRACTION) -> list[Clipping]:
-    """Saturation statistics per channel of ``x``: an (N, n) array or a sequence of them
+    """
+    Compute saturation statistics per channel.
+
+    Saturation statistics per channel of ``x``: an (N, n) array or a sequence of them
     (stretches such as segments; runs never continue from one stretch into the next).
 
     Channels that are constant or not finite everywhere count as not clipped (a constant
@@ -137,7 +149,8 @@ def check_not_clipped(u: np.ndarray | Sequence[np.ndarray], *, joint_names: Sequ
                       where: str, span: str = 'the analysed segments', field: str = 'effort',
                       unit: str = 'N m', min_run: int = MIN_RUN,
                       min_fraction: float = MIN_FRACTION) -> None:
-    """Refuse a plant input that is clipped (saturated) in ``u``.
+    """
+    Refuse a plant input that is clipped (saturated) in ``u``.
 
     ``u``: (N, n) torque per joint, or a sequence of such stretches (see :func:`clipping`);
     ``where`` names the data (e.g. 'bag: /joint_states'), ``span`` the stretch analysed,
@@ -158,8 +171,12 @@ def check_not_clipped(u: np.ndarray | Sequence[np.ndarray], *, joint_names: Sequ
 
 
 def check_band(freq_hz: np.ndarray | Sequence[float], fs: float, *, where: str) -> None:
-    """Refuse analysed frequencies at or above the Nyquist frequency ``fs / 2`` (or not
-    positive): such lines alias in data sampled at ``fs`` Hz."""
+    """
+    Refuse analysed frequencies at or above the Nyquist frequency.
+
+    Refuse analysed frequencies at or above the Nyquist frequency ``fs / 2`` (or not
+    positive): such lines alias in data sampled at ``fs`` Hz.
+    """
     f = np.asarray(freq_hz, dtype=float).reshape(-1)
     if f.size == 0:
         raise EstimationError(f'{where}: no frequencies to analyse')
@@ -180,19 +197,45 @@ def check_band(freq_hz: np.ndarray | Sequence[float], fs: float, *, where: str) 
 
 
 def check_periods(n_periods: int, *, need: int = 2, where: str, hint: str = '') -> None:
-    """Refuse fewer than ``need`` whole steady-state periods (averaging over periods and the
+    """
+    Refuse fewer than ``need`` whole steady-state periods.
+
+    Refuse fewer than ``need`` whole steady-state periods (averaging over periods and the
     noise estimate need at least two). ``hint`` is appended to the message (e.g. how to get
-    more data)."""
+    more data).
+    """
     if n_periods < need:
         raise EstimationError(f'{where}: {n_periods} whole steady-state period'
                               f'{"" if n_periods == 1 else "s"}; expected at least {need=}'
                               f'{f" — {hint}" if hint else ""}')
 
 
+def check_whole_period(drift: float, period_samples: int, *, where: str,
+                       max_drift: float = MAX_DRIFT) -> None:
+    """
+    Refuse a multisine whose period is not a whole number of samples.
+
+    Refuse a multisine whose true period is ``period_samples + drift`` samples with
+    |drift| > ``max_drift``: whole-period DFTs of it leak into the neighbouring lines (the
+    excitation was generated on another clock than the one the joint states are sampled on).
+    """
+    if abs(drift) > max_drift:
+        raise EstimationError(f'{where}: the period is {period_samples + drift:.2f} samples, '
+                              f'not a whole number (off by {abs(drift):.2f} samples per period, '
+                              f'at most {max_drift:g} allowed): whole-period DFTs would leak; '
+                              f'expected a period of whole samples — resample the recording to '
+                              f"the excitation's clock, or give the excitation if detection "
+                              f'misread it (--chirp, --multisine-period)')
+
+
 def missing_rows(*series: np.ndarray) -> np.ndarray:
-    """(N,) True where a sample is missing: NaN in any column of the (N, n) ``series`` that
+    """
+    Mark the samples missing from the given series.
+
+    (N,) True where a sample is missing: NaN in any column of the (N, n) ``series`` that
     holds data elsewhere (a column that is NaN throughout is an interface the robot does
-    not publish, not a gap)."""
+    not publish, not a gap).
+    """
     out = np.zeros(np.asarray(series[0]).shape[0], dtype=bool)
     for x in series:
         bad = ~np.isfinite(np.asarray(x, dtype=float))
@@ -205,8 +248,12 @@ def missing_rows(*series: np.ndarray) -> np.ndarray:
 
 def check_remaining(n_used: int, n_dropped: int, *, need: int, what: str, where: str,
                     dropped_at: Sequence[tuple[float, float]] = (), hint: str = '') -> None:
-    """Refuse when fewer than ``need`` ``what`` (e.g. 'periods') remain after dropping
-    ``n_dropped`` that gaps touched; the message says when the first dropped ones were."""
+    """
+    Refuse when too few periods remain after dropping those gaps touched.
+
+    Refuse when fewer than ``need`` ``what`` (e.g. 'periods') remain after dropping
+    ``n_dropped`` that gaps touched; the message says when the first dropped ones were.
+    """
     if n_used >= need:
         return
     at = ', '.join(f'{a:.3f}..{b:.3f} s' for a, b in list(dropped_at)[:4])
@@ -219,8 +266,12 @@ def check_remaining(n_used: int, n_dropped: int, *, need: int, what: str, where:
 
 def check_covers(t_first: float, t_last: float, t_start: float, t_end: float, *,
                  where: str, dt: float = 0.0, hint: str = '') -> None:
-    """Refuse a segment [t_start, t_end] that the recorded span [t_first, t_last] (sample
-    times, spacing ``dt``) does not cover; half a sample of slack at either end."""
+    """
+    Refuse a segment that the recorded span does not cover.
+
+    Refuse a segment [t_start, t_end] that the recorded span [t_first, t_last] (sample
+    times, spacing ``dt``) does not cover; half a sample of slack at either end.
+    """
     slack = 0.5 * dt
     if t_start < t_first - slack or t_end > t_last + dt + slack:
         raise EstimationError(f'{where}: segment {t_start:.3f}..{t_end:.3f} s but the data '
@@ -229,8 +280,12 @@ def check_covers(t_first: float, t_last: float, t_start: float, t_end: float, *,
 
 
 def check_rate(fs: float, design_fs: float, *, where: str, rtol: float = 1e-3) -> None:
-    """Refuse data sampled at ``fs`` when the design counts samples at ``design_fs``
-    (e.g. /joint_states decimated after the experiment): periods would not line up."""
+    """
+    Refuse data sampled at another rate than the design's.
+
+    Refuse data sampled at ``fs`` when the design counts samples at ``design_fs``
+    (e.g. /joint_states decimated after the experiment): periods would not line up.
+    """
     if not abs(fs - design_fs) <= rtol * design_fs:
         raise EstimationError(f'{where}: designed for {design_fs:.6g} Hz sampling but the '
                               f'recording is sampled at {fs:.6g} Hz; expected the design rate '
@@ -254,9 +309,14 @@ def _covered(rec) -> str:
 
 
 def check_multisine_segments(rec, segments) -> list:
-    """Band, sample rate and whole steady-state periods of descriptor multisine segments
-    (``info`` keys of :func:`frf_ident.core.excitation.procedures.multisine_procedure`); returns the
-    analysed (steady-state) effort of each segment, (N_i, n) arrays, for the clipping check."""
+    """
+    Check the descriptor multisine segments of a recording.
+
+    Band, sample rate and whole steady-state periods of descriptor multisine segments
+    (``info`` keys of :func:`frf_ident.core.excitation.procedures.multisine_procedure`);
+    returns the analysed (steady-state) effort of each segment, (N_i, n) arrays, for the
+    clipping check.
+    """
     info = segments[0].info
     dp = info['design_params']
     where = f'{EXPERIMENT} multisine design'
@@ -296,9 +356,14 @@ def check_chirp_segments(rec, segments) -> list:
 
 
 def check_descriptor_recording(rec) -> None:
-    """Every check of a recording with /frf/experiment descriptors: the multisine segments and
-    the last chirp iteration (the ones :func:`frf_ident.core.estimation.described.estimate_recording`
-    analyses), then clipping of the effort in each design's analysed samples."""
+    """
+    Run every check of a recording with /frf/experiment descriptors.
+
+    Every check of a recording with /frf/experiment descriptors: the multisine segments and
+    the last chirp iteration (the ones
+    :func:`frf_ident.core.estimation.described.estimate_recording` analyses), then clipping
+    of the effort in each design's analysed samples.
+    """
     ms = [s for s in rec.segments if s.info.get('design') == 'multisine']
     ch = [s for s in rec.segments if s.info.get('design') == 'chirp']
     designs = []

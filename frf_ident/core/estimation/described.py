@@ -1,4 +1,5 @@
-"""Closed-loop FRF estimation from a Recording (Sections 4.3, 4.4, 5.1, 7).
+"""
+Closed-loop FRF estimation from a Recording (Sections 4.3, 4.4, 5.1, 7).
 
 Works only from what a bag holds: the time series and the experiment segments. So estimation
 from a bag equals estimation from the in-memory run.
@@ -13,17 +14,17 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
-from frf_ident.core.excitation.chirp import ChirpDesign
-from frf_ident.core.estimation.spectra import (BLAResult, best_linear_approximation,
-                                       best_linear_approximation_reference, chirp_spectra,
-                                       detection_levels_from_spectra, detection_line_spectra,
-                                       frf_from_reference, frf_from_spectra, periodic_spectra)
-from frf_ident.core.estimation.checks import EXPERIMENT, check_remaining, missing_rows
+from frf_ident.core.estimation.checks import check_remaining, EXPERIMENT, missing_rows
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.estimation.spectra import (best_linear_approximation,
+                                               best_linear_approximation_reference, BLAResult,
+                                               chirp_spectra, detection_levels_from_spectra,
+                                               detection_line_spectra, frf_from_reference,
+                                               frf_from_spectra, periodic_spectra)
+from frf_ident.core.excitation.chirp import ChirpDesign
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
+import numpy as np
 
 
 def _names(joint_names: list[str]) -> tuple[list[str], list[str]]:
@@ -40,7 +41,8 @@ def _segment_arrays(rec: Recording, seg: Segment) -> dict[str, np.ndarray]:
 
 def _disturbance_at(cv: dict[str, np.ndarray], key: str, q: np.ndarray,
                     align: str) -> np.ndarray:
-    """The constant-velocity run's series to subtract (Sec. 4.4 E).
+    """
+    Return the constant-velocity run's series to subtract (Sec. 4.4 E).
 
     align 'time': sample by sample, as the paper does. 'position': per axis, the run's series
     read at the excited run's positions (the run moves monotonically, so position maps to
@@ -67,7 +69,8 @@ def _disturbance_at(cv: dict[str, np.ndarray], key: str, q: np.ndarray,
 
 
 class MultisineSpectra:
-    """DFT lines of a multisine experiment, gathered one segment at a time.
+    """
+    DFT lines of a multisine experiment, gathered one segment at a time.
 
     Each (realisation p, experiment m) segment contributes the spectra of its steady-state
     periods at the excited bins (u, y, r) and, when a constant-velocity run was added first,
@@ -87,7 +90,7 @@ class MultisineSpectra:
         self.joint_names: list[str] = []
 
     def add_constant_velocity(self, rec: Recording, seg: Segment) -> None:
-        """The constant-velocity run (Sec. 4.4 E); add it before the multisine segments."""
+        """Return the constant-velocity run (Sec. 4.4 E); add it before the multisine segments."""
         if self.spec:
             raise EstimationError('the constant-velocity run must come before the multisine '
                                   'segments it compensates')
@@ -138,10 +141,14 @@ class MultisineSpectra:
         return n_p, n_ex
 
     def used_periods(self) -> dict[int, np.ndarray]:
-        """Realisation p -> indices of its periods without missing samples in any of its
+        """
+        Return the periods of each realisation without missing samples.
+
+        Realisation p -> indices of its periods without missing samples in any of its
         experiments (period q of a MIMO realisation is one estimate made of the n_ex
         experiments' period q, so a gap in one removes it); realisations left without a
-        period are absent."""
+        period are absent.
+        """
         n_p, n_ex = self._check_complete()
         out = {}
         for p in range(n_p):
@@ -151,8 +158,12 @@ class MultisineSpectra:
         return out
 
     def dropped(self) -> dict[str, Any]:
-        """What gaps removed: the count and, per dropped period, realisation, period index and
-        times [s] of the segment whose samples were missing."""
+        """
+        Report the periods that gaps removed.
+
+        What gaps removed: the count and, per dropped period, realisation, period index and
+        times [s] of the segment whose samples were missing.
+        """
         n_p, n_ex = self._check_complete()
         used = self.used_periods()
         items = []
@@ -189,7 +200,8 @@ class MultisineSpectra:
 
     def frf(self, *, compensate: bool = True, method: str = 'reference'
             ) -> tuple[FrequencyResponse, BLAResult]:
-        """Multisine best linear approximation (eq. 14) of the gathered segments.
+        """
+        Multisine best linear approximation (eq. 14) of the gathered segments.
 
         method 'reference': P_p = (sum_q Y R^H)(sum_q U R^H)^-1 per realisation, averaged
         over p; 'plain': P[p,q] = Y U^+ (eq. 7) per period, averaged over p and q. Only the
@@ -233,8 +245,12 @@ class MultisineSpectra:
 
 def multisine_frf(rec: Recording, *, compensate: bool = True, method: str = 'reference',
                   align: str = 'position') -> tuple[FrequencyResponse, BLAResult]:
-    """Multisine best linear approximation (eq. 14) of the closed-loop data (see
-    :meth:`MultisineSpectra.frf`); ``align`` see :func:`_disturbance_at`."""
+    """
+    Estimate the multisine best linear approximation of closed-loop data.
+
+    Multisine best linear approximation (eq. 14) of the closed-loop data (see
+    :meth:`MultisineSpectra.frf`); ``align`` see :func:`_disturbance_at`.
+    """
     est = SegmentEstimator(rec.segments, align=align)
     est.add_window(rec, compensate=compensate)
     if est.multisine is None:
@@ -243,8 +259,12 @@ def multisine_frf(rec: Recording, *, compensate: bool = True, method: str = 'ref
 
 
 class ChirpSpectra:
-    """Sec. 5.1 spectra (u, y, r at the analysis frequencies) of chirp experiments, per
-    iteration, gathered one segment at a time."""
+    """
+    Gather the spectra of chirp experiments one segment at a time.
+
+    Sec. 5.1 spectra (u, y, r at the analysis frequencies) of chirp experiments, per
+    iteration, gathered one segment at a time.
+    """
 
     def __init__(self) -> None:
         self.spec: dict[int, dict[int, dict[str, np.ndarray]]] = {}
@@ -268,7 +288,8 @@ class ChirpSpectra:
 
     def frf(self, *, iteration: int | None = None, method: str = 'plain',
             path: str = 'u->y') -> FrequencyResponse:
-        """Chirp estimate of one iteration (default: the last).
+        """
+        Chirp estimate of one iteration (default: the last).
 
         path 'u->y' is the plant P (eq. 7, or reference-based with method='reference'),
         'r->u' the transfer the iteration inverts (eq. 18).
@@ -325,7 +346,8 @@ def chirp_frf(rec: Recording, *, iteration: int | None = None, method: str = 'pl
 
 
 class SegmentEstimator:
-    """Every estimate the experiment segments support, fed window by window.
+    """
+    Every estimate the experiment segments support, fed window by window.
 
     ``add_window(rec)`` takes a recording that holds some of the segments completely (the
     whole run, or one window of a long bag); segments are processed in time order with the
@@ -343,8 +365,12 @@ class SegmentEstimator:
         self.done: set[int] = set()
 
     def add_window(self, rec: Recording, *, compensate: bool = True) -> int:
-        """Process the not yet processed segments that ``rec`` overlaps (a segment it holds
-        only in part is an error); returns how many."""
+        """
+        Process the segments that a window overlaps.
+
+        Process the not yet processed segments that ``rec`` overlaps (a segment it holds
+        only in part is an error); returns how many.
+        """
         t0, t1 = float(rec.t[0]), float(rec.t[-1])
         count = 0
         for i, s in enumerate(self.segments):
@@ -363,8 +389,8 @@ class SegmentEstimator:
 
     def missing(self) -> list[Segment]:
         """Segments no window covered completely."""
-        return [s for i, s in enumerate(self.segments) if i not in self.done and
-                s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
+        return [s for i, s in enumerate(self.segments) if i not in self.done
+                and s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
 
     def results(self) -> dict[str, FrequencyResponse]:
         """Every estimate, keyed as :func:`estimate_recording` documents."""
@@ -384,15 +410,19 @@ class SegmentEstimator:
 
 def estimate_recording(rec: Recording, *, options=None, block_s: float | None = None
                        ) -> dict[str, FrequencyResponse]:
-    """Every estimate the recording supports, keyed by name: 'multisine' (reference-based,
+    """
+    Compute every estimate the recording supports.
+
+    Every estimate the recording supports, keyed by name: 'multisine' (reference-based,
     compensated when a constant-velocity run exists), 'multisine_plain',
     'multisine_uncompensated', 'chirp', 'chirp_reference'; without descriptors the
     detected ones (:func:`estimate_detected`). The data are checked first
-    (:func:`frf_ident.core.estimation.checks.check_descriptor_recording`: band, periods, clipping).
-    ``options`` (:class:`frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in a
-    recording without descriptors; a recording with descriptors refuses them. ``block_s``:
-    block length of detection (default
-    :data:`frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`)."""
+    (:func:`frf_ident.core.estimation.checks.check_descriptor_recording`: band, periods,
+    clipping). ``options`` (:class:`frf_ident.core.estimation.detected.ExcitationOptions`)
+    replace detection in a recording without descriptors; a recording with descriptors
+    refuses them. ``block_s``: block length of detection (default
+    :data:`frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`).
+    """
     check_recording(rec, options)
     est = SegmentEstimator(rec.segments)
     est.add_window(rec)
@@ -403,7 +433,7 @@ def estimate_recording(rec: Recording, *, options=None, block_s: float | None = 
 
 
 def check_recording(rec: Recording, options=None) -> None:
-    """The input checks of a recording (or one window of it) with descriptors."""
+    """Return the input checks of a recording (or one window of it) with descriptors."""
     from frf_ident.core.estimation.checks import check_descriptor_recording
     if any(s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
         if options is not None and options.given():
@@ -414,13 +444,17 @@ def check_recording(rec: Recording, options=None) -> None:
 
 def estimate_detected(rec: Recording, options=None, *, block_s: float | None = None
                       ) -> dict[str, FrequencyResponse]:
-    """Estimates of a recording without descriptors: the excitation is detected per joint
+    """
+    Estimate a recording without descriptors from the detected excitation.
+
+    Estimates of a recording without descriptors: the excitation is detected per joint
     in blocks of ``block_s`` seconds, as a streamed bag is
     (:func:`frf_ident.core.estimation.detected.estimate_in_blocks`; ``options`` replace
     detection where given) and checked; one entry 'detected/<joint>' per excited input, the
-    detection sentences in each estimate's meta['detected']."""
-    from frf_ident.core.estimation.detected import (DEFAULT_BLOCK_S, RecordingBlocks,
-                                                    estimate_in_blocks)
+    detection sentences in each estimate's meta['detected'].
+    """
+    from frf_ident.core.estimation.detected import (DEFAULT_BLOCK_S, estimate_in_blocks,
+                                                    RecordingBlocks)
     block_s = DEFAULT_BLOCK_S if block_s is None else block_s
     blocks = RecordingBlocks(rec, block_s)
     return estimate_in_blocks(blocks, options, resume=blocks.continue_from, block_s=block_s)

@@ -1,7 +1,9 @@
-"""Estimation from recordings that carry no experiment descriptors (foreign bags, imports).
+"""
+Estimation from recordings that carry no experiment descriptors (foreign bags, imports).
 
-The excitation is detected in the data (:mod:`frf_ident.core.excitation.detect`): a periodic multisine or
-an exponential chirp, on the velocity reference when the bag has one, else on the torque.
+The excitation is detected in the data (:mod:`frf_ident.core.excitation.detect`): a periodic
+multisine or an exponential chirp, on the velocity reference when the bag has one, else on
+the torque (:func:`~frf_ident.core.excitation.detect.excitation_source`).
 Each detection becomes a :class:`~frf_ident.core.recording.Segment`, and the FRF is estimated
 column by column for the excited inputs (one experiment cannot separate simultaneously excited
 inputs that share lines, so those are refused with the reason).
@@ -24,21 +26,19 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterable, Iterator
 
-import numpy as np
-
-from frf_ident.core.estimation.checks import (JOINT_STATES, check_band, check_covers,
-                                              check_not_clipped, check_periods, check_remaining,
-                                              missing_rows)
-from frf_ident.core.excitation.chirp import ChirpDesign
-from frf_ident.core.excitation.detect import (ChirpDetection, MultisineDetection,
-                                              detect_excitation, excitation_source,
-                                              multisine_at_period)
-from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
-                                       periodic_spectra)
+from frf_ident.core.estimation.checks import (check_band, check_covers, check_not_clipped,
+                                              check_periods, check_remaining, check_whole_period,
+                                              JOINT_STATES, missing_rows)
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
+                                               periodic_spectra)
+from frf_ident.core.excitation.chirp import ChirpDesign
+from frf_ident.core.excitation.detect import (ChirpDetection, detect_excitation, excitation_source,
+                                              multisine_at_period, MultisineDetection)
 from frf_ident.core.excitation.multisine import reference_frequency_set
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
+import numpy as np
 
 __all__ = ['DEFAULT_BLOCK_S', 'MIN_ADVANCE_S', 'DetectedEstimator', 'ExcitationOptions',
            'RecordingBlocks', 'check_detected_segment', 'detect_segments', 'detected_frf',
@@ -58,7 +58,8 @@ MIN_PERIODS = 2
 
 @dataclass(frozen=True)
 class ExcitationOptions:
-    """What is known about the excitation of a recording without descriptors; None: detect.
+    """
+    What is known about the excitation of a recording without descriptors; None: detect.
 
     Attributes
     ----------
@@ -68,21 +69,22 @@ class ExcitationOptions:
     chirp : (f_low, f_high) [Hz] of an exponential chirp (eq. 16); needs ``chirp_time``.
     chirp_time : (t0, t1) [s] of the sweep, counted from the first analysed sample (as the
         detection reports them).
+
     """
 
-    input: str | None = None
+    input: str | None = None  # noqa: A003
     multisine_period: float | None = None
     band: tuple[float, float] | None = None
     chirp: tuple[float, float] | None = None
     chirp_time: tuple[float, float] | None = None
 
     def given(self) -> bool:
-        """True when any option is set."""
+        """Return true when any option is set."""
         return any(v is not None for v in (self.input, self.multisine_period, self.band,
                                            self.chirp, self.chirp_time))
 
     def text(self) -> str:
-        """The given options as 'name=value' pairs."""
+        """Return the given options as 'name=value' pairs."""
         return ', '.join(f'{k}={v!r}' for k, v in vars(self).items() if v is not None)
 
     def check(self, rec: Recording) -> None:
@@ -126,7 +128,7 @@ class ExcitationOptions:
 
 
 def _given_chirp(opts: ExcitationOptions, fs: float) -> ChirpDetection:
-    """The exponential chirp f(t) = exp(a0 t + a1) through (t0, f_low) and (t1, f_high)."""
+    """Return the exponential chirp f(t) = exp(a0 t + a1) through (t0, f_low) and (t1, f_high)."""
     (f_low, f_high), (t0, t1) = opts.chirp, opts.chirp_time
     a0 = float(np.log(f_high / f_low) / (t1 - t0))
     return ChirpDetection(float(fs), float(f_low), float(f_high), float(t0), float(t1), a0,
@@ -135,7 +137,7 @@ def _given_chirp(opts: ExcitationOptions, fs: float) -> ChirpDetection:
 
 def _excitation_of(x: np.ndarray, fs: float, opts: ExcitationOptions
                    ) -> MultisineDetection | ChirpDetection:
-    """The excitation of one channel: from the options where given, else detected."""
+    """Return the excitation of one channel: from the options where given, else detected."""
     if opts.chirp is not None:
         return _given_chirp(opts, fs)
     if opts.multisine_period is not None:
@@ -156,7 +158,7 @@ def _excitation_of(x: np.ndarray, fs: float, opts: ExcitationOptions
 
 
 def _describe(det: MultisineDetection | ChirpDetection, opts: ExcitationOptions) -> str:
-    """The detection sentence, marked where options replaced detection."""
+    """Return the detection sentence, marked where options replaced detection."""
     if opts.chirp is not None:
         return (f'exponential chirp {det.f_low:.6g}-{det.f_high:.6g} Hz from t0 = '
                 f'{det.t0:.6g} s to t1 = {det.t1:.6g} s, sweep rate a0 = {det.a0:.4g} 1/s '
@@ -171,8 +173,12 @@ def _describe(det: MultisineDetection | ChirpDetection, opts: ExcitationOptions)
 
 def detect_segments(rec: Recording, options: ExcitationOptions | None = None
                     ) -> tuple[list[Segment], list[str]]:
-    """Detect the excitation per joint (or take it from ``options``); returns segments and
-    one sentence per detection."""
+    """
+    Detect the excitation per joint.
+
+    Detect the excitation per joint (or take it from ``options``); returns segments and
+    one sentence per detection.
+    """
     opts = options or ExcitationOptions()
     opts.check(rec)
     x, source = excitation_source(rec.reference, rec.effort)
@@ -211,7 +217,8 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
             i0 = det.start
             info = {'design': 'detected_multisine', 'input': j, 'period_samples':
                     det.period_samples, 'periods': det.n_periods, 'start': int(i0),
-                    'harmonics': np.asarray(det.harmonics).tolist(), 'f0': det.f0}
+                    'harmonics': np.asarray(det.harmonics).tolist(), 'f0': det.f0,
+                    'drift': float(det.drift)}
             t1 = rec.t[0] + (i0 + det.n_periods * det.period_samples) / fs
         else:
             info = {'design': 'detected_chirp', 'input': j, 'f_low': det.f_low,
@@ -224,8 +231,12 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
 
 
 def check_detected_segment(rec: Recording, seg: Segment) -> None:
-    """Band below Nyquist, at least two whole periods (multisine) or the sweep inside the
-    data (chirp), and no clipped torque in the segment: refused with one line otherwise."""
+    """
+    Check a detected segment before it is estimated.
+
+    Band below Nyquist, at least two whole periods (multisine) or the sweep inside the
+    data (chirp), and no clipped torque in the segment: refused with one line otherwise.
+    """
     info = seg.info
     name = rec.joint_names[info['input']]
     if info['design'] == 'detected_multisine':
@@ -233,6 +244,8 @@ def check_detected_segment(rec: Recording, seg: Segment) -> None:
         check_band(np.asarray(info['harmonics']) * info['f0'], rec.fs, where=what)
         check_periods(int(info['periods']), need=2, where=what,
                       hint='record more periods or give a shorter multisine period')
+        check_whole_period(float(info.get('drift', 0.0)), int(info['period_samples']),
+                           where=what)
     else:
         what = f'chirp of {name} ({seg.t_start:.3f}..{seg.t_end:.3f} s)'
         check_band([info['f_low'], info['f_high']], rec.fs, where=what)
@@ -243,7 +256,7 @@ def check_detected_segment(rec: Recording, seg: Segment) -> None:
 
 def _strongest_channel(x: np.ndarray, det: MultisineDetection | ChirpDetection,
                        fs: float) -> int:
-    """The channel with the most power at the detected excitation (lines or sweep)."""
+    """Return the channel with the most power at the detected excitation (lines or sweep)."""
     # missing samples (NaN in every channel alike) count as zero in this comparison only
     if isinstance(det, MultisineDetection):
         seg = np.nan_to_num(x[det.start:det.start + det.period_samples])
@@ -264,13 +277,15 @@ def _check_single_input(u_lines: np.ndarray, j: int, name: str) -> None:
 
 
 class DetectedEstimator:
-    """Column estimates of detected excitations, gathered block by block.
+    """
+    Column estimates of detected excitations, gathered block by block.
 
     A long recording without descriptors is cut into blocks; each block's detections are
-    added here and the same excitation (same input, same period and lines, or the same chirp
-    band) found again in a later block adds its periods: the H1 sums sum_q Y conj(U_j) and
-    sum_q |U_j|^2 and the spread of the per-period ratios (for the variance) are kept, not the
-    data. One block alone gives exactly :func:`detected_frf`.
+    added here and the same excitation (same input and period, analysed at the lines of its
+    first detection, or the same chirp band) found again in a later block adds its periods:
+    the H1 sums sum_q Y conj(U_j) and sum_q |U_j|^2 and the spread of the per-period ratios
+    (for the variance) are kept, not the data. One block alone gives exactly
+    :func:`detected_frf`.
     """
 
     def __init__(self) -> None:
@@ -281,9 +296,13 @@ class DetectedEstimator:
         self.used_until: float | None = None
 
     def add_detected(self, rec: Recording, options: ExcitationOptions | None = None) -> int:
-        """Detect the excitation in ``rec`` (:func:`detect_segments`; ``options`` replace
+        """
+        Detect, check and add the excitations in a recording.
+
+        Detect the excitation in ``rec`` (:func:`detect_segments`; ``options`` replace
         detection where given), check and add every detection; the sentences go to
-        :attr:`notes` (each once). Returns how many."""
+        :attr:`notes` (each once). Returns how many.
+        """
         segments, notes = detect_segments(rec, options)
         for seg in segments:
             check_detected_segment(rec, seg)
@@ -299,8 +318,13 @@ class DetectedEstimator:
         j = int(info['input'])
         names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{n}' for n in rec.joint_names])
         if info['design'] == 'detected_multisine':
-            key = (j, 'multisine', int(info['period_samples']), tuple(info['harmonics']))
+            # one excitation per input and period: a later block's detection may pick a
+            # slightly different set of weak lines; the first block's lines are used
+            key = (j, 'multisine', int(info['period_samples']))
             e = self.entries.get(key)
+            if e is not None:
+                seg = Segment(seg.t_start, seg.t_end, dict(info, harmonics=e['bins'].tolist()))
+                info = seg.info
             # the excitation goes on from an earlier block: no start-up transient to skip,
             # and the periods that block used are not used again
             going_on = e is not None and seg.t_start - e['t_end'] < 1.5 * info[
@@ -347,9 +371,13 @@ class DetectedEstimator:
         e['blocks'] += 1
 
     def results(self) -> dict[str, FrequencyResponse]:
-        """One FrequencyResponse per detected excitation, keyed 'detected/<input joint>'
+        """
+        Return one FrequencyResponse per detected excitation.
+
+        One FrequencyResponse per detected excitation, keyed 'detected/<input joint>'
         (a second excitation of the same joint: 'detected/<joint>#2'), the detection
-        sentences in meta['detected']."""
+        sentences in meta['detected'].
+        """
         out: dict[str, FrequencyResponse] = {}
         for e in self.entries.values():
             _check_enough(e)
@@ -399,14 +427,18 @@ def _check_enough(e: dict[str, Any]) -> None:
 def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None = None
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int,
                                   list[tuple[float, float]]]:
-    """Excited bins, the period spectra U, Y (n_q, F, n) of a detected multisine's periods
+    """
+    Compute the period spectra of a detected multisine.
+
+    Excited bins, the period spectra U, Y (n_q, F, n) of a detected multisine's periods
     without missing samples, the transient periods skipped and the (t_start, t_end) of the
     periods dropped for missing samples.
 
     The first period is skipped as start-up transient when there are at least three, unless
     the excitation was already running (``used_until``: the end [s] of the periods an
     earlier block used; periods starting before it are skipped instead, so overlapping
-    blocks never count a period twice). Only whole periods inside the data are used."""
+    blocks never count a period twice). Only whole periods inside the data are used.
+    """
     info = seg.info
     i0 = int(info.get('start', rec.index_of(seg.t_start)))
     n_per = int(info['period_samples'])
@@ -436,8 +468,12 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
 
 
 def _strong_lines(uj: np.ndarray) -> np.ndarray:
-    """The lines the input really excites (a detection may add weak leakage lines): power
-    over the periods ``uj`` (n_q, F) at least 1 % of the median line's."""
+    """
+    Select the lines the input really excites.
+
+    The lines the input really excites (a detection may add weak leakage lines): power
+    over the periods ``uj`` (n_q, F) at least 1 % of the median line's.
+    """
     pj = np.mean(np.abs(uj) ** 2, axis=0)
     return pj >= 1e-2 * np.median(pj)
 
@@ -455,9 +491,13 @@ def _chirp_lines(rec: Recording, seg: Segment) -> tuple[np.ndarray, np.ndarray, 
 
 
 def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
-    """Column j of P (all outputs / input j) from a detected excitation of input j: H1 over
+    """
+    Estimate one column of P from a detected excitation.
+
+    Column j of P (all outputs / input j) from a detected excitation of input j: H1 over
     the periods at each line, sum Y conj(U_j) / sum |U_j|^2 (multisine), or Y / U_j at the
-    Sec. 5.1 analysis frequencies (chirp)."""
+    Sec. 5.1 analysis frequencies (chirp).
+    """
     est = DetectedEstimator()
     est.add(rec, seg)
     frf = next(iter(est.results().values()))
@@ -466,15 +506,21 @@ def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
 
 
 class RecordingBlocks:
-    """The blocks of an in-memory recording, cut as a streamed bag is cut
+    """
+    Cut an in-memory recording into blocks as a streamed bag is cut.
+
+    The blocks of an in-memory recording, cut as a streamed bag is cut
     (:class:`frf_ident.bag.windows.WindowReader` with ``block_s``): from the first sample,
     ``block_s`` long, the next one from where the last used data ended
     (:meth:`continue_from`) or else right after the block.
 
     Parameters
     ----------
-    rec : the recording.
-    block_s : block length [s].
+    rec
+        The recording.
+    block_s
+        Block length [s].
+
     """
 
     def __init__(self, rec: Recording, block_s: float = DEFAULT_BLOCK_S) -> None:
@@ -486,8 +532,12 @@ class RecordingBlocks:
         self._resume: int | None = None
 
     def continue_from(self, t_s: float) -> None:
-        """Start the next block at ``t_s`` [s] if that lies more than ``MIN_ADVANCE_S`` into
-        the block just given and not beyond it."""
+        """
+        Start the next block at a given time.
+
+        Start the next block at ``t_s`` [s] if that lies more than ``MIN_ADVANCE_S`` into
+        the block just given and not beyond it.
+        """
         ns = int(round(t_s * 1e9))
         lo = self._lo
         if lo is not None and lo + int(MIN_ADVANCE_S * 1e9) < ns <= lo + self.block_ns:
@@ -508,7 +558,7 @@ class RecordingBlocks:
 
 
 def _sub_recording(rec: Recording, sl: slice) -> Recording:
-    """The samples ``sl`` of ``rec`` (views), with the segments and meta."""
+    """Return the samples ``sl`` of ``rec`` (views), with the segments and meta."""
     def cut(x):
         return None if x is None else x[sl]
     return Recording(rec.t[sl], list(rec.joint_names), rec.position[sl], rec.velocity[sl],
@@ -517,8 +567,12 @@ def _sub_recording(rec: Recording, sl: slice) -> Recording:
 
 
 def _leftover(det: DetectedEstimator, rec: Recording) -> bool:
-    """True for a block that starts where the periods of the block before ended and is too
-    short for two periods of that multisine (nothing detectable is expected there)."""
+    """
+    Tell whether a block is a leftover too short for detection.
+
+    True for a block that starts where the periods of the block before ended and is too
+    short for two periods of that multisine (nothing detectable is expected there).
+    """
     periods = [e['period_s'] for e in det.entries.values() if 'period_s' in e]
     return bool(periods and det.used_until is not None
                 and rec.t[0] >= det.used_until - 2 * rec.dt
@@ -528,7 +582,8 @@ def _leftover(det: DetectedEstimator, rec: Recording) -> bool:
 def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions | None = None,
                        *, resume: Callable[[float], None] | None = None,
                        block_s: float = DEFAULT_BLOCK_S) -> dict[str, FrequencyResponse]:
-    """Detect and estimate block by block (:class:`DetectedEstimator`).
+    """
+    Detect and estimate block by block (:class:`DetectedEstimator`).
 
     A block whose detection or checks fail is left out with a note (in each estimate's
     meta['detected']); when no block contributes, the reason is raised (the only block's,
@@ -537,10 +592,14 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
 
     Parameters
     ----------
-    blocks : recordings in time order (:class:`RecordingBlocks` or a streamed bag's windows).
-    options : :class:`ExcitationOptions` replacing detection.
-    resume : e.g. ``RecordingBlocks.continue_from``.
-    block_s : block length [s], for messages.
+    blocks
+        Recordings in time order (:class:`RecordingBlocks` or a streamed bag's windows).
+    options
+        :class:`ExcitationOptions` replacing detection.
+    resume
+        E.g. ``RecordingBlocks.continue_from``.
+    block_s
+        Block length [s], for messages.
 
     Returns
     -------
@@ -551,6 +610,7 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     ------
     EstimationError
         No block holds an estimable excitation, or gaps left too little of one.
+
     """
     det = DetectedEstimator()
     notes: list[str] = []

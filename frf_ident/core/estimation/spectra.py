@@ -1,4 +1,5 @@
-"""Non-parametric FRF estimation (Saupe & Knoblach 2015, Sections 3, 4.3 and 5.1).
+"""
+Non-parametric FRF estimation (Saupe & Knoblach 2015, Sections 3, 4.3 and 5.1).
 
 - :func:`frf_from_spectra` — eq. 7, P(w_k) = Y(w_k) U(w_k)^+ per line, with cond(U)
 - :func:`frf_from_reference` — closed-loop estimate P = (Y R^H)(U R^H)^-1 that uses the
@@ -14,23 +15,26 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from frf_ident.errors import EstimationError
 import numpy as np
 from scipy import signal
 
-from frf_ident.errors import EstimationError
-
 
 def frf_from_spectra(Y: np.ndarray, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """FRF P(w_k) = Y(w_k) U(w_k)^+ on every line (eq. 7).
+    """
+    FRF P(w_k) = Y(w_k) U(w_k)^+ on every line (eq. 7).
 
     Parameters
     ----------
-    Y : (n_freq, n_y, n_ex) output spectra, experiments stacked as columns.
-    U : (n_freq, n_u, n_ex) input spectra.
+    Y
+        (n_freq, n_y, n_ex) output spectra, experiments stacked as columns.
+    U
+        (n_freq, n_u, n_ex) input spectra.
 
     Returns
     -------
     P : (n_y, n_u, n_freq) and cond : (n_freq,) condition number of U(w_k).
+
     """
     Y = np.asarray(Y, dtype=complex)
     U = np.asarray(U, dtype=complex)
@@ -47,9 +51,10 @@ def frf_from_spectra(Y: np.ndarray, U: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return np.moveaxis(P, 0, -1), cond
 
 
-def frf_from_reference(Y: np.ndarray, U: np.ndarray, R: np.ndarray) -> tuple[np.ndarray,
-                                                                              np.ndarray]:
-    """Closed-loop FRF through the reference: P = (Y R^H)(U R^H)^-1 per line.
+def frf_from_reference(Y: np.ndarray, U: np.ndarray,
+                       R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Closed-loop FRF through the reference: P = (Y R^H)(U R^H)^-1 per line.
 
     Equivalent to P = S_yr S_ur^-1 (indirect / joint input-output method): noise that the
     controller feeds back into u is uncorrelated with r and drops out, while Y U^+ is biased
@@ -70,7 +75,8 @@ def frf_from_reference(Y: np.ndarray, U: np.ndarray, R: np.ndarray) -> tuple[np.
 
 
 def periodic_spectra(x: np.ndarray, bins: np.ndarray, axis: int = -2) -> np.ndarray:
-    """DFT coefficients of whole periods at the given bins (Sec. 4.2; mean removal is implicit).
+    """
+    DFT coefficients of whole periods at the given bins (Sec. 4.2; mean removal is implicit).
 
     ``x`` holds an integer number of samples per period along ``axis``; the result has that
     axis replaced by the bins (scaled by 1/N: a sine of amplitude A gives |X| = A/2).
@@ -83,7 +89,8 @@ def periodic_spectra(x: np.ndarray, bins: np.ndarray, axis: int = -2) -> np.ndar
 
 @dataclass
 class BLAResult:
-    """Best linear approximation (eq. 14) with its variances, all (n_y, n_u, n_freq).
+    """
+    Best linear approximation (eq. 14) with its variances, all (n_y, n_u, n_freq).
 
     ``noise_variance`` is the variance of the BLA estimate due to noise (from the spread over
     periods), ``total_variance`` that due to noise plus stochastic nonlinear contributions
@@ -100,8 +107,12 @@ class BLAResult:
 
 
 def _realisations(X, name: str, ndim: int = 4) -> list[np.ndarray]:
-    """Per-realisation arrays (n_q_p, ...) of a (n_p, n_q, ...) array or of a sequence of
-    them (realisations may keep different numbers of periods when gaps removed some)."""
+    """
+    Split an array into per-realisation arrays.
+
+    Per-realisation arrays (n_q_p, ...) of a (n_p, n_q, ...) array or of a sequence of
+    them (realisations may keep different numbers of periods when gaps removed some).
+    """
     out = [np.asarray(x, dtype=complex) for x in X]
     if not out or any(x.ndim != ndim for x in out):
         raise EstimationError(f'{name}: expected (n_p, n_q, n_freq, n, n_ex) spectra or one '
@@ -111,13 +122,15 @@ def _realisations(X, name: str, ndim: int = 4) -> list[np.ndarray]:
 
 
 def best_linear_approximation(Y, U) -> BLAResult:
-    """Multisine BLA P_l = 1/(n_p n_q) sum_p sum_q P[p,q] (eq. 14) with variances.
+    """
+    Multisine BLA P_l = 1/(n_p n_q) sum_p sum_q P[p,q] (eq. 14) with variances.
 
     Parameters
     ----------
     Y : (n_p, n_q, n_freq, n_y, n_ex) output spectra per realisation p and period q, or one
         (n_q_p, n_freq, n_y, n_ex) array per realisation (periods removed by gaps).
-    U : input spectra, shaped alike with n_u.
+    U
+        Input spectra, shaped alike with n_u.
 
     Returns
     -------
@@ -126,6 +139,7 @@ def best_linear_approximation(Y, U) -> BLAResult:
         Following Pintelon & Schoukens' robust method, the spread over q (pooled over the
         realisations, each with its own n_q) gives the noise variance and the sample
         variance over p of the P_p the total variance of the estimate.
+
     """
     Ys, Us = _realisations(Y, 'Y'), _realisations(U, 'U')
     if len(Ys) != len(Us) or any(y.shape[:2] != u.shape[:2] for y, u in zip(Ys, Us)):
@@ -141,13 +155,17 @@ def best_linear_approximation(Y, U) -> BLAResult:
 
 
 def _bla_variances(Ppq, Pp: np.ndarray):
-    """(noise, total, nonlinear) variances of the eq. 14 mean from per-period estimates Ppq
+    """
+    Compute the variances of the eq. 14 mean.
+
+    (noise, total, nonlinear) variances of the eq. 14 mean from per-period estimates Ppq
     (one (n_q_p, ...) array per realisation) and per-realisation estimates Pp (n_p, ...);
     None where fewer than two periods / realisations.
 
     The per-period variance is pooled over the realisations (sum of squares over
     sum(n_q_p - 1)); the variance of P_p is that over n_q_p, of the mean over p the sum over
-    p divided by n_p^2 (equal n_q: the usual sum_p var_q / (n_q (n_q - 1)) / n_p^2)."""
+    p divided by n_p^2 (equal n_q: the usual sum_p var_q / (n_q (n_q - 1)) / n_p^2).
+    """
     n_p = Pp.shape[0]
     nq = np.array([P.shape[0] for P in Ppq])
     noise_var = total_var = nl_var = None
@@ -163,7 +181,10 @@ def _bla_variances(Ppq, Pp: np.ndarray):
 
 
 def best_linear_approximation_reference(Y, U, R) -> BLAResult:
-    """Closed-loop BLA through the reference: P_p = (sum_q Y R^H)(sum_q U R^H)^-1, then eq. 14
+    """
+    Estimate the closed-loop BLA through the reference.
+
+    Closed-loop BLA through the reference: P_p = (sum_q Y R^H)(sum_q U R^H)^-1, then eq. 14
     over realisations.
 
     Shapes as :func:`best_linear_approximation` (arrays or one array per realisation), R with
@@ -188,7 +209,8 @@ def best_linear_approximation_reference(Y, U, R) -> BLAResult:
 
 @dataclass
 class DetectionLevels:
-    """Mean output power (per output channel) at excited, non-excited odd and even lines.
+    """
+    Mean output power (per output channel) at excited, non-excited odd and even lines.
 
     Energy at non-excited odd lines reveals odd nonlinearities (friction, stiffness,
     saturation), at even lines even ones (asymmetry, gravity-dependent effects); the noise level
@@ -215,7 +237,8 @@ class DetectionLevels:
 
 def detection_line_levels(y_periods: np.ndarray, excited_bins: np.ndarray,
                           max_bin: int) -> DetectionLevels:
-    """Levels at excited, non-excited odd and even detection lines (Sec. 4.3 remark).
+    """
+    Levels at excited, non-excited odd and even detection lines (Sec. 4.3 remark).
 
     ``y_periods`` : (n_p, n_q, N, n_y) output time series, N samples = one period.
     Lines above ``max_bin`` (the top of the band) are ignored; DC is excluded.
@@ -226,8 +249,12 @@ def detection_line_levels(y_periods: np.ndarray, excited_bins: np.ndarray,
 
 def detection_line_spectra(y_periods: np.ndarray, max_bin: int, *, axis: int = -2
                            ) -> tuple[np.ndarray, np.ndarray]:
-    """Bins 1..min(max_bin, N/2) and the DFT of whole periods there (the input of
-    :func:`detection_levels_from_spectra`; computable one segment at a time)."""
+    """
+    Compute the DFT of whole periods at the detection bins.
+
+    Bins 1..min(max_bin, N/2) and the DFT of whole periods there (the input of
+    :func:`detection_levels_from_spectra`; computable one segment at a time).
+    """
     y = np.asarray(y_periods, dtype=float)
     n = y.shape[axis]
     bins = np.arange(1, min(max_bin, n // 2) + 1)
@@ -236,8 +263,12 @@ def detection_line_spectra(y_periods: np.ndarray, max_bin: int, *, axis: int = -
 
 def detection_levels_from_spectra(Y, bins: np.ndarray,
                                   excited_bins: np.ndarray) -> DetectionLevels:
-    """Detection-line levels from period spectra ``Y`` (n_p, n_q, n_bins, n_y), or one
-    (n_q_p, n_bins, n_y) array per realisation, at ``bins``."""
+    """
+    Compute detection-line levels from period spectra.
+
+    Detection-line levels from period spectra ``Y`` (n_p, n_q, n_bins, n_y), or one
+    (n_q_p, n_bins, n_y) array per realisation, at ``bins``.
+    """
     Ys = _realisations(Y, 'Y', ndim=3)
     n_y = Ys[0].shape[2]
     Ym = np.array([y.mean(axis=0) for y in Ys])
@@ -261,7 +292,8 @@ def detection_levels_from_spectra(Y, bins: np.ndarray,
 def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
                       n_periods: float = 4.0, samples_per_period: float = 10.0,
                       t_first: float = 0.0) -> np.ndarray:
-    """One analysis frequency of the Sec. 5.1 chirp processing.
+    """
+    One analysis frequency of the Sec. 5.1 chirp processing.
 
     Takes the excerpt of ``n_periods`` periods of f_x centred on the time ``t_center`` at which
     f_x is excited, subtracts its mean, low-pass filters and downsamples it to about

@@ -1,4 +1,5 @@
-"""Detect the excitation in a measured signal: periodic multisine or exponential chirp.
+"""
+Detect the excitation in a measured signal: periodic multisine or exponential chirp.
 
 For data recorded by other tools (a robot's own bag, a CSV/MAT import) the experiment
 descriptors of ``/frf/experiment`` are missing; these detectors recover the design from the
@@ -26,14 +27,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from frf_ident.errors import EstimationError
 import numpy as np
 from scipy import fft as sfft
 from scipy import signal
 
-from frf_ident.errors import EstimationError
-
 __all__ = ['MIN_FINITE', 'ChirpDetection', 'MultisineDetection', 'detect_chirp',
-           'detect_excitation', 'detect_multisine', 'excitation_source', 'multisine_at_period']
+           'detect_excitation', 'detect_multisine', 'excitation_source', 'multisine_at_period',
+           'period_drift']
 
 #: share of finite samples a signal needs: a reference that is commanded less often than
 #: this is not the excitation source, and detection refuses sparser signals
@@ -44,7 +45,8 @@ MIN_FINITE = 0.5
 
 @dataclass
 class MultisineDetection:
-    """A periodic (multisine) excitation found in a signal.
+    """
+    A periodic (multisine) excitation found in a signal.
 
     Attributes
     ----------
@@ -58,6 +60,10 @@ class MultisineDetection:
     correlation : normalised autocorrelation at lag P (1 = identical periods).
     line_level_db : weakest excited line over the median non-excited line [dB].
     channel : column of a 2-D input that was analysed.
+    drift : how far the true period exceeds ``period_samples`` [samples] (measured from the
+        phase of the excited lines between the first and last period; 0 for a period of
+        whole samples).
+
     """
 
     fs: float
@@ -70,6 +76,7 @@ class MultisineDetection:
     correlation: float
     line_level_db: float
     channel: int = 0
+    drift: float = 0.0
     kind: str = field(default='multisine', init=False)
 
     @property
@@ -104,12 +111,14 @@ class MultisineDetection:
                 'n_periods': self.n_periods, 'start': self.start, 'f0': self.f0,
                 'harmonics': self.harmonics.tolist(), 'freq_hz': self.freq_hz.tolist(),
                 'odd': self.odd, 'correlation': self.correlation,
-                'line_level_db': self.line_level_db, 'channel': self.channel}
+                'line_level_db': self.line_level_db, 'channel': self.channel,
+                'drift': self.drift}
 
 
 @dataclass
 class ChirpDetection:
-    """An exponential chirp f(t) = exp(a0 t + a1) on [t0, t1] (eq. 16) found in a signal.
+    """
+    An exponential chirp f(t) = exp(a0 t + a1) on [t0, t1] (eq. 16) found in a signal.
 
     Times are seconds from the first sample (index 0 is t = 0).
 
@@ -122,6 +131,7 @@ class ChirpDetection:
     n_half_cycles : half cycles used in the fit (inliers).
     fit_residual : standard deviation of ln f around the fit (relative frequency error).
     channel : column of a 2-D input that was analysed.
+
     """
 
     fs: float
@@ -175,7 +185,8 @@ class ChirpDetection:
 
 def excitation_source(reference: np.ndarray | None, effort: np.ndarray
                       ) -> tuple[np.ndarray, str]:
-    """The signal to detect the excitation on and its name.
+    """
+    Return the signal to detect the excitation on and its name.
 
     The velocity reference r when it was commanded (finite in at least ``MIN_FINITE`` of the
     samples; NaN where no command was held, e.g. before the first one or in a gap) and moves
@@ -183,13 +194,16 @@ def excitation_source(reference: np.ndarray | None, effort: np.ndarray
 
     Parameters
     ----------
-    reference : (N, n) velocity reference or None.
-    effort : (N, n) motor torque.
+    reference
+        (N, n) velocity reference or None.
+    effort
+        (N, n) motor torque.
 
     Returns
     -------
     tuple
         ((N, n) array, 'velocity reference' | 'torque').
+
     """
     if reference is not None:
         r = np.asarray(reference, dtype=float)
@@ -211,8 +225,12 @@ def _bridge(x: np.ndarray, valid: np.ndarray) -> np.ndarray:
 
 
 def _periodic_fill(x: np.ndarray, valid: np.ndarray, p: int) -> np.ndarray:
-    """``x`` with each missing sample replaced by the mean of the present samples at the same
-    phase (index modulo ``p``) in the other periods: for a periodic signal its value."""
+    """
+    Fill missing samples from the same phase of other periods.
+
+    ``x`` with each missing sample replaced by the mean of the present samples at the same
+    phase (index modulo ``p``) in the other periods: for a periodic signal its value.
+    """
     if np.all(valid) or p < 1:
         return x
     n = x.size
@@ -232,9 +250,11 @@ def _periodic_fill(x: np.ndarray, valid: np.ndarray, p: int) -> np.ndarray:
 
 def _prepare(x: np.ndarray, fs: float, min_samples: int = 16
              ) -> tuple[np.ndarray, int, np.ndarray]:
-    """Validate, pick the strongest channel, bridge NaN gaps, remove the median.
+    """
+    Validate, pick the strongest channel, bridge NaN gaps, remove the median.
 
-    Returns (x, channel, valid): ``valid`` marks the samples that were finite."""
+    Returns (x, channel, valid): ``valid`` marks the samples that were finite.
+    """
     if not (np.isfinite(fs) and fs > 0):
         raise EstimationError(f'{fs=} must be a positive sample rate in Hz')
     x = np.asarray(x, dtype=float)
@@ -263,8 +283,12 @@ def _prepare(x: np.ndarray, fs: float, min_samples: int = 16
 # --------------------------------------------------------------------------- multisine
 
 def _lag_correlation(x: np.ndarray, max_lag: int) -> np.ndarray:
-    """Pearson-like autocorrelation per lag: sum x[n] x[n+k] over the overlap, normalised by
-    the energies of both overlapping parts (1 exactly for a noise-free periodic signal)."""
+    """
+    Compute a Pearson-like autocorrelation per lag.
+
+    Pearson-like autocorrelation per lag: sum x[n] x[n+k] over the overlap, normalised by
+    the energies of both overlapping parts (1 exactly for a noise-free periodic signal).
+    """
     n = x.size
     nfft = sfft.next_fast_len(2 * n, real=True)
     spec = sfft.rfft(x, nfft)
@@ -300,7 +324,8 @@ def _moving_mean(v: np.ndarray, w: int) -> np.ndarray:
 
 def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
                     ) -> tuple[int, int]:
-    """(start, n_periods) of the longest run in which x[n + P] matches x[n].
+    """
+    (start, n_periods) of the longest run in which x[n + P] matches x[n].
 
     rho[n] = mean (x[n+P] - x[n])^2 over P/16 samples, divided by the mean of x[n]^2 + x[n+P]^2
     over a whole period (constant for a periodic signal): 0 for identical periods, about 1
@@ -333,14 +358,18 @@ def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
 
 def _refine_edges(e2: np.ndarray, a: int, b: int, w: int, *,
                   floor: float) -> tuple[int, int]:
-    """Move the edges [a, b) of the smoothed run to the sample where the variance of the
+    """
+    Move the edges of a run to variance change points.
+
+    Move the edges [a, b) of the smoothed run to the sample where the variance of the
     period difference e changes (maximum-likelihood change point within +-w samples); an edge
     stays where it is unless the variance outside is at least three times the inside one.
     ``floor`` keeps rounding errors of a noise-free signal from counting as variance. A run
     that reaches the end of the data keeps its end (nothing after it to compare with; a
     start-up transient at the beginning is a change inside the data and is found).
     Isolated outliers (a held command where one was dropped) are median-filtered away first:
-    only a sustained change of variance moves an edge."""
+    only a sustained change of variance moves an edge.
+    """
     lo, hi = max(0, a - w), min(e2.size, a + w)
     k = _variance_change(_despike(e2[lo:hi]), floor, inside_after=True)
     a_new = a if k is None else lo + k
@@ -352,13 +381,17 @@ def _refine_edges(e2: np.ndarray, a: int, b: int, w: int, *,
 
 
 def _despike(e2: np.ndarray, k: int = 5) -> np.ndarray:
-    """Running median over ``k`` samples (outliers of up to k // 2 samples removed)."""
+    """Return the running median over ``k`` samples (outliers of up to k // 2 samples removed)."""
     return signal.medfilt(e2, k) if e2.size >= k else e2
 
 
 def _variance_change(e2: np.ndarray, floor: float, *, inside_after: bool) -> int | None:
-    """Index k splitting e2 into two parts of different mean (Gaussian variance change point),
-    or None if the outside part is not clearly (3x) larger than the inside part."""
+    """
+    Find the index where the variance of e2 changes.
+
+    Index k splitting e2 into two parts of different mean (Gaussian variance change point),
+    or None if the outside part is not clearly (3x) larger than the inside part.
+    """
     n = e2.size
     if n < 4:
         return None
@@ -374,7 +407,7 @@ def _variance_change(e2: np.ndarray, floor: float, *, inside_after: bool) -> int
 
 
 def _longest_run(mask: np.ndarray) -> tuple[int, int]:
-    """[a, b) of the longest run of True (0, 0 if none)."""
+    """Return [a, b) of the longest run of True (0, 0 if none)."""
     if not np.any(mask):
         return 0, 0
     d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
@@ -401,7 +434,8 @@ def _excited_lines(block: np.ndarray, min_line_db: float,
 def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
                      min_correlation: float = 0.3, min_line_db: float = 20.0,
                      dynamic_range_db: float = 80.0) -> MultisineDetection:
-    """Find a periodic multisine in ``x`` sampled at ``fs``.
+    """
+    Find a periodic multisine in ``x`` sampled at ``fs``.
 
     The period P is the smallest lag at which the normalised autocorrelation peaks (at least
     ``min_correlation`` and within reach of the highest peak), checked against its
@@ -441,18 +475,22 @@ def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
     if bins.size == 0:
         raise EstimationError(f'period {p} samples found but no DFT line stands '
                               f'{min_line_db=} dB above the rest')
+    drift = period_drift(block, bins)
     g = int(np.gcd.reduce(bins))
     if g > 1 and p % g == 0:
-        p, bins, n_per = p // g, bins // g, n_per * g
+        p, bins, n_per, drift = p // g, bins // g, n_per * g, drift / g
     return MultisineDetection(float(fs), int(p), int(n_per), int(start), float(fs) / p,
                               bins.astype(np.int64), bool(np.all(bins % 2 == 1)),
-                              float(r[min(p, r.size - 1)]), level, channel)
+                              float(r[min(p, r.size - 1)]), level, channel, drift)
 
 
 def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods: int = 2,
                         band: tuple[float, float] | None = None, min_line_db: float = 20.0,
                         dynamic_range_db: float = 80.0) -> MultisineDetection:
-    """A multisine of known ``period`` [s] in ``x``: no autocorrelation search, so it works
+    """
+    Detect a multisine of known period.
+
+    A multisine of known ``period`` [s] in ``x``: no autocorrelation search, so it works
     on data too short for :func:`detect_multisine` (two periods suffice).
 
     A period that is not a whole number of samples (e.g. rounded when printed) is snapped to
@@ -489,7 +527,35 @@ def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods:
     corr = float(a @ b / max(np.sqrt((a @ a) * (b @ b)), 1e-300))
     return MultisineDetection(float(fs), int(p), int(n_per), int(start), float(fs) / p,
                               bins.astype(np.int64), bool(np.all(bins % 2 == 1)), corr, level,
-                              channel)
+                              channel, period_drift(block, bins))
+
+
+def period_drift(block: np.ndarray, bins: np.ndarray) -> float:
+    """
+    By how many samples the true period exceeds the ``block``'s row length P.
+
+    ``block`` (n_periods, P) holds consecutive periods. A period of P + d samples shifts each
+    period d samples later on the grid: line h of the last period lags the first by the phase
+    2 pi h (n - 1) d / P. d is the weighted least-squares slope of those phases over h, the
+    phases unwrapped around a first fit on the lowest quarter of the lines. 0 with fewer
+    than two periods or no lines.
+    """
+    n, P = block.shape
+    if n < 2 or bins.size == 0:
+        return 0.0
+    X0 = np.fft.rfft(block[0])[bins]
+    XL = np.fft.rfft(block[-1])[bins]
+    w = np.abs(X0 * XL)
+    if not np.any(w > 0):
+        return 0.0
+    phi = -np.angle(XL * np.conj(X0))                 # 2 pi h D / P, D = (n - 1) d
+    h = bins.astype(float)
+    low = h <= np.quantile(h, 0.25)
+    slope = float(np.sum(w[low] * h[low] * phi[low]) / max(np.sum(w[low] * h[low] ** 2),
+                                                           1e-300))
+    phi = phi + 2 * np.pi * np.round((slope * h - phi) / (2 * np.pi))
+    slope = float(np.sum(w * h * phi) / max(np.sum(w * h ** 2), 1e-300))
+    return slope * P / (2 * np.pi) / (n - 1)
 
 
 def _refine_period(x: np.ndarray, p: int, reach: int = 2) -> int:
@@ -508,7 +574,8 @@ def _refine_period(x: np.ndarray, p: int, reach: int = 2) -> int:
 # --------------------------------------------------------------------------- chirp
 
 def _half_cycles(x: np.ndarray, fs: float, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """Zero crossings with hysteresis ``h``: returns (mid times, frequencies) of half cycles.
+    """
+    Zero crossings with hysteresis ``h``: returns (mid times, frequencies) of half cycles.
 
     The state flips only when x passes +h or -h; each flip is dated by the linearly
     interpolated zero crossing just before it, so noise below h causes no chatter.
@@ -554,7 +621,8 @@ def _robust_loglinear(t: np.ndarray, f: np.ndarray, iterations: int = 5
 
 
 def _onset(x: np.ndarray, model: np.ndarray, lo: int, hi: int, fit: slice) -> int:
-    """Index k in [lo, hi] minimising sum_{n<k} x^2 + sum_{n>=k} (x - A cos - B sin)^2.
+    """
+    Index k in [lo, hi] minimising sum_{n<k} x^2 + sum_{n>=k} (x - A cos - B sin)^2.
 
     ``model`` is (2, N) cos/sin of the fitted chirp phase; A, B are least-squares fitted on
     ``fit`` (whole cycles inside the chirp). Matching the whole waveform makes the onset
@@ -591,7 +659,8 @@ def _chirp_extent(x: np.ndarray, fs: float, a0: float, a1: float, t_first: float
 def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
                  max_scatter: float = 0.08, min_inliers: float = 0.7,
                  hysteresis: float = 0.3) -> ChirpDetection:
-    """Find an exponential chirp f(t) = exp(a0 t + a1) (eq. 16) in ``x`` sampled at ``fs``.
+    """
+    Find an exponential chirp f(t) = exp(a0 t + a1) (eq. 16) in ``x`` sampled at ``fs``.
 
     Half cycles between zero crossings (hysteresis ``hysteresis`` times the 99th percentile of
     |x|) give f = 1 / (2 duration) at their mid times; a robust fit of ln f over t gives a0, a1.
@@ -631,7 +700,8 @@ def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
 
 def detect_excitation(x: np.ndarray, fs: float, **kwargs: Any
                       ) -> MultisineDetection | ChirpDetection:
-    """Detect a periodic multisine, else an exponential chirp, in ``x`` sampled at ``fs``.
+    """
+    Detect a periodic multisine, else an exponential chirp, in ``x`` sampled at ``fs``.
 
     The result's ``kind`` ('multisine' or 'chirp') says which was found and ``describe()``
     says what. ``kwargs`` may hold ``min_periods`` for the multisine detector. Raises
