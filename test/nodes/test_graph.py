@@ -1,4 +1,5 @@
-"""The node graph as separate processes over DDS on loopback (each test on its own domain).
+"""
+The node graph as separate processes over DDS on loopback (each test on its own domain).
 
 - chirp iteration via the service + multisine experiment: FRF = offline run_identification
   + estimate_recording within 0.1 dB;
@@ -9,20 +10,17 @@
 from __future__ import annotations
 
 import json
-import os
-import random
+from pathlib import Path
 import select
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
+from frf_ident.app.graph import Graph
+from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 import numpy as np
 import pytest
-
-from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
-from frf_ident.app.graph import Graph, graph_env
 
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / 'config' / 'model_3axis.yaml'
@@ -107,7 +105,7 @@ KILL_AFTER = 1000      # references seen before the plant is killed
 
 
 def _observer(env, tag_file: Path) -> subprocess.Popen:
-    code = f'''
+    code = f"""
 import sys, time, threading, json
 from frf_ident import middleware as mw
 node = mw.create_node('kill_observer')
@@ -124,7 +122,7 @@ print('ready', flush=True)
 mw.spin(node, stop)
 open({str(tag_file)!r}, 'w').write(json.dumps(log))
 mw.shutdown()
-'''
+"""
     return subprocess.Popen([sys.executable, '-c', code], env=env, stdin=subprocess.PIPE,
                             stdout=subprocess.PIPE, text=True, cwd=str(ROOT))
 
@@ -197,7 +195,7 @@ def test_estimator_signal_finalises_bag(tmp_path):
         g = Graph(out, model=MODEL, nodes=('estimator_node',))
         g.start()
         n = 3000
-        code = f'''
+        code = f"""
 import time
 from frf_ident import middleware as mw
 node = mw.create_node('fake_plant')
@@ -215,7 +213,7 @@ for k in range({n}):
 print('sent', flush=True)
 time.sleep(0.5)
 mw.shutdown()
-'''
+"""
         pub = subprocess.Popen([sys.executable, '-c', code], env=g.env, stdout=subprocess.PIPE,
                                text=True, cwd=str(ROOT))
         assert pub.stdout.readline().strip() == 'sent'
