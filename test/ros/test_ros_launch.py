@@ -152,7 +152,7 @@ def test_launch_sim(ros_env, prefix, tmp_path):
     proc = _launch(env, cwd, f'bag:={bag}')
     log = []
     try:
-        nodes = ['plant_node', 'controller_node', 'excitation_node', 'estimator_node']
+        nodes = ['plant_node', 'excitation_node', 'estimator_node']
         names = obs.names(nodes)
         assert sorted(names) == sorted(nodes), names          # no duplicates, nothing else
         listed = subprocess.run(['ros2', 'node', 'list', '--no-daemon'], env=env, text=True,
