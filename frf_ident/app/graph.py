@@ -141,7 +141,7 @@ class Graph:
         self.env = graph_env(self.domain_id, middleware=None if per_node else middleware)
         self.middleware = self.env[mw.ENV_BACKEND]
         #: backend of each node process (a dict ``middleware`` mixes rclpy and DDS nodes)
-        self.node_middleware = {n: per_node.get(n, self.middleware) for n in nodes}
+        self.node_middleware = {n: per_node.get(n, self.middleware) for n in self.nodes}
         self.robot = str(robot or model or '')
         self.say = log or (lambda m: None)
         # lockstep is the simulation's mode; free-running runs on wall time like a robot
