@@ -85,7 +85,9 @@ class Estimator:
         # stamp are needed: no deserialise + serialise per message (the recorder is the graph's
         # busiest node); joint states stay messages (lockstep rewrites their effort)
         raw = {'raw': True} if mw.backend_name() == 'rclpy' else {}
-        node.create_subscription(mw.msg(JS), t['joint_states_topic'], self._on_js, deep)
+        raw['drain'] = True     # every queued message per wake (rclpy takes one per wait)
+        node.create_subscription(mw.msg(JS), t['joint_states_topic'], self._on_js, deep,
+                                 drain=True)
         node.create_subscription(mw.msg(JS), t['excitation_topic'], self._on_exc, deep, **raw)
         node.create_subscription(mw.msg(F64), t['velocity_topic'], self._on_vel, deep, **raw)
         node.create_subscription(mw.msg(F64), t['effort_topic'], self._on_eff, deep, **raw)
