@@ -23,6 +23,8 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 BACKEND_NAME = 'rclpy'
+#: a draining subscription takes at most this many more messages per wake
+DRAIN_BATCH = 64
 #: what rclpy raises for a parameter value of the wrong type or an invalid one
 PARAMETER_ERRORS: tuple = (ParameterException, InvalidParameterTypeException,
                            InvalidParameterValueException)
@@ -150,7 +152,7 @@ class Node(RclpyNode):
         def draining(msg: Any) -> None:
             callback(msg)
             sub = holder[0]
-            while True:
+            for _ in range(DRAIN_BATCH):     # bounded: the other subscriptions get their turn
                 with sub.handle:
                     got = sub.handle.take_message(sub.msg_type, sub.raw)
                 if got is None:
