@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-Launch the frf_ident nodes: plant, controller (sim only), excitation, estimator.
+Launch the frf_ident nodes: plant with its velocity PI (sim only), excitation, estimator.
 
     ros2 launch frf_ident frf_ident.launch.py model:=/path/model.yaml bag:=/tmp/run1
     ros2 service call /frf/run_multisine std_srvs/srv/Trigger     # answers at once
@@ -20,8 +20,8 @@ Launch the frf_ident nodes: plant, controller (sim only), excitation, estimator.
 
 Arguments: ``model`` (model file; '' = the package's default), ``bag`` (bag directory the
 estimator creates; '' = ./frf_bag_<date>_<time>), ``sim`` (true: simulated plant and
-controller in lockstep on sim time; false: a real robot, the nodes run free on wall time and
-the robot's joint_state_broadcaster and velocity controller take the plant's place),
+its PI in lockstep on sim time; false: a real robot, the nodes run free on wall time and the
+robot's joint_state_broadcaster and velocity controller take the plant's place),
 ``use_sim_time`` (default: the value of ``sim``). Parameters come from the package's
 config/frf_ident.yaml; ``lockstep`` always equals ``sim``.
 """
@@ -37,7 +37,7 @@ from launch_ros.parameter_descriptions import ParameterValue
 
 
 def generate_launch_description():
-    """Four nodes, one per process, each with its own name."""
+    """Return plant (sim only), excitation and estimator, one per process and name."""
     params = os.path.join(get_package_share_directory('frf_ident'), 'config', 'frf_ident.yaml')
     sim = LaunchConfiguration('sim')
     common = [params, {
@@ -47,6 +47,7 @@ def generate_launch_description():
     bag = {'bag': ParameterValue(LaunchConfiguration('bag'), value_type=str)}
 
     def node(executable, extra=(), condition=None):
+        """Launch one node of the package under its own name."""
         return Node(package='frf_ident', executable=executable, name=executable,
                     parameters=common + list(extra), output='screen', condition=condition)
 
@@ -57,8 +58,8 @@ def generate_launch_description():
         DeclareLaunchArgument('use_sim_time', default_value=sim,
                               description='default: the value of sim'),
         DeclareLaunchArgument('bag', default_value='', description='bag directory'),
-        node('plant_node', condition=IfCondition(sim)),
-        node('controller_node', condition=IfCondition(sim)),
+        # simulation: the plant hosts the velocity PI (as ros2_control hosts its controllers)
+        node('plant_node', [{'velocity_control': True}], condition=IfCondition(sim)),
         node('excitation_node'),
         node('estimator_node', [bag]),
     ])

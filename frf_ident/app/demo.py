@@ -1,7 +1,8 @@
 """The main job end to end: the node graph on the simulated robot, estimation, diagnosis.
 
-Thin orchestration of :func:`frf_ident.app.graph.run_graph` (node processes over DDS on
-loopback), :func:`frf_ident.app.estimate.estimate_bag` and
+Thin orchestration of :func:`frf_ident.app.graph.run_graph` (node processes on loopback: rclpy
+when ROS 2 is sourced, else the DDS backend; on ROS_DOMAIN_ID when it is set, so ``ros2 topic
+echo`` in the same shell sees the run), :func:`frf_ident.app.estimate.estimate_bag` and
 :func:`frf_ident.app.diagnose.diagnose`.
 """
 from __future__ import annotations

@@ -36,7 +36,11 @@ from frf_ident.io.share import share_dir, SOURCE_ROOT
 import numpy as np
 import yaml
 
+#: free-running: the PI in its own node, as a robot's velocity loop
 NODES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node')
+#: lockstep simulation: the plant hosts the PI (``velocity_control``), as ros2_control hosts its
+#: controllers beside the hardware, so no plant -> controller -> plant round trip per sample
+LOCKSTEP_NODES = ('plant_node', 'excitation_node', 'estimator_node')
 
 
 #: random domains (when neither domain_id nor ROS_DOMAIN_ID is given) come from this range
@@ -124,9 +128,10 @@ class Graph:
                  robot: Optional[str | Path] = None, multisine: Any = None, chirp: Any = None,
                  lockstep: bool = True, domain_id: Optional[int] = None,
                  params: Optional[dict[str, dict[str, Any]]] = None,
-                 log: Any = None, nodes: Sequence[str] = NODES,
+                 log: Any = None, nodes: Optional[Sequence[str]] = None,
                  middleware: Optional[str | dict[str, str]] = None) -> None:
-        self.nodes = tuple(nodes)
+        self.nodes = tuple(nodes if nodes is not None else
+                           (LOCKSTEP_NODES if lockstep else NODES))
         self.out = Path(out_dir)
         self.out.mkdir(parents=True, exist_ok=True)
         self.bag = self.out / 'bag'
@@ -136,7 +141,7 @@ class Graph:
         self.env = graph_env(self.domain_id, middleware=None if per_node else middleware)
         self.middleware = self.env[mw.ENV_BACKEND]
         #: backend of each node process (a dict ``middleware`` mixes rclpy and DDS nodes)
-        self.node_middleware = {n: per_node.get(n, self.middleware) for n in nodes}
+        self.node_middleware = {n: per_node.get(n, self.middleware) for n in self.nodes}
         self.robot = str(robot or model or '')
         self.say = log or (lambda m: None)
         # lockstep is the simulation's mode; free-running runs on wall time like a robot
@@ -149,7 +154,8 @@ class Graph:
             exc.update(_cfg_params('chirp', chirp))
         self.max_iterations = int(chirp.max_iterations) if chirp is not None else 0
         self.run_multisine = multisine is not None
-        sections = {'/**': common, 'plant_node': {}, 'controller_node': {},
+        plant = {'velocity_control': bool(lockstep and 'controller_node' not in self.nodes)}
+        sections = {'/**': common, 'plant_node': plant, 'controller_node': {},
                     'excitation_node': exc,
                     'estimator_node': {'bag': str(self.bag), 'output_dir': str(self.frf_dir)}}
         for name, extra in (params or {}).items():

@@ -687,7 +687,8 @@ class Node:
         return self._add(self._publishers, Publisher(self, msg_cls, topic, as_qos_spec(qos)))
 
     def create_subscription(self, msg_cls: type, topic: str, callback: Callable[[Any], None],
-                            qos: 'QosSpec | int') -> Subscription:
+                            qos: 'QosSpec | int', *, drain: bool = True) -> Subscription:
+        # drain: accepted for the rclpy backend's sake; here every wake takes a whole batch
         return self._add(self._subscriptions,
                          Subscription(self, msg_cls, topic, callback, as_qos_spec(qos)))
 

@@ -93,7 +93,8 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
 
 
 def control_qos(lockstep: bool) -> Any:
-    """QoS of what a node acts on (joint states, commands).
+    """
+    Return the QoS of what a node acts on (joint states, commands).
 
     Lockstep: deep (every sample is consumed in order). Free-running: the newest only, as in a
     real-time loop: a node that fell behind acts on the present, never works through a backlog

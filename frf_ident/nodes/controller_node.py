@@ -22,19 +22,54 @@ from frf_ident.nodes import common as c
 import numpy as np
 
 
+class VelocityLoop:
+    """
+    The model file's velocity PI with the node's input and output rules.
+
+    References of the wrong length count as zero (logged), non-finite entries as zero; the
+    torque is always within +-torque_limit, and a non-finite torque becomes zero. Used by this
+    node and by ``plant_node`` when it hosts the PI (``velocity_control: true``).
+    """
+
+    def __init__(self, node: Any, model_path: str) -> None:
+        from frf_ident.io.model_file import load_model
+        self.node = node
+        _model, robot, self.ctrl = load_model(model_path or None)
+        self.joints = list(robot.joint_names)
+        self.n = len(self.joints)
+        self.ctrl.torque_limit = np.minimum(self.ctrl.torque_limit, robot.torque_limits())
+        self.ctrl.copy().step(np.zeros(self.n), np.zeros(self.n))   # load the compiled PI now
+
+    def reference(self, data: Any) -> np.ndarray:
+        """Return the sanitised velocity reference of a command message's data."""
+        r = np.asarray(data, dtype=float)
+        if r.shape != (self.n,):
+            self.node.get_logger().error(f'velocity command has {r.size} values for {self.n} '
+                                         'joints; using zero')
+            return np.zeros(self.n)
+        if not np.all(np.isfinite(r)):
+            r = np.where(np.isfinite(r), r, 0.0)
+        return r
+
+    def torque(self, r: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Return the PI torque for reference ``r`` and measured velocity ``y``."""
+        u = self.ctrl.step(r, y)
+        lim = self.ctrl.torque_limit
+        u = np.minimum(np.maximum(u, -lim), lim)   # enforced whatever the PI state
+        if not all(map(math.isfinite, u)):
+            u = np.zeros(self.n)
+        return u
+
+
 class ControllerNode:
     def __init__(self, node: Any) -> None:
-        from frf_ident.io.model_file import load_model
         self.node = node
         model_path = c.param(node, 'model', '')
         self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
         c.refuse_lockstep_without_sim(node, self.lockstep)
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic'))
-        model, robot, self.ctrl = load_model(model_path or None)
-        self.joints = list(robot.joint_names)
-        self.n = len(self.joints)
-        self.ctrl.torque_limit = np.minimum(self.ctrl.torque_limit, robot.torque_limits())
-        self.ctrl.copy().step(np.zeros(self.n), np.zeros(self.n))   # load the compiled PI now
+        self.loop = VelocityLoop(node, model_path)
+        self.ctrl, self.joints, self.n = self.loop.ctrl, self.loop.joints, self.loop.n
         F64 = mw.msg('std_msgs/msg/Float64MultiArray')
         self.cmd = F64(data=[0.0] * self.n)
         self.pub = node.create_publisher(F64, t['effort_topic'], mw.qos_default(c.DEEP))
@@ -50,14 +85,7 @@ class ControllerNode:
                                  self._on_state, c.control_qos(self.lockstep))
 
     def _ref(self, data: Any) -> np.ndarray:
-        r = np.asarray(data, dtype=float)
-        if r.shape != (self.n,):
-            self.node.get_logger().error(f'velocity command has {r.size} values for {self.n} '
-                                         'joints; using zero')
-            return np.zeros(self.n)
-        if not np.all(np.isfinite(r)):
-            r = np.where(np.isfinite(r), r, 0.0)
-        return r
+        return self.loop.reference(data)
 
     def _on_ref(self, msg: Any) -> None:
         r = self._ref(msg.data)
@@ -96,12 +124,7 @@ class ControllerNode:
             self.pending = y
 
     def _control(self, r: np.ndarray, y: np.ndarray) -> None:
-        u = self.ctrl.step(r, y)
-        lim = self.ctrl.torque_limit
-        u = np.minimum(np.maximum(u, -lim), lim)   # enforced whatever the PI state
-        if not all(map(math.isfinite, u)):
-            u = np.zeros(self.n)
-        self.cmd.data = u.tolist()
+        self.cmd.data = self.loop.torque(r, y).tolist()
         self.pub.publish(self.cmd)
 
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 from collections import deque
 import json
 from pathlib import Path
+import struct
 import threading
 import time
 from typing import Any, Optional, Sequence
@@ -34,6 +35,18 @@ from frf_ident.nodes import common as c
 
 JS, F64 = 'sensor_msgs/msg/JointState', 'std_msgs/msg/Float64MultiArray'
 STR = 'std_msgs/msg/String'
+
+
+def _cdr(msg: Any) -> bytes:
+    """Return the CDR bytes of a message (or the bytes of a raw subscription as they are)."""
+    return msg if isinstance(msg, bytes) else c.to_cdr(msg)
+
+
+def _header_stamp_ns(data: bytes) -> int:
+    """Return header.stamp [ns] of a serialised message that starts with a std_msgs/Header."""
+    little = data[1] & 1      # encapsulation: CDR_LE = 0x0001, CDR_BE = 0x0000
+    sec, nanosec = struct.unpack_from('<iI' if little else '>iI', data, 4)
+    return sec * 1_000_000_000 + nanosec
 
 
 class Estimator:
@@ -68,10 +81,16 @@ class Estimator:
         self.estimated = 0
         self.lock = threading.Lock()
         deep = mw.qos_default(c.DEEP)
-        node.create_subscription(mw.msg(JS), t['joint_states_topic'], self._on_js, deep)
-        node.create_subscription(mw.msg(JS), t['excitation_topic'], self._on_exc, deep)
-        node.create_subscription(mw.msg(F64), t['velocity_topic'], self._on_vel, deep)
-        node.create_subscription(mw.msg(F64), t['effort_topic'], self._on_eff, deep)
+        # rclpy hands over the CDR bytes themselves (raw=True) where only bytes and the header
+        # stamp are needed: no deserialise + serialise per message (the recorder is the graph's
+        # busiest node); joint states stay messages (lockstep rewrites their effort)
+        raw = {'raw': True} if mw.backend_name() == 'rclpy' else {}
+        raw['drain'] = True     # every queued message per wake (rclpy takes one per wait)
+        node.create_subscription(mw.msg(JS), t['joint_states_topic'], self._on_js, deep,
+                                 drain=True)
+        node.create_subscription(mw.msg(JS), t['excitation_topic'], self._on_exc, deep, **raw)
+        node.create_subscription(mw.msg(F64), t['velocity_topic'], self._on_vel, deep, **raw)
+        node.create_subscription(mw.msg(F64), t['effort_topic'], self._on_eff, deep, **raw)
         node.create_subscription(mw.msg(STR), t['experiment_topic'], self._on_exp,
                                  mw.qos_transient_local(100))
 
@@ -101,7 +120,7 @@ class Estimator:
             self._maybe_estimate()
 
     def _on_eff(self, msg: Any) -> None:
-        data = c.to_cdr(msg)
+        data = _cdr(msg)
         if not self.lockstep:
             self._write(self.t['effort_topic'], F64, max(self.last_js, 0), data)
         elif self.js_stamps:
@@ -110,15 +129,18 @@ class Estimator:
             self.eff_wait.append(data)
 
     def _on_exc(self, msg: Any) -> None:
-        s = c.stamp_ns(msg)
-        self._write(self.t['excitation_topic'], JS, s, c.to_cdr(msg))
+        if isinstance(msg, bytes):
+            data, s = msg, _header_stamp_ns(msg)
+        else:
+            data, s = c.to_cdr(msg), c.stamp_ns(msg)
+        self._write(self.t['excitation_topic'], JS, s, data)
         if self.cmd_wait:
             self._write(self.t['velocity_topic'], F64, s, self.cmd_wait.popleft())
         else:
             self.exc_stamps.append(s)
 
     def _on_vel(self, msg: Any) -> None:
-        data = c.to_cdr(msg)
+        data = _cdr(msg)
         if self.exc_stamps:
             self._write(self.t['velocity_topic'], F64, self.exc_stamps.popleft(), data)
         else:

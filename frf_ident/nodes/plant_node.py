@@ -39,7 +39,12 @@ class PlantNode:
         self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
         self.idle_republish_s = float(c.param(node, 'idle_republish_s', 0.2))
         self.clock_every = max(1, int(c.param(node, 'clock_every', 10)))
-        t = c.topics(node, ('joint_states_topic', 'effort_topic', 'clock_topic'))
+        self.velocity_control = bool(c.param(node, 'velocity_control', False))
+        if self.velocity_control and not self.lockstep:
+            raise c.Refused('velocity_control: true (the PI inside the plant) needs lockstep: '
+                            'true; free-running, start controller_node')
+        t = c.topics(node, ('joint_states_topic', 'effort_topic', 'clock_topic',
+                            'velocity_topic'))
         model, _robot, ctrl = load_model(model_path or None)
         self.plant = load_plant(plant_spec or None, model)
         self.plant.reset()
@@ -63,8 +68,22 @@ class PlantNode:
         self.js_pub = node.create_publisher(JointState, t['joint_states_topic'],
                                             mw.qos_default(c.DEEP))
         self.clock_pub = node.create_publisher(Clock, t['clock_topic'], mw.qos_clock())
-        node.create_subscription(mw.msg('std_msgs/msg/Float64MultiArray'), t['effort_topic'],
-                                 self._on_command, c.control_qos(self.lockstep))
+        F64 = mw.msg('std_msgs/msg/Float64MultiArray')
+        if self.velocity_control:
+            # the PI runs here, as ros2_control runs its controllers beside the hardware: no
+            # plant -> controller -> plant round trip per sample; the torque still goes out
+            # on the effort topic (for the recorder) before the joint state it produced
+            from frf_ident.nodes.controller_node import VelocityLoop
+            self.loop = VelocityLoop(node, model_path)
+            self.y = v0.copy()
+            self.cmd = F64(data=[0.0] * self.n)
+            self.effort_pub = node.create_publisher(F64, t['effort_topic'],
+                                                    mw.qos_default(c.DEEP))
+            node.create_subscription(F64, t['velocity_topic'], self._on_reference,
+                                     mw.qos_default(c.DEEP))
+        else:
+            node.create_subscription(F64, t['effort_topic'], self._on_command,
+                                     c.control_qos(self.lockstep))
         self.last_pub = 0.0
         if self.lockstep:
             self._publish()
@@ -85,11 +104,20 @@ class PlantNode:
     def _advance(self, torque: Any) -> None:
         q, v, e = self.plant.step(torque)
         self.k += 1
+        if self.velocity_control:
+            self.y = np.asarray(v, dtype=float)
         js = self.js
         js.position = q.tolist() if hasattr(q, 'tolist') else list(q)
         js.velocity = v.tolist() if hasattr(v, 'tolist') else list(v)
         js.effort = e.tolist() if hasattr(e, 'tolist') else list(e)
         self._publish()
+
+    def _on_reference(self, msg: Any) -> None:
+        """Lockstep with the PI inside: one sample per velocity reference."""
+        u = self.loop.torque(self.loop.reference(msg.data), self.y)
+        self.cmd.data = u.tolist()
+        self.effort_pub.publish(self.cmd)
+        self._advance(u)
 
     def _on_command(self, msg: Any) -> None:
         data = msg.data

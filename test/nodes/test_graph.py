@@ -1,4 +1,5 @@
-"""The node graph as separate processes over DDS on loopback (each test on its own domain).
+"""
+The node graph as separate processes over DDS on loopback (each test on its own domain).
 
 - chirp iteration via the service + multisine experiment: FRF = offline run_identification
   + estimate_recording within 0.1 dB;
@@ -9,20 +10,17 @@
 from __future__ import annotations
 
 import json
-import os
-import random
+from pathlib import Path
 import select
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
+from frf_ident.app.graph import Graph
+from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 import numpy as np
 import pytest
-
-from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
-from frf_ident.app.graph import Graph, graph_env
 
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / 'config' / 'model_3axis.yaml'
@@ -107,7 +105,7 @@ KILL_AFTER = 1000      # references seen before the plant is killed
 
 
 def _observer(env, tag_file: Path) -> subprocess.Popen:
-    code = f'''
+    code = f"""
 import sys, time, threading, json
 from frf_ident import middleware as mw
 node = mw.create_node('kill_observer')
@@ -124,19 +122,36 @@ print('ready', flush=True)
 mw.spin(node, stop)
 open({str(tag_file)!r}, 'w').write(json.dumps(log))
 mw.shutdown()
-'''
+"""
     return subprocess.Popen([sys.executable, '-c', code], env=env, stdin=subprocess.PIPE,
                             stdout=subprocess.PIPE, text=True, cwd=str(ROOT))
 
 
 def test_kill_plant(tmp_path):
+    # A stale-measurement abort before the kill (a 30 ms stall of a loaded 2-core machine) is
+    # the watchdog doing its job, not the property under test: try again, at most 3 times.
+    for attempt in range(3):
+        if _kill_plant(tmp_path / f'attempt{attempt}'):
+            return
+    pytest.fail('the watchdog aborted before the kill in 3 attempts (machine too loaded)')
+
+
+def _kill_plant(tmp_path):
     from frf_ident.bag import read_recording
+    # On the DDS backend: the zero reference comes stale_s + abort_ramp_s after the last joint
+    # state the excitation node processed. Under rclpy on a loaded 2-core machine the node
+    # still works through up to `lookahead` queued joint states after the kill (measured
+    # 114-154 ms from kill to zero), so the 50 ms figure is the DDS backend's.
+    tmp_path.mkdir()
     g = Graph(tmp_path, model=MODEL, multisine=MultisineConfig(
         n_realisations=1, n_periods=2, resolution_hz=1.0, compensate=False),
-        params={'excitation_node': {'stale_s': 0.03}})   # + 10 ms ramp: < 50 ms
+        params={'excitation_node': {'stale_s': 0.03}},   # + 10 ms ramp: < 50 ms
+        middleware='dds')
     g.start()
     obs_file = tmp_path / 'observed.json'
-    obs = _observer(g.env, obs_file)
+    # the observer on the DDS backend whatever the graph runs on: it must keep up with the
+    # stream (its receive time is the measurement), and the fastest Python subscriber does
+    obs = _observer(dict(g.env, FRF_IDENT_MIDDLEWARE='dds'), obs_file)
     assert obs.stdout.readline().strip() == 'ready'
     drv = g.driver(multisine=True, iterations=0)
     try:
@@ -144,6 +159,9 @@ def test_kill_plant(tmp_path):
         # never wait forever: a watchdog abort before that leaves the observer silent
         ready, _, _ = select.select([obs.stdout], [], [], 60.0)
         if not ready:
+            early = 'stale' in (tmp_path / 'excitation_node.log').read_text()
+            if early:
+                return False
             pytest.fail('no 1000 references within 60 s; excitation log: '
                         + (tmp_path / 'excitation_node.log').read_text()[-400:])
         assert obs.stdout.readline().strip() == 'running'
@@ -167,6 +185,7 @@ def test_kill_plant(tmp_path):
     rec, timing = read_recording(bag)
     assert rec.t.size > 300
     assert 'aborted' in (tmp_path / 'excitation_node.log').read_text()
+    return True
 
 
 def test_estimator_signal_finalises_bag(tmp_path):
@@ -176,7 +195,7 @@ def test_estimator_signal_finalises_bag(tmp_path):
         g = Graph(out, model=MODEL, nodes=('estimator_node',))
         g.start()
         n = 3000
-        code = f'''
+        code = f"""
 import time
 from frf_ident import middleware as mw
 node = mw.create_node('fake_plant')
@@ -194,7 +213,7 @@ for k in range({n}):
 print('sent', flush=True)
 time.sleep(0.5)
 mw.shutdown()
-'''
+"""
         pub = subprocess.Popen([sys.executable, '-c', code], env=g.env, stdout=subprocess.PIPE,
                                text=True, cwd=str(ROOT))
         assert pub.stdout.readline().strip() == 'sent'

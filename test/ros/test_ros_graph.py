@@ -15,8 +15,8 @@
 The node graph on real rclpy: end to end, against the DDS backend, and mixed graphs.
 
 One short lockstep multisine (16 s of samples) per graph. Lockstep is deterministic, so the
-rclpy graph, the DDS-backend graph and the two mixed graphs (rclpy plant + controller with DDS
-excitation + estimator, and the reverse) must record the same bag: the FRFs agree to 1e-6 dB.
+rclpy graph, the DDS-backend graph and the two mixed graphs (rclpy plant with DDS excitation +
+estimator, and the reverse) must record the same bag: the FRFs agree to 1e-6 dB.
 """
 import json
 
