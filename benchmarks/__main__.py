@@ -334,6 +334,7 @@ def bench_nodes() -> list[tuple[str, str, str, str]]:
     from benchmarks.graph import rows
     return rows()
 
+
 SECTIONS['replay'] = __import__('benchmarks.replay_properties', fromlist=['_']).bench_replay
 
 

@@ -240,13 +240,12 @@ class _FlushingMcapWriter(McapWriter):
         self.bio.flush()
         self._last_flush = time.monotonic()
 
-
     def close(self, version: int, metadata: str) -> None:
         super().close(version, _with_distro(metadata))
 
 
 def _with_distro(metadata: str) -> str:
-    """rosbags writes ``ros_distro: rosbags``; name the sourced ROS 2 distro when there is one."""
+    """Rosbags writes ``ros_distro: rosbags``; name the sourced ROS 2 distro when there is one."""
     distro = os.environ.get('ROS_DISTRO', '').strip()
     return metadata.replace('ros_distro: rosbags', f'ros_distro: {distro}') if distro else metadata
 

@@ -1,4 +1,5 @@
-"""Middleware layer: the same node code on rclpy (ROS 2 Jazzy) or on plain Cyclone DDS.
+"""
+Middleware layer: the same node code on rclpy (ROS 2 Jazzy) or on plain Cyclone DDS.
 
 The backend is rclpy when ``import rclpy`` works, otherwise the Cyclone DDS backend
 (:mod:`frf_ident.middleware.dds_backend`), which speaks ROS 2's wire conventions so a ROS 2 graph
@@ -20,13 +21,14 @@ from types import ModuleType
 from typing import Any, Optional, Sequence
 
 from frf_ident.middleware.params import load_params_file, parse_ros_args, strip_ros_args
-from frf_ident.middleware.qos import (QosSpec, qos_clock, qos_default, qos_sensor_data,
-                                      qos_transient_local)
+from frf_ident.middleware.qos import (qos_clock, qos_default, qos_sensor_data, qos_transient_local,
+                                      QosSpec)
 
 __all__ = [
-    'READY', 'QosSpec', 'backend', 'backend_name', 'create_node', 'init', 'load_params_file', 'msg', 'ok',
-    'parameter_errors', 'parse_ros_args', 'qos_clock', 'qos_default', 'qos_sensor_data', 'qos_transient_local',
-    'shutdown', 'spin', 'spin_once', 'srv', 'strip_ros_args',
+    'READY', 'QosSpec', 'backend', 'backend_name', 'create_node', 'init', 'load_params_file',
+    'msg', 'ok', 'parameter_errors', 'parse_ros_args', 'qos_clock', 'qos_default',
+    'qos_sensor_data', 'qos_transient_local', 'shutdown', 'spin', 'spin_once', 'srv',
+    'strip_ros_args',
 ]
 
 ENV_BACKEND = 'FRF_IDENT_MIDDLEWARE'
@@ -52,7 +54,7 @@ def _select_backend() -> ModuleType:
 
 
 def backend() -> ModuleType:
-    """The backend module (chosen once per process)."""
+    """Return the backend module (chosen once per process)."""
     global _backend
     with _lock:
         if _backend is None:
@@ -71,7 +73,7 @@ def init(args: Optional[Sequence[str]] = None) -> None:
 
 
 def ok() -> bool:
-    """True between :func:`init` (or the first :func:`create_node`) and :func:`shutdown`."""
+    """Return true between :func:`init` (or the first :func:`create_node`) and :func:`shutdown`."""
     return backend().ok()
 
 
@@ -82,7 +84,8 @@ def shutdown() -> None:
 
 def create_node(name: str, *, parameter_overrides: Optional[dict[str, Any]] = None,
                 use_sim_time: Optional[bool] = None, namespace: str = '/') -> Any:
-    """Create a node on the chosen backend (initialising it with ``sys.argv`` if needed).
+    """
+    Create a node on the chosen backend (initialising it with ``sys.argv`` if needed).
 
     Parameter precedence (lowest first): declared default, ``--params-file`` (``/**`` then the
     node's own section), ``-p name:=value``, ``parameter_overrides``, ``use_sim_time``.
@@ -119,7 +122,7 @@ def srv(type_name: str) -> Any:
 
 
 def _interface(kind: str, type_name: str) -> Any:
-    """A message or service type: rclpy's own, or the DDS backend's table of them."""
+    """Return a message or service type: rclpy's own, or the DDS backend's table of them."""
     b = backend()
     if b.BACKEND_NAME == 'rclpy':
         return (b.msg if kind == 'message' else b.srv)(type_name)

@@ -1,4 +1,5 @@
-"""Cyclone DDS backend: ROS 2 nodes without ROS, wire-compatible with rmw_cyclonedds_cpp.
+"""
+Cyclone DDS backend: ROS 2 nodes without ROS, wire-compatible with rmw_cyclonedds_cpp.
 
 Conventions (ROS2_CONVENTIONS.md section 1): topics ``rt/<name>``, services ``rq/<name>Request`` /
 ``rr/<name>Reply`` with the 16-byte (guid, seq) header, mangled type names (ros_types), XCDR1,
@@ -17,8 +18,8 @@ import os
 import sys
 import threading
 import time
-import uuid
 from typing import Any, Callable, Optional, Sequence
+import uuid
 
 from cyclonedds.core import (DDSException, GuardCondition, InstanceState, Policy, Qos,
                              ReadCondition, SampleState, ViewState, WaitSet)
@@ -27,10 +28,9 @@ from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
-
 from frf_ident.middleware import ros_types
 from frf_ident.middleware.params import parse_ros_args
-from frf_ident.middleware.qos import QosSpec, as_qos_spec, qos_clock, qos_transient_local
+from frf_ident.middleware.qos import as_qos_spec, qos_clock, qos_transient_local, QosSpec
 
 BACKEND_NAME = 'dds'
 
@@ -70,7 +70,7 @@ def domain_id_from_env() -> int:
 
 
 def localhost_only() -> bool:
-    """True when ROS 2 Jazzy would restrict discovery to this host."""
+    """Return true when ROS 2 Jazzy would restrict discovery to this host."""
     rng = os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE', '').strip().upper()
     if rng:
         return rng == 'LOCALHOST'
@@ -117,7 +117,7 @@ def _gid(entity: Any) -> ros_types.Gid:
 
 
 def _new_endpoint_id() -> str:
-    """A unique id for serviceid=/clientid= USER_DATA (only compared for equality; dotted hex)."""
+    """Return a unique dotted-hex id for serviceid=/clientid= USER_DATA (compared for equality)."""
     return '.'.join(f'{b:x}' for b in uuid.uuid4().bytes)
 
 
@@ -210,7 +210,7 @@ def init(args: Optional[Sequence[str]] = None) -> None:
 
 
 def ok() -> bool:
-    """True between :func:`init` and :func:`shutdown`."""
+    """Return true between :func:`init` and :func:`shutdown`."""
     return _context is not None
 
 
@@ -328,7 +328,7 @@ class Future:
         return self._done.is_set()
 
     def result(self) -> Any:
-        """The result, or None while pending; re-raises the exception set by the backend."""
+        """Return the result, or None while pending; re-raises the exception set by the backend."""
         if self._exception is not None:
             raise self._exception
         return self._result
@@ -538,7 +538,7 @@ class Client:
         self._call_waitset.attach(ReadCondition(self._reader, _ANY_SAMPLE))
 
     def service_is_ready(self) -> bool:
-        """A matched request reader and reply writer of one service (rmw's readiness rule)."""
+        """Return True when the request reader and the reply writer are matched (rmw's rule)."""
         request_ids = {_parse_user_data(e.qos).get('serviceid') for e in map(
             self._writer.get_matched_subscription_data, self._writer.get_matched_subscriptions())
             if e is not None}
@@ -703,7 +703,7 @@ class Node:
         return self._add(self._clients, Client(self, srv_type, name))
 
     def count_publishers(self, topic: str) -> int:
-        """Publishers on ``topic`` in the domain, this node's own included (as rclpy)."""
+        """Publish on ``topic`` in the domain, this node's own included (as rclpy)."""
         return self._ctx.count_publishers(resolve_name(topic, self._name, self._namespace))
 
     def _graph_readers(self) -> list:

@@ -1,18 +1,18 @@
-"""ROS 2 parameter files and ``--ros-args`` parsing, shared by both backends.
+"""
+ROS 2 parameter files and ``--ros-args`` parsing, shared by both backends.
 
 The file format is rcl's (``rcl_yaml_param_parser``): top-level keys are node names (optionally
 nested in namespace keys, optionally with ``*`` / ``**`` wildcards; ``/**`` matches every node),
 each holding a ``ros__parameters`` map. Nested parameter maps are flattened with dots, as ROS does.
 """
 
-import re
 from pathlib import Path
+import re
 from typing import Any, Iterator, Sequence
-
-import yaml
 
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.yamlio import Yaml12FloatLoader
+import yaml
 
 _PARAMS_KEY = 'ros__parameters'
 
@@ -51,7 +51,8 @@ def _pattern(fq_key: str) -> re.Pattern:
 
 def load_params_file(path: 'str | Path', node_name: 'str | None',
                      namespace: str = '/') -> dict[str, Any]:
-    """Return the parameters a ROS parameter file assigns to node ``namespace/node_name``.
+    """
+    Return the parameters a ROS parameter file assigns to node ``namespace/node_name``.
 
     Wildcard sections (``/**``, ``/*``, ...) apply first, exact node sections override them.
     With ``node_name=None`` only the all-nodes section ``/**`` applies.
@@ -108,7 +109,7 @@ def _split_ros_args(argv: Sequence[str]) -> tuple[list[str], list[str]]:
 
 
 def ros_args_sections(argv: Sequence[str]) -> list[str]:
-    """The arguments that belong to ``--ros-args`` sections (each ends at ``--`` or argv's end)."""
+    """Return the arguments in ``--ros-args`` sections (each ends at ``--`` or at argv's end)."""
     return _split_ros_args(argv)[0]
 
 
@@ -126,7 +127,8 @@ _IGNORED_FLAGS = {'--enable-rosout-logs', '--disable-rosout-logs', '--enable-std
 
 def parse_ros_args(argv: Sequence[str], node_name: 'str | None' = None,
                    namespace: str = '/') -> tuple[dict[str, Any], dict[str, Any]]:
-    """Parse ``--ros-args --params-file FILE -p name:=value`` as ``ros2 run`` passes them.
+    """
+    Parse ``--ros-args --params-file FILE -p name:=value`` as ``ros2 run`` passes them.
 
     Returns ``(params_file_values, overrides)``: the values every ``--params-file`` assigns to
     ``node_name`` (later files win; with ``node_name=None`` only the ``/**`` wildcard sections
@@ -158,4 +160,3 @@ def parse_ros_args(argv: Sequence[str], node_name: 'str | None' = None,
         else:
             raise FrfIdentInputError(f'unknown ROS argument {arg=} in {list(argv)=}')
     return file_values, overrides
-

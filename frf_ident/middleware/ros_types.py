@@ -1,4 +1,5 @@
-"""ROS 2 message and service types as Cyclone DDS IDL structs (ROS2_CONVENTIONS.md section 1).
+"""
+ROS 2 message and service types as Cyclone DDS IDL structs (ROS2_CONVENTIONS.md section 1).
 
 Every struct is *final* with non-optional members, so Cyclone serializes it as XCDR1, the
 encoding rmw_cyclonedds_cpp uses; the bytes equal rosbags' ``serialize_cdr`` (checked in
@@ -122,7 +123,8 @@ class TriggerResponse(IdlStruct, typename='std_srvs::srv::Trigger_Response'):
 
 
 class ServiceType:
-    """A ROS service type: ``.Request`` / ``.Response`` body classes plus their wire wrappers.
+    """
+    A ROS service type: ``.Request`` / ``.Response`` body classes plus their wire wrappers.
 
     The wire structs prepend rmw_cyclonedds' request header (``client_guid: uint64``,
     ``sequence_number: int64``; ROS2_CONVENTIONS.md section 1.2). Nesting the body struct keeps
@@ -196,7 +198,7 @@ _ROS_NAME_OF: dict[type, str] = {cls: name for name, cls in MESSAGES.items()}
 
 
 def ros_type_name(msg_cls: Any) -> str:
-    """The ROS name (``pkg/msg/Type``) of a message class from this module."""
+    """Return the ROS name (``pkg/msg/Type``) of a message class from this module."""
     try:
         return _ROS_NAME_OF[msg_cls]
     except (KeyError, TypeError):

@@ -6,9 +6,8 @@ import sys
 import time
 import xml.etree.ElementTree as ET
 
-import pytest
-
 from frf_ident import middleware as mw
+import pytest
 
 
 def test_sim_time_drives_clock_and_timers(domain_env):
@@ -59,7 +58,8 @@ def test_wall_timer_and_cancel(domain_env):
 def test_ros_discovery_info_lists_node_entities(domain_env):
     from cyclonedds.core import Policy, Qos
     from cyclonedds.sub import DataReader
-    from frf_ident.middleware import dds_backend as dds, ros_types as rt
+    from frf_ident.middleware import dds_backend as dds
+    from frf_ident.middleware import ros_types as rt
     node = mw.create_node('mw_graph_node')
     pub = node.create_publisher(mw.msg('std_msgs/msg/String'), '/frf/experiment',
                                 mw.qos_transient_local())
@@ -72,8 +72,8 @@ def test_ros_discovery_info_lists_node_entities(domain_env):
                             Policy.History.KeepLast(1)))
     deadline = time.monotonic() + 5
     info = None
-    while info is None or 'mw_graph_node' not in {n.node_name
-                                                   for n in info.node_entities_info_seq}:
+    while info is None or 'mw_graph_node' not in {
+            n.node_name for n in info.node_entities_info_seq}:
         assert time.monotonic() < deadline, 'no ros_discovery_info sample'
         samples = reader.take(10)
         info = samples[-1] if samples else info
@@ -124,7 +124,7 @@ def test_localhost_config_equals_shipped_xml():
     assert _xml_items(LOCALHOST_CONFIG) == _xml_items(shipped.read_text())
 
 
-GUARDED_CHILD = '''
+GUARDED_CHILD = """
 import os
 from frf_ident.middleware import dds_backend as dds
 real_domain, real_participant, made = dds.Domain, dds.DomainParticipant, []
@@ -147,7 +147,7 @@ while pub.get_subscription_count() == 0:
     time.sleep(0.01)
 print('discovered', flush=True)
 mw.shutdown()
-'''
+"""
 
 
 def test_localhost_enforced_without_cyclonedds_uri(domain_env):

@@ -2,12 +2,11 @@
 
 import textwrap
 
-import pytest
-
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.middleware import load_params_file, parse_ros_args, strip_ros_args
+import pytest
 
-YAML = textwrap.dedent('''
+YAML = textwrap.dedent("""
     /**:
       ros__parameters:
         use_sim_time: true
@@ -29,7 +28,7 @@ YAML = textwrap.dedent('''
     /robot/*:
       ros__parameters:
         in_robot_ns: true
-''')
+""")
 
 
 @pytest.fixture

@@ -2,12 +2,11 @@
 
 import dataclasses
 
-import numpy as np
-import pytest
-from rosbags.typesys import get_typestore, get_types_from_msg, Stores
-
 from frf_ident.middleware import ros_types as rt
 from frf_ident.middleware.dds_backend import resolve_name
+import numpy as np
+import pytest
+from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 TYPESTORE.register(get_types_from_msg('bool success\nstring message',

@@ -1,11 +1,12 @@
-"""The experiment procedures of Section 7 as schedules of phases (closed loop, velocity reference).
+"""
+The experiment procedures of Section 7 as schedules of phases (closed loop, velocity reference).
 
 A procedure is a list of :class:`Phase` objects. ``excite`` phases carry a precomputed velocity
 reference and an experiment segment; ``move`` phases bring an axis back to a position relative
 to the operating point (their reference is computed when the phase starts, from the measured
-position); ``settle`` phases hold still. The offline runner (:mod:`frf_ident.core.simulation.runner`) and the
-excitation node execute the same phases, so simulation and the node graph run identical
-experiments.
+position); ``settle`` phases hold still. The offline runner
+(:mod:`frf_ident.core.simulation.runner`) and the excitation node execute the same phases, so
+simulation and the node graph run identical experiments.
 
 - :func:`multisine_procedure` — Sec. 4.4/7: odd random multisine on a constant velocity
   (amplitude <= 0.75 of it, every axis within +-4 deg), n_p realisations x n_q periods, MIMO by
@@ -15,24 +16,24 @@ experiments.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
+import math
 from typing import Any
 
-import numpy as np
-
-from frf_ident.core.excitation.chirp import (ChirpDesign, chirp_instantaneous_frequency, chirp_phase,
-                                  chirp_phase_flips)
 from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_excerpt_dft,
-                                       chirp_spectra)
-from frf_ident.core.excitation.multisine import (MultisineDesign, design_odd_multisine, mimo_phase_shifts,
-                                      multisine_realisation, reference_frequency_set)
+                                               chirp_spectra)
+from frf_ident.core.excitation.chirp import (chirp_instantaneous_frequency, chirp_phase,
+                                             chirp_phase_flips, ChirpDesign)
+from frf_ident.core.excitation.multisine import (design_odd_multisine, multisine_realisation,
+                                                 MultisineDesign, reference_frequency_set)
 from frf_ident.errors import DesignError, SafetyError
+import numpy as np
 
 
 @dataclass
 class Phase:
-    """One step of a procedure.
+    """
+    One step of a procedure.
 
     kind: 'excite' (reference given, no feedback), 'move' (to ``target`` [rad] relative to the
     operating point; reference and position plan computed at run time by :func:`move_plan`,
@@ -52,7 +53,8 @@ class Phase:
 
 def move_reference(q_now: np.ndarray, q_target: np.ndarray, n_samples: int,
                    dt: float) -> np.ndarray:
-    """Velocity reference of a minimum-jerk move from q_now to q_target in n_samples.
+    """
+    Velocity reference of a minimum-jerk move from q_now to q_target in n_samples.
 
     v(s) = dq / T * 30 s^2 (1 - s)^2 with s = t / T integrates exactly to dq.
     """
@@ -68,7 +70,8 @@ POSITION_GAIN = 2.5    # [1/s] position feedback on the reference in move/settle
 
 def move_plan(q_now: np.ndarray, q_target: np.ndarray, n_samples: int, dt: float
               ) -> tuple[np.ndarray, np.ndarray]:
-    """Feed-forward velocity and planned position (absolute) of a move from q_now to q_target.
+    """
+    Feed-forward velocity and planned position (absolute) of a move from q_now to q_target.
 
     The executor adds POSITION_GAIN (plan - q) to the reference, so the robot ends on the
     target despite friction, ripple and gravity, and every segment starts where the
@@ -89,9 +92,12 @@ def _ramp(v_from: np.ndarray, v_to: np.ndarray, n: int) -> np.ndarray:
 
 @dataclass
 class MultisineConfig:
-    """Section 7 multisine settings. ``resolution_hz`` 0.1 gives the paper's 12.3 s periods;
-    the default 0.25 Hz (4.1 s) keeps simulations short at the same line density in dB/decade
-    above 2 Hz."""
+    """
+    Section 7 multisine settings.
+
+    ``resolution_hz`` 0.1 gives the paper's 12.3 s periods; the default 0.25 Hz (4.1 s) keeps
+    simulations short at the same line density in dB/decade above 2 Hz.
+    """
 
     f_low: float = 2.0
     f_high: float = 60.0
@@ -121,7 +127,8 @@ class MultisineConfig:
 
 def constant_velocity_for_bound(bound_rad: float, travel_time: float, ramp_time: float,
                                 ms_position_peak: float) -> float:
-    """Largest constant velocity whose travel from -bound stays inside +bound (Sec. 4.4 D).
+    """
+    Largest constant velocity whose travel from -bound stays inside +bound (Sec. 4.4 D).
 
     The move spans 2 bound minus twice the multisine's own position excursion, over the
     segment plus one ramp (the two half ramps).
@@ -246,7 +253,8 @@ class ChirpConfig:
 
 
 class ChirpIteration:
-    """Iterative closed-loop excitation design of Sec. 5.3 for an n_u-axis robot.
+    """
+    Iterative closed-loop excitation design of Sec. 5.3 for an n_u-axis robot.
 
     State: the current reference spectra R_i (n_lines, n_u, n_ex) in *chirp coordinates*
     (the excerpt DFT of the signal divided by that of a unit chirp, so a chirp of amplitude a
@@ -274,7 +282,7 @@ class ChirpIteration:
         self.freqs = chirp_analysis_frequencies(cand, self.design.time_at, self.design.t0,
                                                 self.design.t1)
         self.t_centers = self.design.time_at(self.freqs)
-        levels = np.stack([self.design_amplitude(l, u_des) for l in range(n_axes)])  # (n, F)
+        levels = np.stack([self.design_amplitude(ax, u_des) for ax in range(n_axes)])  # (n, F)
         self.u_des_amp = levels.T                                              # (F, n)
         E = np.exp(1j * self.phi)
         self.U_des = self.u_des_amp[:, :, None] * E[None]                     # (F, n, n_ex)
@@ -298,9 +306,12 @@ class ChirpIteration:
 
     # -- signals -------------------------------------------------------------------------------
     def reference_signals(self, R: np.ndarray | None = None) -> np.ndarray:
-        """r(t) for every experiment from chirp-coordinate spectra R (eq. 19):
+        """
+        Synthesise r(t) for every experiment from chirp-coordinate spectra R (eq. 19).
+
         r_lm(t) = |R_lm(f(t))| sin(theta(t) + arg R_lm(f(t))), interpolated over log f.
-        Returns (n_ex, n_samples, n_u) on [0, t1]."""
+        Returns (n_ex, n_samples, n_u) on [0, t1].
+        """
         R = self.R if R is None else R
         n = int(round(self.design.t1 * self.fs)) + 1
         t = np.arange(n) * self.dt
@@ -314,10 +325,10 @@ class ChirpIteration:
         taper[:nt] = 0.5 - 0.5 * np.cos(np.pi * np.arange(nt) / nt)
         taper[-nt:] = taper[:nt][::-1]
         for m in range(self.n):
-            for l in range(self.n):
-                mag = np.interp(lf, lx, np.abs(R[:, l, m]))
-                ph = np.interp(lf, lx, np.unwrap(np.angle(R[:, l, m])))
-                out[m, :, l] = taper * mag * np.sin(theta + ph)
+            for ch in range(self.n):
+                mag = np.interp(lf, lx, np.abs(R[:, ch, m]))
+                ph = np.interp(lf, lx, np.unwrap(np.angle(R[:, ch, m])))
+                out[m, :, ch] = taper * mag * np.sin(theta + ph)
         return out
 
     def phases(self) -> list[Phase]:
@@ -340,7 +351,7 @@ class ChirpIteration:
 
     # -- the update (eqs. 18-19) ---------------------------------------------------------------
     def spectra(self, x: np.ndarray) -> np.ndarray:
-        """Chirp-coordinate spectra (F, n) of one experiment's samples x (N, n) from t0."""
+        """Return one experiment's chirp-coordinate spectra, shaped (F, n), from samples (N, n)."""
         return chirp_spectra(x, self.fs, self.freqs, self.t_centers) / self._unit[:, None]
 
     def error_db(self, U: np.ndarray) -> np.ndarray:
@@ -352,7 +363,8 @@ class ChirpIteration:
 
     def update(self, r_runs: list[np.ndarray], u_runs: list[np.ndarray],
                y_runs: list[np.ndarray] | None = None) -> dict[str, Any]:
-        """Process the measured experiments of this iteration and design the next reference.
+        """
+        Process the measured experiments of this iteration and design the next reference.
 
         ``r_runs``/``u_runs``: per experiment m, (N, n) samples from the chirp start t0.
         Returns the iteration summary (errors in dB, converged flag, predicted peak torque).
