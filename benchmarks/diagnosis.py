@@ -100,8 +100,9 @@ def draw_scene(rng: np.random.Generator, kind: str) -> dict[str, Any]:
     for name, ax, ch in truth:
         sc['axes'].setdefault(str(ax), {}).update(ch)
     if mode:
-        sc['extra_mode'] = {str(mode[0]): {'frequency_hz': mode[1], 'mass_ratio': 0.15,
-                                           'damping_ratio': 0.02}}
+        sc['extra_mode'] = {str(mode[0]): {'frequency_hz': mode[1],
+                                           'mass_ratio': float(rng.uniform(0.3, 0.5)),
+                                           'damping_ratio': float(rng.uniform(0.01, 0.03))}}
     return {'scene': sc, 'truth': truth, 'mode': mode, 'kind': kind}
 
 

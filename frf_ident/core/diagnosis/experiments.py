@@ -472,7 +472,7 @@ def _signature(ev: Evaluator, sim: Recording, axis: int) -> dict[str, Any]:
     return out
 
 
-UNEXPLAINED_RATIO = 4.0   # held-out misfit energy above this many noise floors is unexplained
+UNEXPLAINED_RATIO = 4.0   # held-out misfit above this many noise floors is unexplained
 
 
 def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
@@ -560,7 +560,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     unexplained = []
     for i, a in enumerate(robot.axes):
         share = float(np.clip((val_ext[i] - 1) / max(val_base[i] - 1, 1e-12), 0, 1))
-        if val_ext[i] > UNEXPLAINED_RATIO and share >= MIN_SHARE:
+        if val_ext[i] > UNEXPLAINED_RATIO:
             unexplained.append({'axis': a.name, 'misfit_share': round(share, 3),
                                 'signature': _signature(ev, sim_ext, i)})
     metrics = {'baseline': ev.metrics(robot, sim0), 'extended': ev.metrics(ext, sim_ext),
