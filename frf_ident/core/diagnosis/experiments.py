@@ -592,7 +592,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     unexplained = []
     for i, a in enumerate(robot.axes):
         share = float(np.clip((val_ext[i] - 1) / max(val_base[i] - 1, 1e-12), 0, 1))
-        if val_ext[i] > UNEXPLAINED_RATIO:
+        if val_ext[i] > UNEXPLAINED_RATIO and share >= MIN_SHARE:
             unexplained.append({'axis': a.name, 'misfit_share': round(share, 3),
                                 'signature': _signature(ev, sim_ext, i, ext)})
     metrics = {'baseline': ev.metrics(robot, sim0), 'extended': ev.metrics(ext, sim_ext),

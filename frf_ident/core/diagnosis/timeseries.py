@@ -375,7 +375,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
         b = val['baseline']['per_axis'][ax.name]['time_nrmse'] ** 2
         x = val['extended']['per_axis'][ax.name]['time_nrmse'] ** 2
         share = float(np.clip((x - floor[i]) / max(b - floor[i], 1e-300), 0, 1))
-        if x > UNEXPLAINED_RATIO * floor[i]:
+        if x > UNEXPLAINED_RATIO * floor[i] and share >= MIN_SHARE:
             unexplained.append({'axis': ax.name, 'misfit_share': round(share, 3),
                                 'signature': signature(val['extended']['residual'][:, i],
                                                        qh[:, i], vh[:, i], ah[:, i],
