@@ -330,14 +330,23 @@ def fit_parameter_mismatch(ev: Evaluator, robot: RobotParams, axis: int, scales_
 
 def fit_stiffness_nonlinearity(ev: Evaluator, robot: RobotParams, axis: int, scales_ms,
                                scales_ch) -> Effect | None:
-    """Stiffening spring (eq. 2): the chirp (high load) sees a stiffer joint than the multisine
-    (low load). k2 and bs refined by simulation from the describing-function guess."""
-    if scales_ch - scales_ms < 0.01:
+    """Stiffening spring (eq. 2): the two loads see different stiffness, stiffer than nominal.
+    Without preload the chirp (high load) reaches beyond the breakpoint and sees the stiffer
+    joint; with a static load (gravity) that deflects the spring beyond bs already, the small
+    multisine sits on k2 while the chirp averages over the kink. k2 and bs are refined by
+    simulation from the matching describing-function guess."""
+    if abs(scales_ch - scales_ms) < 0.01 or max(scales_ch, scales_ms) <= 0.01:
         return None
     a = robot.axes[axis]
     k1 = a.stiffness
     tau = float(np.percentile(np.abs(ev.rec.effort[ev.fit_mask, axis]), 99))
-    x0 = np.array([math.log(1 + 2.5 * (math.exp(scales_ch) - 1)), math.log(0.25 * tau / k1)])
+    preload = abs(float(robot.gravity_load(np.zeros(robot.n_axes))[axis])) / k1
+    if scales_ch > scales_ms or preload <= 0:
+        x0 = np.array([math.log(1 + 2.5 * (math.exp(max(scales_ch, scales_ms)) - 1)),
+                       math.log(0.25 * tau / k1)])
+    else:
+        x0 = np.array([scales_ms, math.log(0.7 * preload)])
+    x0[0] = min(max(x0[0], 0.05), 1.45)
 
     def mk(x):
         return _with(robot, axis, stiffness_k2=k1 * math.exp(x[0]),
@@ -345,8 +354,9 @@ def fit_stiffness_nonlinearity(ev: Evaluator, robot: RobotParams, axis: int, sca
     x = _refine(ev, mk, x0, [(0.0, 1.5), (x0[1] - 2.5, x0[1] + 2.0)], axis)
     return Effect('stiffness_nonlinearity', a.name, 0.0,
                   {'stiffness_k2': k1 * math.exp(x[0]), 'stiffness_breakpoint': math.exp(x[1])},
-                  f'resonance moves up with load: stiffness fitted to the chirp (high load) is '
-                  f'x{math.exp(scales_ch - scales_ms):.3f} the multisine (low load) one; '
+                  f'stiffness depends on the load: fitted to the chirp (high load) it is '
+                  f'x{math.exp(scales_ch - scales_ms):.3f} the multisine (low load) one '
+                  f'(static deflection {preload:.3g} rad); '
                   f'simulation fit k2 = {k1 * math.exp(x[0]):.4g} N m/rad beyond '
                   f'bs = {math.exp(x[1]):.3g} rad', axis)
 
