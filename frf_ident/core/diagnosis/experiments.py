@@ -423,7 +423,8 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
             e_c = ev.misfit(ev.terms(apply_effect(ext, c)))
             i = c.axis_index
             gain = cur[i] - e_c[i]
-            share = gain / max(cur[i] - 1.0, 1e-12)
+            # an axis already at its noise floor has no misfit left to explain
+            share = gain / (cur[i] - 1.0) if cur[i] > 1.0 else 0.0
             c.gain = float(share)
             say(f'  {c.axis} {c.name}: misfit {cur[i]:.4g} -> {e_c[i]:.4g} '
                 f'(share {share:.3f}) {c.parameters}')
