@@ -188,14 +188,18 @@ class ReferencePlant:
                 self.gph[i, j] = float(g.get('phase', 0.0))
                 for name in g.get('joints') or [self.joint_names[i]]:
                     self.gsel[i, j, self.joint_names.index(name)] = 1.0
-        # extra link-side mode: mass m_e = mass_ratio * link inertia on a spring tuned to
-        # frequency_hz (as seen with the link held), damping_ratio of critical
+        # extra link-side mode: a share mass_ratio of the link inertia sits on a spring tuned to
+        # frequency_hz (as seen with the link held), damping_ratio of critical; the rigid part
+        # keeps the rest, so at low frequency the link weighs what the model says and only
+        # the second resonance is new
         self.mode = np.zeros((n, 3))
         for k, em in (scene.get('extra_mode') or {}).items():
             i = int(k)
             me = float(em.get('mass_ratio', 0.3)) * float(axes[i]['link_inertia'])
             w = 2 * math.pi * float(em['frequency_hz'])
             self.mode[i] = [me, me * w * w, 2 * float(em.get('damping_ratio', 0.03)) * me * w]
+            mo[i, i] -= me
+        self.minv = np.linalg.inv(mo)
         self.p = p
         self.delay_steps = np.floor(delay / self.dt)
         self.frac = delay / self.dt - self.delay_steps
