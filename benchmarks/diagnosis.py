@@ -1,4 +1,18 @@
-"""Diagnosis sweep (``make bench``, section ``diagnosis``): random 3-axis scenes of the
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Diagnosis sweep (``make bench``, section ``diagnosis``): random 3-axis scenes of the
 independent reference plant (test/plants/reference.py, not FlexibleJointPlant) with 0-4 hidden
 effects at realistic sizes, identified end to end through ``identify --plant`` (a bag) and
 diagnosed through ``diagnose`` against the nominal model config/model_3axis.yaml.
@@ -14,10 +28,10 @@ from __future__ import annotations
 import json
 import math
 import os
+from pathlib import Path
 import sys
 import tempfile
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -42,8 +56,10 @@ def _nominal() -> dict[str, Any]:
 
 def draw_effect(name: str, rng: np.random.Generator, axis: dict[str, Any],
                 small: bool = False) -> dict[str, Any]:
-    """Random realistic change of one axis for effect ``name`` (model-file keys); ``small``
-    draws from the low end of the range (near the noise floor)."""
+    """
+    Random realistic change of one axis for effect ``name`` (model-file keys); ``small``
+    draws from the low end of the range (near the noise floor).
+    """
     hi = 0.3 if small else 1.0
 
     def u(a, b):
@@ -67,8 +83,10 @@ def draw_effect(name: str, rng: np.random.Generator, axis: dict[str, Any],
 
 
 def draw_scene(rng: np.random.Generator, kind: str) -> dict[str, Any]:
-    """A scene: {'scene': plug-in scene, 'truth': [(effect, axis index, params)], 'mode':
-    (axis, Hz) or None, 'kind'}."""
+    """
+    A scene: {'scene': plug-in scene, 'truth': [(effect, axis index, params)], 'mode':
+    (axis, Hz) or None, 'kind'}.
+    """
     model = _nominal()
     axes = model['axes']
     truth: list[tuple[str, int, dict[str, Any]]] = []
@@ -118,9 +136,9 @@ def identification_config():
 def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
     """Identify the scene's plant through ``--plant`` into a bag, diagnose the bag."""
     sys.path.insert(0, str(ROOT / 'test'))
-    import plants.reference as ref
     from frf_ident.app.diagnose import diagnose
     from frf_ident.app.identify import run_identify
+    import plants.reference as ref
     ref.SCENE = scene['scene']
     try:
         bag = work / 'bag'
@@ -167,9 +185,11 @@ def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0
 
 
 def second_mode_hz(scene: dict[str, Any], ax: int) -> float:
-    """Frequency [Hz] of the resonance the extra link-side mode adds to axis ``ax`` (motor,
+    """
+    Frequency [Hz] of the resonance the extra link-side mode adds to axis ``ax`` (motor,
     rigid link part and the mode's mass as a free 3-mass chain, the highest of its two
-    modes): what the measured FRF shows, not the spring's link-held tuning."""
+    modes): what the measured FRF shows, not the spring's link-held tuning.
+    """
     a = _nominal()['axes'][ax]
     em = scene['scene']['extra_mode'][str(ax)]
     me = em['mass_ratio'] * a['link_inertia']
@@ -221,8 +241,10 @@ def aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def bench_rows() -> list[tuple[str, str, str, str]]:
-    """Rows of ``make bench``: the sweep, then diagnose wall time on the demo bag if present
-    (out/demo/graph/bag of ``make demo``)."""
+    """
+    Rows of ``make bench``: the sweep, then diagnose wall time on the demo bag if present
+    (out/demo/graph/bag of ``make demo``).
+    """
     n = int(os.environ.get('FRF_BENCH_SCENES', '42'))
     r = sweep(n, verbose=False)
     rows = [(f'diagnosis sweep: recall of hidden pairs ({r["n"]} scenes)',

@@ -1,11 +1,25 @@
-"""`frf-ident diagnose` on real measured data (../shared/data, read in place), through the one
-route for all formats: MAT file + import map, or the bag imported with the same map."""
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+`frf-ident diagnose` on real measured data (../shared/data, read in place), through the one
+route for all formats: MAT file + import map, or the bag imported with the same map.
+"""
 import json
 from pathlib import Path
 
-import pytest
-
 from frf_ident.cli import main
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / 'shared' / 'data'
@@ -26,8 +40,10 @@ def _diagnose(tmp_path, name, data, model, mp=None, extra=()):
 
 @pytest.mark.skipif(not EMPS.is_file(), reason='shared EMPS data not present')
 def test_emps_names_coulomb_friction_with_authors_value(tmp_path):
-    """Nominal model with only M and Fv: Coulomb friction first, Fc within 15 % of the
-    authors' 20.39 N, and the extended model better on the held-out part."""
+    """
+    Nominal model with only M and Fv: Coulomb friction first, Fc within 15 % of the
+    authors' 20.39 N, and the extended model better on the held-out part.
+    """
     rep = _diagnose(tmp_path, 'emps', EMPS, 'model_emps.yaml', 'map_emps.yaml')
     first = rep['effects'][0]
     assert first['name'] == 'coulomb_friction'
@@ -40,10 +56,12 @@ def test_emps_names_coulomb_friction_with_authors_value(tmp_path):
 
 @pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
 def test_kuka_gravity_of_axes_2_3_and_the_same_report_from_mat_and_bag(tmp_path):
-    """Rigid, friction-free, gravity-free nominal model of axes 1-3: the extension names the
+    """
+    Rigid, friction-free, gravity-free nominal model of axes 1-3: the extension names the
     configuration-dependent gravity of axes 2 and 3 (coupled: q2 and q2 + q3), not of axis 1,
     predicts the held-out torque better than the nominal model and better than zero torque
-    (NRMSE < 1); the imported bag gives the same report as the MAT file."""
+    (NRMSE < 1); the imported bag gives the same report as the MAT file.
+    """
     rep = _diagnose(tmp_path, 'mat', KUKA, 'model_kuka_kr300_axes123.yaml', 'map_kuka_kr300.yaml')
     grav = {e['axis']: e['parameters']['gravity'] for e in rep['effects']
             if e['name'] == 'gravity'}
@@ -65,8 +83,10 @@ def test_kuka_gravity_of_axes_2_3_and_the_same_report_from_mat_and_bag(tmp_path)
 
 @pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
 def test_kuka_validate_on_another_record(tmp_path):
-    """--validate: fit on the first half of trajectory A (imported), report both models on the
-    second half (the only other KUKA record is the rest of the same trajectory)."""
+    """
+    --validate: fit on the first half of trajectory A (imported), report both models on the
+    second half (the only other KUKA record is the rest of the same trajectory).
+    """
     from frf_ident.app.diagnose import load_data
     from frf_ident.bag import write_recording
     from frf_ident.core.recording import Recording

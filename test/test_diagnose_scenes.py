@@ -1,4 +1,18 @@
-"""Hidden effects in the independent reference plant (test/plants/reference.py), end to end:
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Hidden effects in the independent reference plant (test/plants/reference.py), end to end:
 ``identify --plant plants.reference:ReferencePlant`` records a bag, ``diagnose`` compares it
 with the nominal config/model_3axis.yaml. Seeds are random on every run (printed, and
 reproducible with FRF_DIAG_SEED=<seed>); the large sweep is ``make bench`` (section diagnosis).
@@ -7,10 +21,9 @@ import math
 import os
 import sys
 
+from benchmarks.diagnosis import draw_scene, run_scene
 import numpy as np
 import pytest
-
-from benchmarks.diagnosis import draw_scene, run_scene
 
 
 def _seed(offset: int) -> int:

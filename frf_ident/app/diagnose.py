@@ -1,4 +1,18 @@
-"""`frf-ident diagnose DATA --model M.yaml --out DIR [--validate OTHER ...]`
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+`frf-ident diagnose DATA --model M.yaml --out DIR [--validate OTHER ...]`
 (docs/CONTRACT.md §7): what the nominal simulation gets wrong, which effect causes it, what
 stays unexplained, the extended model and its gain on held-out data and on other records.
 
@@ -11,8 +25,8 @@ Writes DIR/report.json, DIR/extended_model.yaml, DIR/report.html and its PNG plo
 """
 from __future__ import annotations
 
-import json
 from dataclasses import replace
+import json
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -23,16 +37,20 @@ __all__ = ['diagnose', 'has_experiments', 'load_data']
 
 
 def load_data(path: Path, map_path: Path | None = None) -> Recording:
-    """DATA -> Recording: a bag directory or .mcap directly, a CSV/MAT table with a map.
+    """
+    Return dATA -> Recording: a bag directory or .mcap directly, a CSV/MAT table with a map.
 
     Parameters
     ----------
-    path : bag directory, .mcap file, or .csv/.mat table.
-    map_path : import map (frf_ident.io.importer) for tables.
+    path
+        Bag directory, .mcap file, or .csv/.mat table.
+    map_path
+        Import map (frf_ident.io.importer) for tables.
 
     Returns
     -------
     The recording.
+
     """
     path = Path(path)
     if not path.exists():
@@ -55,7 +73,7 @@ def has_experiments(rec: Recording) -> bool:
 
 
 def _select_joints(rec, names):
-    """The recording restricted to the named joints, in that order."""
+    """Return the recording restricted to the named joints, in that order."""
     from frf_ident.core.recording import Recording
     idx = [list(rec.joint_names).index(n) for n in names]
 
@@ -82,20 +100,28 @@ def _match_axes(rec: Recording, robot, model_path: Path, progress) -> Recording:
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
              validate: Sequence[Path] = (), progress: Callable[[str], None] = print
              ) -> dict[str, Any]:
-    """Run the diagnosis and write DIR/report.json, extended_model.yaml, report.html.
+    """
+    Run the diagnosis and write DIR/report.json, extended_model.yaml, report.html.
 
     Parameters
     ----------
-    data : the record to fit on (bag, or CSV/MAT with ``map_path``).
-    model_path : nominal model file (docs/CONTRACT.md §5).
-    out : output directory.
-    map_path : import map for CSV/MAT records (DATA and every OTHER).
-    validate : other records of the same robot: baseline and extended metrics on each.
-    progress : callback for progress lines.
+    data
+        The record to fit on (bag, or CSV/MAT with ``map_path``).
+    model_path
+        Nominal model file (docs/CONTRACT.md §5).
+    out
+        Output directory.
+    map_path
+        Import map for CSV/MAT records (DATA and every OTHER).
+    validate
+        Other records of the same robot: baseline and extended metrics on each.
+    progress
+        Callback for progress lines.
 
     Returns
     -------
     {'report': report.json content, 'result': the diagnosis result, 'mode': ...}
+
     """
     from frf_ident.core.diagnosis import diagnose_experiments, diagnose_timeseries
     from frf_ident.io.model_file import load_model, save_model
@@ -149,8 +175,10 @@ def _plain_metrics(m: Any) -> Any:
 
 
 def validate_on(name: str, other: Recording, robot, ext, ctrl) -> dict[str, Any]:
-    """Baseline and extended metrics of the two model files on another record (no refit):
-    simulation of its experiments when it has them, else the time-series torque prediction."""
+    """
+    Baseline and extended metrics of the two model files on another record (no refit):
+    simulation of its experiments when it has them, else the time-series torque prediction.
+    """
     from dataclasses import replace as _r
     robot = _r(robot, sample_rate=other.fs)
     ext = _r(ext, sample_rate=other.fs)

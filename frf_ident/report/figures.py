@@ -1,4 +1,18 @@
-"""Figures of the HTML report (matplotlib, Agg backend). Each function writes one PNG.
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Figures of the HTML report (matplotlib, Agg backend). Each function writes one PNG.
 
 - :func:`bode_figure` — magnitude and phase per channel with 2-sigma uncertainty bands
 - :func:`snr_figure` — coherence-like SNR per line, |P|^2 / var(P) in dB
@@ -16,11 +30,10 @@ import matplotlib
 import matplotlib.ticker
 
 matplotlib.use('Agg')
+from frf_ident.core.estimation.frd import FrequencyResponse  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy import signal  # noqa: E402
-
-from frf_ident.core.estimation.frd import FrequencyResponse  # noqa: E402
 
 DPI = 100
 REF_STYLE = {'color': 'k', 'lw': 1.3}
@@ -56,7 +69,8 @@ def _channel_title(frf: FrequencyResponse, o: int, i: int) -> str:
 def bode_figure(frfs: Mapping[str, FrequencyResponse], path: Path, *,
                 reference: FrequencyResponse | None = None, title: str = '',
                 units: str = '') -> Path:
-    """Bode diagram of every channel: magnitude [dB] above phase [deg], one column per input.
+    """
+    Bode diagram of every channel: magnitude [dB] above phase [deg], one column per input.
 
     Estimates are markers joined by thin lines, with a shaded +-2 sigma band (from the total
     variance, else the noise variance): |P| +- 2 sigma in magnitude and +-asin(2 sigma/|P|)
@@ -147,7 +161,8 @@ def snr_figure(frfs: Mapping[str, FrequencyResponse], path: Path) -> Path | None
 def spectrogram_figure(x: np.ndarray, fs: float, names: Sequence[str], path: Path, *,
                        f_range: tuple[float, float] = (1.0, 60.0), t0: float = 0.0,
                        quantity: str = 'torque', unit: str = 'N m') -> Path:
-    """PSD over time of each column of ``x`` (scipy.signal.spectrogram), log frequency axis.
+    """
+    PSD over time of each column of ``x`` (scipy.signal.spectrogram), log frequency axis.
 
     Windows of about 2 s (Hann, 7/8 overlap) resolve 1 Hz; colour is 10 log10 PSD in
     dB re 1 unit^2/Hz, the colour range spans 60 dB below the maximum.
@@ -244,8 +259,10 @@ def unwrapped_phase_deg(p: np.ndarray) -> np.ndarray:
 
 
 def paper_figure(results: dict[str, Any], case: str, path: Path) -> Path:
-    """Figure 4 (case 'coulomb') / Figure 5 ('stiffness') of the paper: both designs side by
-    side, magnitude and phase, linear model vs the linear-case and nonlinear-case estimates."""
+    """
+    Figure 4 (case 'coulomb') / Figure 5 ('stiffness') of the paper: both designs side by
+    side, magnitude and phase, linear model vs the linear-case and nonlinear-case estimates.
+    """
     label = {'coulomb': 'Fc = 50 N m, k2 = k1', 'stiffness': 'Fc = 0 N m, k2 = 1.7 k1'}[case]
     fig, axes = plt.subplots(2, 2, figsize=(11, 6.5), sharex=True)
     f_an = np.asarray(results['analytic']['freq_hz'])
@@ -277,11 +294,13 @@ def paper_figure(results: dict[str, Any], case: str, path: Path) -> Path:
 
 def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
                       ) -> list[tuple[str, str]]:
-    """Figures of ``frf-ident diagnose``: (file name, caption) pairs written into ``out``.
+    """
+    Figures of ``frf-ident diagnose``: (file name, caption) pairs written into ``out``.
 
     Experiments: measured vs nominal vs extended FRF (diagonal) with the residual spectrum,
     and the torque residual against velocity and position. Time series: the inverse-dynamics
-    residual in time, against velocity and against position."""
+    residual in time, against velocity and against position.
+    """
     figs: list[tuple[str, str]] = []
     if mode == 'experiments':
         est = res['estimates']

@@ -1,4 +1,18 @@
-"""One self-contained HTML report (inline CSS, no scripts, no external resources) that shows
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+One self-contained HTML report (inline CSS, no scripts, no external resources) that shows
 FRF estimates, their uncertainty, the excitation and the data quality of a run.
 
 ``write_report(out_dir, frfs=..., ...)`` writes ``out_dir/report.html`` and its PNG figures
@@ -19,12 +33,11 @@ import math
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-import numpy as np
-
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import figures
+import numpy as np
 
 __all__ = ['write_diagnosis_report', 'write_report']
 
@@ -51,19 +64,26 @@ def write_report(out_dir: str | Path, *, frfs: Mapping[str, FrequencyResponse],
                  timing: Mapping[str, Any] | Any | None = None,
                  iterations: Sequence[Mapping[str, Any]] | None = None,
                  title: str = 'FRF identification report') -> Path:
-    """Write ``out_dir/report.html`` plus PNG figures; return the HTML path.
+    """
+    Write ``out_dir/report.html`` plus PNG figures; return the HTML path.
 
     Parameters
     ----------
-    out_dir : directory (created if needed); existing report files in it are replaced.
+    out_dir
+        Directory (created if needed); existing report files in it are replaced.
     frfs : label -> estimate (e.g. {'multisine': ..., 'chirp': ...}); all with the same
         channels as the first.
-    reference : model or known FRF drawn as a black line.
-    recording : the time series; gives the time plot and the torque spectrogram.
-    timing : ``TimingReport`` or its ``to_dict()``.
+    reference
+        Model or known FRF drawn as a black line.
+    recording
+        The time series; gives the time plot and the torque spectrogram.
+    timing
+        ``TimingReport`` or its ``to_dict()``.
     iterations : chirp iteration summaries ``{'iteration': i, 'error_db': [per channel]}``
         (``error_db_per_channel`` is accepted too), optional ``tolerance_db``.
-    title : page and heading title.
+    title
+        Page and heading title.
+
     """
     if not frfs and recording is None:
         raise FrfIdentInputError('write_report: nothing to report (frfs is empty and no '
@@ -303,22 +323,30 @@ def _timing_section(t: Mapping[str, Any]) -> str:
 def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
                            res: Mapping[str, Any], rec: Recording, mode: str,
                            data: str | Path) -> Path:
-    """``out_dir/report.html`` of ``frf-ident diagnose``: ranked effects with evidence, what is
+    """
+    ``out_dir/report.html`` of ``frf-ident diagnose``: ranked effects with evidence, what is
     left unexplained and where, held-out metrics (also per axis and per --validate record),
     rejected candidates and the figures of :func:`figures.diagnosis_figures`.
 
     Parameters
     ----------
-    out_dir : directory of report.json (created if missing).
-    report : the report.json content (docs/CONTRACT.md §7).
-    res : the diagnosis result (estimates, simulations or residuals for the figures).
-    rec : the diagnosed recording.
-    mode : 'experiments' or 'timeseries'.
-    data : the diagnosed file (shown in the title).
+    out_dir
+        Directory of report.json (created if missing).
+    report
+        The report.json content (docs/CONTRACT.md §7).
+    res
+        The diagnosis result (estimates, simulations or residuals for the figures).
+    rec
+        The diagnosed recording.
+    mode
+        'experiments' or 'timeseries'.
+    data
+        The diagnosed file (shown in the title).
 
     Returns
     -------
     Path of report.html.
+
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,24 +1,38 @@
-"""Diagnosis pieces against truth the diagnosis did not produce: synthetic residuals with known
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Diagnosis pieces against truth the diagnosis did not produce: synthetic residuals with known
 ripple, rigid multi-axis torques written here from the equations of motion (gravity of a
-coupled arm, friction), missing reference samples, and one route for CSV, MAT and bag."""
+coupled arm, friction), missing reference samples, and one route for CSV, MAT and bag.
+"""
+from dataclasses import replace
 import json
 import math
-from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-import pytest
-import scipy.io as sio
-
 from frf_ident.cli import main
-from frf_ident.core.diagnosis.experiments import missing_reference
 from frf_ident.core.diagnosis.common import simulate_like
+from frf_ident.core.diagnosis.experiments import missing_reference
 from frf_ident.core.diagnosis.residual import find_ripple, ripple_range
 from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
 from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
+import numpy as np
+import pytest
+import scipy.io as sio
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -77,8 +91,10 @@ def test_missing_reference_is_left_out_not_commanded_as_zero():
 
 
 def _arm_record(seed: int, *, disturbance_hz: float = 0.0):
-    """Rigid 3-axis arm (axis 1 vertical, 2-3 horizontal): torques from the equations of
-    motion written here, measured with noise."""
+    """
+    Rigid 3-axis arm (axis 1 vertical, 2-3 horizontal): torques from the equations of
+    motion written here, measured with noise.
+    """
     rng = np.random.default_rng(seed)
     fs, T = 500.0, 40.0
     t = np.arange(int(T * fs)) / fs
@@ -126,8 +142,10 @@ def test_timeseries_names_gravity_of_a_coupled_arm_and_friction():
 
 
 def test_unexplained_disturbance_gets_its_band_and_axis():
-    """A 7 Hz torque that no candidate effect explains: listed as unexplained on its axis
-    with a band around 7 Hz, not as a named effect's false parameters."""
+    """
+    A 7 Hz torque that no candidate effect explains: listed as unexplained on its axis
+    with a band around 7 Hz, not as a named effect's false parameters.
+    """
     rec, _ = _arm_record(6, disturbance_hz=7.0)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     res = diagnose_timeseries(rec, robot)

@@ -1,17 +1,31 @@
-"""The independent reference plant (test/plants/reference.py) against FlexibleJointPlant: two
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The independent reference plant (test/plants/reference.py) against FlexibleJointPlant: two
 implementations written apart (RK4 + Karnopp vs exponential integrator + set-valued friction)
-must agree where the physics is the same; and the gravity keys of the model file."""
+must agree where the physics is the same; and the gravity keys of the model file.
+"""
 from dataclasses import replace
 from pathlib import Path
-
-import numpy as np
-import pytest
 
 from frf_ident.core.model.schema import robot_from_dict, robot_to_dict
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import ModelFileError
 from frf_ident.io.model_file import load_model
+import numpy as np
 from plants import reference
+import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -1,4 +1,18 @@
-"""Independent reference plant for diagnosis tests and the bench sweep (docs/CONTRACT.md §4).
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Independent reference plant for diagnosis tests and the bench sweep (docs/CONTRACT.md §4).
 
 Written without :class:`frf_ident.core.simulation.plant.FlexibleJointPlant`: its own state
 layout, its own fixed-step Runge-Kutta (RK4) integrator on a fine substep grid, its own
@@ -33,7 +47,7 @@ SUBSTEPS = 8          # RK4 steps per sample
 
 
 def scene_axes(model: dict[str, Any], scene: dict[str, Any]) -> list[dict[str, Any]]:
-    """The model's axes with the scene's hidden changes (plain dicts, §5 keys)."""
+    """Return the model's axes with the scene's hidden changes (plain dicts, §5 keys)."""
     axes = [dict(a) for a in model['axes']]
     for k, ch in (scene.get('axes') or {}).items():
         axes[int(k)].update(ch)
@@ -109,8 +123,10 @@ def _rhs(s, u, p, minv, gamp, gph, gsel, mode, out):
 
 @numba.njit(cache=True)
 def _advance(s, hist, k, delay_steps, frac, dt, p, minv, gamp, gph, gsel, mode, m):
-    """RK4 over one sample in m substeps; the command each axis sees at time t is the held
-    sample u[floor((t - delay) / dt)] from ``hist`` (ring of past commands, index k = now)."""
+    """
+    RK4 over one sample in m substeps; the command each axis sees at time t is the held
+    sample u[floor((t - delay) / dt)] from ``hist`` (ring of past commands, index k = now).
+    """
     n = p.shape[0]
     h = dt / m
     nb = hist.shape[0]

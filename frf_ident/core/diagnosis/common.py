@@ -1,18 +1,32 @@
-"""Shared pieces of the diagnosis: effect names, the result record, simulation of a model on the
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Shared pieces of the diagnosis: effect names, the result record, simulation of a model on the
 recorded excitation, splitting a recording into fit and held-out parts, and the metrics of
-docs/CONTRACT.md §7 (frf_error_db, time_nrmse)."""
+docs/CONTRACT.md §7 (frf_error_db, time_nrmse).
+"""
 from __future__ import annotations
 
 import copy
 from dataclasses import dataclass, replace
 from typing import Any
 
-import numpy as np
-
-from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.model.params import RobotParams
-from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.core.recording import Recording, Segment
+from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.simulation.plant import FlexibleJointPlant
+import numpy as np
 
 EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'backlash',
            'torque_ripple', 'time_delay', 'gravity', 'parameter_mismatch')
@@ -48,21 +62,23 @@ def _plain(x: Any) -> Any:
 
 
 def apply_effect(robot: RobotParams, eff: Effect) -> RobotParams:
-    """The robot with the effect's parameters written into its axis (model-file keys)."""
+    """Return the robot with the effect's parameters written into its axis (model-file keys)."""
     axes = list(robot.axes)
     axes[eff.axis_index] = replace(axes[eff.axis_index], **copy.deepcopy(eff.parameters))
     return replace(robot, axes=axes)
 
 
 def quiet(robot: RobotParams) -> RobotParams:
-    """The model without measurement noise/quantisation: what a simulation predicts."""
+    """Return the model without measurement noise/quantisation: what a simulation predicts."""
     return robot.with_axes(velocity_noise=0.0, torque_noise=0.0, encoder_resolution=0.0)
 
 
 def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recording:
-    """Run ``robot`` in closed loop with ``ctrl`` on the recording's velocity reference (the
+    """
+    Run ``robot`` in closed loop with ``ctrl`` on the recording's velocity reference (the
     same excitation through the same controller) and return a Recording with the same
-    segments, so that it can be estimated exactly like the measurement."""
+    segments, so that it can be estimated exactly like the measurement.
+    """
     if rec.reference is None:
         raise ValueError('recording has no reference; closed-loop simulation impossible')
     plant = FlexibleJointPlant(replace(quiet(robot), sample_rate=rec.fs))
@@ -81,9 +97,11 @@ def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recor
 
 
 def split_recording(rec: Recording) -> tuple[Recording, Recording, str]:
-    """Fit and validation views of an identification recording (same samples, different
+    """
+    Fit and validation views of an identification recording (same samples, different
     segments): multisine realisations 0..n_p-2 and the last chirp iteration for fitting; the
-    last multisine realisation and the second-last chirp iteration held out."""
+    last multisine realisation and the second-last chirp iteration held out.
+    """
     segs = rec.segments
     ms = [s for s in segs if s.info.get('design') == 'multisine']
     cv = [s for s in segs if s.info.get('design') == 'constant_velocity']
@@ -114,7 +132,7 @@ def split_recording(rec: Recording) -> tuple[Recording, Recording, str]:
 
 
 def segment_mask(rec: Recording, designs=('multisine', 'chirp')) -> np.ndarray:
-    """Samples inside the recording's segments of the given designs."""
+    """Sample inside the recording's segments of the given designs."""
     m = np.zeros(rec.t.size, bool)
     for s in rec.segments:
         if s.info.get('design') in designs:
@@ -138,8 +156,10 @@ def diag_ratio(pm, ps) -> np.ndarray:
 
 
 def frf_error_db(pairs, axis: int | None = None) -> float:
-    """docs/CONTRACT.md §7: RMS over the analysed lines of 20 log10 |P_measured / P_model|
-    (diagonal elements; only that of ``axis`` when given)."""
+    """
+    docs/CONTRACT.md §7: RMS over the analysed lines of 20 log10 |P_measured / P_model|
+    (diagonal elements; only that of ``axis`` when given).
+    """
     sel = slice(None) if axis is None else slice(axis, axis + 1)
     vals = [20 * np.log10(np.abs(diag_ratio(pm, ps)[sel])).ravel() for pm, ps in pairs]
     v = np.concatenate(vals) if vals else np.array([np.nan])

@@ -1,4 +1,18 @@
-"""Diagnosis of identification recordings (multisine on constant velocity + iterated chirps).
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Diagnosis of identification recordings (multisine on constant velocity + iterated chirps).
 
 Every candidate effect is fitted from the evidence it leaves (one function per effect), then
 the candidate model is simulated on the recorded excitation through the same controller and
@@ -8,21 +22,20 @@ errors, each in units of the noise the data show); see :func:`diagnose_experimen
 """
 from __future__ import annotations
 
-import math
 from dataclasses import replace
+import math
 from typing import Any, Callable
 
+from frf_ident.core.estimation.described import chirp_frf, multisine_frf
+from frf_ident.core.model.params import RobotParams
+from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.analytic import robot_frf_sampled
+from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.errors import EstimationError
 import numpy as np
 from scipy import optimize
 
-from frf_ident.core.simulation.analytic import robot_frf_sampled
-from frf_ident.core.estimation.described import chirp_frf, multisine_frf
-from frf_ident.core.simulation.controller import PIVelocity
-from frf_ident.core.model.params import RobotParams
-from frf_ident.core.recording import Recording
-from frf_ident.errors import EstimationError
-
-from .common import (Effect, apply_effect, diag_ratio, frf_error_db, nrmse, segment_mask,
+from .common import (apply_effect, diag_ratio, Effect, frf_error_db, nrmse, segment_mask,
                      simulate_like, split_recording)
 from .residual import inverse_dynamics_residual, regress_axis
 
@@ -33,7 +46,7 @@ SETTLE_S = 0.5       # samples this long after a stretch without reference are n
 
 
 def estimates(rec: Recording) -> dict[str, Any]:
-    """The two estimates the diagnosis compares: compensated multisine BLA and the chirp."""
+    """Return the two estimates the diagnosis compares: compensated multisine BLA and the chirp."""
     out: dict[str, Any] = {}
     if any(s.info.get('design') == 'multisine' for s in rec.segments):
         cv = any(s.info.get('design') == 'constant_velocity' for s in rec.segments)
@@ -44,8 +57,10 @@ def estimates(rec: Recording) -> dict[str, Any]:
 
 
 def missing_reference(rec: Recording) -> np.ndarray:
-    """Samples whose reference is missing (NaN), widened by SETTLE_S after each stretch: the
-    controller's input there is unknown, so simulation and measurement are not compared."""
+    """
+    Samples whose reference is missing (NaN), widened by SETTLE_S after each stretch: the
+    controller's input there is unknown, so simulation and measurement are not compared.
+    """
     bad = ~np.all(np.isfinite(rec.reference), axis=1)
     if bad.any():
         settle = int(SETTLE_S * rec.fs)
@@ -59,9 +74,11 @@ def missing_reference(rec: Recording) -> np.ndarray:
 
 
 def period_noise(rec: Recording, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Noise variance of velocity and effort per axis measured from the multisine periods:
+    """
+    Noise variance of velocity and effort per axis measured from the multisine periods:
     half the mean square difference of consecutive steady-state periods (periodic signal
-    cancels, noise doubles). NaN where the recording has no repeated periods."""
+    cancels, noise doubles). NaN where the recording has no repeated periods.
+    """
     dv, du = [], []
     for s in rec.segments:
         info = s.info
@@ -84,13 +101,15 @@ def period_noise(rec: Recording, mask: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 
 class Evaluator:
-    """Simulates candidate models on the recorded excitation and scores them per axis.
+    """
+    Simulates candidate models on the recorded excitation and scores them per axis.
 
     Every loss term of an axis (diagonal FRF misfit of multisine and chirp, torque and velocity
     output error) is expressed in units of its noise floor measured in the data: the BLA noise
     variance from the multisine periods for the FRFs, the period-to-period variance of the
     measured torque and velocity for the time signals. A model that explains the axis to its
-    noise scores about 1."""
+    noise scores about 1.
+    """
 
     def __init__(self, rec: Recording, ctrl: PIVelocity) -> None:
         self.rec, self.ctrl = rec, ctrl
@@ -132,8 +151,10 @@ class Evaluator:
 
     def terms(self, robot: RobotParams, sim: Recording | None = None, *, held_out: bool = False
               ) -> dict[str, np.ndarray]:
-        """Loss terms per axis (arrays of n): mean |ln(P_meas/P_model)|^2 over the lines of the
-        diagonal element, torque and velocity NRMSE^2, on the fit (or held-out) part."""
+        """
+        Loss terms per axis (arrays of n): mean |ln(P_meas/P_model)|^2 over the lines of the
+        diagonal element, torque and velocity NRMSE^2, on the fit (or held-out) part.
+        """
         sim = sim if sim is not None else self._sim(robot)
         part = self.val if held_out and self.val.segments else self.fit
         meas = self.meas_val if held_out and self.meas_val else self.meas_fit
@@ -158,8 +179,10 @@ class Evaluator:
         return np.mean([terms[k] / self.floors[k] for k in terms], axis=0)
 
     def misfit_sd(self) -> float:
-        """Standard deviation of :meth:`misfit` under noise alone (exponentially distributed
-        terms averaged over their independent lines / samples)."""
+        """
+        Standard deviation of :meth:`misfit` under noise alone (exponentially distributed
+        terms averaged over their independent lines / samples).
+        """
         return float(np.sqrt(np.mean([1.0 / self.counts[k] for k in self.floors])
                              / len(self.floors)))
 
@@ -182,7 +205,7 @@ class Evaluator:
 
 
 def drop_segments(rec: Recording, missing: np.ndarray) -> Recording:
-    """The recording without the segments that overlap samples without reference."""
+    """Return the recording without the segments that overlap samples without reference."""
     if not missing.any():
         return rec
     keep = [s for s in rec.segments if not missing[rec.slice(s.t_start, s.t_end)].any()]
@@ -198,8 +221,10 @@ def replace_segments(rec: Recording, like: Recording) -> Recording:
 # --- evidence and fits, one function per effect ------------------------------------------------
 
 def friction_regression(ev: Evaluator, robot: RobotParams, axis: int):  # noqa: D401
-    """Motor-side inverse-dynamics residual of the nominal model regressed on sgn(v), v and
-    motor-position harmonics, on the fit segments plus the constant-velocity run."""
+    """
+    Motor-side inverse-dynamics residual of the nominal model regressed on sgn(v), v and
+    motor-position harmonics, on the fit segments plus the constant-velocity run.
+    """
     rec = ev.rec
     f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, rec.effort, rec.dt,
                                               robot)
@@ -254,8 +279,10 @@ def fit_ripple(reg, robot: RobotParams, axis: int) -> Effect | None:
 
 
 def fit_time_delay(ev: Evaluator, sim_est: dict, robot: RobotParams, axis: int) -> Effect | None:
-    """Phase of P_meas/P_nominal linear in frequency with unchanged magnitude: weighted LS of
-    the unwrapped phase on -2 pi f (multisine and chirp lines)."""
+    """
+    Phase of P_meas/P_nominal linear in frequency with unchanged magnitude: weighted LS of
+    the unwrapped phase on -2 pi f (multisine and chirp lines).
+    """
     fr, ph, mg = [], [], []
     for k, pm in ev.meas_fit.items():
         r = diag_ratio(pm, sim_est[k])[axis]
@@ -287,8 +314,10 @@ def _scaled(robot: RobotParams, axis: int, keys, x) -> RobotParams:
 
 def fit_linear_scales(meas: dict, robot: RobotParams, axis: int, keys=_LIN_KEYS,
                       which=('multisine', 'chirp')) -> np.ndarray:
-    """Least squares of log scale factors of ``keys`` so that the analytic sampled FRF fits the
-    measured diagonal element (complex log error) of the chosen estimates."""
+    """
+    Least squares of log scale factors of ``keys`` so that the analytic sampled FRF fits the
+    measured diagonal element (complex log error) of the chosen estimates.
+    """
     sel = [(meas[k].freq_hz, meas[k].response[axis, axis]) for k in which if k in meas]
 
     def res(x):
@@ -305,8 +334,10 @@ def fit_linear_scales(meas: dict, robot: RobotParams, axis: int, keys=_LIN_KEYS,
 
 def stiffness_seen(meas: dict, sim_est: dict, robot: RobotParams, axis: int, key: str
                    ) -> float:
-    """Log stiffness scale that fits estimate ``key`` of the measurement, minus the one that
-    fits the same estimate of the nominal simulation (removes estimator bias)."""
+    """
+    Log stiffness scale that fits estimate ``key`` of the measurement, minus the one that
+    fits the same estimate of the nominal simulation (removes estimator bias).
+    """
     if key not in meas:
         return 0.0
     return float(fit_linear_scales(meas, robot, axis, ('stiffness',), (key,))[0]
@@ -330,11 +361,14 @@ def fit_parameter_mismatch(ev: Evaluator, robot: RobotParams, axis: int, scales_
 
 def fit_stiffness_nonlinearity(ev: Evaluator, robot: RobotParams, axis: int, scales_ms,
                                scales_ch) -> Effect | None:
-    """Stiffening spring (eq. 2): the two loads see different stiffness, stiffer than nominal.
-    Without preload the chirp (high load) reaches beyond the breakpoint and sees the stiffer
-    joint; with a static load (gravity) that deflects the spring beyond bs already, the small
-    multisine sits on k2 while the chirp averages over the kink. k2 and bs are refined by
-    simulation from the matching describing-function guess."""
+    """
+    Stiffening spring (eq. 2): the two loads see different stiffness, stiffer than nominal.
+
+    Without preload the chirp (high load) reaches beyond the breakpoint and sees the stiffer joint;
+    with a static load (gravity) that deflects the spring beyond bs already, the small multisine
+    sits on k2 while the chirp averages over the kink. k2 and bs are refined by simulation from the
+    matching describing-function guess.
+    """
     if abs(scales_ch - scales_ms) < 0.01 or max(scales_ch, scales_ms) <= 0.01:
         return None
     a = robot.axes[axis]
@@ -363,8 +397,10 @@ def fit_stiffness_nonlinearity(ev: Evaluator, robot: RobotParams, axis: int, sca
 
 def fit_backlash(ev: Evaluator, robot: RobotParams, axis: int, scales_ms, scales_ch
                  ) -> Effect | None:
-    """Dead zone: softer joint at low load (multisine) than at high load (chirp); the gap is
-    found by a bounded 1-D simulation fit."""
+    """
+    Dead zone: softer joint at low load (multisine) than at high load (chirp); the gap is
+    found by a bounded 1-D simulation fit.
+    """
     if scales_ms > -0.01 or scales_ch - scales_ms < 0.01:
         return None
     a = robot.axes[axis]
@@ -410,10 +446,12 @@ def _rebuild(robot: RobotParams, effects: list[Effect]) -> RobotParams:
 
 def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Effect],
             cur: np.ndarray, say: Callable[[str], None]) -> tuple[RobotParams, np.ndarray]:
-    """Greedy per axis: in each round every axis takes its candidate that removes the largest
+    """
+    Greedy per axis: in each round every axis takes its candidate that removes the largest
     share of the axis' misfit above noise (own-axis attribution: a small effect on a weak axis
     competes only with that axis' misfit), if the share is >= MIN_SHARE and the drop exceeds
-    MIN_Z standard deviations of the misfit under noise. The rest are re-evaluated on top."""
+    MIN_Z standard deviations of the misfit under noise. The rest are re-evaluated on top.
+    """
     sd = ev.misfit_sd()
     ext = _rebuild(base, kept)
     pending = list(cands)
@@ -458,11 +496,13 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
 
 
 def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> dict[str, Any]:
-    """Where the held-out residual of one axis lives: the band [f1, f2] Hz around the
+    """
+    Where the held-out residual of one axis lives: the band [f1, f2] Hz around the
     largest FRF misfit above noise that is left after refitting the axis' inertias, stiffness
     and damping to the measured FRF (multisine and chirp lines merged; the neighbouring lines
     above a quarter of that misfit, plus one line each side), and the signal the torque
-    residual of the extended model correlates with most (|r| >= 0.3)."""
+    residual of the extended model correlates with most (|r| >= 0.3).
+    """
     meas = ev.meas_val if ev.meas_val else ev.meas_fit
     part = ev.val if ev.val.segments else ev.fit
     est = estimates(replace_segments(sim, part))
@@ -520,7 +560,8 @@ UNEXPLAINED_RATIO = 4.0   # held-out misfit above this many noise floors is unex
 
 def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
                          progress: Callable[[str], None] | None = None) -> dict[str, Any]:
-    """Diagnose an identification recording against the nominal ``robot``.
+    """
+    Diagnose an identification recording against the nominal ``robot``.
 
     Two stages, every candidate judged on its own axis' misfit (in units of the noise floor):
     first the torque-residual effects (Coulomb and viscous friction, torque ripple) from one
@@ -530,7 +571,8 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
 
     Returns {'effects': [Effect], 'extended': RobotParams, 'metrics': {...}, 'unexplained':
     [...], 'candidates': [...], 'estimates': {'measured', 'nominal', 'extended'} for the plots,
-    'sims': {...}, 'evaluator': ev}."""
+    'sims': {...}, 'evaluator': ev}.
+    """
     say = progress or (lambda _m: None)
     if rec.reference is None:
         raise EstimationError('recording has no velocity reference: use the time-series '

@@ -1,4 +1,18 @@
-"""Time-domain evidence: the motor-side inverse-dynamics residual and its regression.
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Time-domain evidence: the motor-side inverse-dynamics residual and its regression.
 
 For the flexible joint (eqs. 20-22) every motor-side torque the model lacks (Coulomb and
 viscous friction, torque ripple) appears exactly in
@@ -12,14 +26,13 @@ phase) before the regression f ~ c0 + Fc sgn(v) + dFv v [+ dJ a] + ripple harmon
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
+import math
 
+from frf_ident.core.model.params import RobotParams
 import numpy as np
 from scipy import signal
 from scipy.ndimage import median_filter
-
-from frf_ident.core.model.params import RobotParams
 
 
 def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
@@ -29,7 +42,7 @@ def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
 
 
 def is_rigid(robot: RobotParams, fs: float) -> bool:
-    """True when every axis' locked resonance lies far above the Nyquist frequency."""
+    """Return true when every axis' locked resonance lies far above the Nyquist frequency."""
     return all(math.sqrt(a.stiffness * (1 / a.motor_inertia + 1 / a.link_inertia)) / (2 * math.pi)
                > 2 * fs for a in robot.axes)
 
@@ -37,9 +50,11 @@ def is_rigid(robot: RobotParams, fs: float) -> bool:
 def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: float,
                               robot: RobotParams, link_position: np.ndarray | None = None
                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Motor-side residual torque of the model, evaluated between samples (k + 1/2) where the
+    """
+    Motor-side residual torque of the model, evaluated between samples (k + 1/2) where the
     zero-order-held torque u[k] acts. Returns (f, q_half, v_half, a_half), each (N-1, n).
-    With ``link_position`` (a link-side encoder) the deflection is measured, not simulated."""
+    With ``link_position`` (a link-side encoder) the deflection is measured, not simulated.
+    """
     n = robot.n_axes
     qh = 0.5 * (q[1:] + q[:-1])
     vh = 0.5 * (v[1:] + v[:-1])
@@ -103,10 +118,12 @@ RIPPLE_FALSE_ALARM = 1e-3  # probability that noise alone passes the ripple scan
 
 
 def ripple_range(q: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
-    """Spatial frequencies [1/rad] the recorded motion resolves: from RIPPLE_MIN_CYCLES
+    """
+    Spatial frequencies [1/rad] the recorded motion resolves: from RIPPLE_MIN_CYCLES
     cycles over the travel in ``mask`` up to the sample limit 0.9 pi / (95th percentile of
     the position step per sample), i.e. a ripple period of 2.2 samples at the usual speed
-    (at exactly 2 samples the sine regressor vanishes and the scan statistic degenerates)."""
+    (at exactly 2 samples the sine regressor vanishes and the scan statistic degenerates).
+    """
     qm = q[mask]
     span = float(np.ptp(qm)) if qm.size else 0.0
     if span <= 0:
@@ -118,13 +135,15 @@ def ripple_range(q: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
 
 
 def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
-    """Spatial frequency [1/rad] whose sin/cos in motor position explain most of the residual
+    """
+    Spatial frequency [1/rad] whose sin/cos in motor position explain most of the residual
     f, scanned over :func:`ripple_range` with 4x oversampling of the resolution 2 pi / travel.
 
     Returns (s, peak ratio, threshold): the peak power over the local noise level of the scan
     (running median / ln 2, the mean of an exponentially distributed periodogram) and the level
     that noise alone exceeds with probability RIPPLE_FALSE_ALARM over the scan's independent
-    frequencies (ln(M / alpha)). s = 0 when the motion resolves no range."""
+    frequencies (ln(M / alpha)). s = 0 when the motion resolves no range.
+    """
     qm, fm = q[mask], f[mask] - np.mean(f[mask]) if mask.any() else f[mask]
     s_min, s_max = ripple_range(q, mask)
     if s_min <= 0 or s_max <= 2 * s_min:
@@ -167,11 +186,13 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
                  mask: np.ndarray, fs: float, *, fc: float = 20.0, v_eps: float = 0.0,
                  with_inertia: bool = False, nuisance: np.ndarray | None = None,
                  ripple: bool = True, ripple_mask: np.ndarray | None = None) -> Regression:
-    """Regress the residual f of one axis on [1, sgn(v), v, (a), (nuisance), ripple sin/cos].
+    """
+    Regress the residual f of one axis on [1, sgn(v), v, (a), (nuisance), ripple sin/cos].
 
     All columns are low-pass filtered like f (fc [Hz]); samples with |v| < v_eps (sticking,
     where the Coulomb force is undetermined) and outside ``mask`` are left out. t statistics
-    use an effective sample count N * 2 fc / fs (filtered data are correlated)."""
+    use an effective sample count N * 2 fc / fs (filtered data are correlated).
+    """
     sg = np.sign(lowpass(v, fs, fc))
     cols = {'offset': np.ones_like(v), 'coulomb_friction': sg, 'viscous_friction': v}
     if with_inertia:

@@ -1,4 +1,18 @@
-"""Diagnosis of plain time series (recorded trajectories, imported CSV/MAT): no identification
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Diagnosis of plain time series (recorded trajectories, imported CSV/MAT): no identification
 experiments, so the evidence is the motor-side inverse-dynamics residual of the nominal model
 (:mod:`.residual`), regressed per axis on the signatures of the candidate effects:
 
@@ -27,15 +41,14 @@ one of the predicted torque, on the lines with coherence > 0.5.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import replace
+import math
 from typing import Any, Callable
-
-import numpy as np
-from scipy import signal, stats
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
+import numpy as np
+from scipy import signal, stats
 
 from .common import Effect
 from .residual import find_ripple, inverse_dynamics_residual, is_rigid, lowpass
@@ -52,12 +65,14 @@ MIN_SHARE = 0.10          # ... when it is also at least this share of the nomin
 
 
 def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]:
-    """u - (torque the model needs for the measured motion), between samples.
+    """
+    U - (torque the model needs for the measured motion), between samples.
 
     Linear part from :func:`.residual.inverse_dynamics_residual`, plus the model's own Coulomb
     friction, torque ripple and gravity (link positions taken as the motor positions: the
     deflection is far below the gravity terms' angular scale). Returns (f, q, v, a), each
-    (N-1, n)."""
+    (N-1, n).
+    """
     f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, rec.effort, rec.dt,
                                               robot)
     g_const = np.array([a.gravity_torque for a in robot.axes])
@@ -79,8 +94,11 @@ def _gravity_sets(n: int, i: int) -> list[tuple[int, ...]]:
 
 
 def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None):
-    """Candidate regressor groups of axis i: name -> low-passed columns (N, k). Gravity sets
-    only over the ``bearing`` axes (all when None)."""
+    """
+    Candidate regressor groups of axis i: name -> low-passed columns (N, k).
+
+    Gravity sets only over the ``bearing`` axes (all when None).
+    """
     n = q.shape[1]
     g: dict[str, np.ndarray] = {
         'gravity_torque': np.ones((q.shape[0], 1)),
@@ -115,9 +133,11 @@ def _lstsq(cols: list[np.ndarray], y: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def _axis_masks(rec, f, vh, i, fit_m, val_m, fc):
-    """(low-passed residual, fit mask, held-out mask, effective samples) of axis i: sticking
+    """
+    (low-passed residual, fit mask, held-out mask, effective samples) of axis i: sticking
     samples (Coulomb force undetermined) and the filter's edges around reversals are left out
-    of fit and validation alike."""
+    of fit and validation alike.
+    """
     fs = rec.fs
     ff = lowpass(f[:, i], fs, fc)
     vl = lowpass(vh[:, i], fs, fc)
@@ -132,10 +152,12 @@ def _axis_masks(rec, f, vh, i, fit_m, val_m, fc):
 
 
 def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
-    """Axes that carry a configuration-dependent load: G sin(sum of a contiguous joint set
+    """
+    Axes that carry a configuration-dependent load: G sin(sum of a contiguous joint set
     containing the axis + phi) passes the F test (p < ALPHA) on top of offset, friction and
     inertia. Only these axes' angles may enter gravity arguments: a joint whose axis carries no
-    gravity (a vertical axis) does not tilt the links beyond it."""
+    gravity (a vertical axis) does not tilt the links beyond it.
+    """
     out = []
     n = q.shape[1]
     for i, (ff, fit_i, val_i, n_eff) in enumerate(prep):
@@ -158,9 +180,11 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
 
 def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
                   val: np.ndarray, n_eff: float) -> tuple[list[str], dict[str, dict]]:
-    """Forward selection by F test (p < ALPHA at ``n_eff`` effective samples), then removal of
+    """
+    Forward selection by F test (p < ALPHA at ``n_eff`` effective samples), then removal of
     every group whose absence does not worsen the held-out residual. Returns the selected
-    names and per candidate {'p', 'share', 'held_out_gain'} for the report."""
+    names and per candidate {'p', 'share', 'held_out_gain'} for the report.
+    """
     chosen: list[str] = []
     info: dict[str, dict] = {}
     yf = y[fit]
@@ -205,10 +229,12 @@ def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
 
 
 def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
-    """Fit and held-out masks: the record cut into blocks of BLOCK_S, every HOLD_EVERY-th
+    """
+    Fit and held-out masks: the record cut into blocks of BLOCK_S, every HOLD_EVERY-th
     held out (interleaved, so held-out data cover the same configurations as the fit instead
     of extrapolating to the end of a short trajectory), a guard of half a filter period
-    dropped at every block boundary and EDGE of the record at both ends."""
+    dropped at every block boundary and EDGE of the record at both ends.
+    """
     blk = max(int(BLOCK_S * fs), 8)
     k = np.arange(n)
     held = (k // blk) % HOLD_EVERY == HOLD_EVERY - 1
@@ -224,20 +250,26 @@ def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
 def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
                         progress: Callable[[str], None] | None = None
                         ) -> dict[str, Any]:
-    """Per axis: residual regression on the fit blocks of :func:`split_blocks`, effects
+    """
+    Per axis: residual regression on the fit blocks of :func:`split_blocks`, effects
     selected by F test and held-out error, the extended model, metrics on the held-out blocks.
 
     Parameters
     ----------
-    rec : the recording (positions, velocities, efforts of the model's axes).
-    robot : the nominal model.
-    fc : low-pass cut-off of residual and regressors [Hz].
-    progress : callback for progress lines.
+    rec
+        The recording (positions, velocities, efforts of the model's axes).
+    robot
+        The nominal model.
+    fc
+        Low-pass cut-off of residual and regressors [Hz].
+    progress
+        Callback for progress lines.
 
     Returns
     -------
     dict with 'effects' (ranked), 'extended' (RobotParams), 'metrics' (docs/CONTRACT.md §7),
     'unexplained', 'rejected' (candidates with their numbers), 'residual' (for the plots).
+
     """
     say = progress or (lambda _m: None)
     fs = rec.fs
@@ -389,9 +421,11 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
 
 
 def noise_floor(rec: Recording, f: np.ndarray, fc: float) -> np.ndarray:
-    """Per axis NRMSE^2 that torque noise alone leaves after the fc low-pass: the white level
+    """
+    Per axis NRMSE^2 that torque noise alone leaves after the fc low-pass: the white level
     of the residual's spectrum between 0.6 and 0.95 of the Nyquist frequency (where motion
-    leaves little), times the bandwidth fc, over the variance of the low-passed torque."""
+    leaves little), times the bandwidth fc, over the variance of the low-passed torque.
+    """
     fs = rec.fs
     nper = int(min(2 ** int(math.log2(max(f.shape[0] // 8, 64))), 4096))
     fr, p = signal.welch(f, fs=fs, nperseg=nper, axis=0)
@@ -402,8 +436,10 @@ def noise_floor(rec: Recording, f: np.ndarray, fc: float) -> np.ndarray:
 
 
 def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
-    """Where a held-out residual lives: the band [f1, f2] Hz holding the middle half of its
-    power (quartiles below fc) and the signal it correlates with most (|r| >= 0.3)."""
+    """
+    Where a held-out residual lives: the band [f1, f2] Hz holding the middle half of its
+    power (quartiles below fc) and the signal it correlates with most (|r| >= 0.3).
+    """
     out: dict[str, Any] = {}
     r = res[mask]
     if r.size >= 64:
@@ -432,7 +468,8 @@ def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
 
 def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
                     mask: np.ndarray | None = None) -> dict[str, Any]:
-    """Held-out metrics of a model file on a recording: the torque the model predicts from
+    """
+    Held-out metrics of a model file on a recording: the torque the model predicts from
     the measured motion against the measured torque (both low-passed at fc), on ``mask``
     (between samples, N-1; default all but the ends).
 
@@ -440,6 +477,7 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
     -------
     dict with 'frf_error_db', 'time_nrmse', 'per_axis' {name: {...}} and 'residual' (N-1, n)
     (measured minus predicted torque, low-passed).
+
     """
     fs = rec.fs
     f, *_ = model_residual(rec, robot)

@@ -1,4 +1,18 @@
-"""Typed parameters of a flexible-joint robot: one :class:`AxisParams` per joint and the
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Typed parameters of a flexible-joint robot: one :class:`AxisParams` per joint and the
 :class:`RobotParams` of the whole arm (Saupe & Knoblach 2015, eqs. 1, 2, 20-22).
 
 The model file (docs/CONTRACT.md, "Model file") is converted to and from these classes by
@@ -7,20 +21,20 @@ The model file (docs/CONTRACT.md, "Model file") is converted to and from these c
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
+import math
 from typing import Any
 
-import numpy as np
-
 from frf_ident.errors import ModelFileError
+import numpy as np
 
 __all__ = ['AxisParams', 'RobotParams']
 
 
 @dataclass
 class AxisParams:
-    """Parameters of one flexible joint; keys and units of the model file (docs/CONTRACT.md §5).
+    """
+    Parameters of one flexible joint; keys and units of the model file (docs/CONTRACT.md §5).
 
     Extensions beyond the contract (documented in README): ``gravity_torque`` [N m] constant
     link-side load, ``gravity`` configuration-dependent link-side load (a list of terms
@@ -105,7 +119,8 @@ class AxisParams:
 
 @dataclass
 class RobotParams:
-    """A multi-axis flexible-joint robot: axes plus optional link-side inertial coupling.
+    """
+    A multi-axis flexible-joint robot: axes plus optional link-side inertial coupling.
 
     ``link_coupling`` is an (n, n) symmetric matrix of off-diagonal link inertia terms [kg m^2]
     (diagonal ignored); the link inertia matrix is diag(link_inertia) + offdiag(link_coupling).
@@ -159,8 +174,10 @@ class RobotParams:
         return m
 
     def gravity_load(self, q_link: np.ndarray) -> np.ndarray:
-        """Link-side load torque of every axis [N m] at link positions ``q_link`` (..., n):
-        constant ``gravity_torque`` plus the ``gravity`` terms G sin(sum q_j + phi)."""
+        """
+        Link-side load torque of every axis [N m] at link positions ``q_link`` (..., n):
+        constant ``gravity_torque`` plus the ``gravity`` terms G sin(sum q_j + phi).
+        """
         q = np.asarray(q_link, dtype=float)
         out = np.zeros(q.shape) + np.array([a.gravity_torque for a in self.axes])
         names = self.joint_names
@@ -178,6 +195,6 @@ class RobotParams:
         return replace(self, axes=[replace(a, **changes) for a in self.axes])
 
     def linear(self) -> 'RobotParams':
-        """The linear part: no Coulomb friction, backlash, ripple, nonlinear stiffness."""
+        """Return the linear part: no Coulomb friction, backlash, ripple, nonlinear stiffness."""
         return self.with_axes(coulomb_friction=0.0, backlash=0.0, torque_ripple=[],
                               stiffness_k2=None, stiffness_breakpoint=None, gravity=[])

@@ -1,4 +1,18 @@
-"""The model-file structure (docs/CONTRACT.md §5) as plain dicts <-> typed parameters.
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The model-file structure (docs/CONTRACT.md §5) as plain dicts <-> typed parameters.
 
 Parsing text (YAML) lives in :mod:`frf_ident.io.model_file`; this module only validates and
 converts the loaded mapping, so the core stays free of I/O. Every error names the field and
@@ -13,15 +27,14 @@ Extensions beyond the contract (all optional, documented in README):
 from __future__ import annotations
 
 import copy
-import math
 from dataclasses import asdict, fields
+import math
 from typing import Any
 
-import numpy as np
-
-from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.model.params import AxisParams, RobotParams
+from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.errors import ModelFileError
+import numpy as np
 
 MODEL_VERSION = 1
 _AXIS_KEYS = {f.name for f in fields(AxisParams)}

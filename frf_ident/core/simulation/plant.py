@@ -1,4 +1,18 @@
-"""Flexible-joint robot plant (Saupe & Knoblach 2015, eqs. 1, 2, 20-22) and its simulation.
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Flexible-joint robot plant (Saupe & Knoblach 2015, eqs. 1, 2, 20-22) and its simulation.
 
 Per axis i, motor position q_m, link position q_o, deflection dq = q_m - q_o (eq. 20):
 
@@ -30,16 +44,15 @@ analytic FRFs of :mod:`frf_ident.core.simulation.analytic` to rounding.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+import math
 from typing import Any
-
-import numba
-import numpy as np
-from scipy import linalg
 
 from frf_ident.core.model.params import AxisParams, RobotParams
 from frf_ident.core.simulation.controller import pi_step
+import numba
+import numpy as np
+from scipy import linalg
 
 # columns of the per-axis parameter matrix used by the kernels
 JM, K1, K2, BS, DAMP, BV, FC, BL, GRAV, ULIM, NPARAM = range(11)
@@ -114,7 +127,8 @@ def _pack(params: RobotParams) -> _Packed:
 
 
 def state_space(params: RobotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Linear state space x' = A x + B tau of eqs. 20-22 (k1, d, viscous friction, coupling).
+    """
+    Linear state space x' = A x + B tau of eqs. 20-22 (k1, d, viscous friction, coupling).
 
     x = [q_m, v_m, q_o, v_o] (blocks of n). Returns (A, B, C_velocity, C_position).
     """
@@ -146,7 +160,8 @@ def _hold_response(A: np.ndarray, b: np.ndarray, tau: float) -> tuple[np.ndarray
 
 
 def _delayed_hold_matrices(params: RobotParams):
-    """Exact response to the zero-order-held command delayed by each axis' time_delay.
+    """
+    Exact response to the zero-order-held command delayed by each axis' time_delay.
 
     Over substep s of sample k (times [s h, (s+1) h) after t_k) axis i sees the command
     u[k + floor((tau - delay_i)/dt)], which switches at most once, at a fraction phi of the
@@ -176,7 +191,8 @@ def _delayed_hold_matrices(params: RobotParams):
 
 
 def _substep_matrices(params: RobotParams, h: float):
-    """Exact discretisation of the linear part over one substep h.
+    """
+    Exact discretisation of the linear part over one substep h.
 
     Augmented exponential of [[A, Bu, 0, 0], [0, 0, I, 0], [0, 0, 0, I], [0, 0, 0, 0]] h gives
     the responses to an input a + b s + c s^2 / 2; rewritten for the values at s = 0, h/2, h.
@@ -217,7 +233,8 @@ def _spring(e, k1, k2, bs):
 
 @numba.njit(cache=True, fastmath=True)
 def _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, row):
-    """Nonlinear residual torques beyond the linear model (k1, d) at flat state x.
+    """
+    Nonlinear residual torques beyond the linear model (k1, d) at flat state x.
 
     Writes sc[row, :n] = motor side ripple - (tau_s - k1 dq) - (tau_d - d dv) and
     sc[row, n:2n] = link side (tau_s - k1 dq) + (tau_d - d dv), with tau_s of eq. 2 behind the
@@ -268,7 +285,8 @@ _UO, _UN, _FA, _FM, _FB, _LIN, _XP, _W1, _W2, _NSCRATCH = range(10)
 @numba.njit(cache=True, fastmath=True)
 def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp,
                  gamp, gph, gsel, nonlinear, h):
-    """One substep of the exponential integrator, then Coulomb friction.
+    """
+    One substep of the exponential integrator, then Coulomb friction.
 
     Linear part exact: x+ = Ad x + Go uo + Gn un + cg for the delayed zero-order-held command
     (older / newer value, rows _UO/_UN of sc), plus Ga fa + Gm fm + Gb fb for a feed-forward
@@ -319,10 +337,12 @@ def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, 
 @numba.njit(cache=True, fastmath=True)
 def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
              cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc):
-    """Advance the plant over [t_k, t_k+dt): delayed zero-order-held commands from the ring
+    """
+    Advance the plant over [t_k, t_k+dt): delayed zero-order-held commands from the ring
     buffer plus an optional feed-forward torque on the stage grid uff[2 m k ... 2 m k + 2 m].
     The total torque is limited to +-torque_limit (the feed-forward is cut where it would
-    exceed the limit together with the command)."""
+    exceed the limit together with the command).
+    """
     n = prm.shape[0]
     h = dt / m
     for s in range(m):
@@ -343,8 +363,7 @@ def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, 
 
 @numba.njit(cache=True, fastmath=True)
 def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
-    """Encoder position (quantised) and velocity (true or by differentiation) plus noise
-    vn[k]."""
+    """Encode position (quantised) and velocity (true or by differentiation) plus noise vn[k]."""
     n = qout.shape[0]
     for i in range(n):
         q = x[i]
@@ -362,7 +381,8 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
               offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph, gsel,
               nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v,
               out_u, out_x, out_r):
-    """Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
+    """
+    Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
 
     With a position plan (``has_plan``) the velocity reference gets position feedback,
     r_k <- r_k + kpos (qplan_k - q_k), as the excitation node does for moves; out_r holds the
@@ -412,10 +432,12 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
 @numba.njit(cache=True, fastmath=True)
 def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw, cg,
               ra, rs, rp, gamp, gph, gsel, nonlinear, enc, from_encoder, vnoise, sc, q, v):
-    """One sample of :func:`_simulate` for a command u given from outside (plug-in step):
+    """
+    One sample of :func:`_simulate` for a command u given from outside (plug-in step):
     the start position becomes qprev, u enters the delay buffer, the plant advances and the
     measurement at the end of the sample goes to q, v. The buffer is left rebased (latest
-    command last), as :meth:`FlexibleJointPlant._rebase_buffer` leaves it."""
+    command last), as :meth:`FlexibleJointPlant._rebase_buffer` leaves it.
+    """
     n = u.shape[0]
     _measure(x, qprev, enc, False, dt, vnoise, 0, q, v)
     for i in range(n):
@@ -433,8 +455,10 @@ def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, g
 
 @dataclass
 class SimResult:
-    """Sampled signals of a simulation run, each (N, n): t (N,), q/v measured, u applied torque,
-    states (N, 4, n) true [q_m, v_m, q_o, v_o]."""
+    """
+    Sampled signals of a simulation run, each (N, n): t (N,), q/v measured, u applied torque,
+    states (N, 4, n) true [q_m, v_m, q_o, v_o].
+    """
 
     t: np.ndarray
     position: np.ndarray
@@ -445,8 +469,10 @@ class SimResult:
 
 
 def static_deflection(axis: AxisParams, load: float | None = None) -> float:
-    """Spring deflection that carries the static link-side load (eq. 2 inverted, backlash
-    added); ``load`` defaults to the constant ``gravity_torque``."""
+    """
+    Spring deflection that carries the static link-side load (eq. 2 inverted, backlash
+    added); ``load`` defaults to the constant ``gravity_torque``.
+    """
     g = axis.gravity_torque if load is None else load
     if g == 0:
         return 0.0
@@ -459,7 +485,8 @@ def static_deflection(axis: AxisParams, load: float | None = None) -> float:
 
 
 class FlexibleJointPlant:
-    """Simulated robot, usable as a docs/CONTRACT.md §4 plant plug-in and for batch runs.
+    """
+    Simulated robot, usable as a docs/CONTRACT.md §4 plant plug-in and for batch runs.
 
     ``step(torque)`` applies a motor torque for one sample (zero-order hold, through the input
     delay and torque limit) and returns the measurement (position, velocity, effort) at the end
@@ -490,7 +517,7 @@ class FlexibleJointPlant:
 
     @property
     def state(self) -> np.ndarray:
-        """True state as a (4, n) view: rows q_m, v_m, q_o, v_o."""
+        """Return true state as a (4, n) view: rows q_m, v_m, q_o, v_o."""
         return self.x.reshape(4, self.n_axes)
 
     def equilibrium_torque(self) -> np.ndarray:
@@ -498,9 +525,11 @@ class FlexibleJointPlant:
         return self.params.gravity_load(np.zeros(self.n_axes))
 
     def reset(self, seed: int | None = None) -> None:
-        """Back to rest at the static equilibrium under gravity.
+        """
+        Back to rest at the static equilibrium under gravity.
 
-        The noise generator continues (new noise in every run) unless ``seed`` is given."""
+        The noise generator continues (new noise in every run) unless ``seed`` is given.
+        """
         n = self.n_axes
         self.x = np.zeros(4 * n)  # flat [q_m, v_m, q_o, v_o]; see ``state``
         self.x[:n] = [static_deflection(a, g) for a, g in zip(self.params.axes,
@@ -528,7 +557,8 @@ class FlexibleJointPlant:
                  torque_fine: np.ndarray | None = None, controller: Any = None,
                  n_samples: int | None = None, position_plan: np.ndarray | None = None,
                  position_gain: float | np.ndarray = 0.0) -> SimResult:
-        """Run samples from the current state.
+        """
+        Run samples from the current state.
 
         Closed loop (``controller`` given, a :class:`~frf_ident.core.simulation.controller.PIVelocity`):
         u = PI(reference - y) + torque. Open loop: u = torque (zero-order hold). ``torque_fine``
@@ -584,7 +614,8 @@ class FlexibleJointPlant:
             self.buf = np.ascontiguousarray(np.roll(self.buf, -shift, axis=0))
 
     def step(self, torque: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Apply motor torque [N m] for one sample; return (position, velocity, effort).
+        """
+        Apply motor torque [N m] for one sample; return (position, velocity, effort).
 
         docs/CONTRACT.md §4: the returned measurement is taken at the end of the sample, the
         effort is the torque applied (after the torque limit) plus torque noise. Runs the same
