@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Run the diagnosis sweep over random scenes of the independent plant.
+
 Diagnosis sweep (``make bench``, section ``diagnosis``): random 3-axis scenes of the
 independent reference plant (test/plants/reference.py, not FlexibleJointPlant) with 0-4 hidden
 effects at realistic sizes, identified end to end through ``identify --plant`` (a bag) and
@@ -57,6 +59,8 @@ def _nominal() -> dict[str, Any]:
 def draw_effect(name: str, rng: np.random.Generator, axis: dict[str, Any],
                 small: bool = False) -> dict[str, Any]:
     """
+    Draw a random realistic change of one axis.
+
     Random realistic change of one axis for effect ``name`` (model-file keys); ``small``
     draws from the low end of the range (near the noise floor).
     """
@@ -84,6 +88,8 @@ def draw_effect(name: str, rng: np.random.Generator, axis: dict[str, Any],
 
 def draw_scene(rng: np.random.Generator, kind: str) -> dict[str, Any]:
     """
+    Draw a random scene.
+
     A scene: {'scene': plug-in scene, 'truth': [(effect, axis index, params)], 'mode':
     (axis, Hz) or None, 'kind'}.
     """
@@ -186,6 +192,8 @@ def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0
 
 def second_mode_hz(scene: dict[str, Any], ax: int) -> float:
     """
+    Return the frequency of the resonance that the extra link-side mode adds.
+
     Frequency [Hz] of the resonance the extra link-side mode adds to axis ``ax`` (motor,
     rigid link part and the mode's mass as a free 3-mass chain, the highest of its two
     modes): what the measured FRF shows, not the spring's link-held tuning.
@@ -242,6 +250,8 @@ def aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
 
 def bench_rows() -> list[tuple[str, str, str, str]]:
     """
+    Return the rows of ``make bench``.
+
     Rows of ``make bench``: the sweep, then diagnose wall time on the demo bag if present
     (out/demo/graph/bag of ``make demo``).
     """

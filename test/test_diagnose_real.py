@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Run `frf-ident diagnose` on real measured data.
+
 `frf-ident diagnose` on real measured data (../shared/data, read in place), through the one
 route for all formats: MAT file + import map, or the bag imported with the same map.
 """
@@ -41,6 +43,8 @@ def _diagnose(tmp_path, name, data, model, mp=None, extra=()):
 @pytest.mark.skipif(not EMPS.is_file(), reason='shared EMPS data not present')
 def test_emps_names_coulomb_friction_with_authors_value(tmp_path):
     """
+    Find the EMPS Coulomb friction the nominal model lacks.
+
     Nominal model with only M and Fv: Coulomb friction first, Fc within 15 % of the
     authors' 20.39 N, and the extended model better on the held-out part.
     """
@@ -57,6 +61,8 @@ def test_emps_names_coulomb_friction_with_authors_value(tmp_path):
 @pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
 def test_kuka_gravity_of_axes_2_3_and_the_same_report_from_mat_and_bag(tmp_path):
     """
+    Find the configuration-dependent gravity of KUKA axes 2 and 3.
+
     Rigid, friction-free, gravity-free nominal model of axes 1-3: the extension names the
     configuration-dependent gravity of axes 2 and 3 (coupled: q2 and q2 + q3), not of axis 1,
     predicts the held-out torque better than the nominal model and better than zero torque
@@ -84,6 +90,8 @@ def test_kuka_gravity_of_axes_2_3_and_the_same_report_from_mat_and_bag(tmp_path)
 @pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
 def test_kuka_validate_on_another_record(tmp_path):
     """
+    Validate on another record with --validate.
+
     --validate: fit on the first half of trajectory A (imported), report both models on the
     second half (the only other KUKA record is the rest of the same trajectory).
     """

@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Hidden effects in the independent reference plant, end to end.
+
 Hidden effects in the independent reference plant (test/plants/reference.py), end to end:
 ``identify --plant plants.reference:ReferencePlant`` records a bag, ``diagnose`` compares it
 with the nominal config/model_3axis.yaml. Seeds are random on every run (printed, and

@@ -11,7 +11,8 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""The main job end to end: the node graph on the simulated robot, estimation, diagnosis.
+"""
+The main job end to end: the node graph on the simulated robot, estimation, diagnosis.
 
 Thin orchestration of :func:`frf_ident.app.graph.run_graph` (node processes on loopback: rclpy
 when ROS 2 is sourced, else the DDS backend; on ROS_DOMAIN_ID when it is set, so ``ros2 topic
@@ -41,20 +42,27 @@ DEMO_ROBOT = 'robot_3axis_demo.yaml'
 def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
              multisine: MultisineConfig = DEMO_MULTISINE, chirp: ChirpConfig = DEMO_CHIRP,
              progress: Callable[[str], None] = say) -> int:
-    """Run the node graph, estimate from its bag and diagnose against the nominal model.
+    """
+    Run the node graph, estimate from its bag and diagnose against the nominal model.
 
     Parameters
     ----------
-    out : output directory (graph/bag, estimate/, diagnosis/ are created in it).
-    model : nominal model file (default config/model_3axis.yaml).
-    robot : the simulated robot (default config/robot_3axis_demo.yaml).
-    multisine, chirp : the experiments.
-    progress : called with one line per step.
+    out
+        Output directory (graph/bag, estimate/, diagnosis/ are created in it).
+    model
+        Nominal model file (default config/model_3axis.yaml).
+    robot
+        The simulated robot (default config/robot_3axis_demo.yaml).
+    multisine, chirp
+        The experiments.
+    progress
+        Called with one line per step.
 
     Returns
     -------
     int
         0 on success.
+
     """
     from frf_ident.app.diagnose import diagnose
     from frf_ident.app.estimate import estimate_bag

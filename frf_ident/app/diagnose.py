@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Run the ``frf-ident diagnose`` command: diagnose a record against a nominal model.
+
 `frf-ident diagnose DATA --model M.yaml --out DIR [--validate OTHER ...]`
 (docs/CONTRACT.md §7): what the nominal simulation gets wrong, which effect causes it, what
 stays unexplained, the extended model and its gain on held-out data and on other records.
@@ -38,7 +40,7 @@ __all__ = ['diagnose', 'has_experiments', 'load_data']
 
 def load_data(path: Path, map_path: Path | None = None) -> Recording:
     """
-    Return dATA -> Recording: a bag directory or .mcap directly, a CSV/MAT table with a map.
+    Load DATA as a Recording: a bag directory or .mcap directly, a CSV/MAT table with a map.
 
     Parameters
     ----------
@@ -164,7 +166,7 @@ def _rejected(c) -> dict[str, Any]:
 
 
 def _plain_metrics(m: Any) -> Any:
-    """Metrics as strict JSON: NaN (no line to compare) becomes null."""
+    """Return the metrics as strict JSON: NaN (no line to compare) becomes null."""
     if isinstance(m, dict):
         return {k: _plain_metrics(v) for k, v in m.items()}
     if isinstance(m, (list, tuple)):
@@ -176,6 +178,8 @@ def _plain_metrics(m: Any) -> Any:
 
 def validate_on(name: str, other: Recording, robot, ext, ctrl) -> dict[str, Any]:
     """
+    Return baseline and extended metrics of the two models on another record.
+
     Baseline and extended metrics of the two model files on another record (no refit):
     simulation of its experiments when it has them, else the time-series torque prediction.
     """

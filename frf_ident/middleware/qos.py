@@ -11,7 +11,8 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Backend-neutral QoS profiles (ROS2_CONVENTIONS.md section 1.4).
+"""
+Backend-neutral QoS profiles (ROS2_CONVENTIONS.md section 1.4).
 
 Node code passes a :class:`QosSpec` (or a plain ``int`` depth, as rclpy allows) to
 ``create_publisher`` / ``create_subscription``; each backend converts it to its native QoS.

@@ -11,7 +11,8 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""rclpy backend (ROS 2 Jazzy): a thin subclass of rclpy.node.Node.
+"""
+Rclpy backend (ROS 2 Jazzy): a thin subclass of rclpy.node.Node.
 
 Only what differs from rclpy is written here: backend-neutral :class:`QosSpec` arguments,
 dynamically typed parameters for ``None`` / empty-list defaults, parameter overrides as a dict,
@@ -44,7 +45,8 @@ PARAMETER_ERRORS: tuple = (ParameterException, InvalidParameterTypeException,
 
 
 def to_qos_profile(qos: 'QosSpec | int | QoSProfile') -> QoSProfile:
-    """Backend-neutral QoS -> rclpy QoSProfile (unset policies keep rmw defaults).
+    """
+    Backend-neutral QoS -> rclpy QoSProfile (unset policies keep rmw defaults).
 
     A QoSProfile passes through unchanged: rclpy's own Node internals (parameter events,
     TimeSource's /clock subscription) call the overridden create_* methods with one.
@@ -60,7 +62,7 @@ def to_qos_profile(qos: 'QosSpec | int | QoSProfile') -> QoSProfile:
 
 
 class Client:
-    """rclpy client wrapper: ``call`` raises TimeoutError and spins the node if nobody does."""
+    """Rclpy client wrapper: ``call`` raises TimeoutError and spins the node if nobody does."""
 
     def __init__(self, node: 'Node', client: Any) -> None:
         self._node = node
@@ -104,7 +106,7 @@ class Client:
 
 
 class Node(RclpyNode):
-    """rclpy Node accepting the backend-neutral arguments of frf_ident.middleware."""
+    """Rclpy Node accepting the backend-neutral arguments of frf_ident.middleware."""
 
     def __init__(self, name: str, *, namespace: str = '/',
                  parameter_overrides: Optional[dict[str, Any]] = None,
@@ -211,7 +213,8 @@ def spin_once(node: Node, timeout_sec: Optional[float] = None) -> None:
 
 
 def spin(node: Node, stop_event: Optional[threading.Event] = None) -> None:
-    """Spin the node's SingleThreadedExecutor until ``stop_event`` is set or rclpy shuts down.
+    """
+    Spin the node's SingleThreadedExecutor until ``stop_event`` is set or rclpy shuts down.
 
     One thread runs every callback, in order, as rclpy's own ``rclpy.spin`` (the
     MultiThreadedExecutor costs several times more per message). A client's ``call`` works

@@ -26,12 +26,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from frf_ident.core.estimation.frd import FrequencyResponse
 import matplotlib
-import matplotlib.ticker
 
 matplotlib.use('Agg')
-from frf_ident.core.estimation.frd import FrequencyResponse  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy import signal  # noqa: E402
 
@@ -260,6 +260,8 @@ def unwrapped_phase_deg(p: np.ndarray) -> np.ndarray:
 
 def paper_figure(results: dict[str, Any], case: str, path: Path) -> Path:
     """
+    Draw Figure 4 or 5 of the paper.
+
     Figure 4 (case 'coulomb') / Figure 5 ('stiffness') of the paper: both designs side by
     side, magnitude and phase, linear model vs the linear-case and nonlinear-case estimates.
     """

@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Self-contained HTML reports of estimates and diagnoses.
+
 One self-contained HTML report (inline CSS, no scripts, no external resources) that shows
 FRF estimates, their uncertainty, the excitation and the data quality of a run.
 
@@ -192,8 +194,8 @@ def _error_to_reference(frf: FrequencyResponse, ref: FrequencyResponse | None) -
     errs = []
     for o in range(frf.noutputs):
         for i in range(frf.ninputs):
-            mag_ref = np.exp(np.interp(lf, lr, np.log(np.maximum(np.abs(ref.response[o, i]),
-                                                                  1e-300))))
+            mag_ref = np.exp(np.interp(
+                lf, lr, np.log(np.maximum(np.abs(ref.response[o, i]), 1e-300))))
             errs.append(20 * np.log10(np.maximum(np.abs(frf.response[o, i, inside]), 1e-300)
                                       / mag_ref))
     return float(np.sqrt(np.mean(np.concatenate(errs) ** 2)))
@@ -324,6 +326,8 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
                            res: Mapping[str, Any], rec: Recording, mode: str,
                            data: str | Path) -> Path:
     """
+    Write the HTML report of ``frf-ident diagnose``.
+
     ``out_dir/report.html`` of ``frf-ident diagnose``: ranked effects with evidence, what is
     left unexplained and where, held-out metrics (also per axis and per --validate record),
     rejected candidates and the figures of :func:`figures.diagnosis_figures`.

@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Diagnosis pieces against truth the diagnosis did not produce.
+
 Diagnosis pieces against truth the diagnosis did not produce: synthetic residuals with known
 ripple, rigid multi-axis torques written here from the equations of motion (gravity of a
 coupled arm, friction), missing reference samples, and one route for CSV, MAT and bag.
@@ -92,6 +94,8 @@ def test_missing_reference_is_left_out_not_commanded_as_zero():
 
 def _arm_record(seed: int, *, disturbance_hz: float = 0.0):
     """
+    Find the gravity of a rigid 3-axis arm from its equations of motion.
+
     Rigid 3-axis arm (axis 1 vertical, 2-3 horizontal): torques from the equations of
     motion written here, measured with noise.
     """
@@ -143,6 +147,8 @@ def test_timeseries_names_gravity_of_a_coupled_arm_and_friction():
 
 def test_unexplained_disturbance_gets_its_band_and_axis():
     """
+    Report a torque no candidate explains as unexplained, with its band.
+
     A 7 Hz torque that no candidate effect explains: listed as unexplained on its axis
     with a band around 7 Hz, not as a named effect's false parameters.
     """

@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+The independent reference plant against FlexibleJointPlant.
+
 The independent reference plant (test/plants/reference.py) against FlexibleJointPlant: two
 implementations written apart (RK4 + Karnopp vs exponential integrator + set-valued friction)
 must agree where the physics is the same; and the gravity keys of the model file.

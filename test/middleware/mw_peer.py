@@ -11,7 +11,8 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Peer process for the two-process DDS tests: ``python mw_peer.py MODE``.
+"""
+Peer process for the two-process DDS tests: ``python mw_peer.py MODE``.
 
 Prints ``ready`` once its endpoints exist, then serves until stdin closes.
 Modes: ``publish`` (JointState + Float64MultiArray at 100 Hz), ``service`` (Trigger server on

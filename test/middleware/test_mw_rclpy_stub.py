@@ -11,7 +11,8 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""The rclpy backend's own logic against a minimal stand-in of the rclpy API (no ROS here).
+"""
+The rclpy backend's own logic against a minimal stand-in of the rclpy API (no ROS here).
 
 This checks argument translation only; real rclpy behaviour is not exercised on this machine.
 """

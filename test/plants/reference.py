@@ -124,6 +124,8 @@ def _rhs(s, u, p, minv, gamp, gph, gsel, mode, out):
 @numba.njit(cache=True)
 def _advance(s, hist, k, delay_steps, frac, dt, p, minv, gamp, gph, gsel, mode, m):
     """
+    Integrate one sample with RK4 in m substeps.
+
     RK4 over one sample in m substeps; the command each axis sees at time t is the held
     sample u[floor((t - delay) / dt)] from ``hist`` (ring of past commands, index k = now).
     """

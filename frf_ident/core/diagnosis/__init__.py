@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Diagnose where the nominal model fails and build the extended model.
+
 Diagnosis: what the nominal simulation gets wrong, which effect causes it, and the extended
 model (docs/CONTRACT.md §7). Pure numpy/scipy; no middleware imports.
 """

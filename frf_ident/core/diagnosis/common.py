@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Provide the shared pieces of the diagnosis.
+
 Shared pieces of the diagnosis: effect names, the result record, simulation of a model on the
 recorded excitation, splitting a recording into fit and held-out parts, and the metrics of
 docs/CONTRACT.md §7 (frf_error_db, time_nrmse).
@@ -75,6 +77,8 @@ def quiet(robot: RobotParams) -> RobotParams:
 
 def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recording:
     """
+    Simulate ``robot`` in closed loop on the recording's reference and return the result.
+
     Run ``robot`` in closed loop with ``ctrl`` on the recording's velocity reference (the
     same excitation through the same controller) and return a Recording with the same
     segments, so that it can be estimated exactly like the measurement.
@@ -98,6 +102,8 @@ def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recor
 
 def split_recording(rec: Recording) -> tuple[Recording, Recording, str]:
     """
+    Split an identification recording into fit and validation views.
+
     Fit and validation views of an identification recording (same samples, different
     segments): multisine realisations 0..n_p-2 and the last chirp iteration for fitting; the
     last multisine realisation and the second-last chirp iteration held out.
@@ -132,7 +138,7 @@ def split_recording(rec: Recording) -> tuple[Recording, Recording, str]:
 
 
 def segment_mask(rec: Recording, designs=('multisine', 'chirp')) -> np.ndarray:
-    """Sample inside the recording's segments of the given designs."""
+    """Return a mask of the samples inside the recording's segments of the given designs."""
     m = np.zeros(rec.t.size, bool)
     for s in rec.segments:
         if s.info.get('design') in designs:
@@ -141,7 +147,7 @@ def segment_mask(rec: Recording, designs=('multisine', 'chirp')) -> np.ndarray:
 
 
 def nrmse(meas: np.ndarray, model: np.ndarray, mask: np.ndarray | None = None) -> float:
-    """RMS of the output error over RMS of the measured output (both mean-free)."""
+    """Return the RMS of the output error over RMS of the measured output (both mean-free)."""
     if mask is not None:
         meas, model = meas[mask], model[mask]
     den = np.sqrt(np.mean((meas - np.mean(meas, 0)) ** 2))
@@ -149,7 +155,7 @@ def nrmse(meas: np.ndarray, model: np.ndarray, mask: np.ndarray | None = None) -
 
 
 def diag_ratio(pm, ps) -> np.ndarray:
-    """Diagonal elements P_measured/P_model, shape (n, n_freq)."""
+    """Return the diagonal elements P_measured/P_model, shape (n, n_freq)."""
     n = min(pm.response.shape[0], pm.response.shape[1])
     idx = np.arange(n)
     return pm.response[idx, idx] / ps.response[idx, idx]
@@ -157,6 +163,8 @@ def diag_ratio(pm, ps) -> np.ndarray:
 
 def frf_error_db(pairs, axis: int | None = None) -> float:
     """
+    Return the FRF error in dB of model against measurement.
+
     docs/CONTRACT.md §7: RMS over the analysed lines of 20 log10 |P_measured / P_model|
     (diagonal elements; only that of ``axis`` when given).
     """

@@ -58,6 +58,8 @@ def estimates(rec: Recording) -> dict[str, Any]:
 
 def missing_reference(rec: Recording) -> np.ndarray:
     """
+    Return the samples whose reference is missing, widened by a settling time.
+
     Samples whose reference is missing (NaN), widened by SETTLE_S after each stretch: the
     controller's input there is unknown, so simulation and measurement are not compared.
     """
@@ -75,6 +77,8 @@ def missing_reference(rec: Recording) -> np.ndarray:
 
 def period_noise(rec: Recording, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
+    Return the noise variance of velocity and effort per axis from the multisine periods.
+
     Noise variance of velocity and effort per axis measured from the multisine periods:
     half the mean square difference of consecutive steady-state periods (periodic signal
     cancels, noise doubles). NaN where the recording has no repeated periods.
@@ -152,6 +156,8 @@ class Evaluator:
     def terms(self, robot: RobotParams, sim: Recording | None = None, *, held_out: bool = False
               ) -> dict[str, np.ndarray]:
         """
+        Return the loss terms per axis of a model.
+
         Loss terms per axis (arrays of n): mean |ln(P_meas/P_model)|^2 over the lines of the
         diagonal element, torque and velocity NRMSE^2, on the fit (or held-out) part.
         """
@@ -171,15 +177,17 @@ class Evaluator:
         return out
 
     def loss(self, robot: RobotParams, axis: int) -> float:
-        """Misfit of one axis (units of its noise floor) of a model, on the fit part."""
+        """Return the misfit of one axis (units of its noise floor) of a model, on the fit part."""
         return float(self.misfit(self.terms(robot))[axis])
 
     def misfit(self, terms: dict[str, np.ndarray]) -> np.ndarray:
-        """Per axis: mean over the loss terms of term / noise floor (1 = at the noise)."""
+        """Return per axis the mean of term / noise floor over the loss terms (1 = at noise)."""
         return np.mean([terms[k] / self.floors[k] for k in terms], axis=0)
 
     def misfit_sd(self) -> float:
         """
+        Return the standard deviation of :meth:`misfit` under noise alone.
+
         Standard deviation of :meth:`misfit` under noise alone (exponentially distributed
         terms averaged over their independent lines / samples).
         """
@@ -187,7 +195,7 @@ class Evaluator:
                              / len(self.floors)))
 
     def metrics(self, robot: RobotParams, sim: Recording | None = None) -> dict[str, Any]:
-        """docs/CONTRACT.md §7 metrics on the held-out part, plus per axis."""
+        """Return the docs/CONTRACT.md §7 metrics on the held-out part, plus per axis."""
         sim = sim if sim is not None else self._sim(robot)
         sv = replace_segments(sim, self.val if self.val.segments else self.fit)
         mv = self.meas_val if self.meas_val else self.meas_fit
@@ -222,6 +230,8 @@ def replace_segments(rec: Recording, like: Recording) -> Recording:
 
 def friction_regression(ev: Evaluator, robot: RobotParams, axis: int):  # noqa: D401
     """
+    Regress the motor-side inverse-dynamics residual of the nominal model per axis.
+
     Motor-side inverse-dynamics residual of the nominal model regressed on sgn(v), v and
     motor-position harmonics, on the fit segments plus the constant-velocity run.
     """
@@ -280,6 +290,8 @@ def fit_ripple(reg, robot: RobotParams, axis: int) -> Effect | None:
 
 def fit_time_delay(ev: Evaluator, sim_est: dict, robot: RobotParams, axis: int) -> Effect | None:
     """
+    Fit a time delay to the phase of P_meas/P_nominal.
+
     Phase of P_meas/P_nominal linear in frequency with unchanged magnitude: weighted LS of
     the unwrapped phase on -2 pi f (multisine and chirp lines).
     """
@@ -315,6 +327,8 @@ def _scaled(robot: RobotParams, axis: int, keys, x) -> RobotParams:
 def fit_linear_scales(meas: dict, robot: RobotParams, axis: int, keys=_LIN_KEYS,
                       which=('multisine', 'chirp')) -> np.ndarray:
     """
+    Fit log scale factors of model parameters to the measured FRF.
+
     Least squares of log scale factors of ``keys`` so that the analytic sampled FRF fits the
     measured diagonal element (complex log error) of the chosen estimates.
     """
@@ -335,6 +349,8 @@ def fit_linear_scales(meas: dict, robot: RobotParams, axis: int, keys=_LIN_KEYS,
 def stiffness_seen(meas: dict, sim_est: dict, robot: RobotParams, axis: int, key: str
                    ) -> float:
     """
+    Return the stiffness scale the measurement shows beyond the estimator bias.
+
     Log stiffness scale that fits estimate ``key`` of the measurement, minus the one that
     fits the same estimate of the nominal simulation (removes estimator bias).
     """
@@ -346,7 +362,7 @@ def stiffness_seen(meas: dict, sim_est: dict, robot: RobotParams, axis: int, key
 
 def fit_parameter_mismatch(ev: Evaluator, robot: RobotParams, axis: int, scales_ms, scales_ch
                            ) -> Effect | None:
-    """Inertias, stiffness and damping fitted to both loads; consistent shifts only."""
+    """Fit inertias, stiffness and damping to both loads; consistent shifts only."""
     x = fit_linear_scales(ev.meas_fit, robot, axis)
     a = robot.axes[axis]
     changed = {k: getattr(a, k) * math.exp(v) for k, v in zip(_LIN_KEYS, x) if abs(v) > 0.03}
@@ -362,7 +378,7 @@ def fit_parameter_mismatch(ev: Evaluator, robot: RobotParams, axis: int, scales_
 def fit_stiffness_nonlinearity(ev: Evaluator, robot: RobotParams, axis: int, scales_ms,
                                scales_ch) -> Effect | None:
     """
-    Stiffening spring (eq. 2): the two loads see different stiffness, stiffer than nominal.
+    Fit a stiffening spring (eq. 2): the two loads see different stiffness, stiffer than nominal.
 
     Without preload the chirp (high load) reaches beyond the breakpoint and sees the stiffer joint;
     with a static load (gravity) that deflects the spring beyond bs already, the small multisine
@@ -398,6 +414,8 @@ def fit_stiffness_nonlinearity(ev: Evaluator, robot: RobotParams, axis: int, sca
 def fit_backlash(ev: Evaluator, robot: RobotParams, axis: int, scales_ms, scales_ch
                  ) -> Effect | None:
     """
+    Fit a backlash (dead zone) to the load dependence of the stiffness.
+
     Dead zone: softer joint at low load (multisine) than at high load (chirp); the gap is
     found by a bounded 1-D simulation fit.
     """
@@ -447,6 +465,8 @@ def _rebuild(robot: RobotParams, effects: list[Effect]) -> RobotParams:
 def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Effect],
             cur: np.ndarray, say: Callable[[str], None]) -> tuple[RobotParams, np.ndarray]:
     """
+    Accept candidate effects greedily per axis.
+
     Greedy per axis: in each round every axis takes its candidate that removes the largest
     share of the axis' misfit above noise (own-axis attribution: a small effect on a weak axis
     competes only with that axis' misfit), if the share is >= MIN_SHARE and the drop exceeds
@@ -497,6 +517,8 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
 
 def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> dict[str, Any]:
     """
+    Return where the held-out residual of one axis lives.
+
     Where the held-out residual of one axis lives: the band [f1, f2] Hz around the
     largest FRF misfit above noise that is left after refitting the axis' inertias, stiffness
     and damping to the measured FRF (multisine and chirp lines merged; the neighbouring lines

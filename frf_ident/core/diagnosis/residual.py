@@ -36,7 +36,7 @@ from scipy.ndimage import median_filter
 
 
 def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
-    """Zero-phase 4th-order Butterworth low-pass along axis 0."""
+    """Filter with a zero-phase 4th-order Butterworth low-pass along axis 0."""
     sos = signal.butter(4, min(fc, 0.45 * fs), fs=fs, output='sos')
     return signal.sosfiltfilt(sos, x, axis=0)
 
@@ -51,6 +51,8 @@ def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: f
                               robot: RobotParams, link_position: np.ndarray | None = None
                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
+    Compute the motor-side residual torque of the model from the measured motion.
+
     Motor-side residual torque of the model, evaluated between samples (k + 1/2) where the
     zero-order-held torque u[k] acts. Returns (f, q_half, v_half, a_half), each (N-1, n).
     With ``link_position`` (a link-side encoder) the deflection is measured, not simulated.
@@ -119,6 +121,8 @@ RIPPLE_FALSE_ALARM = 1e-3  # probability that noise alone passes the ripple scan
 
 def ripple_range(q: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
     """
+    Return the range of spatial frequencies [1/rad] the recorded motion resolves.
+
     Spatial frequencies [1/rad] the recorded motion resolves: from RIPPLE_MIN_CYCLES
     cycles over the travel in ``mask`` up to the sample limit 0.9 pi / (95th percentile of
     the position step per sample), i.e. a ripple period of 2.2 samples at the usual speed
@@ -136,6 +140,8 @@ def ripple_range(q: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
 
 def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
     """
+    Scan the residual for the spatial frequency of a torque ripple.
+
     Spatial frequency [1/rad] whose sin/cos in motor position explain most of the residual
     f, scanned over :func:`ripple_range` with 4x oversampling of the resolution 2 pi / travel.
 

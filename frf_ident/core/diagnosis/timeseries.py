@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Diagnose plain time series by regression of the inverse-dynamics residual.
+
 Diagnosis of plain time series (recorded trajectories, imported CSV/MAT): no identification
 experiments, so the evidence is the motor-side inverse-dynamics residual of the nominal model
 (:mod:`.residual`), regressed per axis on the signatures of the candidate effects:
@@ -66,7 +68,7 @@ MIN_SHARE = 0.10          # ... when it is also at least this share of the nomin
 
 def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]:
     """
-    U - (torque the model needs for the measured motion), between samples.
+    Return u - (torque the model needs for the measured motion), between samples.
 
     Linear part from :func:`.residual.inverse_dynamics_residual`, plus the model's own Coulomb
     friction, torque ripple and gravity (link positions taken as the motor positions: the
@@ -89,13 +91,13 @@ def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]
 
 
 def _gravity_sets(n: int, i: int) -> list[tuple[int, ...]]:
-    """Contiguous joint sets containing axis i (the coupled-arm sums)."""
+    """Return the contiguous joint sets containing axis i (the coupled-arm sums)."""
     return [tuple(range(a, b + 1)) for a in range(0, i + 1) for b in range(i, n)]
 
 
 def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None):
     """
-    Candidate regressor groups of axis i: name -> low-passed columns (N, k).
+    Return the candidate regressor groups of axis i: name -> low-passed columns (N, k).
 
     Gravity sets only over the ``bearing`` axes (all when None).
     """
@@ -134,6 +136,8 @@ def _lstsq(cols: list[np.ndarray], y: np.ndarray) -> tuple[np.ndarray, float]:
 
 def _axis_masks(rec, f, vh, i, fit_m, val_m, fc):
     """
+    Return the residual, masks and effective sample count of axis i.
+
     (low-passed residual, fit mask, held-out mask, effective samples) of axis i: sticking
     samples (Coulomb force undetermined) and the filter's edges around reversals are left out
     of fit and validation alike.
@@ -153,6 +157,8 @@ def _axis_masks(rec, f, vh, i, fit_m, val_m, fc):
 
 def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
     """
+    Return the axes that carry a configuration-dependent (gravity) load.
+
     Axes that carry a configuration-dependent load: G sin(sum of a contiguous joint set
     containing the axis + phi) passes the F test (p < ALPHA) on top of offset, friction and
     inertia. Only these axes' angles may enter gravity arguments: a joint whose axis carries no
@@ -181,6 +187,8 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
 def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
                   val: np.ndarray, n_eff: float) -> tuple[list[str], dict[str, dict]]:
     """
+    Select regressor groups by F test and held-out error.
+
     Forward selection by F test (p < ALPHA at ``n_eff`` effective samples), then removal of
     every group whose absence does not worsen the held-out residual. Returns the selected
     names and per candidate {'p', 'share', 'held_out_gain'} for the report.
@@ -212,7 +220,7 @@ def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
         chosen.append(best)
 
     def held(names):
-        """Held-out residual energy of the groups ``names`` refitted jointly."""
+        """Return the held-out residual energy of the groups ``names`` refitted jointly."""
         c, _ = _lstsq([groups[k][fit] for k in names], yf)
         if not names:
             r = y[val]
@@ -230,6 +238,8 @@ def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
 
 def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
     """
+    Return the fit and held-out masks of interleaved blocks.
+
     Fit and held-out masks: the record cut into blocks of BLOCK_S, every HOLD_EVERY-th
     held out (interleaved, so held-out data cover the same configurations as the fit instead
     of extrapolating to the end of a short trajectory), a guard of half a filter period
@@ -251,6 +261,8 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                         progress: Callable[[str], None] | None = None
                         ) -> dict[str, Any]:
     """
+    Diagnose a time-series recording against the nominal ``robot``.
+
     Per axis: residual regression on the fit blocks of :func:`split_blocks`, effects
     selected by F test and held-out error, the extended model, metrics on the held-out blocks.
 
@@ -290,7 +302,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
         X0 = np.column_stack(list(g0.values()))
         c0, *_ = np.linalg.lstsq(X0[fit_i], ff[fit_i], rcond=None)
         wide = lowpass(f[:, i], fs, 0.45 * fs) - np.column_stack(
-            [x for x in _groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0, bearing).values()]) @ c0
+            list(_groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0, bearing).values())) @ c0
         s, peak, thr = find_ripple(wide, qh[:, i], fit_i)
         groups = _groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0, bearing)
         chosen, info = select_groups(groups, ff, fit_i, val_i, n_eff)
@@ -422,6 +434,8 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
 
 def noise_floor(rec: Recording, f: np.ndarray, fc: float) -> np.ndarray:
     """
+    Return per axis the NRMSE^2 that torque noise alone leaves.
+
     Per axis NRMSE^2 that torque noise alone leaves after the fc low-pass: the white level
     of the residual's spectrum between 0.6 and 0.95 of the Nyquist frequency (where motion
     leaves little), times the bandwidth fc, over the variance of the low-passed torque.
@@ -437,6 +451,8 @@ def noise_floor(rec: Recording, f: np.ndarray, fc: float) -> np.ndarray:
 
 def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
     """
+    Return where a held-out residual lives (band and correlated signal).
+
     Where a held-out residual lives: the band [f1, f2] Hz holding the middle half of its
     power (quartiles below fc) and the signal it correlates with most (|r| >= 0.3).
     """
@@ -469,6 +485,8 @@ def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
 def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
                     mask: np.ndarray | None = None) -> dict[str, Any]:
     """
+    Return held-out metrics of a model file on a recording.
+
     Held-out metrics of a model file on a recording: the torque the model predicts from
     the measured motion against the measured torque (both low-passed at fc), on ``mask``
     (between samples, N-1; default all but the ends).
@@ -505,7 +523,7 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
 
 
 def _frf_error(v: np.ndarray, u_meas: np.ndarray, u_model: np.ndarray, fs: float) -> float:
-    """RMS dB difference of the Welch H1 estimates u_meas -> v and u_model -> v."""
+    """Return the RMS dB difference of the Welch H1 estimates u_meas -> v and u_model -> v."""
     out = []
     nper = int(min(2 ** int(math.log2(max(v.shape[0] // 4, 64))), 4096))
     for i in range(v.shape[1]):

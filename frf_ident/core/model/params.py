@@ -12,6 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
+Typed parameters of a flexible-joint robot.
+
 Typed parameters of a flexible-joint robot: one :class:`AxisParams` per joint and the
 :class:`RobotParams` of the whole arm (Saupe & Knoblach 2015, eqs. 1, 2, 20-22).
 
@@ -175,6 +177,8 @@ class RobotParams:
 
     def gravity_load(self, q_link: np.ndarray) -> np.ndarray:
         """
+        Return the link-side load torque of every axis.
+
         Link-side load torque of every axis [N m] at link positions ``q_link`` (..., n):
         constant ``gravity_torque`` plus the ``gravity`` terms G sin(sum q_j + phi).
         """

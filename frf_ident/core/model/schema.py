@@ -141,7 +141,7 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
 
 
 def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
-    """``controller`` section -> PIVelocity (torque limits from the axes)."""
+    """Convert the ``controller`` section to a PIVelocity (torque limits from the axes)."""
     c = d.get('controller')
     if not isinstance(c, dict):
         raise ModelFileError(f'controller: expected a mapping with kind, kp, ki, got {c!r}')
@@ -166,7 +166,7 @@ def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
 
 
 def robot_to_dict(robot: RobotParams, controller: PIVelocity | None = None) -> dict[str, Any]:
-    """RobotParams (+ controller) -> model-file mapping (inverse of robot_from_dict)."""
+    """Convert RobotParams (+ controller) to a model-file mapping (inverse of robot_from_dict)."""
     axes = []
     for a in robot.axes:
         ad = asdict(a)

@@ -18,7 +18,7 @@ Per axis i, motor position q_m, link position q_o, deflection dq = q_m - q_o (eq
 
     Jm  ddq_m = tau_m + tau_ripple(q_m) - tau_fc(dq_m) - b_v dq_m - tau_s(dq)
                 - d (dq_m - dq_o)                                                  (eq. 21)
-    M_o ddq_o = tau_s(dq) + d (dq_m - dq_o) - tau_g                                             (eq. 22)
+    M_o ddq_o = tau_s(dq) + d (dq_m - dq_o) - tau_g                                (eq. 22)
 
 with Coulomb friction tau_fc = Fc sgn(dq_m) (eq. 1), the deflection-dependent spring tau_s of
 eq. 2 (k1 up to the breakpoint bs, k2 beyond), an optional backlash dead zone of total width
@@ -65,13 +65,13 @@ class _Packed:
     prm: np.ndarray       # (n, NPARAM)
     ad: np.ndarray        # (4n, 4n) state transition over one substep
     ga: np.ndarray        # (4n, n) input matrices for the stage values at start,
-    gm: np.ndarray        #   middle and end of a substep (quadratic interpolation)
+    gm: np.ndarray        # ... middle and end of a substep (quadratic interpolation)
     gb: np.ndarray
     gw: np.ndarray        # (4n, 2n) residual torques (motor side, link side), held
     cg: np.ndarray        # (4n,) effect of the constant gravity torque over one substep
     nonlinear: bool       # any residual torque (nonlinear spring, backlash, ripple)
     gold: np.ndarray      # (m, 4n, n) held command, delayed: part of substep s under the older
-    gnew: np.ndarray      #   command u[k + offsets[s, 0, i]] and under the newer one
+    gnew: np.ndarray      # ... command u[k + offsets[s, 0, i]] and under the newer one
     ra: np.ndarray        # (n, R) ripple amplitudes
     rs: np.ndarray        # (n, R) spatial frequencies
     rp: np.ndarray        # (n, R) phases
@@ -338,6 +338,8 @@ def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, 
 def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
              cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc):
     """
+    Advance the plant over one sample [t_k, t_k+dt).
+
     Advance the plant over [t_k, t_k+dt): delayed zero-order-held commands from the ring
     buffer plus an optional feed-forward torque on the stage grid uff[2 m k ... 2 m k + 2 m].
     The total torque is limited to +-torque_limit (the feed-forward is cut where it would
@@ -433,6 +435,8 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
 def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw, cg,
               ra, rs, rp, gamp, gph, gsel, nonlinear, enc, from_encoder, vnoise, sc, q, v):
     """
+    Advance one sample for a command given from outside (plug-in step).
+
     One sample of :func:`_simulate` for a command u given from outside (plug-in step):
     the start position becomes qprev, u enters the delay buffer, the plant advances and the
     measurement at the end of the sample goes to q, v. The buffer is left rebased (latest
@@ -456,6 +460,8 @@ def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, g
 @dataclass
 class SimResult:
     """
+    Sampled signals of a simulation run.
+
     Sampled signals of a simulation run, each (N, n): t (N,), q/v measured, u applied torque,
     states (N, 4, n) true [q_m, v_m, q_o, v_o].
     """
@@ -470,6 +476,8 @@ class SimResult:
 
 def static_deflection(axis: AxisParams, load: float | None = None) -> float:
     """
+    Return the spring deflection that carries the static link-side load.
+
     Spring deflection that carries the static link-side load (eq. 2 inverted, backlash
     added); ``load`` defaults to the constant ``gravity_torque``.
     """
@@ -532,8 +540,8 @@ class FlexibleJointPlant:
         """
         n = self.n_axes
         self.x = np.zeros(4 * n)  # flat [q_m, v_m, q_o, v_o]; see ``state``
-        self.x[:n] = [static_deflection(a, g) for a, g in zip(self.params.axes,
-                                                               self.equilibrium_torque())]
+        self.x[:n] = [static_deflection(a, g)
+                      for a, g in zip(self.params.axes, self.equilibrium_torque())]
         self.qprev = self.x[:n].copy()
         enc = self._packed.enc
         self.qprev = np.where(enc > 0, enc * np.floor(self.qprev / np.where(enc > 0, enc, 1)
@@ -560,7 +568,8 @@ class FlexibleJointPlant:
         """
         Run samples from the current state.
 
-        Closed loop (``controller`` given, a :class:`~frf_ident.core.simulation.controller.PIVelocity`):
+        Closed loop (``controller`` given, a
+        :class:`~frf_ident.core.simulation.controller.PIVelocity`):
         u = PI(reference - y) + torque. Open loop: u = torque (zero-order hold). ``torque_fine``
         is an extra torque on the integrator's stage grid, shape (2 m N + 1, n) with
         m = substeps, used for continuous-time excitations (e.g. the paper's open-loop example).

@@ -11,7 +11,8 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Offline runner: executes procedure phases in closed loop on a simulated or plug-in plant.
+"""
+Offline runner: executes procedure phases in closed loop on a simulated or plug-in plant.
 
 The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` (run at compiled
 speed, the PI inside the kernel) or any docs/CONTRACT.md §4 plug-in with ``dt``,
@@ -74,7 +75,8 @@ class ClosedLoop:
 
     def run(self, reference: np.ndarray, excitation: np.ndarray | None = None,
             plan: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Run the reference (N, n); returns and logs (position, velocity, effort).
+        """
+        Run the reference (N, n); returns and logs (position, velocity, effort).
 
         With ``plan`` (N, n absolute positions) the reference gets position feedback
         r + POSITION_GAIN (plan - q), as for moves; the reference actually used is logged.
@@ -129,7 +131,8 @@ def run_identification(plant: Any, controller: PIVelocity,
                        config: IdentificationConfig | None = None, *,
                        progress: Progress | None = None,
                        meta: dict[str, Any] | None = None) -> Recording:
-    """Run the Section 7 procedures (multisine with compensation run, iterated chirps).
+    """
+    Run the Section 7 procedures (multisine with compensation run, iterated chirps).
 
     Returns the recording with all segments; ``meta['summary']`` holds per procedure the
     experiment time and, for the chirp iteration, every iteration's error to u_des.
