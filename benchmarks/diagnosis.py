@@ -213,18 +213,33 @@ def _nominal_names() -> list[str]:
     return [a['name'] for a in _nominal()['axes']]
 
 
-def sweep(n: int = 42, seed: int = 2026, verbose: bool = True) -> dict[str, Any]:
-    """Run ``n`` scenes (kinds cycled, sizes drawn) and aggregate."""
+def scene_of(seed: int, k: int) -> dict[str, Any]:
+    """Return scene number ``k`` of the sweep that starts at ``seed`` (kinds cycled)."""
+    return draw_scene(np.random.default_rng(seed + k), KINDS[k % len(KINDS)])
+
+
+def _run_numbered(seed: int, k: int) -> dict[str, Any]:
+    with tempfile.TemporaryDirectory() as tmp:
+        r = run_scene(scene_of(seed, k), Path(tmp))
+    r['seed'] = seed + k
+    return r
+
+
+def sweep(n: int = 42, seed: int = 2026, verbose: bool = True, jobs: int | None = None
+          ) -> dict[str, Any]:
+    """
+    Run ``n`` scenes (kinds cycled, sizes drawn) and aggregate.
+
+    Scenes run in ``jobs`` processes (default: one per CPU); the result does not depend on it.
+    """
+    from concurrent.futures import ProcessPoolExecutor
+    jobs = jobs or os.cpu_count() or 1
     runs = []
-    for k in range(n):
-        rng = np.random.default_rng(seed + k)
-        scene = draw_scene(rng, KINDS[k % len(KINDS)])
-        with tempfile.TemporaryDirectory() as tmp:
-            r = run_scene(scene, Path(tmp))
-        r['seed'] = seed + k
-        runs.append(r)
-        if verbose:
-            print(json.dumps(r, default=float), flush=True)
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        for r in pool.map(_run_numbered, [seed] * n, range(n)):
+            runs.append(r)
+            if verbose:
+                print(json.dumps(r, default=float), flush=True)
     return aggregate(runs)
 
 

@@ -176,7 +176,13 @@ class Recording:
         """Return the sample time [s], the median spacing of ``t`` (ValueError below 2 samples)."""
         if self.t.size < 2:
             raise ValueError('recording has fewer than 2 samples')
-        return float(np.median(np.diff(self.t)))
+        # the median of a long record costs ~1 ms and estimators ask often: kept while ``t``
+        # is the same array
+        cached = self.__dict__.get('_dt_of')
+        if cached is None or cached[0] is not self.t:
+            cached = (self.t, float(np.median(np.diff(self.t))))
+            self.__dict__['_dt_of'] = cached
+        return cached[1]
 
     @property
     def fs(self) -> float:

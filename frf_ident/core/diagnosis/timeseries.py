@@ -95,6 +95,39 @@ def _gravity_sets(n: int, i: int) -> list[tuple[int, ...]]:
     return [tuple(range(a, b + 1)) for a in range(0, i + 1) for b in range(i, n)]
 
 
+def _link_sets(bearing: list[int], i: int) -> list[tuple[int, ...]]:
+    """
+    Return the joint sets whose angle sums tilt the links that load axis i.
+
+    In a serial arm the links from axis i outward load it; the absolute angle of link j is
+    the sum of the joints of the run of bearing axes (axes whose own angle carries a load,
+    parallel and not vertical) from its first axis up to j. So axis i, in a run b..e of
+    bearing axes, depends on the sets (b..j) for i <= j <= e; an axis outside every run on
+    none.
+
+    Parameters
+    ----------
+    bearing : list of int
+        The bearing axes (:func:`gravity_bearing`).
+    i : int
+        The axis.
+
+    Returns
+    -------
+    list of tuple of int
+        The joint sets, shortest first.
+    """
+    if i not in bearing:
+        return []
+    b = i
+    while b - 1 in bearing:
+        b -= 1
+    e = i
+    while e + 1 in bearing:
+        e += 1
+    return [tuple(range(b, j + 1)) for j in range(i, e + 1)]
+
+
 def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None):
     """
     Return the candidate regressor groups of axis i: name -> low-passed columns (N, k).
@@ -110,8 +143,8 @@ def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None):
     if ripple_s:
         g['torque_ripple'] = np.column_stack([np.sin(ripple_s * q[:, i]),
                                               np.cos(ripple_s * q[:, i])])
-    sets = [js for js in _gravity_sets(n, i) if np.ptp(q[:, list(js)].sum(axis=1)) > 1e-3
-            and (bearing is None or set(js) <= set(bearing))]
+    sets = [js for js in (_gravity_sets(n, i) if bearing is None else _link_sets(bearing, i))
+            if np.ptp(q[:, list(js)].sum(axis=1)) > 1e-3]
     # one gravity group per single set and per pair of sets: a coupled arm's axis carries the
     # weight of its own link and of the links beyond (G1 sin(q2) + G2 sin(q2 + q3)), which a
     # single set approximates with the wrong joints when the motion correlates them
@@ -161,8 +194,9 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
 
     Axes that carry a configuration-dependent load: G sin(sum of a contiguous joint set
     containing the axis + phi) passes the F test (p < ALPHA) on top of offset, friction and
-    inertia. Only these axes' angles may enter gravity arguments: a joint whose axis carries no
-    gravity (a vertical axis) does not tilt the links beyond it.
+    inertia and removes at least MIN_SHARE of what they leave. Only these axes' angles may
+    enter gravity arguments (:func:`_link_sets`): a joint whose axis carries no gravity (a
+    vertical axis) does not tilt the links beyond it.
     """
     out = []
     n = q.shape[1]
@@ -178,7 +212,11 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
                 continue
             _, rss1 = _lstsq(base + [g[key][fit_i]], ff[fit_i])
             F = ((rss0 - rss1) / 2) / max(rss1 / dof, 1e-300) * (n_eff / max(fit_i.sum(), 1))
-            if F > 0 and stats.f.sf(F, 2, dof) < ALPHA:
+            # significant and large: a slow residual of friction the model lacks (a
+            # degressive law) passes the F test against a sinusoid over a short travel, but a
+            # link's weight dominates the residual of the axis that carries it
+            if (F > 0 and stats.f.sf(F, 2, dof) < ALPHA
+                    and rss0 - rss1 >= MIN_SHARE * rss0):
                 out.append(i)
                 break
     return out

@@ -27,6 +27,7 @@ Non-parametric FRF estimation (Saupe & Knoblach 2015, Sections 3, 4.3 and 5.1).
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
 
 from frf_ident.errors import EstimationError
 import numpy as np
@@ -302,6 +303,37 @@ def detection_levels_from_spectra(Y, bins: np.ndarray,
 
 # --- chirp processing (Section 5.1) -----------------------------------------------------------
 
+@functools.lru_cache(maxsize=None)
+def decimation_filter(q: int) -> np.ndarray:
+    """
+    Return the FIR low-pass that :func:`scipy.signal.resample_poly` designs for down = q.
+
+    The same filter scipy designs by default (Kaiser window, beta 5, cut-off 1/q of the
+    Nyquist frequency, 20 q + 1 taps), designed once per q: the chirp processing decimates
+    thousands of excerpts with a few factors.
+
+    Parameters
+    ----------
+    q : int
+        Decimation factor (> 1).
+
+    Returns
+    -------
+    ndarray
+        The filter taps (read-only).
+    """
+    h = signal.firwin(2 * 10 * q + 1, 1.0 / q, window=('kaiser', 5.0))
+    h.flags.writeable = False
+    return h
+
+
+@functools.lru_cache(maxsize=4096)
+def _hann(n: int) -> np.ndarray:
+    w = signal.windows.hann(n, sym=False)
+    w.flags.writeable = False
+    return w
+
+
 def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
                       n_periods: float = 4.0, samples_per_period: float = 10.0,
                       t_first: float = 0.0) -> np.ndarray:
@@ -329,10 +361,10 @@ def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
     seg = seg - seg.mean(axis=0)
     q = max(1, int(np.floor(fs / (samples_per_period * f_x))))
     if q > 1:
-        seg = signal.resample_poly(seg, 1, q, axis=0)
+        seg = signal.resample_poly(seg, 1, q, axis=0, window=decimation_filter(q))
     n = seg.shape[0]
     t = t_first + i0 / fs + np.arange(n) * (q / fs)
-    w = signal.windows.hann(n, sym=False)
+    w = _hann(n)
     kernel = w * np.exp(-2j * np.pi * f_x * (t - t_center))
     return np.tensordot(kernel, seg, axes=(0, 0)) / np.sum(w)
 
