@@ -178,10 +178,9 @@ def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0
     if scene['mode']:
         ax = scene['mode'][0]
         fm = second_mode_hz(scene, ax)
-        mode_ok = any(u['axis'] == names[ax] and 'band_hz' in u['signature']
-                      and u['signature']['band_hz'][0] <= fm * 1.1
-                      and u['signature']['band_hz'][1] >= fm * 0.9
-                      for u in report['unexplained'])
+        mode_ok = any(u['axis'] == names[ax] and any(
+            b[0] <= fm * 1.1 and b[1] >= fm * 0.9 for b in u['signature'].get('bands_hz', []))
+            for u in report['unexplained'])
     return {'kind': scene['kind'], 'hidden': sorted(f'{n}@{a}' for n, a in hidden),
             'found': sorted(f'{n}@{a}' for n, a in found),
             'hits': len(hits), 'n_hidden': len(hidden),

@@ -369,10 +369,12 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
     if une:
         une_html = ('<p>The extended model leaves these axes clearly above their noise floor; '
                     'the signature says where the rest of the misfit lives.</p>'
-                    + _table(['axis', 'share of the nominal misfit left', 'band [Hz]',
-                              'residual correlates with'],
+                    + _table(['axis', 'share of the nominal misfit left',
+                              'bands [Hz], strongest first', 'residual correlates with'],
                              [[u['axis'], u['misfit_share'],
-                               str(u['signature'].get('band_hz', '-')),
+                               ', '.join(f'{b[0]:g}-{b[1]:g}' for b in u['signature'].get(
+                                   'bands_hz', [u['signature']['band_hz']]
+                                   if 'band_hz' in u['signature'] else [])) or '-',
                                u['signature'].get('correlates_with', '-')] for u in une]))
     else:
         une_html = '<p>nothing: every axis is explained to within its noise floor.</p>'

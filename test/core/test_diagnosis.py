@@ -25,7 +25,7 @@ from pathlib import Path
 
 from frf_ident.cli import main
 from frf_ident.core.diagnosis.common import simulate_like
-from frf_ident.core.diagnosis.experiments import missing_reference
+from frf_ident.core.diagnosis.experiments import missing_reference, residual_bands
 from frf_ident.core.diagnosis.residual import find_ripple, ripple_range
 from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
 from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
@@ -213,3 +213,16 @@ def test_controller_reset_uses_the_gravity_load():
     rob = robot_from_dict(m)
     ctrl = controller_from_dict(m, rob)
     assert ctrl.integral[1] == pytest.approx(120.0 + 100.0 * math.sin(0.5))
+
+
+def test_residual_bands_list_each_concentration_strongest_first():
+    """Two separated bumps give two bands around their centres; one below a quarter none."""
+    f = np.arange(1.0, 60.0, 0.5)
+
+    def bump(fc, a):
+        return a * np.exp(-((f - fc) / 1.0) ** 2)
+    bands = residual_bands(f, bump(15.0, 1.0) + bump(35.0, 0.5) + bump(50.0, 0.2))
+    assert len(bands) == 2
+    assert bands[0][0] < 15.0 < bands[0][1] and bands[1][0] < 35.0 < bands[1][1]
+    assert bands[0][1] < bands[1][0]
+    assert residual_bands(f, np.zeros_like(f)) == []

@@ -501,7 +501,7 @@ def refit_friction(ev: Evaluator, robot: RobotParams, cand: Effect, *, local: bo
 
     Bounded 1-D search of the coefficient minimising the axis' misfit of the closed-loop
     simulation: from 0 to the nominal value plus a friction torque of 30 % of the axis' torque,
-    or with ``local`` within +-50 % of the candidate's value (a regression estimate whose
+    or with ``local`` from 0.3 to 2 times the candidate's value (a regression estimate whose
     remaining misfit shows it is not quite right: the misfit is sharp in Coulomb friction).
 
     Parameters
@@ -523,7 +523,7 @@ def refit_friction(ev: Evaluator, robot: RobotParams, cand: Effect, *, local: bo
     i, key = cand.axis_index, cand.name
     v = float(cand.parameters[key])
     if local and v > 0:
-        lo, hi = 0.5 * v, 1.5 * v
+        lo, hi = 0.3 * v, 2.0 * v
     else:
         lo, hi = 0.0, getattr(robot.axes[i], key) + _friction_scale(ev, i, key)
     sol = optimize.minimize_scalar(lambda x: ev.loss(_with(robot, i, **{key: x}), i),
@@ -547,8 +547,9 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
     Each effect was fitted on top of the model of its time; together they can leave the axis
     above its floor (a stiffening spring fitted before the time delay was known). Nelder-Mead
     on the log scale factors of every positive scalar parameter of the axis' kept effects
-    (friction, delay, stiffening, backlash, linear parameters), every other effect in the
-    model; the result replaces the effects' parameters only if it lowers the axis' misfit.
+    (friction, delay, stiffening, backlash, linear parameters, the added ripple's amplitude),
+    every other effect in the model; the result replaces the effects' parameters only if it
+    lowers the axis' misfit.
 
     Parameters
     ----------
@@ -573,14 +574,22 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
     mine = [c for c in kept if c.axis_index == axis]
     slots = [(c, k) for c in mine for k, v in c.parameters.items()
              if k in _REFIT_KEYS and isinstance(v, (int, float)) and v > 0]
+    # a ripple's amplitude (the entry the diagnosis added: the last one)
+    slots += [(c, 'torque_ripple') for c in mine if c.name == 'torque_ripple']
     if not slots:
         return _rebuild(base, kept), cur
-    start = [float(c.parameters[k]) for c, k in slots]
+    start = [float(c.parameters[k][-1]['amplitude'] if k == 'torque_ripple'
+                   else c.parameters[k]) for c, k in slots]
 
     def params(x):
-        out: dict[int, dict[str, float]] = {}
+        out: dict[int, dict[str, Any]] = {}
         for (c, k), v, d in zip(slots, start, x):
-            out.setdefault(id(c), dict(c.parameters))[k] = v * math.exp(d)
+            p = out.setdefault(id(c), dict(c.parameters))
+            if k == 'torque_ripple':
+                p[k] = [dict(r) for r in p[k]]
+                p[k][-1]['amplitude'] = v * math.exp(d)
+            else:
+                p[k] = v * math.exp(d)
         return out
 
     def mk(x):
@@ -599,7 +608,8 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
         return _rebuild(base, kept), cur
     p = params(sol.x)
     say(f'  {mine[0].axis}: effects refitted jointly, misfit {cur[axis]:.4g} -> '
-        f'{new[axis]:.4g}: ' + ', '.join(f'{k} {p[id(c)][k]:.4g}' for c, k in slots))
+        f'{new[axis]:.4g}: ' + ', '.join(f'{k} {v * math.exp(d):.4g}'
+                                         for (c, k), v, d in zip(slots, start, sol.x)))
     for c in mine:
         if id(c) in p:
             c.parameters = p[id(c)]
@@ -627,9 +637,17 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
     sd = ev.misfit_sd()
     ext = _rebuild(base, kept)
     pending = list(cands)
+    rnd = 0
     while pending:
         scored = []
         for c in pending:
+            i = c.axis_index
+            if (rnd and c.name in _FRICTION
+                    and cur[i] > UNEXPLAINED_RATIO * ev.floor_seen(cur)[i]):
+                # its axis took an effect and is still clearly above its floor: the value the
+                # regression read next to the unmodelled effect is refitted by simulation
+                r = refit_friction(ev, ext, c, local=True)
+                c.parameters, c.evidence = r.parameters, r.evidence
             e_c = ev.misfit(ev.terms(apply_effect(ext, c)))
             i = c.axis_index
             gain = cur[i] - e_c[i]
@@ -685,18 +703,64 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
                 ext, cur = trial, new
         pending = [c for c in pending if c.axis_index in best and c not in best.values()
                    and not any(k.name == c.name and k.axis == c.axis for k in kept)]
+        rnd += 1
     return ext, cur
+
+
+MAX_BANDS = 3    # residual concentrations listed in a signature
+
+
+def residual_bands(f: np.ndarray, wt: np.ndarray) -> list[list[float]]:
+    """
+    Return the bands [f1, f2] Hz where a misfit per line concentrates, strongest first.
+
+    A band is the run of lines around a local maximum while they stay above a quarter of it
+    (half its amplitude in dB), plus one line each side; further bands are taken around the
+    largest remaining lines as long as they reach a quarter of the strongest. A resonance the
+    model lacks reshapes the whole FRF of its axis (the neighbouring resonance and
+    antiresonance move too), so its own band need not be the strongest.
+
+    Parameters
+    ----------
+    f : ndarray
+        Line frequencies [Hz], ascending.
+    wt : ndarray
+        Misfit above the noise floor per line (>= 0).
+
+    Returns
+    -------
+    list of [float, float]
+        At most MAX_BANDS bands; empty when no line is above the floor.
+    """
+    if f.size == 0 or wt.max() <= 0:
+        return []
+    free = np.ones(f.size, bool)
+    top = float(wt.max())
+    bands = []
+    while len(bands) < MAX_BANDS and free.any():
+        k = int(np.argmax(np.where(free, wt, -1.0)))
+        if wt[k] < 0.25 * top:
+            break
+        lo, hi = k, k
+        while lo > 0 and free[lo - 1] and wt[lo - 1] >= 0.25 * wt[k]:
+            lo -= 1
+        while hi < f.size - 1 and free[hi + 1] and wt[hi + 1] >= 0.25 * wt[k]:
+            hi += 1
+        free[max(lo - 1, 0):hi + 2] = False
+        bands.append([round(float(f[max(lo - 1, 0)]), 2),
+                      round(float(f[min(hi + 1, f.size - 1)]), 2)])
+    return bands
 
 
 def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> dict[str, Any]:
     """
     Return where the held-out residual of one axis lives.
 
-    Where the held-out residual of one axis lives: the band [f1, f2] Hz around the
-    largest FRF misfit above noise that is left after refitting the axis' inertias, stiffness
-    and damping to the measured FRF (multisine and chirp lines merged; the neighbouring lines
-    above a quarter of that misfit, plus one line each side), and the signal the torque
-    residual of the extended model correlates with most (|r| >= 0.3).
+    Where the held-out residual of one axis lives: the bands [f1, f2] Hz of the FRF misfit
+    above noise that is left after refitting the axis' inertias, stiffness and damping to the
+    measured FRF (multisine and chirp lines merged; :func:`residual_bands`; ``band_hz`` the
+    strongest, ``bands_hz`` all), and the signal the torque residual of the extended model
+    correlates with most (|r| >= 0.3).
     """
     meas = ev.meas_val if ev.meas_val else ev.meas_fit
     part = ev.val if ev.val.segments else ev.fit
@@ -722,17 +786,10 @@ def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> di
         f, wt = np.concatenate(fr), np.concatenate(w)
         o = np.argsort(f)
         f, wt = f[o], wt[o]
-        if wt.max() > 0:
-            # the strongest concentration: the lines around the largest misfit while they
-            # stay above a quarter of it (half the amplitude in dB)
-            k = int(np.argmax(wt))
-            lo, hi = k, k
-            while lo > 0 and wt[lo - 1] >= 0.25 * wt[k]:
-                lo -= 1
-            while hi < f.size - 1 and wt[hi + 1] >= 0.25 * wt[k]:
-                hi += 1
-            out['band_hz'] = [round(float(f[max(lo - 1, 0)]), 2),
-                              round(float(f[min(hi + 1, f.size - 1)]), 2)]
+        bands = residual_bands(f, wt)
+        if bands:
+            out['band_hz'] = bands[0]
+            out['bands_hz'] = bands
     m = ev.val_mask if ev.val_mask.any() else ev.fit_mask
     res = (ev.rec.effort[:, axis] - sim.effort[:, axis])[m]
     sigs = {'position': ev.rec.position[:, axis], 'velocity': ev.rec.velocity[:, axis],
@@ -837,13 +894,19 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         say('second pass over the torque-residual candidates of axes with FRF-shape effects')
         # the regression read them against a linear model that lacked the FRF-shape effect
         # (a wrong link-side state biases the residual): friction is refitted by simulation
-        again = [refit_friction(ev, ext, c) if c.name in _FRICTION else c for c in again]
+        for c in again:
+            if c.name in _FRICTION:
+                r = refit_friction(ev, ext, c)
+                c.parameters, c.evidence = r.parameters, r.evidence
         ext, cur = _accept(ev, robot, kept, again, cur, say)
     # joint refit: an axis still clearly above its floor refits its effects' parameters
-    # together by simulation (each was fitted on top of the model of its time)
+    # together by simulation (each was fitted on top of the model of its time); so does an
+    # axis that took a second-pass effect (read from a regression against a model that lacked
+    # the axis' FRF-shape effect)
+    second = {c.axis_index for c in again if c in kept}
     for i in range(robot.n_axes):
-        if (any(c.axis_index == i for c in kept)
-                and cur[i] > UNEXPLAINED_RATIO * ev.floor_seen(cur)[i]):
+        if any(c.axis_index == i for c in kept) and (
+                i in second or cur[i] > UNEXPLAINED_RATIO * ev.floor_seen(cur)[i]):
             ext, cur = refit_jointly(ev, robot, kept, i, cur, say)
     # held-out check: an effect stays only if removing it worsens its axis' held-out misfit
     sim_ext = ev._sim(ext)
