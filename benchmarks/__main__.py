@@ -341,6 +341,13 @@ def bench_diagnosis() -> list[tuple[str, str, str, str]]:
     return bench_rows()
 
 
+@section('diagnosis_real')
+def bench_diagnosis_real() -> list[tuple[str, str, str, str]]:
+    """Compare the KUKA KR300 diagnosis of the two halves of trajectory A."""
+    from benchmarks.diagnosis import kuka_halves_rows
+    return kuka_halves_rows()
+
+
 @section('nodes')
 def bench_nodes() -> list[tuple[str, str, str, str]]:
     """Measure the node graph's lockstep steps/s beside the same backend's ping-pong."""

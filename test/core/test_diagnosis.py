@@ -92,12 +92,13 @@ def test_missing_reference_is_left_out_not_commanded_as_zero():
         0.2 * np.max(np.abs(res.velocity[1500:2000]))
 
 
-def _arm_record(seed: int, *, disturbance_hz: float = 0.0):
+def _arm_record(seed: int, *, disturbance_hz: float = 0.0, cable: float = 0.0):
     """
     Find the gravity of a rigid 3-axis arm from its equations of motion.
 
     Rigid 3-axis arm (axis 1 vertical, 2-3 horizontal): torques from the equations of
-    motion written here, measured with noise.
+    motion written here, measured with noise; ``cable`` [N m/rad] adds a position-dependent
+    torque on axis 1 that is no gravity (a cable carrier's spring).
     """
     rng = np.random.default_rng(seed)
     fs, T = 500.0, 40.0
@@ -117,6 +118,7 @@ def _arm_record(seed: int, *, disturbance_hz: float = 0.0):
     u[:, 2] += g3 * np.sin(q[:, 1] + q[:, 2] + p3)
     if disturbance_hz:
         u[:, 0] += 3.0 * np.sin(2 * np.pi * disturbance_hz * t)
+    u[:, 0] += cable * q[:, 0]
     u += 0.2 * rng.standard_normal(u.shape)
     vm = v + 1e-4 * rng.standard_normal(v.shape)
     truth = {'fc': fc, 'g2': g2, 'g3': g3}
@@ -143,6 +145,24 @@ def test_timeseries_names_gravity_of_a_coupled_arm_and_friction():
     m = res['metrics']
     assert m['extended']['time_nrmse'] < 0.3 < m['baseline']['time_nrmse']
     assert res['unexplained'] == []
+
+
+def test_position_dependent_torque_of_a_vertical_axis_does_not_tilt_the_links_beyond():
+    """
+    Keep the gravity arguments of axes 2-3 free of joint 1.
+
+    Axis 1 carries a position-dependent torque of its own (a cable spring); the sets of axes 2
+    and 3 are still the link angles q2 and q2 + q3 (their residual does not improve with q1).
+    """
+    rec, truth = _arm_record(6, cable=30.0)
+    robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
+    res = diagnose_timeseries(rec, robot)
+    found = {(e.name, e.axis): e.parameters for e in res['effects']}
+    for ax in ('joint_2', 'joint_3'):
+        assert all('joint_1' not in g['joints'] for g in found[('gravity', ax)]['gravity'])
+    grav3 = found[('gravity', 'joint_3')]['gravity']
+    assert [tuple(g['joints']) for g in grav3] == [('joint_2', 'joint_3')]
+    assert grav3[0]['amplitude'] == pytest.approx(truth['g3'], rel=0.2)
 
 
 def test_unexplained_disturbance_gets_its_band_and_axis():

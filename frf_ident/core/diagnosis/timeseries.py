@@ -95,20 +95,19 @@ def _gravity_sets(n: int, i: int) -> list[tuple[int, ...]]:
     return [tuple(range(a, b + 1)) for a in range(0, i + 1) for b in range(i, n)]
 
 
-def _link_sets(bearing: list[int], i: int) -> list[tuple[int, ...]]:
+def _link_sets(runs: list[list[int]], i: int) -> list[tuple[int, ...]]:
     """
     Return the joint sets whose angle sums tilt the links that load axis i.
 
     In a serial arm the links from axis i outward load it; the absolute angle of link j is
-    the sum of the joints of the run of bearing axes (axes whose own angle carries a load,
-    parallel and not vertical) from its first axis up to j. So axis i, in a run b..e of
-    bearing axes, depends on the sets (b..j) for i <= j <= e; an axis outside every run on
-    none.
+    the sum of the joints of the run of parallel bearing axes (:func:`gravity_bearing`) from
+    its first axis up to j. So axis i, in a run b..e, depends on the sets (b..j) for
+    i <= j <= e; an axis outside every run on none.
 
     Parameters
     ----------
-    bearing : list of int
-        The bearing axes (:func:`gravity_bearing`).
+    runs : list of list of int
+        The runs of bearing axes (:func:`gravity_bearing`).
     i : int
         The axis.
 
@@ -117,22 +116,17 @@ def _link_sets(bearing: list[int], i: int) -> list[tuple[int, ...]]:
     list of tuple of int
         The joint sets, shortest first.
     """
-    if i not in bearing:
-        return []
-    b = i
-    while b - 1 in bearing:
-        b -= 1
-    e = i
-    while e + 1 in bearing:
-        e += 1
-    return [tuple(range(b, j + 1)) for j in range(i, e + 1)]
+    for run in runs:
+        if i in run:
+            return [tuple(range(run[0], j + 1)) for j in range(i, run[-1] + 1)]
+    return []
 
 
 def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None):
     """
     Return the candidate regressor groups of axis i: name -> low-passed columns (N, k).
 
-    Gravity sets only over the ``bearing`` axes (all when None).
+    Gravity sets only over the runs ``bearing`` of :func:`gravity_bearing` (all when None).
     """
     n = q.shape[1]
     g: dict[str, np.ndarray] = {
@@ -188,17 +182,34 @@ def _axis_masks(rec, f, vh, i, fit_m, val_m, fc):
     return ff, fit_i, val_i, max(fit_i.sum() * 2 * fc / fs, 10.0)
 
 
-def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
+def gravity_bearing(q, v, a, fs, fc, prep) -> list[list[int]]:
     """
-    Return the axes that carry a configuration-dependent (gravity) load.
+    Return the runs of axes that carry a configuration-dependent (gravity) load.
 
-    Axes that carry a configuration-dependent load: G sin(sum of a contiguous joint set
+    An axis carries a configuration-dependent load when G sin(sum of a contiguous joint set
     containing the axis + phi) passes the F test (p < ALPHA) on top of offset, friction and
     inertia and removes at least MIN_SHARE of what they leave. Only these axes' angles may
     enter gravity arguments (:func:`_link_sets`): a joint whose axis carries no gravity (a
-    vertical axis) does not tilt the links beyond it.
+    vertical axis) does not tilt the links beyond it. Two neighbouring bearing axes i, i + 1
+    belong to one run (parallel joints: q_i tilts the link of axis i + 1) when axis i + 1's
+    residual is explained better by a set containing joint i than by any set without it.
+
+    Parameters
+    ----------
+    q, v, a : ndarray, shape (N, n)
+        Positions, velocities, accelerations between samples.
+    fs, fc : float
+        Sample rate and low-pass cut-off [Hz].
+    prep : list
+        Per axis (residual, fit mask, held-out mask, effective samples).
+
+    Returns
+    -------
+    list of list of int
+        The runs, each a list of consecutive axes.
     """
-    out = []
+    bearing: list[int] = []
+    share: dict[tuple[int, tuple[int, ...]], float] = {}
     n = q.shape[1]
     for i, (ff, fit_i, val_i, n_eff) in enumerate(prep):
         g = _groups(q, v, a, fs, fc, i, 0.0, None)
@@ -212,14 +223,25 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[int]:
                 continue
             _, rss1 = _lstsq(base + [g[key][fit_i]], ff[fit_i])
             F = ((rss0 - rss1) / 2) / max(rss1 / dof, 1e-300) * (n_eff / max(fit_i.sum(), 1))
+            share[i, js] = (rss0 - rss1) / max(rss0, 1e-300)
             # significant and large: a slow residual of friction the model lacks (a
             # degressive law) passes the F test against a sinusoid over a short travel, but a
             # link's weight dominates the residual of the axis that carries it
-            if (F > 0 and stats.f.sf(F, 2, dof) < ALPHA
-                    and rss0 - rss1 >= MIN_SHARE * rss0):
-                out.append(i)
-                break
-    return out
+            if (F > 0 and stats.f.sf(F, 2, dof) < ALPHA and share[i, js] >= MIN_SHARE
+                    and i not in bearing):
+                bearing.append(i)
+    runs: list[list[int]] = []
+    for i in bearing:
+        if runs and runs[-1][-1] == i - 1:
+            with_prev = max((v for (k, js), v in share.items() if k == i and i - 1 in js),
+                            default=0.0)
+            without = max((v for (k, js), v in share.items() if k == i and i - 1 not in js),
+                          default=0.0)
+            if with_prev > without:
+                runs[-1].append(i)
+                continue
+        runs.append([i])
+    return runs
 
 
 def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
@@ -332,8 +354,8 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     names = robot.joint_names
     prep = [_axis_masks(rec, f, vh, i, fit_m, val_m, fc) for i in range(robot.n_axes)]
     bearing = gravity_bearing(qh, vh, ah, fs, fc, prep)
-    say(f'axes whose own angle carries a configuration-dependent load: '
-        f'{[names[i] for i in bearing] or "none"}')
+    say(f'axes whose own angle carries a configuration-dependent load (runs of parallel '
+        f'joints): {[[names[i] for i in run] for run in bearing] or "none"}')
     for i, ax in enumerate(robot.axes):
         ff, fit_i, val_i, n_eff = prep[i]
         g0 = _groups(qh, vh, ah, fs, fc, i, 0.0, bearing)
