@@ -23,7 +23,8 @@ Reports recall of hidden (effect, axis) pairs, false alarms among the reported e
 scenes without effects, parameters within 20 %, and unmodelled second modes reported as
 ``unexplained`` on their axis with a band containing the mode.
 
-``python -m benchmarks.diagnosis N`` runs N scenes and prints one JSON line per scene.
+``python -m benchmarks.diagnosis N [SEED]`` runs N scenes (seeds SEED, SEED + 1, ...; default
+2026) and prints one JSON line per scene, then the aggregate.
 """
 from __future__ import annotations
 
@@ -295,7 +296,8 @@ def bench_rows() -> list[tuple[str, str, str, str]]:
 
 
 if __name__ == '__main__':
-    print(json.dumps({k: v for k, v in sweep(int(sys.argv[1]) if len(sys.argv) > 1 else 42
+    print(json.dumps({k: v for k, v in sweep(int(sys.argv[1]) if len(sys.argv) > 1 else 42,
+                                             int(sys.argv[2]) if len(sys.argv) > 2 else 2026
                                              ).items() if k != 'runs'}, default=float))
 
 

@@ -16,9 +16,9 @@ Hidden effects in the independent reference plant, end to end.
 
 Hidden effects in the independent reference plant (test/plants/reference.py), end to end:
 ``identify --plant plants.reference:ReferencePlant`` records a bag, ``diagnose`` compares it
-with the nominal config/model_3axis.yaml. Seeds are fixed (FRF_DIAG_SEED=random draws new
-ones, printed and reproducible with FRF_DIAG_SEED=<seed>); the sweep over random scenes is
-``make bench`` (section diagnosis).
+with the nominal config/model_3axis.yaml. Every run draws new random scenes (the seed is printed
+and in every failure message; FRF_DIAG_SEED=<seed> repeats one); the rates over many scenes are
+measured by the sweep (``make bench``, section diagnosis).
 """
 import math
 import os
@@ -29,20 +29,15 @@ import numpy as np
 import pytest
 
 
-def _seed(offset: int) -> int:
-    # fixed in make test (random seeds failed a per-scene floor in about 1 of 9 runs here, a
-    # flaky CI); FRF_DIAG_SEED=<seed> or FRF_DIAG_SEED=random draws others; the rates over
-    # random scenes are measured by the sweep (`make bench`)
-    given = os.environ.get('FRF_DIAG_SEED', '2026')
-    if given == 'random':
-        return int.from_bytes(os.urandom(3), 'little')
-    return int(given) + offset
+def _seed() -> int:
+    given = os.environ.get('FRF_DIAG_SEED')
+    return int(given) if given else int.from_bytes(os.urandom(3), 'little')
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize('kind', ['random', 'clean'])
 def test_scene_of_the_reference_plant(kind, tmp_path):
-    seed = _seed(0 if kind == 'random' else 1)
+    seed = _seed()
     scene = draw_scene(np.random.default_rng(seed), kind)
     print(f'FRF_DIAG_SEED={seed} kind={kind} hidden={scene["truth"]}', file=sys.stderr)
     r = run_scene(scene, tmp_path)
@@ -61,14 +56,12 @@ def test_scene_of_the_reference_plant(kind, tmp_path):
 
 @pytest.mark.slow
 def test_unmodelled_second_mode_is_unexplained_on_its_axis(tmp_path):
-    seed = _seed(2)
+    seed = _seed()
     scene = draw_scene(np.random.default_rng(seed), 'second_mode')
     print(f'FRF_DIAG_SEED={seed} mode={scene["mode"]}', file=sys.stderr)
     r = run_scene(scene, tmp_path)
     msg = f'FRF_DIAG_SEED={seed}: {r}'
-    # what the diagnosis does in every scene of the sweep: no named effect for the mode, and
-    # its axis listed as unexplained; whether the band contains the mode is measured by the
-    # sweep (`make bench`: 4 of 6 scenes; README) and is not yet reliable enough to assert here
+    # no named effect for the mode; its axis unexplained with a band around the resonance the
+    # extra mode adds (within 10 %)
     assert r['n_found'] == 0, msg
-    axis = f'joint_{scene["mode"][0] + 1}'
-    assert axis in {u['axis'] for u in r['unexplained']}, msg
+    assert r['mode_unexplained'], msg
