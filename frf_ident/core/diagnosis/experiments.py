@@ -204,6 +204,7 @@ class Evaluator:
         -------
         ndarray, shape (n_axes,)
             The floor per axis.
+
         """
         self.lowest = np.minimum(self.lowest, misfit)
         return np.minimum(self.lowest, 1.0)
@@ -519,6 +520,7 @@ def refit_friction(ev: Evaluator, robot: RobotParams, cand: Effect, *, local: bo
     -------
     Effect
         The candidate with the refitted coefficient (its evidence notes the refit).
+
     """
     i, key = cand.axis_index, cand.name
     v = float(cand.parameters[key])
@@ -570,6 +572,7 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
     -------
     (RobotParams, ndarray)
         The extended model and its misfit per axis.
+
     """
     mine = [c for c in kept if c.axis_index == axis]
     slots = [(c, k) for c in mine for k, v in c.parameters.items()
@@ -731,6 +734,7 @@ def residual_bands(f: np.ndarray, wt: np.ndarray) -> list[list[float]]:
     -------
     list of [float, float]
         At most MAX_BANDS bands; empty when no line is above the floor.
+
     """
     if f.size == 0 or wt.max() <= 0:
         return []

@@ -115,6 +115,7 @@ def _link_sets(runs: list[list[int]], i: int) -> list[tuple[int, ...]]:
     -------
     list of tuple of int
         The joint sets, shortest first.
+
     """
     for run in runs:
         if i in run:
@@ -207,6 +208,7 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[list[int]]:
     -------
     list of list of int
         The runs, each a list of consecutive axes.
+
     """
     bearing: list[int] = []
     share: dict[tuple[int, tuple[int, ...]], float] = {}

@@ -321,6 +321,7 @@ def decimation_filter(q: int) -> np.ndarray:
     -------
     ndarray
         The filter taps (read-only).
+
     """
     h = signal.firwin(2 * 10 * q + 1, 1.0 / q, window=('kaiser', 5.0))
     h.flags.writeable = False
