@@ -236,13 +236,23 @@ def test_controller_reset_uses_the_gravity_load():
 
 
 def test_residual_bands_list_each_concentration_strongest_first():
-    """Two separated bumps give two bands around their centres; one below a quarter none."""
-    f = np.arange(1.0, 60.0, 0.5)
+    """
+    List separated concentrations strongest first, merge overlapping ones of two grids.
 
-    def bump(fc, a):
-        return a * np.exp(-((f - fc) / 1.0) ** 2)
-    bands = residual_bands(f, bump(15.0, 1.0) + bump(35.0, 0.5) + bump(50.0, 0.2))
+    Two separated bumps give two bands around their centres; one below a quarter of the
+    strongest none; the same bump on a second line grid merges with the first's band.
+    """
+    f = np.arange(1.0, 60.0, 0.5)
+    f2 = np.arange(1.25, 60.0, 0.5)
+
+    def bump(x, fc, a):
+        return a * np.exp(-((x - fc) / 1.0) ** 2)
+    w = bump(f, 15.0, 1.0) + bump(f, 35.0, 0.5) + bump(f, 50.0, 0.2)
+    bands = residual_bands([(f, w)])
     assert len(bands) == 2
     assert bands[0][0] < 15.0 < bands[0][1] and bands[1][0] < 35.0 < bands[1][1]
     assert bands[0][1] < bands[1][0]
-    assert residual_bands(f, np.zeros_like(f)) == []
+    both = residual_bands([(f, w), (f2, bump(f2, 35.2, 0.6))])
+    assert len(both) == 2 and both[0] == bands[0]
+    assert both[1][0] <= bands[1][0] and both[1][1] >= bands[1][1]
+    assert residual_bands([(f, np.zeros_like(f))]) == []

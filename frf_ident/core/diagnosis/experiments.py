@@ -713,22 +713,23 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
 MAX_BANDS = 3    # residual concentrations listed in a signature
 
 
-def residual_bands(f: np.ndarray, wt: np.ndarray) -> list[list[float]]:
+def residual_bands(lines: list[tuple[np.ndarray, np.ndarray]]) -> list[list[float]]:
     """
     Return the bands [f1, f2] Hz where a misfit per line concentrates, strongest first.
 
-    A band is the run of lines around a local maximum while they stay above a quarter of it
-    (half its amplitude in dB), plus one line each side; further bands are taken around the
-    largest remaining lines as long as they reach a quarter of the strongest. A resonance the
-    model lacks reshapes the whole FRF of its axis (the neighbouring resonance and
-    antiresonance move too), so its own band need not be the strongest.
+    Per estimate (multisine, chirp: each its own line grid), a band is the run of lines
+    around a local maximum while they stay above a quarter of it (half its amplitude in dB),
+    plus one line each side; further bands are taken around the largest remaining lines as
+    long as they reach a quarter of the strongest line of all estimates. Overlapping bands of
+    the estimates are merged. A resonance the model lacks reshapes the whole FRF of its axis
+    (the neighbouring resonance and antiresonance move too), so its own band need not be the
+    strongest.
 
     Parameters
     ----------
-    f : ndarray
-        Line frequencies [Hz], ascending.
-    wt : ndarray
-        Misfit above the noise floor per line (>= 0).
+    lines : list of (ndarray, ndarray)
+        Per estimate the line frequencies [Hz] (ascending) and the misfit above the noise floor
+        per line (>= 0).
 
     Returns
     -------
@@ -736,24 +737,34 @@ def residual_bands(f: np.ndarray, wt: np.ndarray) -> list[list[float]]:
         At most MAX_BANDS bands; empty when no line is above the floor.
 
     """
-    if f.size == 0 or wt.max() <= 0:
+    lines = [(f, w) for f, w in lines if f.size]
+    top = max((float(w.max()) for _, w in lines), default=0.0)
+    if top <= 0:
         return []
-    free = np.ones(f.size, bool)
-    top = float(wt.max())
-    bands = []
-    while len(bands) < MAX_BANDS and free.any():
-        k = int(np.argmax(np.where(free, wt, -1.0)))
-        if wt[k] < 0.25 * top:
-            break
-        lo, hi = k, k
-        while lo > 0 and free[lo - 1] and wt[lo - 1] >= 0.25 * wt[k]:
-            lo -= 1
-        while hi < f.size - 1 and free[hi + 1] and wt[hi + 1] >= 0.25 * wt[k]:
-            hi += 1
-        free[max(lo - 1, 0):hi + 2] = False
-        bands.append([round(float(f[max(lo - 1, 0)]), 2),
-                      round(float(f[min(hi + 1, f.size - 1)]), 2)])
-    return bands
+    found = []                                   # (lo, hi, peak)
+    for f, wt in lines:
+        free = np.ones(f.size, bool)
+        while free.any():
+            k = int(np.argmax(np.where(free, wt, -1.0)))
+            if wt[k] < 0.25 * top:
+                break
+            lo, hi = k, k
+            while lo > 0 and free[lo - 1] and wt[lo - 1] >= 0.25 * wt[k]:
+                lo -= 1
+            while hi < f.size - 1 and free[hi + 1] and wt[hi + 1] >= 0.25 * wt[k]:
+                hi += 1
+            free[max(lo - 1, 0):hi + 2] = False
+            found.append([float(f[max(lo - 1, 0)]), float(f[min(hi + 1, f.size - 1)]),
+                          float(wt[k])])
+    merged: list[list[float]] = []
+    for b in sorted(found):
+        if merged and b[0] <= merged[-1][1]:
+            merged[-1][1] = max(merged[-1][1], b[1])
+            merged[-1][2] = max(merged[-1][2], b[2])
+        else:
+            merged.append(list(b))
+    merged.sort(key=lambda b: -b[2])
+    return [[round(b[0], 2), round(b[1], 2)] for b in merged[:MAX_BANDS]]
 
 
 def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> dict[str, Any]:
@@ -762,7 +773,7 @@ def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> di
 
     Where the held-out residual of one axis lives: the bands [f1, f2] Hz of the FRF misfit
     above noise that is left after refitting the axis' inertias, stiffness and damping to the
-    measured FRF (multisine and chirp lines merged; :func:`residual_bands`; ``band_hz`` the
+    measured FRF (:func:`residual_bands` of the multisine and chirp lines; ``band_hz`` the
     strongest, ``bands_hz`` all), and the signal the torque residual of the extended model
     correlates with most (|r| >= 0.3).
     """
@@ -786,14 +797,10 @@ def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> di
         fr.append(pm.freq_hz)
         w.append(np.maximum(r - ev.floors[k][axis], 0.0))
     out: dict[str, Any] = {}
-    if fr:
-        f, wt = np.concatenate(fr), np.concatenate(w)
-        o = np.argsort(f)
-        f, wt = f[o], wt[o]
-        bands = residual_bands(f, wt)
-        if bands:
-            out['band_hz'] = bands[0]
-            out['bands_hz'] = bands
+    bands = residual_bands(list(zip(fr, w)))
+    if bands:
+        out['band_hz'] = bands[0]
+        out['bands_hz'] = bands
     m = ev.val_mask if ev.val_mask.any() else ev.fit_mask
     res = (ev.rec.effort[:, axis] - sim.effort[:, axis])[m]
     sigs = {'position': ev.rec.position[:, axis], 'velocity': ev.rec.velocity[:, axis],
