@@ -244,7 +244,7 @@ def sweep(n: int = 42, seed: int = 2026, verbose: bool = True, jobs: int | None 
 
 
 def aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """Recall, false alarms, clean scenes, parameter accuracy, second modes."""
+    """Recall, false alarms, clean scenes, parameter accuracy (per effect too), second modes."""
     hid = sum(r['n_hidden'] for r in runs)
     fnd = sum(r['n_found'] for r in runs)
     clean = [r for r in runs if r['kind'] in ('clean', 'second_mode')]
@@ -254,12 +254,18 @@ def aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
     for r in runs:
         for h in r['hidden']:
             per.setdefault(h.split('@')[0], []).append(int(h in r['found']))
+    errs: dict[str, list[float]] = {}
+    for r in runs:
+        for k, e in r['param_errors'].items():
+            errs.setdefault(k.split('@')[0], []).append(float(e))
     return {'n': len(runs), 'recall': sum(r['hits'] for r in runs) / max(hid, 1),
             'false_alarm_share': sum(r['false_alarms'] for r in runs) / max(fnd, 1),
             'clean_empty': sum(r['n_found'] == 0 for r in clean) / max(len(clean), 1),
             'param_within_20': float(np.mean([e < 0.2 for e in perr])) if perr else math.nan,
             'mode_unexplained': sum(modes) / max(len(modes), 1) if modes else math.nan,
             'per_effect': {k: f'{sum(v)}/{len(v)}' for k, v in per.items()},
+            'param_error_per_effect': {k: {'median': float(np.median(v)), 'max': float(max(v))}
+                                       for k, v in errs.items()},
             'median_wall_s': float(np.median([r['wall_s'] for r in runs])), 'runs': runs}
 
 
@@ -282,7 +288,10 @@ def bench_rows() -> list[tuple[str, str, str, str]]:
              ''),
             ('... second mode unexplained with its band', f'{100 * r["mode_unexplained"]:.0f} %',
              '', '')]
-    rows += [(f'  {k}', v, '', '') for k, v in r['per_effect'].items()]
+    pe = r['param_error_per_effect']
+    rows += [(f'  {k}: found / parameter error median, max', v,
+              f'{100 * pe[k]["median"]:.1f} %, {100 * pe[k]["max"]:.1f} %' if k in pe else '',
+              '') for k, v in r['per_effect'].items()]
     bag = ROOT / 'out' / 'demo' / 'graph' / 'bag'
     if bag.exists():
         from frf_ident.app.diagnose import diagnose
