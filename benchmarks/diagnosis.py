@@ -23,8 +23,9 @@ Reports recall of hidden (effect, axis) pairs, false alarms among the reported e
 scenes without effects, parameters within 20 %, and unmodelled second modes reported as
 ``unexplained`` on their axis with a band containing the mode.
 
-``python -m benchmarks.diagnosis N [SEED]`` runs N scenes (seeds SEED, SEED + 1, ...; default
-2026) and prints one JSON line per scene, then the aggregate.
+``python -m benchmarks.diagnosis N [SEED [KIND]]`` runs N scenes (seeds SEED, SEED + 1, ...;
+default 2026; only those of KIND, e.g. second_mode, when given) and prints one JSON line per
+scene, then the aggregate.
 """
 from __future__ import annotations
 
@@ -225,18 +226,20 @@ def _run_numbered(seed: int, k: int) -> dict[str, Any]:
     return r
 
 
-def sweep(n: int = 42, seed: int = 2026, verbose: bool = True, jobs: int | None = None
-          ) -> dict[str, Any]:
+def sweep(n: int = 42, seed: int = 2026, verbose: bool = True, jobs: int | None = None,
+          kind: str | None = None) -> dict[str, Any]:
     """
     Run ``n`` scenes (kinds cycled, sizes drawn) and aggregate.
 
     Scenes run in ``jobs`` processes (default: one per CPU); the result does not depend on it.
+    With ``kind`` only the scenes of that kind among the ``n`` run.
     """
     from concurrent.futures import ProcessPoolExecutor
     jobs = jobs or os.cpu_count() or 1
+    ks = [k for k in range(n) if kind is None or KINDS[k % len(KINDS)] == kind]
     runs = []
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        for r in pool.map(_run_numbered, [seed] * n, range(n)):
+        for r in pool.map(_run_numbered, [seed] * len(ks), ks):
             runs.append(r)
             if verbose:
                 print(json.dumps(r, default=float), flush=True)
@@ -306,7 +309,8 @@ def bench_rows() -> list[tuple[str, str, str, str]]:
 
 if __name__ == '__main__':
     print(json.dumps({k: v for k, v in sweep(int(sys.argv[1]) if len(sys.argv) > 1 else 42,
-                                             int(sys.argv[2]) if len(sys.argv) > 2 else 2026
+                                             int(sys.argv[2]) if len(sys.argv) > 2 else 2026,
+                                             kind=sys.argv[3] if len(sys.argv) > 3 else None
                                              ).items() if k != 'runs'}, default=float))
 
 
