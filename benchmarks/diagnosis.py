@@ -188,7 +188,8 @@ def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0
             'hits': len(hits), 'n_hidden': len(hidden),
             'false_alarms': len([k for k in found if k not in hidden]),
             'n_found': len(found), 'param_errors': perr, 'mode_unexplained': mode_ok,
-            'unexplained': report['unexplained'], 'wall_s': round(wall, 1), 'n_sims': n_sims}
+            'unexplained': report['unexplained'], 'wall_s': round(wall, 1), 'n_sims': n_sims,
+            'parameters': {f'{n}@{a}': p for (n, a), p in found.items()}}
 
 
 def second_mode_hz(scene: dict[str, Any], ax: int) -> float:
