@@ -66,6 +66,20 @@ UNEXPLAINED_RATIO = 4.0   # held-out misfit energy above this many noise floors 
 MIN_SHARE = 0.10          # ... when it is also at least this share of the nominal misfit
 
 
+#: evidence sentence of each one-coefficient regressor group (c: fitted coefficient)
+_SCALAR_EVIDENCE = {
+    'coulomb_friction': ('inverse-dynamics residual steps by {step:.3g} (torque units) at each '
+                         'velocity reversal (F test p = {p:.2g}; removing it raises the held-out '
+                         'residual energy by {gain:.0f} %)'),
+    'viscous_friction': ('residual proportional to velocity: {c:+.4g} per unit velocity '
+                         '(p = {p:.2g})'),
+    'motor_inertia': ('residual proportional to acceleration: inertia {old:.4g} -> {new:.4g} '
+                      '(p = {p:.2g})'),
+    'gravity_torque': ('constant torque residual {c:+.3g} (a load or friction asymmetry the model '
+                       'lacks; p = {p:.2g})'),
+}
+
+
 def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]:
     """
     Return u - (torque the model needs for the measured motion), between samples.
@@ -397,51 +411,28 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                                  'residual_share': round(float(v.get('share', 0.0)), 4),
                                  'held_out_gain': round(float(v.get('held_out_gain', 0.0)), 4)})
         score = {k: float(np.clip(info[k].get('held_out_gain', 0.0), 0, 1)) for k in chosen}
-        if 'coulomb_friction' in cf:
-            c = float(cf['coulomb_friction'][0])
-            ch['coulomb_friction'] = ax.coulomb_friction + c
-            effects.append(Effect(
-                'coulomb_friction', ax.name, score['coulomb_friction'],
-                {'coulomb_friction': ch['coulomb_friction']},
-                f'inverse-dynamics residual steps by {2 * c:.3g} (torque units) at each velocity '
-                f'reversal (F test p = {info["coulomb_friction"]["p"]:.2g}; removing it raises '
-                f'the held-out residual energy by '
-                f'{100 * info["coulomb_friction"]["held_out_gain"]:.0f} %)', i))
-        if 'viscous_friction' in cf:
-            c = float(cf['viscous_friction'][0])
-            ch['viscous_friction'] = ax.viscous_friction + c
-            effects.append(Effect(
-                'viscous_friction', ax.name, score['viscous_friction'],
-                {'viscous_friction': ch['viscous_friction']},
-                f'residual proportional to velocity: {c:+.4g} per unit velocity (p = '
-                f'{info["viscous_friction"]["p"]:.2g})', i))
-        if 'motor_inertia' in cf:
-            c = float(cf['motor_inertia'][0])
-            ch['motor_inertia'] = ax.motor_inertia + c
-            effects.append(Effect(
-                'parameter_mismatch', ax.name, score['motor_inertia'],
-                {'motor_inertia': ch['motor_inertia']},
-                f'residual proportional to acceleration: inertia {ax.motor_inertia:.4g} -> '
-                f'{ch["motor_inertia"]:.4g} (p = {info["motor_inertia"]["p"]:.2g})', i))
-        if 'torque_ripple' in cf:
-            a_s, a_c = (float(x) for x in cf['torque_ripple'])
-            amp = math.hypot(a_s, a_c)
-            rip = {'amplitude': amp, 'spatial_frequency': s, 'phase': math.atan2(-a_c, -a_s)}
-            ch['torque_ripple'] = list(ax.torque_ripple) + [rip]
-            effects.append(Effect(
-                'torque_ripple', ax.name, score['torque_ripple'],
-                {'torque_ripple': ch['torque_ripple']},
-                f'residual periodic in position: amplitude {amp:.3g} at {s:.4g} /rad (scan '
-                f'peak {peak:.0f}x the local noise level, false-alarm level {thr:.0f})', i))
-        if 'gravity_torque' in cf:
-            # f = u - model: a constant residual is a load the model lacks
-            c = float(cf['gravity_torque'][0])
-            ch['gravity_torque'] = ax.gravity_torque + c
-            effects.append(Effect(
-                'parameter_mismatch', ax.name, score['gravity_torque'],
-                {'gravity_torque': ch['gravity_torque']},
-                f'constant torque residual {c:+.3g} (a load or friction asymmetry the model '
-                f'lacks; p = {info["gravity_torque"]["p"]:.2g})', i))
+        for k in ('coulomb_friction', 'viscous_friction', 'motor_inertia', 'torque_ripple',
+                  'gravity_torque'):
+            if k not in cf:
+                continue
+            if k == 'torque_ripple':
+                a_s, a_c = (float(x) for x in cf[k])
+                amp = math.hypot(a_s, a_c)
+                rip = {'amplitude': amp, 'spatial_frequency': s,
+                       'phase': math.atan2(-a_c, -a_s)}
+                ch[k] = list(ax.torque_ripple) + [rip]
+                text = (f'residual periodic in position: amplitude {amp:.3g} at {s:.4g} /rad '
+                        f'(scan peak {peak:.0f}x the local noise level, false-alarm level '
+                        f'{thr:.0f})')
+            else:
+                # f = u - model: the coefficient adds to the model's value
+                c = float(cf[k][0])
+                ch[k] = getattr(ax, k) + c
+                text = _SCALAR_EVIDENCE[k].format(
+                    c=c, step=2 * c, old=getattr(ax, k), new=ch[k], p=info[k]['p'],
+                    gain=100 * info[k].get('held_out_gain', 0.0))
+            name = 'parameter_mismatch' if k in ('motor_inertia', 'gravity_torque') else k
+            effects.append(Effect(name, ax.name, score[k], {k: ch[k]}, text, i))
         gk = [k for k in chosen if k.startswith('gravity:')]
         if gk:
             terms = list(ax.gravity)
