@@ -273,6 +273,12 @@ def aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
             'median_wall_s': float(np.median([r['wall_s'] for r in runs])), 'runs': runs}
 
 
+def _timed(fn) -> float:
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
+
+
 def bench_rows() -> list[tuple[str, str, str, str]]:
     """
     Return the rows of ``make bench``.
@@ -305,6 +311,11 @@ def bench_rows() -> list[tuple[str, str, str, str]]:
             wall = time.perf_counter() - t0
         rows.append(('diagnose on the demo bag: wall time', f'{wall:.0f} s',
                      f'{res["result"].get("n_sims", 0)} simulations', 'goal < 120 s'))
+        ev = res['result']['evaluator']
+        robot = res['result']['extended']
+        t_loss = min(_timed(lambda: ev.loss(robot, 0)) for _ in range(3))
+        rows.append(('... one candidate evaluation (simulate + estimate)', f'{t_loss:.2f} s',
+                     '', ''))
     return rows
 
 
