@@ -26,12 +26,13 @@ from pathlib import Path
 from frf_ident.cli import main
 from frf_ident.core.diagnosis.common import simulate_like
 from frf_ident.core.diagnosis.experiments import missing_reference, residual_bands
-from frf_ident.core.diagnosis.residual import find_ripple, ripple_range
+from frf_ident.core.diagnosis.residual import delayed_effort, find_ripple, ripple_range
 from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
 from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
+from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
 import scipy.io as sio
@@ -70,6 +71,21 @@ def test_ripple_scan_false_alarms_follow_the_threshold():
         _, peak, thr = find_ripple(rng.standard_normal(8000), q, np.ones(8000, bool))
         hits += peak > thr
     assert hits <= 2
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(0.0, 4.0), st.integers(0, 2 ** 32 - 1))
+def test_delayed_effort_is_the_interval_average_of_the_delayed_hold(d, seed):
+    # brute force: the zero-order-held command read at t - delay on a fine grid, averaged
+    # over each sample interval (the plant applies exactly this, plant.py)
+    dt, n, sub = 0.002, 40, 2000
+    u = np.random.default_rng(seed).standard_normal((n, 2))
+    got = delayed_effort(u, [d * dt, 0.0], dt)
+    t = (np.arange(n * sub) + 0.5) / sub * dt
+    k = np.clip(np.floor((t - d * dt) / dt).astype(int), 0, n - 1)
+    want = u[k, 0].reshape(n, sub).mean(axis=1)
+    assert np.allclose(got[:, 0], want, atol=2e-3 * np.abs(u).max())
+    assert np.array_equal(got[:, 1], u[:, 1])
 
 
 def test_missing_reference_is_left_out_not_commanded_as_zero():

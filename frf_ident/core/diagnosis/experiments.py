@@ -37,7 +37,7 @@ from scipy import optimize
 
 from .common import (apply_effect, diag_ratio, Effect, frf_error_db, nrmse, segment_mask,
                      simulate_like, split_recording)
-from .residual import inverse_dynamics_residual, regress_axis
+from .residual import delayed_effort, inverse_dynamics_residual, regress_axis
 
 MIN_SHARE = 0.10     # an effect must remove this share of its axis' misfit above the noise floor
 MIN_Z = 3.0          # ... and more than MIN_Z standard deviations of that misfit under noise
@@ -255,14 +255,17 @@ def replace_segments(rec: Recording, like: Recording) -> Recording:
 
 def friction_regression(ev: Evaluator, robot: RobotParams, axis: int):  # noqa: D401
     """
-    Regress the motor-side inverse-dynamics residual of the nominal model per axis.
+    Regress the motor-side inverse-dynamics residual of a model on one axis.
 
-    Motor-side inverse-dynamics residual of the nominal model regressed on sgn(v), v and
+    Motor-side inverse-dynamics residual of ``robot`` (the command delayed by its axes'
+    ``time_delay``, :func:`.residual.delayed_effort`) regressed on sgn(v), v and
     motor-position harmonics, on the fit segments plus the constant-velocity run.
     """
     rec = ev.rec
-    f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, rec.effort, rec.dt,
-                                              robot)
+    # the torque that acts is the command delayed by the model's input delay (the
+    # regression read against an undelayed model biases viscous friction)
+    u = delayed_effort(rec.effort, [a.time_delay for a in robot.axes], rec.dt)
+    f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, u, rec.dt, robot)
     mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity'))
             & ~ev.missing)[:-1]
     noise = max(robot.axes[axis].velocity_noise, 1e-6)
@@ -819,6 +822,7 @@ def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> di
 
 
 STAGE2_ROUNDS = 3          # FRF-shape evidence read again on axes that took an effect
+MIN_DELAY_SAMPLES = 0.1    # a delay candidate this many samples long re-reads friction
 UNEXPLAINED_RATIO = 4.0   # held-out misfit above this many noise floors is unexplained
 
 
@@ -884,11 +888,20 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
                           for k in ('multisine', 'chirp'))
             say(f'{robot.axes[i].name}: stiffness seen by multisine x{math.exp(s_ms):.3f}, '
                 f'chirp x{math.exp(s_ch):.3f} (against the model so far)')
-            for fn in (lambda: fit_time_delay(ev, sim_est, ext, i),
-                       lambda: fit_parameter_mismatch(ev, ext, i, s_ms, s_ch),
-                       lambda: fit_stiffness_nonlinearity(ev, ext, i, s_ms, s_ch),
-                       lambda: fit_backlash(ev, ext, i, s_ms, s_ch)):
-                e = fn()
+            found = [fn() for fn in (lambda: fit_time_delay(ev, sim_est, ext, i),
+                                     lambda: fit_parameter_mismatch(ev, ext, i, s_ms, s_ch),
+                                     lambda: fit_stiffness_nonlinearity(ev, ext, i, s_ms, s_ch),
+                                     lambda: fit_backlash(ev, ext, i, s_ms, s_ch))]
+            td = found[0]
+            if (td is not None and td.parameters['time_delay'] - ext.axes[i].time_delay
+                    > MIN_DELAY_SAMPLES * ev.rec.dt):
+                # friction read again with the delay: the stage-1 regression ran against an
+                # undelayed model, which biases viscous friction (a joint-damping mismatch
+                # then poses as the rest); these compete with the FRF-shape candidates
+                reg = friction_regression(ev, _with(ext, i, time_delay=td.parameters[
+                    'time_delay']), i)
+                found += [fit_coulomb(reg, ext, i), fit_viscous(reg, ext, i)]
+            for e in found:
                 if e is not None and not any(k.name == e.name and k.axis == e.axis
                                              for k in kept):
                     stage2.append(e)

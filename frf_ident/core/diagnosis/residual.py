@@ -47,6 +47,41 @@ def is_rigid(robot: RobotParams, fs: float) -> bool:
                > 2 * fs for a in robot.axes)
 
 
+def delayed_effort(u: np.ndarray, delay: np.ndarray, dt: float) -> np.ndarray:
+    """
+    Return the zero-order-held command as it acts after an input delay.
+
+    The torque acting over sample interval k is u held from ``t_k - delay``: for a delay of
+    d = m + r samples (integer m, fraction r) the interval average is
+    (1 - r) u[k - m] + r u[k - m - 1]; before the record starts the first command is held.
+
+    Parameters
+    ----------
+    u : ndarray, shape (N, n)
+        Commanded torque per sample and axis.
+    delay : array_like, shape (n,)
+        Input delay per axis [s] (>= 0).
+    dt : float
+        Sample time [s].
+
+    Returns
+    -------
+    ndarray, shape (N, n)
+        The acting torque per sample interval.
+
+    """
+    u = np.asarray(u, dtype=float)
+    out = u.copy()
+    for i, d in enumerate(np.asarray(delay, dtype=float) / dt):
+        if d <= 0:
+            continue
+        m, r = int(math.floor(d)), d - math.floor(d)
+        pad = np.concatenate([np.full(m + 1, u[0, i]), u[:, i]])
+        n = u.shape[0]
+        out[:, i] = (1 - r) * pad[1:n + 1] + r * pad[:n]
+    return out
+
+
 def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: float,
                               robot: RobotParams, link_position: np.ndarray | None = None
                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
