@@ -59,7 +59,8 @@ def load_data(path: Path, map_path: Path | None = None) -> Recording:
         raise FrfIdentInputError(f'{path}: no such bag or file')
     if path.is_dir() or path.suffix == '.mcap':
         from frf_ident.bag import read_recording
-        rec, _ = read_recording(path)
+        # gaps a recorder lost are kept as missing rows: the diagnosis leaves them out
+        rec, _ = read_recording(path, gaps='mark')
         return rec
     if map_path is None:
         raise FrfIdentInputError(f'{path}: a {path.suffix or "table"} file needs --map MAP.yaml '
@@ -132,6 +133,12 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     rec = _match_axes(load_data(data, map_path), robot, model_path, progress)
     others = [(p, _match_axes(load_data(p, map_path), robot, model_path, progress))
               for p in validate]
+    for p, r in [(data, rec)] + others:
+        gaps = r.meta.get('gaps') or []
+        if gaps:
+            progress(f'{p}: {len(gaps)} gap(s) in the joint states '
+                     f'({sum(b - a for a, b in gaps):.3f} s, first at {gaps[0][0]:.3f} s) left '
+                     f'out of fit and validation')
     if abs(robot.sample_rate - rec.fs) > 1e-6 * rec.fs:
         robot = replace(robot, sample_rate=rec.fs)
     if has_experiments(rec):

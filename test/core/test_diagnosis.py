@@ -23,8 +23,9 @@ import json
 import math
 from pathlib import Path
 
+from frf_ident.bag import write_recording
 from frf_ident.cli import main
-from frf_ident.core.diagnosis.common import simulate_like
+from frf_ident.core.diagnosis.common import bridge_gaps, GAP_GUARD_S, simulate_like
 from frf_ident.core.diagnosis.experiments import missing_reference, residual_bands
 from frf_ident.core.diagnosis.residual import delayed_effort, find_ripple, ripple_range
 from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
@@ -106,6 +107,18 @@ def test_missing_reference_is_left_out_not_commanded_as_zero():
     # the simulation follows the measured motion through the gap (not a zero command)
     assert np.max(np.abs(sim.velocity[1500:2000] - res.velocity[1500:2000])) < \
         0.2 * np.max(np.abs(res.velocity[1500:2000]))
+    # joint states lost in a gap of the bag (NaN rows): bridged for the simulation, their
+    # reference taken away (widened by the filters' reach), so they are never compared
+    pos, vel = res.position.copy(), res.velocity.copy()
+    pos[3000:3100] = vel[3000:3100] = np.nan
+    lossy = Recording(res.t, robot.joint_names, pos, vel, res.effort, r.copy())
+    bridged, lost = bridge_gaps(lossy)
+    g = int(round(GAP_GUARD_S * rec.fs))
+    assert lost[3000 - g:3100 + g].all() and not lost[:3000 - g].any()
+    assert np.isfinite(bridged.position).all() and np.isfinite(bridged.velocity).all()
+    miss = missing_reference(bridged)
+    assert miss[3000 - g:3100 + g + int(0.5 * rec.fs)].all() and not miss[2500:3000 - g].any()
+    assert np.isfinite(simulate_like(bridged, robot, ctrl).velocity).all()
 
 
 def _arm_record(seed: int, *, disturbance_hz: float = 0.0, cable: float = 0.0):
@@ -232,6 +245,40 @@ def test_csv_mat_and_bag_of_the_same_data_give_the_same_report(tmp_path):
             assert json.dumps(e['parameters']) == json.dumps(e0['parameters'])
         assert r['metrics']['extended']['time_nrmse'] == \
             pytest.approx(reps[0]['metrics']['extended']['time_nrmse'], rel=1e-3)
+
+
+def test_bag_with_lost_stretches_is_diagnosed_without_them(tmp_path, capsys):
+    """
+    Diagnose a bag that lost stretches of joint states (a recorder's drops).
+
+    Three stretches of 0.3 s are missing from the bag (their messages were never written):
+    the diagnosis reads them as gaps, leaves them out of fit and validation and names the
+    same effects with the true parameters as without the gaps (it refused the bag before).
+    """
+    rec, truth = _arm_record(5)
+    keep = np.ones(rec.t.size, bool)
+    for t0 in (7.1, 19.4, 31.7):
+        keep[(rec.t >= t0) & (rec.t < t0 + 0.3)] = False
+    lossy = Recording(rec.t[keep], rec.joint_names, rec.position[keep], rec.velocity[keep],
+                      rec.effort[keep])
+    bag = write_recording(lossy, tmp_path / 'lossy')
+    model = tmp_path / 'model.yaml'
+    model.write_text(json.dumps(dict(RIGID, sample_rate=500.0)))
+    out = tmp_path / 'diag'
+    assert main(['diagnose', str(bag), '--model', str(model), '--out', str(out)]) == 0
+    assert '3 gap(s) in the joint states' in capsys.readouterr().out
+    rep = json.loads((out / 'report.json').read_text())
+    found = {(e['name'], e['axis']): e['parameters'] for e in rep['effects']}
+    full = diagnose_timeseries(rec, replace(robot_from_dict(RIGID), sample_rate=rec.fs))
+    assert set(found) == {(e.name, e.axis) for e in full['effects']}
+    g3 = found[('gravity', 'joint_3')]['gravity'][0]['amplitude']
+    assert g3 == pytest.approx(truth['g3'], rel=0.2)
+    for i, name in enumerate(rec.joint_names):
+        assert found[('coulomb_friction', name)]['coulomb_friction'] == \
+            pytest.approx(truth['fc'][i], rel=0.2)
+    m = rep['metrics']
+    assert math.isfinite(m['extended']['time_nrmse'])
+    assert m['extended']['time_nrmse'] < 0.3 < m['baseline']['time_nrmse']
 
 
 def test_table_without_map_is_refused_with_one_line(tmp_path, capsys):

@@ -75,6 +75,55 @@ def quiet(robot: RobotParams) -> RobotParams:
     return robot.with_axes(velocity_noise=0.0, torque_noise=0.0, encoder_resolution=0.0)
 
 
+GAP_GUARD_S = 0.1    # bridged rows widened by this on both sides (the low-pass filters' reach)
+
+
+def bridge_gaps(rec: Recording) -> tuple[Recording, np.ndarray]:
+    """
+    Bridge the rows a recording lacks and return the mask of them.
+
+    A bag read with ``gaps='mark'`` has NaN joint states inside gaps it lost. Filters and the
+    closed-loop simulation must run through them, no comparison may use them: position,
+    velocity and effort are interpolated linearly in time there, and the rows (widened by
+    GAP_GUARD_S on both sides) lose their reference (NaN), so the experiment diagnosis leaves
+    them plus a settling time out (``experiments.missing_reference``) and the time-series
+    diagnosis masks them.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording, possibly with non-finite joint-state rows.
+
+    Returns
+    -------
+    rec : Recording
+        The same recording when nothing is missing, else a bridged copy.
+    missing : ndarray of bool, shape (N,)
+        The bridged rows, widened by GAP_GUARD_S.
+
+    """
+    bad = ~(np.all(np.isfinite(rec.position), axis=1) & np.all(np.isfinite(rec.velocity), axis=1)
+            & np.all(np.isfinite(rec.effort), axis=1))
+    if not bad.any():
+        return rec, bad
+    if bad.all():
+        raise ValueError('recording has no complete joint-state row')
+    ok = ~bad
+
+    def fill(x):
+        return np.column_stack([np.interp(rec.t, rec.t[ok], x[ok, j])
+                                for j in range(x.shape[1])])
+    g = int(round(GAP_GUARD_S * rec.fs))
+    wide = np.convolve(bad, np.ones(2 * g + 1), mode='same') > 0
+    ref = None
+    if rec.reference is not None:
+        ref = np.array(rec.reference, dtype=float)
+        ref[wide] = np.nan
+    out = Recording(rec.t, list(rec.joint_names), fill(rec.position), fill(rec.velocity),
+                    fill(rec.effort), ref, rec.excitation, list(rec.segments), dict(rec.meta))
+    return out, wide
+
+
 def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recording:
     """
     Simulate ``robot`` in closed loop on the recording's reference and return the result.

@@ -35,8 +35,8 @@ from frf_ident.errors import EstimationError
 import numpy as np
 from scipy import optimize
 
-from .common import (apply_effect, diag_ratio, Effect, frf_error_db, nrmse, segment_mask,
-                     simulate_like, split_recording)
+from .common import (apply_effect, bridge_gaps, diag_ratio, Effect, frf_error_db, nrmse,
+                     segment_mask, simulate_like, split_recording)
 from .residual import delayed_effort, inverse_dynamics_residual, regress_axis
 
 MIN_SHARE = 0.10     # an effect must remove this share of its axis' misfit above the noise floor
@@ -116,7 +116,9 @@ class Evaluator:
     """
 
     def __init__(self, rec: Recording, ctrl: PIVelocity) -> None:
-        self.rec, self.ctrl = rec, ctrl
+        # rows lost in gaps of the bag are bridged and lose their reference: left out below
+        self.rec, self.ctrl = bridge_gaps(rec)[0], ctrl
+        rec = self.rec
         self.missing = missing_reference(rec)
         fit, val, self.validation_text = split_recording(rec)
         self.fit, self.val = (drop_segments(fit, self.missing), drop_segments(val, self.missing))

@@ -52,7 +52,7 @@ from frf_ident.core.recording import Recording
 import numpy as np
 from scipy import signal, stats
 
-from .common import Effect
+from .common import bridge_gaps, Effect
 from .residual import find_ripple, inverse_dynamics_residual, is_rigid, lowpass
 
 __all__ = ['ALPHA', 'FC_HZ', 'diagnose_timeseries', 'model_residual', 'predict_metrics']
@@ -360,10 +360,14 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
 
     """
     say = progress or (lambda _m: None)
+    rec, lost = bridge_gaps(rec)
     fs = rec.fs
     N = rec.t.size
     f, qh, vh, ah = model_residual(rec, robot)
     fit_m, val_m = split_blocks(N - 1, fs, fc)
+    # rows bridged over gaps of the record take part in neither fit nor validation
+    fit_m &= ~(lost[1:] | lost[:-1])
+    val_m &= ~(lost[1:] | lost[:-1])
     effects: list[Effect] = []
     rejected: list[dict[str, Any]] = []
     ext_axes = list(robot.axes)
@@ -542,7 +546,8 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
 
     Held-out metrics of a model file on a recording: the torque the model predicts from
     the measured motion against the measured torque (both low-passed at fc), on ``mask``
-    (between samples, N-1; default all but the ends).
+    (between samples, N-1; default all but the ends), never on rows bridged over a gap
+    (:func:`.common.bridge_gaps`).
 
     Returns
     -------
@@ -550,12 +555,14 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
     (measured minus predicted torque, low-passed).
 
     """
+    rec, lost = bridge_gaps(rec)
     fs = rec.fs
     f, *_ = model_residual(rec, robot)
     N = rec.t.size
     if mask is None:
         mask = np.zeros(N - 1, bool)
         mask[int(EDGE * N):N - 1 - int(EDGE * N)] = True
+    mask = mask & ~(lost[1:] | lost[:-1])
     uf = lowpass(rec.effort[:-1], fs, fc)
     ff = lowpass(f, fs, fc)
     u_model = uf - ff
