@@ -71,6 +71,21 @@ def load_data(path: Path, map_path: Path | None = None) -> Recording:
 
 
 def has_experiments(rec: Recording) -> bool:
+    """
+    Return whether the record holds identification experiments.
+
+    Parameters
+    ----------
+    rec : Recording
+        The record to inspect.
+
+    Returns
+    -------
+    bool
+        True when it has a reference column and at least one multisine or chirp segment (the
+        experiments route of the diagnosis), else False (time-series route).
+
+    """
     return rec.reference is not None and any(
         s.info.get('design') in ('multisine', 'chirp') for s in rec.segments)
 
@@ -162,6 +177,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
               'unexplained': res.get('unexplained', []),
               'rejected': res.get('rejected', [_rejected(c) for c in res.get('candidates', [])]),
               'extended_model': 'extended_model.yaml'}
+    if rec.meta.get('gaps'):
+        report['gaps'] = rec.meta['gaps']
     (out / 'report.json').write_text(json.dumps(report, indent=1))
     write_diagnosis_report(out, report, res, rec, mode, data)
     return {'report': report, 'result': res, 'mode': mode}

@@ -268,6 +268,7 @@ def test_bag_with_lost_stretches_is_diagnosed_without_them(tmp_path, capsys):
     assert main(['diagnose', str(bag), '--model', str(model), '--out', str(out)]) == 0
     assert '3 gap(s) in the joint states' in capsys.readouterr().out
     rep = json.loads((out / 'report.json').read_text())
+    assert [round(a, 1) for a, _ in rep['gaps']] == [7.1, 19.4, 31.7]
     found = {(e['name'], e['axis']): e['parameters'] for e in rep['effects']}
     full = diagnose_timeseries(rec, replace(robot_from_dict(RIGID), sample_rate=rec.fs))
     assert set(found) == {(e.name, e.axis) for e in full['effects']}
