@@ -86,8 +86,20 @@ def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]
 
     Linear part from :func:`.residual.inverse_dynamics_residual`, plus the model's own Coulomb
     friction, torque ripple and gravity (link positions taken as the motor positions: the
-    deflection is far below the gravity terms' angular scale). Returns (f, q, v, a), each
-    (N-1, n).
+    deflection is far below the gravity terms' angular scale).
+
+    Parameters
+    ----------
+    rec : Recording
+        Measured positions [rad], velocities [rad/s] and efforts [N m] of the model's axes.
+    robot : RobotParams
+        The model whose residual is wanted.
+
+    Returns
+    -------
+    f, q, v, a : ndarray, shape (N-1, n)
+        Residual torque and position, velocity, acceleration between samples.
+
     """
     f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, rec.effort, rec.dt,
                                               robot)
@@ -549,10 +561,22 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
     (between samples, N-1; default all but the ends), never on rows bridged over a gap
     (:func:`.common.bridge_gaps`).
 
+    Parameters
+    ----------
+    rec : Recording
+        The record (any record of the robot, not necessarily the one fitted).
+    robot : RobotParams
+        The model file's robot (nominal or extended).
+    fc : float
+        Low-pass cut-off of torques and residual [Hz].
+    mask : ndarray of bool, shape (N-1,), optional
+        The samples (between samples) the metrics are computed on.
+
     Returns
     -------
-    dict with 'frf_error_db', 'time_nrmse', 'per_axis' {name: {...}} and 'residual' (N-1, n)
-    (measured minus predicted torque, low-passed).
+    dict
+        'frf_error_db', 'time_nrmse', 'per_axis' {name: {...}} and 'residual' (N-1, n)
+        (measured minus predicted torque, low-passed).
 
     """
     rec, lost = bridge_gaps(rec)
