@@ -37,6 +37,28 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     """
     Read the bag (in memory or streamed) and estimate.
 
+    Parameters
+    ----------
+    bag : Path
+        Bag directory or .mcap file.
+    joints : list of str or None
+        Joint names to analyse; None: all joints of the first joint state message.
+    t_range : tuple of float or None
+        (start, end) in s of the bag clock: analyse only this time range; None: all of it.
+    options : ExcitationOptions or None
+        :class:`~frf_ident.core.estimation.detected.ExcitationOptions` replacing detection
+        in bags without experiment descriptors; None: detect the excitation.
+    stream : bool or None
+        True: read window by window; False or None: only when the bag would exceed the
+        memory budget.
+    max_memory_mb : float or None
+        Memory budget of the in-memory reader in MB (> 0); None: a quarter of the physical
+        memory, at most 4 GiB (:func:`~frf_ident.app.stream_estimate.default_memory_budget`).
+    window_s : float
+        Block length in s (> 0) for bags without experiment descriptors.
+    progress : callable
+        Called with one line of text per step.
+
     Returns
     -------
     tuple

@@ -76,18 +76,93 @@ def torque_sample_offset(lockstep: bool) -> int:
 class Outputs(Protocol):
     """What the session sends; the node implements it with publishers and its logger."""
 
-    def reference(self, k: int, r: np.ndarray, x: np.ndarray) -> None: ...
+    def reference(self, k: int, r: np.ndarray, x: np.ndarray) -> None:
+        """
+        Send the reference of one sample.
 
-    def experiment(self, text: str) -> None: ...
+        Parameters
+        ----------
+        k : int
+            Sample index; the sample's stamp is k dt.
+        r : ndarray, shape (n,)
+            Velocity reference [rad/s] per joint (model joint order).
+        x : ndarray, shape (n,)
+            Excitation part of ``r`` [rad/s].
 
-    def progress(self, event: dict[str, Any]) -> None: ...
+        """
 
-    def log(self, level: str, text: str) -> None: ...
+    def experiment(self, text: str) -> None:
+        """
+        Send an experiment descriptor or event.
+
+        Parameters
+        ----------
+        text : str
+            JSON text: a ``Segment.descriptor`` or a ``procedure_end`` / ``aborted`` event.
+
+        """
+
+    def progress(self, event: dict[str, Any]) -> None:
+        """
+        Send a progress event.
+
+        Parameters
+        ----------
+        event : dict
+            JSON-serialisable event: ``event`` ('started', 'progress' or 'finished'), ``run``,
+            ``procedure``, ``samples``, ``of``, ``fraction``, ``wall_s`` and, when finished,
+            ``success`` with ``result`` or ``error`` (and ``aborted`` after an abort).
+
+        """
+
+    def log(self, level: str, text: str) -> None:
+        """
+        Write a log line.
+
+        Parameters
+        ----------
+        level : str
+            Severity: 'info', 'warn' or 'error'.
+        text : str
+            The line.
+
+        """
 
 
 @dataclass
 class SessionSettings:
-    """Parameters of the excitation node (defaults are the node's parameter defaults)."""
+    """
+    Parameters of the excitation node (defaults are the node's parameter defaults).
+
+    Parameters
+    ----------
+    lockstep : bool, optional
+        Lockstep simulation (references ahead of the joint states); default False:
+        free-running (a real robot).
+    lookahead : int, optional
+        Lockstep: references published ahead of the newest joint state [samples].
+    stale_s : float, optional
+        Watchdog, lockstep: wall time [s] without /joint_states before a run aborts.
+    stale_samples : int, optional
+        Watchdog, free-running: the same limit in samples.
+    start_grace_s : float, optional
+        Wall time [s] the first answer of a run may take (the watchdog waits at least this).
+    abort_ramp_s : float, optional
+        Wall time [s] within which an abort ramps the reference to zero.
+    position_bound_deg : float, optional
+        Bound [deg] of the planned position around the operating point (checked before a
+        run).
+    live_position_bound_deg : float, optional
+        Bound [deg] of the measured position around the operating point (a run aborts
+        beyond it).
+    progress_period_s : float, optional
+        Wall time [s] between progress events.
+    multisine : MultisineConfig, optional
+        Design of the multisine procedure.
+    chirp : ChirpConfig, optional
+        Design of the chirp iteration.
+
+    """
 
     lockstep: bool = False         # free-running unless the simulation says otherwise
     lookahead: int = 20            # lockstep: references published ahead [samples]
@@ -168,7 +243,21 @@ class ExcitationSession:
 
     # -- measurements -------------------------------------------------------------------------
     def on_state(self, k: int, q: np.ndarray, effort: Optional[np.ndarray]) -> None:
-        """Joint state of sample ``k`` (position ``q``, effort or None) in model joint order."""
+        """
+        Joint state of sample ``k`` (position ``q``, effort or None) in model joint order.
+
+        Parameters
+        ----------
+        k : int
+            Sample index of the joint state (stamp / dt); states not newer than the last one
+            are ignored.
+        q : ndarray, shape (n,)
+            Measured position [rad]; the first one received becomes the operating point.
+        effort : ndarray, shape (n,) or None
+            Measured effort [N m] (the torque of sample ``k - offset``, see the module
+            docstring), or None when the message carries none.
+
+        """
         with self.lock:
             if k <= self.k_js:
                 return
@@ -279,7 +368,22 @@ class ExcitationSession:
         return run
 
     def start_multisine(self) -> Run:
-        """Start the multisine procedure; returns at once (the end comes as an event)."""
+        """
+        Start the multisine procedure; returns at once (the end comes as an event).
+
+        Returns
+        -------
+        Run
+            The started run; its ``done`` event is set when it finished or aborted.
+
+        Raises
+        ------
+        RuntimeError
+            No joint state received yet, or another procedure is still running.
+        SafetyError
+            The planned position leaves the position bound.
+
+        """
         phases, design = multisine_procedure(self.s.multisine, self.n, self.fs)
 
         def end(run: Run) -> dict:
@@ -288,13 +392,37 @@ class ExcitationSession:
         return self._start('multisine', phases, False, end)
 
     def chirp_iteration(self) -> ChirpIteration:
-        """Return the chirp iteration (created on first use)."""
+        """
+        Return the chirp iteration (created on first use).
+
+        Returns
+        -------
+        ChirpIteration
+            The session's chirp iteration, kept across its steps.
+
+        """
         if self.chirp is None:
             self.chirp = ChirpIteration(self.s.chirp, self.n, self.fs, self.torque_limit)
         return self.chirp
 
     def start_chirp_iteration(self) -> Run:
-        """Start one chirp-iteration step; the update runs when its last sample is in."""
+        """
+        Start one chirp-iteration step; the update runs when its last sample is in.
+
+        Returns
+        -------
+        Run
+            The started run; its ``done`` event is set when it finished or aborted.
+
+        Raises
+        ------
+        RuntimeError
+            The iteration has already converged, the predicted peak torque exceeds the torque
+            limit, no joint state received yet, or another procedure is still running.
+        SafetyError
+            The planned position leaves the position bound.
+
+        """
         it = self.chirp_iteration()
         if it.history and it.history[-1].get('converged'):
             raise RuntimeError('the chirp iteration has already converged')

@@ -51,7 +51,23 @@ MEMORY_PER_BAG_BYTE = 3.0
 
 @dataclass
 class StreamedEstimate:
-    """Estimates of a streamed bag with the merged timing report and what the stream did."""
+    """
+    Estimates of a streamed bag with the merged timing report and what the stream did.
+
+    Parameters
+    ----------
+    estimates : dict of str to FrequencyResponse
+        Every estimate the bag supports, keyed by name ('multisine', 'chirp', ...).
+    timing : TimingReport
+        Timing report of all windows merged (:func:`frf_ident.bag.timing.merge_reports`).
+    stats : StreamStats
+        What the stream did: windows, messages read per topic, peak rows held, recovery.
+    meta : dict, optional
+        Recording metadata from the experiment descriptors (empty without them).
+    notes : list of str, optional
+        Per-block detection notes of bags without descriptors (empty otherwise).
+
+    """
 
     estimates: dict[str, FrequencyResponse]
     timing: tm.TimingReport
@@ -66,6 +82,12 @@ def default_memory_budget() -> int:
 
     Bytes the in-memory reader may use before ``estimate`` streams: a quarter of the
     physical memory, at most 4 GiB.
+
+    Returns
+    -------
+    int
+        Budget in bytes (8 GiB of physical memory assumed when it cannot be queried).
+
     """
     try:
         phys = os.sysconf('SC_PAGE_SIZE') * os.sysconf('SC_PHYS_PAGES')
@@ -75,7 +97,23 @@ def default_memory_budget() -> int:
 
 
 def needs_streaming(bag: str | Path, budget_bytes: int) -> bool:
-    """Return true when reading the bag into memory would exceed ``budget_bytes``."""
+    """
+    Return true when reading the bag into memory would exceed ``budget_bytes``.
+
+    Parameters
+    ----------
+    bag : str or Path
+        Bag directory or .mcap file.
+    budget_bytes : int
+        Memory budget of the in-memory reader in bytes.
+
+    Returns
+    -------
+    bool
+        True when the size of the bag's MCAP files times :data:`MEMORY_PER_BAG_BYTE`
+        exceeds ``budget_bytes``.
+
+    """
     from frf_ident.bag.reader import locate
     size = sum(f.stat().st_size for f in locate(bag).files)
     return size * MEMORY_PER_BAG_BYTE > budget_bytes
@@ -102,6 +140,37 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     (:class:`~frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in
     every block.
     Only the last chirp iteration is read (the one estimated).
+
+    Parameters
+    ----------
+    bag : str or Path
+        Bag directory or .mcap file.
+    joints : list of str, optional
+        Joint names to analyse; default: all joints of the first joint state message.
+    t_range : tuple of float, optional
+        (t_start, t_end) in s of the bag clock, t_start < t_end: analyse only the segments
+        or blocks inside this range; default: the whole bag.
+    block_s : float, optional
+        Block length in s for bags without experiment descriptors.
+    options : ExcitationOptions, optional
+        Excitation options replacing detection; default None: detect the excitation.
+    progress : callable, optional
+        Called with one line of text per step; default: silent.
+    bar : bool, optional
+        Show a progress bar of the bytes scanned.
+
+    Returns
+    -------
+    StreamedEstimate
+        The estimates with the merged timing report, stream statistics, recording metadata
+        and detection notes.
+
+    Raises
+    ------
+    EstimationError
+        ``t_range`` is malformed, an experiment segment has no joint states, no joint state
+        lies inside the analysed windows, or the data do not support an estimate.
+
     """
     say = progress or (lambda _msg: None)
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):

@@ -60,6 +60,18 @@ class BagFiles:
     ``compression`` is rosbag2's own compression from metadata.yaml ('' none, 'file': each
     file is a zstd-compressed MCAP, 'message': each message's data is zstd-compressed);
     MCAP chunk compression (zstd, lz4) is the scanner's business and needs nothing here.
+
+    Parameters
+    ----------
+    path : Path
+        The bag as given: a bag directory or a bare .mcap file.
+    files : list of Path
+        The MCAP files of the bag, in reading order.
+    metadata : dict, optional
+        Contents of metadata.yaml; None when the bag has none.
+    compression : str, optional
+        rosbag2 compression mode: '' (none, default), 'file' or 'message'.
+
     """
 
     path: Path
@@ -132,7 +144,25 @@ def _decompressed(batch: Batch) -> Batch:
 
 
 def locate(path: str | Path) -> BagFiles:
-    """Resolve a bag directory, a bag directory without metadata.yaml, or a bare .mcap."""
+    """
+    Resolve a bag directory, a bag directory without metadata.yaml, or a bare .mcap.
+
+    Parameters
+    ----------
+    path : str or Path
+        rosbag2 directory (with or without metadata.yaml) or a bare .mcap file.
+
+    Returns
+    -------
+    BagFiles
+        The bag's MCAP files in order, with metadata.yaml contents and compression mode.
+
+    Raises
+    ------
+    BagError
+        The path does not exist, its storage is not MCAP, or it holds no MCAP file.
+
+    """
     p = Path(path)
     if not p.exists():
         raise BagError(f'bag {str(p)!r} does not exist')
@@ -547,6 +577,29 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
     ('refuse') or kept as missing data ('mark': NaN joint states on the grid inside it,
     listed in the report's ``missing`` and ``rec.meta['gaps']``). Raises :class:`BagError`
     (one line) for every input problem.
+
+    Parameters
+    ----------
+    path : str or Path
+        rosbag2 directory, directory of .mcap files, or a bare .mcap file.
+    joints : list of str, optional
+        Joint names to read, in this order; default: those of the first joint state message.
+    topics : BagTopics, optional
+        Topic names; default: the standard ones (/joint_states, /frf/experiment ...).
+    t_range : tuple of float, optional
+        (t0, t1) in s of the bag clock, t0 < t1: keep only this window; default: everything.
+    progress : bool, optional
+        Show a progress bar of the bytes read.
+    gaps : {'refuse', 'mark'}, optional
+        What to do with gaps of missing joint states (see above); default 'refuse'.
+
+    Returns
+    -------
+    rec : Recording
+        The uniformly sampled recording (joint states, commands, excitation, segments).
+    report : TimingReport
+        Timing analysis, repairs, recovery of damaged files and warnings.
+
     """
     topics = topics or BagTopics()
     if joints is not None and (isinstance(joints, str) or not joints):
@@ -878,6 +931,19 @@ def bag_info(path: str | Path) -> dict[str, Any]:
 
     Uses metadata.yaml when present, else the MCAP summary, else scans the file (then also
     reporting what could not be read).
+
+    Parameters
+    ----------
+    path : str or Path
+        rosbag2 directory or a bare .mcap file.
+
+    Returns
+    -------
+    dict
+        ``path``, ``files``, ``storage``, ``metadata_yaml``, ``message_count``, ``start_s``,
+        ``end_s``, ``duration_s`` (s), ``topics`` (list of {``name``, ``type``,
+        ``count``}), ``complete`` and ``bytes_lost``; with metadata.yaml also ``version``.
+
     """
     bag = locate(path)
     if bag.metadata is not None:
@@ -948,6 +1014,19 @@ def reindex(path: str | Path, out: str | Path) -> Path:
 
     Rewrite a damaged or unfinished bag as a complete one at ``out`` (all readable messages,
     summary, footer and metadata.yaml), like ``ros2 bag reindex`` plus recovery.
+
+    Parameters
+    ----------
+    path : str or Path
+        The damaged bag: rosbag2 directory or a bare .mcap file.
+    out : str or Path
+        Directory of the new bag (must not exist).
+
+    Returns
+    -------
+    Path
+        ``out``.
+
     """
     from .writer import BagRecorder
 
@@ -967,7 +1046,23 @@ def reindex(path: str | Path, out: str | Path) -> Path:
 
 def iter_raw(path: str | Path, topics: set[str] | None = None) -> Iterator[tuple[str, str, int,
                                                                                  bytes]]:
-    """(topic, type, log_time_ns, cdr) of every readable message, streaming."""
+    """
+    (topic, type, log_time_ns, cdr) of every readable message, streaming.
+
+    Parameters
+    ----------
+    path : str or Path
+        rosbag2 directory or a bare .mcap file.
+    topics : set of str, optional
+        Topics to read; default: all.
+
+    Yields
+    ------
+    tuple of (str, str, int, bytes)
+        (topic name, message type, log time in ns, CDR-serialised message bytes), in file
+        order.
+
+    """
     bag = locate(path)
     stats: list[ScanStats] = []
     for batch in iter_batches(bag, topics, False, stats):

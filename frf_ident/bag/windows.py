@@ -51,7 +51,21 @@ _PAD_NS = 10_000_000          # windows reach 10 ms beyond their segment
 
 @dataclass
 class ExperimentIndex:
-    """What the /frf/experiment topic says: recording_meta, segments, warnings."""
+    """
+    What the /frf/experiment topic says: recording_meta, segments, warnings.
+
+    Parameters
+    ----------
+    meta : dict
+        Contents of the ``recording_meta`` events (empty without them).
+    segments : list of Segment
+        The experiment segments described, with times in s of the bag clock.
+    warnings : list of str
+        Problems found in the descriptors (end without start, ignored events).
+    events : int, optional
+        Number of messages read on the experiment topic.
+
+    """
 
     meta: dict[str, Any]
     segments: list[Segment]
@@ -60,7 +74,22 @@ class ExperimentIndex:
 
 
 def read_experiment(path: str | Path, *, topics: BagTopics | None = None) -> ExperimentIndex:
-    """First pass: the experiment descriptors only (no joint state is decoded)."""
+    """
+    First pass: the experiment descriptors only (no joint state is decoded).
+
+    Parameters
+    ----------
+    path : str or Path
+        rosbag2 directory or a bare .mcap file.
+    topics : BagTopics, optional
+        Topic names; default: the standard ones.
+
+    Returns
+    -------
+    ExperimentIndex
+        Metadata, segments and warnings of the descriptors, and the number of messages.
+
+    """
     topics = topics or BagTopics()
     bag = locate(path)
     col = Collector(bag, topics, None, {})
@@ -72,7 +101,21 @@ def read_experiment(path: str | Path, *, topics: BagTopics | None = None) -> Exp
 
 
 def segment_windows(segments: list[Segment]) -> list[tuple[int, int]]:
-    """(start_ns, end_ns) windows covering the estimable segments, overlapping ones merged."""
+    """
+    (start_ns, end_ns) windows covering the estimable segments, overlapping ones merged.
+
+    Parameters
+    ----------
+    segments : list of Segment
+        Experiment segments; only multisine, chirp and constant-velocity ones are covered.
+
+    Returns
+    -------
+    list of tuple of int
+        (start_ns, end_ns) in ns of the bag clock, each segment padded by 10 ms on both
+        sides (start clipped at 0), sorted, overlapping windows merged.
+
+    """
     spans = sorted((int(round(s.t_start * 1e9)) - _PAD_NS, int(round(s.t_end * 1e9)) + _PAD_NS)
                    for s in segments
                    if s.info.get('design') in ('multisine', 'chirp', 'constant_velocity'))
@@ -87,7 +130,21 @@ def segment_windows(segments: list[Segment]) -> list[tuple[int, int]]:
 
 @dataclass
 class StreamStats:
-    """What a streaming read did: windows, the most rows held at once, data loss."""
+    """
+    What a streaming read did: windows, the most rows held at once, data loss.
+
+    Parameters
+    ----------
+    windows : int, optional
+        Number of windows assembled.
+    messages : dict of str to int, optional
+        Messages read per topic.
+    peak_rows : int, optional
+        The most message rows held in memory at once.
+    recovery : dict, optional
+        Recovery summary of damaged or unfinished files (as in the timing report).
+
+    """
 
     windows: int = 0
     messages: dict[str, int] = field(default_factory=dict)
@@ -105,6 +162,40 @@ class WindowReader:
     ``experiment`` is the first pass (:func:`read_experiment`, run here when not given);
     ``gaps`` as in :func:`read_recording`. After the iteration :attr:`stats` holds the counts
     and the recovery summary of damaged files.
+
+    Parameters
+    ----------
+    path : str or Path
+        rosbag2 directory or a bare .mcap file.
+    windows : list of tuple of int, optional
+        (start_ns, end_ns) windows in ns of the bag clock; give either this or ``block_s``.
+    block_s : float, optional
+        Block length in s (> 0): consecutive blocks from the first sample.
+    joints : list of str, optional
+        Joint names to read, in this order; default: those of the first joint state message.
+    topics : BagTopics, optional
+        Topic names; default: the standard ones.
+    experiment : ExperimentIndex, optional
+        Result of :func:`read_experiment` for this bag; default: read here.
+    span : tuple of int, optional
+        (start_ns, end_ns) limiting the blocks of ``block_s`` mode; default: the whole bag.
+    margin_s : float, optional
+        Margin in s: a window is assembled once the scan has read this far beyond its end,
+        and rows this close to a window are kept for it.
+    drain_rows : int, optional
+        Messages fed between two attempts to emit windows and drop passed rows.
+    progress : bool, optional
+        Show a progress bar of the bytes read.
+    gaps : {'refuse', 'mark'}, optional
+        Gaps of missing joint states, as in :func:`read_recording`; default 'refuse'.
+
+    Raises
+    ------
+    ValueError
+        Not exactly one of ``windows`` and ``block_s`` given, or an unknown ``gaps`` mode.
+    BagError
+        ``block_s`` is not > 0, ``joints`` is empty or a string, or the bag cannot be located.
+
     """
 
     def __init__(self, path: str | Path, *, windows: list[tuple[int, int]] | None = None,
@@ -147,6 +238,12 @@ class WindowReader:
         multisine period of the current block ends) instead of right after it; ignored
         unless it lies more than ``MIN_ADVANCE_S`` inside the block just read (the scan only
         moves forward; the in-memory blocks follow the same rule).
+
+        Parameters
+        ----------
+        t_s : float
+            Start time in s of the bag clock for the next block.
+
         """
         if self.block_ns is None or not self._starts:
             return

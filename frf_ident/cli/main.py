@@ -43,7 +43,16 @@ COMMANDS = {
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """Argparse that reports a usage error in one line with exit status 2."""
+    """
+    Argparse that reports a usage error in one line with exit status 2.
+
+    Parameters
+    ----------
+    *args, **kwargs
+        Those of :class:`argparse.ArgumentParser` (``prog``, ``description``,
+        ``formatter_class`` ...): the constructor is inherited unchanged.
+
+    """
 
     def error(self, message: str) -> None:
         """

@@ -28,7 +28,15 @@ __all__ = ['Yaml12FloatLoader', 'load_yaml']
 
 
 class Yaml12FloatLoader(yaml.SafeLoader):
-    """SafeLoader that resolves floats as YAML 1.2 (and rcl) do."""
+    """
+    SafeLoader that resolves floats as YAML 1.2 (and rcl) do.
+
+    Parameters
+    ----------
+    stream : str, bytes or file-like
+        The YAML text to load, as for :class:`yaml.SafeLoader`.
+
+    """
 
 
 Yaml12FloatLoader.add_implicit_resolver(

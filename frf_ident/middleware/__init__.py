@@ -67,7 +67,23 @@ def _select_backend() -> ModuleType:
 
 
 def backend() -> ModuleType:
-    """Return the backend module (chosen once per process)."""
+    """
+    Return the backend module (chosen once per process).
+
+    Returns
+    -------
+    module
+        :mod:`frf_ident.middleware.rclpy_backend` when rclpy imports, else
+        :mod:`frf_ident.middleware.dds_backend`; ``FRF_IDENT_MIDDLEWARE`` forces one.
+
+    Raises
+    ------
+    ValueError
+        ``FRF_IDENT_MIDDLEWARE`` is set to something else than 'rclpy' or 'dds'.
+    ImportError
+        ``FRF_IDENT_MIDDLEWARE=rclpy`` but rclpy cannot be imported.
+
+    """
     global _backend
     with _lock:
         if _backend is None:
@@ -76,17 +92,41 @@ def backend() -> ModuleType:
 
 
 def backend_name() -> str:
-    """``'rclpy'`` or ``'dds'``."""
+    """
+    ``'rclpy'`` or ``'dds'``.
+
+    Returns
+    -------
+    str
+        Name of the backend in use (selecting it on first use).
+
+    """
     return backend().BACKEND_NAME
 
 
 def init(args: Optional[Sequence[str]] = None) -> None:
-    """Initialise the middleware; ``args`` (default ``sys.argv``) may carry ``--ros-args``."""
+    """
+    Initialise the middleware; ``args`` (default ``sys.argv``) may carry ``--ros-args``.
+
+    Parameters
+    ----------
+    args : sequence of str, optional
+        Command line including the program name; default ``sys.argv``.
+
+    """
     backend().init(args)
 
 
 def ok() -> bool:
-    """Return true between :func:`init` (or the first :func:`create_node`) and :func:`shutdown`."""
+    """
+    Return true between :func:`init` (or the first :func:`create_node`) and :func:`shutdown`.
+
+    Returns
+    -------
+    bool
+        Whether the middleware is initialised and not shut down.
+
+    """
     return backend().ok()
 
 
@@ -103,6 +143,23 @@ def create_node(name: str, *, parameter_overrides: Optional[dict[str, Any]] = No
     Parameter precedence (lowest first): declared default, ``--params-file`` (``/**`` then the
     node's own section), ``-p name:=value``, ``parameter_overrides``, ``use_sim_time``.
     Use :func:`load_params_file` to pass a ROS parameter YAML as ``parameter_overrides``.
+
+    Parameters
+    ----------
+    name : str
+        Node name.
+    parameter_overrides : dict, optional
+        Parameter name -> value, overriding defaults and the command line.
+    use_sim_time : bool, optional
+        Forced value of the ``use_sim_time`` parameter; None (default): from the parameters.
+    namespace : str, optional
+        Node namespace; default ``'/'``.
+
+    Returns
+    -------
+    Node
+        The backend's node, with rclpy's Node method names.
+
     """
     return backend().create_node(name, namespace=namespace,
                                  parameter_overrides=parameter_overrides,
@@ -110,27 +167,93 @@ def create_node(name: str, *, parameter_overrides: Optional[dict[str, Any]] = No
 
 
 def spin(node: Any, stop_event: Optional[threading.Event] = None) -> None:
-    """Run ``node``'s callbacks in this thread until ``stop_event`` is set or shutdown."""
+    """
+    Run ``node``'s callbacks in this thread until ``stop_event`` is set or shutdown.
+
+    Parameters
+    ----------
+    node : Node
+        A node from :func:`create_node`.
+    stop_event : threading.Event, optional
+        Spinning stops once it is set; default None: until shutdown (rclpy) or until the
+        node is destroyed (DDS backend).
+
+    """
     backend().spin(node, stop_event)
 
 
 def spin_once(node: Any, timeout_sec: Optional[float] = None) -> None:
-    """Wait up to ``timeout_sec`` for work and run the ready callbacks of ``node``."""
+    """
+    Wait up to ``timeout_sec`` for work and run the ready callbacks of ``node``.
+
+    Parameters
+    ----------
+    node : Node
+        A node from :func:`create_node`.
+    timeout_sec : float, optional
+        Longest wait in s; default None: wait until there is work.
+
+    """
     backend().spin_once(node, timeout_sec)
 
 
 def parameter_errors() -> tuple:
-    """Exception types a node raises for a parameter of the wrong type or value."""
+    """
+    Exception types a node raises for a parameter of the wrong type or value.
+
+    Returns
+    -------
+    tuple of type
+        The backend's parameter exception classes, for an ``except`` clause.
+
+    """
     return backend().PARAMETER_ERRORS
 
 
 def msg(type_name: str) -> type:
-    """Message class for ``pkg/msg/Type`` on the current backend."""
+    """
+    Message class for ``pkg/msg/Type`` on the current backend.
+
+    Parameters
+    ----------
+    type_name : str
+        Full message type name, e.g. ``'sensor_msgs/msg/JointState'``.
+
+    Returns
+    -------
+    type
+        The message class; instances are built with keyword arguments (ROS field names).
+
+    Raises
+    ------
+    KeyError
+        The DDS backend does not know the type.
+
+    """
     return _interface('message', type_name)
 
 
 def srv(type_name: str) -> Any:
-    """Service type for ``pkg/srv/Type`` (with ``.Request`` and ``.Response``)."""
+    """
+    Service type for ``pkg/srv/Type`` (with ``.Request`` and ``.Response``).
+
+    Parameters
+    ----------
+    type_name : str
+        Full service type name, e.g. ``'std_srvs/srv/Trigger'``.
+
+    Returns
+    -------
+    object
+        rclpy's generated service class, or the DDS backend's ``ServiceType``; both have
+        ``Request`` and ``Response`` message classes.
+
+    Raises
+    ------
+    KeyError
+        The DDS backend does not know the type.
+
+    """
     return _interface('service', type_name)
 
 

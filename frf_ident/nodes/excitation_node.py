@@ -77,7 +77,21 @@ def settings_from_parameters(node: Any) -> SessionSettings:
 
 
 class ExcitationNode:
-    """Publishers, subscription, services and the watchdog timer around the session."""
+    """
+    Publishers, subscription, services and the watchdog timer around the session.
+
+    Parameters
+    ----------
+    node : Any
+        The node to wire (from :func:`frf_ident.middleware.create_node`); its parameters
+        give the session settings, topics, model file and ``discovery_wait_s``.
+
+    Raises
+    ------
+    Refused
+        ``lockstep`` without ``use_sim_time``, or another publisher on the velocity topic.
+
+    """
 
     def __init__(self, node: Any) -> None:
         from frf_ident.io.model_file import load_model
@@ -123,6 +137,19 @@ class ExcitationNode:
 
     # -- Outputs of the session ------------------------------------------------------------
     def reference(self, k: int, r: np.ndarray, x: np.ndarray) -> None:
+        """
+        Publish the excitation part (stamped) and then the velocity reference of a sample.
+
+        Parameters
+        ----------
+        k : int
+            Sample index; the excitation message is stamped k dt.
+        r : ndarray, shape (n,)
+            Velocity reference [rad/s], published on the velocity topic.
+        x : ndarray, shape (n,)
+            Excitation part of ``r`` [rad/s], published on the excitation topic.
+
+        """
         c.set_stamp(self.exc_msg, k * self.dt_ns)
         self.exc_msg.velocity = x.tolist()
         self.exc_pub.publish(self.exc_msg)   # first: recorders pair the command with this stamp
@@ -130,12 +157,41 @@ class ExcitationNode:
         self.cmd_pub.publish(self.cmd)
 
     def experiment(self, text: str) -> None:
+        """
+        Publish an experiment descriptor or event on the experiment topic.
+
+        Parameters
+        ----------
+        text : str
+            JSON text of the descriptor or event.
+
+        """
         self.exp_pub.publish(self.String(data=text))
 
     def progress(self, event: dict) -> None:
+        """
+        Publish a progress event as JSON on the progress topic.
+
+        Parameters
+        ----------
+        event : dict
+            JSON-serialisable event (see :meth:`frf_ident.app.excitation.Outputs.progress`).
+
+        """
         self.progress_pub.publish(self.String(data=json.dumps(event, sort_keys=True)))
 
     def log(self, level: str, text: str) -> None:
+        """
+        Write a line to the node's logger.
+
+        Parameters
+        ----------
+        level : str
+            'error', 'warn' or anything else for info.
+        text : str
+            The line.
+
+        """
         # one call site per severity: rclpy refuses a severity change at the same call site
         logger = self.node.get_logger()
         if level == 'error':
@@ -147,7 +203,20 @@ class ExcitationNode:
 
     # -- wiring ----------------------------------------------------------------------------
     def refuse_second_publisher(self, wait_s: float) -> None:
-        """Refuse when another node publishes velocity references (two excitation engines)."""
+        """
+        Refuse when another node publishes velocity references (two excitation engines).
+
+        Parameters
+        ----------
+        wait_s : float
+            Wall time [s] to keep checking for another publisher (discovery takes a while).
+
+        Raises
+        ------
+        Refused
+            Another publisher is on the velocity topic.
+
+        """
         deadline = time.monotonic() + wait_s
         while True:
             n = self.node.count_publishers(self.velocity_topic)
@@ -196,7 +265,20 @@ class ExcitationNode:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """``ros2 run frf_ident excitation_node``."""
+    """
+    ``ros2 run frf_ident excitation_node``.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Command line (``--ros-args`` ...); default sys.argv.
+
+    Returns
+    -------
+    int
+        Exit code: 0, or 2 when the node refused its parameters.
+
+    """
     return c.run_node('excitation_node', ExcitationNode, argv)
 
 

@@ -73,7 +73,8 @@ def write_report(out_dir: str | Path, *, frfs: Mapping[str, FrequencyResponse],
     ----------
     out_dir
         Directory (created if needed); existing report files in it are replaced.
-    frfs : label -> estimate (e.g. {'multisine': ..., 'chirp': ...}); all with the same
+    frfs : mapping of str to FrequencyResponse
+        Label -> estimate (e.g. {'multisine': ..., 'chirp': ...}); all with the same
         channels as the first.
     reference
         Model or known FRF drawn as a black line.
@@ -81,10 +82,21 @@ def write_report(out_dir: str | Path, *, frfs: Mapping[str, FrequencyResponse],
         The time series; gives the time plot and the torque spectrogram.
     timing
         ``TimingReport`` or its ``to_dict()``.
-    iterations : chirp iteration summaries ``{'iteration': i, 'error_db': [per channel]}``
+    iterations : sequence of dict, optional
+        Chirp iteration summaries ``{'iteration': i, 'error_db': [per channel]}``
         (``error_db_per_channel`` is accepted too), optional ``tolerance_db``.
     title
         Page and heading title.
+
+    Returns
+    -------
+    Path
+        Path of the written ``report.html``.
+
+    Raises
+    ------
+    FrfIdentInputError
+        ``frfs`` is empty and no ``recording`` is given.
 
     """
     if not frfs and recording is None:

@@ -62,13 +62,16 @@ class Clipping:
     """
     Saturation statistics of one channel over the given stretches of data.
 
-    Attributes
+    Parameters
     ----------
-    low, high : smallest and largest value [unit of the data].
-    clipped_low, clipped_high : whether that side sits at its extreme in the sense of the
-        module thresholds.
-    fraction : share of all samples in qualifying runs at a clipped side (0 if none).
-    longest_run : longest run of samples at a clipped side (0 if none).
+    low, high : float
+        Smallest and largest finite value [unit of the data] (NaN when none is finite).
+    clipped_low, clipped_high : bool
+        Whether that side sits at its extreme in the sense of the module thresholds.
+    fraction : float
+        Share of all samples in qualifying runs at a clipped side (0 if none).
+    longest_run : int
+        Longest run of samples at a clipped side (0 if none).
 
     """
 
@@ -89,6 +92,18 @@ class Clipping:
         Return the clipping level or levels as text.
 
         For example '+-150 N m', '+150 N m' or '-150 and +148 N m'.
+
+        Parameters
+        ----------
+        unit : str, optional
+            Unit appended to the numbers (e.g. 'N m'); default none.
+
+        Returns
+        -------
+        str
+            Both extremes when both sides are clipped ('+-' when they are symmetric), else
+            the clipped one; meaningful only when :attr:`clipped` is true.
+
         """
         u = f' {unit}' if unit else ''
         lo, hi = self.low, self.high
@@ -132,6 +147,26 @@ def clipping(x: np.ndarray | Sequence[np.ndarray], *, min_run: int = MIN_RUN,
 
     Channels that are constant or not finite everywhere count as not clipped (a constant
     channel has no excitation to clip; a missing interface is all NaN).
+
+    Parameters
+    ----------
+    x : ndarray, shape (N, n) or (N,), or sequence of them
+        The data, one column per channel; stretches must have the same number of columns.
+    min_run : int, optional
+        Fewest consecutive samples at an extreme value that count as a run.
+    min_fraction : float, optional
+        Smallest share of all samples in such runs for a side to be clipped.
+
+    Returns
+    -------
+    list of Clipping
+        Statistics of each of the n channels.
+
+    Raises
+    ------
+    ValueError
+        No data, or stretches that are not (N, n) arrays with a common n.
+
     """
     parts = [np.asarray(p, dtype=float) for p in ([x] if isinstance(x, np.ndarray) else x)]
     parts = [p[:, None] if p.ndim == 1 else p for p in parts]
@@ -169,6 +204,33 @@ def check_not_clipped(u: np.ndarray | Sequence[np.ndarray], *, joint_names: Sequ
     ``where`` names the data (e.g. 'bag: /joint_states'), ``span`` the stretch analysed,
     ``field`` and ``unit`` the quantity. Raises :class:`EstimationError` naming the most
     clipped joint, its level, the share of samples and the longest run.
+
+    Parameters
+    ----------
+    u : ndarray, shape (N, n), or sequence of them
+        Plant input (torque [N m]) per joint, or stretches of it.
+    joint_names : sequence of str
+        Names of the n joints, for the message.
+    where : str
+        What the data are (e.g. 'bag: /joint_states').
+    span : str, optional
+        The stretch analysed, for the message.
+    field : str, optional
+        Name of the quantity, for the message.
+    unit : str, optional
+        Unit of the quantity, for the message.
+    min_run : int, optional
+        Fewest consecutive samples at an extreme value that count as a run.
+    min_fraction : float, optional
+        Smallest share of all samples in such runs for a side to be clipped.
+
+    Raises
+    ------
+    EstimationError
+        A joint's input is clipped.
+    ValueError
+        ``joint_names`` does not match the number of channels of ``u``.
+
     """
     stats = clipping(u, min_run=min_run, min_fraction=min_fraction)
     if len(stats) != len(joint_names):
@@ -189,6 +251,22 @@ def check_band(freq_hz: np.ndarray | Sequence[float], fs: float, *, where: str) 
 
     Refuse analysed frequencies at or above the Nyquist frequency ``fs / 2`` (or not
     positive): such lines alias in data sampled at ``fs`` Hz.
+
+    Parameters
+    ----------
+    freq_hz : array_like
+        The analysed frequencies [Hz].
+    fs : float
+        Sample rate of the data [Hz].
+    where : str
+        What the frequencies belong to, for the message.
+
+    Raises
+    ------
+    EstimationError
+        No frequency, a sample rate that is not a positive number, a frequency that is not
+        positive and finite, or one at or above fs / 2.
+
     """
     f = np.asarray(freq_hz, dtype=float).reshape(-1)
     if f.size == 0:
@@ -216,6 +294,23 @@ def check_periods(n_periods: int, *, need: int = 2, where: str, hint: str = '') 
     Refuse fewer than ``need`` whole steady-state periods (averaging over periods and the
     noise estimate need at least two). ``hint`` is appended to the message (e.g. how to get
     more data).
+
+    Parameters
+    ----------
+    n_periods : int
+        Number of whole steady-state periods available.
+    need : int, optional
+        Fewest periods accepted.
+    where : str
+        What the periods belong to, for the message.
+    hint : str, optional
+        Appended to the message; default none.
+
+    Raises
+    ------
+    EstimationError
+        ``n_periods`` < ``need``.
+
     """
     if n_periods < need:
         raise EstimationError(f'{where}: {n_periods} whole steady-state period'
@@ -231,6 +326,23 @@ def check_whole_period(drift: float, period_samples: int, *, where: str,
     Refuse a multisine whose true period is ``period_samples + drift`` samples with
     |drift| > ``max_drift``: whole-period DFTs of it leak into the neighbouring lines (the
     excitation was generated on another clock than the one the joint states are sampled on).
+
+    Parameters
+    ----------
+    drift : float
+        Difference of the true period from ``period_samples`` [samples per period].
+    period_samples : int
+        Period of the multisine in whole samples.
+    where : str
+        What the multisine belongs to, for the message.
+    max_drift : float, optional
+        Largest |drift| accepted [samples per period].
+
+    Raises
+    ------
+    EstimationError
+        |drift| > ``max_drift``.
+
     """
     if abs(drift) > max_drift:
         raise EstimationError(f'{where}: the period is {period_samples + drift:.2f} samples, '
@@ -248,6 +360,17 @@ def missing_rows(*series: np.ndarray) -> np.ndarray:
     (N,) True where a sample is missing: NaN in any column of the (N, n) ``series`` that
     holds data elsewhere (a column that is NaN throughout is an interface the robot does
     not publish, not a gap).
+
+    Parameters
+    ----------
+    *series : ndarray, shape (N, n) or (N,)
+        Signals on the same N samples (e.g. position, velocity, effort); at least one.
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        True at the samples a gap removed.
+
     """
     out = np.zeros(np.asarray(series[0]).shape[0], dtype=bool)
     for x in series:
@@ -266,6 +389,29 @@ def check_remaining(n_used: int, n_dropped: int, *, need: int, what: str, where:
 
     Refuse when fewer than ``need`` ``what`` (e.g. 'periods') remain after dropping
     ``n_dropped`` that gaps touched; the message says when the first dropped ones were.
+
+    Parameters
+    ----------
+    n_used : int
+        Number of periods (or lines) left without missing samples.
+    n_dropped : int
+        Number dropped because a gap touched them.
+    need : int
+        Fewest accepted.
+    what : str
+        What is counted (e.g. 'periods'), for the message.
+    where : str
+        What the data belong to, for the message.
+    dropped_at : sequence of tuple of float, optional
+        (start, end) [s] of the dropped ones; the first four are named in the message.
+    hint : str, optional
+        Appended to the message; default none.
+
+    Raises
+    ------
+    EstimationError
+        ``n_used`` < ``need``.
+
     """
     if n_used >= need:
         return
@@ -284,6 +430,26 @@ def check_covers(t_first: float, t_last: float, t_start: float, t_end: float, *,
 
     Refuse a segment [t_start, t_end] that the recorded span [t_first, t_last] (sample
     times, spacing ``dt``) does not cover; half a sample of slack at either end.
+
+    Parameters
+    ----------
+    t_first, t_last : float
+        Times of the first and last recorded sample [s].
+    t_start, t_end : float
+        Start and end of the segment [s].
+    where : str
+        What the segment is, for the message.
+    dt : float, optional
+        Sample spacing [s]; the last sample covers until ``t_last + dt``. Default 0: no
+        slack.
+    hint : str, optional
+        Appended to the message; default none.
+
+    Raises
+    ------
+    EstimationError
+        The segment starts before or ends after the recorded span.
+
     """
     slack = 0.5 * dt
     if t_start < t_first - slack or t_end > t_last + dt + slack:

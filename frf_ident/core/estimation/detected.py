@@ -74,13 +74,18 @@ class ExcitationOptions:
     """
     What is known about the excitation of a recording without descriptors; None: detect.
 
-    Attributes
+    Parameters
     ----------
-    input : name of the excited joint (the only input analysed).
-    multisine_period : multisine period [s]; the periodic block and lines are found in the data.
-    band : (f_low, f_high) [Hz]; only multisine lines inside are analysed.
-    chirp : (f_low, f_high) [Hz] of an exponential chirp (eq. 16); needs ``chirp_time``.
-    chirp_time : (t0, t1) [s] of the sweep, counted from the first analysed sample (as the
+    input : str, optional
+        Name of the excited joint (the only input analysed).
+    multisine_period : float, optional
+        Multisine period [s]; the periodic block and lines are found in the data.
+    band : tuple of float, optional
+        (f_low, f_high) [Hz]; only multisine lines inside are analysed.
+    chirp : tuple of float, optional
+        (f_low, f_high) [Hz] of an exponential chirp (eq. 16); needs ``chirp_time``.
+    chirp_time : tuple of float, optional
+        (t0, t1) [s] of the sweep, counted from the first analysed sample (as the
         detection reports them).
 
     """
@@ -92,16 +97,48 @@ class ExcitationOptions:
     chirp_time: tuple[float, float] | None = None
 
     def given(self) -> bool:
-        """Return true when any option is set."""
+        """
+        Return true when any option is set.
+
+        Returns
+        -------
+        bool
+            False when every option is None (detect everything).
+
+        """
         return any(v is not None for v in (self.input, self.multisine_period, self.band,
                                            self.chirp, self.chirp_time))
 
     def text(self) -> str:
-        """Return the given options as 'name=value' pairs."""
+        """
+        Return the given options as 'name=value' pairs.
+
+        Returns
+        -------
+        str
+            Comma-separated ``name=value`` of the options that are not None (for messages).
+
+        """
         return ', '.join(f'{k}={v!r}' for k, v in vars(self).items() if v is not None)
 
     def check(self, rec: Recording) -> None:
-        """Refuse options that contradict each other or the recording (one line each)."""
+        """
+        Refuse options that contradict each other or the recording (one line each).
+
+        Parameters
+        ----------
+        rec : Recording
+            The recording the options are for (joint names, sample rate, duration).
+
+        Raises
+        ------
+        EstimationError
+            An unknown input joint, both a chirp and a multisine period, a chirp without
+            sweep times (or the reverse), a band with a chirp, a band or chirp frequency at
+            or above Nyquist, fewer than two periods in the recording, or sweep times outside
+            it.
+
+        """
         if self.input is not None and self.input not in rec.joint_names:
             raise EstimationError(f'input={self.input!r} is not a joint of the recording; '
                                   f'expected one of {rec.joint_names}')
@@ -191,6 +228,28 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
 
     Detect the excitation per joint (or take it from ``options``); returns segments and
     one sentence per detection.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording, without experiment descriptors.
+    options : ExcitationOptions, optional
+        What is known about the excitation; default None: detect everything.
+
+    Returns
+    -------
+    segments : list of Segment
+        One segment per excited input, ``info['design']`` 'detected_multisine' or
+        'detected_chirp' with the detected parameters and the input's column index.
+    notes : list of str
+        One sentence per detection, and why joints were passed over.
+
+    Raises
+    ------
+    EstimationError
+        The options are refused, or no multisine or chirp is found in any joint (or in the
+        given input).
+
     """
     opts = options or ExcitationOptions()
     opts.check(rec)
@@ -249,6 +308,19 @@ def check_detected_segment(rec: Recording, seg: Segment) -> None:
 
     Band below Nyquist, at least two whole periods (multisine) or the sweep inside the
     data (chirp), and no clipped torque in the segment: refused with one line otherwise.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording the segment was detected in.
+    seg : Segment
+        A segment from :func:`detect_segments`.
+
+    Raises
+    ------
+    EstimationError
+        One of the checks fails.
+
     """
     info = seg.info
     name = rec.joint_names[info['input']]
@@ -315,6 +387,25 @@ class DetectedEstimator:
         Detect the excitation in ``rec`` (:func:`detect_segments`; ``options`` replace
         detection where given), check and add every detection; the sentences go to
         :attr:`notes` (each once). Returns how many.
+
+        Parameters
+        ----------
+        rec : Recording
+            A recording (or block of one) without experiment descriptors.
+        options : ExcitationOptions, optional
+            What is known about the excitation; default None: detect everything.
+
+        Returns
+        -------
+        int
+            Number of detected excitations added.
+
+        Raises
+        ------
+        EstimationError
+            Nothing detected, a detection fails its checks (then nothing is added), or
+            other inputs are excited at the same lines.
+
         """
         segments, notes = detect_segments(rec, options)
         for seg in segments:
@@ -326,7 +417,23 @@ class DetectedEstimator:
         return len(segments)
 
     def add(self, rec: Recording, seg: Segment) -> None:
-        """One detected segment of ``rec`` (from :func:`detect_segments`)."""
+        """
+        One detected segment of ``rec`` (from :func:`detect_segments`).
+
+        Parameters
+        ----------
+        rec : Recording
+            The recording (or block) the segment was detected in.
+        seg : Segment
+            A detected segment; its periods or chirp lines are added to the sums of the
+            same excitation found earlier, if any.
+
+        Raises
+        ------
+        EstimationError
+            Other inputs are excited at the same lines.
+
+        """
         info = seg.info
         j = int(info['input'])
         names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{n}' for n in rec.joint_names])
@@ -390,6 +497,17 @@ class DetectedEstimator:
         One FrequencyResponse per detected excitation, keyed 'detected/<input joint>'
         (a second excitation of the same joint: 'detected/<joint>#2'), the detection
         sentences in meta['detected'].
+
+        Returns
+        -------
+        dict of str to FrequencyResponse
+            Column estimates, one input (the excited joint) and every joint as output.
+
+        Raises
+        ------
+        EstimationError
+            Gaps left fewer than two multisine periods or no chirp line of an excitation.
+
         """
         out: dict[str, FrequencyResponse] = {}
         for e in self.entries.values():
@@ -510,6 +628,24 @@ def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
     Column j of P (all outputs / input j) from a detected excitation of input j: H1 over
     the periods at each line, sum Y conj(U_j) / sum |U_j|^2 (multisine), or Y / U_j at the
     Sec. 5.1 analysis frequencies (chirp).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording the segment was detected in.
+    seg : Segment
+        A detected segment (from :func:`detect_segments`).
+
+    Returns
+    -------
+    FrequencyResponse
+        Column j of P: input ``tau_m/<joint j>``, outputs ``dq_m/<joint>`` of every joint.
+
+    Raises
+    ------
+    EstimationError
+        Other inputs are excited at the same lines, or gaps left too little data.
+
     """
     est = DetectedEstimator()
     est.add(rec, seg)
@@ -550,6 +686,12 @@ class RecordingBlocks:
 
         Start the next block at ``t_s`` [s] if that lies more than ``MIN_ADVANCE_S`` into
         the block just given and not beyond it.
+
+        Parameters
+        ----------
+        t_s : float
+            Start time [s] of the next block, on the recording's time axis.
+
         """
         ns = int(round(t_s * 1e9))
         lo = self._lo

@@ -61,21 +61,37 @@ class MultisineDetection:
     """
     A periodic (multisine) excitation found in a signal.
 
-    Attributes
+    Parameters
     ----------
-    fs : sample rate [Hz].
-    period_samples : samples per period P.
-    n_periods : whole periods in the periodic block.
-    start : index of the first sample of the periodic block.
-    f0 : fundamental fs / P [Hz].
-    harmonics : excited DFT lines h (frequency h * f0), sorted.
-    odd : True when every excited line is an odd multiple of f0.
-    correlation : normalised autocorrelation at lag P (1 = identical periods).
-    line_level_db : weakest excited line over the median non-excited line [dB].
-    channel : column of a 2-D input that was analysed.
-    drift : how far the true period exceeds ``period_samples`` [samples] (measured from the
+    fs : float
+        Sample rate [Hz].
+    period_samples : int
+        Samples per period P.
+    n_periods : int
+        Whole periods in the periodic block.
+    start : int
+        Index of the first sample of the periodic block.
+    f0 : float
+        Fundamental fs / P [Hz].
+    harmonics : ndarray of int
+        Excited DFT lines h (frequency h * f0), sorted.
+    odd : bool
+        True when every excited line is an odd multiple of f0.
+    correlation : float
+        Normalised autocorrelation at lag P (1 = identical periods).
+    line_level_db : float
+        Weakest excited line over the median non-excited line [dB].
+    channel : int, optional
+        Column of a 2-D input that was analysed (default 0).
+    drift : float, optional
+        How far the true period exceeds ``period_samples`` [samples] (measured from the
         phase of the excited lines between the first and last period; 0 for a period of
         whole samples).
+
+    Attributes
+    ----------
+    kind : str
+        Always 'multisine' (not a constructor parameter).
 
     """
 
@@ -108,7 +124,16 @@ class MultisineDetection:
         return self.start + self.n_periods * self.period_samples
 
     def describe(self) -> str:
-        """One sentence a person can check against the design."""
+        """
+        One sentence a person can check against the design.
+
+        Returns
+        -------
+        str
+            Period, number of whole periods, start, excited lines, line level and period
+            correlation.
+
+        """
         f = self.freq_hz
         lines = (f'{f.size} excited lines {f[0]:.3g}-{f[-1]:.3g} Hz, '
                  + ('all odd multiples of f0' if self.odd else 'not all odd multiples of f0'))
@@ -119,7 +144,16 @@ class MultisineDetection:
                 f'period correlation {self.correlation:.3f})')
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary."""
+        """
+        JSON-ready summary.
+
+        Returns
+        -------
+        dict
+            Every field (``harmonics`` as a list) plus ``freq_hz``, the excited frequencies
+            [Hz].
+
+        """
         return {'kind': self.kind, 'fs': self.fs, 'period_samples': self.period_samples,
                 'n_periods': self.n_periods, 'start': self.start, 'f0': self.f0,
                 'harmonics': self.harmonics.tolist(), 'freq_hz': self.freq_hz.tolist(),
@@ -135,15 +169,27 @@ class ChirpDetection:
 
     Times are seconds from the first sample (index 0 is t = 0).
 
+    Parameters
+    ----------
+    fs : float
+        Sample rate [Hz].
+    f_low, f_high : float
+        Instantaneous frequency at t0 and t1 [Hz] (f_low > f_high for a down-sweep).
+    t0, t1 : float
+        Start and end of the active chirp [s].
+    a0, a1 : float
+        Eq. 16 coefficients (a0 = sweep rate [1/s]).
+    n_half_cycles : int
+        Half cycles used in the fit (inliers).
+    fit_residual : float
+        Standard deviation of ln f around the fit (relative frequency error).
+    channel : int, optional
+        Column of a 2-D input that was analysed (default 0).
+
     Attributes
     ----------
-    fs : sample rate [Hz].
-    f_low, f_high : instantaneous frequency at t0 and t1 [Hz] (f_low > f_high for a down-sweep).
-    t0, t1 : start and end of the active chirp [s].
-    a0, a1 : eq. 16 coefficients (a0 = sweep rate [1/s]).
-    n_half_cycles : half cycles used in the fit (inliers).
-    fit_residual : standard deviation of ln f around the fit (relative frequency error).
-    channel : column of a 2-D input that was analysed.
+    kind : str
+        Always 'chirp' (not a constructor parameter).
 
     """
 
@@ -174,11 +220,32 @@ class ChirpDetection:
         return int(round(self.t1 * self.fs)) + 1
 
     def frequency(self, t: np.ndarray | float) -> np.ndarray:
-        """Instantaneous frequency exp(a0 t + a1) [Hz] (eq. 16)."""
+        """
+        Instantaneous frequency exp(a0 t + a1) [Hz] (eq. 16).
+
+        Parameters
+        ----------
+        t : float or array_like
+            Time [s] from the first sample.
+
+        Returns
+        -------
+        ndarray
+            Frequency [Hz], shaped as ``t``.
+
+        """
         return np.exp(self.a0 * np.asarray(t, dtype=float) + self.a1)
 
     def describe(self) -> str:
-        """One sentence a person can check against the design."""
+        """
+        One sentence a person can check against the design.
+
+        Returns
+        -------
+        str
+            Band, decades, active interval, sweep rate and quality of the fit.
+
+        """
         decades = abs(np.log10(self.f_high / self.f_low))
         return (f'exponential chirp {self.f_low:.3g}-{self.f_high:.3g} Hz '
                 f'({decades:.2f} decades) from t0 = {self.t0:.3f} s to t1 = {self.t1:.3f} s '
@@ -187,7 +254,15 @@ class ChirpDetection:
                 f'frequency scatter')
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary."""
+        """
+        JSON-ready summary.
+
+        Returns
+        -------
+        dict
+            Every field of the detection.
+
+        """
         return {'kind': self.kind, 'fs': self.fs, 'f_low': self.f_low, 'f_high': self.f_high,
                 't0': self.t0, 't1': self.t1, 'a0': self.a0, 'a1': self.a1,
                 'n_half_cycles': self.n_half_cycles, 'fit_residual': self.fit_residual,
@@ -459,6 +534,28 @@ def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
     is P / g.
 
     Raises :class:`EstimationError` (one line) if no ``min_periods`` whole periods are found.
+
+    Parameters
+    ----------
+    x : ndarray, shape (N,) or (N, n)
+        The signal; of a 2-D signal the channel with the largest RMS is analysed. NaN marks
+        missing samples.
+    fs : float
+        Sample rate [Hz].
+    min_periods : int, optional
+        Fewest whole periods the periodic block must hold.
+    min_correlation : float, optional
+        Smallest normalised autocorrelation of a period candidate.
+    min_line_db : float, optional
+        How far [dB] an excited line must stand above the median DFT line.
+    dynamic_range_db : float, optional
+        Lines more than this [dB] below the strongest one are not excited lines.
+
+    Returns
+    -------
+    MultisineDetection
+        Period, periodic block, excited lines and quality of the detection.
+
     """
     x, channel, valid = _prepare(x, fs)
     n = x.size
@@ -512,6 +609,30 @@ def multisine_at_period(x: np.ndarray, fs: float, period: float, *, min_periods:
     lines restricted to ``band`` = (f_low, f_high) [Hz] when given. Raises
     :class:`EstimationError` if fewer than ``min_periods`` whole periods repeat or no line is
     excited in the band.
+
+    Parameters
+    ----------
+    x : ndarray, shape (N,) or (N, n)
+        The signal; of a 2-D signal the channel with the largest RMS is analysed. NaN marks
+        missing samples.
+    fs : float
+        Sample rate [Hz].
+    period : float
+        The multisine period [s].
+    min_periods : int, optional
+        Fewest whole periods that must repeat.
+    band : tuple of float, optional
+        (f_low, f_high) [Hz]: keep only the excited lines inside; default: all.
+    min_line_db : float, optional
+        How far [dB] an excited line must stand above the median DFT line.
+    dynamic_range_db : float, optional
+        Lines more than this [dB] below the strongest one are not excited lines.
+
+    Returns
+    -------
+    MultisineDetection
+        The periodic block and excited lines at the (snapped) period.
+
     """
     if not (np.isfinite(period) and period > 0):
         raise EstimationError(f'{period=} must be a positive duration in seconds')
@@ -552,6 +673,19 @@ def period_drift(block: np.ndarray, bins: np.ndarray) -> float:
     2 pi h (n - 1) d / P. d is the weighted least-squares slope of those phases over h, the
     phases unwrapped around a first fit on the lowest quarter of the lines. 0 with fewer
     than two periods or no lines.
+
+    Parameters
+    ----------
+    block : ndarray, shape (n_periods, P)
+        Consecutive periods of the signal, one per row.
+    bins : ndarray of int
+        Excited DFT lines h of a period of P samples.
+
+    Returns
+    -------
+    float
+        Drift d [samples per period]: the true period is P + d samples.
+
     """
     n, P = block.shape
     if n < 2 or bins.size == 0:
@@ -684,6 +818,28 @@ def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
     spans a ratio of at least ``min_ratio``.
 
     Raises :class:`EstimationError` (one line) otherwise.
+
+    Parameters
+    ----------
+    x : ndarray, shape (N,) or (N, n)
+        The signal; of a 2-D signal the channel with the largest RMS is analysed. NaN marks
+        missing samples.
+    fs : float
+        Sample rate [Hz].
+    min_ratio : float, optional
+        Smallest frequency ratio the fitted half cycles must span.
+    max_scatter : float, optional
+        Largest relative scatter of the half-cycle frequencies around the fit.
+    min_inliers : float, optional
+        Smallest share of half cycles that must follow the fit.
+    hysteresis : float, optional
+        Zero-crossing hysteresis as a share of the 99th percentile of |x|.
+
+    Returns
+    -------
+    ChirpDetection
+        Band, active interval, eq. 16 coefficients and quality of the fit.
+
     """
     x, channel, _ = _prepare(x, fs)
     h = hysteresis * float(np.quantile(np.abs(x), 0.99))
@@ -719,6 +875,22 @@ def detect_excitation(x: np.ndarray, fs: float, **kwargs: Any
     The result's ``kind`` ('multisine' or 'chirp') says which was found and ``describe()``
     says what. ``kwargs`` may hold ``min_periods`` for the multisine detector. Raises
     :class:`EstimationError` with one line giving both reasons if neither is found.
+
+    Parameters
+    ----------
+    x : ndarray, shape (N,) or (N, n)
+        The signal; of a 2-D signal the channel with the largest RMS is analysed. NaN marks
+        missing samples.
+    fs : float
+        Sample rate [Hz].
+    **kwargs
+        ``min_periods`` (int, default 2) for :func:`detect_multisine`; other keys are ignored.
+
+    Returns
+    -------
+    MultisineDetection or ChirpDetection
+        The multisine if one is found, else the chirp.
+
     """
     try:
         return detect_multisine(x, fs, min_periods=kwargs.get('min_periods', 2))

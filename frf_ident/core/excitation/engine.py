@@ -44,6 +44,19 @@ class PhaseSamples:
     ``reference`` (N, n) is the feed-forward velocity reference, ``excitation`` (N, n) its
     excitation part, ``plan`` (N, n absolute positions, or None) the position plan the reference
     follows with feedback ``POSITION_GAIN (plan - q)``.
+
+    Parameters
+    ----------
+    phase : Phase
+        The phase these samples belong to.
+    reference : ndarray, shape (N, n)
+        Feed-forward velocity reference [rad/s] of the N samples for the n joints.
+    excitation : ndarray, shape (N, n)
+        Excitation part of ``reference`` [rad/s] (zero for move and settle phases).
+    plan : ndarray, shape (N, n), optional
+        Absolute position plan [rad] followed with position feedback (move, settle); None
+        for an excite phase (the reference is sent as is).
+
     """
 
     phase: Phase
@@ -131,7 +144,23 @@ class PhaseEngine:
 
 @dataclass
 class SegmentEvent:
-    """A segment (an excitation phase with a descriptor) starting or ending at samples k0..k1."""
+    """
+    A segment (an excitation phase with a descriptor) starting or ending at samples k0..k1.
+
+    Parameters
+    ----------
+    event : str
+        'start' or 'end'.
+    info : dict
+        The phase's segment descriptor (design, parameters ...).
+    k0 : int
+        Stream sample index of the segment's first sample.
+    k1 : int
+        Stream sample index one past the segment's last sample (k0 + number of samples).
+    index : int
+        Segment number within the stream (0 for the first segment).
+
+    """
 
     event: str                 # 'start' | 'end'
     info: dict[str, Any]
@@ -142,7 +171,22 @@ class SegmentEvent:
 
 @dataclass
 class StreamSample:
-    """One streamed sample: reference, excitation part and the segment events at it."""
+    """
+    One streamed sample: reference, excitation part and the segment events at it.
+
+    Parameters
+    ----------
+    k : int
+        Sample index (stamp k dt).
+    reference : ndarray, shape (n,)
+        Velocity reference [rad/s] to send, position feedback included.
+    excitation : ndarray, shape (n,)
+        Excitation part of the reference [rad/s].
+    events : list of SegmentEvent, optional
+        'start' of a segment beginning at this sample, 'end' of one ending with it (usually
+        none).
+
+    """
 
     k: int
     reference: np.ndarray
@@ -183,7 +227,16 @@ class PhaseStream:
         return self._i_phase >= len(self.phases)
 
     def needs_measurement(self) -> bool:
-        """Tell whether the next sample needs the position measured at that very sample."""
+        """
+        Tell whether the next sample needs the position measured at that very sample.
+
+        Returns
+        -------
+        bool
+            True when the next sample belongs to a move or settle phase (position
+            feedback); False for an excite phase or when the stream is done.
+
+        """
         if self.done:
             return False
         if self._cur is not None:

@@ -45,6 +45,53 @@ class AxisParams:
     itself, several names give the coupled-arm case, e.g. ``G sin(q2 + q3 + phi)``),
     ``encoder_resolution`` [rad/count] (0 = ideal), ``velocity_noise`` [rad/s] and
     ``torque_noise`` [N m] standard deviations of additive measurement noise.
+
+    Parameters
+    ----------
+    name : str, optional
+        Joint name.
+    motor_inertia : float, optional
+        Motor inertia Jm [kg m^2] (> 0).
+    link_inertia : float, optional
+        Link inertia Jo [kg m^2] (> 0).
+    stiffness : float, optional
+        Transmission stiffness k1 [N m/rad] (> 0).
+    damping : float, optional
+        Transmission damping d [N m s/rad] (>= 0).
+    viscous_friction : float, optional
+        Motor-side viscous friction [N m s/rad] (>= 0).
+    coulomb_friction : float, optional
+        Coulomb friction Fc [N m] (>= 0).
+    stiffness_k2 : float or None, optional
+        Stiffness k2 [N m/rad] beyond the breakpoint; None (default): linear spring.
+    stiffness_breakpoint : float or None, optional
+        Breakpoint bs [rad] (> 0) of the stiffness; set together with ``stiffness_k2``.
+    backlash : float, optional
+        Total backlash gap [rad] (>= 0).
+    torque_ripple : list of dict, optional
+        Ripple terms {amplitude [N m], spatial_frequency [1/rad], phase [rad]}, each adding
+        amplitude sin(spatial_frequency q_m + phase).
+    time_delay : float, optional
+        Input delay [s] (>= 0).
+    torque_limit : float, optional
+        Torque limit [N m] (> 0).
+    gravity_torque : float, optional
+        Constant link-side load [N m].
+    gravity : list of dict, optional
+        Configuration-dependent link-side load terms (see above).
+    encoder_resolution : float, optional
+        Encoder resolution [rad/count]; 0: ideal position measurement.
+    velocity_noise : float, optional
+        Standard deviation [rad/s] of the additive velocity measurement noise.
+    torque_noise : float, optional
+        Standard deviation [N m] of the additive torque measurement noise.
+
+    Raises
+    ------
+    ModelFileError
+        A value is out of range, only one of ``stiffness_k2`` and ``stiffness_breakpoint`` is
+        set, or a ripple or gravity term is malformed.
+
     """
 
     name: str = 'joint_1'
@@ -108,7 +155,27 @@ class AxisParams:
                 and (self.stiffness_k2 is None or self.stiffness_k2 == self.stiffness))
 
     def gravity_joints(self, names: list[str], k: int) -> list[int]:
-        """Axis indices whose link positions are summed in gravity term ``k``."""
+        """
+        Axis indices whose link positions are summed in gravity term ``k``.
+
+        Parameters
+        ----------
+        names : list of str
+            Joint names of the robot's axes, in axis order.
+        k : int
+            Index of the term in ``gravity``.
+
+        Returns
+        -------
+        list of int
+            Indices into ``names`` of the term's ``joints`` (default: this axis).
+
+        Raises
+        ------
+        ModelFileError
+            The term names a joint that is not one of ``names``.
+
+        """
         sel = self.gravity[k].get('joints') or [self.name]
         out = []
         for j in sel:
@@ -126,6 +193,30 @@ class RobotParams:
 
     ``link_coupling`` is an (n, n) symmetric matrix of off-diagonal link inertia terms [kg m^2]
     (diagonal ignored); the link inertia matrix is diag(link_inertia) + offdiag(link_coupling).
+
+    Parameters
+    ----------
+    axes : list of AxisParams
+        The n axes, in joint order.
+    link_coupling : ndarray, shape (n, n), optional
+        Symmetric off-diagonal link inertia terms [kg m^2]; None (default): no coupling.
+    sample_rate : float, optional
+        Sample rate of the simulation and controller [Hz].
+    substeps : int, optional
+        Integration substeps per sample of the simulation (>= 1).
+    velocity_from_encoder : bool, optional
+        Measure velocity as the difference of quantised positions over one sample (like a
+        real drive) instead of the true motor velocity.
+    seed : int, optional
+        Seed of the simulated measurement noise.
+
+    Raises
+    ------
+    ModelFileError
+        No axes, a non-positive ``sample_rate``, ``substeps`` < 1, a malformed
+        ``link_coupling``, a gravity term naming an unknown joint, or a link inertia matrix
+        that is not positive definite.
+
     """
 
     axes: list[AxisParams]
@@ -169,6 +260,15 @@ class RobotParams:
         return [a.name for a in self.axes]
 
     def link_inertia_matrix(self) -> np.ndarray:
+        """
+        Return the link inertia matrix M_o.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            diag(link_inertia) plus the off-diagonal terms of ``link_coupling`` [kg m^2].
+
+        """
         m = np.diag([a.link_inertia for a in self.axes]).astype(float)
         if self.link_coupling is not None:
             off = self.link_coupling - np.diag(np.diag(self.link_coupling))
@@ -181,6 +281,17 @@ class RobotParams:
 
         Link-side load torque of every axis [N m] at link positions ``q_link`` (..., n):
         constant ``gravity_torque`` plus the ``gravity`` terms G sin(sum q_j + phi).
+
+        Parameters
+        ----------
+        q_link : array_like, shape (..., n)
+            Link positions [rad], the last axis in joint order.
+
+        Returns
+        -------
+        ndarray, shape (..., n)
+            Link-side load torque [N m] of every axis.
+
         """
         q = np.asarray(q_link, dtype=float)
         out = np.zeros(q.shape) + np.array([a.gravity_torque for a in self.axes])
@@ -192,13 +303,44 @@ class RobotParams:
         return out
 
     def torque_limits(self) -> np.ndarray:
+        """
+        Return the torque limit of every axis.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            ``torque_limit`` of each axis [N m].
+
+        """
         return np.array([a.torque_limit for a in self.axes], dtype=float)
 
     def with_axes(self, **changes: Any) -> 'RobotParams':
-        """Copy with the same attribute changes applied to every axis."""
+        """
+        Copy with the same attribute changes applied to every axis.
+
+        Parameters
+        ----------
+        **changes
+            :class:`AxisParams` field names and their new values.
+
+        Returns
+        -------
+        RobotParams
+            A copy whose axes are copies with ``changes`` applied (validated again).
+
+        """
         return replace(self, axes=[replace(a, **changes) for a in self.axes])
 
     def linear(self) -> 'RobotParams':
-        """Return the linear part: no Coulomb friction, backlash, ripple, nonlinear stiffness."""
+        """
+        Return the linear part: no Coulomb friction, backlash, ripple, nonlinear stiffness.
+
+        Returns
+        -------
+        RobotParams
+            A copy without Coulomb friction, backlash, torque ripple, stiffening spring and
+            gravity terms (``gravity_torque`` and the linear terms are kept).
+
+        """
         return self.with_axes(coulomb_friction=0.0, backlash=0.0, torque_ripple=[],
                               stiffness_k2=None, stiffness_breakpoint=None, gravity=[])
