@@ -45,12 +45,12 @@ MODEL = ROOT / 'config' / 'model_3axis.yaml'
 PLANT = 'plants.reference:ReferencePlant'
 NOISE = 2e-5                      # velocity noise of the "real" robot [rad/s]
 KINDS = ('random', 'random', 'random', 'two_on_one_axis', 'weak_axis_small', 'second_mode',
-         'clean')
+         'clean', 'gravity')
 # the characteristic parameter of each effect, compared within 20 %
 CHECK_KEY = {'coulomb_friction': 'coulomb_friction', 'viscous_friction': 'viscous_friction',
              'stiffness_nonlinearity': 'stiffness_k2', 'backlash': 'backlash',
-             'torque_ripple': 'amplitude', 'time_delay': 'time_delay'}
-DRAWN = tuple(CHECK_KEY)
+             'torque_ripple': 'amplitude', 'time_delay': 'time_delay', 'gravity': 'amplitude'}
+DRAWN = tuple(k for k in CHECK_KEY if k != 'gravity')    # gravity: its own scene kind
 
 
 def _nominal() -> dict[str, Any]:
@@ -99,9 +99,9 @@ def draw_scene(rng: np.random.Generator, kind: str) -> dict[str, Any]:
     axes = model['axes']
     truth: list[tuple[str, int, dict[str, Any]]] = []
     mode = None
-    if kind == 'random':
-        k = int(rng.integers(1, 5))
-        used: set[tuple[str, int]] = set()
+
+    def add_random(k: int) -> None:
+        used = {(t[0], t[1]) for t in truth}
         while len(truth) < k:
             name, ax = str(rng.choice(DRAWN)), int(rng.integers(3))
             if (name, ax) in used or (name == 'backlash' and any(
@@ -109,6 +109,8 @@ def draw_scene(rng: np.random.Generator, kind: str) -> dict[str, Any]:
                 continue
             used.add((name, ax))
             truth.append((name, ax, draw_effect(name, rng, axes[ax])))
+    if kind == 'random':
+        add_random(int(rng.integers(1, 5)))
     elif kind == 'two_on_one_axis':
         ax = int(rng.integers(3))
         a, b = rng.choice(['coulomb_friction', 'torque_ripple', 'time_delay',
@@ -119,6 +121,19 @@ def draw_scene(rng: np.random.Generator, kind: str) -> dict[str, Any]:
         truth = [('coulomb_friction', 1, draw_effect('coulomb_friction', rng, axes[1])),
                  ('coulomb_friction', 2, draw_effect('coulomb_friction', rng, axes[2],
                                                      small=True))]
+    elif kind == 'gravity':
+        # an axis the nominal model loads with a constant (its value at the operating point)
+        # carries a link's weight G sin(q + phi) instead: the constant within 10 %, the
+        # configuration dependence hidden (G from 1.2 to 4 times the load, either slope)
+        ax = int(rng.choice([i for i, a in enumerate(axes) if a.get('gravity_torque')]))
+        load = float(axes[ax]['gravity_torque']) * float(rng.uniform(0.9, 1.1))
+        amp = abs(load) * float(rng.uniform(1.2, 4.0))
+        phase = math.asin(load / amp)
+        if rng.uniform() < 0.5:
+            phase = math.pi - phase
+        truth = [('gravity', ax, {'gravity': [{'amplitude': amp, 'phase': phase}],
+                                  'gravity_torque': 0.0})]
+        add_random(1 + int(rng.integers(0, 3)))      # and 0-2 other effects anywhere
     elif kind == 'second_mode':
         ax = int(rng.integers(3))
         mode = (ax, float(rng.uniform(18.0, 30.0)))
@@ -163,8 +178,7 @@ def param_error(name: str, truth: dict[str, Any], found: dict[str, Any]) -> floa
     """Relative error of the effect's characteristic parameter."""
     key = CHECK_KEY[name]
     if key == 'amplitude':
-        return abs(found['torque_ripple'][-1]['amplitude']
-                   / truth['torque_ripple'][0]['amplitude'] - 1)
+        return abs(found[name][-1]['amplitude'] / truth[name][0]['amplitude'] - 1)
     return abs(found.get(key, math.nan) / truth[key] - 1)
 
 

@@ -69,7 +69,8 @@ def test_scene_drawn_at_random(draw, tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize('kind, seed', [('random', 2026), ('clean', 2027)])
+@pytest.mark.parametrize('kind, seed', [('random', 2026), ('clean', 2027),
+                                        ('gravity', 14)])   # + stiffening on its axis
 def test_scene_of_the_reference_plant(kind, seed, tmp_path):
     scene = draw_scene(np.random.default_rng(seed), kind)
     r = run_scene(scene, tmp_path)

@@ -43,6 +43,7 @@ MIN_SHARE = 0.10     # an effect must remove this share of its axis' misfit abov
 MIN_Z = 3.0          # ... and more than MIN_Z standard deviations of that misfit under noise
 FLOOR_MIN = 1e-6     # relative noise floor assumed when the data give none (noise-free data)
 SETTLE_S = 0.5       # samples this long after a stretch without reference are not compared
+GRAVITY_MIN_T = 3.0  # t statistic of the residual's position slope that proposes gravity
 
 
 def estimates(rec: Recording) -> dict[str, Any]:
@@ -316,6 +317,66 @@ def fit_ripple(reg, robot: RobotParams, axis: int) -> Effect | None:
                   f'{r["spatial_frequency"]:.4g} /rad (scan peak {reg.ripple_peak_ratio:.0f}x '
                   f'the local noise level, above the false-alarm level '
                   f'{reg.ripple_threshold:.0f}), held by the constant-velocity run', axis)
+
+
+def fit_gravity(ev: Evaluator, robot: RobotParams, axis: int) -> Effect | None:
+    """
+    Fit a configuration-dependent load (gravity) from the torque residual's position slope.
+
+    Over the short travel of identification experiments a load G sin(q + phi) shows as its
+    value and slope at the operating point q0 (the mean position of the fit data): the
+    residual of the model regressed on [1, sgn v, v, q - q0] gives the missing constant c and
+    slope s, and one term through both, G sin(q0 + phi) = L0 + c, G cos(q0 + phi) = s, replaces
+    the axis' constant load L0 (``gravity_torque``). Proposed only for an axis whose model has
+    no gravity terms yet and where the slope's t statistic reaches GRAVITY_MIN_T (a clean axis
+    costs no simulation).
+
+    Parameters
+    ----------
+    ev : Evaluator
+        The recording's evaluator.
+    robot : RobotParams
+        The model so far.
+    axis : int
+        The axis.
+
+    Returns
+    -------
+    Effect or None
+        The ``gravity`` candidate (parameters ``gravity`` and ``gravity_torque`` = 0), None
+        when the axis already has gravity terms or the data do not move it.
+
+    """
+    a = robot.axes[axis]
+    if a.gravity:
+        return None
+    rec = ev.rec
+    u = delayed_effort(rec.effort, [x.time_delay for x in robot.axes], rec.dt)
+    f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, u, rec.dt, robot)
+    mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity'))
+            & ~ev.missing)[:-1]
+    q = qh[:, axis]
+    if not mask.any() or np.ptp(q[mask]) <= 0:
+        return None
+    q0 = float(np.mean(q[mask]))
+    noise = max(a.velocity_noise, 1e-6)
+    reg = regress_axis(f[:, axis], q, vh[:, axis], ah[:, axis], rec.effort[:-1, axis], mask,
+                       rec.fs, v_eps=5 * noise + 1e-4, nuisance=(q - q0)[:, None],
+                       ripple=False)
+    c, slope = reg.coef.get('offset', 0.0), reg.coef.get('nuisance_0')
+    if slope is None or abs(reg.tstat['nuisance_0']) < GRAVITY_MIN_T:
+        return None
+    value = a.gravity_torque + c
+    amp = math.hypot(value, slope)
+    if amp <= 0:
+        return None
+    phase = math.atan2(value, slope) - q0
+    return Effect('gravity', a.name, 0.0,
+                  {'gravity': [{'amplitude': amp, 'phase': phase}], 'gravity_torque': 0.0},
+                  f'torque residual rises with position: {slope:+.4g} N m/rad over the '
+                  f'{np.ptp(q[mask]):.3g} rad travelled (t = {reg.tstat["nuisance_0"]:.1f}), '
+                  f'load {value:.4g} N m at {q0:.3g} rad: {amp:.4g} sin(q {phase:+.3f}) N m '
+                  f'in place of the constant {a.gravity_torque:.4g}', axis)
 
 
 def fit_time_delay(ev: Evaluator, sim_est: dict, robot: RobotParams, axis: int) -> Effect | None:
@@ -875,6 +936,9 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
             e = fn(reg, robot, i)
             if e is not None:
                 stage1.append(e)
+        e = fit_gravity(ev, robot, i)
+        if e is not None:
+            stage1.append(e)
     ext, cur = _accept(ev, robot, kept, stage1, e0, say)
     cands += stage1
     sim1 = ev._sim(ext) if kept else sim0

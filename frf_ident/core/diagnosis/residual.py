@@ -114,11 +114,13 @@ def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: f
         z, eye = np.zeros((n, n)), np.eye(n)
         A = np.block([[z, eye], [-moi @ K, -moi @ D]])
         B = np.block([[z, z, z], [moi @ K, moi @ D, -moi]])
-        g = np.array([a.gravity_torque for a in robot.axes])
+        # the model's link-side load (constant plus gravity terms) at the link positions,
+        # taken as the motor positions: the deflection is far below the terms' angular scale
+        g = robot.gravity_load(qh)
         sysd = signal.cont2discrete((A, B, np.eye(2 * n), np.zeros((2 * n, 3 * n))), dt,
                                     method='foh')
-        w = np.hstack([qh, vh, np.tile(g, (qh.shape[0], 1))])
-        x0 = np.concatenate([qh[0] - g / k, vh[0]])
+        w = np.hstack([qh, vh, g])
+        x0 = np.concatenate([qh[0] - g[0] / k, vh[0]])
         _, xs = signal.dlsim(sysd, w, x0=x0)[:2]
         qo, vo = xs[:, :n], xs[:, n:]
         f = u[:-1] - (jm * ah + bv * vh + k * (qh - qo) + d * (vh - vo))

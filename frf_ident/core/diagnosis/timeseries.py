@@ -103,10 +103,8 @@ def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]
     """
     f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, rec.effort, rec.dt,
                                               robot)
-    g_const = np.array([a.gravity_torque for a in robot.axes])
-    grav = robot.gravity_load(qh)
-    if not is_rigid(robot, rec.fs):
-        grav = grav - g_const           # the flexible inverse dynamics carries the constant
+    # the flexible inverse dynamics carries the load in its link-side equation
+    grav = robot.gravity_load(qh) if is_rigid(robot, rec.fs) else np.zeros_like(qh)
     fc = np.array([a.coulomb_friction for a in robot.axes])
     rip = np.zeros_like(f)
     for i, a in enumerate(robot.axes):
