@@ -256,13 +256,16 @@ def replace_segments(rec: Recording, like: Recording) -> Recording:
 
 # --- evidence and fits, one function per effect ------------------------------------------------
 
-def friction_regression(ev: Evaluator, robot: RobotParams, axis: int):  # noqa: D401
+def friction_regression(ev: Evaluator, robot: RobotParams, axis: int, *,
+                        position_slope: bool = False):  # noqa: D401
     """
     Regress the motor-side inverse-dynamics residual of a model on one axis.
 
     Motor-side inverse-dynamics residual of ``robot`` (the command delayed by its axes'
     ``time_delay``, :func:`.residual.delayed_effort`) regressed on sgn(v), v and
-    motor-position harmonics, on the fit segments plus the constant-velocity run.
+    motor-position harmonics, on the fit segments plus the constant-velocity run; with
+    ``position_slope`` on sgn(v), v and q - q0 instead of the harmonics (q0: the mean position,
+    ``Regression.q0``).
     """
     rec = ev.rec
     # the torque that acts is the command delayed by the model's input delay (the
@@ -272,10 +275,16 @@ def friction_regression(ev: Evaluator, robot: RobotParams, axis: int):  # noqa: 
     mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity'))
             & ~ev.missing)[:-1]
     noise = max(robot.axes[axis].velocity_noise, 1e-6)
-    return regress_axis(f[:, axis], qh[:, axis], vh[:, axis], ah[:, axis],
-                        rec.effort[:-1, axis], mask, rec.fs, v_eps=5 * noise + 1e-4,
-                        ripple_mask=(segment_mask(ev.fit, ('constant_velocity',))
-                                     & ~ev.missing)[:-1])
+    q = qh[:, axis]
+    kw: dict[str, Any] = {'ripple_mask': (segment_mask(ev.fit, ('constant_velocity',))
+                                          & ~ev.missing)[:-1]}
+    q0 = float(np.mean(q[mask])) if mask.any() else 0.0
+    if position_slope:
+        kw = {'nuisance': (q - q0)[:, None], 'ripple': False}
+    reg = regress_axis(f[:, axis], q, vh[:, axis], ah[:, axis], rec.effort[:-1, axis], mask,
+                       rec.fs, v_eps=5 * noise + 1e-4, **kw)
+    reg.q0, reg.travel = q0, float(np.ptp(q[mask])) if mask.any() else 0.0
+    return reg
 
 
 def fit_coulomb(reg, robot: RobotParams, axis: int) -> Effect | None:
@@ -350,19 +359,8 @@ def fit_gravity(ev: Evaluator, robot: RobotParams, axis: int) -> Effect | None:
     a = robot.axes[axis]
     if a.gravity:
         return None
-    rec = ev.rec
-    u = delayed_effort(rec.effort, [x.time_delay for x in robot.axes], rec.dt)
-    f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, u, rec.dt, robot)
-    mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity'))
-            & ~ev.missing)[:-1]
-    q = qh[:, axis]
-    if not mask.any() or np.ptp(q[mask]) <= 0:
-        return None
-    q0 = float(np.mean(q[mask]))
-    noise = max(a.velocity_noise, 1e-6)
-    reg = regress_axis(f[:, axis], q, vh[:, axis], ah[:, axis], rec.effort[:-1, axis], mask,
-                       rec.fs, v_eps=5 * noise + 1e-4, nuisance=(q - q0)[:, None],
-                       ripple=False)
+    reg = friction_regression(ev, robot, axis, position_slope=True)
+    q0 = reg.q0
     c, slope = reg.coef.get('offset', 0.0), reg.coef.get('nuisance_0')
     if slope is None or abs(reg.tstat['nuisance_0']) < GRAVITY_MIN_T:
         return None
@@ -374,7 +372,7 @@ def fit_gravity(ev: Evaluator, robot: RobotParams, axis: int) -> Effect | None:
     return Effect('gravity', a.name, 0.0,
                   {'gravity': [{'amplitude': amp, 'phase': phase}], 'gravity_torque': 0.0},
                   f'torque residual rises with position: {slope:+.4g} N m/rad over the '
-                  f'{np.ptp(q[mask]):.3g} rad travelled (t = {reg.tstat["nuisance_0"]:.1f}), '
+                  f'{reg.travel:.3g} rad travelled (t = {reg.tstat["nuisance_0"]:.1f}), '
                   f'load {value:.4g} N m at {q0:.3g} rad: {amp:.4g} sin(q {phase:+.3f}) N m '
                   f'in place of the constant {a.gravity_torque:.4g}', axis)
 

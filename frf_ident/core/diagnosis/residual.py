@@ -140,6 +140,8 @@ class Regression:
     rms_residual: float = 0.0
     rms_effort: float = 0.0
     n_eff: float = 0.0
+    q0: float = 0.0          # mean position of the regressed samples [rad]
+    travel: float = 0.0      # their position range [rad]
 
 
 def _ls(X: np.ndarray, y: np.ndarray, n_eff: float):
