@@ -980,12 +980,19 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     stage2 = stage2_all
     cands += stage2
     # second pass: a torque-residual effect masked by a large FRF-shape effect on the same
-    # axis (viscous friction next to backlash) gets another chance on top of the model so far
-    again = [c for c in stage1 if c not in kept and c.axis_index in
-             {k.axis_index for k in kept if k in stage2}
+    # axis (viscous friction next to backlash) gets another chance on top of the model so far;
+    # so does one on an axis still clearly above its floor once a coupled axis took an
+    # FRF-shape effect (a stiffening joint_2 drowned joint_1's own misfit through the link
+    # coupling, and biased its regression)
+    shaped = {k.axis_index for k in kept if k in stage2}
+    fl = ev.floor_seen(cur)
+    again = [c for c in stage1 if c not in kept
+             and (c.axis_index in shaped
+                  or (shaped and cur[c.axis_index] > UNEXPLAINED_RATIO * fl[c.axis_index]))
              and not any(k.name == c.name and k.axis == c.axis for k in kept)]
     if again:
-        say('second pass over the torque-residual candidates of axes with FRF-shape effects')
+        say('second pass over the torque-residual candidates of axes with FRF-shape effects '
+            'or still above their floor next to one')
         # the regression read them against a linear model that lacked the FRF-shape effect
         # (a wrong link-side state biases the residual): friction is refitted by simulation
         for c in again:
