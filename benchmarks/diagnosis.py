@@ -390,4 +390,15 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
                      'goal within 20 %'))
     rows.append(("... axis-3 gravity vs the authors' tau_g (r, each half)",
                  ' / '.join(f'{c:.3f}' for c in corr), '', ''))
+    # why the halves cannot agree: the trajectory goes out and back, so within a half an axis
+    # whose velocity keeps one sign cannot tell Coulomb friction from a constant load, and
+    # its gravity curve is seen over one sweep of its angle only
+    share = []
+    for sl in (slice(0, n), slice(n, None)):
+        v = rec.velocity[sl, :3]
+        moving = np.abs(v) > math.radians(1.0)
+        share.append(' '.join(f'{100 * np.mean(v[moving[:, i], i] > 0):.0f}'
+                              for i in range(3)))
+    rows.append(('... share of moving samples with positive velocity, axes 1-3 [%]',
+                 ' / '.join(share), 'one-signed: Coulomb = constant offset in that half', ''))
     return rows
