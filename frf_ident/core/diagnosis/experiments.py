@@ -37,7 +37,7 @@ from scipy import optimize
 
 from .common import (apply_effect, bridge_gaps, diag_ratio, Effect, frf_error_db, nrmse,
                      segment_mask, simulate_like, split_recording)
-from .residual import delayed_effort, inverse_dynamics_residual, regress_axis
+from .residual import inverse_dynamics_residual, regress_axis
 
 MIN_SHARE = 0.10     # an effect must remove this share of its axis' misfit above the noise floor
 MIN_Z = 3.0          # ... and more than MIN_Z standard deviations of that misfit under noise
@@ -152,6 +152,32 @@ class Evaluator:
         self.counts = count
         self.lowest = np.full(n, np.inf)
         self.n_sims = 0
+        self._residual: tuple[Any, Any] = (None, None)
+
+    def residual(self, robot: RobotParams) -> tuple[np.ndarray, ...]:
+        """
+        Return the inverse-dynamics residual of a model on the recording.
+
+        :func:`.residual.inverse_dynamics_residual` of ``robot``; the last model's is kept
+        (every axis' friction and gravity readings of one model share it; models are replaced,
+        never edited in place, so identity is the key).
+
+        Parameters
+        ----------
+        robot : RobotParams
+            The model.
+
+        Returns
+        -------
+        f, q, v, a : ndarray, shape (N-1, n)
+            Residual torque and position, velocity, acceleration between samples.
+
+        """
+        if self._residual[0] is not robot:
+            rec = self.rec
+            self._residual = (robot, inverse_dynamics_residual(rec.position, rec.velocity,
+                                                               rec.effort, rec.dt, robot))
+        return self._residual[1]
 
     def _sim(self, robot: RobotParams) -> Recording:
         self.n_sims += 1
@@ -261,17 +287,13 @@ def friction_regression(ev: Evaluator, robot: RobotParams, axis: int, *,
     """
     Regress the motor-side inverse-dynamics residual of a model on one axis.
 
-    Motor-side inverse-dynamics residual of ``robot`` (the command delayed by its axes'
-    ``time_delay``, :func:`.residual.delayed_effort`) regressed on sgn(v), v and
-    motor-position harmonics, on the fit segments plus the constant-velocity run; with
-    ``position_slope`` on sgn(v), v and q - q0 instead of the harmonics (q0: the mean position,
-    ``Regression.q0``).
+    Motor-side inverse-dynamics residual of ``robot`` (:meth:`Evaluator.residual`, the command
+    delayed by its axes' ``time_delay``) regressed on sgn(v), v and motor-position harmonics,
+    on the fit segments plus the constant-velocity run; with ``position_slope`` on sgn(v), v
+    and q - q0 instead of the harmonics (q0: the mean position, ``Regression.q0``).
     """
     rec = ev.rec
-    # the torque that acts is the command delayed by the model's input delay (the
-    # regression read against an undelayed model biases viscous friction)
-    u = delayed_effort(rec.effort, [a.time_delay for a in robot.axes], rec.dt)
-    f, qh, vh, ah = inverse_dynamics_residual(rec.position, rec.velocity, u, rec.dt, robot)
+    f, qh, vh, ah = ev.residual(robot)
     mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity'))
             & ~ev.missing)[:-1]
     noise = max(robot.axes[axis].velocity_noise, 1e-6)
@@ -365,9 +387,7 @@ def fit_gravity(ev: Evaluator, robot: RobotParams, axis: int) -> Effect | None:
     if slope is None or abs(reg.tstat['nuisance_0']) < GRAVITY_MIN_T:
         return None
     value = a.gravity_torque + c
-    amp = math.hypot(value, slope)
-    if amp <= 0:
-        return None
+    amp = math.hypot(value, slope)          # > 0: the slope passed its t test
     phase = math.atan2(value, slope) - q0
     return Effect('gravity', a.name, 0.0,
                   {'gravity': [{'amplitude': amp, 'phase': phase}], 'gravity_torque': 0.0},

@@ -89,10 +89,13 @@ def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: f
     Compute the motor-side residual torque of the model from the measured motion.
 
     Motor-side residual torque of the model, evaluated between samples (k + 1/2) where the
-    zero-order-held torque u[k] acts. Returns (f, q_half, v_half, a_half), each (N-1, n).
+    zero-order-held torque u[k] acts, delayed by the axes' ``time_delay``
+    (:func:`delayed_effort`; against an undelayed model a 1-2 ms delay biases the friction the
+    residual is regressed on). Returns (f, q_half, v_half, a_half), each (N-1, n).
     With ``link_position`` (a link-side encoder) the deflection is measured, not simulated.
     """
     n = robot.n_axes
+    u = delayed_effort(u, [a.time_delay for a in robot.axes], dt)
     qh = 0.5 * (q[1:] + q[:-1])
     vh = 0.5 * (v[1:] + v[:-1])
     ah = np.diff(v, axis=0) / dt

@@ -376,8 +376,8 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     f, qh, vh, ah = model_residual(rec, robot)
     fit_m, val_m = split_blocks(N - 1, fs, fc)
     # rows bridged over gaps of the record take part in neither fit nor validation
-    fit_m &= ~(lost[1:] | lost[:-1])
-    val_m &= ~(lost[1:] | lost[:-1])
+    kept = ~(lost[1:] | lost[:-1])
+    fit_m, val_m = fit_m & kept, val_m & kept
     effects: list[Effect] = []
     rejected: list[dict[str, Any]] = []
     ext_axes = list(robot.axes)
