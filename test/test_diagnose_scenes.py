@@ -42,8 +42,9 @@ def _check(r: dict, msg: str) -> None:
 
     Clean and second-mode scenes name nothing (the mode is unexplained on its axis with a
     band containing it); the others name at least half of the hidden (effect, axis) pairs
-    with at most one false alarm and at least half of the found parameters within 20 %
-    (floors every scene of the README sweeps meets; the rates are measured by the sweep).
+    with at most one false alarm, at least half of the found parameters within 20 % and at
+    most one outside (floors all 96 scenes of the three README sweeps meet; the rates are
+    measured by the sweep).
     """
     if r['kind'] in ('clean', 'second_mode'):
         assert r['n_found'] == 0, msg
@@ -54,6 +55,7 @@ def _check(r: dict, msg: str) -> None:
     assert r['false_alarms'] <= 1, msg
     errs = list(r['param_errors'].values())
     assert sum(e < 0.2 for e in errs) >= math.ceil(len(errs) / 2), msg
+    assert sum(e < 0.2 for e in errs) >= len(errs) - 1, msg   # at most one outside 20 %
 
 
 @pytest.mark.slow
