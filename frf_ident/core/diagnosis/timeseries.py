@@ -64,6 +64,8 @@ BLOCK_S = 0.5         # fit / held-out blocks [s]
 HOLD_EVERY = 3        # every third block is held out
 UNEXPLAINED_RATIO = 4.0   # held-out misfit energy above this many noise floors is unexplained
 MIN_SHARE = 0.10          # ... when it is also at least this share of the nominal misfit
+REST_NOISE = 0.3          # an axis is at rest below this many velocity-noise levels ...
+REST_SHARE = 0.05         # ... or below this share of its 95th-percentile speed
 
 
 #: evidence sentence of each one-coefficient regressor group (c: fitted coefficient)
@@ -186,24 +188,53 @@ def _lstsq(cols: list[np.ndarray], y: np.ndarray) -> tuple[np.ndarray, float]:
     return c, float(r @ r)
 
 
-def _axis_masks(rec, f, vh, i, fit_m, val_m, fc):
+def moving(v: np.ndarray, v_raw: np.ndarray, fs: float, fc: float) -> np.ndarray:
+    """
+    Return where each axis moves: its torque is set by the motion, not held by static friction.
+
+    At rest the joint sticks and its torque is whatever static friction holds (anything
+    within the breakaway band, set by the history of the motion), which no friction law of
+    the model predicts. An axis moves where its low-passed speed exceeds REST_NOISE times the
+    velocity noise (measured as the sample-to-sample scatter of the raw velocity) and
+    REST_SHARE of its 95th-percentile speed (below that the Stribeck region begins and the
+    sign of the velocity is set by noise); the filter's edge around every velocity reversal
+    is left out too.
+
+    Parameters
+    ----------
+    v : ndarray, shape (N, n)
+        Velocities (between samples).
+    v_raw : ndarray, shape (M, n)
+        The recorded velocities (for the noise level).
+    fs, fc : float
+        Sample rate and low-pass cut-off [Hz].
+
+    Returns
+    -------
+    ndarray of bool, shape (N, n)
+
+    """
+    vl = lowpass(v, fs, fc)
+    vnoise = np.std(np.diff(v_raw, axis=0), axis=0) / math.sqrt(2)
+    speed = np.abs(vl)
+    out = speed > np.maximum(REST_NOISE * vnoise, REST_SHARE * np.percentile(speed, 95, axis=0))
+    guard = int(0.5 * fs / fc)
+    for i in range(v.shape[1]):
+        for c in np.flatnonzero(np.diff(np.sign(vl[:, i])) != 0):
+            out[max(c - guard, 0):c + guard + 1, i] = False
+    return out
+
+
+def _axis_masks(rec, f, move, i, fit_m, val_m, fc):
     """
     Return the residual, masks and effective sample count of axis i.
 
-    (low-passed residual, fit mask, held-out mask, effective samples) of axis i: sticking
-    samples (Coulomb force undetermined) and the filter's edges around reversals are left out
-    of fit and validation alike.
+    (low-passed residual, fit mask, held-out mask, effective samples) of axis i: samples at
+    rest (:func:`moving`) are left out of fit and validation alike.
     """
     fs = rec.fs
     ff = lowpass(f[:, i], fs, fc)
-    vl = lowpass(vh[:, i], fs, fc)
-    vnoise = float(np.std(np.diff(rec.velocity[:, i]))) / math.sqrt(2)
-    use = np.abs(vl) > 0.3 * vnoise
-    sg = np.sign(vl)
-    guard = int(0.5 * fs / fc)
-    for c in np.flatnonzero(np.diff(sg) != 0):
-        use[max(c - guard, 0):c + guard + 1] = False
-    fit_i, val_i = fit_m & use, val_m & use
+    fit_i, val_i = fit_m & move[:, i], val_m & move[:, i]
     return ff, fit_i, val_i, max(fit_i.sum() * 2 * fc / fs, 10.0)
 
 
@@ -382,7 +413,8 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     rejected: list[dict[str, Any]] = []
     ext_axes = list(robot.axes)
     names = robot.joint_names
-    prep = [_axis_masks(rec, f, vh, i, fit_m, val_m, fc) for i in range(robot.n_axes)]
+    move = moving(vh, rec.velocity, fs, fc)
+    prep = [_axis_masks(rec, f, move, i, fit_m, val_m, fc) for i in range(robot.n_axes)]
     bearing = gravity_bearing(qh, vh, ah, fs, fc, prep)
     say(f'axes whose own angle carries a configuration-dependent load (runs of parallel '
         f'joints): {[[names[i] for i in run] for run in bearing] or "none"}')
@@ -579,28 +611,33 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
     """
     rec, lost = bridge_gaps(rec)
     fs = rec.fs
-    f, *_ = model_residual(rec, robot)
+    f, _, vh, _ = model_residual(rec, robot)
     N = rec.t.size
     if mask is None:
         mask = np.zeros(N - 1, bool)
         mask[int(EDGE * N):N - 1 - int(EDGE * N)] = True
-    mask = mask & ~(lost[1:] | lost[:-1])
+    # per axis: only where it moves (at rest static friction holds any torque)
+    use = (mask & ~(lost[1:] | lost[:-1]))[:, None] & moving(vh, rec.velocity, fs, fc)
     uf = lowpass(rec.effort[:-1], fs, fc)
     ff = lowpass(f, fs, fc)
     u_model = uf - ff
     per = {}
+    err2, var2 = 0.0, 0.0
     for i, name in enumerate(robot.joint_names):
-        e = ff[mask, i]
-        den = float(np.std(uf[mask, i]))
-        per[name] = {'frf_error_db': round(_frf_error(rec.velocity[:-1][mask][:, [i]],
-                                                      uf[mask][:, [i]], u_model[mask][:, [i]],
+        m = use[:, i]
+        e = ff[m, i]
+        du = uf[m, i] - uf[m, i].mean() if m.any() else np.zeros(0)
+        err2, var2 = err2 + float(e @ e), var2 + float(du @ du)
+        per[name] = {'frf_error_db': round(_frf_error(rec.velocity[:-1][m][:, [i]],
+                                                      uf[m][:, [i]], u_model[m][:, [i]],
                                                       fs), 4),
-                     'time_nrmse': round(float(np.sqrt(np.mean(e ** 2)) / max(den, 1e-300)), 5)}
-    e = ff[mask]
-    den = np.sqrt(np.mean((uf[mask] - uf[mask].mean(0)) ** 2))
-    return {'frf_error_db': round(_frf_error(rec.velocity[:-1][mask], uf[mask], u_model[mask],
+                     'time_nrmse': round(math.sqrt(float(e @ e) / max(float(du @ du), 1e-300)),
+                                         5),
+                     'moving_share': round(float(m.sum()) / max(int(mask.sum()), 1), 3)}
+    rows = use.any(axis=1)
+    return {'frf_error_db': round(_frf_error(rec.velocity[:-1][rows], uf[rows], u_model[rows],
                                              fs), 4),
-            'time_nrmse': round(float(np.sqrt(np.mean(e ** 2)) / max(den, 1e-300)), 5),
+            'time_nrmse': round(math.sqrt(err2 / max(var2, 1e-300)), 5),
             'per_axis': per, 'residual': ff}
 
 
