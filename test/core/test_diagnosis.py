@@ -389,3 +389,46 @@ def test_torque_held_at_rest_is_neither_fitted_nor_scored():
     assert ext['time_nrmse'] < 0.15
     for name in rec.joint_names:
         assert 0.4 < ext['per_axis'][name]['moving_share'] < 0.95
+
+
+def test_axis_moving_one_way_keeps_friction_out_of_the_gravity_shape():
+    """
+    Fit Coulomb friction of a one-way axis as the constant it is there, never as gravity.
+
+    Axis 3 sweeps one way through 1 rad (as each half of the KUKA record does): sgn(v) is a
+    constant, so Coulomb friction cannot be told from a constant load, and a sinusoid without
+    that constant bends its amplitude and phase to carry the friction torque. The constant is
+    always fitted on such an axis, Coulomb friction is listed as not separable, and the
+    gravity amplitude comes out right.
+    """
+    rng = np.random.default_rng(3)
+    fs, T = 500.0, 20.0
+    t = np.arange(int(T * fs)) / fs
+    q = np.zeros((t.size, 3))
+    for i in (0, 1):
+        for _ in range(3):
+            q[:, i] += rng.uniform(0.1, 0.3) * np.sin(2 * np.pi * rng.uniform(0.1, 0.5) * t
+                                                      + rng.uniform(0, 6))
+    q[:, 2] = -t / T - 0.02 * np.sin(2 * np.pi * 0.3 * t)
+    v = np.gradient(q, 1 / fs, axis=0)
+    assert (v[50:-50, 2] < 0).all()
+    a = np.gradient(v, 1 / fs, axis=0)
+    J, fc, g3, p3 = np.array([6.0, 4.0, 1.5]), np.array([3.0, 4.0, 6.0]), 25.0, -1.9
+    u = J * a + fc * np.sign(v)
+    u[:, 1] += 60.0 * np.sin(q[:, 1] + 0.4) + g3 * np.sin(q[:, 1] + q[:, 2] + p3)
+    u[:, 2] += g3 * np.sin(q[:, 1] + q[:, 2] + p3)
+    u += 0.2 * rng.standard_normal(u.shape)
+    rec = Recording(t, ['joint_1', 'joint_2', 'joint_3'], q,
+                    v + 1e-4 * rng.standard_normal(v.shape), u)
+    res = diagnose_timeseries(rec, replace(robot_from_dict(RIGID), sample_rate=fs))
+    found = {(e.name, e.axis): e.parameters for e in res['effects']}
+    assert ('coulomb_friction', 'joint_3') not in found
+    assert any(r['name'] == 'coulomb_friction' and r['axis'] == 'joint_3' and 'one way' in
+               r.get('reason', '') for r in res['rejected'])
+    grav3 = found[('gravity', 'joint_3')]['gravity']
+    assert grav3[0]['amplitude'] == pytest.approx(g3, rel=0.15)
+    # the constant carries the friction: -Fc plus no load
+    assert found[('parameter_mismatch', 'joint_3')]['gravity_torque'] == \
+        pytest.approx(-fc[2], abs=1.5)
+    assert found[('coulomb_friction', 'joint_2')]['coulomb_friction'] == \
+        pytest.approx(fc[1], rel=0.15)

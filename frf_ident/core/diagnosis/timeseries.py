@@ -66,6 +66,7 @@ UNEXPLAINED_RATIO = 4.0   # held-out misfit energy above this many noise floors 
 MIN_SHARE = 0.10          # ... when it is also at least this share of the nominal misfit
 REST_NOISE = 0.3          # an axis is at rest below this many velocity-noise levels ...
 REST_SHARE = 0.05         # ... or below this share of its 95th-percentile speed
+ONE_WAY = 0.05            # an axis with fewer moving samples in one direction moves one way
 
 
 #: evidence sentence of each one-coefficient regressor group (c: fitted coefficient)
@@ -302,16 +303,18 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[list[int]]:
 
 
 def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
-                  val: np.ndarray, n_eff: float) -> tuple[list[str], dict[str, dict]]:
+                  val: np.ndarray, n_eff: float, forced: list[str] | tuple[str, ...] = ()
+                  ) -> tuple[list[str], dict[str, dict]]:
     """
     Select regressor groups by F test and held-out error.
 
-    Forward selection by F test (p < ALPHA at ``n_eff`` effective samples), then removal of
-    every group whose absence does not worsen the held-out residual. Returns the selected
-    names and per candidate {'p', 'share', 'held_out_gain'} for the report.
+    Forward selection by F test (p < ALPHA at ``n_eff`` effective samples) on top of the
+    ``forced`` groups, then removal of every other group whose absence does not worsen the
+    held-out residual. Returns the selected names and per candidate {'p', 'share',
+    'held_out_gain'} for the report.
     """
-    chosen: list[str] = []
-    info: dict[str, dict] = {}
+    chosen: list[str] = list(forced)
+    info: dict[str, dict] = {k: {'p': 0.0, 'share': 0.0, 'forced': True} for k in forced}
     yf = y[fit]
     tot = float((yf - yf.mean()) @ (yf - yf.mean())) or 1e-300
     while True:
@@ -348,7 +351,7 @@ def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
         with_k = held(chosen)
         without = held([c for c in chosen if c != k])
         info[k]['held_out_gain'] = (without - with_k) / max(without, 1e-300)
-        if without <= with_k:
+        if without <= with_k and k not in forced:
             chosen.remove(k)
     return chosen, info
 
@@ -427,7 +430,20 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
             list(_groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0, bearing).values())) @ c0
         s, peak, thr = find_ripple(wide, qh[:, i], fit_i)
         groups = _groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0, bearing)
-        chosen, info = select_groups(groups, ff, fit_i, val_i, n_eff)
+        up = float(np.mean(vh[fit_i, i] > 0)) if fit_i.any() else 0.0
+        if min(up, 1.0 - up) < ONE_WAY:
+            # one direction only: sgn(v) is the constant column, Coulomb friction a load
+            # (always fitted: the robot has friction, no other term may take its torque)
+            del groups['coulomb_friction']
+            forced = ['gravity_torque']
+            rejected.append({'name': 'coulomb_friction', 'axis': ax.name,
+                             'reason': f'the axis moves one way only in this record '
+                                       f'({100 * up:.0f} % of its moving samples forward): '
+                                       f'Coulomb friction and a constant load are one '
+                                       f'parameter here'})
+        else:
+            forced = []
+        chosen, info = select_groups(groups, ff, fit_i, val_i, n_eff, forced=forced)
         while True:
             coef, _ = _lstsq([groups[k][fit_i] for k in chosen], ff[fit_i])
             cf, k0 = {}, 0
