@@ -291,9 +291,19 @@ def friction_regression(ev: Evaluator, robot: RobotParams, axis: int, *,
     delayed by its axes' ``time_delay``) regressed on sgn(v), v and motor-position harmonics,
     on the fit segments plus the constant-velocity run; with ``position_slope`` on sgn(v), v
     and q - q0 instead of the harmonics (q0: the mean position, ``Regression.q0``).
+
+    The inverse dynamics is linear: the model's own Coulomb friction and torque ripple of the
+    axis are taken out of its residual here, so every coefficient is a correction to the
+    model (what :func:`fit_coulomb`, :func:`fit_viscous` and :func:`fit_ripple` add to it),
+    also when friction is read again on top of a model that already has a Coulomb level.
     """
     rec = ev.rec
     f, qh, vh, ah = ev.residual(robot)
+    a = robot.axes[axis]
+    fa = f[:, axis] - a.coulomb_friction * np.sign(vh[:, axis])
+    for r in a.torque_ripple:
+        fa = fa + r['amplitude'] * np.sin(r['spatial_frequency'] * qh[:, axis]
+                                          + r.get('phase', 0.0))
     mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity'))
             & ~ev.missing)[:-1]
     noise = max(robot.axes[axis].velocity_noise, 1e-6)
@@ -303,7 +313,7 @@ def friction_regression(ev: Evaluator, robot: RobotParams, axis: int, *,
     q0 = float(np.mean(q[mask])) if mask.any() else 0.0
     if position_slope:
         kw = {'nuisance': (q - q0)[:, None], 'ripple': False}
-    reg = regress_axis(f[:, axis], q, vh[:, axis], ah[:, axis], rec.effort[:-1, axis], mask,
+    reg = regress_axis(fa, q, vh[:, axis], ah[:, axis], rec.effort[:-1, axis], mask,
                        rec.fs, v_eps=5 * noise + 1e-4, **kw)
     reg.q0, reg.travel = q0, float(np.ptp(q[mask])) if mask.any() else 0.0
     return reg
@@ -720,10 +730,13 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
     share of the axis' misfit above noise (own-axis attribution: a small effect on a weak axis
     competes only with that axis' misfit), if the share is >= MIN_SHARE and the drop exceeds
     MIN_Z standard deviations of the misfit under noise. The rest are re-evaluated on top.
+    A candidate of an effect already kept on its axis (a friction level read again with the
+    axis' time delay) is a new value for it: taken, it replaces the kept one.
     """
     sd = ev.misfit_sd()
     ext = _rebuild(base, kept)
     pending = list(cands)
+    taken: set[tuple[str, str]] = set()
     rnd = 0
     while pending:
         scored = []
@@ -765,7 +778,12 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
             break
         for c in best.values():
             c.score = float(np.clip(c.gain, 0.0, 1.0))
+            for k in [k for k in kept if k.name == c.name and k.axis == c.axis]:
+                say(f'  {k.axis} {k.name} {k.parameters} replaced by {c.parameters}')
+                k.score, k.gain = 0.0, 0.0
+                kept.remove(k)
             kept.append(c)
+            taken.add((c.name, c.axis))
         ext = _rebuild(base, kept)
         cur = ev.misfit(ev.terms(ext))
         # a friction coefficient read from the regression that explains most of its axis'
@@ -789,7 +807,7 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
                 c.parameters, c.evidence = r.parameters, r.evidence
                 ext, cur = trial, new
         pending = [c for c in pending if c.axis_index in best and c not in best.values()
-                   and not any(k.name == c.name and k.axis == c.axis for k in kept)]
+                   and (c.name, c.axis) not in taken]
         rnd += 1
     return ext, cur
 
@@ -981,10 +999,17 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
                     > MIN_DELAY_SAMPLES * ev.rec.dt):
                 # friction read again with the delay: the stage-1 regression ran against an
                 # undelayed model, which biases viscous friction (a joint-damping mismatch
-                # then poses as the rest); these compete with the FRF-shape candidates
+                # then poses as the rest) and Coulomb friction (the command acts later than
+                # the reversal it answers); these compete with the FRF-shape candidates. A
+                # Coulomb level kept from stage 1 is offered again as its delayed re-read:
+                # left at its biased value, a spurious viscous term absorbs the difference
                 reg = friction_regression(ev, _with(ext, i, time_delay=td.parameters[
                     'time_delay']), i)
-                found += [fit_coulomb(reg, ext, i), fit_viscous(reg, ext, i)]
+                redo = [e for e in (fit_coulomb(reg, ext, i), fit_viscous(reg, ext, i))
+                        if e is not None]
+                for e in redo:
+                    e.evidence = 'read again with the time delay: ' + e.evidence
+                stage2 += redo
             for e in found:
                 if e is not None and not any(k.name == e.name and k.axis == e.axis
                                              for k in kept):
