@@ -152,6 +152,7 @@ class Evaluator:
         self.counts = count
         self.lowest = np.full(n, np.inf)
         self.n_sims = 0
+        self._sims: dict[str, Recording] = {}
         self._residual: tuple[Any, Any] = (None, None)
 
     def residual(self, robot: RobotParams) -> tuple[np.ndarray, ...]:
@@ -180,8 +181,15 @@ class Evaluator:
         return self._residual[1]
 
     def _sim(self, robot: RobotParams) -> Recording:
-        self.n_sims += 1
-        return simulate_like(self.rec, robot, self.ctrl)
+        # the same model is simulated again where a candidate is checked before its round
+        # (a damping mismatch before its viscous rival is refitted): keep the last few
+        key = repr(robot)
+        if key not in self._sims:
+            self.n_sims += 1
+            self._sims[key] = simulate_like(self.rec, robot, self.ctrl)
+            while len(self._sims) > SIM_CACHE:
+                self._sims.pop(next(iter(self._sims)))
+        return self._sims[key]
 
     def terms(self, robot: RobotParams, sim: Recording | None = None, *, held_out: bool = False
               ) -> dict[str, np.ndarray]:
@@ -920,6 +928,7 @@ def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> di
     return out
 
 
+SIM_CACHE = 4              # simulations the Evaluator keeps (by model)
 STAGE2_ROUNDS = 3          # FRF-shape evidence read again on axes that took an effect
 MIN_DELAY_SAMPLES = 0.1    # a delay candidate this many samples long re-reads friction
 UNEXPLAINED_RATIO = 4.0   # held-out misfit above this many noise floors is unexplained
@@ -1012,7 +1021,8 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
                 stage2 += redo
             pm = found[1]
             if (pm is not None and 'damping' in pm.parameters and not any(
-                    k.name == 'viscous_friction' and k.axis_index == i for k in kept)):
+                    k.name == 'viscous_friction' and k.axis_index == i for k in kept)
+                    and ev.misfit(ev.terms(apply_effect(ext, pm)))[i] < cur[i]):
                 # the FRF fit dissipates only through the joint damping: a motor-side
                 # viscous friction the model lacks poses as a damping mismatch. Its rival,
                 # viscous friction refitted by simulation over its whole range (the
