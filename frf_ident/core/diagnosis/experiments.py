@@ -37,7 +37,7 @@ from scipy import optimize
 
 from .common import (apply_effect, bridge_gaps, diag_ratio, Effect, frf_error_db, nrmse,
                      segment_mask, simulate_like, split_recording)
-from .residual import inverse_dynamics_residual, regress_axis
+from .residual import coulomb_and_ripple, inverse_dynamics_residual, regress_axis
 
 MIN_SHARE = 0.10     # an effect must remove this share of its axis' misfit above the noise floor
 MIN_Z = 3.0          # ... and more than MIN_Z standard deviations of that misfit under noise
@@ -307,11 +307,7 @@ def friction_regression(ev: Evaluator, robot: RobotParams, axis: int, *,
     """
     rec = ev.rec
     f, qh, vh, ah = ev.residual(robot)
-    a = robot.axes[axis]
-    fa = f[:, axis] - a.coulomb_friction * np.sign(vh[:, axis])
-    for r in a.torque_ripple:
-        fa = fa + r['amplitude'] * np.sin(r['spatial_frequency'] * qh[:, axis]
-                                          + r.get('phase', 0.0))
+    fa = f[:, axis] - coulomb_and_ripple(robot, qh, vh)[:, axis]
     mask = (segment_mask(ev.fit, ('multisine', 'chirp', 'constant_velocity'))
             & ~ev.missing)[:-1]
     noise = max(robot.axes[axis].velocity_noise, 1e-6)

@@ -41,6 +41,33 @@ def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
     return signal.sosfiltfilt(sos, x, axis=0)
 
 
+def coulomb_and_ripple(robot: RobotParams, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """
+    Return the torque the model's Coulomb friction and torque ripple take, per axis.
+
+    Fc sgn(v) minus the ripple sum A sin(s q + phase): the part of a model's inverse dynamics
+    that :func:`inverse_dynamics_residual` (linear) leaves out.
+
+    Parameters
+    ----------
+    robot : RobotParams
+        The model.
+    q, v : ndarray, shape (N, n)
+        Motor positions [rad] and velocities [rad/s].
+
+    Returns
+    -------
+    ndarray, shape (N, n)
+
+    """
+    out = np.array([a.coulomb_friction for a in robot.axes]) * np.sign(v)
+    for i, a in enumerate(robot.axes):
+        for r in a.torque_ripple:
+            out[:, i] -= r['amplitude'] * np.sin(r['spatial_frequency'] * q[:, i]
+                                                 + r.get('phase', 0.0))
+    return out
+
+
 def is_rigid(robot: RobotParams, fs: float) -> bool:
     """Return true when every axis' locked resonance lies far above the Nyquist frequency."""
     return all(math.sqrt(a.stiffness * (1 / a.motor_inertia + 1 / a.link_inertia)) / (2 * math.pi)

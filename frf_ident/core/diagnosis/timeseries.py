@@ -53,7 +53,8 @@ import numpy as np
 from scipy import signal, stats
 
 from .common import bridge_gaps, Effect
-from .residual import find_ripple, inverse_dynamics_residual, is_rigid, lowpass
+from .residual import (coulomb_and_ripple, find_ripple, inverse_dynamics_residual, is_rigid,
+                       lowpass)
 
 __all__ = ['ALPHA', 'FC_HZ', 'diagnose_timeseries', 'model_residual', 'predict_metrics']
 
@@ -108,13 +109,7 @@ def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]
                                               robot)
     # the flexible inverse dynamics carries the load in its link-side equation
     grav = robot.gravity_load(qh) if is_rigid(robot, rec.fs) else np.zeros_like(qh)
-    fc = np.array([a.coulomb_friction for a in robot.axes])
-    rip = np.zeros_like(f)
-    for i, a in enumerate(robot.axes):
-        for r in a.torque_ripple:
-            rip[:, i] += r['amplitude'] * np.sin(r['spatial_frequency'] * qh[:, i]
-                                                 + r.get('phase', 0.0))
-    return f - fc * np.sign(vh) + rip - grav, qh, vh, ah
+    return f - coulomb_and_ripple(robot, qh, vh) - grav, qh, vh, ah
 
 
 def _gravity_sets(n: int, i: int) -> list[tuple[int, ...]]:
