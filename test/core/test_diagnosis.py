@@ -430,5 +430,9 @@ def test_axis_moving_one_way_keeps_friction_out_of_the_gravity_shape():
     # the constant carries the friction: -Fc plus no load
     assert found[('parameter_mismatch', 'joint_3')]['gravity_torque'] == \
         pytest.approx(-fc[2], abs=1.5)
+    # ... and says so: it was not F-tested, so no p value
+    const = next(e for e in res['effects'] if e.axis == 'joint_3'
+                 and 'gravity_torque' in e.parameters)
+    assert 'one way' in const.evidence and 'p =' not in const.evidence
     assert found[('coulomb_friction', 'joint_2')]['coulomb_friction'] == \
         pytest.approx(fc[1], rel=0.15)

@@ -82,6 +82,10 @@ _SCALAR_EVIDENCE = {
     'gravity_torque': ('constant torque residual {c:+.3g} (a load or friction asymmetry the model '
                        'lacks; p = {p:.2g})'),
 }
+#: evidence of the constant fitted without a test on an axis that moves one way only
+_ONE_WAY_EVIDENCE = ('constant torque residual {c:+.3g} while the axis moves one way only: '
+                     'Coulomb friction and a constant load (gravity at the operating point) in '
+                     'one parameter, always fitted (not tested)')
 
 
 def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]:
@@ -485,7 +489,8 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                 # f = u - model: the coefficient adds to the model's value
                 c = float(cf[k][0])
                 ch[k] = getattr(ax, k) + c
-                text = _SCALAR_EVIDENCE[k].format(
+                form = _ONE_WAY_EVIDENCE if info[k].get('forced') else _SCALAR_EVIDENCE[k]
+                text = form.format(
                     c=c, step=2 * c, old=getattr(ax, k), new=ch[k], p=info[k]['p'],
                     gain=100 * info[k].get('held_out_gain', 0.0))
             name = 'parameter_mismatch' if k in ('motor_inertia', 'gravity_torque') else k
@@ -524,7 +529,8 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                              f'inverse-dynamics torque of the model file over the RMS of the '
                              f'measured torque ({fc:g} Hz low-pass)')
     unexplained = []
-    floor = noise_floor(rec, f, fc)
+    # over the rows the held-out NRMSE is taken over (a long rest lowers the torque variance)
+    floor = noise_floor(rec, f, fc, val_m[:, None] & moving(vh, rec.velocity, fs, fc))
     for i, ax in enumerate(robot.axes):
         b = val['baseline']['per_axis'][ax.name]['time_nrmse'] ** 2
         x = val['extended']['per_axis'][ax.name]['time_nrmse'] ** 2
@@ -542,20 +548,42 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                          'val_mask': val_m}}
 
 
-def noise_floor(rec: Recording, f: np.ndarray, fc: float) -> np.ndarray:
+def noise_floor(rec: Recording, f: np.ndarray, fc: float, use: np.ndarray | None = None
+                ) -> np.ndarray:
     """
     Return per axis the NRMSE^2 that torque noise alone leaves.
 
     Per axis NRMSE^2 that torque noise alone leaves after the fc low-pass: the white level
     of the residual's spectrum between 0.6 and 0.95 of the Nyquist frequency (where motion
-    leaves little), times the bandwidth fc, over the variance of the low-passed torque.
+    leaves little), times the bandwidth fc, over the variance of the low-passed torque on the
+    rows the NRMSE is taken over.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording.
+    f : ndarray, shape (N-1, n)
+        The model's torque residual (:func:`model_residual`).
+    fc : float
+        Low-pass cut-off of the metric [Hz].
+    use : ndarray of bool, shape (N-1, n), optional
+        Per axis the rows the NRMSE is taken over (:func:`predict_metrics`: held out and
+        moving); all rows if omitted.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The floor per axis.
+
     """
     fs = rec.fs
     nper = int(min(2 ** int(math.log2(max(f.shape[0] // 8, 64))), 4096))
     fr, p = signal.welch(f, fs=fs, nperseg=nper, axis=0)
     sel = (fr > 0.6 * fs / 2) & (fr < 0.95 * fs / 2)
     level = np.median(p[sel], axis=0) if sel.any() else np.zeros(f.shape[1])
-    var_u = np.var(lowpass(rec.effort[:-1], fs, fc), axis=0)
+    uf = lowpass(rec.effort[:-1], fs, fc)
+    var_u = np.array([np.var(uf[use[:, i], i]) if use is not None and use[:, i].sum() > 1
+                      else np.var(uf[:, i]) for i in range(uf.shape[1])])
     return level * min(fc, fs / 2) / np.maximum(var_u, 1e-300)
 
 
