@@ -71,8 +71,12 @@ def test_scene_drawn_at_random(draw, tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize('kind, seed', [('random', 2026), ('clean', 2027),
-                                        ('gravity', 14)])   # + stiffening on its axis
+@pytest.mark.parametrize('kind, seed', [
+    # a random draw that failed CI: joint_2 sticks, its regression reads Coulomb friction
+    # twice too high, a viscous term and a damping mismatch took its place
+    ('random', 7189810),
+    ('clean', 2027),
+    ('gravity', 14)])   # + stiffening on its axis
 def test_scene_of_the_reference_plant(kind, seed, tmp_path):
     scene = draw_scene(np.random.default_rng(seed), kind)
     r = run_scene(scene, tmp_path)

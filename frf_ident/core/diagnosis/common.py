@@ -45,6 +45,7 @@ class Effect:
     evidence: str
     axis_index: int = 0
     gain: float = 0.0          # relative reduction of the fit loss when the effect is added
+    support: float = 0.0       # |t| of the regression coefficient that proposed it (0: none)
 
     def to_dict(self) -> dict[str, Any]:
         return {'name': self.name, 'axis': self.axis, 'score': round(float(self.score), 3),

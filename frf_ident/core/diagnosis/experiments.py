@@ -334,7 +334,7 @@ def fit_coulomb(reg, robot: RobotParams, axis: int) -> Effect | None:
                   f'motor velocity changes sign (t = {reg.tstat["coulomb_friction"]:.1f}, '
                   f'partial R2 {reg.partial_r2.get("coulomb_friction", 0):.2f}); the chirp '
                   f'(velocity reversals) deviates from the nominal FRF while the multisine on '
-                  f'constant velocity does not', axis)
+                  f'constant velocity does not', axis, support=abs(reg.tstat['coulomb_friction']))
 
 
 def fit_viscous(reg, robot: RobotParams, axis: int) -> Effect | None:
@@ -346,7 +346,8 @@ def fit_viscous(reg, robot: RobotParams, axis: int) -> Effect | None:
     return Effect('viscous_friction', a.name, 0.0, {'viscous_friction': bv},
                   f'torque residual proportional to motor velocity: {c:+.3g} N m s/rad '
                   f'(t = {reg.tstat["viscous_friction"]:.1f}, partial R2 '
-                  f'{reg.partial_r2.get("viscous_friction", 0):.2f})', axis)
+                  f'{reg.partial_r2.get("viscous_friction", 0):.2f})', axis,
+                  support=abs(reg.tstat['viscous_friction']))
 
 
 def fit_ripple(reg, robot: RobotParams, axis: int) -> Effect | None:
@@ -582,6 +583,7 @@ def _refine(ev: Evaluator, mk: Callable, x0: np.ndarray, bounds, axis: int) -> n
 
 _FRICTION = ('coulomb_friction', 'viscous_friction')
 DOMINANT_SHARE = 0.9   # an effect that removes this share of its axis' misfit dominates it
+REFIT_T = 3.0          # |t| of a friction reading that is refitted by simulation when it fails
 
 
 def _friction_scale(ev: Evaluator, axis: int, key: str) -> float:
@@ -758,6 +760,23 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
             # an axis already at its noise floor has no misfit left to explain
             fl = ev.floor_seen(e_c)[i]
             share = gain / (cur[i] - fl) if cur[i] > fl else 0.0
+            if (share < MIN_SHARE and c.name in _FRICTION and c.support >= REFIT_T
+                    and c.parameters[c.name] > 0):
+                # the regression clearly sees the friction term but its value makes the
+                # simulation worse: a sticking joint's breakaway transients bias the
+                # inverse-dynamics residual at small speeds (a Coulomb level read twice too
+                # high with a negative viscous term); the closed-loop simulation sticks
+                # like the robot, so the level is refitted by it around the reading
+                r = refit_friction(ev, ext, c, local=True)
+                e_r = ev.misfit(ev.terms(apply_effect(ext, r)))
+                say(f'  {c.axis} {c.name} {c.parameters[c.name]:.4g} (t = {c.support:.1f}) '
+                    f'refitted by simulation: {r.parameters[c.name]:.4g}, misfit '
+                    f'{e_c[i]:.4g} -> {e_r[i]:.4g}')
+                if e_r[i] < e_c[i]:
+                    c.parameters, c.evidence, e_c = r.parameters, r.evidence, e_r
+                    gain = cur[i] - e_c[i]
+                    fl = ev.floor_seen(e_c)[i]
+                    share = gain / (cur[i] - fl) if cur[i] > fl else 0.0
             c.gain = float(share)
             say(f'  {c.axis} {c.name}: misfit {cur[i]:.4g} -> {e_c[i]:.4g} '
                 f'(share {share:.3f}) {c.parameters}')
