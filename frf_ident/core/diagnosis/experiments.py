@@ -744,6 +744,13 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
     pending = list(cands)
     taken: set[tuple[str, str]] = set()
     rnd = 0
+
+    def share_of(e_c: np.ndarray, i: int) -> tuple[float, float]:
+        # gain and share of axis i's misfit above its floor (an axis at its floor has none)
+        gain = cur[i] - e_c[i]
+        fl = ev.floor_seen(e_c)[i]
+        return gain, (gain / (cur[i] - fl) if cur[i] > fl else 0.0)
+
     while pending:
         scored = []
         for c in pending:
@@ -755,11 +762,7 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
                 r = refit_friction(ev, ext, c, local=True)
                 c.parameters, c.evidence = r.parameters, r.evidence
             e_c = ev.misfit(ev.terms(apply_effect(ext, c)))
-            i = c.axis_index
-            gain = cur[i] - e_c[i]
-            # an axis already at its noise floor has no misfit left to explain
-            fl = ev.floor_seen(e_c)[i]
-            share = gain / (cur[i] - fl) if cur[i] > fl else 0.0
+            gain, share = share_of(e_c, i)
             if (share < MIN_SHARE and c.name in _FRICTION and c.support >= REFIT_T
                     and c.parameters[c.name] > 0):
                 # the regression clearly sees the friction term but its value makes the
@@ -774,9 +777,7 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
                     f'{e_c[i]:.4g} -> {e_r[i]:.4g}')
                 if e_r[i] < e_c[i]:
                     c.parameters, c.evidence, e_c = r.parameters, r.evidence, e_r
-                    gain = cur[i] - e_c[i]
-                    fl = ev.floor_seen(e_c)[i]
-                    share = gain / (cur[i] - fl) if cur[i] > fl else 0.0
+                    gain, share = share_of(e_c, i)
             c.gain = float(share)
             say(f'  {c.axis} {c.name}: misfit {cur[i]:.4g} -> {e_c[i]:.4g} '
                 f'(share {share:.3f}) {c.parameters}')
