@@ -530,7 +530,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                              f'measured torque ({fc:g} Hz low-pass)')
     unexplained = []
     # over the rows the held-out NRMSE is taken over (a long rest lowers the torque variance)
-    floor = noise_floor(rec, f, fc, val_m[:, None] & moving(vh, rec.velocity, fs, fc))
+    floor = noise_floor(rec, f, fc, val['extended']['rows'])
     for i, ax in enumerate(robot.axes):
         b = val['baseline']['per_axis'][ax.name]['time_nrmse'] ** 2
         x = val['extended']['per_axis'][ax.name]['time_nrmse'] ** 2
@@ -567,8 +567,8 @@ def noise_floor(rec: Recording, f: np.ndarray, fc: float, use: np.ndarray | None
     fc : float
         Low-pass cut-off of the metric [Hz].
     use : ndarray of bool, shape (N-1, n), optional
-        Per axis the rows the NRMSE is taken over (:func:`predict_metrics`: held out and
-        moving); all rows if omitted.
+        Per axis the rows the NRMSE is taken over (``rows`` of :func:`predict_metrics`); all
+        rows if omitted.
 
     Returns
     -------
@@ -644,8 +644,9 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
     Returns
     -------
     dict
-        'frf_error_db', 'time_nrmse', 'per_axis' {name: {...}} and 'residual' (N-1, n)
-        (measured minus predicted torque, low-passed).
+        'frf_error_db', 'time_nrmse', 'per_axis' {name: {...}}, 'residual' (N-1, n)
+        (measured minus predicted torque, low-passed) and 'rows' (N-1, n) (per axis the rows
+        the metrics were taken over: in ``mask``, not bridged, moving).
 
     """
     rec, lost = bridge_gaps(rec)
@@ -677,7 +678,7 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
     return {'frf_error_db': round(_frf_error(rec.velocity[:-1][rows], uf[rows], u_model[rows],
                                              fs), 4),
             'time_nrmse': round(math.sqrt(err2 / max(var2, 1e-300)), 5),
-            'per_axis': per, 'residual': ff}
+            'per_axis': per, 'residual': ff, 'rows': use}
 
 
 def _frf_error(v: np.ndarray, u_meas: np.ndarray, u_model: np.ndarray, fs: float) -> float:
