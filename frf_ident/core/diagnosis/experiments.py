@@ -755,16 +755,17 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
         scored = []
         for c in pending:
             i = c.axis_index
-            if (rnd and c.name in _FRICTION
-                    and cur[i] > UNEXPLAINED_RATIO * ev.floor_seen(cur)[i]):
+            refitted = bool(rnd and c.name in _FRICTION
+                            and cur[i] > UNEXPLAINED_RATIO * ev.floor_seen(cur)[i])
+            if refitted:
                 # its axis took an effect and is still clearly above its floor: the value the
                 # regression read next to the unmodelled effect is refitted by simulation
                 r = refit_friction(ev, ext, c, local=True)
                 c.parameters, c.evidence = r.parameters, r.evidence
             e_c = ev.misfit(ev.terms(apply_effect(ext, c)))
             gain, share = share_of(e_c, i)
-            if (share < MIN_SHARE and c.name in _FRICTION and c.support >= REFIT_T
-                    and c.parameters[c.name] > 0):
+            if (not refitted and share < MIN_SHARE and c.name in _FRICTION
+                    and c.support >= REFIT_T and c.parameters[c.name] > 0):
                 # the regression clearly sees the friction term but its value makes the
                 # simulation worse: a sticking joint's breakaway transients bias the
                 # inverse-dynamics residual at small speeds (a Coulomb level read twice too
