@@ -25,7 +25,10 @@ scenes without effects, parameters within 20 %, and unmodelled second modes repo
 
 ``python -m benchmarks.diagnosis N [SEED [KIND]]`` runs N scenes (seeds SEED, SEED + 1, ...;
 default 2026; only those of KIND, e.g. second_mode, when given) and prints one JSON line per
-scene, then the aggregate.
+scene, then the aggregate. With FRF_DIAG_LOG=1 every scene's diagnosis log (each candidate's
+misfit before and after, refits, held-out checks) goes to stderr: ``FRF_DIAG_LOG=1 python -m
+benchmarks.diagnosis 1 SEED`` shows scene SEED drawn as kind ``random`` (the kind the tests
+draw for it when SEED % 8 < 3).
 """
 from __future__ import annotations
 
@@ -156,6 +159,13 @@ def identification_config():
                                 ChirpConfig(duration=10.0, max_iterations=3))
 
 
+def _diagnosis_log():
+    """Return the diagnosis' progress sink: stderr with FRF_DIAG_LOG=1, else nothing."""
+    if os.environ.get('FRF_DIAG_LOG', '') not in ('', '0'):
+        return lambda m: print(m, file=sys.stderr, flush=True)
+    return lambda _m: None
+
+
 def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
     """Identify the scene's plant through ``--plant`` into a bag, diagnose the bag."""
     sys.path.insert(0, str(ROOT / 'test'))
@@ -167,7 +177,7 @@ def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
         bag = work / 'bag'
         run_identify(MODEL, PLANT, identification_config(), bag, progress=lambda _m: None)
         t0 = time.perf_counter()
-        res = diagnose(bag, MODEL, work / 'diag', progress=lambda _m: None)
+        res = diagnose(bag, MODEL, work / 'diag', progress=_diagnosis_log())
         wall = time.perf_counter() - t0
     finally:
         ref.SCENE = {}

@@ -17,7 +17,8 @@ Hidden effects in the independent reference plant, end to end.
 Hidden effects in the independent reference plant (test/plants/reference.py), end to end:
 ``identify --plant plants.reference:ReferencePlant`` records a bag, ``diagnose`` compares it
 with the nominal config/model_3axis.yaml. Two scenes are drawn at random on every run (a fresh
-seed each, printed with the scene; FRF_DIAG_SEED=<seed> repeats one), kinds as in the sweep;
+seed each, printed with the scene; FRF_DIAG_SEED=<seed> repeats one, FRF_DIAG_LOG=1 with
+``pytest -s`` prints its diagnosis log), kinds as in the sweep;
 the other scenes keep fixed seeds as regression checks. The rates over many scenes are
 measured by the sweep (``make bench``, section diagnosis).
 """
