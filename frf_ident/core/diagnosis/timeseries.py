@@ -149,11 +149,49 @@ def _link_sets(runs: list[list[int]], i: int) -> list[tuple[int, ...]]:
     return []
 
 
-def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None):
+def one_way_sets(v: np.ndarray, sets: list[tuple[int, ...]], rows: np.ndarray, fs: float,
+                 fc: float) -> list[tuple[int, ...]]:
+    """
+    Return the joint sets whose angle sum moves one way only on ``rows``.
+
+    On a single sweep of an angle every quantity along the path (the speed of each axis, a
+    velocity-dependent friction law, the configuration-dependent inertia) is a function of
+    that angle, so a sinusoid of it fits whatever the model lacks there and is no evidence
+    of a load that depends on the configuration. Gravity of a set is tested only where its
+    angle sum is seen going both ways (at least ONE_WAY of the rows in each direction, as
+    for the Coulomb friction of a one-way axis).
+
+    Parameters
+    ----------
+    v : ndarray, shape (N, n)
+        Velocities (between samples).
+    sets : list of tuple of int
+        The joint sets.
+    rows : ndarray of bool, shape (N,)
+        The rows the set would be fitted on.
+    fs, fc : float
+        Sample rate and low-pass cut-off [Hz].
+
+    Returns
+    -------
+    list of tuple of int
+        The sets of ``sets`` whose angle sum moves one way only.
+
+    """
+    out = []
+    for js in sets:
+        up = lowpass(v[:, list(js)].sum(axis=1), fs, fc)[rows] > 0
+        if not up.size or min(float(np.mean(up)), 1.0 - float(np.mean(up))) < ONE_WAY:
+            out.append(js)
+    return out
+
+
+def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None, skip=()):
     """
     Return the candidate regressor groups of axis i: name -> low-passed columns (N, k).
 
-    Gravity sets only over the runs ``bearing`` of :func:`gravity_bearing` (all when None).
+    Gravity sets only over the runs ``bearing`` of :func:`gravity_bearing` (all when None),
+    none of the sets ``skip`` (those :func:`one_way_sets` finds).
     """
     n = q.shape[1]
     g: dict[str, np.ndarray] = {
@@ -165,7 +203,7 @@ def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None):
         g['torque_ripple'] = np.column_stack([np.sin(ripple_s * q[:, i]),
                                               np.cos(ripple_s * q[:, i])])
     sets = [js for js in (_gravity_sets(n, i) if bearing is None else _link_sets(bearing, i))
-            if np.ptp(q[:, list(js)].sum(axis=1)) > 1e-3]
+            if np.ptp(q[:, list(js)].sum(axis=1)) > 1e-3 and js not in skip]
     # one gravity group per single set and per pair of sets: a coupled arm's axis carries the
     # weight of its own link and of the links beyond (G1 sin(q2) + G2 sin(q2 + q3)), which a
     # single set approximates with the wrong joints when the motion correlates them
@@ -269,7 +307,8 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[list[int]]:
     share: dict[tuple[int, tuple[int, ...]], float] = {}
     n = q.shape[1]
     for i, (ff, fit_i, val_i, n_eff) in enumerate(prep):
-        g = _groups(q, v, a, fs, fc, i, 0.0, None)
+        g = _groups(q, v, a, fs, fc, i, 0.0, None,
+                    one_way_sets(v, _gravity_sets(n, i), fit_i, fs, fc))
         base = [g[k][fit_i] for k in ('gravity_torque', 'coulomb_friction', 'viscous_friction',
                                       'motor_inertia')]
         _, rss0 = _lstsq(base, ff[fit_i])
@@ -309,19 +348,33 @@ def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
 
     Forward selection by F test (p < ALPHA at ``n_eff`` effective samples) on top of the
     ``forced`` groups, then removal of every other group whose absence does not worsen the
-    held-out residual. Returns the selected names and per candidate {'p', 'share',
-    'held_out_gain'} for the report.
+    held-out residual, repeated without the removed groups until none is removed (stepwise
+    regression: a group that only stood in for another one no longer keeps it out). Returns
+    the selected names and per candidate {'p', 'share', 'held_out_gain'} for the report.
     """
     chosen: list[str] = list(forced)
     info: dict[str, dict] = {k: {'p': 0.0, 'share': 0.0, 'forced': True} for k in forced}
     yf = y[fit]
     tot = float((yf - yf.mean()) @ (yf - yf.mean())) or 1e-300
+    dropped: set[str] = set()
+    while True:
+        _forward(groups, yf, fit, n_eff, chosen, dropped, info, tot)
+        removed = _backward(groups, y, fit, val, chosen, forced, info)
+        # stepwise: a group dropped on held-out data may have kept out another that the
+        # forward pass now admits (a one-off sinusoid standing in for the friction)
+        if not removed:
+            return chosen, info
+        dropped |= set(removed)
+
+
+def _forward(groups, yf, fit, n_eff, chosen, dropped, info, tot):
+    """Add to ``chosen`` the groups (not in ``dropped``) that pass the F test, best first."""
     while True:
         _, rss0 = _lstsq([groups[k][fit] for k in chosen], yf)
         best, bp = None, ALPHA
         for k, x in groups.items():
-            if k in chosen or (k.startswith('gravity:')
-                               and any(c.startswith('gravity:') for c in chosen)):
+            if k in chosen or k in dropped or (k.startswith('gravity:') and any(
+                    c.startswith('gravity:') for c in chosen)):
                 continue
             cols = [groups[c][fit] for c in chosen] + [x[fit]]
             _, rss1 = _lstsq(cols, yf)
@@ -335,8 +388,13 @@ def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
             if p < bp:
                 best, bp = k, p
         if best is None:
-            break
+            return
         chosen.append(best)
+
+
+def _backward(groups, y, fit, val, chosen, forced, info) -> list[str]:
+    """Remove from ``chosen`` every group whose absence does not worsen the held-out error."""
+    yf = y[fit]
 
     def held(names):
         """Return the held-out residual energy of the groups ``names`` refitted jointly."""
@@ -346,13 +404,15 @@ def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
         else:
             r = y[val] - np.column_stack([groups[k][val] for k in names]) @ c
         return float(r @ r)
+    removed = []
     for k in list(chosen):
         with_k = held(chosen)
         without = held([c for c in chosen if c != k])
         info[k]['held_out_gain'] = (without - with_k) / max(without, 1e-300)
         if without <= with_k and k not in forced:
             chosen.remove(k)
-    return chosen, info
+            removed.append(k)
+    return removed
 
 
 def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
@@ -422,13 +482,21 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
         f'joints): {[[names[i] for i in run] for run in bearing] or "none"}')
     for i, ax in enumerate(robot.axes):
         ff, fit_i, val_i, n_eff = prep[i]
-        g0 = _groups(qh, vh, ah, fs, fc, i, 0.0, bearing)
+        skip = one_way_sets(vh, _gravity_sets(robot.n_axes, i), fit_i, fs, fc)
+        g0 = _groups(qh, vh, ah, fs, fc, i, 0.0, bearing, skip)
+        seen = [js for js in skip if np.ptp(qh[:, list(js)].sum(axis=1)) > 1e-3]
+        if seen:
+            rejected.append({'name': 'gravity', 'axis': ax.name, 'reason': (
+                'not testable in this record: ' + ', '.join(
+                    ' + '.join('q_' + names[j] for j in js) for js in seen)
+                + ' moves one way only where the axis moves, so a sinusoid of it fits any '
+                  'torque that changes along the path (friction, inertia)')})
         X0 = np.column_stack(list(g0.values()))
         c0, *_ = np.linalg.lstsq(X0[fit_i], ff[fit_i], rcond=None)
         wide = lowpass(f[:, i], fs, 0.45 * fs) - np.column_stack(
-            list(_groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0, bearing).values())) @ c0
+            list(_groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0, bearing, skip).values())) @ c0
         s, peak, thr = find_ripple(wide, qh[:, i], fit_i)
-        groups = _groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0, bearing)
+        groups = _groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0, bearing, skip)
         up = float(np.mean(vh[fit_i, i] > 0)) if fit_i.any() else 0.0
         if min(up, 1.0 - up) < ONE_WAY:
             # one direction only: sgn(v) is the constant column, Coulomb friction a load
