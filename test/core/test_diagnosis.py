@@ -391,6 +391,36 @@ def test_torque_held_at_rest_is_neither_fitted_nor_scored():
         assert 0.4 < ext['per_axis'][name]['moving_share'] < 0.95
 
 
+def _sweep_arm(rng, fs, T, two_way, f_hi, sweep):
+    """
+    Return t, q, v, a of a rigid 3-axis arm whose other axes sweep one way.
+
+    Axes ``two_way`` move back and forth (three random sines up to ``f_hi`` Hz); ``sweep``
+    maps each other axis to its one-way position as a function of t.
+    """
+    t = np.arange(int(T * fs)) / fs
+    q = np.zeros((t.size, 3))
+    for i in two_way:
+        for _ in range(3):
+            q[:, i] += rng.uniform(0.1, 0.3) * np.sin(2 * np.pi * rng.uniform(f_hi - 0.4, f_hi)
+                                                      * t + rng.uniform(0, 6))
+    for i, f in sweep.items():
+        q[:, i] = f(t)
+    v = np.gradient(q, 1 / fs, axis=0)
+    return t, q, v, np.gradient(v, 1 / fs, axis=0)
+
+
+def _diagnose_arm(rng, t, q, v, u, g2, g3, p3, fs=500.0):
+    """Add the coupled gravity of axes 2-3 and noise to u and diagnose it against RIGID."""
+    u[:, 1] += g2 * np.sin(q[:, 1] + 0.4) + g3 * np.sin(q[:, 1] + q[:, 2] + p3)
+    u[:, 2] += g3 * np.sin(q[:, 1] + q[:, 2] + p3)
+    u += 0.2 * rng.standard_normal(u.shape)
+    rec = Recording(t, ['joint_1', 'joint_2', 'joint_3'], q,
+                    v + 1e-4 * rng.standard_normal(v.shape), u)
+    res = diagnose_timeseries(rec, replace(robot_from_dict(RIGID), sample_rate=fs))
+    return res, {(e.name, e.axis): e.parameters for e in res['effects']}
+
+
 def test_axis_moving_one_way_keeps_friction_out_of_the_gravity_shape():
     """
     Fit Coulomb friction of a one-way axis as the constant it is there, never as gravity.
@@ -402,26 +432,11 @@ def test_axis_moving_one_way_keeps_friction_out_of_the_gravity_shape():
     gravity amplitude comes out right.
     """
     rng = np.random.default_rng(3)
-    fs, T = 500.0, 20.0
-    t = np.arange(int(T * fs)) / fs
-    q = np.zeros((t.size, 3))
-    for i in (0, 1):
-        for _ in range(3):
-            q[:, i] += rng.uniform(0.1, 0.3) * np.sin(2 * np.pi * rng.uniform(0.1, 0.5) * t
-                                                      + rng.uniform(0, 6))
-    q[:, 2] = -t / T - 0.02 * np.sin(2 * np.pi * 0.3 * t)
-    v = np.gradient(q, 1 / fs, axis=0)
+    t, q, v, a = _sweep_arm(rng, 500.0, 20.0, (0, 1), 0.5,
+                            {2: lambda t: -t / 20.0 - 0.02 * np.sin(2 * np.pi * 0.3 * t)})
     assert (v[50:-50, 2] < 0).all()
-    a = np.gradient(v, 1 / fs, axis=0)
     J, fc, g3, p3 = np.array([6.0, 4.0, 1.5]), np.array([3.0, 4.0, 6.0]), 25.0, -1.9
-    u = J * a + fc * np.sign(v)
-    u[:, 1] += 60.0 * np.sin(q[:, 1] + 0.4) + g3 * np.sin(q[:, 1] + q[:, 2] + p3)
-    u[:, 2] += g3 * np.sin(q[:, 1] + q[:, 2] + p3)
-    u += 0.2 * rng.standard_normal(u.shape)
-    rec = Recording(t, ['joint_1', 'joint_2', 'joint_3'], q,
-                    v + 1e-4 * rng.standard_normal(v.shape), u)
-    res = diagnose_timeseries(rec, replace(robot_from_dict(RIGID), sample_rate=fs))
-    found = {(e.name, e.axis): e.parameters for e in res['effects']}
+    res, found = _diagnose_arm(rng, t, q, v, J * a + fc * np.sign(v), 60.0, g3, p3)
     assert ('coulomb_friction', 'joint_3') not in found
     assert any(r['name'] == 'coulomb_friction' and r['axis'] == 'joint_3' and 'one way' in
                r.get('reason', '') for r in res['rejected'])
@@ -450,27 +465,13 @@ def test_sinusoid_of_a_one_way_angle_is_not_taken_for_gravity(seed):
     rejected list says why. Axes 2-3 (coupled gravity, both ways) keep theirs.
     """
     rng = np.random.default_rng(seed)
-    fs, T = 500.0, 12.0
-    t = np.arange(int(T * fs)) / fs
-    q = np.zeros((t.size, 3))
-    for i in (1, 2):
-        for _ in range(3):
-            q[:, i] += rng.uniform(0.1, 0.3) * np.sin(2 * np.pi * rng.uniform(0.2, 0.6) * t
-                                                      + rng.uniform(0, 6))
-    q[:, 0] = 0.4 * (1 - np.cos(np.pi * t / T))
-    v = np.gradient(q, 1 / fs, axis=0)
-    a = np.gradient(v, 1 / fs, axis=0)
+    t, q, v, a = _sweep_arm(rng, 500.0, 12.0, (1, 2), 0.6,
+                            {0: lambda t: 0.4 * (1 - np.cos(np.pi * t / 12.0))})
     vs = 0.3 * v[:, 0].max()
     u = np.array([6.0, 4.0, 1.5]) * a + np.array([3.0, 4.0, 2.0]) * np.sign(v)
     u[:, 0] += 40.0 * v[:, 0] + rng.uniform(3.0, 5.0) * np.exp(-(v[:, 0] / vs) ** 2)
-    g3, p3 = 25.0, -0.3
-    u[:, 1] += 80.0 * np.sin(q[:, 1] + 0.4) + g3 * np.sin(q[:, 1] + q[:, 2] + p3)
-    u[:, 2] += g3 * np.sin(q[:, 1] + q[:, 2] + p3)
-    u += 0.2 * rng.standard_normal(u.shape)
-    rec = Recording(t, ['joint_1', 'joint_2', 'joint_3'], q,
-                    v + 1e-4 * rng.standard_normal(v.shape), u)
-    res = diagnose_timeseries(rec, replace(robot_from_dict(RIGID), sample_rate=fs))
-    found = {(e.name, e.axis): e.parameters for e in res['effects']}
+    g3 = 25.0
+    res, found = _diagnose_arm(rng, t, q, v, u, 80.0, g3, -0.3)
     assert ('gravity', 'joint_1') not in found, found
     assert all('joint_1' not in g['joints'] for ax in ('joint_2', 'joint_3')
                for g in found[('gravity', ax)]['gravity'])
