@@ -375,6 +375,9 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
     tau_g = np.asarray(loadmat(KUKA, squeeze_me=True)['tau_g_all'])[:3].T
     n = rec.t.size // 2
     fits, names, corr = [], [], []
+    # on an axis moving one way only the constant is load + Coulomb friction forward and
+    # load - Coulomb backward: a different parameter in each half, per axis and direction
+    consts: dict[str, dict[str, float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for k, sl in enumerate((slice(0, n), slice(n, None), slice(0, None))):
             part = Recording(rec.t[sl] - rec.t[sl][0], rec.joint_names, rec.position[sl],
@@ -382,19 +385,13 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
             bag = write_recording(part, Path(tmp) / f'half{k}')
             res = diagnose(bag, cfg / 'model_kuka_kr300_axes123.yaml', Path(tmp) / f'd{k}',
                            progress=lambda _m: None)
-            # on an axis moving one way only the constant is load + Coulomb friction forward
-            # and load - Coulomb backward: a different parameter in each half
-            one_way = {r['axis']: ('forward' if np.mean(part.velocity[
-                np.abs(part.velocity[:, int(r['axis'][-1]) - 1]) > math.radians(1.0),
-                int(r['axis'][-1]) - 1] > 0) > 0.5 else 'backward')
-                for r in res['report'].get('rejected', [])
-                if r['name'] == 'coulomb_friction' and 'one way' in r.get('reason', '')}
+            one_way = {r['axis']: 'forward' if r['forward_share'] > 0.5 else 'backward'
+                       for r in res['report'].get('rejected', []) if 'forward_share' in r}
             fit = {}
             for e in res['report']['effects']:
                 for key, val in e['parameters'].items():
                     if key == 'gravity_torque' and e['axis'] in one_way:
-                        fit[e['axis'], f'constant (load and Coulomb friction, moving '
-                                       f'{one_way[e["axis"]]} only)'] = float(val)
+                        consts.setdefault(e['axis'], {})[one_way[e['axis']]] = float(val)
                     elif key == 'gravity':
                         for t in val:
                             fit[e['axis'], 'gravity sin(' + ' + '.join(t['joints'])
@@ -402,13 +399,13 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
                     elif isinstance(val, (int, float)):
                         fit[e['axis'], key] = float(val)
             fits.append(fit)
-            if k == 2:
-                break
-            names.append(sorted(f'{e["name"]}@{e["axis"]}' for e in res['report']['effects']))
-            robot = load_model(Path(tmp) / f'd{k}' / 'extended_model.yaml')[1]
-            g3 = robot.gravity_load(rec.position[:, :3])[:, 2]
-            corr.append(float(np.corrcoef(g3, tau_g[:, 2])[0, 1]) if np.std(g3) > 0
-                        else math.nan)
+            if k < 2:
+                names.append(sorted(f'{e["name"]}@{e["axis"]}'
+                                    for e in res['report']['effects']))
+                robot = load_model(Path(tmp) / f'd{k}' / 'extended_model.yaml')[1]
+                g3 = robot.gravity_load(rec.position[:, :3])[:, 2]
+                corr.append(float(np.corrcoef(g3, tau_g[:, 2])[0, 1]) if np.std(g3) > 0
+                            else math.nan)
     rows = [('KUKA A halves: effects of the first half', ', '.join(names[0]), '', ''),
             ('... of the second half', ', '.join(names[1]), '', '')]
     both = sorted(set(fits[0]) & set(fits[1]))
@@ -421,11 +418,8 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
                  f'named in one half only: {len(set(fits[0]) ^ set(fits[1]))}', ''))
     # the two one-way constants of an axis that goes out in one half and back in the other
     # hold Coulomb friction and load separately: (forward - backward) / 2 and their mean
-    for ax in sorted({a for a, _ in fits[0]}):
-        c = {d: next((f[ax, key] for f in fits[:2] for key in [
-            f'constant (load and Coulomb friction, moving {d} only)'] if (ax, key) in f), None)
-            for d in ('forward', 'backward')}
-        if None in c.values():
+    for ax, c in sorted(consts.items()):
+        if len(c) < 2:
             continue
         full = fits[2].get((ax, 'coulomb_friction'))
         fc = (c['forward'] - c['backward']) / 2

@@ -68,6 +68,7 @@ MIN_SHARE = 0.10          # ... when it is also at least this share of the nomin
 REST_NOISE = 0.3          # an axis is at rest below this many velocity-noise levels ...
 REST_SHARE = 0.05         # ... or below this share of its 95th-percentile speed
 ONE_WAY = 0.05            # an axis with fewer moving samples in one direction moves one way
+MIN_TRAVEL = 1e-3         # [rad] a joint set whose angle sum spans less is no gravity candidate
 
 
 #: evidence sentence of each one-coefficient regressor group (c: fitted coefficient)
@@ -149,10 +150,10 @@ def _link_sets(runs: list[list[int]], i: int) -> list[tuple[int, ...]]:
     return []
 
 
-def one_way_sets(v: np.ndarray, sets: list[tuple[int, ...]], rows: np.ndarray, fs: float,
-                 fc: float) -> list[tuple[int, ...]]:
+def one_way_sets(q: np.ndarray, v: np.ndarray, sets: list[tuple[int, ...]], rows: np.ndarray,
+                 fs: float, fc: float) -> list[tuple[int, ...]]:
     """
-    Return the joint sets whose angle sum moves one way only on ``rows``.
+    Return the joint sets whose angle sum moves (MIN_TRAVEL), but one way only on ``rows``.
 
     On a single sweep of an angle every quantity along the path (the speed of each axis, a
     velocity-dependent friction law, the configuration-dependent inertia) is a function of
@@ -163,8 +164,8 @@ def one_way_sets(v: np.ndarray, sets: list[tuple[int, ...]], rows: np.ndarray, f
 
     Parameters
     ----------
-    v : ndarray, shape (N, n)
-        Velocities (between samples).
+    q, v : ndarray, shape (N, n)
+        Positions and velocities (between samples).
     sets : list of tuple of int
         The joint sets.
     rows : ndarray of bool, shape (N,)
@@ -180,6 +181,8 @@ def one_way_sets(v: np.ndarray, sets: list[tuple[int, ...]], rows: np.ndarray, f
     """
     out = []
     for js in sets:
+        if np.ptp(q[:, list(js)].sum(axis=1)) <= MIN_TRAVEL:
+            continue
         up = lowpass(v[:, list(js)].sum(axis=1), fs, fc)[rows] > 0
         if not up.size or min(float(np.mean(up)), 1.0 - float(np.mean(up))) < ONE_WAY:
             out.append(js)
@@ -203,7 +206,7 @@ def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None, skip=()):
         g['torque_ripple'] = np.column_stack([np.sin(ripple_s * q[:, i]),
                                               np.cos(ripple_s * q[:, i])])
     sets = [js for js in (_gravity_sets(n, i) if bearing is None else _link_sets(bearing, i))
-            if np.ptp(q[:, list(js)].sum(axis=1)) > 1e-3 and js not in skip]
+            if np.ptp(q[:, list(js)].sum(axis=1)) > MIN_TRAVEL and js not in skip]
     # one gravity group per single set and per pair of sets: a coupled arm's axis carries the
     # weight of its own link and of the links beyond (G1 sin(q2) + G2 sin(q2 + q3)), which a
     # single set approximates with the wrong joints when the motion correlates them
@@ -276,7 +279,7 @@ def _axis_masks(rec, f, move, i, fit_m, val_m, fc):
     return ff, fit_i, val_i, max(fit_i.sum() * 2 * fc / fs, 10.0)
 
 
-def gravity_bearing(q, v, a, fs, fc, prep) -> list[list[int]]:
+def gravity_bearing(q, v, a, fs, fc, prep, skips=None) -> list[list[int]]:
     """
     Return the runs of axes that carry a configuration-dependent (gravity) load.
 
@@ -296,6 +299,8 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[list[int]]:
         Sample rate and low-pass cut-off [Hz].
     prep : list
         Per axis (residual, fit mask, held-out mask, effective samples).
+    skips : list of list of tuple of int, optional
+        Per axis the joint sets that are no candidates (:func:`one_way_sets`); none if omitted.
 
     Returns
     -------
@@ -307,8 +312,7 @@ def gravity_bearing(q, v, a, fs, fc, prep) -> list[list[int]]:
     share: dict[tuple[int, tuple[int, ...]], float] = {}
     n = q.shape[1]
     for i, (ff, fit_i, val_i, n_eff) in enumerate(prep):
-        g = _groups(q, v, a, fs, fc, i, 0.0, None,
-                    one_way_sets(v, _gravity_sets(n, i), fit_i, fs, fc))
+        g = _groups(q, v, a, fs, fc, i, 0.0, None, skips[i] if skips else ())
         base = [g[k][fit_i] for k in ('gravity_torque', 'coulomb_friction', 'viscous_friction',
                                       'motor_inertia')]
         _, rss0 = _lstsq(base, ff[fit_i])
@@ -477,18 +481,19 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     names = robot.joint_names
     move = moving(vh, rec.velocity, fs, fc)
     prep = [_axis_masks(rec, f, move, i, fit_m, val_m, fc) for i in range(robot.n_axes)]
-    bearing = gravity_bearing(qh, vh, ah, fs, fc, prep)
+    skips = [one_way_sets(qh, vh, _gravity_sets(robot.n_axes, i), prep[i][1], fs, fc)
+             for i in range(robot.n_axes)]
+    bearing = gravity_bearing(qh, vh, ah, fs, fc, prep, skips)
     say(f'axes whose own angle carries a configuration-dependent load (runs of parallel '
         f'joints): {[[names[i] for i in run] for run in bearing] or "none"}')
     for i, ax in enumerate(robot.axes):
         ff, fit_i, val_i, n_eff = prep[i]
-        skip = one_way_sets(vh, _gravity_sets(robot.n_axes, i), fit_i, fs, fc)
+        skip = skips[i]
         g0 = _groups(qh, vh, ah, fs, fc, i, 0.0, bearing, skip)
-        seen = [js for js in skip if np.ptp(qh[:, list(js)].sum(axis=1)) > 1e-3]
-        if seen:
+        if skip:
             rejected.append({'name': 'gravity', 'axis': ax.name, 'reason': (
                 'not testable in this record: ' + ', '.join(
-                    ' + '.join('q_' + names[j] for j in js) for js in seen)
+                    ' + '.join('q_' + names[j] for j in js) for js in skip)
                 + ' moves one way only where the axis moves, so a sinusoid of it fits any '
                   'torque that changes along the path (friction, inertia)')})
         X0 = np.column_stack(list(g0.values()))
@@ -504,6 +509,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
             del groups['coulomb_friction']
             forced = ['gravity_torque']
             rejected.append({'name': 'coulomb_friction', 'axis': ax.name,
+                             'forward_share': round(up, 3),
                              'reason': f'the axis moves one way only in this record '
                                        f'({100 * up:.0f} % of its moving samples forward): '
                                        f'Coulomb friction and a constant load are one '
