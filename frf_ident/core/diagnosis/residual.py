@@ -41,6 +41,32 @@ def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
     return signal.sosfiltfilt(sos, x, axis=0)
 
 
+def effective_samples(n: int, fs: float, fc: float) -> float:
+    """
+    Return how many independent samples n samples of white noise keep after :func:`lowpass`.
+
+    A signal of noise bandwidth B holds 2 B independent samples per second. The zero-phase
+    Butterworth passes white noise with B = integral of |H(f)|^4 (forward and backward), about
+    0.9 fc for the 4th order, so n 2 B / fs (at least 10).
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    fs, fc : float
+        Sample rate and cut-off of :func:`lowpass` [Hz].
+
+    Returns
+    -------
+    float
+
+    """
+    sos = signal.butter(4, min(fc, 0.45 * fs), fs=fs, output='sos')
+    f, h = signal.sosfreqz(sos, worN=8192, fs=fs)
+    bw = float(np.trapezoid(np.abs(h) ** 4, f))
+    return max(n * 2 * bw / fs, 10.0)
+
+
 def coulomb_and_ripple(robot: RobotParams, q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """
     Return the torque the model's Coulomb friction and torque ripple take, per axis.

@@ -53,10 +53,11 @@ import numpy as np
 from scipy import signal, stats
 
 from .common import bridge_gaps, Effect
-from .residual import (coulomb_and_ripple, find_ripple, inverse_dynamics_residual, is_rigid,
-                       lowpass)
+from .residual import (coulomb_and_ripple, effective_samples, find_ripple,
+                       inverse_dynamics_residual, is_rigid, lowpass)
 
-__all__ = ['ALPHA', 'FC_HZ', 'diagnose_timeseries', 'model_residual', 'predict_metrics']
+__all__ = ['ALPHA', 'FC_HZ', 'diagnose_timeseries', 'f_test', 'model_residual',
+           'predict_metrics']
 
 ALPHA = 1e-3          # false-alarm probability of the F test that admits a regressor group
 FC_HZ = 20.0          # low-pass of residual and regressors [Hz]
@@ -65,6 +66,7 @@ BLOCK_S = 0.5         # fit / held-out blocks [s]
 HOLD_EVERY = 3        # every third block is held out
 UNEXPLAINED_RATIO = 4.0   # held-out misfit energy above this many noise floors is unexplained
 MIN_SHARE = 0.10          # ... when it is also at least this share of the nominal misfit
+BEARING_SHARE = 0.5       # a link's weight dominates what friction and inertia leave of its axis
 REST_NOISE = 0.3          # an axis is at rest below this many velocity-noise levels ...
 REST_SHARE = 0.05         # ... or below this share of its 95th-percentile speed
 ONE_WAY = 0.05            # an axis with fewer moving samples in one direction moves one way
@@ -276,7 +278,7 @@ def _axis_masks(rec, f, move, i, fit_m, val_m, fc):
     fs = rec.fs
     ff = lowpass(f[:, i], fs, fc)
     fit_i, val_i = fit_m & move[:, i], val_m & move[:, i]
-    return ff, fit_i, val_i, max(fit_i.sum() * 2 * fc / fs, 10.0)
+    return ff, fit_i, val_i, effective_samples(int(fit_i.sum()), fs, fc)
 
 
 def gravity_bearing(q, v, a, fs, fc, prep, skips=None) -> list[list[int]]:
@@ -285,7 +287,7 @@ def gravity_bearing(q, v, a, fs, fc, prep, skips=None) -> list[list[int]]:
 
     An axis carries a configuration-dependent load when G sin(sum of a contiguous joint set
     containing the axis + phi) passes the F test (p < ALPHA) on top of offset, friction and
-    inertia and removes at least MIN_SHARE of what they leave. Only these axes' angles may
+    inertia and removes at least BEARING_SHARE of what they leave. Only these axes' angles may
     enter gravity arguments (:func:`_link_sets`): a joint whose axis carries no gravity (a
     vertical axis) does not tilt the links beyond it. Two neighbouring bearing axes i, i + 1
     belong to one run (parallel joints: q_i tilts the link of axis i + 1) when axis i + 1's
@@ -316,19 +318,17 @@ def gravity_bearing(q, v, a, fs, fc, prep, skips=None) -> list[list[int]]:
         base = [g[k][fit_i] for k in ('gravity_torque', 'coulomb_friction', 'viscous_friction',
                                       'motor_inertia')]
         _, rss0 = _lstsq(base, ff[fit_i])
-        dof = max(n_eff - 6, 1.0)
         for js in _gravity_sets(n, i):
             key = 'gravity:' + ','.join(map(str, js))
             if key not in g:
                 continue
             _, rss1 = _lstsq(base + [g[key][fit_i]], ff[fit_i])
-            F = ((rss0 - rss1) / 2) / max(rss1 / dof, 1e-300) * (n_eff / max(fit_i.sum(), 1))
             share[i, js] = (rss0 - rss1) / max(rss0, 1e-300)
             # significant and large: a slow residual of friction the model lacks (a
             # degressive law) passes the F test against a sinusoid over a short travel, but a
             # link's weight dominates the residual of the axis that carries it
-            if (F > 0 and stats.f.sf(F, 2, dof) < ALPHA and share[i, js] >= MIN_SHARE
-                    and i not in bearing):
+            if (f_test(rss0, rss1, 2, 6, n_eff) < math.log(ALPHA)
+                    and share[i, js] >= BEARING_SHARE and i not in bearing):
                 bearing.append(i)
     runs: list[list[int]] = []
     for i in bearing:
@@ -342,6 +342,38 @@ def gravity_bearing(q, v, a, fs, fc, prep, skips=None) -> list[list[int]]:
                 continue
         runs.append([i])
     return runs
+
+
+def f_test(rss0: float, rss1: float, q: int, p: int, n_eff: float) -> float:
+    """
+    Return the log p-value of the F test that q added regressors reduce rss0 to rss1.
+
+    The residual is low-passed: its N samples hold only ``n_eff`` independent ones
+    (:func:`.residual.effective_samples`), and a regressor as slow as the residual picks up
+    N / n_eff times a sample's noise variance per coefficient. ``rss1 / (n_eff - p)`` is that
+    variance, so the plain F ratio has the F(q, n_eff - p) distribution under the null
+    (test/core/test_diagnosis.py checks the false-alarm rate by Monte Carlo).
+
+    Parameters
+    ----------
+    rss0, rss1 : float
+        Residual sums of squares without and with the q regressors (all N samples).
+    q : int
+        Number of added regressors.
+    p : int
+        Number of regressors of the larger model.
+    n_eff : float
+        Effective number of independent samples.
+
+    Returns
+    -------
+    float
+        log p (0 when the regressors do not reduce the residual).
+
+    """
+    dof = max(n_eff - p, 1.0)
+    F = ((rss0 - rss1) / q) / max(rss1 / dof, 1e-300)
+    return float(stats.f.logsf(F, q, dof)) if F > 0 else 0.0
 
 
 def select_groups(groups: dict[str, np.ndarray], y: np.ndarray, fit: np.ndarray,
@@ -375,7 +407,9 @@ def _forward(groups, yf, fit, n_eff, chosen, dropped, info, tot):
     """Add to ``chosen`` the groups (not in ``dropped``) that pass the F test, best first."""
     while True:
         _, rss0 = _lstsq([groups[k][fit] for k in chosen], yf)
-        best, bp = None, ALPHA
+        # ranked by log p, then (where log p underflows too, a link's weight against a
+        # friction-free model) by the Bayesian information criterion on effective samples
+        best, bp = None, (math.log(ALPHA), math.inf)
         for k, x in groups.items():
             if k in chosen or k in dropped or (k.startswith('gravity:') and any(
                     c.startswith('gravity:') for c in chosen)):
@@ -384,20 +418,23 @@ def _forward(groups, yf, fit, n_eff, chosen, dropped, info, tot):
             _, rss1 = _lstsq(cols, yf)
             q = x.shape[1]
             p_tot = sum(groups[c].shape[1] for c in chosen) + q
-            dof = max(n_eff - p_tot, 1.0)
-            F = ((rss0 - rss1) / q) / max(rss1 / dof, 1e-300) * (n_eff / max(fit.sum(), 1))
-            p = float(stats.f.sf(F, q, dof)) if F > 0 else 1.0
+            lp = f_test(rss0, rss1, q, p_tot, n_eff)
             info.setdefault(k, {})
-            info[k].update(p=p, share=(rss0 - rss1) / tot)
-            if p < bp:
-                best, bp = k, p
+            info[k].update(p=math.exp(lp), share=(rss0 - rss1) / tot)
+            key = (lp, n_eff * math.log(max(rss1, 1e-300)) + p_tot * math.log(n_eff))
+            if key < bp:
+                best, bp = k, key
         if best is None:
             return
         chosen.append(best)
 
 
 def _backward(groups, y, fit, val, chosen, forced, info) -> list[str]:
-    """Remove from ``chosen`` every group whose absence does not worsen the held-out error."""
+    """
+    Remove from ``chosen`` every group whose absence does not worsen the held-out error.
+
+    One at a time, the one whose absence helps most first; returns the removed names.
+    """
     yf = y[fit]
 
     def held(names):
@@ -409,14 +446,19 @@ def _backward(groups, y, fit, val, chosen, forced, info) -> list[str]:
             r = y[val] - np.column_stack([groups[k][val] for k in names]) @ c
         return float(r @ r)
     removed = []
-    for k in list(chosen):
+    while True:
+        # the group whose absence helps the held-out data most goes first, then the rest are
+        # judged again without it (two collinear groups each look useless next to the other)
         with_k = held(chosen)
-        without = held([c for c in chosen if c != k])
-        info[k]['held_out_gain'] = (without - with_k) / max(without, 1e-300)
-        if without <= with_k and k not in forced:
-            chosen.remove(k)
-            removed.append(k)
-    return removed
+        for k in chosen:
+            without = held([c for c in chosen if c != k])
+            info[k]['held_out_gain'] = (without - with_k) / max(without, 1e-300)
+        worst = min((k for k in chosen if k not in forced),
+                    key=lambda k: info[k]['held_out_gain'], default=None)
+        if worst is None or info[worst]['held_out_gain'] > 0:
+            return removed
+        chosen.remove(worst)
+        removed.append(worst)
 
 
 def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
@@ -496,10 +538,17 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                     ' + '.join('q_' + names[j] for j in js) for js in skip)
                 + ' moves one way only where the axis moves, so a sinusoid of it fits any '
                   'torque that changes along the path (friction, inertia)')})
-        X0 = np.column_stack(list(g0.values()))
+        # the scan's base also takes a slow trend in the axis' own position (a cable
+        # carrier's spring, a load of a non-bearing axis): over the 1.5 cycles at the low
+        # end of the scan it poses as a ripple, which repeats along the travel and a trend
+        # does not
+        qc = qh[:, i] - qh[fit_i, i].mean() if fit_i.any() else qh[:, i]
+        trend = np.column_stack([qc, qc ** 2])
+        X0 = np.column_stack(list(g0.values()) + [lowpass(trend, fs, fc)])
         c0, *_ = np.linalg.lstsq(X0[fit_i], ff[fit_i], rcond=None)
         wide = lowpass(f[:, i], fs, 0.45 * fs) - np.column_stack(
-            list(_groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0, bearing, skip).values())) @ c0
+            list(_groups(qh, vh, ah, fs, 0.45 * fs, i, 0.0, bearing, skip).values())
+            + [lowpass(trend, fs, 0.45 * fs)]) @ c0
         s, peak, thr = find_ripple(wide, qh[:, i], fit_i)
         groups = _groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0, bearing, skip)
         up = float(np.mean(vh[fit_i, i] > 0)) if fit_i.any() else 0.0
@@ -534,7 +583,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                 break
             for k in bad:
                 chosen.remove(k)
-                info[k]['unphysical'] = True
+                info[k]['unphysical'] = getattr(ax, k) + float(cf[k][0])
         say(f'{ax.name}: selected {chosen} (ripple scan peak {peak:.1f}, threshold {thr:.1f}); '
             + ', '.join(f'{k} p={v.get("p", 1):.2g} share={v.get("share", 0):.3f}'
                         for k, v in info.items()))
@@ -545,6 +594,10 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                                  'p_value': float(f'{v.get("p", 1.0):.3g}'),
                                  'residual_share': round(float(v.get('share', 0.0)), 4),
                                  'held_out_gain': round(float(v.get('held_out_gain', 0.0)), 4)})
+                if 'unphysical' in v:
+                    rejected[-1]['reason'] = (f'the joint fit gives {k} = '
+                                              f'{v["unphysical"]:.3g}, outside the physical '
+                                              f'range: another term the model lacks')
         score = {k: float(np.clip(info[k].get('held_out_gain', 0.0), 0, 1)) for k in chosen}
         for k in ('coulomb_friction', 'viscous_friction', 'motor_inertia', 'torque_ripple',
                   'gravity_torque'):
