@@ -374,7 +374,7 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
     rec = load_data(KUKA, cfg / 'map_kuka_kr300.yaml')
     tau_g = np.asarray(loadmat(KUKA, squeeze_me=True)['tau_g_all'])[:3].T
     n = rec.t.size // 2
-    fits, names, corr = [], [], []
+    fits, names, corr, unphysical = [], [], [], []
     # on an axis moving one way only the constant is load + Coulomb friction forward and
     # load - Coulomb backward: a different parameter in each half, per axis and direction
     consts: dict[str, dict[str, float]] = {}
@@ -402,6 +402,10 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
             if k < 2:
                 names.append(sorted(f'{e["name"]}@{e["axis"]}'
                                     for e in res['report']['effects']))
+                unphysical.append(', '.join(
+                    f'{r["name"]}@{r["axis"]} {r["reason"].split(" = ")[1].split(",")[0]}'
+                    for r in res['report'].get('rejected', [])
+                    if 'physical range' in r.get('reason', '')) or 'none')
                 robot = load_model(Path(tmp) / f'd{k}' / 'extended_model.yaml')[1]
                 g3 = robot.gravity_load(rec.position[:, :3])[:, 2]
                 corr.append(float(np.corrcoef(g3, tau_g[:, 2])[0, 1]) if np.std(g3) > 0
@@ -427,6 +431,8 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
                      f'{fc:.3g} (load {(c["forward"] + c["backward"]) / 2:+.3g})',
                      f'whole record {full:.3g}' if full else 'whole record: none',
                      f'ratio {fc / full:.2f}' if full else ''))
+    rows.append(('... fitted outside the physical range, dropped (each half)',
+                 ' / '.join(unphysical), '', ''))
     rows.append(("... axis-3 gravity vs the authors' tau_g (r, each half)",
                  ' / '.join(f'{c:.3f}' for c in corr), '', ''))
     # why the halves cannot agree: the trajectory goes out and back, so within a half an axis
