@@ -403,9 +403,9 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
                 names.append(sorted(f'{e["name"]}@{e["axis"]}'
                                     for e in res['report']['effects']))
                 unphysical.append(', '.join(
-                    f'{r["name"]}@{r["axis"]} {r["reason"].split(" = ")[1].split(",")[0]}'
-                    for r in res['report'].get('rejected', [])
-                    if 'physical range' in r.get('reason', '')) or 'none')
+                    f'{r["name"]}@{r["axis"]} {r["fitted_value"]:.3g}'
+                    for r in res['report'].get('rejected', []) if 'fitted_value' in r)
+                    or 'none')
                 robot = load_model(Path(tmp) / f'd{k}' / 'extended_model.yaml')[1]
                 g3 = robot.gravity_load(rec.position[:, :3])[:, 2]
                 corr.append(float(np.corrcoef(g3, tau_g[:, 2])[0, 1]) if np.std(g3) > 0

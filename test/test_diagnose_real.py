@@ -52,9 +52,8 @@ def test_emps_names_coulomb_friction_with_authors_value(tmp_path):
     Nominal model with only M and Fv: Coulomb friction first, Fc within 15 % of the
     authors' 20.39 N, and the extended model better on the held-out part. No gravity: the
     EMPS is a prismatic drive and the authors' model has none. A slow position-dependent
-    force of a few N over the 0.25 m travel passes the (calibrated) F test, but no link's
-    weight dominates what friction leaves; read as G sin(q + phi) it comes out as a sinusoid
-    of hundreds of N beside a constant that cancels it.
+    force along its 0.25 m travel passes the calibrated F test, but it is no link's weight
+    dominating what friction leaves (timeseries.BEARING_SHARE).
     """
     rep = _diagnose(tmp_path, 'emps', EMPS, 'model_emps.yaml', 'map_emps.yaml')
     assert 'gravity' not in {e['name'] for e in rep['effects']}, rep['effects']

@@ -26,6 +26,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from frf_ident.core.diagnosis.residual import lowpass
+from frf_ident.core.diagnosis.timeseries import FC_HZ
 from frf_ident.core.estimation.frd import FrequencyResponse
 import matplotlib
 
@@ -358,8 +360,7 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
     fig, ax = plt.subplots(3, n, figsize=(5 * n, 9), squeeze=False)
     for i in range(n):
         nom = r['f'][:, i]
-        sos = signal.butter(4, min(20.0, 0.45 * rec.fs), fs=rec.fs, output='sos')
-        nom = signal.sosfiltfilt(sos, nom)
+        nom = lowpass(nom, rec.fs, FC_HZ)   # as the diagnosis low-passed its predictions
         ext = nom - (r['pred_extended'][:, i] - r['pred_baseline'][:, i])
         ax[0, i].plot(r['t'], nom, 'k', lw=0.6, label='nominal residual')
         ax[0, i].plot(r['t'], ext, color='tab:green', lw=0.6, label='extended residual')

@@ -513,8 +513,8 @@ def test_f_test_of_a_low_passed_residual_keeps_its_false_alarm_rate():
     two-column group (sinusoids of a random smooth path, as a gravity group) added on top of a
     constant: the share of runs with p < 0.05 (< 0.01) must be the nominal 5 % (1 %). Counting
     the effective sample count twice (in the variance and again as a factor of F) made the
-    test pass noise almost never and miss real effects of the same size; taking the cut-off
-    for the noise bandwidth (it is 0.9 fc) made it pass noise 7 % of the time at 5 %.
+    test pass noise almost never and miss real effects of the same size; the count uses the
+    filter's noise bandwidth (0.9 fc), not the cut-off.
     """
     rng = np.random.default_rng(11)
     fs, n, runs = 250.0, 1500, 1500

@@ -37,8 +37,12 @@ from scipy.ndimage import median_filter
 
 def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
     """Filter with a zero-phase 4th-order Butterworth low-pass along axis 0."""
-    sos = signal.butter(4, min(fc, 0.45 * fs), fs=fs, output='sos')
-    return signal.sosfiltfilt(sos, x, axis=0)
+    return signal.sosfiltfilt(_lowpass_sos(fs, fc), x, axis=0)
+
+
+def _lowpass_sos(fs: float, fc: float) -> np.ndarray:
+    """Return the sections of :func:`lowpass` (one pass)."""
+    return signal.butter(4, min(fc, 0.45 * fs), fs=fs, output='sos')
 
 
 def effective_samples(n: int, fs: float, fc: float) -> float:
@@ -61,8 +65,7 @@ def effective_samples(n: int, fs: float, fc: float) -> float:
     float
 
     """
-    sos = signal.butter(4, min(fc, 0.45 * fs), fs=fs, output='sos')
-    f, h = signal.sosfreqz(sos, worN=8192, fs=fs)
+    f, h = signal.sosfreqz(_lowpass_sos(fs, fc), worN=8192, fs=fs)
     bw = float(np.trapezoid(np.abs(h) ** 4, f))
     return max(n * 2 * bw / fs, 10.0)
 

@@ -595,9 +595,9 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                                  'residual_share': round(float(v.get('share', 0.0)), 4),
                                  'held_out_gain': round(float(v.get('held_out_gain', 0.0)), 4)})
                 if 'unphysical' in v:
-                    rejected[-1]['reason'] = (f'the joint fit gives {k} = '
-                                              f'{v["unphysical"]:.3g}, outside the physical '
-                                              f'range: another term the model lacks')
+                    rejected[-1].update(fitted_value=round(v['unphysical'], 4), reason=(
+                        f'the joint fit gives {k} = {v["unphysical"]:.3g}, outside the '
+                        f'physical range: another term the model lacks'))
         score = {k: float(np.clip(info[k].get('held_out_gain', 0.0), 0, 1)) for k in chosen}
         for k in ('coulomb_friction', 'viscous_friction', 'motor_inertia', 'torque_ripple',
                   'gravity_torque'):
