@@ -156,7 +156,6 @@ def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: f
     vh = 0.5 * (v[1:] + v[:-1])
     ah = np.diff(v, axis=0) / dt
     jm = np.array([a.motor_inertia for a in robot.axes])
-    jo = np.array([a.link_inertia for a in robot.axes])
     bv = np.array([a.viscous_friction for a in robot.axes])
     k = np.array([a.stiffness for a in robot.axes])
     d = np.array([a.damping for a in robot.axes])
@@ -165,7 +164,9 @@ def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: f
         vo = np.gradient(qo, dt, axis=0)
         f = u[:-1] - (jm * ah + bv * vh + k * (qh - qo) + d * (vh - vo))
     elif is_rigid(robot, 1 / dt):
-        f = u[:-1] - ((jm + jo) * ah + bv * vh)
+        # motor and link move together: the link inertia matrix (with its off-diagonal
+        # coupling, RobotParams.link_coupling) adds to the motor inertias
+        f = u[:-1] - (jm * ah + ah @ robot.link_inertia_matrix() + bv * vh)
     else:
         mo = robot.link_inertia_matrix()
         moi = np.linalg.inv(mo)
