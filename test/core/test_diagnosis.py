@@ -28,7 +28,8 @@ from frf_ident.cli import main
 from frf_ident.core.diagnosis.common import bridge_gaps, GAP_GUARD_S, simulate_like
 from frf_ident.core.diagnosis.experiments import missing_reference, residual_bands
 from frf_ident.core.diagnosis.residual import (
-    delayed_effort, effective_samples, find_ripple, lowpass, ripple_range)
+    delayed_effort, effective_samples, find_ripple, lowpass, regress_axis,
+    ripple_range)
 from frf_ident.core.diagnosis.timeseries import (diagnose_timeseries, f_test, FC_HZ,
                                                  select_groups)
 from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
@@ -533,6 +534,30 @@ def test_f_test_of_a_low_passed_residual_keeps_its_false_alarm_rate():
     lp = np.array(lp)
     assert 0.035 <= np.mean(lp < math.log(0.05)) <= 0.065
     assert 0.003 <= np.mean(lp < math.log(0.01)) <= 0.02
+
+
+def test_t_statistics_of_the_friction_regression_keep_their_false_alarm_rate():
+    """
+    Test the experiments route's t statistics by Monte Carlo: noise alone passes at 5 %.
+
+    White torque noise at 1 kHz regressed (as the friction and gravity-slope readings do) on
+    sgn(v), v and q - q0 of a random smooth motion with velocity reversals: |t| > 1.96 of the
+    viscous and slope coefficients must occur in 5 % of the runs. The variance used to be
+    multiplied by N / n_eff on top of rss / (n_eff - p), which made every t statistic
+    sqrt(fs / 2 fc) = 5 times too small here.
+    """
+    rng = np.random.default_rng(5)
+    fs, n, runs = 1000.0, 3000, 400
+    hits = []
+    for _ in range(runs):
+        v = lowpass(rng.standard_normal(n), fs, 1.0)
+        v *= rng.uniform(0.5, 2.0) / np.std(v)
+        q = np.cumsum(v) / fs
+        reg = regress_axis(rng.standard_normal(n), q, v, np.gradient(v, 1 / fs),
+                           np.zeros(n), np.ones(n, bool), fs, ripple=False,
+                           nuisance=(q - q.mean())[:, None])
+        hits += [abs(reg.tstat[k]) > 1.96 for k in ('viscous_friction', 'nuisance_0')]
+    assert 0.03 <= np.mean(hits) <= 0.075
 
 
 def test_rigid_residual_carries_the_link_coupling():

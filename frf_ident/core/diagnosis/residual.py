@@ -207,9 +207,10 @@ class Regression:
 def _ls(X: np.ndarray, y: np.ndarray, n_eff: float):
     coef, *_ = np.linalg.lstsq(X, y, rcond=None)
     res = y - X @ coef
+    # rss / (n_eff - p) is already the noise variance a slow regressor picks up per
+    # coefficient (N / n_eff times a sample's): no second N / n_eff factor (f_test, timeseries)
     dof = max(n_eff - X.shape[1], 1.0)
-    s2 = float(res @ res) / y.size * y.size / dof
-    cov = s2 * np.linalg.pinv(X.T @ X) * (y.size / n_eff)
+    cov = float(res @ res) / dof * np.linalg.pinv(X.T @ X)
     se = np.sqrt(np.maximum(np.diag(cov), 1e-300))
     return coef, coef / se, res
 
@@ -296,7 +297,8 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
 
     All columns are low-pass filtered like f (fc [Hz]); samples with |v| < v_eps (sticking,
     where the Coulomb force is undetermined) and outside ``mask`` are left out. t statistics
-    use an effective sample count N * 2 fc / fs (filtered data are correlated).
+    use the effective sample count of the filtered data (:func:`effective_samples`), so under
+    white noise |t| > 1.96 has probability 0.05 (test/core/test_diagnosis.py).
     """
     sg = np.sign(lowpass(v, fs, fc))
     cols = {'offset': np.ones_like(v), 'coulomb_friction': sg, 'viscous_friction': v}
@@ -312,7 +314,7 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
     for c in ch:
         m[max(c - guard, 0):c + guard + 1] = False
     ff = lowpass(f, fs, fc)
-    n_eff = max(m.sum() * 2 * fc / fs, 10.0)
+    n_eff = effective_samples(int(m.sum()), fs, fc)
     rip: list[dict[str, float]] = []
     peak, thr = 0.0, math.inf
     if ripple:
