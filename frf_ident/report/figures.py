@@ -26,8 +26,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from frf_ident.core.diagnosis.residual import lowpass
-from frf_ident.core.diagnosis.timeseries import FC_HZ
+from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
 from frf_ident.core.estimation.frd import FrequencyResponse
 import matplotlib
 

@@ -35,6 +35,9 @@ from scipy import signal
 from scipy.ndimage import median_filter
 
 
+FC_HZ = 20.0   # low-pass of residual and regressors of both diagnosis routes [Hz]
+
+
 def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
     """Filter with a zero-phase 4th-order Butterworth low-pass along axis 0."""
     return signal.sosfiltfilt(_lowpass_sos(fs, fc), x, axis=0)
@@ -289,7 +292,7 @@ def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray) -> tuple[float, 
 
 
 def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: np.ndarray,
-                 mask: np.ndarray, fs: float, *, fc: float = 20.0, v_eps: float = 0.0,
+                 mask: np.ndarray, fs: float, *, fc: float = FC_HZ, v_eps: float = 0.0,
                  with_inertia: bool = False, nuisance: np.ndarray | None = None,
                  ripple: bool = True, ripple_mask: np.ndarray | None = None) -> Regression:
     """

@@ -53,14 +53,13 @@ import numpy as np
 from scipy import signal, stats
 
 from .common import bridge_gaps, Effect
-from .residual import (coulomb_and_ripple, effective_samples, find_ripple,
+from .residual import (coulomb_and_ripple, effective_samples, FC_HZ, find_ripple,
                        inverse_dynamics_residual, is_rigid, lowpass)
 
 __all__ = ['ALPHA', 'FC_HZ', 'diagnose_timeseries', 'f_test', 'model_residual',
            'predict_metrics']
 
 ALPHA = 1e-3          # false-alarm probability of the F test that admits a regressor group
-FC_HZ = 20.0          # low-pass of residual and regressors [Hz]
 EDGE = 0.02           # share of the record left out at each end of fit and held-out parts
 BLOCK_S = 0.5         # fit / held-out blocks [s]
 HOLD_EVERY = 3        # every third block is held out
@@ -152,6 +151,11 @@ def _link_sets(runs: list[list[int]], i: int) -> list[tuple[int, ...]]:
     return []
 
 
+def _travels(q: np.ndarray, js: tuple[int, ...]) -> bool:
+    """Return whether the angle sum of joint set ``js`` spans more than MIN_TRAVEL."""
+    return bool(np.ptp(q[:, list(js)].sum(axis=1)) > MIN_TRAVEL)
+
+
 def one_way_sets(q: np.ndarray, v: np.ndarray, sets: list[tuple[int, ...]], rows: np.ndarray,
                  fs: float, fc: float) -> list[tuple[int, ...]]:
     """
@@ -183,7 +187,7 @@ def one_way_sets(q: np.ndarray, v: np.ndarray, sets: list[tuple[int, ...]], rows
     """
     out = []
     for js in sets:
-        if np.ptp(q[:, list(js)].sum(axis=1)) <= MIN_TRAVEL:
+        if not _travels(q, js):
             continue
         up = lowpass(v[:, list(js)].sum(axis=1), fs, fc)[rows] > 0
         if not up.size or min(float(np.mean(up)), 1.0 - float(np.mean(up))) < ONE_WAY:
@@ -208,7 +212,7 @@ def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None, skip=()):
         g['torque_ripple'] = np.column_stack([np.sin(ripple_s * q[:, i]),
                                               np.cos(ripple_s * q[:, i])])
     sets = [js for js in (_gravity_sets(n, i) if bearing is None else _link_sets(bearing, i))
-            if np.ptp(q[:, list(js)].sum(axis=1)) > MIN_TRAVEL and js not in skip]
+            if _travels(q, js) and js not in skip]
     # one gravity group per single set and per pair of sets: a coupled arm's axis carries the
     # weight of its own link and of the links beyond (G1 sin(q2) + G2 sin(q2 + q3)), which a
     # single set approximates with the wrong joints when the motion correlates them
