@@ -374,7 +374,7 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
     rec = load_data(KUKA, cfg / 'map_kuka_kr300.yaml')
     tau_g = np.asarray(loadmat(KUKA, squeeze_me=True)['tau_g_all'])[:3].T
     n = rec.t.size // 2
-    fits, names, corr, unphysical = [], [], [], []
+    fits, errs, names, corr, unphysical = [], [], [], [], []
     # on an axis moving one way only the constant is load + Coulomb friction forward and
     # load - Coulomb backward: a different parameter in each half, per axis and direction
     consts: dict[str, dict[str, float]] = {}
@@ -393,18 +393,23 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
                 cross.append(res['report']['metrics']['validation_records'][0])
             one_way = {r['axis']: 'forward' if r['forward_share'] > 0.5 else 'backward'
                        for r in res['report'].get('rejected', []) if 'forward_share' in r}
-            fit = {}
+            fit, err = {}, {}
             for e in res['report']['effects']:
                 for key, val in e['parameters'].items():
+                    se = e.get('standard_error', {}).get(key)
                     if key == 'gravity_torque' and e['axis'] in one_way:
                         consts.setdefault(e['axis'], {})[one_way[e['axis']]] = float(val)
                     elif key == 'gravity':
-                        for t in val:
-                            fit[e['axis'], 'gravity sin(' + ' + '.join(t['joints'])
-                                + ' + phi)'] = t['amplitude']
+                        for t, t_se in zip(val, se or [None] * len(val)):
+                            k_g = (e['axis'], 'gravity sin(' + ' + '.join(t['joints'])
+                                   + ' + phi)')
+                            fit[k_g] = t['amplitude']
+                            err[k_g] = (t_se or {}).get('amplitude')
                     elif isinstance(val, (int, float)):
                         fit[e['axis'], key] = float(val)
+                        err[e['axis'], key] = se
             fits.append(fit)
+            errs.append(err)
             if k < 2:
                 names.append(sorted(f'{e["name"]}@{e["axis"]}'
                                     for e in res['report']['effects']))
@@ -419,13 +424,28 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
     rows = [('KUKA A halves: effects of the first half', ', '.join(names[0]), '', ''),
             ('... of the second half', ', '.join(names[1]), '', '')]
     both = sorted(set(fits[0]) & set(fits[1]))
+    z = {}
     for key in both:
         a, b = fits[0][key], fits[1][key]
-        rows.append((f'... {key[0]} {key[1]}', f'{a:.3g} / {b:.3g}',
-                     f'ratio {b / a:.2f}' if a else '', 'goal within 20 %'))
+        sa, sb = errs[0].get(key), errs[1].get(key)
+        if sa is not None and sb is not None and (sa or sb):
+            z[key] = abs(a - b) / math.hypot(sa, sb)
+        rows.append((f'... {key[0]} {key[1]} (standard error)',
+                     f'{a:.3g} ({sa:.2g}) / {b:.3g} ({sb:.2g})' if key in z else
+                     f'{a:.3g} / {b:.3g}',
+                     (f'ratio {b / a:.2f}' if a else '')
+                     + (f', difference {z[key]:.1f} combined SE' if key in z else ''),
+                     'goal within 20 %'))
     agree = sum(abs(fits[1][k] / fits[0][k] - 1) <= 0.2 for k in both if fits[0][k])
     rows.append(('... parameters of both halves within 20 %', f'{agree}/{len(both)}',
                  f'named in one half only: {len(set(fits[0]) ^ set(fits[1]))}', ''))
+    # the record's own uncertainty (block jackknife of each half) against the other half
+    rows.append(('... differences within 2 combined standard errors',
+                 f'{sum(v <= 2.0 for v in z.values())}/{len(z)}',
+                 'relative standard error of each half: ' + ', '.join(
+                     f'{100 * errs[0][k] / abs(fits[0][k]):.0f}/'
+                     f'{100 * errs[1][k] / abs(fits[1][k]):.0f} %' for k in z),
+                 'the halves disagree no more than their own errors say'))
     # the two one-way constants of an axis that goes out in one half and back in the other
     # hold Coulomb friction and load separately: (forward - backward) / 2 and their mean
     for ax, c in sorted(consts.items()):

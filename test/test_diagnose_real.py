@@ -103,14 +103,8 @@ def test_kuka_gravity_of_axes_2_3_and_the_same_report_from_mat_and_bag(tmp_path)
         pytest.approx(m['extended']['time_nrmse'], rel=1e-3)
 
 
-@pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
-def test_kuka_validate_on_another_record(tmp_path):
-    """
-    Validate on another record with --validate.
-
-    --validate: fit on the first half of trajectory A (imported), report both models on the
-    second half (the only other KUKA record is the rest of the same trajectory).
-    """
+def _kuka_halves(tmp_path):
+    """Write the two halves of KUKA trajectory A (imported with the map) as bags."""
     from frf_ident.bag import write_recording
     from frf_ident.core.recording import Recording
     rec = load_data(KUKA, CFG / 'map_kuka_kr300.yaml')
@@ -120,6 +114,53 @@ def test_kuka_validate_on_another_record(tmp_path):
         part = Recording(rec.t[sl] - rec.t[sl][0], rec.joint_names, rec.position[sl],
                          rec.velocity[sl], rec.effort[sl], meta=dict(rec.meta))
         paths.append(write_recording(part, tmp_path / f'half{k}'))
+    return paths
+
+
+def _estimates(report):
+    """Return {(axis, parameter): (value, standard error)} of a time-series report."""
+    out = {}
+    for e in report['effects']:
+        for key, val in e['parameters'].items():
+            se = e['standard_error'][key]
+            if key == 'gravity':
+                for t, t_se in zip(val, se):
+                    out[e['axis'], '+'.join(t['joints'])] = (t['amplitude'], t_se['amplitude'])
+            elif key != 'gravity_torque':     # a one-way axis: load and friction in one
+                out[e['axis'], key] = (val, se)
+    return out
+
+
+@pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
+def test_kuka_halves_disagree_no_more_than_their_standard_errors(tmp_path):
+    """
+    Test the reported standard errors on data they were not computed from.
+
+    Each half of trajectory A is diagnosed on its own; every parameter named in both (at
+    least five) differs between the halves by at most 2.5 times the two halves' standard
+    errors combined. A white-noise formula's errors (rss / (n_eff - p) (X'X)^-1), 3-20 times
+    smaller, put the axis-2 gravity amplitudes (36 / 6, 44 / 15) 5 and axis 3's viscous
+    friction (9.4 / 5.3) 12 of its errors apart.
+    """
+    paths = _kuka_halves(tmp_path)
+    est = [_estimates(_diagnose(tmp_path, f'h{k}', p, 'model_kuka_kr300_axes123.yaml'))
+           for k, p in enumerate(paths)]
+    both = sorted(set(est[0]) & set(est[1]))
+    assert len(both) >= 5
+    z = {k: abs(est[0][k][0] - est[1][k][0]) / np.hypot(est[0][k][1], est[1][k][1])
+         for k in both}
+    assert max(z.values()) <= 2.5, z
+
+
+@pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
+def test_kuka_validate_on_another_record(tmp_path):
+    """
+    Validate on another record with --validate.
+
+    --validate: fit on the first half of trajectory A (imported), report both models on the
+    second half (the only other KUKA record is the rest of the same trajectory).
+    """
+    paths = _kuka_halves(tmp_path)
     rep = _diagnose(tmp_path, 'val', paths[0], 'model_kuka_kr300_axes123.yaml',
                     extra=['--validate', str(paths[1])])
     (v,) = rep['metrics']['validation_records']

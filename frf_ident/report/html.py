@@ -371,9 +371,12 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
                 'time series (inverse-dynamics residual regression)')
     eff = report['effects']
     if eff:
-        eff_html = _table(['#', 'effect', 'axis', 'score', 'parameters', 'evidence'],
+        eff_html = _table(['#', 'effect', 'axis', 'score', 'parameters',
+                           'standard error', 'evidence'],
                           [[k + 1, x['name'], x['axis'], x['score'],
-                            _json_short(x['parameters']), x['evidence']]
+                            _json_short(x['parameters']),
+                            _json_short(x['standard_error']) if 'standard_error' in x else '',
+                            x['evidence']]
                            for k, x in enumerate(eff)])
     else:
         eff_html = '<p>none of the candidate effects improves the held-out data.</p>'

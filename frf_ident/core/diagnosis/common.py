@@ -46,10 +46,15 @@ class Effect:
     axis_index: int = 0
     gain: float = 0.0          # relative reduction of the fit loss when the effect is added
     support: float = 0.0       # |t| of the regression coefficient that proposed it (0: none)
+    #: the parameters' standard errors, same keys (None: not estimated, e.g. a nominal term)
+    standard_error: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        return {'name': self.name, 'axis': self.axis, 'score': round(float(self.score), 3),
-                'parameters': _plain(self.parameters), 'evidence': self.evidence}
+        out = {'name': self.name, 'axis': self.axis, 'score': round(float(self.score), 3),
+               'parameters': _plain(self.parameters), 'evidence': self.evidence}
+        if self.standard_error is not None:
+            out['standard_error'] = _plain(self.standard_error)
+        return out
 
 
 def _plain(x: Any) -> Any:

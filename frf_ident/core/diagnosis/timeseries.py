@@ -56,8 +56,8 @@ from .common import bridge_gaps, Effect
 from .residual import (coulomb_and_ripple, effective_samples, FC_HZ, find_ripple,
                        inverse_dynamics_residual, is_rigid, lowpass)
 
-__all__ = ['ALPHA', 'FC_HZ', 'diagnose_timeseries', 'f_test', 'model_residual',
-           'predict_metrics']
+__all__ = ['ALPHA', 'FC_HZ', 'block_standard_errors', 'diagnose_timeseries', 'f_test',
+           'model_residual', 'predict_metrics']
 
 ALPHA = 1e-3          # false-alarm probability of the F test that admits a regressor group
 EDGE = 0.02           # share of the record left out at each end of fit and held-out parts
@@ -486,6 +486,65 @@ def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
     return ~held & ~near, held & ~near
 
 
+def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: np.ndarray,
+                          fit: np.ndarray, block: int) -> dict[str, np.ndarray]:
+    """
+    Return delete-one-block jackknife standard errors of the jointly fitted groups.
+
+    The groups ``chosen`` are refitted jointly with one block of ``block`` rows of the fit rows
+    left out at a time (J blocks); the standard error of a quantity x is
+    sqrt((J - 1) / J sum (x_j - mean x)^2) (Kuensch 1989, the block jackknife for dependent
+    data). The blocks are as long as the held-out blocks (:func:`split_blocks`), far longer
+    than the low-passed residual's correlation time, so the spread takes the residual as it
+    is: coloured, and with whatever systematic misfit the model still has, where a formula for
+    white noise would not (README_diagnosis.md, "Standard errors").
+
+    Parameters
+    ----------
+    groups : dict of str to ndarray, shape (N, k)
+        The regressor groups (low-passed columns).
+    chosen : list of str
+        The groups fitted jointly.
+    y : ndarray, shape (N,)
+        The low-passed residual.
+    fit : ndarray of bool, shape (N,)
+        The rows fitted on.
+    block : int
+        Block length [samples].
+
+    Returns
+    -------
+    dict of str to ndarray
+        Per group the standard error of each quantity it reports: its coefficient (one
+        column) or the amplitude hypot(a_sin, a_cos) of each sin / cos pair; NaN for all
+        when fewer than 3 blocks hold fit rows.
+
+    """
+    def quantities(c):
+        out, k0 = {}, 0
+        for k in chosen:
+            w = groups[k].shape[1]
+            x = c[k0:k0 + w]
+            out[k] = (np.hypot(x[0::2], x[1::2]) if w > 1 else x[:1]).astype(float)
+            k0 += w
+        return out
+    ids = np.arange(y.size) // max(block, 1)
+    used = np.unique(ids[fit])
+    if used.size < 3:
+        return {k: np.full(max(groups[k].shape[1] // 2, 1), math.nan) for k in chosen}
+    reps = []
+    for b in used:
+        m = fit & (ids != b)
+        c, _ = _lstsq([groups[k][m] for k in chosen], y[m])
+        reps.append(quantities(c))
+    J = used.size
+    out = {}
+    for k in chosen:
+        x = np.array([r[k] for r in reps])
+        out[k] = np.sqrt((J - 1) / J * ((x - x.mean(axis=0)) ** 2).sum(axis=0))
+    return out
+
+
 def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
                         progress: Callable[[str], None] | None = None
                         ) -> dict[str, Any]:
@@ -603,6 +662,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                         f'the joint fit gives {k} = {v["unphysical"]:.3g}, outside the '
                         f'physical range: another term the model lacks'))
         score = {k: float(np.clip(info[k].get('held_out_gain', 0.0), 0, 1)) for k in chosen}
+        se = block_standard_errors(groups, chosen, ff, fit_i, max(int(BLOCK_S * fs), 8))
         for k in ('coulomb_friction', 'viscous_friction', 'motor_inertia', 'torque_ripple',
                   'gravity_torque'):
             if k not in cf:
@@ -613,9 +673,10 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                 rip = {'amplitude': amp, 'spatial_frequency': s,
                        'phase': math.atan2(-a_c, -a_s)}
                 ch[k] = list(ax.torque_ripple) + [rip]
-                text = (f'residual periodic in position: amplitude {amp:.3g} at {s:.4g} /rad '
-                        f'(scan peak {peak:.0f}x the local noise level, false-alarm level '
-                        f'{thr:.0f})')
+                err = {k: [None] * len(ax.torque_ripple) + [{'amplitude': _se(se[k][0])}]}
+                text = (f'residual periodic in position: amplitude {amp:.3g}{_pm(se[k][0])} at '
+                        f'{s:.4g} /rad (scan peak {peak:.0f}x the local noise level, '
+                        f'false-alarm level {thr:.0f})')
             else:
                 # f = u - model: the coefficient adds to the model's value
                 c = float(cf[k][0])
@@ -623,12 +684,15 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                 form = _ONE_WAY_EVIDENCE if info[k].get('forced') else _SCALAR_EVIDENCE[k]
                 text = form.format(
                     c=c, step=2 * c, old=getattr(ax, k), new=ch[k], p=info[k]['p'],
-                    gain=100 * info[k].get('held_out_gain', 0.0))
+                    gain=100 * info[k].get('held_out_gain', 0.0)) + _pm(se[k][0], k)
+                err = {k: _se(se[k][0])}
             name = 'parameter_mismatch' if k in ('motor_inertia', 'gravity_torque') else k
-            effects.append(Effect(name, ax.name, score[k], {k: ch[k]}, text, i))
+            effects.append(Effect(name, ax.name, score[k], {k: ch[k]}, text, i,
+                                  standard_error=err))
         gk = [k for k in chosen if k.startswith('gravity:')]
         if gk:
             terms = list(ax.gravity)
+            errs: list[dict[str, float | None] | None] = [None] * len(terms)
             parts = []
             for k in gk:
                 for t_i, set_text in enumerate(k.split(':')[1].split('|')):
@@ -638,14 +702,16 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                     term = {'amplitude': math.hypot(a_s, a_c), 'phase': math.atan2(a_c, a_s),
                             'joints': [names[j] for j in js]}
                     terms.append(term)
-                    parts.append(f'{term["amplitude"]:.3g} sin('
+                    errs.append({'amplitude': _se(se[k][t_i])})
+                    parts.append(f'{term["amplitude"]:.3g}{_pm(se[k][t_i])} sin('
                                  f'{" + ".join("q_" + names[j] for j in js)} '
                                  f'{term["phase"]:+.2f})')
             ch['gravity'] = terms
             effects.append(Effect(
                 'gravity', ax.name, max(score[k] for k in gk), {'gravity': terms},
                 f'residual follows the configuration: {", ".join(parts)} (torque units; '
-                f'held-out gain {100 * max(score[k] for k in gk):.0f} %)', i))
+                f'held-out gain {100 * max(score[k] for k in gk):.0f} %)', i,
+                standard_error={'gravity': errs}))
         ext_axes[i] = replace(ax, **ch)
     effects.sort(key=lambda x: -x.score)
     ext = replace(robot, axes=ext_axes)
@@ -677,6 +743,18 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                          'pred_baseline': lowpass(f, fs, fc) - val['baseline']['residual'],
                          'pred_extended': lowpass(f, fs, fc) - val['extended']['residual'],
                          'val_mask': val_m}}
+
+
+def _se(x: float) -> float | None:
+    """Return a standard error for the report: None when there were too few blocks."""
+    return None if not math.isfinite(x) else float(x)
+
+
+def _pm(x: float, key: str = '') -> str:
+    """Return the evidence text of a standard error (:func:`block_standard_errors`)."""
+    if not math.isfinite(x):
+        return ''
+    return (f'; standard error of {key} {x:.2g}' if key else f' \u00b1 {x:.2g}')
 
 
 def noise_floor(rec: Recording, f: np.ndarray, fc: float, use: np.ndarray | None = None
