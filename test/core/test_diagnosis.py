@@ -560,6 +560,37 @@ def test_t_statistics_of_the_friction_regression_keep_their_false_alarm_rate():
     assert 0.03 <= np.mean(hits) <= 0.075
 
 
+def test_held_out_removal_takes_the_worst_of_two_collinear_groups_first():
+    """
+    Test stepwise removal on two groups that each look useless next to the other.
+
+    F is the signal s itself; S is s plus a column w that the fit blocks' residual carries
+    (with the opposite sign) and that is 1.5 times larger, with the other sign, in the
+    held-out blocks. Both pass the forward F test (S explains the fit blocks' w), and on the
+    held-out blocks the pair is worse than either alone, so each group's removal "helps".
+    F alone is the better model there: removal must take S first (its absence helps most)
+    and then keep F. Taken in list order (before commit d825159), F, which explains
+    the fit blocks better alone and so entered first, went first.
+    """
+    rng = np.random.default_rng(11)
+    n = 300
+    fit = np.arange(n) < 200
+    s, w = rng.standard_normal(n), rng.standard_normal(n)
+    groups = {'F': s[:, None], 'S': (s + 1.25 * np.where(fit, w, -1.5 * w))[:, None]}
+    y = s - 1.25 * np.where(fit, w, 0.0) + 0.05 * rng.standard_normal(n)
+
+    def held_out(names):
+        c, *_ = np.linalg.lstsq(np.column_stack([groups[k][fit] for k in names]), y[fit],
+                                rcond=None)
+        r = y[~fit] - np.column_stack([groups[k][~fit] for k in names]) @ c
+        return float(r @ r)
+    assert held_out(['F']) < held_out(['S']) < held_out(['F', 'S'])
+    chosen, info = select_groups(groups, y, fit, ~fit, 200.0)
+    assert info['F']['p'] < 1e-3 and info['S']['p'] < 1e-3      # both entered
+    assert chosen == ['F']
+    assert info['S']['held_out_gain'] < 0
+
+
 @pytest.mark.parametrize('design', [3, 5])
 def test_block_standard_errors_match_the_monte_carlo_spread(design):
     """
