@@ -69,7 +69,9 @@ def run(args: argparse.Namespace) -> int:
                    progress=say)
     rep = res['report']
     for k, e in enumerate(rep['effects']):
-        print(f"{k + 1}. {e['name']} ({e['axis']}, score {e['score']:.2f}): {e['parameters']}")
+        se = f", standard error {e['standard_error']}" if 'standard_error' in e else ''
+        print(f"{k + 1}. {e['name']} ({e['axis']}, score {e['score']:.2f}): {e['parameters']}"
+              + se)
     if not rep['effects']:
         print('no effects: none of the candidates improves the held-out data')
     for u in rep['unexplained']:
