@@ -226,6 +226,17 @@ def _groups(q, v, a, fs, fc, i, ripple_s, bearing=None, skip=()):
     return {k: lowpass(x, fs, fc) for k, x in g.items()}
 
 
+def _by_group(coef: np.ndarray, groups: dict[str, np.ndarray], chosen: list[str]
+              ) -> dict[str, np.ndarray]:
+    """Return the joint fit's coefficients ``coef`` split into the groups ``chosen``."""
+    out, k0 = {}, 0
+    for k in chosen:
+        w = groups[k].shape[1]
+        out[k] = coef[k0:k0 + w]
+        k0 += w
+    return out
+
+
 def _lstsq(cols: list[np.ndarray], y: np.ndarray) -> tuple[np.ndarray, float]:
     if not cols:
         return np.zeros(0), float(y @ y)
@@ -465,6 +476,11 @@ def _backward(groups, y, fit, val, chosen, forced, info) -> list[str]:
         removed.append(worst)
 
 
+def _block_length(fs: float) -> int:
+    """Return the length of a fit / held-out block [samples]: BLOCK_S, at least 8."""
+    return max(int(BLOCK_S * fs), 8)
+
+
 def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
     """
     Return the fit and held-out masks of interleaved blocks.
@@ -474,7 +490,7 @@ def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
     of extrapolating to the end of a short trajectory), a guard of half a filter period
     dropped at every block boundary and EDGE of the record at both ends.
     """
-    blk = max(int(BLOCK_S * fs), 8)
+    blk = _block_length(fs)
     k = np.arange(n)
     held = (k // blk) % HOLD_EVERY == HOLD_EVERY - 1
     guard = int(0.5 * fs / fc)
@@ -487,12 +503,12 @@ def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: np.ndarray,
-                          fit: np.ndarray, block: int) -> dict[str, np.ndarray]:
+                          fit: np.ndarray, fs: float) -> dict[str, np.ndarray]:
     """
     Return delete-one-block jackknife standard errors of the jointly fitted groups.
 
-    The groups ``chosen`` are refitted jointly with one block of ``block`` rows of the fit rows
-    left out at a time (J blocks); the standard error of a quantity x is
+    The groups ``chosen`` are refitted jointly with one block of the fit rows left out at a
+    time (J blocks); the standard error of a quantity x is
     sqrt((J - 1) / J sum (x_j - mean x)^2) (Kuensch 1989, the block jackknife for dependent
     data). The blocks are as long as the held-out blocks (:func:`split_blocks`), far longer
     than the low-passed residual's correlation time, so the spread takes the residual as it
@@ -509,8 +525,8 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
         The low-passed residual.
     fit : ndarray of bool, shape (N,)
         The rows fitted on.
-    block : int
-        Block length [samples].
+    fs : float
+        Sample rate [Hz] (the blocks are BLOCK_S long).
 
     Returns
     -------
@@ -521,14 +537,9 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
 
     """
     def quantities(c):
-        out, k0 = {}, 0
-        for k in chosen:
-            w = groups[k].shape[1]
-            x = c[k0:k0 + w]
-            out[k] = (np.hypot(x[0::2], x[1::2]) if w > 1 else x[:1]).astype(float)
-            k0 += w
-        return out
-    ids = np.arange(y.size) // max(block, 1)
+        return {k: np.hypot(x[0::2], x[1::2]) if x.size > 1 else x[:1]
+                for k, x in _by_group(c, groups, chosen).items()}
+    ids = np.arange(y.size) // _block_length(fs)
     used = np.unique(ids[fit])
     if used.size < 3:
         return {k: np.full(max(groups[k].shape[1] // 2, 1), math.nan) for k in chosen}
@@ -631,11 +642,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
         chosen, info = select_groups(groups, ff, fit_i, val_i, n_eff, forced=forced)
         while True:
             coef, _ = _lstsq([groups[k][fit_i] for k in chosen], ff[fit_i])
-            cf, k0 = {}, 0
-            for k in chosen:
-                w = groups[k].shape[1]
-                cf[k] = coef[k0:k0 + w]
-                k0 += w
+            cf = _by_group(coef, groups, chosen)
             # a fit that leaves the physical range (negative friction or inertia) is no
             # evidence of that effect: drop the group and refit the rest
             bad = [k for k, base in (('coulomb_friction', ax.coulomb_friction),
@@ -662,7 +669,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                         f'the joint fit gives {k} = {v["unphysical"]:.3g}, outside the '
                         f'physical range: another term the model lacks'))
         score = {k: float(np.clip(info[k].get('held_out_gain', 0.0), 0, 1)) for k in chosen}
-        se = block_standard_errors(groups, chosen, ff, fit_i, max(int(BLOCK_S * fs), 8))
+        se = block_standard_errors(groups, chosen, ff, fit_i, fs)
         for k in ('coulomb_friction', 'viscous_friction', 'motor_inertia', 'torque_ripple',
                   'gravity_torque'):
             if k not in cf:
@@ -684,7 +691,9 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                 form = _ONE_WAY_EVIDENCE if info[k].get('forced') else _SCALAR_EVIDENCE[k]
                 text = form.format(
                     c=c, step=2 * c, old=getattr(ax, k), new=ch[k], p=info[k]['p'],
-                    gain=100 * info[k].get('held_out_gain', 0.0)) + _pm(se[k][0], k)
+                    gain=100 * info[k].get('held_out_gain', 0.0))
+                if math.isfinite(se[k][0]):
+                    text += f'; {k} = {ch[k]:.4g}{_pm(se[k][0])}'
                 err = {k: _se(se[k][0])}
             name = 'parameter_mismatch' if k in ('motor_inertia', 'gravity_torque') else k
             effects.append(Effect(name, ax.name, score[k], {k: ch[k]}, text, i,
@@ -750,11 +759,9 @@ def _se(x: float) -> float | None:
     return None if not math.isfinite(x) else float(x)
 
 
-def _pm(x: float, key: str = '') -> str:
-    """Return the evidence text of a standard error (:func:`block_standard_errors`)."""
-    if not math.isfinite(x):
-        return ''
-    return (f'; standard error of {key} {x:.2g}' if key else f' \u00b1 {x:.2g}')
+def _pm(x: float) -> str:
+    """Return ' +- se' for the evidence text ('' without a standard error)."""
+    return f' \u00b1 {x:.2g}' if math.isfinite(x) else ''
 
 
 def noise_floor(rec: Recording, f: np.ndarray, fc: float, use: np.ndarray | None = None
