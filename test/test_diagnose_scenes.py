@@ -86,7 +86,10 @@ def test_scene_of_the_reference_plant(kind, seed, tmp_path):
 
 @pytest.mark.slow
 def test_unmodelled_second_mode_is_unexplained_on_its_axis(tmp_path):
-    seed = 4707352      # the mode at 19.6 Hz on joint_3, near the first resonance
+    # a CI draw: the mode at 23.7 Hz on joint_3 (resonance 31 Hz) was named a stiffness and
+    # damping mismatch that removed 93 % of the axis' misfit (left 220 floors, under 10 % of
+    # the nominal's): the FRF no linear rescale fits is what shows the missing structure
+    seed = 15626261
     scene = draw_scene(np.random.default_rng(seed), 'second_mode')
     r = run_scene(scene, tmp_path)
     msg = f'seed {seed}: {r}'

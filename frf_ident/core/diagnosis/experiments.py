@@ -894,35 +894,80 @@ def residual_bands(lines: list[tuple[np.ndarray, np.ndarray]]) -> list[list[floa
     return [[round(b[0], 2), round(b[1], 2)] for b in merged[:MAX_BANDS]]
 
 
-def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> dict[str, Any]:
+def unscalable_misfit(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams
+                      ) -> list[tuple[np.ndarray, np.ndarray]]:
     """
-    Return where the held-out residual of one axis lives.
+    Return the held-out FRF misfit of one axis that no linear rescale of it removes.
 
-    Where the held-out residual of one axis lives: the bands [f1, f2] Hz of the FRF misfit
-    above noise that is left after refitting the axis' inertias, stiffness and damping to the
-    measured FRF (:func:`residual_bands` of the multisine and chirp lines; ``band_hz`` the
-    strongest, ``bands_hz`` all), and the signal the torque residual of the extended model
-    correlates with most (|r| >= 0.3).
+    The axis' inertias, stiffness and damping are refitted to the measured FRF
+    (P_meas/P_sim times the analytic FRF of ``ext``: the estimator bias and the effects the
+    simulation already models cancel), and the misfit left per line is in units of the line
+    noise floor. A shifted antiresonance is a parameter question and goes; a resonance the
+    model lacks stays.
+
+    Parameters
+    ----------
+    ev : Evaluator
+        The recording and its noise floors.
+    sim : Recording
+        The simulation of ``ext`` on the recorded excitation.
+    axis : int
+        The axis.
+    ext : RobotParams
+        The model.
+
+    Returns
+    -------
+    list of (ndarray, ndarray)
+        Per estimate (multisine, chirp) the line frequencies [Hz] and |ln(P_meas/P_refit)|^2
+        over the noise floor per line (1 = at noise).
+
     """
     meas = ev.meas_val if ev.meas_val else ev.meas_fit
     part = ev.val if ev.val.segments else ev.fit
     est = estimates(replace_segments(sim, part))
-    # the misfit no rescaling of inertias, stiffness and damping removes: a shifted
-    # antiresonance is a parameter question, a resonance the model lacks stays. The rescale
-    # is fitted to P_meas/P_sim (estimator bias cancels) as a ratio of analytic FRFs.
     ratio = {k: diag_ratio(pm, est[k])[axis] for k, pm in meas.items()}
     scaled = {k: replace(pm, response=pm.response * 0 + 0j) for k, pm in meas.items()}
     for k, pm in meas.items():
         scaled[k].response[axis, axis] = ratio[k] * robot_frf_sampled(ext, pm.freq_hz)[axis, axis]
     x = fit_linear_scales(scaled, ext, axis)
     refit = _scaled(ext, axis, _LIN_KEYS, x)
-    fr, w = [], []
+    out = []
     for k, pm in meas.items():
         f_ = pm.freq_hz
         r = np.abs(np.log(ratio[k] * robot_frf_sampled(ext, f_)[axis, axis]
                           / robot_frf_sampled(refit, f_)[axis, axis])) ** 2
-        fr.append(pm.freq_hz)
-        w.append(np.maximum(r - ev.floors[k][axis], 0.0))
+        out.append((f_, r / ev.floors[k][axis]))
+    return out
+
+
+def typical_unscalable_misfit(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams
+                              ) -> float:
+    """
+    Return the typical line's :func:`unscalable_misfit` (noise floors).
+
+    The median over the lines of each estimate, averaged over the estimates: about 1 when a
+    rescale of the axis' linear parameters brings its FRF to the measured one, well above
+    where a resonance is missing. The median lets the few lines next to a resonance, whose
+    noise is far above the axis' mean floor, pass.
+    """
+    return float(np.mean([np.median(r) for _, r in unscalable_misfit(ev, sim, axis, ext)]))
+
+
+def _signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> dict[str, Any]:
+    """
+    Return where the held-out residual of one axis lives.
+
+    Where the held-out residual of one axis lives: the bands [f1, f2] Hz of the FRF misfit
+    above noise that is left after refitting the axis' inertias, stiffness and damping to the
+    measured FRF (:func:`residual_bands` of :func:`unscalable_misfit`; ``band_hz`` the
+    strongest, ``bands_hz`` all), and the signal the torque residual of the extended model
+    correlates with most (|r| >= 0.3).
+    """
+    fr, w = [], []
+    for f_, r in unscalable_misfit(ev, sim, axis, ext):
+        fr.append(f_)
+        w.append(np.maximum(r - 1.0, 0.0))
     out: dict[str, Any] = {}
     bands = residual_bands(list(zip(fr, w)))
     if bands:
@@ -1134,13 +1179,21 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     # a parameter mismatch claims the axis' linear parameters are off; if the axis stays
     # clearly above its floor with them refitted, the model lacks structure there (an
     # unmodelled resonance near the first one looks like a softer joint): no named cause,
-    # the axis is reported unexplained
-    lacking = [c for c in kept if c.name == 'parameter_mismatch'
-               and _left_unexplained(val_ext, val_base, c.axis_index)]
+    # the axis is reported unexplained. Clearly above: a share of the misfit left, or an FRF
+    # that no rescale of the axis' linear parameters brings near the measured one (a second
+    # mode the mismatch explains 93 % of, CI scene 15626261)
+    lacking = []
+    for c in kept:
+        if c.name != 'parameter_mismatch':
+            continue
+        off = typical_unscalable_misfit(ev, sim_ext, c.axis_index, ext)
+        if _left_unexplained(val_ext, val_base, c.axis_index) or off > UNEXPLAINED_RATIO:
+            say(f'  {c.axis} parameter_mismatch not named: the axis stays at '
+                f'{val_ext[c.axis_index]:.4g} x its floor with it, its FRF {off:.3g} x on the '
+                f'typical line with its linear parameters refitted (structure missing, not '
+                f'parameters)')
+            lacking.append(c)
     for c in lacking:
-        say(f'  {c.axis} parameter_mismatch not named: the axis stays at '
-            f'{val_ext[c.axis_index]:.4g}'
-            f' x its floor with it (structure missing, not parameters)')
         kept.remove(c)
         c.gain = 0.0
     if lacking:
