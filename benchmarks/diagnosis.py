@@ -24,11 +24,12 @@ scenes without effects, parameters within 20 %, and unmodelled second modes repo
 ``unexplained`` on their axis with a band containing the mode.
 
 ``python -m benchmarks.diagnosis N [SEED [KIND]]`` runs N scenes (seeds SEED, SEED + 1, ...;
-default 2026; only those of KIND, e.g. second_mode, when given) and prints one JSON line per
-scene, then the aggregate. With FRF_DIAG_LOG=1 every scene's diagnosis log (each candidate's
-misfit before and after, refits, held-out checks) goes to stderr: ``FRF_DIAG_LOG=1 python -m
-benchmarks.diagnosis 1 SEED`` shows scene SEED drawn as kind ``random`` (the kind the tests
-draw for it when SEED % 8 < 3).
+default 2026; only those of KIND, e.g. second_mode, when given; all N of kind ``mismatch``,
+which is not in the cycle: one axis' stiffness 5-20 % off the nominal model next to 1-2 drawn
+effects) and prints one JSON line per scene, then the aggregate. With FRF_DIAG_LOG=1 every
+scene's diagnosis log (each candidate's misfit before and after, refits, held-out checks) goes
+to stderr: ``FRF_DIAG_LOG=1 python -m benchmarks.diagnosis 1 SEED`` shows scene SEED drawn as
+kind ``random`` (the kind the tests draw for it when SEED % 8 < 3).
 """
 from __future__ import annotations
 
@@ -52,8 +53,12 @@ KINDS = ('random', 'random', 'random', 'two_on_one_axis', 'weak_axis_small', 'se
 # the characteristic parameter of each effect, compared within 20 %
 CHECK_KEY = {'coulomb_friction': 'coulomb_friction', 'viscous_friction': 'viscous_friction',
              'stiffness_nonlinearity': 'stiffness_k2', 'backlash': 'backlash',
-             'torque_ripple': 'amplitude', 'time_delay': 'time_delay', 'gravity': 'amplitude'}
-DRAWN = tuple(k for k in CHECK_KEY if k != 'gravity')    # gravity: its own scene kind
+             'torque_ripple': 'amplitude', 'time_delay': 'time_delay', 'gravity': 'amplitude',
+             'parameter_mismatch': 'stiffness'}
+# gravity and a parameter mismatch: scene kinds of their own
+DRAWN = tuple(k for k in CHECK_KEY if k not in ('gravity', 'parameter_mismatch'))
+# drawn only when asked for by name (not in the cycle, so the README sweeps keep their scenes)
+EXTRA_KINDS = ('mismatch',)
 
 
 def _nominal() -> dict[str, Any]:
@@ -137,6 +142,13 @@ def draw_scene(rng: np.random.Generator, kind: str) -> dict[str, Any]:
         truth = [('gravity', ax, {'gravity': [{'amplitude': amp, 'phase': phase}],
                                   'gravity_torque': 0.0})]
         add_random(1 + int(rng.integers(0, 3)))      # and 0-2 other effects anywhere
+    elif kind == 'mismatch':
+        # as on every real robot, the nominal model's linear parameters are off: one axis'
+        # stiffness 5-20 % either way, next to 1-2 drawn effects anywhere
+        ax = int(rng.integers(3))
+        scale = float(rng.uniform(1.05, 1.2)) ** (1 if rng.uniform() < 0.5 else -1)
+        truth = [('parameter_mismatch', ax, {'stiffness': float(axes[ax]['stiffness']) * scale})]
+        add_random(2 + int(rng.integers(0, 2)))      # the mismatch and 1-2 others
     elif kind == 'second_mode':
         ax = int(rng.integers(3))
         mode = (ax, float(rng.uniform(18.0, 30.0)))
@@ -239,14 +251,20 @@ def _nominal_names() -> list[str]:
     return [a['name'] for a in _nominal()['axes']]
 
 
-def scene_of(seed: int, k: int) -> dict[str, Any]:
-    """Return scene number ``k`` of the sweep that starts at ``seed`` (kinds cycled)."""
-    return draw_scene(np.random.default_rng(seed + k), KINDS[k % len(KINDS)])
+def scene_of(seed: int, k: int, kind: str | None = None) -> dict[str, Any]:
+    """
+    Return scene number ``k`` of the sweep that starts at ``seed``.
+
+    Kinds are cycled; a kind of EXTRA_KINDS given as ``kind`` is drawn for every scene.
+    """
+    if kind not in EXTRA_KINDS:
+        kind = KINDS[k % len(KINDS)]
+    return draw_scene(np.random.default_rng(seed + k), kind)
 
 
-def _run_numbered(seed: int, k: int) -> dict[str, Any]:
+def _run_numbered(seed: int, k: int, kind: str | None = None) -> dict[str, Any]:
     with tempfile.TemporaryDirectory() as tmp:
-        r = run_scene(scene_of(seed, k), Path(tmp))
+        r = run_scene(scene_of(seed, k, kind), Path(tmp))
     r['seed'] = seed + k
     return r
 
@@ -257,14 +275,16 @@ def sweep(n: int = 42, seed: int = 2026, verbose: bool = True, jobs: int | None 
     Run ``n`` scenes (kinds cycled, sizes drawn) and aggregate.
 
     Scenes run in ``jobs`` processes (default: one per CPU); the result does not depend on it.
-    With ``kind`` only the scenes of that kind among the ``n`` run.
+    With ``kind`` only the scenes of that kind among the ``n`` run (all ``n`` for a kind of
+    EXTRA_KINDS).
     """
     from concurrent.futures import ProcessPoolExecutor
     jobs = jobs or os.cpu_count() or 1
-    ks = [k for k in range(n) if kind is None or KINDS[k % len(KINDS)] == kind]
+    ks = [k for k in range(n)
+          if kind is None or kind in EXTRA_KINDS or KINDS[k % len(KINDS)] == kind]
     runs = []
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        for r in pool.map(_run_numbered, [seed] * len(ks), ks):
+        for r in pool.map(_run_numbered, [seed] * len(ks), ks, [kind] * len(ks)):
             runs.append(r)
             if verbose:
                 print(json.dumps(r, default=float), flush=True)
