@@ -1150,7 +1150,11 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     # a friction term is checked against the axis' other friction term refitted without it
     # (on the fit part): the two were fitted together, so the partner left at the value it
     # took next to the term cannot show what the data need without it (a viscous term that
-    # absorbed a Coulomb level a few percent off passes the plain check)
+    # absorbed a Coulomb level a few percent off passes the plain check);
+    # so is a parameter mismatch of the axis, whose joint damping dissipates like viscous
+    # friction: both are refitted jointly by simulation without the term (a joint refit that
+    # settled on a stiffness and damping next to a spurious viscous term, seed 9109 of the
+    # bench kind 'mismatch', otherwise keeps it)
     for c in list(kept):
         others = [k for k in kept if k is not c]
         refit = {}
@@ -1159,13 +1163,29 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
                 if p.axis_index == c.axis_index and p.name in _FRICTION:
                     refit[id(p)] = refit_friction(
                         ev, _rebuild(robot, [k for k in others if k is not p]), p, local=True)
+            if any(p.axis_index == c.axis_index and p.name == 'parameter_mismatch'
+                   for p in others):
+                mine = {id(k): replace(refit.get(id(k), k)) for k in others
+                        if k.axis_index == c.axis_index}
+                trial = [mine.get(id(k), k) for k in others]
+                refit_jointly(ev, robot, trial, c.axis_index,
+                              ev.misfit(ev.terms(_rebuild(robot, trial))), say)
+                refit.update(mine)
         alt = [refit.get(id(k), k) for k in others]
+        i = c.axis_index
         v = ev.misfit(ev.terms(_rebuild(robot, alt), held_out=True))
-        if v[c.axis_index] <= val_ext[c.axis_index]:
-            say(f'  dropped {c.axis} {c.name}: held-out misfit without it '
-                f'{v[c.axis_index]:.4g} <= {val_ext[c.axis_index]:.4g} with it'
-                + ''.join(f' ({r.name} refitted without it: {r.parameters[r.name]:.4g})'
-                          for r in refit.values()))
+        # with its partners refitted, the model without the term may fit even the fit part
+        # better: the joint refit had settled next to it, and the data do not ask for it
+        # (seed 9109: 11.7 floors without a viscous term against 13.8 with it; held out, two
+        # misfits this far above the floor differ by chance: 11.9 against 10.3)
+        v_fit = ev.misfit(ev.terms(_rebuild(robot, alt)))[i] if refit else math.inf
+        if v[i] <= val_ext[i] or v_fit <= cur[i]:
+            say(f'  dropped {c.axis} {c.name}: misfit without it held out '
+                f'{v[i]:.4g} (with it {val_ext[i]:.4g}), fitted {v_fit:.4g} (with it '
+                f'{cur[i]:.4g})'
+                + ''.join(f' ({r.name} refitted without it: ' + ', '.join(
+                    f'{k} {x:.4g}' for k, x in r.parameters.items()
+                    if isinstance(x, (int, float))) + ')' for r in refit.values()))
             kept.remove(c)
             c.gain = 0.0
             for k in others:
