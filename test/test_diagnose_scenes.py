@@ -100,16 +100,32 @@ def test_unmodelled_second_mode_is_unexplained_on_its_axis(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize('scale', [0.8, 1.2])
-def test_stiffness_mismatch_is_named_with_its_value(scale, tmp_path):
+def test_mismatched_axis_keeps_its_nominal_friction(tmp_path):
+    """
+    Name a stiffness mismatch next to another effect, and no friction change on its axis.
+
+    Bench kind ``mismatch``, seed 9109: joint_1 9 % stiffer than nominal, Coulomb friction
+    11 N m on joint_2. The joint refit of joint_1 settled on stiffness and damping next to a
+    viscous friction of 1.02 (nominal 20), which the held-out check kept until the mismatch
+    became the viscous term's partner, refitted without it (README_diagnosis, acceptance).
+    """
+    scene = draw_scene(np.random.default_rng(9109), 'mismatch')
+    r = run_scene(scene, tmp_path)
+    assert sorted(r['found']) == sorted(r['hidden']), r
+    assert all(e < 0.1 for e in r['param_errors'].values()), r
+
+
+@pytest.mark.slow
+def test_stiffness_mismatch_is_named_with_its_value(tmp_path):
     """
     Name a linear stiffness the nominal model gets wrong, with its value.
 
-    The reference plant's joint_2 is 20 % softer / stiffer than the nominal model: a
-    parameter_mismatch on joint_2 with the plant's stiffness (within 10 %), nothing else named,
-    nothing unexplained (the structure is right, only a parameter is off).
+    The reference plant's joint_2 is 20 % softer than the nominal model: a parameter_mismatch
+    on joint_2 with the plant's stiffness (within 10 %), nothing else named, nothing
+    unexplained (the structure is right, only a parameter is off). A stiffer joint next to
+    another effect: :func:`test_mismatched_axis_keeps_its_nominal_friction`.
     """
-    k = 3.0e5 * scale
+    k = 3.0e5 * 0.8
     scene = {'scene': {'axes': {'1': {'stiffness': k}}, 'velocity_noise': 2e-5, 'seed': 7},
              'truth': [], 'mode': None, 'kind': 'mismatch'}
     r = run_scene(scene, tmp_path)
