@@ -116,16 +116,17 @@ def test_mismatched_axis_keeps_its_nominal_friction(tmp_path):
 
 
 @pytest.mark.slow
-def test_stiffness_mismatch_is_named_with_its_value(tmp_path):
+@pytest.mark.parametrize('scale', [0.8, 1.2])
+def test_stiffness_mismatch_is_named_with_its_value(scale, tmp_path):
     """
     Name a linear stiffness the nominal model gets wrong, with its value.
 
-    The reference plant's joint_2 is 20 % softer than the nominal model: a parameter_mismatch
-    on joint_2 with the plant's stiffness (within 10 %), nothing else named, nothing
-    unexplained (the structure is right, only a parameter is off). A stiffer joint next to
-    another effect: :func:`test_mismatched_axis_keeps_its_nominal_friction`.
+    The reference plant's joint_2 is 20 % softer / stiffer than the nominal model: a
+    parameter_mismatch on joint_2 with the plant's stiffness (within 10 %), nothing else named,
+    nothing unexplained (the structure is right, only a parameter is off). Next to another
+    effect: :func:`test_mismatched_axis_keeps_its_nominal_friction`.
     """
-    k = 3.0e5 * 0.8
+    k = 3.0e5 * scale
     scene = {'scene': {'axes': {'1': {'stiffness': k}}, 'velocity_noise': 2e-5, 'seed': 7},
              'truth': [], 'mode': None, 'kind': 'mismatch'}
     r = run_scene(scene, tmp_path)

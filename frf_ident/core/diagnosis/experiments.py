@@ -1146,10 +1146,10 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
             ext, cur = refit_jointly(ev, robot, kept, i, cur, say)
     # a ripple the stage-1 scan saw on an axis that took an FRF-shape effect, not kept, is
     # read again from the residual of the refitted model and offered once more: read against
-    # a mismatched stiffness its amplitude and phase are biased, and even read again before
-    # the joint refit it worsens an axis whose mismatch is still a few percent off (bench
-    # kind mismatch, seed 9104: 29.2 -> 31.1 floors there; read on the refitted model it is
-    # 6.89 N m at phase 1.43, truth 6.91 at 1.43)
+    # a mismatched stiffness its amplitude and phase are biased, and offered in the second
+    # pass, next to a mismatch still a few percent off, it worsens the axis (bench kind
+    # mismatch, seed 9104: 7.40 N m at phase 1.38, 29.2 -> 31.2 floors; read here it is named,
+    # 6.86 N m at 1.42, truth 6.91 at 1.43)
     late = []
     for i in sorted(shaped):
         if (any(c.name == 'torque_ripple' and c.axis_index == i for c in stage1)
