@@ -478,7 +478,9 @@ def _backward(groups, y, fit, val, chosen, forced, info) -> list[str]:
 
 def _block_length(fs: float) -> int:
     """Return the length of a fit / held-out block [samples]: BLOCK_S, at least 8."""
-    return max(int(BLOCK_S * fs), 8)
+    # rounded: a rate taken from float timestamps (249.99999999999977 Hz for 4 ms) must not
+    # cut a sample off every block, and the two halves of one record then differ in blocks
+    return max(int(round(BLOCK_S * fs)), 8)
 
 
 def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
