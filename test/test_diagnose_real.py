@@ -91,6 +91,10 @@ def test_kuka_gravity_of_axes_2_3_and_the_same_report_from_mat_and_bag(tmp_path)
     assert m['extended']['time_nrmse'] < min(1.0, m['baseline']['time_nrmse'])
     for ax in ('joint_1', 'joint_2', 'joint_3'):
         assert m['extended']['per_axis'][ax]['time_nrmse'] < 1.0
+    # axis 3: its joint fit gives a negative inertia (-3.27), which is dropped and the terms
+    # selected again; a constant load enters and the held-out NRMSE is 0.106 (0.180 when the
+    # rest was only refitted)
+    assert m['extended']['per_axis']['joint_3']['time_nrmse'] < 0.15
     # independent truth: the authors' rigid-body gravity torque stored in the file (tau_g_all,
     # joint side). Axis 3's fitted gravity follows it; axis 2's motor does not see it (the
     # KR300 balances axis 2 with a counterbalance cylinder), axis 1's is identically zero.
@@ -98,7 +102,8 @@ def test_kuka_gravity_of_axes_2_3_and_the_same_report_from_mat_and_bag(tmp_path)
     assert np.ptp(tau_g[:, 0]) == 0.0
     q = load_data(KUKA, CFG / 'map_kuka_kr300.yaml').position[:, :3]
     g3 = load_model(tmp_path / 'mat' / 'extended_model.yaml')[1].gravity_load(q)[:, 2]
-    assert np.corrcoef(g3, tau_g[:, 2])[0, 1] > 0.9
+    # r = 0.977 (0.935 before the constant load entered)
+    assert np.corrcoef(g3, tau_g[:, 2])[0, 1] > 0.95
     bag = tmp_path / 'kuka_bag'
     assert main(['import', str(KUKA), '--map', str(CFG / 'map_kuka_kr300.yaml'),
                  '--out', str(bag)]) == 0

@@ -646,16 +646,22 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
             coef, _ = _lstsq([groups[k][fit_i] for k in chosen], ff[fit_i])
             cf = _by_group(coef, groups, chosen)
             # a fit that leaves the physical range (negative friction or inertia) is no
-            # evidence of that effect: drop the group and refit the rest
+            # evidence of that effect: drop the group and select again without it, since it
+            # may have kept out the group that carries that torque (KUKA A, joint_3: an
+            # inertia of -3.27 stood in for a constant load, which now enters)
             bad = [k for k, base in (('coulomb_friction', ax.coulomb_friction),
                                      ('viscous_friction', ax.viscous_friction),
                                      ('motor_inertia', ax.motor_inertia))
                    if k in cf and base + float(cf[k][0]) <= 0]
             if not bad:
                 break
-            for k in bad:
-                chosen.remove(k)
-                info[k]['unphysical'] = getattr(ax, k) + float(cf[k][0])
+            unphys = {k: getattr(ax, k) + float(cf[k][0]) for k in bad}
+            unphys.update({k: v['unphysical'] for k, v in info.items() if 'unphysical' in v})
+            groups = {k: x for k, x in groups.items() if k not in unphys}
+            chosen, again = select_groups(groups, ff, fit_i, val_i, n_eff, forced=forced)
+            info = {**{k: v for k, v in info.items() if k in unphys}, **again}
+            for k, x in unphys.items():
+                info[k]['unphysical'] = x
         say(f'{ax.name}: selected {chosen} (ripple scan peak {peak:.1f}, threshold {thr:.1f}); '
             + ', '.join(f'{k} p={v.get("p", 1):.2g} share={v.get("share", 0):.3f}'
                         for k, v in info.items()))
