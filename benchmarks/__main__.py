@@ -344,8 +344,8 @@ def bench_diagnosis() -> list[tuple[str, str, str, str]]:
 @section('diagnosis_real')
 def bench_diagnosis_real() -> list[tuple[str, str, str, str]]:
     """Compare the KUKA KR300 diagnosis of the two halves of trajectory A."""
-    from benchmarks.diagnosis import kuka_halves_rows
-    return kuka_halves_rows()
+    from benchmarks.diagnosis import kuka_halves_rows, kuka_synthetic_halves_rows
+    return kuka_halves_rows() + kuka_synthetic_halves_rows()
 
 
 @section('nodes')

@@ -31,7 +31,8 @@ from frf_ident.core.diagnosis.residual import (
     delayed_effort, effective_samples, find_ripple, lowpass, regress_axis,
     ripple_range)
 from frf_ident.core.diagnosis.timeseries import (
-    block_standard_errors, diagnose_timeseries, f_test, FC_HZ, select_groups, split_blocks)
+    block_standard_errors, diagnose_timeseries, f_test, FC_HZ, noise_level, select_groups,
+    split_blocks)
 from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.plant import FlexibleJointPlant
@@ -504,6 +505,23 @@ def test_group_dropped_on_held_out_data_lets_the_one_it_kept_out_in():
     chosen, info = select_groups(groups, y, fit, ~fit, n_eff=300.0)
     assert chosen == ['viscous_friction']
     assert info['stand_in']['held_out_gain'] < 0
+
+
+@pytest.mark.parametrize('fs, sigma', [(250.0, 0.6), (1000.0, 0.05)])
+def test_noise_level_is_the_white_level_beside_the_motion(fs, sigma):
+    """
+    Read the white noise level of a residual that also holds slow motion torque.
+
+    White noise of standard deviation sigma has the one-sided level 2 sigma^2 / fs; a torque
+    below a tenth of the Nyquist frequency, 30 times the noise, must not raise it.
+    """
+    rng = np.random.default_rng(int(fs))
+    t = np.arange(int(20 * fs)) / fs
+    slow = 30 * sigma * np.sin(2 * np.pi * 0.05 * fs * t)
+    f = np.column_stack([slow + sigma * rng.standard_normal(t.size),
+                         2 * sigma * rng.standard_normal(t.size)])
+    level = noise_level(f, fs)
+    assert level == pytest.approx([2 * sigma ** 2 / fs, 8 * sigma ** 2 / fs], rel=0.1)
 
 
 def test_f_test_of_a_low_passed_residual_keeps_its_false_alarm_rate():

@@ -57,7 +57,7 @@ from .residual import (coulomb_and_ripple, effective_samples, FC_HZ, find_ripple
                        inverse_dynamics_residual, is_rigid, lowpass)
 
 __all__ = ['ALPHA', 'FC_HZ', 'block_standard_errors', 'diagnose_timeseries', 'f_test',
-           'model_residual', 'predict_metrics']
+           'model_residual', 'noise_level', 'predict_metrics']
 
 ALPHA = 1e-3          # false-alarm probability of the F test that admits a regressor group
 EDGE = 0.02           # share of the record left out at each end of fit and held-out parts
@@ -778,9 +778,8 @@ def noise_floor(rec: Recording, f: np.ndarray, fc: float, use: np.ndarray | None
     Return per axis the NRMSE^2 that torque noise alone leaves.
 
     Per axis NRMSE^2 that torque noise alone leaves after the fc low-pass: the white level
-    of the residual's spectrum between 0.6 and 0.95 of the Nyquist frequency (where motion
-    leaves little), times the bandwidth fc, over the variance of the low-passed torque on the
-    rows the NRMSE is taken over.
+    of the residual (:func:`noise_level`) times the bandwidth fc, over the variance of the
+    low-passed torque on the rows the NRMSE is taken over.
 
     Parameters
     ----------
@@ -801,14 +800,38 @@ def noise_floor(rec: Recording, f: np.ndarray, fc: float, use: np.ndarray | None
 
     """
     fs = rec.fs
-    nper = int(min(2 ** int(math.log2(max(f.shape[0] // 8, 64))), 4096))
-    fr, p = signal.welch(f, fs=fs, nperseg=nper, axis=0)
-    sel = (fr > 0.6 * fs / 2) & (fr < 0.95 * fs / 2)
-    level = np.median(p[sel], axis=0) if sel.any() else np.zeros(f.shape[1])
+    level = noise_level(f, fs)
     uf = lowpass(rec.effort[:-1], fs, fc)
     var_u = np.array([np.var(uf[use[:, i], i]) if use is not None and use[:, i].sum() > 1
                       else np.var(uf[:, i]) for i in range(uf.shape[1])])
     return level * min(fc, fs / 2) / np.maximum(var_u, 1e-300)
+
+
+def noise_level(f: np.ndarray, fs: float) -> np.ndarray:
+    """
+    Return per axis the white torque-noise level of a residual [torque^2 / Hz].
+
+    The median one-sided power spectral density (Welch) between 0.6 and 0.95 of the Nyquist
+    frequency, where the motion leaves little; a white noise of standard deviation sigma has
+    the level 2 sigma^2 / fs.
+
+    Parameters
+    ----------
+    f : ndarray, shape (N, n)
+        A torque residual (:func:`model_residual`).
+    fs : float
+        Sample rate [Hz].
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The level per axis (zeros when the record is too short to have that band).
+
+    """
+    nper = int(min(2 ** int(math.log2(max(f.shape[0] // 8, 64))), 4096))
+    fr, p = signal.welch(f, fs=fs, nperseg=nper, axis=0)
+    sel = (fr > 0.6 * fs / 2) & (fr < 0.95 * fs / 2)
+    return np.median(p[sel], axis=0) if sel.any() else np.zeros(f.shape[1])
 
 
 def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
