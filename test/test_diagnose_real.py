@@ -149,7 +149,7 @@ def test_kuka_halves_disagree_no_more_than_their_standard_errors(tmp_path):
     Each half of trajectory A is diagnosed on its own; every parameter named in both (at
     least five) differs between the halves by at most 2.5 times the two halves' standard
     errors combined. The largest difference is 1.6 of them (axis 3's viscous friction, 9.4 /
-    5.3; `python -m benchmarks diagnosis_real`), so errors 1.6 times smaller fail it.
+    5.4; `python -m benchmarks diagnosis_real`), so errors 1.6 times smaller fail it.
     """
     paths = _kuka_halves(tmp_path)
     est = [_estimates(_diagnose(tmp_path, f'h{k}', p, 'model_kuka_kr300_axes123.yaml'))
