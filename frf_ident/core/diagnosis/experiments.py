@@ -1190,12 +1190,13 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
                 refit.update(mine)
         alt = [refit.get(id(k), k) for k in others]
         i = c.axis_index
-        v = ev.misfit(ev.terms(_rebuild(robot, alt), held_out=True))
+        without = _rebuild(robot, alt)
+        v = ev.misfit(ev.terms(without, held_out=True))
         # with its partners refitted, the model without the term may fit even the fit part
         # better: the joint refit had settled next to it, and the data do not ask for it
         # (seed 9109: 11.7 floors without a viscous term against 13.8 with it; held out, two
         # misfits this far above the floor differ by chance: 11.9 against 10.3)
-        v_fit = ev.misfit(ev.terms(_rebuild(robot, alt)))[i] if refit else math.inf
+        v_fit = ev.misfit(ev.terms(without))[i] if refit else math.inf
         if v[i] <= val_ext[i] or v_fit <= cur[i]:
             say(f'  dropped {c.axis} {c.name}: misfit without it held out '
                 f'{v[i]:.4g} (with it {val_ext[i]:.4g}), fitted {v_fit:.4g} (with it '

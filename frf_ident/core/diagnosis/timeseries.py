@@ -642,6 +642,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
         else:
             forced = []
         chosen, info = select_groups(groups, ff, fit_i, val_i, n_eff, forced=forced)
+        unphysical: dict[str, dict] = {}
         while True:
             coef, _ = _lstsq([groups[k][fit_i] for k in chosen], ff[fit_i])
             cf = _by_group(coef, groups, chosen)
@@ -655,13 +656,11 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                    if k in cf and base + float(cf[k][0]) <= 0]
             if not bad:
                 break
-            unphys = {k: getattr(ax, k) + float(cf[k][0]) for k in bad}
-            unphys.update({k: v['unphysical'] for k, v in info.items() if 'unphysical' in v})
-            groups = {k: x for k, x in groups.items() if k not in unphys}
-            chosen, again = select_groups(groups, ff, fit_i, val_i, n_eff, forced=forced)
-            info = {**{k: v for k, v in info.items() if k in unphys}, **again}
-            for k, x in unphys.items():
-                info[k]['unphysical'] = x
+            unphysical.update({k: {**info[k], 'unphysical': getattr(ax, k) + float(cf[k][0])}
+                               for k in bad})
+            groups = {k: x for k, x in groups.items() if k not in unphysical}
+            chosen, info = select_groups(groups, ff, fit_i, val_i, n_eff, forced=forced)
+        info = {**unphysical, **info}
         say(f'{ax.name}: selected {chosen} (ripple scan peak {peak:.1f}, threshold {thr:.1f}); '
             + ', '.join(f'{k} p={v.get("p", 1):.2g} share={v.get("share", 0):.3f}'
                         for k, v in info.items()))
