@@ -102,7 +102,7 @@ def test_kuka_gravity_of_axes_2_3_and_the_same_report_from_mat_and_bag(tmp_path)
     assert np.ptp(tau_g[:, 0]) == 0.0
     q = load_data(KUKA, CFG / 'map_kuka_kr300.yaml').position[:, :3]
     g3 = load_model(tmp_path / 'mat' / 'extended_model.yaml')[1].gravity_load(q)[:, 2]
-    # r = 0.977 (0.935 before the constant load entered)
+    # r = 0.977 (`python -m benchmarks diagnosis_real`, whole record)
     assert np.corrcoef(g3, tau_g[:, 2])[0, 1] > 0.95
     bag = tmp_path / 'kuka_bag'
     assert main(['import', str(KUKA), '--map', str(CFG / 'map_kuka_kr300.yaml'),
