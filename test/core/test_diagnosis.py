@@ -305,10 +305,13 @@ def test_controller_reset_uses_the_gravity_load():
 
 def test_residual_bands_list_each_concentration_strongest_first():
     """
-    List separated concentrations strongest first, merge overlapping ones of two grids.
+    List separated concentrations strongest first; two grids count what both show.
 
     Two separated bumps give two bands around their centres; one below a quarter of the
-    strongest none; the same bump on a second line grid merges with the first's band.
+    strongest none. On two offset line grids (multisine and chirp) the same bumps give the
+    same bands, while a peak only one grid shows (a noisy line, however large) gives none and
+    no longer sets the quarter the others are measured against. Where the grids share no
+    misfit, each one's own concentrations are listed.
     """
     f = np.arange(1.0, 60.0, 0.5)
     f2 = np.arange(1.25, 60.0, 0.5)
@@ -320,9 +323,15 @@ def test_residual_bands_list_each_concentration_strongest_first():
     assert len(bands) == 2
     assert bands[0][0] < 15.0 < bands[0][1] and bands[1][0] < 35.0 < bands[1][1]
     assert bands[0][1] < bands[1][0]
-    both = residual_bands([(f, w), (f2, bump(f2, 35.2, 0.6))])
-    assert len(both) == 2 and both[0] == bands[0]
-    assert both[1][0] <= bands[1][0] and both[1][1] >= bands[1][1]
+    w2 = bump(f2, 15.1, 1.1) + bump(f2, 35.2, 0.6) + bump(f2, 50.0, 0.2)
+    spike = np.where(np.isclose(f2, 5.25), 8.0, 0.0)
+    both = residual_bands([(f, w), (f2, w2 + spike)])
+    assert len(both) == 2
+    assert both[0][0] < 15.0 < both[0][1] and both[1][0] < 35.0 < both[1][1]
+    assert all(abs(x - y) <= 0.5 for b, c in zip(both, bands) for x, y in zip(b, c))
+    assert residual_bands([(f, w + np.where(np.isclose(f, 5.0), 8.0, 0.0))])[0] == [4.5, 5.5]
+    apart = residual_bands([(f, 4.0 * bump(f, 15.0, 1.0)), (f2, 2.0 * bump(f2, 40.0, 1.0))])
+    assert apart[0][0] < 15.0 < apart[0][1] and apart[1][0] < 40.0 < apart[1][1]
     assert residual_bands([(f, np.zeros_like(f))]) == []
 
 

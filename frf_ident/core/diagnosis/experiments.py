@@ -838,19 +838,26 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
 
 
 MAX_BANDS = 3    # residual concentrations listed in a signature
+SHOWN = 1.0      # a line's misfit this many noise floors above the floor is shown by it
 
 
 def residual_bands(lines: list[tuple[np.ndarray, np.ndarray]]) -> list[list[float]]:
     """
     Return the bands [f1, f2] Hz where a misfit per line concentrates, strongest first.
 
-    Per estimate (multisine, chirp: each its own line grid), a band is the run of lines
-    around a local maximum while they stay above a quarter of it (half its amplitude in dB),
-    plus one line each side; further bands are taken around the largest remaining lines as
-    long as they reach a quarter of the strongest line of all estimates. Overlapping bands of
-    the estimates are merged. A resonance the model lacks reshapes the whole FRF of its axis
-    (the neighbouring resonance and antiresonance move too), so its own band need not be the
-    strongest.
+    The estimates (multisine, chirp: each its own line grid) are independent experiments,
+    and a misfit counts where all of them show it: on the union of the line grids within the
+    range every estimate covers, each estimate contributes its own line's misfit, or between
+    two of its lines the larger of the two (a narrow peak is seen on offset grids), and the
+    smallest contribution is taken. One experiment's outlying line (a noisy line, a
+    chirp-only artefact next to a resonance) then does not crowd out a misfit all show; only
+    where no frequency's misfit is shown by all (at least ``SHOWN`` above the floor: twice
+    the noise), the largest any shows is taken. A
+    band is the run of lines around a local maximum while they stay above a quarter of it
+    (half its amplitude in dB), plus one line each side; further bands are taken around the
+    largest remaining lines as long as they reach a quarter of the strongest. A resonance
+    the model lacks reshapes the whole FRF of its axis (the neighbouring resonance and
+    antiresonance move too), so its own band need not be the strongest.
 
     Parameters
     ----------
@@ -864,34 +871,47 @@ def residual_bands(lines: list[tuple[np.ndarray, np.ndarray]]) -> list[list[floa
         At most MAX_BANDS bands; empty when no line is above the floor.
 
     """
-    lines = [(f, w) for f, w in lines if f.size]
-    top = max((float(w.max()) for _, w in lines), default=0.0)
+    f, wt = _misfit_all_show(lines)
+    top = float(wt.max()) if wt.size else 0.0
     if top <= 0:
         return []
     found = []                                   # (lo, hi, peak)
-    for f, wt in lines:
-        free = np.ones(f.size, bool)
-        while free.any():
-            k = int(np.argmax(np.where(free, wt, -1.0)))
-            if wt[k] < 0.25 * top:
-                break
-            lo, hi = k, k
-            while lo > 0 and free[lo - 1] and wt[lo - 1] >= 0.25 * wt[k]:
-                lo -= 1
-            while hi < f.size - 1 and free[hi + 1] and wt[hi + 1] >= 0.25 * wt[k]:
-                hi += 1
-            free[max(lo - 1, 0):hi + 2] = False
-            found.append([float(f[max(lo - 1, 0)]), float(f[min(hi + 1, f.size - 1)]),
-                          float(wt[k])])
-    merged: list[list[float]] = []
-    for b in sorted(found):
-        if merged and b[0] <= merged[-1][1]:
-            merged[-1][1] = max(merged[-1][1], b[1])
-            merged[-1][2] = max(merged[-1][2], b[2])
-        else:
-            merged.append(list(b))
-    merged.sort(key=lambda b: -b[2])
-    return [[round(b[0], 2), round(b[1], 2)] for b in merged[:MAX_BANDS]]
+    free = np.ones(f.size, bool)
+    while free.any():
+        k = int(np.argmax(np.where(free, wt, -1.0)))
+        if wt[k] < 0.25 * top:
+            break
+        lo, hi = k, k
+        while lo > 0 and free[lo - 1] and wt[lo - 1] >= 0.25 * wt[k]:
+            lo -= 1
+        while hi < f.size - 1 and free[hi + 1] and wt[hi + 1] >= 0.25 * wt[k]:
+            hi += 1
+        free[max(lo - 1, 0):hi + 2] = False
+        found.append([float(f[max(lo - 1, 0)]), float(f[min(hi + 1, f.size - 1)]),
+                      float(wt[k])])
+    return [[round(b[0], 2), round(b[1], 2)] for b in found[:MAX_BANDS]]
+
+
+def _misfit_all_show(lines: list[tuple[np.ndarray, np.ndarray]]
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the union of the line grids where all estimates cover it, and the misfit all show.
+
+    Where no line's misfit is shown by all estimates (SHOWN above the noise floor), the largest
+    any estimate shows.
+    """
+    lines = [(f, w) for f, w in lines if f.size]
+    if not lines:
+        return np.zeros(0), np.zeros(0)
+    grid = np.unique(np.concatenate([f for f, _ in lines]))
+    grid = grid[(grid >= max(f[0] for f, _ in lines)) & (grid <= min(f[-1] for f, _ in lines))]
+    seen = np.empty((len(lines), grid.size))
+    for j, (f, w) in enumerate(lines):
+        k = np.searchsorted(f, grid)
+        between = np.maximum(w[np.maximum(k - 1, 0)], w[k])
+        seen[j] = np.where(f[k] == grid, w[k], between)
+    out = seen.min(axis=0)
+    return grid, out if out.max(initial=0.0) >= SHOWN else seen.max(axis=0)
 
 
 def unscalable_misfit(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams
