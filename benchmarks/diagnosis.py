@@ -257,23 +257,18 @@ def _nominal_names() -> list[str]:
     return [a['name'] for a in _nominal()['axes']]
 
 
-def scene_of(seed: int, k: int, kind: str | None = None, every: bool = False
-             ) -> dict[str, Any]:
+def scene_of(seed: int, k: int, kind: str | None = None) -> dict[str, Any]:
     """
     Return scene number ``k`` of the sweep that starts at ``seed``.
 
-    Kinds are cycled; ``kind`` is drawn for every scene when it is one of EXTRA_KINDS or
-    ``every`` is set.
+    Drawn as ``kind``, or as the cycle's kind when None.
     """
-    if kind is None or not (every or kind in EXTRA_KINDS):
-        kind = KINDS[k % len(KINDS)]
-    return draw_scene(np.random.default_rng(seed + k), kind)
+    return draw_scene(np.random.default_rng(seed + k), kind or KINDS[k % len(KINDS)])
 
 
-def _run_numbered(seed: int, k: int, kind: str | None = None, every: bool = False
-                  ) -> dict[str, Any]:
+def _run_numbered(seed: int, k: int, kind: str | None = None) -> dict[str, Any]:
     with tempfile.TemporaryDirectory() as tmp:
-        r = run_scene(scene_of(seed, k, kind, every), Path(tmp))
+        r = run_scene(scene_of(seed, k, kind), Path(tmp))
     r['seed'] = seed + k
     return r
 
@@ -293,8 +288,7 @@ def sweep(n: int = 42, seed: int = 2026, verbose: bool = True, jobs: int | None 
     ks = [k for k in range(n) if kind is None or every or KINDS[k % len(KINDS)] == kind]
     runs = []
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        for r in pool.map(_run_numbered, [seed] * len(ks), ks, [kind] * len(ks),
-                          [every] * len(ks)):
+        for r in pool.map(_run_numbered, [seed] * len(ks), ks, [kind] * len(ks)):
             runs.append(r)
             if verbose:
                 print(json.dumps(r, default=float), flush=True)
@@ -323,6 +317,9 @@ def aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
             'param_within_20': float(np.mean([e < 0.2 for e in perr])) if perr else math.nan,
             'mode_unexplained': sum(modes) / max(len(modes), 1) if modes else math.nan,
             'mode_band_first': sum(firsts) / len(firsts) if firsts else math.nan,
+            'unexplained_entries': sum(len(r['unexplained']) for r in runs),
+            'bands_listed': sum(len(u['signature'].get('bands_hz', []))
+                                for r in runs for u in r['unexplained']),
             'per_effect': {k: f'{sum(v)}/{len(v)}' for k, v in per.items()},
             'param_error_per_effect': {k: {'median': float(np.median(v)), 'max': float(max(v))}
                                        for k, v in errs.items()},

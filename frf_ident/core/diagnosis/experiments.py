@@ -852,12 +852,12 @@ def residual_bands(lines: list[tuple[np.ndarray, np.ndarray]]) -> list[list[floa
     smallest contribution is taken. One experiment's outlying line (a noisy line, a
     chirp-only artefact next to a resonance) then does not crowd out a misfit all show; only
     where no frequency's misfit is shown by all (at least ``SHOWN`` above the floor: twice
-    the noise), the largest any shows is taken. A
-    band is the run of lines around a local maximum while they stay above a quarter of it
-    (half its amplitude in dB), plus one line each side; further bands are taken around the
-    largest remaining lines as long as they reach a quarter of the strongest. A resonance
-    the model lacks reshapes the whole FRF of its axis (the neighbouring resonance and
-    antiresonance move too), so its own band need not be the strongest.
+    the noise), the largest any shows is taken. A band is the run of lines around a local
+    maximum while they stay above a quarter of it (half its amplitude in dB), plus one line
+    each side; further bands are taken around the largest remaining lines as long as they
+    reach a quarter of the strongest. A resonance the model lacks reshapes the whole FRF of
+    its axis (the neighbouring resonance and antiresonance move too), so its own band need
+    not be the strongest.
 
     Parameters
     ----------
@@ -872,7 +872,7 @@ def residual_bands(lines: list[tuple[np.ndarray, np.ndarray]]) -> list[list[floa
 
     """
     f, wt = _misfit_all_show(lines)
-    top = float(wt.max()) if wt.size else 0.0
+    top = float(wt.max(initial=0.0))
     if top <= 0:
         return []
     found = []                                   # (lo, hi, peak)
