@@ -23,7 +23,10 @@ $(STAMP): setup.py
 
 venv: $(STAMP)
 
+# the demo's output is regenerated (the same simulated run), so an earlier one is replaced
+# instead of refused (frf-ident demo never writes over an existing bag)
 demo: $(STAMP)
+	rm -rf $(OUT)/demo
 	$(PY) -m frf_ident demo --out $(OUT)/demo
 
 test: $(STAMP)
