@@ -323,6 +323,12 @@ def aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
             'per_effect': {k: f'{sum(v)}/{len(v)}' for k, v in per.items()},
             'param_error_per_effect': {k: {'median': float(np.median(v)), 'max': float(max(v))}
                                        for k, v in errs.items()},
+            # the counts behind the shares, as README quotes them
+            'counts': {'found': f'{sum(r["hits"] for r in runs)}/{hid}',
+                       'false_alarms': f'{sum(r["false_alarms"] for r in runs)}/{fnd}',
+                       'clean_empty': f'{sum(r["n_found"] == 0 for r in clean)}/{len(clean)}',
+                       'param_within_20': f'{sum(e < 0.2 for e in perr)}/{len(perr)}'},
+            'simulations': sum(r['n_sims'] for r in runs),
             'median_wall_s': float(np.median([r['wall_s'] for r in runs])), 'runs': runs}
 
 
