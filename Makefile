@@ -4,6 +4,10 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= out
+# an empty OUT would make `make demo` run `rm -rf /demo`
+ifeq ($(strip $(OUT)),)
+$(error OUT is empty: set it to an output directory, e.g. OUT=out)
+endif
 
 # Every DDS participant we start stays on loopback (docs/CONTRACT.md §2). With ROS 2 sourced
 # (.ci/run does it when ../shared/ros2 exists) the ROS tests run on rmw_cyclonedds_cpp.
