@@ -82,6 +82,8 @@ def test_variance_predicts_the_difference_of_disjoint_realisations(periods):
         # with the variances right z2 is F(2, 16)-distributed (each variance from 5
         # realisations): median 0.72, 96 % below 4. A variance off by 2x either way moves
         # the median to about 0.36 or 1.4
+        print(f'disjoint realisations {a} vs {b}: median z^2 {np.median(z2):.2f}, '
+              f'{100 * np.mean(z2 < 4):.0f} % of {z2.size} lines within 2 SD')
         assert 0.5 < np.median(z2) < 1.2, np.median(z2)
         assert np.mean(z2 < 4) > 0.9, np.mean(z2 < 4)
 
@@ -97,6 +99,8 @@ def test_bla_agrees_with_welch(periods):
     keep = (fw > 2) & (fw < 195)
     smooth = np.array([bla[np.abs(f - x) < 0.3].mean() for x in fw[keep]])
     ratio = h1[keep] / smooth
+    print(f'Welch H1 / BLA: {np.max(np.abs(20 * np.log10(np.abs(ratio)))):.2f} dB, '
+          f'{np.max(np.abs(np.degrees(np.angle(ratio)))):.1f} deg at most (2-195 Hz)')
     assert np.max(np.abs(20 * np.log10(np.abs(ratio)))) < 0.5
     assert np.max(np.abs(np.degrees(np.angle(ratio)))) < 3.0
 
@@ -108,6 +112,8 @@ def test_uncertainty_peaks_at_the_resonance_where_the_cubic_spring_acts(periods)
     mag = np.abs(res.response[0, 0])
     rel = np.sqrt(res.total_variance[0, 0]) / mag
     f_peak = f[np.argmax(mag)]
+    print(f'resonance {f_peak:.1f} Hz; relative SD {100 * rel.max():.1f} % at '
+          f'{f[np.argmax(rel)]:.1f} Hz, median {100 * np.median(rel):.1f} %')
     # output noise alone would give the smallest relative spread where |BLA| is largest; the
     # distortion of the cubic spring grows with the displacement, largest at the resonance
     assert 60 < f_peak < 80, f_peak
