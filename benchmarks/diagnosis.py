@@ -458,13 +458,14 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
     agree = sum(abs(fits[1][k] / fits[0][k] - 1) <= 0.2 for k in both if fits[0][k])
     rows.append(('... parameters of both halves within 20 %', f'{agree}/{len(both)}',
                  f'named in one half only: {len(set(fits[0]) ^ set(fits[1]))}', ''))
-    # the record's own uncertainty (block jackknife of each half) against the other half
+    # the record's own uncertainty (block-robust standard errors of each half) against the
+    # other half: a difference beyond it is no noise, the model lacks a term there
     rows.append(('... differences within 2 combined standard errors',
                  f'{sum(v <= 2.0 for v in z.values())}/{len(z)}',
                  'relative standard error of each half: ' + ', '.join(
                      f'{100 * errs[0][k] / abs(fits[0][k]):.0f}/'
                      f'{100 * errs[1][k] / abs(fits[1][k]):.0f} %' for k in z),
-                 'the halves disagree no more than their own errors say'))
+                 'beyond 2: more than noise'))
     # the two one-way constants of an axis that goes out in one half and back in the other
     # hold Coulomb friction and load separately: (forward - backward) / 2 and their mean
     for ax, c in sorted(consts.items()):
@@ -536,22 +537,18 @@ def _report(res: dict[str, Any]) -> dict[str, Any]:
     return {'effects': [e.to_dict() for e in res['effects']], 'rejected': res['rejected']}
 
 
-def kuka_synthetic_halves_rows(runs: int = 20, seed: int = 0) -> list[tuple[str, str, str, str]]:
+def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
     """
-    Return the rows of the KUKA halves repeated on synthetic records of known truth.
+    Diagnose the halves of KUKA trajectory A on synthetic records of known truth.
 
-    What can the halves of trajectory A determine at all? The whole record's extended model is
-    taken as the truth: its torque for the recorded motion (inverse dynamics) plus white noise
-    at the level the record itself has (:func:`noise_level` of its residual), ``runs``
-    realisations. Each half is diagnosed on its own as in :func:`kuka_halves_rows`. Rows: the
-    share of parameters named in both halves that agree within 20 % (the goal), and per
-    parameter the mean and Monte-Carlo spread of each half's estimate against the truth, the
-    records whose halves agree within 20 % (of those naming it in both), the mean reported
-    standard error against that spread, and the real record's halves. A real
-    difference far outside the synthetic spread is no noise: the model lacks a term there.
+    The truth is the whole record's extended model: its torque for the recorded motion
+    (inverse dynamics) plus white noise at the level the record itself has
+    (:func:`noise_level` of its residual), ``runs`` realisations; each half diagnosed on its
+    own as in :func:`kuka_halves_rows`. Returns 'truth', 'sigma', 'real' (the real record's
+    halves), 'est' ({parameter: per half the list of (value, standard error)}), 'named_both'
+    and 'agree' ({parameter: records naming it in both halves, and of these the ones
+    within 20 %}). Needs the KUKA data (:data:`KUKA`).
     """
-    if not KUKA.is_file():
-        return []
     from frf_ident.app.diagnose import load_data
     from frf_ident.core.diagnosis import diagnose_timeseries
     from frf_ident.core.diagnosis.timeseries import model_residual, noise_level
@@ -594,6 +591,29 @@ def kuka_synthetic_halves_rows(runs: int = 20, seed: int = 0) -> list[tuple[str,
         for j in (0, 1):
             for k, x in h[j].items():
                 est.setdefault(k, [[], []])[j].append(x)
+    return {'truth': truth, 'sigma': sigma, 'real': real, 'est': est,
+            'named_both': named_both, 'agree': agree_k}
+
+
+def kuka_synthetic_halves_rows(runs: int = 20, seed: int = 0) -> list[tuple[str, str, str, str]]:
+    """
+    Return the rows of the KUKA halves repeated on synthetic records of known truth.
+
+    What can the halves of trajectory A determine at all? The whole record's extended model is
+    taken as the truth: its torque for the recorded motion (inverse dynamics) plus white noise
+    at the level the record itself has (:func:`noise_level` of its residual), ``runs``
+    realisations. Each half is diagnosed on its own as in :func:`kuka_halves_rows`. Rows: the
+    share of parameters named in both halves that agree within 20 % (the goal), and per
+    parameter the mean and Monte-Carlo spread of each half's estimate against the truth, the
+    records whose halves agree within 20 % (of those naming it in both), the mean reported
+    standard error against that spread, and the real record's halves. A real
+    difference far outside the synthetic spread is no noise: the model lacks a term there.
+    """
+    if not KUKA.is_file():
+        return []
+    syn = kuka_synthetic_halves(runs, seed)
+    truth, sigma, real, est = syn['truth'], syn['sigma'], syn['real'], syn['est']
+    named_both, agree_k = syn['named_both'], syn['agree']
     real_both = set(real[0]) & set(real[1])
     real_agree = sum(abs(real[1][k][0] / real[0][k][0] - 1) <= 0.2 for k in real_both)
     agree, pairs = sum(agree_k.values()), sum(named_both.values())

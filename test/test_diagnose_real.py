@@ -142,23 +142,29 @@ def _estimates(report):
 
 
 @pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
-def test_kuka_halves_disagree_no_more_than_their_standard_errors(tmp_path):
+def test_kuka_standard_errors_match_the_spread_on_synthetic_halves():
     """
-    Test the reported standard errors on data they were not computed from.
+    Test the reported standard errors against the Monte-Carlo spread on the KUKA motion.
 
-    Each half of trajectory A is diagnosed on its own; every parameter named in both (at
-    least five) differs between the halves by at most 2.5 times the two halves' standard
-    errors combined. The largest difference is 1.6 of them (axis 3's viscous friction, 9.4 /
-    5.4; `python -m benchmarks diagnosis_real`), so errors 1.6 times smaller fail it.
+    The halves of trajectory A repeated on 10 synthetic records (the whole record's extended
+    model as truth plus white noise at the record's level; benchmarks.diagnosis): for every
+    parameter a half names in all 10, the mean reported standard error lies within 0.35-2.5
+    times the spread of the estimates (0.54-1.24 on these records; the delete-one-block
+    jackknife used before gave 1.25-7.1 here: conservative most where one block holds much
+    of what determines a parameter, axis 2's Coulomb friction in the first half).
     """
-    paths = _kuka_halves(tmp_path)
-    est = [_estimates(_diagnose(tmp_path, f'h{k}', p, 'model_kuka_kr300_axes123.yaml'))
-           for k, p in enumerate(paths)]
-    both = sorted(set(est[0]) & set(est[1]))
-    assert len(both) >= 5
-    z = {k: abs(est[0][k][0] - est[1][k][0]) / np.hypot(est[0][k][1], est[1][k][1])
-         for k in both}
-    assert max(z.values()) <= 2.5, z
+    from benchmarks.diagnosis import kuka_synthetic_halves
+    runs = 10
+    syn = kuka_synthetic_halves(runs, seed=1)
+    ratio = {}
+    for k, halves in syn['est'].items():
+        for j, xs in enumerate(halves):
+            if len(xs) == runs and all(se is not None for _, se in xs):
+                ratio[k, j] = (np.mean([se for _, se in xs])
+                               / np.std([x for x, _ in xs], ddof=1))
+    print({f'{k[0]} {k[1]} half {j + 1}': round(float(r), 2) for (k, j), r in ratio.items()})
+    assert len(ratio) >= 10, ratio
+    assert all(0.35 < r < 2.5 for r in ratio.values()), ratio
 
 
 @pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')

@@ -507,15 +507,18 @@ def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
 def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: np.ndarray,
                           fit: np.ndarray, fs: float) -> dict[str, np.ndarray]:
     """
-    Return delete-one-block jackknife standard errors of the jointly fitted groups.
+    Return block-robust (CR2) standard errors of the jointly fitted groups.
 
-    The groups ``chosen`` are refitted jointly with one block of the fit rows left out at a
-    time (J blocks); the standard error of a quantity x is
-    sqrt((J - 1) / J sum (x_j - mean x)^2) (Kuensch 1989, the block jackknife for dependent
-    data). The blocks are as long as the held-out blocks (:func:`split_blocks`), far longer
-    than the low-passed residual's correlation time, so the spread takes the residual as it
-    is: coloured, and with whatever systematic misfit the model still has, where a formula for
-    white noise would not (README_diagnosis.md, "Standard errors").
+    The covariance of the joint least-squares fit of the groups ``chosen`` is the sandwich
+    (X'X)^-1 (sum_b X_b' A_b e_b e_b' A_b X_b) (X'X)^-1 over the blocks b of the fit rows
+    (as long as the held-out blocks of :func:`split_blocks`), e_b the block's residuals and
+    A_b = (I - H_bb)^-1/2 with H_bb the block's part of the hat matrix: the bias-reduced
+    cluster-robust estimator CR2 (Bell & McCaffrey 2002), unbiased for independent
+    homoscedastic noise however few the blocks. A block is far longer than the low-passed
+    residual's correlation time, so the sandwich takes the residual as it is: coloured, and
+    with whatever misfit the model still has within a block, where a formula for white noise
+    would not (README_diagnosis.md, "Standard errors"). The error of the amplitude
+    hypot(a_sin, a_cos) of a sin / cos pair is its spread under the pair's normal distribution.
 
     Parameters
     ----------
@@ -534,28 +537,46 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
     -------
     dict of str to ndarray
         Per group the standard error of each quantity it reports: its coefficient (one
-        column) or the amplitude hypot(a_sin, a_cos) of each sin / cos pair; NaN for all
-        when fewer than 3 blocks hold fit rows.
+        column) or the amplitude of each sin / cos pair; NaN for all when fewer than 3 blocks
+        hold fit rows.
 
     """
-    def quantities(c):
-        return {k: np.hypot(x[0::2], x[1::2]) if x.size > 1 else x[:1]
-                for k, x in _by_group(c, groups, chosen).items()}
-    ids = np.arange(y.size) // _block_length(fs)
-    used = np.unique(ids[fit])
-    if used.size < 3:
+    ids = (np.arange(y.size) // _block_length(fs))[fit]
+    used = np.unique(ids)
+    if used.size < 3 or not chosen:
         return {k: np.full(max(groups[k].shape[1] // 2, 1), math.nan) for k in chosen}
-    reps = []
+    X = np.column_stack([groups[k][fit] for k in chosen])
+    bread = np.linalg.pinv(X.T @ X)
+    coef = bread @ (X.T @ y[fit])
+    e = y[fit] - X @ coef
+    meat = np.zeros_like(bread)
     for b in used:
-        m = fit & (ids != b)
-        c, _ = _lstsq([groups[k][m] for k in chosen], y[m])
-        reps.append(quantities(c))
-    J = used.size
-    out = {}
+        xb = X[ids == b]
+        w, u = np.linalg.eigh(np.eye(xb.shape[0]) - xb @ bread @ xb.T)
+        # (I - H_bb)^-1/2 e_b; an eigenvalue near 0 is a block the fit rests on alone
+        score = xb.T @ (u @ ((u.T @ e[ids == b]) / np.sqrt(np.maximum(w, 1e-12))))
+        meat += np.outer(score, score)
+    cov = bread @ meat @ bread
+    out, k0 = {}, 0
     for k in chosen:
-        x = np.array([r[k] for r in reps])
-        out[k] = np.sqrt((J - 1) / J * ((x - x.mean(axis=0)) ** 2).sum(axis=0))
+        w_k = groups[k].shape[1]
+        c, v = coef[k0:k0 + w_k], cov[k0:k0 + w_k, k0:k0 + w_k]
+        if w_k == 1:
+            out[k] = np.sqrt(v[0, :1].clip(min=0.0))
+        else:
+            # amplitudes: the spread of hypot(a_sin, a_cos) over draws from the pair's normal
+            # distribution (not the delta method, which misses an ill-determined phase)
+            out[k] = np.array([np.std(np.hypot(*_normal_draws(c[t:t + 2], v[t:t + 2, t:t + 2])))
+                               for t in range(0, w_k, 2)])
+        k0 += w_k
     return out
+
+
+def _normal_draws(mean: np.ndarray, cov: np.ndarray, n: int = 4000) -> np.ndarray:
+    """Return ``n`` fixed draws (2, n) of the normal distribution (mean, cov) of a pair."""
+    w, u = np.linalg.eigh(cov)
+    z = np.random.default_rng(0).standard_normal((2, n))
+    return mean[:, None] + u @ (np.sqrt(np.maximum(w, 0.0))[:, None] * z)
 
 
 def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
