@@ -549,12 +549,17 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
     bread = np.linalg.pinv(X.T @ X)
     coef = bread @ (X.T @ y[fit])
     e = y[fit] - X @ coef
+    # H_bb = A A' with A = X_b (X'X)^-1/2: its nonzero eigenvalues are the squared singular
+    # values of A (at most one per column), so (I - H_bb)^-1/2 e_b costs O(n_b p^2)
+    w, v = np.linalg.eigh(bread)
+    half = (v * np.sqrt(np.maximum(w, 0.0))) @ v.T
     meat = np.zeros_like(bread)
     for b in used:
-        xb = X[ids == b]
-        w, u = np.linalg.eigh(np.eye(xb.shape[0]) - xb @ bread @ xb.T)
-        # (I - H_bb)^-1/2 e_b; an eigenvalue near 0 is a block the fit rests on alone
-        score = xb.T @ (u @ ((u.T @ e[ids == b]) / np.sqrt(np.maximum(w, 1e-12))))
+        xb, eb = X[ids == b], e[ids == b]
+        u, sv, _ = np.linalg.svd(xb @ half, full_matrices=False)
+        # an eigenvalue of I - H_bb near 0 is a block the fit rests on alone
+        gain = 1.0 / np.sqrt(np.maximum(1.0 - sv ** 2, 1e-12)) - 1.0
+        score = xb.T @ (eb + u @ (gain * (u.T @ eb)))
         meat += np.outer(score, score)
     cov = bread @ meat @ bread
     out, k0 = {}, 0
