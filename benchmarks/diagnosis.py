@@ -536,7 +536,9 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
     the environment variable KUKA_BC names a directory holding B.mat and C.mat.
     """
     import os
-    bc = Path(os.environ.get(KUKA_BC_ENV, '/nonexistent'))
+    if not os.environ.get(KUKA_BC_ENV):
+        return []
+    bc = Path(os.environ[KUKA_BC_ENV])
     paths = {'A': KUKA, 'B': bc / 'B.mat', 'C': bc / 'C.mat'}
     if not all(p.is_file() for p in paths.values()):
         return []
