@@ -420,7 +420,7 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
             if k < 2:
                 cross.append(res['report']['metrics']['validation_records'][0])
             one_way = _one_way(res['report'])
-            est = _half_estimates(res['report'])
+            est = _estimates(res['report'])
             fit = {key: v for key, (v, _) in est.items()}
             err = {key: se for key, (_, se) in est.items()}
             for e in res['report']['effects']:
@@ -491,12 +491,11 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
                  ' / '.join(f'{c:.3f}' for c in corr[:2]), f'whole record {corr[2]:.3f}', ''))
     # what the authors' rigid-body gravity depends on: sinusoids of the model's joint sets
     # leave part of it, the wrist's pitch (record joint 5) the rest
-    full = rec.position
     shares = []
     for extra in ((), (4,)):
-        cols = [np.ones(full.shape[0])]
+        cols = [np.ones(rec.t.size)]
         for js in [(1,), (1, 2)] + ([(1, 2) + extra] if extra else []):
-            arg = full[:, list(js)].sum(axis=1)
+            arg = rec.position[:, list(js)].sum(axis=1)
             cols += [np.sin(arg), np.cos(arg)]
         X = np.column_stack(cols)
         res = [tau_g[:, i] - X @ np.linalg.lstsq(X, tau_g[:, i], rcond=None)[0] for i in (1, 2)]
@@ -552,7 +551,7 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
                            map_path=cfg / 'map_kuka_kr300.yaml', validate=others,
                            progress=lambda _m: None)
             rep = res['report']
-            est[x] = _half_estimates(rep)
+            est[x] = _estimates(rep)
             m = rep['metrics']
             rows.append((f'KUKA trajectory {x} fitted: held-out NRMSE nominal -> extended',
                          f'{m["baseline"]["time_nrmse"]:.3f} -> {m["extended"]["time_nrmse"]:.3f}',
@@ -582,7 +581,7 @@ def _one_way(report: dict[str, Any]) -> dict[str, str]:
             for r in report.get('rejected', []) if 'forward_share' in r}
 
 
-def _half_estimates(report: dict[str, Any]) -> dict[tuple[str, str], tuple]:
+def _estimates(report: dict[str, Any]) -> dict[tuple[str, str], tuple]:
     """
     Return {(axis, parameter): (value, standard error)} of a time-series report.
 
@@ -633,7 +632,7 @@ def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
     rec = Recording(full.t, full.joint_names[:m], full.position[:, :m], full.velocity[:, :m],
                     full.effort[:, :m])
     whole = diagnose_timeseries(rec, robot)
-    truth = _half_estimates(_report(whole))
+    truth = _estimates(_report(whole))
     f = model_residual(rec, whole['extended'])[0]
     sigma = np.sqrt(noise_level(f, rec.fs) * rec.fs / 2)
     n = rec.t.size // 2
@@ -644,7 +643,7 @@ def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
             part = Recording(rec.t[sl] - rec.t[sl][0], rec.joint_names, rec.position[sl],
                              rec.velocity[sl], effort[sl])
             res = diagnose_timeseries(part, robot)
-            out.append(_half_estimates(_report(res)))
+            out.append(_estimates(_report(res)))
         return out
     real = halves(rec.effort)
     rng = np.random.default_rng(seed)

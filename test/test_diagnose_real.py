@@ -127,20 +127,6 @@ def _kuka_halves(tmp_path):
     return paths
 
 
-def _estimates(report):
-    """Return {(axis, parameter): (value, standard error)} of a time-series report."""
-    out = {}
-    for e in report['effects']:
-        for key, val in e['parameters'].items():
-            se = e['standard_error'][key]
-            if key == 'gravity':
-                for t, t_se in zip(val, se):
-                    out[e['axis'], '+'.join(t['joints'])] = (t['amplitude'], t_se['amplitude'])
-            elif key != 'gravity_torque':     # a one-way axis: load and friction in one
-                out[e['axis'], key] = (val, se)
-    return out
-
-
 @pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
 def test_kuka_standard_errors_match_the_spread_on_synthetic_halves():
     """
@@ -150,8 +136,9 @@ def test_kuka_standard_errors_match_the_spread_on_synthetic_halves():
     model as truth plus white noise at the record's level; benchmarks.diagnosis): for every
     parameter a half names in all 10, the mean reported standard error lies within 0.35-2.5
     times the spread of the estimates (0.54-1.24 on these records; the delete-one-block
-    jackknife used before gave 1.25-7.1 here: conservative most where one block holds much
-    of what determines a parameter, axis 2's Coulomb friction in the first half).
+    jackknife used before gave 1.0-14 on the bench's 20 records, `python -m benchmarks
+    diagnosis_real` at 9a63d26: conservative most where one block holds much of what
+    determines a parameter, axis 2's Coulomb friction in the first half).
     """
     from benchmarks.diagnosis import kuka_synthetic_halves
     runs = 10

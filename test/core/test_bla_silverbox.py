@@ -27,7 +27,7 @@ from pathlib import Path
 from frf_ident.core.estimation.spectra import best_linear_approximation, periodic_spectra
 import numpy as np
 import pytest
-from scipy import signal
+from scipy import signal, stats
 from scipy.io import loadmat
 
 SILVERBOX = (Path(__file__).resolve().parents[2].parent / 'shared' / 'data' / 'Silverbox'
@@ -35,6 +35,8 @@ SILVERBOX = (Path(__file__).resolve().parents[2].parent / 'shared' / 'data' / 'S
 FS = 1e7 / 2 ** 14         # [Hz] (SOURCE.md)
 N = 8192                   # samples per period
 LINES = np.arange(1, 2684, 2)    # the excited odd lines, up to 200 Hz
+#: z^2 of two 5-realisation BLAs with their estimated variances, when these are right
+NULL = stats.f(2, 16)
 
 pytestmark = pytest.mark.skipif(not SILVERBOX.is_file(), reason='shared Silverbox data absent')
 
@@ -83,7 +85,8 @@ def test_variance_predicts_the_difference_of_disjoint_realisations(periods):
         # realisations): median 0.72, 96 % below 4. A variance off by 2x either way moves
         # the median to about 0.36 or 1.4
         print(f'disjoint realisations {a} vs {b}: median z^2 {np.median(z2):.2f}, '
-              f'{100 * np.mean(z2 < 4):.0f} % of {z2.size} lines within 2 SD')
+              f'{100 * np.mean(z2 < 4):.0f} % of {z2.size} lines within 2 SD '
+              f'(F(2, 16): {NULL.median():.2f}, {100 * NULL.cdf(4):.0f} %)')
         assert 0.5 < np.median(z2) < 1.2, np.median(z2)
         assert np.mean(z2 < 4) > 0.9, np.mean(z2 < 4)
 

@@ -551,8 +551,8 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
     e = y[fit] - X @ coef
     # H_bb = A A' with A = X_b (X'X)^-1/2: its nonzero eigenvalues are the squared singular
     # values of A (at most one per column), so (I - H_bb)^-1/2 e_b costs O(n_b p^2)
-    w, v = np.linalg.eigh(bread)
-    half = (v * np.sqrt(np.maximum(w, 0.0))) @ v.T
+    lam, vec = np.linalg.eigh(bread)
+    half = (vec * np.sqrt(np.maximum(lam, 0.0))) @ vec.T
     meat = np.zeros_like(bread)
     for b in used:
         xb, eb = X[ids == b], e[ids == b]
@@ -562,18 +562,15 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
         score = xb.T @ (eb + u @ (gain * (u.T @ eb)))
         meat += np.outer(score, score)
     cov = bread @ meat @ bread
-    out, k0 = {}, 0
-    for k in chosen:
-        w_k = groups[k].shape[1]
-        c, v = coef[k0:k0 + w_k], cov[k0:k0 + w_k, k0:k0 + w_k]
-        if w_k == 1:
-            out[k] = np.sqrt(v[0, :1].clip(min=0.0))
+    out = {}
+    for k, ix in _by_group(np.arange(coef.size), groups, chosen).items():
+        if ix.size == 1:
+            out[k] = np.sqrt(np.maximum(cov[ix, ix], 0.0))
         else:
             # amplitudes: the spread of hypot(a_sin, a_cos) over draws from the pair's normal
             # distribution (not the delta method, which misses an ill-determined phase)
-            out[k] = np.array([np.std(np.hypot(*_normal_draws(c[t:t + 2], v[t:t + 2, t:t + 2])))
-                               for t in range(0, w_k, 2)])
-        k0 += w_k
+            out[k] = np.array([np.std(np.hypot(*_normal_draws(coef[p], cov[np.ix_(p, p)])))
+                               for p in ix.reshape(-1, 2)])
     return out
 
 
