@@ -543,7 +543,7 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
         return []
     from frf_ident.app.diagnose import diagnose
     cfg = ROOT / 'config'
-    est, rows = {}, []
+    est, rows, slopes = {}, [], {}
     with tempfile.TemporaryDirectory() as tmp:
         for x, p in paths.items():
             others = [q for y, q in paths.items() if y != x]
@@ -552,6 +552,7 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
                            progress=lambda _m: None)
             rep = res['report']
             est[x] = _estimates(rep)
+            slopes[x] = _slopes_by_direction(p, Path(tmp) / x / 'extended_model.yaml')
             m = rep['metrics']
             rows.append((f'KUKA trajectory {x} fitted: held-out NRMSE nominal -> extended',
                          f'{m["baseline"]["time_nrmse"]:.3f} -> {m["extended"]["time_nrmse"]:.3f}',
@@ -560,6 +561,7 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
                                    for y, v in zip([y for y in paths if y != x],
                                                    m['validation_records'])),
                          'other experiments, not used for fitting'))
+    rows += _direction_rows(paths, slopes)
     keys = sorted(set().union(*(set(e) for e in est.values())))
     agree = named = 0
     for k in keys:
@@ -573,6 +575,51 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
                      f'B, C within 20 % of A: {sum(near)}/{len(near)}', ''))
     rows.append(('... parameters of B and C within 20 % of A', f'{agree}/{named}', '', ''))
     return rows
+
+
+def _slopes_by_direction(data: Path, model: Path) -> list[tuple[float, float, float]]:
+    """
+    Return per axis the viscous slope forward and backward that a record's residual shows.
+
+    The residual of the extended model ``model`` (low-passed, moving rows) regressed on an
+    offset, v and |v|: forward slope b + c_v + c_|v|, backward b + c_v - c_|v| (b the model's
+    viscous friction), and the block-robust standard error of c_|v|, half their difference.
+    """
+    from frf_ident.app.diagnose import load_data
+    from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
+    from frf_ident.core.diagnosis.timeseries import block_standard_errors, model_residual, moving
+    from frf_ident.core.recording import Recording
+    from frf_ident.io.model_file import load_model
+    robot = load_model(model)[1]
+    full = load_data(data, ROOT / 'config' / 'map_kuka_kr300.yaml')
+    m = robot.n_axes
+    rec = Recording(full.t, full.joint_names[:m], full.position[:, :m], full.velocity[:, :m],
+                    full.effort[:, :m])
+    f, _, v, _ = model_residual(rec, robot)
+    rows = moving(v, rec.velocity, rec.fs, FC_HZ)
+    out = []
+    for i, ax in enumerate(robot.axes):
+        g = {k: lowpass(x, rec.fs, FC_HZ)[:, None] for k, x in (
+            ('offset', np.ones(v.shape[0])), ('v', v[:, i]), ('abs', np.abs(v[:, i])))}
+        y = lowpass(f[:, i], rec.fs, FC_HZ)
+        X = np.column_stack(list(g.values()))[rows[:, i]]
+        c = np.linalg.lstsq(X, y[rows[:, i]], rcond=None)[0]
+        se = block_standard_errors(g, list(g), y, rows[:, i], rec.fs)['abs'][0]
+        b = ax.viscous_friction + c[1]
+        out.append((b + c[2], b - c[2], float(se)))
+    return out
+
+
+def _direction_rows(paths: dict[str, Path], slopes: dict[str, list]
+                    ) -> list[tuple[str, str, str, str]]:
+    """Return per axis the rows of :func:`_slopes_by_direction` of each trajectory."""
+    names = ('joint_1', 'joint_2', 'joint_3')
+    return [(f'... {names[i]} viscous slope forward / backward (half-difference SE): '
+             + ' / '.join(paths), ' ; '.join(
+                 f'{slopes[x][i][0]:.3g} / {slopes[x][i][1]:.3g} ({slopes[x][i][2]:.2g})'
+                 for x in paths),
+             'residual of each extended model on offset, v, |v|',
+             'a one-way half measures one of them') for i in range(3)]
 
 
 def _one_way(report: dict[str, Any]) -> dict[str, str]:
