@@ -577,7 +577,7 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
     return rows
 
 
-def _slopes_by_direction(data: Path, model: Path) -> list[tuple[float, float, float]]:
+def _slopes_by_direction(data: Path, model: Path) -> dict[str, tuple[float, float, float]]:
     """
     Return per axis the viscous slope forward and backward that a record's residual shows.
 
@@ -597,7 +597,7 @@ def _slopes_by_direction(data: Path, model: Path) -> list[tuple[float, float, fl
                     full.effort[:, :m])
     f, _, v, _ = model_residual(rec, robot)
     rows = moving(v, rec.velocity, rec.fs, FC_HZ)
-    out = []
+    out = {}
     for i, ax in enumerate(robot.axes):
         g = {k: lowpass(x, rec.fs, FC_HZ)[:, None] for k, x in (
             ('offset', np.ones(v.shape[0])), ('v', v[:, i]), ('abs', np.abs(v[:, i])))}
@@ -606,20 +606,18 @@ def _slopes_by_direction(data: Path, model: Path) -> list[tuple[float, float, fl
         c = np.linalg.lstsq(X, y[rows[:, i]], rcond=None)[0]
         se = block_standard_errors(g, list(g), y, rows[:, i], rec.fs)['abs'][0]
         b = ax.viscous_friction + c[1]
-        out.append((b + c[2], b - c[2], float(se)))
+        out[ax.name] = (b + c[2], b - c[2], float(se))
     return out
 
 
-def _direction_rows(paths: dict[str, Path], slopes: dict[str, list]
+def _direction_rows(paths: dict[str, Path], slopes: dict[str, dict]
                     ) -> list[tuple[str, str, str, str]]:
     """Return per axis the rows of :func:`_slopes_by_direction` of each trajectory."""
-    names = ('joint_1', 'joint_2', 'joint_3')
-    return [(f'... {names[i]} viscous slope forward / backward (half-difference SE): '
+    return [(f'... {ax} viscous slope forward / backward (half-difference SE): '
              + ' / '.join(paths), ' ; '.join(
-                 f'{slopes[x][i][0]:.3g} / {slopes[x][i][1]:.3g} ({slopes[x][i][2]:.2g})'
-                 for x in paths),
+                 '{:.3g} / {:.3g} ({:.2g})'.format(*slopes[x][ax]) for x in paths),
              'residual of each extended model on offset, v, |v|',
-             'a one-way half measures one of them') for i in range(3)]
+             'a one-way half measures one of them') for ax in slopes[next(iter(paths))]]
 
 
 def _one_way(report: dict[str, Any]) -> dict[str, str]:
