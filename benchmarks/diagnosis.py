@@ -42,9 +42,13 @@ from pathlib import Path
 import sys
 import tempfile
 import time
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from frf_ident.core.model.params import RobotParams
+    from frf_ident.core.recording import Recording
 
 ROOT = Path(__file__).resolve().parents[1]
 MODEL = ROOT / 'config' / 'model_3axis.yaml'
@@ -534,14 +538,13 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
     three fits (standard error) with how many of B and C lie within 20 % of A. Empty unless
     the environment variable KUKA_BC names a directory holding B.mat and C.mat.
     """
-    import os
     if not os.environ.get(KUKA_BC_ENV):
         return []
     bc = Path(os.environ[KUKA_BC_ENV])
     paths = {'A': KUKA, 'B': bc / 'B.mat', 'C': bc / 'C.mat'}
     if not all(p.is_file() for p in paths.values()):
         return []
-    from frf_ident.app.diagnose import diagnose
+    from frf_ident.app.diagnose import diagnose, load_data
     cfg = ROOT / 'config'
     est, rows, slopes = {}, [], {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -552,7 +555,8 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
                            progress=lambda _m: None)
             rep = res['report']
             est[x] = _estimates(rep)
-            slopes[x] = _slopes_by_direction(p, Path(tmp) / x / 'extended_model.yaml')
+            slopes[x] = _slopes_by_direction(load_data(p, cfg / 'map_kuka_kr300.yaml'),
+                                             res['result']['extended'])
             m = rep['metrics']
             rows.append((f'KUKA trajectory {x} fitted: held-out NRMSE nominal -> extended',
                          f'{m["baseline"]["time_nrmse"]:.3f} -> {m["extended"]["time_nrmse"]:.3f}',
@@ -577,24 +581,18 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
     return rows
 
 
-def _slopes_by_direction(data: Path, model: Path) -> dict[str, tuple[float, float, float]]:
+def _slopes_by_direction(rec: Recording, robot: RobotParams
+                         ) -> dict[str, tuple[float, float, float]]:
     """
     Return per axis the viscous slope forward and backward that a record's residual shows.
 
-    The residual of the extended model ``model`` (low-passed, moving rows) regressed on an
+    The residual of the extended model ``robot`` (low-passed, moving rows) regressed on an
     offset, v and |v|: forward slope b + c_v + c_|v|, backward b + c_v - c_|v| (b the model's
     viscous friction), and the block-robust standard error of c_|v|, half their difference.
     """
-    from frf_ident.app.diagnose import load_data
     from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
     from frf_ident.core.diagnosis.timeseries import block_standard_errors, model_residual, moving
-    from frf_ident.core.recording import Recording
-    from frf_ident.io.model_file import load_model
-    robot = load_model(model)[1]
-    full = load_data(data, ROOT / 'config' / 'map_kuka_kr300.yaml')
-    m = robot.n_axes
-    rec = Recording(full.t, full.joint_names[:m], full.position[:, :m], full.velocity[:, :m],
-                    full.effort[:, :m])
+    rec = rec.select_joints(rec.joint_names[:robot.n_axes])
     f, _, v, _ = model_residual(rec, robot)
     rows = moving(v, rec.velocity, rec.fs, FC_HZ)
     out = {}
@@ -673,9 +671,8 @@ def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
     from frf_ident.io.model_file import load_model
     robot = load_model(ROOT / 'config' / 'model_kuka_kr300_axes123.yaml')[1]
     full = load_data(KUKA, ROOT / 'config' / 'map_kuka_kr300.yaml')
-    m = robot.n_axes        # the model's axes are the record's first joints (as diagnose maps)
-    rec = Recording(full.t, full.joint_names[:m], full.position[:, :m], full.velocity[:, :m],
-                    full.effort[:, :m])
+    # the model's axes are the record's first joints (as diagnose maps them)
+    rec = full.select_joints(full.joint_names[:robot.n_axes])
     whole = diagnose_timeseries(rec, robot)
     truth = _estimates(_report(whole))
     f = model_residual(rec, whole['extended'])[0]

@@ -90,27 +90,15 @@ def has_experiments(rec: Recording) -> bool:
         s.info.get('design') in ('multisine', 'chirp') for s in rec.segments)
 
 
-def _select_joints(rec, names):
-    """Return the recording restricted to the named joints, in that order."""
-    from frf_ident.core.recording import Recording
-    idx = [list(rec.joint_names).index(n) for n in names]
-
-    def pick(a):
-        return None if a is None else a[:, idx]
-    return Recording(rec.t, list(names), pick(rec.position), pick(rec.velocity),
-                     pick(rec.effort), pick(rec.reference), pick(rec.excitation),
-                     list(rec.segments), dict(rec.meta))
-
-
 def _match_axes(rec: Recording, robot, model_path: Path, progress) -> Recording:
     if robot.joint_names == list(rec.joint_names):
         return rec
     if set(robot.joint_names) <= set(rec.joint_names):
-        return _select_joints(rec, robot.joint_names)
+        return rec.select_joints(robot.joint_names)
     if robot.n_axes <= len(rec.joint_names):
         progress(f'note: model axes {robot.joint_names} taken in order for the data joints '
                  f'{rec.joint_names[:robot.n_axes]}')
-        return _select_joints(rec, rec.joint_names[:robot.n_axes])
+        return rec.select_joints(rec.joint_names[:robot.n_axes])
     raise FrfIdentInputError(f'--model {model_path}: axes {robot.joint_names} do not match the '
                              f'data joints {rec.joint_names}')
 

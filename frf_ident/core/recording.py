@@ -225,6 +225,34 @@ class Recording:
         """
         return slice(self.index_of(t_start), self.index_of(t_end))
 
+    def select_joints(self, names: list[str]) -> 'Recording':
+        """
+        Return the recording restricted to the named joints, in that order.
+
+        Parameters
+        ----------
+        names : list of str
+            Joint names of this recording.
+
+        Returns
+        -------
+        Recording
+            The same samples, segments and meta, the signals of ``names`` only.
+
+        Raises
+        ------
+        ValueError
+            A name is not one of the recording's joints.
+
+        """
+        idx = [list(self.joint_names).index(n) for n in names]
+
+        def pick(a):
+            return None if a is None else a[:, idx]
+        return Recording(self.t, list(names), pick(self.position), pick(self.velocity),
+                         pick(self.effort), pick(self.reference), pick(self.excitation),
+                         list(self.segments), dict(self.meta))
+
     def segments_where(self, **match: Any) -> list[Segment]:
         """
         Return the segments whose info matches every given key/value.
