@@ -24,9 +24,16 @@ measured by the sweep (``make bench``, section diagnosis).
 """
 import math
 import os
+from pathlib import Path
 import sys
 
-from benchmarks.diagnosis import draw_scene, KINDS, run_scene
+from benchmarks.diagnosis import (draw_scene, identification_config, KINDS, MODEL, PLANT,
+                                  run_scene)
+from frf_ident.app.diagnose import load_data
+from frf_ident.app.identify import run_identify
+from frf_ident.core.diagnosis.experiments import (
+    coupled_ripples, Evaluator, fit_ripple, friction_regression, ripple_resolution)
+from frf_ident.io.model_file import load_model
 import numpy as np
 import pytest
 
@@ -133,3 +140,52 @@ def test_stiffness_mismatch_is_named_with_its_value(scale, tmp_path):
     assert r['found'] == ['parameter_mismatch@joint_2'], r
     assert r['parameters']['parameter_mismatch@joint_2']['stiffness'] == pytest.approx(k, rel=0.1)
     assert r['unexplained'] == [], r
+
+
+def _ripple_reads(axes: dict, tmp_path) -> tuple[list, list]:
+    """Return each axis' stage-1 ripple reading of the reference plant and the coupled ones."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import plants.reference as ref
+    ref.SCENE = {'axes': axes, 'velocity_noise': 2e-5, 'seed': 5}
+    try:
+        run_identify(MODEL, PLANT, identification_config(), tmp_path / 'bag',
+                     progress=lambda _m: None)
+    finally:
+        ref.SCENE = {}
+    _, robot, ctrl = load_model(MODEL)
+    ev = Evaluator(load_data(tmp_path / 'bag'), ctrl)
+    reads = [r for r in (fit_ripple(friction_regression(ev, robot, i), robot, i)
+                         for i in range(robot.n_axes)) if r is not None]
+    return reads, coupled_ripples(reads, robot.link_inertia_matrix(), ripple_resolution(ev))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('own', [None, 2.0])
+def test_a_ripple_seen_through_the_link_coupling_is_not_the_axis_own(own, tmp_path):
+    """
+    Tell another axis' ripple seen through the links from an axis' own ripple.
+
+    Bench seed 41017: joint_3's 6.1 N m ripple at 1024 /rad loads joint_1 through the link
+    coupling at the same spatial frequency in joint_1's position (the axes move together on
+    the constant-velocity run), and joint_1's scan reads it as its own. Here the independent
+    reference plant carries that ripple alone (the reading on joint_1 is the coupling), or
+    with joint_1's own ripple of ``own`` N m (the low end of the bench's range) at 1060 /rad,
+    inside the scan's resolution of joint_3's: that one is joint_1's.
+    """
+    rip3 = {'amplitude': 6.1, 'spatial_frequency': 1024.3, 'phase': 2.66}
+    axes = {'2': {'torque_ripple': [rip3]}}
+    if own:
+        axes['0'] = {'torque_ripple': [{'amplitude': own, 'spatial_frequency': 1060.0,
+                                        'phase': -1.0}]}
+    reads, coupled = _ripple_reads(axes, tmp_path)
+    by_axis = {r.axis: r.parameters['torque_ripple'][-1] for r in reads}
+    msg = f'{by_axis}, coupled: {[c.axis for c in coupled]}'
+    assert abs(by_axis['joint_3']['amplitude'] / 6.1 - 1) < 0.2, msg
+    assert 'joint_3' not in [c.axis for c in coupled], msg
+    if own:
+        assert abs(by_axis['joint_1']['amplitude'] / own - 1) < 0.2, msg
+        assert 'joint_1' not in [c.axis for c in coupled], msg
+    else:
+        # the coupling is seen (else the test shows nothing) and recognised
+        assert 'joint_1' in by_axis, msg
+        assert 'joint_1' in [c.axis for c in coupled], msg
