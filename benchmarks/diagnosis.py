@@ -544,7 +544,7 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
     paths = {'A': KUKA, 'B': bc / 'B.mat', 'C': bc / 'C.mat'}
     if not all(p.is_file() for p in paths.values()):
         return []
-    from frf_ident.app.diagnose import diagnose, load_data
+    from frf_ident.app.diagnose import diagnose
     cfg = ROOT / 'config'
     est, rows, slopes = {}, [], {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -555,8 +555,7 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
                            progress=lambda _m: None)
             rep = res['report']
             est[x] = _estimates(rep)
-            slopes[x] = _slopes_by_direction(load_data(p, cfg / 'map_kuka_kr300.yaml'),
-                                             res['result']['extended'])
+            slopes[x] = _slopes_by_direction(res['recording'], res['result']['extended'])
             m = rep['metrics']
             rows.append((f'KUKA trajectory {x} fitted: held-out NRMSE nominal -> extended',
                          f'{m["baseline"]["time_nrmse"]:.3f} -> {m["extended"]["time_nrmse"]:.3f}',
@@ -586,13 +585,13 @@ def _slopes_by_direction(rec: Recording, robot: RobotParams
     """
     Return per axis the viscous slope forward and backward that a record's residual shows.
 
-    The residual of the extended model ``robot`` (low-passed, moving rows) regressed on an
-    offset, v and |v|: forward slope b + c_v + c_|v|, backward b + c_v - c_|v| (b the model's
-    viscous friction), and the block-robust standard error of c_|v|, half their difference.
+    The residual of the extended model ``robot`` on ``rec`` (its joints the model's axes, as
+    diagnose returns it; low-passed, moving rows) regressed on an offset, v and |v|: forward
+    slope b + c_v + c_|v|, backward b + c_v - c_|v| (b the model's viscous friction), and the
+    block-robust standard error of c_|v|, half their difference.
     """
     from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
     from frf_ident.core.diagnosis.timeseries import block_standard_errors, model_residual, moving
-    rec = rec.select_joints(rec.joint_names[:robot.n_axes])
     f, _, v, _ = model_residual(rec, robot)
     rows = moving(v, rec.velocity, rec.fs, FC_HZ)
     out = {}

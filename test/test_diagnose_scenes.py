@@ -33,7 +33,7 @@ from benchmarks.diagnosis import (draw_scene, identification_config, KINDS, MODE
 from frf_ident.app.diagnose import load_data
 from frf_ident.app.identify import run_identify
 from frf_ident.core.diagnosis.experiments import (
-    coupled_ripples, Evaluator, fit_ripple, friction_regression, ripple_resolution)
+    coupled_ripples, Evaluator, fit_ripple, friction_regression)
 from frf_ident.io.model_file import load_model
 import numpy as np
 import pytest
@@ -155,9 +155,10 @@ def _ripple_reads(scene: dict, tmp_path) -> tuple[list, list]:
         ref.SCENE = {}
     _, robot, ctrl = load_model(MODEL)
     ev = Evaluator(load_data(tmp_path / 'bag'), ctrl)
-    reads = [r for r in (fit_ripple(friction_regression(ev, robot, i), robot, i)
-                         for i in range(robot.n_axes)) if r is not None]
-    return reads, coupled_ripples(reads, robot.link_inertia_matrix(), ripple_resolution(ev))
+    regs = [friction_regression(ev, robot, i) for i in range(robot.n_axes)]
+    reads = [r for r in (fit_ripple(g, robot, i) for i, g in enumerate(regs)) if r is not None]
+    return reads, coupled_ripples(reads, robot.link_inertia_matrix(),
+                                  np.array([g.ripple_resolution for g in regs]))
 
 
 @pytest.mark.slow

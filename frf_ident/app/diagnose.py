@@ -126,7 +126,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
 
     Returns
     -------
-    {'report': report.json content, 'result': the diagnosis result, 'mode': ...}
+    {'report': report.json content, 'result': the diagnosis result, 'mode': ...,
+    'recording': the diagnosed data, its joints matched to the model's axes}
 
     """
     from frf_ident.core.diagnosis import diagnose_experiments, diagnose_timeseries
@@ -169,7 +170,7 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         report['gaps'] = rec.meta['gaps']
     (out / 'report.json').write_text(json.dumps(report, indent=1))
     write_diagnosis_report(out, report, res, rec, mode, data)
-    return {'report': report, 'result': res, 'mode': mode}
+    return {'report': report, 'result': res, 'mode': mode, 'recording': rec}
 
 
 def _rejected(c) -> dict[str, Any]:

@@ -1053,7 +1053,8 @@ def coupled_ripples(cands: list[Effect], inertia: np.ndarray, resolution: np.nda
     inertia : ndarray, shape (n, n)
         Link inertia matrix M of the model (:meth:`RobotParams.link_inertia_matrix`).
     resolution : ndarray, shape (n,)
-        Spatial-frequency resolution [1/rad] of each axis' ripple scan, 2 pi / travel.
+        Spatial-frequency resolution [1/rad] of each axis' ripple scan
+        (``Regression.ripple_resolution``).
 
     Returns
     -------
@@ -1069,14 +1070,6 @@ def coupled_ripples(cands: list[Effect], inertia: np.ndarray, resolution: np.nda
         <= max(resolution[j], resolution[i])
         and r['amplitude'] <= abs(inertia[j, i] / inertia[i, i]) * p['amplitude']
         for i, _, p in rip)]
-
-
-def ripple_resolution(ev: Evaluator) -> np.ndarray:
-    """Return per axis 2 pi / the travel of the constant-velocity run (inf without one)."""
-    run = segment_mask(ev.fit, ('constant_velocity',)) & ~ev.missing
-    travel = np.ptp(ev.rec.position[run], axis=0) if run.any() else np.zeros(
-        ev.rec.position.shape[1])
-    return np.where(travel > 0, 2 * math.pi / np.maximum(travel, 1e-300), math.inf)
 
 
 def _left_unexplained(val_ext: np.ndarray, val_base: np.ndarray, i: int) -> bool:
@@ -1117,8 +1110,10 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     cands: list[Effect] = []
     kept: list[Effect] = []
     stage1 = []
+    resolution = np.full(robot.n_axes, math.inf)
     for i in range(robot.n_axes):
         reg = friction_regression(ev, robot, i)
+        resolution[i] = reg.ripple_resolution
         say(f'{robot.axes[i].name}: residual regression '
             f'{ {k: round(v, 4) for k, v in reg.coef.items()} }, ripple scan peak '
             f'{reg.ripple_peak_ratio:.1f} (threshold {reg.ripple_threshold:.1f})')
@@ -1129,7 +1124,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         e = fit_gravity(ev, robot, i)
         if e is not None:
             stage1.append(e)
-    for c in coupled_ripples(stage1, robot.link_inertia_matrix(), ripple_resolution(ev)):
+    for c in coupled_ripples(stage1, robot.link_inertia_matrix(), resolution):
         # the link coupling of a stronger ripple at the same spatial frequency on another
         # axis, not a ripple of this one (bench seed 41017: joint_1 named 0.15 N m at
         # 1026 /rad beside joint_3's 6.1 N m at 1024 /rad)

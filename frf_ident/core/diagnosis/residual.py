@@ -205,6 +205,8 @@ class Regression:
     n_eff: float = 0.0
     q0: float = 0.0          # mean position of the regressed samples [rad]
     travel: float = 0.0      # their position range [rad]
+    #: spatial-frequency resolution of the ripple scan [1/rad]: 2 pi / the scanned travel
+    ripple_resolution: float = math.inf
 
 
 def _ls(X: np.ndarray, y: np.ndarray, n_eff: float):
@@ -319,14 +321,18 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
     ff = lowpass(f, fs, fc)
     n_eff = effective_samples(int(m.sum()), fs, fc)
     rip: list[dict[str, float]] = []
-    peak, thr = 0.0, math.inf
+    peak, thr, resolution = 0.0, math.inf, math.inf
     if ripple:
         # the scan sees the residual low-passed only at 0.45 fs: a ripple reaches up to the
         # sample limit, above the regression's fc
         X0 = np.column_stack([lowpass(c, fs, fc) for c in cols.values()])
         c0, *_ = np.linalg.lstsq(X0[m], ff[m], rcond=None)
         wide = lowpass(f, fs, 0.45 * fs) - np.column_stack(list(cols.values())) @ c0
-        s, peak, thr = find_ripple(wide, q, m if ripple_mask is None else ripple_mask)
+        scanned = m if ripple_mask is None else ripple_mask
+        s, peak, thr = find_ripple(wide, q, scanned)
+        s_min = ripple_range(q, scanned)[0]
+        if s_min > 0:
+            resolution = s_min / RIPPLE_MIN_CYCLES
         if s > 0:
             cols['ripple_sin'] = np.sin(s * q)
             cols['ripple_cos'] = np.cos(s * q)
@@ -362,4 +368,5 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
         rip = [{'amplitude': amp, 'spatial_frequency': s,
                 'phase': math.atan2(-cf['ripple_cos'], -cf['ripple_sin']), 't': tr}]
     return Regression(cf, ts, pr2, rip, peak, thr, float(np.sqrt(np.mean(res ** 2))),
-                      float(np.std(lowpass(u, fs, fc)[m])), n_eff)
+                      float(np.std(lowpass(u, fs, fc)[m])), n_eff,
+                      ripple_resolution=resolution)
