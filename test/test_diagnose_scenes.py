@@ -196,3 +196,21 @@ def test_a_ripple_seen_through_the_link_coupling_is_not_the_axis_own(own, tmp_pa
         # recognised
         assert abs(by_axis['joint_1']['spatial_frequency'] / 1024.3 - 1) < 0.01, msg
         assert 'joint_1' in [c.axis for c in coupled], msg
+
+
+@pytest.mark.slow
+def test_friction_fitted_next_to_a_coupled_axis_misfit_is_refitted(tmp_path):
+    """
+    Name a viscous friction whose regression reads it with the wrong sign, with its value.
+
+    Bench seed 51009 (scene 9 of the sweep from 51000): joint_2's viscous friction is 58.2
+    (nominal 25) beside its 7.9 N m ripple, joint_1 has a backlash and joint_3 a stiffening
+    gear 1.2e4 noise floors off. joint_2's residual regression reads the viscous correction
+    as -239 (t = 4.8): floored at 0 it made the axis worse, and a Coulomb friction of 0.77 was
+    named in its place. A clear reading that fails is refitted by simulation over the whole
+    range (42.8), and, fitted while joint_3 was so far off, refitted jointly with the ripple
+    once joint_3's stiffening is in the model.
+    """
+    r = run_scene(scene_of(51000, 9), tmp_path)
+    assert sorted(r['found']) == sorted(r['hidden']), r
+    assert all(e < 0.2 for e in r['param_errors'].values()), r
