@@ -208,8 +208,8 @@ def test_friction_fitted_next_to_a_coupled_axis_misfit_is_refitted(tmp_path):
     gear 1.2e4 noise floors off. joint_2's residual regression reads the viscous correction
     as -239 (t = 4.8): floored at 0 it made the axis worse, and a Coulomb friction of 0.77 was
     named in its place. A clear reading that fails is refitted by simulation over the whole
-    range (42.8), and, fitted while joint_3 was so far off, refitted jointly with the ripple
-    once joint_3's stiffening is in the model.
+    range (42.8), and, fitted while joint_3 was so far off, refitted once joint_3's
+    stiffening is in the model.
     """
     r = run_scene(scene_of(51000, 9), tmp_path)
     assert sorted(r['found']) == sorted(r['hidden']), r
