@@ -1253,9 +1253,8 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     # so does an axis whose effects were all fitted in stage 1, next to another axis' FRF-shape
     # effect that the model still lacked: the link coupling carried that axis' misfit into its
     # simulation (bench seed 51009: joint_2's viscous friction refitted to 42.8 while a
-    # stiffening joint_3 was 1.2e4 floors off; truth 58.2)
-    # (its ripple amplitude is not: near the floor it trades with the phase drift of a
-    # spatial frequency known only within the scan's resolution)
+    # stiffening joint_3 was 1.2e4 floors off; truth 58.2). Its ripple amplitude is left alone
+    # (``refit_jointly``, ``ripple``)
     early = ({c.axis_index for c in kept if c not in stage2} - shaped) if shaped else set()
     for i in range(robot.n_axes):
         above = cur[i] > UNEXPLAINED_RATIO * ev.floor_seen(cur)[i]
