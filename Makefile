@@ -34,7 +34,7 @@ demo: $(STAMP)
 	$(PY) -m frf_ident demo --out $(OUT)/demo
 
 test: $(STAMP)
-	$(PY) -m pytest -q -ra test
+	$(PY) -m pytest -q -ra --durations=15 test
 
 bench: $(STAMP)
 	$(PY) -m benchmarks

@@ -68,9 +68,13 @@ def prefix(tmp_path_factory):
     return pre, site
 
 
-def _env(ros_env, prefix):
+def _env(ros_env, prefix, tmp_path):
     pre, site = prefix
     env = dict(ros_env)
+    # launch_ros writes each node's parameter dict to a launch_params_* file it never deletes
+    # (ros2/launch_ros#5): they go to the test's own directory, not /tmp
+    env['TMPDIR'] = str(tmp_path / 'tmp')
+    (tmp_path / 'tmp').mkdir()
     env['AMENT_PREFIX_PATH'] = os.pathsep.join([str(pre), env.get('AMENT_PREFIX_PATH', '')])
     parts = [site] + [p for p in env.get('PYTHONPATH', '').split(os.pathsep)
                       if p and Path(p).resolve() != ROOT]
@@ -150,7 +154,7 @@ def _until(pred, timeout, what):
 
 
 def test_launch_sim(ros_env, prefix, tmp_path):
-    env = _env(ros_env, prefix)
+    env = _env(ros_env, prefix, tmp_path)
     bag = tmp_path / 'run1'
     cwd = tmp_path / 'cwd'
     cwd.mkdir()
@@ -191,11 +195,12 @@ def test_launch_sim(ros_env, prefix, tmp_path):
     meta = (bag / 'metadata.yaml').read_text()
     assert 'ros_distro: jazzy' in meta, meta[-300:]
     assert not list(cwd.glob('frf_bag_*')), 'bag:= was ignored'
+    assert list((tmp_path / 'tmp').glob('launch_params_*')), 'TMPDIR was ignored'
 
 
 def test_launch_real_robot_mode(ros_env, prefix, tmp_path):
     """sim:=false: no plant or controller; excitation and estimator run free on wall time."""
-    env = _env(ros_env, prefix)
+    env = _env(ros_env, prefix, tmp_path)
     obs = _Observer(int(env['ROS_DOMAIN_ID']))
     proc = _launch(env, tmp_path, 'sim:=false', f'bag:={tmp_path / "robot_bag"}')
     log = []
