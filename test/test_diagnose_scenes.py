@@ -84,8 +84,7 @@ def test_scene_drawn_at_random(draw, tmp_path):
     # a random draw that failed CI: joint_2 sticks, its regression reads Coulomb friction
     # twice too high, a viscous term and a damping mismatch took its place
     ('random', 7189810),
-    ('clean', 2027),
-    ('gravity', 14)])   # + stiffening on its axis
+    ('clean', 2027)])
 def test_scene_of_the_reference_plant(kind, seed, tmp_path):
     scene = draw_scene(np.random.default_rng(seed), kind)
     r = run_scene(scene, tmp_path)
@@ -212,5 +211,21 @@ def test_friction_fitted_next_to_a_coupled_axis_misfit_is_refitted(tmp_path):
     stiffening is in the model.
     """
     r = run_scene(scene_of(51000, 9), tmp_path)
+    assert sorted(r['found']) == sorted(r['hidden']), r
+    assert all(e < 0.2 for e in r['param_errors'].values()), r
+
+
+@pytest.mark.slow
+def test_gravity_beside_a_stiffening_gear_on_its_axis_is_named(tmp_path):
+    """
+    Name a load the stiffening gear of its axis absorbed, with its value.
+
+    Bench seed 51023 (scene 23 of the sweep from 51000): joint_2 carries 277 sin(q + 2.671)
+    N m and a stiffening gear, joint_3 a ripple. The stage-1 reading of the load is right
+    (279 at 2.664), but the stiffening fitted without it leaves joint_2 below its floor, and
+    offered on top of that fit the load worsened the axis (0.66 -> 2.27 floors): the load
+    was missed. Offered with the stiffening refitted beside it, it is named.
+    """
+    r = run_scene(scene_of(51000, 23), tmp_path)
     assert sorted(r['found']) == sorted(r['hidden']), r
     assert all(e < 0.2 for e in r['param_errors'].values()), r

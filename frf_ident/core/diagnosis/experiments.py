@@ -636,13 +636,14 @@ def refit_friction(ev: Evaluator, robot: RobotParams, cand: Effect, *, local: bo
                                             f'effects: {float(sol.x):.4g}')
 
 
+_GRAVITY_SLOTS = {'gravity_amplitude': 'amplitude', 'gravity_phase': 'phase'}
 _REFIT_KEYS = ('coulomb_friction', 'viscous_friction', 'time_delay', 'stiffness_k2',
                'stiffness_breakpoint', 'backlash') + _LIN_KEYS
 
 
 def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: int,
-                  cur: np.ndarray, say: Callable[[str], None], *, ripple: bool = True
-                  ) -> tuple[RobotParams, np.ndarray]:
+                  cur: np.ndarray, say: Callable[[str], None], *, ripple: bool = True,
+                  gravity: bool = False) -> tuple[RobotParams, np.ndarray]:
     """
     Refit the scalar parameters of the kept effects of one axis jointly by simulation.
 
@@ -672,6 +673,8 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
         the scan's resolution and is not refitted: where the rest of the axis is explained
         the amplitude alone trades with the phase drift of a frequency a little off (demo
         bag: 4.01 -> 3.24 N m at 122.3 /rad for a true 4 at 120).
+    gravity : bool
+        Refit the added gravity term's amplitude (log scale) and phase (in radians) too.
 
     Returns
     -------
@@ -684,9 +687,12 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
              if k in _REFIT_KEYS and isinstance(v, (int, float)) and v > 0]
     # a ripple's amplitude (the entry the diagnosis added: the last one)
     slots += [(c, 'torque_ripple') for c in mine if ripple and c.name == 'torque_ripple']
+    # the added gravity term (the last one): amplitude and phase
+    slots += [(c, k) for c in mine if gravity and c.name == 'gravity' for k in _GRAVITY_SLOTS]
     if not slots:
         return _rebuild(base, kept), cur
     start = [float(c.parameters[k][-1]['amplitude'] if k == 'torque_ripple'
+                   else c.parameters['gravity'][-1][_GRAVITY_SLOTS[k]] if k in _GRAVITY_SLOTS
                    else c.parameters[k]) for c, k in slots]
 
     def params(x):
@@ -696,6 +702,12 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
             if k == 'torque_ripple':
                 p[k] = [dict(r) for r in p[k]]
                 p[k][-1]['amplitude'] = v * math.exp(d)
+            elif k in _GRAVITY_SLOTS:
+                if p['gravity'] is c.parameters['gravity']:
+                    p['gravity'] = [dict(t) for t in p['gravity']]
+                # the phase moves in radians, the amplitude by its log scale factor
+                p['gravity'][-1][_GRAVITY_SLOTS[k]] = (
+                    float(v + d) if k == 'gravity_phase' else v * math.exp(d))
             else:
                 p[k] = v * math.exp(d)
         return out
@@ -716,11 +728,66 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
         return _rebuild(base, kept), cur
     p = params(sol.x)
     say(f'  {mine[0].axis}: effects refitted jointly, misfit {cur[axis]:.4g} -> '
-        f'{new[axis]:.4g}: ' + ', '.join(f'{k} {v * math.exp(d):.4g}'
-                                         for (c, k), v, d in zip(slots, start, sol.x)))
+        f'{new[axis]:.4g}: ' + ', '.join(
+            f'{k} {v + d if k == "gravity_phase" else v * math.exp(d):.4g}'
+            for (c, k), v, d in zip(slots, start, sol.x)))
     for c in mine:
         if id(c) in p:
             c.parameters = p[id(c)]
+    return ext, new
+
+
+def gravity_with_shape(ev: Evaluator, base: RobotParams, kept: list[Effect], cand: Effect,
+                       cur: np.ndarray, say: Callable[[str], None]
+                       ) -> tuple[RobotParams, np.ndarray]:
+    """
+    Offer a gravity candidate with its axis' FRF-shape effects refitted jointly beside it.
+
+    A load G sin(q + phi) sets the gear's deflection at every position. A stiffening spring or
+    a backlash fitted while the model lacked the load has absorbed that shift; offered on top
+    of it, the right load worsens the axis (bench seed 51023: 0.66 -> 2.27 floors). The
+    candidate is added, the axis' kept effects are refitted jointly by simulation
+    (:func:`refit_jointly`), and the pair replaces the axis' effects if it passes the
+    acceptance rule of :func:`_accept` against the model without the load (share of the
+    misfit above the floor >= MIN_SHARE, drop >= MIN_Z standard deviations under noise).
+
+    Parameters
+    ----------
+    ev : Evaluator
+        The recording's evaluator.
+    base : RobotParams
+        The nominal model.
+    kept : list of Effect
+        The kept effects, updated in place when the candidate is taken.
+    cand : Effect
+        The gravity candidate (stage 1).
+    cur : ndarray
+        Misfit per axis of the model of ``kept``.
+    say : callable
+        Progress lines.
+
+    Returns
+    -------
+    (RobotParams, ndarray)
+        The extended model and its misfit per axis.
+
+    """
+    i = cand.axis_index
+    trial = [replace(k) if k.axis_index == i else k for k in kept] + [replace(cand)]
+    with_load = ev.misfit(ev.terms(_rebuild(base, trial)))
+    ext, new = refit_jointly(ev, base, trial, i, with_load, say, gravity=True)
+    gain = cur[i] - new[i]
+    fl = ev.floor_seen(new)[i]
+    share = gain / (cur[i] - fl) if cur[i] > fl else 0.0
+    say(f"  {cand.axis} gravity with the axis' effects refitted beside it: misfit "
+        f'{cur[i]:.4g} -> {with_load[i]:.4g} on top, {new[i]:.4g} refitted (share {share:.3f})')
+    if share < MIN_SHARE or gain < MIN_Z * ev.misfit_sd():
+        return _rebuild(base, kept), cur
+    cand.parameters = trial[-1].parameters
+    cand.gain = cand.score = float(np.clip(share, 0.0, 1.0))
+    for k, t in zip(kept, trial):
+        k.parameters = t.parameters
+    kept.append(cand)
     return ext, new
 
 
@@ -1245,6 +1312,9 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
                 r = refit_friction(ev, ext, c)
                 c.parameters, c.evidence = r.parameters, r.evidence
         ext, cur = _accept(ev, robot, kept, again, cur, say)
+        for c in again:
+            if c.name == 'gravity' and c not in kept and c.axis_index in shaped:
+                ext, cur = gravity_with_shape(ev, robot, kept, c, cur, say)
     # joint refit: an axis still clearly above its floor refits its effects' parameters
     # together by simulation (each was fitted on top of the model of its time); so does an
     # axis that took a second-pass effect (read from a regression against a model that lacked
