@@ -637,6 +637,13 @@ def refit_friction(ev: Evaluator, robot: RobotParams, cand: Effect, *, local: bo
 
 
 _GRAVITY_SLOTS = {'gravity_amplitude': 'amplitude', 'gravity_phase': 'phase'}
+
+
+def _slot_value(key: str, start: float, d: float) -> float:
+    """Return a refitted slot's value: a phase moves in radians, the rest by exp(d)."""
+    return float(start + d) if key == 'gravity_phase' else start * math.exp(d)
+
+
 _REFIT_KEYS = ('coulomb_friction', 'viscous_friction', 'time_delay', 'stiffness_k2',
                'stiffness_breakpoint', 'backlash') + _LIN_KEYS
 
@@ -672,7 +679,8 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
         Refit the added ripple's amplitude too. Its spatial frequency is known only within
         the scan's resolution and is not refitted: where the rest of the axis is explained
         the amplitude alone trades with the phase drift of a frequency a little off (demo
-        bag: 4.01 -> 3.24 N m at 122.3 /rad for a true 4 at 120).
+        bag diagnosed at commit 2b6c1fa, which refitted it: 4.01 -> 3.24 N m at 122.3 /rad
+        for a true 4 at 120).
     gravity : bool
         Refit the added gravity term's amplitude (log scale) and phase (in radians) too.
 
@@ -701,15 +709,13 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
             p = out.setdefault(id(c), dict(c.parameters))
             if k == 'torque_ripple':
                 p[k] = [dict(r) for r in p[k]]
-                p[k][-1]['amplitude'] = v * math.exp(d)
+                p[k][-1]['amplitude'] = _slot_value(k, v, d)
             elif k in _GRAVITY_SLOTS:
                 if p['gravity'] is c.parameters['gravity']:
                     p['gravity'] = [dict(t) for t in p['gravity']]
-                # the phase moves in radians, the amplitude by its log scale factor
-                p['gravity'][-1][_GRAVITY_SLOTS[k]] = (
-                    float(v + d) if k == 'gravity_phase' else v * math.exp(d))
+                p['gravity'][-1][_GRAVITY_SLOTS[k]] = _slot_value(k, v, d)
             else:
-                p[k] = v * math.exp(d)
+                p[k] = _slot_value(k, v, d)
         return out
 
     def mk(x):
@@ -728,9 +734,8 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
         return _rebuild(base, kept), cur
     p = params(sol.x)
     say(f'  {mine[0].axis}: effects refitted jointly, misfit {cur[axis]:.4g} -> '
-        f'{new[axis]:.4g}: ' + ', '.join(
-            f'{k} {v + d if k == "gravity_phase" else v * math.exp(d):.4g}'
-            for (c, k), v, d in zip(slots, start, sol.x)))
+        f'{new[axis]:.4g}: ' + ', '.join(f'{k} {_slot_value(k, v, d):.4g}'
+                                         for (c, k), v, d in zip(slots, start, sol.x)))
     for c in mine:
         if id(c) in p:
             c.parameters = p[id(c)]
@@ -745,7 +750,9 @@ def gravity_with_shape(ev: Evaluator, base: RobotParams, kept: list[Effect], can
 
     A load G sin(q + phi) sets the gear's deflection at every position. A stiffening spring or
     a backlash fitted while the model lacked the load has absorbed that shift; offered on top
-    of it, the right load worsens the axis (bench seed 51023: 0.66 -> 2.27 floors). The
+    of it, the right load worsens the axis (bench seed 51023: 0.66 -> 2.27 floors). Of the
+    stage-1 candidates only the load acts on the link side: friction and ripple act at the
+    motor and leave the gear's static deflection alone, so they are offered on top. The
     candidate is added, the axis' kept effects are refitted jointly by simulation
     (:func:`refit_jointly`), and the pair replaces the axis' effects if it passes the
     acceptance rule of :func:`_accept` against the model without the load (share of the
@@ -776,12 +783,10 @@ def gravity_with_shape(ev: Evaluator, base: RobotParams, kept: list[Effect], can
     trial = [replace(k) if k.axis_index == i else k for k in kept] + [replace(cand)]
     with_load = ev.misfit(ev.terms(_rebuild(base, trial)))
     ext, new = refit_jointly(ev, base, trial, i, with_load, say, gravity=True)
-    gain = cur[i] - new[i]
-    fl = ev.floor_seen(new)[i]
-    share = gain / (cur[i] - fl) if cur[i] > fl else 0.0
+    gain, share = share_of_misfit(ev, cur, new, i)
     say(f"  {cand.axis} gravity with the axis' effects refitted beside it: misfit "
         f'{cur[i]:.4g} -> {with_load[i]:.4g} on top, {new[i]:.4g} refitted (share {share:.3f})')
-    if share < MIN_SHARE or gain < MIN_Z * ev.misfit_sd():
+    if not passes(ev, gain, share):
         return _rebuild(base, kept), cur
     cand.parameters = trial[-1].parameters
     cand.gain = cand.score = float(np.clip(share, 0.0, 1.0))
@@ -799,6 +804,36 @@ def _rebuild(robot: RobotParams, effects: list[Effect]) -> RobotParams:
     return robot
 
 
+def share_of_misfit(ev: Evaluator, cur: np.ndarray, new: np.ndarray, i: int
+                    ) -> tuple[float, float]:
+    """
+    Return the drop of axis i's misfit from ``cur`` to ``new`` and its share above the floor.
+
+    Parameters
+    ----------
+    ev : Evaluator
+        The recording's evaluator (its floor takes ``new`` into its record).
+    cur, new : ndarray
+        Misfit per axis without and with the change.
+    i : int
+        The axis.
+
+    Returns
+    -------
+    (float, float)
+        The drop and its share of the misfit above the floor (0 for an axis at its floor).
+
+    """
+    gain = float(cur[i] - new[i])
+    fl = ev.floor_seen(new)[i]
+    return gain, (gain / (cur[i] - fl) if cur[i] > fl else 0.0)
+
+
+def passes(ev: Evaluator, gain: float, share: float) -> bool:
+    """Return the acceptance rule: share >= MIN_SHARE and a drop >= MIN_Z sd under noise."""
+    return share >= MIN_SHARE and gain >= MIN_Z * ev.misfit_sd()
+
+
 def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Effect],
             cur: np.ndarray, say: Callable[[str], None]) -> tuple[RobotParams, np.ndarray]:
     """
@@ -811,17 +846,10 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
     A candidate of an effect already kept on its axis (a friction level read again with the
     axis' time delay) is a new value for it: taken, it replaces the kept one.
     """
-    sd = ev.misfit_sd()
     ext = _rebuild(base, kept)
     pending = list(cands)
     taken: set[tuple[str, str]] = set()
     rnd = 0
-
-    def share_of(e_c: np.ndarray, i: int) -> tuple[float, float]:
-        # gain and share of axis i's misfit above its floor (an axis at its floor has none)
-        gain = cur[i] - e_c[i]
-        fl = ev.floor_seen(e_c)[i]
-        return gain, (gain / (cur[i] - fl) if cur[i] > fl else 0.0)
 
     while pending:
         scored = []
@@ -835,7 +863,7 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
                 r = refit_friction(ev, ext, c, local=True)
                 c.parameters, c.evidence = r.parameters, r.evidence
             e_c = ev.misfit(ev.terms(apply_effect(ext, c)))
-            gain, share = share_of(e_c, i)
+            gain, share = share_of_misfit(ev, cur, e_c, i)
             if (not refitted and share < MIN_SHARE and c.name in _FRICTION
                     and c.support >= REFIT_T):
                 # the regression clearly sees the friction term but its value makes the
@@ -852,11 +880,11 @@ def _accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Ef
                     f'{e_c[i]:.4g} -> {e_r[i]:.4g}')
                 if e_r[i] < e_c[i]:
                     c.parameters, c.evidence, e_c = r.parameters, r.evidence, e_r
-                    gain, share = share_of(e_c, i)
+                    gain, share = share_of_misfit(ev, cur, e_c, i)
             c.gain = float(share)
             say(f'  {c.axis} {c.name}: misfit {cur[i]:.4g} -> {e_c[i]:.4g} '
                 f'(share {share:.3f}) {c.parameters}')
-            if share >= MIN_SHARE and gain >= MIN_Z * sd:
+            if passes(ev, gain, share):
                 scored.append((share, c))
         best: dict[int, Effect] = {}
         by_axis: dict[int, list[Effect]] = {}
