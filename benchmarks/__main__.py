@@ -81,6 +81,19 @@ def bench_simulation() -> list[tuple[str, str, str, str]]:
     return rows
 
 
+@section('discretisation')
+def bench_discretisation() -> list[tuple[str, str, str, str]]:
+    """
+    Measure the plant's discretisation error per effect against a converged simulation.
+
+    The linear part is integrated exactly (the baseline column); each nonlinear effect adds an
+    error that falls with the substeps as its order says (log2 of the error ratio from m to
+    2 m, the last column).
+    """
+    from benchmarks.discretisation import rows
+    return rows()
+
+
 @section('estimation')
 def bench_estimation() -> list[tuple[str, str, str, str]]:
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation

@@ -118,3 +118,17 @@ def test_gravity_equilibrium_holds_at_rest():
     plant = FlexibleJointPlant(rob)
     res = plant.simulate(torque=np.tile(plant.equilibrium_torque(), (1000, 1)))
     assert np.max(np.abs(res.velocity)) < 1e-9
+
+
+@pytest.mark.parametrize('name, order', [
+    ('Coulomb friction 15 N m', 1.0), ('backlash 5e-5 rad', 1.0),
+    ('stiffening k2 = 1.5 k1 beyond 2.5e-4 rad', 2.0), ('torque ripple 4 N m at 120 /rad', 2.0)])
+def test_discretisation_error_falls_with_the_order_of_each_effect(name, order):
+    # truth: the same closed-loop run at 32 substeps; the linear part is exact, a switching
+    # nonlinearity (stick-slip, backlash contact) first order, a smooth one second order
+    from benchmarks.discretisation import discretisation_error, EFFECTS, orders
+    assert discretisation_error({}, 1, seconds=4.0, reference_substeps=32) < 1e-8
+    err = [discretisation_error(EFFECTS[name], m, seconds=4.0, reference_substeps=32)
+           for m in (1, 2, 4)]
+    assert err[0] > 1e-7
+    assert all(abs(o - order) < 0.35 for o in orders(err)), (err, orders(err))

@@ -134,10 +134,12 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
                                  f'of numbers, got {coupling!r}') from None
     return RobotParams(
         axes=axes, link_coupling=coupling,
-        sample_rate=_number('sample_rate', d.get('sample_rate', 1000.0)),
-        substeps=int(_number('simulation.substeps', sim.get('substeps', 2))),
-        velocity_from_encoder=bool(sim.get('velocity_from_encoder', False)),
-        seed=int(_number('simulation.seed', sim.get('seed', 0))))
+        sample_rate=_number('sample_rate', d.get('sample_rate', RobotParams.sample_rate)),
+        substeps=int(_number('simulation.substeps',
+                             sim.get('substeps', RobotParams.substeps))),
+        velocity_from_encoder=bool(sim.get('velocity_from_encoder',
+                                           RobotParams.velocity_from_encoder)),
+        seed=int(_number('simulation.seed', sim.get('seed', RobotParams.seed))))
 
 
 def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
