@@ -166,6 +166,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
               'unexplained': res.get('unexplained', []),
               'rejected': res.get('rejected', [_rejected(c) for c in res.get('candidates', [])]),
               'extended_model': 'extended_model.yaml'}
+    if 'discretisation' in res:
+        report['discretisation'] = res['discretisation']
     if rec.meta.get('gaps'):
         report['gaps'] = rec.meta['gaps']
     (out / 'report.json').write_text(json.dumps(report, indent=1))

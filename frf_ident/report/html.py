@@ -409,6 +409,17 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
                            v['baseline']['time_nrmse']],
                           ['extended', v['extended']['frf_error_db'],
                            v['extended']['time_nrmse']]]))
+    step = report.get('discretisation')
+    if step:
+        met += (f'<p>Integrator check: the extended model simulated at twice its '
+                f'simulation.substeps ({step["substeps"]}) moves the held-out misfit '
+                + ', '.join(f'{ax} {x:.4g} -> {y:.4g}' for ax, x, y in zip(
+                    m['extended'].get('per_axis', {}), step['held_out_misfit'],
+                    step['held_out_misfit_double_substeps']))
+                + ' noise floors; '
+                + (html.escape(', '.join(step['too_coarse'])) + ': simulated too coarsely for '
+                   'this record, raise simulation.substeps in the model file.</p>'
+                   if step['too_coarse'] else 'within the noise on every axis.</p>'))
     rej = report.get('rejected', [])
     rej_html = (_table(list(rej[0].keys()), [list(r.values()) for r in rej]) if rej else
                 '<p>none.</p>')

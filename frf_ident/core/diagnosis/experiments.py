@@ -1174,6 +1174,41 @@ def coupled_ripples(cands: list[Effect], inertia: np.ndarray, resolution: np.nda
         for i, _, p in rip)]
 
 
+def discretisation_check(ev: Evaluator, robot: RobotParams, val: np.ndarray
+                         ) -> dict[str, Any]:
+    """
+    Return how much the model's held-out misfit owes to the integrator's step.
+
+    The plant's error is first order in the substep where friction sticks or backlash closes
+    (benchmarks/discretisation.py): part of every misfit the diagnosis computes is the
+    integrator's. The model is simulated once more at twice ``simulation.substeps``; an axis
+    whose held-out misfit moves by more than MIN_Z standard deviations of the misfit under
+    noise is simulated too coarsely for this record.
+
+    Parameters
+    ----------
+    ev : Evaluator
+        The recording's evaluator.
+    robot : RobotParams
+        The model (the extended one).
+    val : ndarray, shape (n_axes,)
+        Its held-out misfit per axis at its own substeps.
+
+    Returns
+    -------
+    dict
+        ``substeps``, ``held_out_misfit`` and ``held_out_misfit_double_substeps`` per axis,
+        ``too_coarse``: the names of the axes whose misfit moved.
+
+    """
+    fine = ev.misfit(ev.terms(replace(robot, substeps=2 * int(robot.substeps)), held_out=True))
+    moved = np.abs(fine - val) > MIN_Z * ev.misfit_sd()
+    return {'substeps': int(robot.substeps),
+            'held_out_misfit': [round(float(x), 4) for x in val],
+            'held_out_misfit_double_substeps': [round(float(x), 4) for x in fine],
+            'too_coarse': [a.name for a, m in zip(robot.axes, moved) if m]}
+
+
 def _left_unexplained(val_ext: np.ndarray, val_base: np.ndarray, i: int) -> bool:
     """Return true when axis i's held-out misfit stays clearly above its noise floor."""
     share = (val_ext[i] - 1) / max(val_base[i] - 1, 1e-12)
@@ -1465,9 +1500,18 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
              'nominal': estimates(replace_segments(sim0, ev.val if ev.val.segments else ev.fit)),
              'extended': estimates(replace_segments(sim_ext,
                                                     ev.val if ev.val.segments else ev.fit))}
+    step = discretisation_check(ev, ext, val_ext)
+    if step['too_coarse']:
+        say(f'simulation.substeps = {step["substeps"]} is too coarse for this record: at '
+            f'twice as many the held-out misfit moves from '
+            + ', '.join(f'{a.name} {x:.4g} to {y:.4g}' for a, x, y in zip(
+                robot.axes, step['held_out_misfit'], step['held_out_misfit_double_substeps'])
+                if a.name in step['too_coarse'])
+            + ' noise floors: raise simulation.substeps in the model file')
     say(f'{ev.n_sims} simulations of the recorded excitation')
     return {'effects': kept, 'candidates': [c for c in cands if c not in kept],
             'extended': ext, 'metrics': metrics, 'unexplained': unexplained,
+            'discretisation': step,
             'misfit': {'baseline': val_base.tolist(), 'extended': val_ext.tolist()},
             'estimates': plots, 'sims': {'nominal': sim0, 'extended': sim_ext},
             'evaluator': ev, 'n_sims': ev.n_sims}
