@@ -636,7 +636,10 @@ def refit_friction(ev: Evaluator, robot: RobotParams, cand: Effect, *, local: bo
                                             f'effects: {float(sol.x):.4g}')
 
 
-_GRAVITY_SLOTS = {'gravity_amplitude': 'amplitude', 'gravity_phase': 'phase'}
+#: refit slots inside the last term of a list-valued parameter: slot -> (parameter, field)
+_TERM_SLOTS = {'torque_ripple': ('torque_ripple', 'amplitude'),
+               'gravity_amplitude': ('gravity', 'amplitude'),
+               'gravity_phase': ('gravity', 'phase')}
 
 
 def _slot_value(key: str, start: float, d: float) -> float:
@@ -696,24 +699,22 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
     # a ripple's amplitude (the entry the diagnosis added: the last one)
     slots += [(c, 'torque_ripple') for c in mine if ripple and c.name == 'torque_ripple']
     # the added gravity term (the last one): amplitude and phase
-    slots += [(c, k) for c in mine if gravity and c.name == 'gravity' for k in _GRAVITY_SLOTS]
+    slots += [(c, k) for c in mine if gravity and c.name == 'gravity'
+              for k in ('gravity_amplitude', 'gravity_phase')]
     if not slots:
         return _rebuild(base, kept), cur
-    start = [float(c.parameters[k][-1]['amplitude'] if k == 'torque_ripple'
-                   else c.parameters['gravity'][-1][_GRAVITY_SLOTS[k]] if k in _GRAVITY_SLOTS
+    start = [float(c.parameters[_TERM_SLOTS[k][0]][-1][_TERM_SLOTS[k][1]] if k in _TERM_SLOTS
                    else c.parameters[k]) for c, k in slots]
 
     def params(x):
         out: dict[int, dict[str, Any]] = {}
         for (c, k), v, d in zip(slots, start, x):
             p = out.setdefault(id(c), dict(c.parameters))
-            if k == 'torque_ripple':
-                p[k] = [dict(r) for r in p[k]]
-                p[k][-1]['amplitude'] = _slot_value(k, v, d)
-            elif k in _GRAVITY_SLOTS:
-                if p['gravity'] is c.parameters['gravity']:
-                    p['gravity'] = [dict(t) for t in p['gravity']]
-                p['gravity'][-1][_GRAVITY_SLOTS[k]] = _slot_value(k, v, d)
+            if k in _TERM_SLOTS:
+                key, field = _TERM_SLOTS[k]
+                if p[key] is c.parameters[key]:     # the terms are copied, never edited
+                    p[key] = [dict(t) for t in p[key]]
+                p[key][-1][field] = _slot_value(k, v, d)
             else:
                 p[k] = _slot_value(k, v, d)
         return out
