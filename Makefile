@@ -33,8 +33,10 @@ demo: $(STAMP)
 	rm -rf $(OUT)/demo
 	$(PY) -m frf_ident demo --out $(OUT)/demo
 
+# one pytest-xdist worker per core; a module's shared fixtures keep its tests on one worker
+# (xdist_group marks)
 test: $(STAMP)
-	$(PY) -m pytest -q -ra --durations=15 test
+	$(PY) -m pytest -q -ra --durations=15 -n auto --dist loadgroup test
 
 bench: $(STAMP)
 	$(PY) -m benchmarks

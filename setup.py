@@ -45,7 +45,8 @@ setup(
         'cyclonedds>=0.10.5',
     ],
     extras_require={
-        'test': ['pytest>=7.4', 'hypothesis>=6.80', 'control>=0.10', 'import-linter>=2.1',
+        'test': ['pytest>=7.4', 'pytest-xdist>=3.5', 'hypothesis>=6.80', 'control>=0.10',
+                 'import-linter>=2.1',
                  # the linters as ROS 2 Jazzy (Ubuntu 24.04) ships them, for ament_flake8/pep257
                  'flake8==7.0.0', 'flake8-builtins==2.1.0', 'flake8-comprehensions==3.14.0',
                  'flake8-docstrings==1.6.0', 'flake8-import-order==0.18.2',

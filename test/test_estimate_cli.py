@@ -34,6 +34,9 @@ from frf_ident.io.model_file import load_model, load_plant
 import numpy as np
 import pytest
 
+# module fixtures shared by the tests here: they run on one worker (make test, pytest-xdist)
+pytestmark = pytest.mark.xdist_group('test_estimate_cli')
+
 FS = 1000.0
 
 

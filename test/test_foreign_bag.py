@@ -23,6 +23,9 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
 
+# module fixtures shared by the tests here: they run on one worker (make test, pytest-xdist)
+pytestmark = pytest.mark.xdist_group('test_foreign_bag')
+
 FS = 1000.0
 
 

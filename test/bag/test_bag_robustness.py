@@ -32,6 +32,9 @@ import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_typestore, Stores
 
+# module fixtures shared by the tests here: they run on one worker (make test, pytest-xdist)
+pytestmark = pytest.mark.xdist_group('test_bag_robustness')
+
 STORE = get_typestore(Stores.ROS2_JAZZY)
 
 

@@ -31,6 +31,9 @@ import numpy as np
 import pytest
 from replay_synth import Imperfections, multisine_run, truth_frf, write_robot_bag, write_rosbag2
 
+# module fixtures shared by the tests here: they run on one worker (make test, pytest-xdist)
+pytestmark = pytest.mark.xdist_group('test_rosbag2_bags')
+
 IMP = Imperfections(jitter=0.01, drop=0.005, log_offset=0.004)
 
 

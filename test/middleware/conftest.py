@@ -15,7 +15,6 @@
 
 import os
 from pathlib import Path
-import random
 
 import pytest
 
@@ -31,12 +30,12 @@ def loopback_env(domain_id: int) -> dict[str, str]:
 
 
 @pytest.fixture(scope='module')
-def domain_env():
-    """Put this process on a fresh random domain (100..200) and tear the participant down after."""
+def domain_env(new_domain):
+    """Put this process on a fresh domain of its own and tear the participant down after."""
     from frf_ident.middleware import dds_backend
     dds_backend.shutdown()
     saved = dict(os.environ)
-    env = loopback_env(random.randint(100, 200))
+    env = loopback_env(new_domain())
     os.environ.update(env)
     try:
         yield env

@@ -35,6 +35,8 @@ from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 import numpy as np
 import pytest
 
+# its module fixture runs the graph once for all tests here: they share a worker
+pytestmark = pytest.mark.xdist_group('test_graph')
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / 'config' / 'model_3axis.yaml'
 
@@ -49,9 +51,10 @@ def _chirp() -> ChirpConfig:
 
 
 @pytest.fixture(scope='module')
-def graph_run(tmp_path_factory):
+def graph_run(tmp_path_factory, new_domain):
     out = tmp_path_factory.mktemp('graph')
-    g = Graph(out, model=MODEL, multisine=_ms(), chirp=_chirp(),
+    # module scope starts before any test's own domain: this run takes one of its own
+    g = Graph(out, model=MODEL, multisine=_ms(), chirp=_chirp(), domain_id=new_domain(),
               params={'excitation_node': {'stale_s': 0.5}})
     g.start()
     try:

@@ -14,11 +14,8 @@
 """
 ROS 2 tests: run only where ROS 2 Jazzy is sourced (rclpy importable), else skipped.
 
-Each test gets its own ROS_DOMAIN_ID from :func:`next_domain`: a domain in 110..149 that no
-other test process holds (an flock on /tmp/frf_ident_ros_domain_<id>.lock, kept until this
-session ends), so neither sequential tests nor concurrent test sessions share a domain.
+Each test gets its own ROS_DOMAIN_ID from the fixture ``new_domain`` (test/conftest.py).
 """
-import fcntl
 import importlib.util
 import os
 from pathlib import Path
@@ -27,23 +24,6 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 HAVE_ROS = importlib.util.find_spec('rclpy') is not None and bool(os.environ.get('ROS_DISTRO'))
-_held: list = []
-
-
-def next_domain() -> int:
-    """Return a ROS domain id in 110..149 held by no other test session, unused here."""
-    for d in range(110, 150):
-        if any(h[0] == d for h in _held):
-            continue
-        f = open(f'/tmp/frf_ident_ros_domain_{d}.lock', 'w')
-        try:
-            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            f.close()
-            continue
-        _held.append((d, f))
-        return d
-    raise RuntimeError('no free ROS domain in 110..149')
 
 
 def pytest_collection_modifyitems(config, items):
@@ -55,19 +35,13 @@ def pytest_collection_modifyitems(config, items):
                 item.add_marker(skip)
 
 
-@pytest.fixture(scope='session')
-def new_domain():
-    """:func:`next_domain` as a fixture (test modules here are not importable packages)."""
-    return next_domain
-
-
 @pytest.fixture
-def ros_env():
+def ros_env(new_domain):
     """Environment of the ROS processes a test starts: loopback, its own domain, rclpy."""
     env = dict(os.environ)
     env.update(ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', RMW_IMPLEMENTATION='rmw_cyclonedds_cpp',
                CYCLONEDDS_URI=(ROOT / 'config' / 'cyclonedds-localhost.xml').as_uri(),
-               ROS_DOMAIN_ID=str(next_domain()), FRF_IDENT_MIDDLEWARE='rclpy',
+               ROS_DOMAIN_ID=str(new_domain()), FRF_IDENT_MIDDLEWARE='rclpy',
                PYTHONUNBUFFERED='1',
                PYTHONPATH=os.pathsep.join([str(ROOT)] + [
                    p for p in os.environ.get('PYTHONPATH', '').split(os.pathsep) if p]))

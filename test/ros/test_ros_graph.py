@@ -25,6 +25,9 @@ from frf_ident.core.excitation.procedures import MultisineConfig
 import numpy as np
 import pytest
 
+# module fixtures shared by the tests here: they run on one worker (make test, pytest-xdist)
+pytestmark = pytest.mark.xdist_group('test_ros_graph')
+
 SIM = ('plant_node', 'controller_node')
 REST = ('excitation_node', 'estimator_node')
 
