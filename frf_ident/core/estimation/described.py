@@ -293,8 +293,11 @@ class ChirpSpectra:
         a = _segment_arrays(rec, seg)
         self.joint_names = list(rec.joint_names)
         self.info.setdefault(it, info)
+        # one pass over the three signals: the excerpt weights are formed once per frequency
+        spec = chirp_spectra(np.stack([a[k] for k in ('u', 'y', 'r')], axis=-1), rec.fs,
+                             freqs, tc)
         self.spec.setdefault(it, {})[int(info['experiment'])] = {
-            k: chirp_spectra(a[k], rec.fs, freqs, tc) for k in ('u', 'y', 'r')}
+            k: spec[..., i] for i, k in enumerate(('u', 'y', 'r'))}
 
     def iterations(self) -> list[int]:
         return sorted(self.spec)

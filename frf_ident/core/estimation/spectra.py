@@ -28,8 +28,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import functools
+import math
 
 from frf_ident.errors import EstimationError
+import numba
 import numpy as np
 from scipy import signal
 
@@ -328,11 +330,72 @@ def decimation_filter(q: int) -> np.ndarray:
     return h
 
 
-@functools.lru_cache(maxsize=4096)
-def _hann(n: int) -> np.ndarray:
-    w = signal.windows.hann(n, sym=False)
-    w.flags.writeable = False
-    return w
+def _filter_bank(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the decimation filters of the factors ``q``, concatenated, and where each starts.
+
+    :func:`decimation_filter` of every factor > 1 once, and per element of ``q`` the index of
+    its taps in the concatenation (0 for q = 1, which filters nothing).
+    """
+    bank, at = [np.zeros(0)], {}
+    n = 0
+    for f in np.unique(q[q > 1]):
+        at[int(f)] = n
+        bank.append(decimation_filter(int(f)))
+        n += bank[-1].size
+    return np.concatenate(bank), np.array([at.get(int(f), 0) for f in q], dtype=np.int64)
+
+
+@numba.njit(cache=True)
+def _excerpt_dfts(x, i0, i1, q, f_x, t_center, t_first, fs, bank, start, out):
+    """
+    Fill out[k] with the Sec. 5.1 DFT of the excerpt x[i0[k]:i1[k]] at f_x[k] (all channels).
+
+    The excerpt's mean removed, the zero-phase FIR of ``bank[start[k]:]`` (2 L + 1 taps,
+    L = 10 q) applied with zeros outside the excerpt and every q-th sample kept, as
+    ``scipy.signal.resample_poly(seg, 1, q, window=h)`` does (output m at input m q), then a
+    periodic Hann window and the DFT at exactly f_x, over the sum of the window. All of it is
+    linear in the excerpt, so it is one weight per input sample, c_j = sum_m w_m
+    exp(-i 2 pi f_x t_m) h(m q - j), formed once and applied to every channel. NaN for a
+    channel whose excerpt holds a non-finite sample.
+    """
+    n_ch = x.shape[1]
+    c = np.zeros(max(1, int(np.max(i1 - i0))), dtype=np.complex128)
+    for k in range(f_x.size):
+        a, qq = i0[k], q[k]
+        n_in = i1[k] - a
+        if n_in <= 0:
+            for ch in range(n_ch):
+                out[k, ch] = np.nan + 0j
+            continue
+        n_out = (n_in + qq - 1) // qq
+        half = 10 * qq if qq > 1 else 0
+        h0 = start[k] + half
+        for j in range(n_in):
+            c[j] = 0.0
+        w_sum = 0.0
+        for m in range(n_out):
+            w = 1.0 if n_out == 1 else 0.5 - 0.5 * math.cos(2.0 * math.pi * m / n_out)
+            w_sum += w
+            t = t_first + a / fs + m * (qq / fs)
+            kern = w * np.exp(-2j * np.pi * f_x[k] * (t - t_center[k]))
+            centre = m * qq
+            if qq == 1:
+                c[centre] += kern
+                continue
+            for d in range(max(-half, centre - n_in + 1), min(half, centre) + 1):
+                c[centre - d] += kern * bank[h0 + d]
+        c_sum = 0j
+        for j in range(n_in):
+            c_sum += c[j]
+        for ch in range(n_ch):
+            mean = 0.0
+            acc = 0j
+            for j in range(n_in):
+                mean += x[a + j, ch]
+                acc += c[j] * x[a + j, ch]
+            # a missing sample makes both sums NaN: the channel loses this frequency only
+            out[k, ch] = (acc - mean / n_in * c_sum) / w_sum
 
 
 def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
@@ -343,31 +406,17 @@ def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
 
     Takes the excerpt of ``n_periods`` periods of f_x centred on the time ``t_center`` at which
     f_x is excited, subtracts its mean, low-pass filters and downsamples it to about
-    ``samples_per_period`` samples per period (polyphase FIR, zero phase), applies a Hann window
-    and evaluates the DFT at exactly f_x.
+    ``samples_per_period`` samples per period (polyphase FIR, zero phase: the filter and
+    alignment of :func:`scipy.signal.resample_poly` with :func:`decimation_filter`), applies a
+    Hann window and evaluates the DFT at exactly f_x.
 
     ``x`` : (N, ...) samples at rate fs, the first at time ``t_first``. Returns (...) complex,
-    NaN when the excerpt holds a missing (NaN) sample: a gap removes that frequency only.
+    NaN for a channel whose excerpt holds a missing (NaN) sample: a gap removes that frequency
+    of that channel only.
     """
-    x = np.asarray(x, dtype=float)
-    half = 0.5 * n_periods / f_x
-    i0 = int(round((t_center - half - t_first) * fs))
-    i1 = int(round((t_center + half - t_first) * fs))
-    if i0 < 0 or i1 > x.shape[0]:
-        raise EstimationError(f'excerpt for f_x={f_x:g} Hz around t={t_center:g} s is outside '
-                              f'the record [{t_first:g}, {t_first + x.shape[0] / fs:g}] s')
-    seg = x[i0:i1]
-    if not np.all(np.isfinite(seg)):
-        return np.full(seg.shape[1:], np.nan + 0j)
-    seg = seg - seg.mean(axis=0)
-    q = max(1, int(np.floor(fs / (samples_per_period * f_x))))
-    if q > 1:
-        seg = signal.resample_poly(seg, 1, q, axis=0, window=decimation_filter(q))
-    n = seg.shape[0]
-    t = t_first + i0 / fs + np.arange(n) * (q / fs)
-    w = _hann(n)
-    kernel = w * np.exp(-2j * np.pi * f_x * (t - t_center))
-    return np.tensordot(kernel, seg, axes=(0, 0)) / np.sum(w)
+    return chirp_spectra(x, fs, np.array([f_x], dtype=float), np.array([t_center], dtype=float),
+                         t_first=t_first, n_periods=n_periods,
+                         samples_per_period=samples_per_period)[0]
 
 
 def chirp_analysis_frequencies(f_candidates: np.ndarray, t_of_f, t_start: float,
@@ -382,7 +431,27 @@ def chirp_analysis_frequencies(f_candidates: np.ndarray, t_of_f, t_start: float,
 def chirp_spectra(x: np.ndarray, fs: float, freqs: np.ndarray, t_centers: np.ndarray, *,
                   t_first: float = 0.0, n_periods: float = 4.0,
                   samples_per_period: float = 10.0) -> np.ndarray:
-    """Sec. 5.1 spectra of all channels: x (N, n_ch) -> (n_freq, n_ch) complex."""
-    return np.stack([chirp_excerpt_dft(x, fs, f, tc, n_periods=n_periods,
-                                       samples_per_period=samples_per_period, t_first=t_first)
-                     for f, tc in zip(freqs, t_centers)])
+    """
+    Sec. 5.1 spectra of all channels: x (N, ...) -> (n_freq, ...) complex.
+
+    :func:`chirp_excerpt_dft` at every analysis frequency ``freqs`` (excited at the times
+    ``t_centers``), compiled over all of them at once (a chirp has hundreds of analysis
+    frequencies; the diagnosis processes one chirp per simulated model).
+    """
+    x = np.asarray(x, dtype=float)
+    f = np.asarray(freqs, dtype=float).ravel()
+    tc = np.asarray(t_centers, dtype=float).ravel()
+    half = 0.5 * n_periods / f
+    i0 = np.round((tc - half - t_first) * fs).astype(np.int64)
+    i1 = np.round((tc + half - t_first) * fs).astype(np.int64)
+    outside = (i0 < 0) | (i1 > x.shape[0])
+    if outside.any():
+        k = int(np.argmax(outside))
+        raise EstimationError(f'excerpt for f_x={f[k]:g} Hz around t={tc[k]:g} s is outside '
+                              f'the record [{t_first:g}, {t_first + x.shape[0] / fs:g}] s')
+    q = np.maximum(1, np.floor(fs / (samples_per_period * f))).astype(np.int64)
+    bank, start = _filter_bank(q)
+    flat = np.ascontiguousarray(x.reshape(x.shape[0], -1))
+    out = np.empty((f.size, flat.shape[1]), dtype=complex)
+    _excerpt_dfts(flat, i0, i1, q, f, tc, float(t_first), float(fs), bank, start, out)
+    return out.reshape((f.size,) + x.shape[1:])
