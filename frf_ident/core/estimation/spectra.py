@@ -432,15 +432,45 @@ def chirp_spectra(x: np.ndarray, fs: float, freqs: np.ndarray, t_centers: np.nda
                   t_first: float = 0.0, n_periods: float = 4.0,
                   samples_per_period: float = 10.0) -> np.ndarray:
     """
-    Sec. 5.1 spectra of all channels: x (N, ...) -> (n_freq, ...) complex.
+    Return the Sec. 5.1 spectra of all channels at the chirp's analysis frequencies.
 
-    :func:`chirp_excerpt_dft` at every analysis frequency ``freqs`` (excited at the times
-    ``t_centers``), compiled over all of them at once (a chirp has hundreds of analysis
-    frequencies; the diagnosis processes one chirp per simulated model).
+    :func:`chirp_excerpt_dft` at every analysis frequency, compiled over all of them at once
+    (a chirp has hundreds of analysis frequencies; the diagnosis processes one chirp per
+    simulated model).
+
+    Parameters
+    ----------
+    x : ndarray, shape (N, ...)
+        Samples at rate ``fs``, the first at time ``t_first``.
+    fs : float
+        Sample rate [Hz].
+    freqs : ndarray, shape (n_freq,)
+        Analysis frequencies [Hz].
+    t_centers : ndarray, shape (n_freq,)
+        Times [s] at which the chirp excites each of them.
+    t_first : float
+        Time of the first sample [s].
+    n_periods : float
+        Length of each excerpt in periods of its frequency.
+    samples_per_period : float
+        Samples per period the excerpt is decimated to.
+
+    Returns
+    -------
+    ndarray, shape (n_freq, ...)
+        Complex spectra; NaN for a channel whose excerpt holds a missing sample.
+
+    Raises
+    ------
+    EstimationError
+        When an excerpt reaches outside the record.
+
     """
     x = np.asarray(x, dtype=float)
     f = np.asarray(freqs, dtype=float).ravel()
     tc = np.asarray(t_centers, dtype=float).ravel()
+    if f.size == 0:
+        return np.zeros((0,) + x.shape[1:], dtype=complex)
     half = 0.5 * n_periods / f
     i0 = np.round((tc - half - t_first) * fs).astype(np.int64)
     i1 = np.round((tc + half - t_first) * fs).astype(np.int64)
