@@ -36,11 +36,15 @@ os.environ.setdefault('CYCLONEDDS_URI', (ROOT / 'config' / 'cyclonedds-localhost
 os.environ.setdefault('MPLBACKEND', 'Agg')
 
 _held: list = []
+_turn = [os.getpid() % 100]
 
 
 def next_domain() -> int:
     """Return a ROS domain id in 100..199 held by no other test process, unused here."""
-    for d in range(100, 200):
+    # round robin from a per-process start: a domain just released is not taken again at
+    # once, while a process the test before started may still be leaving it
+    for k in range(100):
+        d = 100 + (_turn[0] + k) % 100
         if any(h[0] == d for h in _held):
             continue
         f = open(f'/tmp/frf_ident_ros_domain_{d}.lock', 'w')
@@ -50,6 +54,7 @@ def next_domain() -> int:
             f.close()
             continue
         _held.append((d, f))
+        _turn[0] = (d - 100 + 1) % 100
         return d
     raise RuntimeError('no free ROS domain in 100..199')
 
