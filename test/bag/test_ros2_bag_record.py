@@ -21,7 +21,7 @@ with the estimate of the played bag within 0.5 dB (issue 12).
 The recorder stores receive times as log times (wall clock) while the joint states keep the
 header stamps of the played bag; /velocity_controller/commands (no header) arrive on the wall
 clock. Needs ROS 2 (`ros2` on PATH, rosbag2 with MCAP); skipped cleanly without it. Every DDS
-participant stays on loopback in a ROS_DOMAIN_ID of its own (``new_domain``, test/conftest.py).
+participant stays on loopback in the test's own ROS_DOMAIN_ID (test/conftest.py).
 """
 import json
 import os
@@ -39,9 +39,9 @@ TOPICS = ['/joint_states', '/velocity_controller/commands', '/effort_controller/
           '/frf/excitation', '/frf/experiment']
 
 
-def _ros_env(domain: int):
-    env = dict(os.environ)
-    env.update(RMW_IMPLEMENTATION='rmw_cyclonedds_cpp', ROS_DOMAIN_ID=str(domain),
+def _ros_env():
+    env = dict(os.environ)          # ROS_DOMAIN_ID: the test's own (test/conftest.py)
+    env.update(RMW_IMPLEMENTATION='rmw_cyclonedds_cpp',
                ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
     cfg = Path(__file__).resolve().parents[2] / 'config' / 'cyclonedds-localhost.xml'
     env['CYCLONEDDS_URI'] = cfg.as_uri()
@@ -66,7 +66,7 @@ def _estimates(out):
 
 
 @pytest.mark.slow
-def test_ros2_bag_record_of_the_demo_topics(tmp_path, capsys, new_domain):
+def test_ros2_bag_record_of_the_demo_topics(tmp_path, capsys):
     pytest.importorskip('rosbag2_py')
     if shutil.which('ros2') is None:
         pytest.skip('ros2 CLI not on PATH (source /opt/ros/jazzy/setup.bash)')
@@ -74,7 +74,7 @@ def test_ros2_bag_record_of_the_demo_topics(tmp_path, capsys, new_domain):
     assert main(['identify', '--out', str(demo), '--realisations', '2', '--periods', '3',
                  '--resolution', '1', '--procedures', 'multisine']) == 0
     rec_bag = tmp_path / 'recorded'
-    env = _ros_env(new_domain())
+    env = _ros_env()
     log = open(tmp_path / 'ros2.log', 'w')
     # deep reliable queues on both sides, as one records 1 kHz topics on a busy machine
     qos = tmp_path / 'qos.yaml'

@@ -14,7 +14,7 @@
 """
 ROS 2 tests: run only where ROS 2 Jazzy is sourced (rclpy importable), else skipped.
 
-Each test gets its own ROS_DOMAIN_ID from the fixture ``new_domain`` (test/conftest.py).
+Each test runs on a ROS_DOMAIN_ID of its own (test/conftest.py), which ``ros_env`` passes on.
 """
 import importlib.util
 import os
@@ -36,12 +36,12 @@ def pytest_collection_modifyitems(config, items):
 
 
 @pytest.fixture
-def ros_env(new_domain):
-    """Environment of the ROS processes a test starts: loopback, its own domain, rclpy."""
+def ros_env():
+    """Environment of the ROS processes a test starts: loopback, the test's domain, rclpy."""
     env = dict(os.environ)
     env.update(ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', RMW_IMPLEMENTATION='rmw_cyclonedds_cpp',
                CYCLONEDDS_URI=(ROOT / 'config' / 'cyclonedds-localhost.xml').as_uri(),
-               ROS_DOMAIN_ID=str(new_domain()), FRF_IDENT_MIDDLEWARE='rclpy',
+               ROS_DOMAIN_ID=os.environ['ROS_DOMAIN_ID'], FRF_IDENT_MIDDLEWARE='rclpy',
                PYTHONUNBUFFERED='1',
                PYTHONPATH=os.pathsep.join([str(ROOT)] + [
                    p for p in os.environ.get('PYTHONPATH', '').split(os.pathsep) if p]))
