@@ -414,7 +414,7 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
         met += (f'<p>Integrator check: the extended model simulated at twice its '
                 f'simulation.substeps ({step["substeps"]}) moves the held-out misfit '
                 + ', '.join(f'{html.escape(str(ax))} {x:.4g} -> {y:.4g}' for ax, x, y in zip(
-                    m['extended'].get('per_axis', {}), step['held_out_misfit'],
+                    step['axes'], step['held_out_misfit'],
                     step['held_out_misfit_double_substeps']))
                 + ' noise floors; '
                 + (html.escape(', '.join(step['too_coarse'])) + ': simulated too coarsely for '

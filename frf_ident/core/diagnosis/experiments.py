@@ -700,7 +700,7 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
     slots += [(c, 'torque_ripple') for c in mine if ripple and c.name == 'torque_ripple']
     # the added gravity term (the last one): amplitude and phase
     slots += [(c, k) for c in mine if gravity and c.name == 'gravity'
-              for k in ('gravity_amplitude', 'gravity_phase')]
+              for k, (par, _) in _TERM_SLOTS.items() if par == 'gravity']
     if not slots:
         return _rebuild(base, kept), cur
     start = [float(c.parameters[_TERM_SLOTS[k][0]][-1][_TERM_SLOTS[k][1]] if k in _TERM_SLOTS
@@ -1198,13 +1198,14 @@ def discretisation_check(ev: Evaluator, robot: RobotParams, val: np.ndarray
     Returns
     -------
     dict
-        ``substeps``, ``held_out_misfit`` and ``held_out_misfit_double_substeps`` per axis,
-        ``too_coarse``: the names of the axes whose misfit moved.
+        ``axes`` (the model's axis names), ``substeps``, ``held_out_misfit`` and
+        ``held_out_misfit_double_substeps`` per axis in that order, ``too_coarse``: the names
+        of the axes whose misfit moved.
 
     """
     fine = ev.misfit(ev.terms(replace(robot, substeps=2 * int(robot.substeps)), held_out=True))
     moved = np.abs(fine - val) > MIN_Z * ev.misfit_sd()
-    return {'substeps': int(robot.substeps),
+    return {'axes': robot.joint_names, 'substeps': int(robot.substeps),
             'held_out_misfit': [round(float(x), 4) for x in val],
             'held_out_misfit_double_substeps': [round(float(x), 4) for x in fine],
             'too_coarse': [a.name for a, m in zip(robot.axes, moved) if m]}
@@ -1505,9 +1506,9 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     if step['too_coarse']:
         say(f'simulation.substeps = {step["substeps"]} is too coarse for this record: at '
             f'twice as many the held-out misfit moves from '
-            + ', '.join(f'{a.name} {x:.4g} to {y:.4g}' for a, x, y in zip(
-                robot.axes, step['held_out_misfit'], step['held_out_misfit_double_substeps'])
-                if a.name in step['too_coarse'])
+            + ', '.join(f'{a} {x:.4g} to {y:.4g}' for a, x, y in zip(
+                step['axes'], step['held_out_misfit'], step['held_out_misfit_double_substeps'])
+                if a in step['too_coarse'])
             + ' noise floors: raise simulation.substeps in the model file')
     say(f'{ev.n_sims} simulations of the recorded excitation')
     return {'effects': kept, 'candidates': [c for c in cands if c not in kept],
