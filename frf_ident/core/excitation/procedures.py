@@ -274,7 +274,8 @@ class ChirpIteration:
     and phase psi reads a e^{j psi}). Step i: run the experiments of :meth:`phases`, then
     :meth:`update` with the measured r and u: P_r->u = U R^-1 (eq. 7 on r -> u), the next
     R_{i+1} = P_r->u^-1 U_des (eq. 18), regularised, step-limited and scaled so the predicted
-    torque stays below the limit; r_{i+1}(t) synthesised from R_{i+1} (eq. 19).
+    torque in time stays below the limit (:meth:`torque_scale`); r_{i+1}(t) synthesised from
+    R_{i+1} (eq. 19).
     """
 
     def __init__(self, cfg: ChirpConfig, n_axes: int, fs: float,
@@ -362,6 +363,66 @@ class ChirpIteration:
             out.append(Phase('settle', n_settle))
         return out
 
+    def torque_scale(self, U_pred: np.ndarray, Um: np.ndarray, u_runs: list[np.ndarray]
+                     ) -> tuple[float, np.ndarray]:
+        """
+        Return the scale of the next reference that keeps its torque below the limits.
+
+        The bound is on the torque in time, not on its line amplitudes: the chirp part of
+        each experiment's torque is synthesised from the predicted spectra U_pred (as r(t)
+        is from R, eq. 19), and what the measured torque holds besides its own synthesised
+        chirp part (the torque at rest, transients, friction) is added as measured. The
+        scale s <= 1 keeps |s u_chirp(t) + u_rest(t)| below ``torque_margin`` times each
+        axis' limit at every sample.
+
+        Parameters
+        ----------
+        U_pred : ndarray, shape (n_lines, n_u, n_ex)
+            Predicted torque spectra of the next reference (chirp coordinates).
+        Um : ndarray, shape (n_lines, n_u, n_ex)
+            Measured torque spectra of this iteration.
+        u_runs : list of ndarray, shape (N, n_u)
+            Measured torque of each experiment.
+
+        Returns
+        -------
+        scale : float
+            The factor for the next reference (1 when nothing binds).
+        peak : ndarray, shape (n_u,)
+            Predicted peak torque per axis after scaling.
+
+        Raises
+        ------
+        SafetyError
+            When the torque besides the chirp alone already exceeds the bound.
+
+        """
+        bound = self.cfg.torque_margin * self.torque_limit
+        chirp_next, chirp_now = self.reference_signals(U_pred), self.reference_signals(Um)
+        n = min(min(len(u) for u in u_runs), chirp_now.shape[1])
+        a = chirp_next[:, :n]                                              # (n_ex, n, n_u)
+        b = np.stack([u[:n] for u in u_runs]) - chirp_now[:, :n]
+
+        def peak(s: float) -> np.ndarray:
+            return np.max(np.abs(s * a + b), axis=(0, 1))
+
+        # max |s a + b| / bound is convex in s: the scales it allows are an interval from 0
+        over = peak(0.0) > bound
+        if over.any():
+            raise SafetyError(
+                f'chirp iteration {self.iteration}: the torque besides the chirp alone reaches '
+                f'{peak(0.0)[over].round(1).tolist()} N m on axes {np.flatnonzero(over).tolist()}'
+                f', above {self.cfg.torque_margin:g} x the limits '
+                f'{self.torque_limit[over].tolist()}: no chirp fits; refusing to go on')
+        lo, hi = 0.0, 1.0
+        if np.all(peak(hi) <= bound):
+            lo = hi
+        else:
+            for _ in range(40):
+                mid = 0.5 * (lo + hi)
+                lo, hi = (mid, hi) if np.all(peak(mid) <= bound) else (lo, mid)
+        return lo, peak(lo)
+
     # -- the update (eqs. 18-19) ---------------------------------------------------------------
     def spectra(self, x: np.ndarray) -> np.ndarray:
         """Return one experiment's chirp-coordinate spectra, shaped (F, n), from samples (N, n)."""
@@ -400,12 +461,9 @@ class ChirpIteration:
         grow = np.abs(R_next) / np.maximum(np.abs(Rm), 1e-300)
         limit = np.minimum(1.0, self.cfg.max_gain_step / np.maximum(grow, 1e-300))
         R_next = R_next * limit
-        U_pred = P_ru @ R_next
-        peak = np.max(np.abs(U_pred), axis=(0, 2))                       # per channel
-        scale = np.min(np.minimum(1.0, self.cfg.torque_margin * self.torque_limit
-                                  / np.maximum(peak, 1e-300)))
+        scale, peak = self.torque_scale(P_ru @ R_next, Um, u_runs)
         R_next = R_next * scale
-        summary.update({'predicted_peak_torque': (peak * scale).tolist(),
+        summary.update({'predicted_peak_torque': peak.tolist(),
                         'scaled_for_torque_limit': bool(scale < 1.0),
                         'cond_P_ru_max': float(np.max(np.linalg.cond(P_ru)))})
         self.history.append(summary)
