@@ -91,7 +91,16 @@ def test_full_report(tmp_path):
     assert 'chirp &lt;fast&gt;' in text                       # labels are escaped
     assert '/joint_states' in text and 'half the joint-state rate' in text   # timing
     assert 'tau_2 \u2192 dq_1' in text
-    assert 'median SNR [dB]' in text and '26' in text          # 20 log10(1 / 0.05) = 26 dB
+    # the estimates table: median SNR 20 log10(1.02 / 0.05) = 26.19 dB (multisine, total
+    # variance) and 20 log10(0.98 / 0.05) = 25.85 dB (chirp), RMS error to the reference
+    # |20 log10(1.02)| = 0.172 dB and |20 log10(0.98)| = 0.175 dB
+    assert 'median SNR [dB]' in text
+    rows = {m.group(1): re.findall(r'<td[^>]*>([^<]*)</td>', m.group(0))
+            for m in re.finditer(r'<tr><td>([^<]*)</td>.*?</tr>', text)}
+    # (the reference is interpolated in log f onto the estimate's lines: +-0.01 dB)
+    for label, snr, err in (('multisine', 26.19, 0.172), ('chirp &lt;fast&gt;', 25.85, 0.175)):
+        assert float(rows[label][-2]) == pytest.approx(snr, abs=0.06)   # shown to 0.1
+        assert float(rows[label][-1]) == pytest.approx(err, abs=0.01)
     assert '<script' not in text and 'http' not in text        # self-contained
 
 
