@@ -76,7 +76,8 @@ def _write_joint_states_bag(path, rec, rng, jitter=0.01, drop=0.005):
     return int((~keep).sum())
 
 
-def test_jittered_dropped_joint_states_only_bag_within_half_db(clean_run, tmp_path, capsys):
+def test_jittered_dropped_joint_states_only_bag_within_005_db_and_half_a_degree(
+        clean_run, tmp_path, capsys):
     clean = estimate_recording(clean_run)
     assert list(clean) == ['detected/joint_2']
     dropped = _write_joint_states_bag(tmp_path / 'robot', clean_run, np.random.default_rng(4))
@@ -89,10 +90,13 @@ def test_jittered_dropped_joint_states_only_bag_within_half_db(clean_run, tmp_pa
                                           return_indices=True)
     assert common.size >= 0.8 * ref.freq_hz.size   # resampling noise hides a few weak lines
     o_est, o_ref = est.outputs.index('dq_m/joint_2'), ref.outputs.index('dq_m/joint_2')
-    err_db = 20 * np.log10(np.abs(est.response[o_est, 0, i_est]
-                                  / ref.response[o_ref, 0, i_ref]))   # the driven channel
-    print(f'{common.size} lines, max |error| {np.max(np.abs(err_db)):.3f} dB')
-    assert np.max(np.abs(err_db)) <= 0.5
+    ratio = est.response[o_est, 0, i_est] / ref.response[o_ref, 0, i_ref]   # driven channel
+    err_db, err_deg = 20 * np.log10(np.abs(ratio)), np.degrees(np.angle(ratio))
+    print(f'{common.size} lines, max |error| {np.max(np.abs(err_db)):.4f} dB, '
+          f'{np.max(np.abs(err_deg)):.3f} deg')
+    # magnitude and phase: a one-sample shift between effort and velocity (3.6 deg per
+    # 10 Hz at 1 kHz) keeps every magnitude
+    assert np.max(np.abs(err_db)) <= 0.05 and np.max(np.abs(err_deg)) <= 0.5
     # the command line says what it detected
     assert main(['estimate', str(tmp_path / 'robot'), '--out', str(tmp_path / 'est')]) == 0
     out = capsys.readouterr().out

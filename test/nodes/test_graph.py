@@ -75,10 +75,6 @@ def offline():
     return rec, estimate_recording(rec)
 
 
-def _db(x):
-    return 20 * np.log10(np.abs(x))
-
-
 def test_graph_matches_offline(graph_run, offline):
     from frf_ident.bag import read_recording
     from frf_ident.core.estimation.described import estimate_recording
@@ -96,8 +92,10 @@ def test_graph_matches_offline(graph_run, offline):
     for key in ('multisine', 'chirp'):
         a, b = est[key], est_off[key]
         np.testing.assert_allclose(a.freq_hz, b.freq_hz)
-        err = np.max(np.abs(_db(a.response) - _db(b.response)))
-        assert err < 0.1, f'{key}: max |dB| difference {err:.3f}'
+        # complex: a one-sample shift between effort and velocity keeps every magnitude
+        # (21.6 deg at 60 Hz); 0.0116 relative is 0.1 dB, or 0.66 deg
+        err = np.max(np.abs(a.response / b.response - 1))
+        assert err < 0.0116, f'{key}: max relative difference {err:.4f}'
     live = json.loads((g.frf_dir / 'frf.json').read_text())
     assert live['estimate'] == 'multisine'
 
