@@ -20,7 +20,8 @@ that was killed leaves a file without summary and footer, and fuzzed/corrupt fil
 in a ``BagError``, never a traceback. This scanner walks the data section record by record
 (reading one record, i.e. at most one chunk, at a time: memory is bounded by the chunk size),
 validates lengths against the file size and chunk CRCs when present, skips a damaged chunk
-whose framing is intact, stops at the first damaged record frame, and counts what was lost.
+whose framing is intact, resumes after a damaged record frame at the next chunk the summary
+indexes (or stops there without an intact summary), and counts what was lost.
 
 Spec: https://mcap.dev/spec (records, opcodes, field order).
 """
@@ -34,7 +35,7 @@ import zlib
 
 MAGIC = b'\x89MCAP0\r\n'
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 1, 2, 3, 4, 5, 6
-OP_STATISTICS, OP_METADATA, OP_DATA_END = 0x0B, 0x0C, 0x0F
+OP_CHUNK_INDEX, OP_STATISTICS, OP_METADATA, OP_DATA_END = 0x08, 0x0B, 0x0C, 0x0F
 _REC = struct.Struct('<BQ')
 _U16 = struct.Struct('<H')
 _U32 = struct.Struct('<I')
@@ -161,6 +162,7 @@ class McapScanner:
         self.metadata: dict[str, dict[str, str]] = {}
         self.stats = ScanStats()
         self._wanted: dict[int, ChannelInfo | None] = {}
+        self._chunk_starts: list[int] | None = None
 
     # ------------------------------------------------------------------ records
     def _on_schema(self, buf: bytes | memoryview) -> None:
@@ -275,9 +277,19 @@ class McapScanner:
                 return
             op, length = _REC.unpack_from(head, 0)
             if length > st.file_bytes - pos - 9:
-                st.problems.append(f'record at byte {pos} (opcode 0x{op:02x}) claims {length} '
-                                   f'bytes, only {st.file_bytes - pos - 9} remain')
-                return
+                problem = (f'record at byte {pos} (opcode 0x{op:02x}) claims {length} bytes, '
+                           f'only {st.file_bytes - pos - 9} remain')
+                nxt = self._resume_after(pos)
+                if nxt is None:
+                    st.problems.append(problem)
+                    return
+                skipped = [c for c in self._chunk_starts or () if pos <= c < nxt]
+                st.chunks_lost += len(skipped)
+                st.problems.append(f'{problem}: resumed at the next chunk the summary indexes, '
+                                   f'byte {nxt} ({len(skipped)} chunk(s) skipped)')
+                f.seek(nxt)
+                pos = nxt
+                continue
             if op == OP_DATA_END or op == OP_FOOTER:
                 self._finish(f, pos, length)
                 return
@@ -292,6 +304,19 @@ class McapScanner:
             pos += 9 + length
             if self.on_bytes:
                 self.on_bytes(9 + length)
+
+    def _resume_after(self, pos: int) -> int | None:
+        """
+        Return the start of the first chunk after byte ``pos`` that the summary indexes.
+
+        A damaged record frame hides where the next record begins; the summary's chunk
+        indexes (when the file has an intact summary) still say where every chunk starts.
+        None without an intact summary or a later chunk.
+        """
+        if self._chunk_starts is None:
+            self._chunk_starts = chunk_starts(self.path)
+        later = [c for c in self._chunk_starts if c > pos]
+        return min(later) if later else None
 
     def _top_record(self, op: int, buf: bytes, pos: int) -> Iterator[Batch]:
         """Process one top-level record; a damaged one is counted as lost (returns False)."""
@@ -333,6 +358,45 @@ class McapScanner:
 Summary = tuple[dict[int, ChannelInfo], dict[int, int], int, int]
 
 
+def chunk_starts(path: Path | str) -> list[int]:
+    """
+    Return the file offsets of the chunks the MCAP summary indexes (ChunkIndex records).
+
+    Empty when the file has no intact summary.
+    """
+    try:
+        buf = _summary_bytes(Path(path))
+    except (McapFormatError, struct.error, OSError, ValueError):
+        return []
+    out, off = [], 0
+    while buf is not None and off + 9 <= len(buf):
+        op, length = _REC.unpack_from(buf, off)
+        body, off = off + 9, off + 9 + length
+        if off > len(buf):
+            break
+        if op == OP_CHUNK_INDEX and length >= 24:
+            (start,) = _U64.unpack_from(buf, body + 16)
+            out.append(int(start))
+    return sorted(out)
+
+
+def _summary_bytes(path: Path) -> bytes | None:
+    """Return the summary section of an MCAP file whose footer is intact, else None."""
+    with path.open('rb') as f:
+        size = f.seek(0, 2)
+        if size < 8 + 9 + 20 + 8:
+            return None
+        f.seek(size - 8 - 29)
+        tail = f.read(37)
+        if tail[-8:] != MAGIC or tail[0] != OP_FOOTER:
+            return None
+        summary_start, _, _ = struct.unpack_from('<QQI', tail, 9)
+        if summary_start == 0 or summary_start >= size - 37:
+            return None
+        f.seek(summary_start)
+        return f.read(size - 37 - summary_start)
+
+
 def read_summary(path: Path | str) -> Summary | None:
     """
     Channels, per-channel message counts and start/end log time from the MCAP summary.
@@ -347,19 +411,9 @@ def read_summary(path: Path | str) -> Summary | None:
 
 
 def _read_summary(path: Path) -> Summary | None:
-    with path.open('rb') as f:
-        size = f.seek(0, 2)
-        if size < 8 + 9 + 20 + 8:
-            return None
-        f.seek(size - 8 - 29)
-        tail = f.read(37)
-        if tail[-8:] != MAGIC or tail[0] != OP_FOOTER:
-            return None
-        summary_start, _, _ = struct.unpack_from('<QQI', tail, 9)
-        if summary_start == 0 or summary_start >= size - 37:
-            return None
-        f.seek(summary_start)
-        buf = f.read(size - 37 - summary_start)
+    buf = _summary_bytes(path)
+    if buf is None:
+        return None
     schemas: dict[int, str] = {}
     chans: list[tuple[int, int, str, str, dict[str, str]]] = []
     stats: tuple[dict[int, int], int, int] | None = None

@@ -31,10 +31,12 @@ import json
 import os
 from pathlib import Path
 import shutil
+import struct
 import tempfile
 import threading
 import time
 from typing import Any, Mapping
+import zlib
 
 from frf_ident.core.jsonable import json_default
 from frf_ident.core.recording import Recording
@@ -184,7 +186,7 @@ def _experiment_events(rec: Recording, stamps: np.ndarray) -> list[tuple[int, in
 
 def _write_bag(rec: Recording, stamps: np.ndarray, path: Path, topics: BagTopics) -> None:
     ts = typestore()
-    writer = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)
+    writer = _CrcWriter(path, version=9, storage_plugin=StoragePlugin.MCAP)
     writer.open()
     try:
         conn = _connections(writer, ts, rec, topics)
@@ -231,7 +233,35 @@ def _connections(writer: Writer, ts: Typestore, rec: Recording,
 
 # --------------------------------------------------------------------------- BagRecorder
 
-class _FlushingMcapWriter(McapWriter):
+class _CrcMcapWriter(McapWriter):
+    """
+    rosbags' MCAP storage with the chunk CRC filled in.
+
+    rosbags writes 0 (not computed), so a reader cannot tell a damaged chunk from an intact
+    one and a bad byte in the middle of a bag fails the whole read; with the CRC the reader
+    (frf_ident/bag/mcapio.py) drops that chunk alone and reports what was lost, as for the
+    bags of ``ros2 bag record``, whose MCAP writer computes it.
+    """
+
+    #: offset of uncompressed_crc in a chunk record: opcode, length, start, end, size
+    _CRC_AT = 1 + 8 + 8 + 8 + 8
+
+    def close_chunk(self) -> None:
+        data = self.chunk.bio.getvalue()
+        start = self.bio.tell()
+        super().close_chunk()
+        if data:
+            end = self.bio.tell()
+            self.bio.seek(start + self._CRC_AT)
+            self.bio.write(struct.pack('<I', zlib.crc32(data)))
+            self.bio.seek(end)
+
+
+class _CrcWriter(Writer):
+    STORAGE_PLUGINS = {StoragePlugin.MCAP: _CrcMcapWriter}
+
+
+class _FlushingMcapWriter(_CrcMcapWriter):
     """rosbags' MCAP storage with small chunks that are handed to the OS as soon as closed."""
 
     chunk_bytes = 64 * 1024
