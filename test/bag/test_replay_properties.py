@@ -37,14 +37,15 @@ import numpy as np
 import pytest
 
 hypothesis = pytest.importorskip('hypothesis')
-from hypothesis import given, HealthCheck, settings  # noqa: E402, I100
+from hypothesis import example, given, HealthCheck, settings  # noqa: E402, I100
 from hypothesis import strategies as st  # noqa: E402
 from replay_synth import Imperfections, multisine_run, truth_frf, write_robot_bag  # noqa: E402
 
 PERIOD = 1024          # samples (1.024 s): short bags keep an example to a second or two
 N_PERIODS = 8
 #: accepted estimate: median |error| to the exact FRF over the driven channel's lines [dB]
-TOL_DB = 1.0
+#: (measured: 0.0002 dB clean, 0.003 dB with 1 % drops, jitter, duplicates and reordering)
+TOL_DB = 0.05
 
 _RUNS: dict[str, object] = {}
 
@@ -118,9 +119,16 @@ def check_one(imp: Imperfections, kind: str, truncate: int, stream: bool, seed: 
 @given(imp=imperfections(), kind=st.sampled_from(['whole', 'fractional']),
        truncate=st.sampled_from([0, 0, 3000, 20000]), stream=st.booleans(),
        seed=st.integers(0, 2 ** 16))
+@example(imp=Imperfections(jitter=0.03, drop=0.01, duplicates=0.01, reorder=0.01,
+                           head_cut=2.5, tail_cut=2.5), kind='whole', truncate=0, stream=True,
+         seed=1)
 def test_estimate_exits_0_close_to_the_truth_or_2_with_one_line(imp, kind, truncate, stream,
                                                                 seed):
-    check_one(imp, kind, truncate, stream, seed)
+    got = check_one(imp, kind, truncate, stream, seed)
+    # a whole-sample period, an intact file and no bursts leave at least 3 whole periods:
+    # jitter, single drops, duplicates, reordering and cut ends are no reason to refuse
+    if kind == 'whole' and not truncate and not imp.bursts:
+        assert got == 'ok', (got, imp)
 
 
 def test_clean_bag_estimated_and_fractional_period_refused():
