@@ -33,6 +33,7 @@ from frf_ident.core.model.params import RobotParams
 import numpy as np
 from scipy import signal
 from scipy.ndimage import median_filter
+from scipy.optimize import brentq
 
 
 FC_HZ = 20.0   # low-pass of residual and regressors of both diagnosis routes [Hz]
@@ -222,6 +223,57 @@ def _ls(X: np.ndarray, y: np.ndarray, n_eff: float):
 
 RIPPLE_MIN_CYCLES = 1.5    # lowest spatial frequency: this many cycles over the analysed travel
 RIPPLE_FALSE_ALARM = 1e-3  # probability that noise alone passes the ripple scan's threshold
+RIPPLE_LEVEL_WINDOW = 161  # grid points of the running median that gives the local noise level
+#: Monte-Carlo constants of the scan's noise statistic (white noise, 1,500 scans each of 4,000 to
+#: 20,000 samples; test_ripple_scan_false_alarms_follow_the_threshold): the median over the
+#: 4x oversampled window is that of about this many independent periodogram values ...
+RIPPLE_LEVEL_DOF = 50.0
+#: ... and the oversampled scan's maximum behaves as that of this many independent values per
+#: resolution cell
+RIPPLE_CELL_FACTOR = 1.5
+
+
+def ripple_threshold(n_cells: float, n_level: int, alpha: float = RIPPLE_FALSE_ALARM) -> float:
+    """
+    Return the scan ratio that noise alone exceeds with probability ``alpha``.
+
+    Each ratio is an exponential periodogram value over a local level that is itself a
+    sample median: with the level exact the threshold would be ln(M / alpha), but a median of
+    K exponentials scatters by about 1 / sqrt(K), which fattens the tail by
+    exp(x^2 / 2K) at the ratios that matter (x ~ 15-20: a factor 10-100). The tail of one ratio
+    is the median's moment-generating function, exactly (Renyi's representation of the order
+    statistics of exponentials):
+
+        P(ratio > x) = prod_{j < r} (K - j) / (K - j + x / ln 2),  r = (K + 1) / 2,
+
+    and the maximum over the scan is that of RIPPLE_CELL_FACTOR x ``n_cells`` independent
+    values: P(max > x) = 1 - exp(-c M P(ratio > x)).
+
+    Parameters
+    ----------
+    n_cells : float
+        Resolution cells scanned, M = (s_max - s_min) / (2 pi / travel).
+    n_level : int
+        Grid points of the running median (the level's window, 4x oversampled).
+    alpha : float, optional
+        False-alarm probability of the whole scan.
+
+    Returns
+    -------
+    float
+        The threshold on the peak ratio.
+
+    """
+    k = max(int(round(RIPPLE_LEVEL_DOF * n_level / RIPPLE_LEVEL_WINDOW)), 3)
+    j = np.arange((k + 1) // 2)
+    target = -math.log1p(-alpha) / (RIPPLE_CELL_FACTOR * max(n_cells, 1.0))
+
+    def log_tail(x: float) -> float:
+        return float(np.sum(np.log((k - j) / (k - j + x / math.log(2))))) - math.log(target)
+    hi = 2.0 * math.log(1.0 / target) + 10.0
+    while log_tail(hi) > 0:
+        hi *= 2.0
+    return float(brentq(log_tail, 0.0, hi))
 
 
 def ripple_range(q: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
@@ -243,7 +295,8 @@ def ripple_range(q: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
     return RIPPLE_MIN_CYCLES * 2 * math.pi / span, s_max
 
 
-def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
+def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray, *,
+                alpha: float = RIPPLE_FALSE_ALARM) -> tuple[float, float, float]:
     """
     Scan the residual for the spatial frequency of a torque ripple.
 
@@ -252,8 +305,8 @@ def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray) -> tuple[float, 
 
     Returns (s, peak ratio, threshold): the peak power over the local noise level of the scan
     (running median / ln 2, the mean of an exponentially distributed periodogram) and the level
-    that noise alone exceeds with probability RIPPLE_FALSE_ALARM over the scan's independent
-    frequencies (ln(M / alpha)). s = 0 when the motion resolves no range.
+    that noise alone exceeds with probability ``alpha`` (:func:`ripple_threshold`). s = 0
+    when the motion resolves no range.
     """
     qm, fm = q[mask], f[mask] - np.mean(f[mask]) if mask.any() else f[mask]
     s_min, s_max = ripple_range(q, mask)
@@ -278,7 +331,7 @@ def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray) -> tuple[float, 
     # local noise level: running median over +-80 grid points (+-20 resolution cells); the
     # first and last half windows take the level of the first / last full window, so a peak
     # at the edge of the range is not measured against copies of itself
-    w = min(161, 2 * (grid.size // 2) - 1)
+    w = min(RIPPLE_LEVEL_WINDOW, 2 * (grid.size // 2) - 1)
     h = w // 2
     level = median_filter(pw, size=w, mode='nearest')
     level[:h] = level[h]
@@ -288,9 +341,8 @@ def find_ripple(f: np.ndarray, q: np.ndarray, mask: np.ndarray) -> tuple[float, 
     i = int(np.argmax(ratio))
     fine = np.linspace(grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)], 41)
     pf = [(fm @ np.cos(s * qm)) ** 2 + (fm @ np.sin(s * qm)) ** 2 for s in fine]
-    n_indep = max((s_max - s_min) / res, 1.0)
     return (float(fine[int(np.argmax(pf))]), float(ratio[i]),
-            math.log(n_indep / RIPPLE_FALSE_ALARM))
+            ripple_threshold((s_max - s_min) / res, w, alpha))
 
 
 def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: np.ndarray,
