@@ -145,6 +145,10 @@ def test_chirp_iteration_keeps_the_torque_in_time_below_binding_limits():
     ctrl.torque_limit = limit.copy()
     rec = _run(rob, ctrl, ch=ChirpConfig(max_iterations=4))
     its = rec.meta['summary']['chirp']['iterations']
+    for it in its:
+        print(f"iteration {it['iteration']}: error {it['max_abs_error_db']:.2f} dB, peak "
+              f"{np.round(it['max_abs_torque'], 2)}, predicted next "
+              f"{np.round(it.get('predicted_peak_torque') or [], 2)}")
     assert len(its) == 4 and not any(it['converged'] for it in its)
     assert all(it['scaled_for_torque_limit'] for it in its[:-1])
     peaks = np.array([it['max_abs_torque'] for it in its])
