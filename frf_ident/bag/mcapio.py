@@ -288,6 +288,8 @@ class McapScanner:
                 st.problems.append(f'{problem}: resumed at the next chunk the summary indexes, '
                                    f'byte {nxt} ({len(skipped)} chunk(s) skipped)')
                 f.seek(nxt)
+                if self.on_bytes:
+                    self.on_bytes(nxt - pos)
                 pos = nxt
                 continue
             if op == OP_DATA_END or op == OP_FOOTER:
