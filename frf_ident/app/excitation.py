@@ -50,6 +50,7 @@ from frf_ident.core.excitation.procedures import (check_position_bound, ChirpCon
                                                   ChirpIteration, multisine_procedure,
                                                   MultisineConfig)
 from frf_ident.core.recording import Segment
+from frf_ident.errors import DesignError
 import numpy as np
 
 __all__ = ['ExcitationSession', 'Outputs', 'SessionSettings', 'torque_sample_offset']
@@ -129,6 +130,10 @@ class Outputs(Protocol):
         """
 
 
+#: the longest ramp to zero an abort may take [s]
+MAX_ABORT_RAMP_S = 0.1
+
+
 @dataclass
 class SessionSettings:
     """
@@ -175,6 +180,24 @@ class SessionSettings:
     progress_period_s: float = 0.5         # wall s between progress events
     multisine: MultisineConfig = field(default_factory=MultisineConfig)
     chirp: ChirpConfig = field(default_factory=ChirpConfig)
+
+    def __post_init__(self) -> None:
+        """Refuse settings that switch a safety check off or make it slow (DesignError)."""
+        positive = {'stale_s': self.stale_s, 'stale_samples': self.stale_samples,
+                    'start_grace_s': self.start_grace_s, 'abort_ramp_s': self.abort_ramp_s,
+                    'position_bound_deg': self.position_bound_deg,
+                    'live_position_bound_deg': self.live_position_bound_deg,
+                    'progress_period_s': self.progress_period_s, 'lookahead': self.lookahead}
+        for name, value in positive.items():
+            if not (math.isfinite(value) and value > 0):
+                raise DesignError(f'{name}={value} must be a positive number')
+        if self.abort_ramp_s > MAX_ABORT_RAMP_S:
+            raise DesignError(f'abort_ramp_s={self.abort_ramp_s} s: an abort must stop the '
+                              f'robot within {MAX_ABORT_RAMP_S} s')
+        if self.live_position_bound_deg < self.position_bound_deg:
+            raise DesignError(f'live_position_bound_deg={self.live_position_bound_deg} is below '
+                              f'position_bound_deg={self.position_bound_deg}: every run would '
+                              'abort on its planned motion')
 
 
 class Run:
@@ -261,8 +284,14 @@ class ExcitationSession:
         with self.lock:
             if k <= self.k_js:
                 return
-            now = time.monotonic()
             run = self.run
+            if not np.all(np.isfinite(q)):
+                # no position: the live bound cannot be checked, so this is no joint state
+                # (a stream of them trips the watchdog), and a running procedure stops
+                if run is not None and not run.done.is_set():
+                    self._abort(f'measured position {q.tolist()} is not finite')
+                return
+            now = time.monotonic()
             if run is not None and k > run.start_k + 1:
                 run.max_gap = max(run.max_gap, now - self.t_js)
             self.k_js, self.q_js, self.t_js = k, q, now
@@ -328,6 +357,11 @@ class ExcitationSession:
                     of=st.total, fraction=st.sent / max(st.total, 1), wall_s=wall, **extra)
 
     def _finish(self, run: Run) -> None:
+        if not self.s.lockstep and np.any(self.last_ref != 0):
+            # free-running: the controller keeps the last reference it got, and the last
+            # settle sample is a small position correction, not zero: the robot would drift
+            self._publish(self.next_k, np.zeros(self.n), np.zeros(self.n))
+            self.next_k += 1
         wall = time.monotonic() - run.t0
         steps = run.end_k - run.start_k
         rate = steps / max(wall, 1e-9)

@@ -156,11 +156,19 @@ class PIVelocity:
         Returns
         -------
         ndarray, shape (n,)
-            Torque command u [N m], within +-torque_limit; ``integral`` is updated.
+            Torque command u [N m], within +-torque_limit; ``integral`` is updated. An axis
+            whose error or feedforward is not finite gets its integral torque alone (no P
+            action, no integration).
 
         """
         e = np.asarray(reference, dtype=float) - np.asarray(measured, dtype=float)
         ff = np.zeros(self.n_axes) if feedforward is None else np.asarray(feedforward, float)
+        # a measurement that is no number (the PI is compiled with fastmath, which assumes
+        # none): that axis gets no P action and no integration, so it keeps the integral
+        # torque that held its load; never a NaN torque, never a saturated one by accident
+        bad = ~(np.isfinite(e) & np.isfinite(ff))
+        if bad.any():
+            e, ff = np.where(bad, 0.0, e), np.where(bad, 0.0, ff)
         u = np.empty(self.n_axes)
         pi_step(e, self.integral, self.kp, self.ki, ff.reshape(1, -1), 0, self.torque_limit,
                 self.dt, u)
