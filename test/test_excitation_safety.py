@@ -20,6 +20,8 @@ the simulated model, stepped one sample per joint state.
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 from frf_ident.app.excitation import ExcitationSession, SessionSettings
 from frf_ident.core.excitation.procedures import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
@@ -52,11 +54,12 @@ class _Out:
 
 def _free_run(settings: SessionSettings, corrupt=None, after_s: float = 0.0):
     """
-    Run a multisine on the free-running simulated robot; return session, output, positions.
+    Run a multisine on the free-running simulated robot.
 
     The controller holds the latest reference it got (controller_node's rule) and keeps
     running ``after_s`` seconds after the procedure ended; ``corrupt(k, q)`` may alter the
-    measured position the session sees.
+    measured position the session sees. Returns the run, the session's output, the
+    positions from the operating point, the sample the run ended at and |torque| / limit.
     """
     robot, ctrl = load_model(None)[1:]
     plant = FlexibleJointPlant(robot)
@@ -67,16 +70,19 @@ def _free_run(settings: SessionSettings, corrupt=None, after_s: float = 0.0):
     q, v = plant.state[0].copy(), np.zeros(robot.n_axes)
     sess.on_state(0, q.copy(), ctrl.integral.copy())
     run = sess.start_multisine()
-    positions, k, end = [], 0, None
+    positions, torques, k, end = [], [], 0, None
     while end is None or k < end + int(after_s / robot.dt):
         r = out.refs[-1][1] if out.refs else np.zeros(robot.n_axes)
-        q, v, effort = plant.step(np.clip(ctrl.step(r, v), -lim, lim))
+        u = np.clip(ctrl.step(r, v), -lim, lim)
+        q, v, effort = plant.step(u)
         k += 1
         positions.append(q.copy())
+        torques.append(u / lim)
         sess.on_state(k, corrupt(k, q.copy()) if corrupt else q.copy(), effort.copy())
         if end is None and run.done.is_set():
             end = k
-    return sess, run, out, np.array(positions) - sess.q0, end
+    return SimpleNamespace(run=run, out=out, dq=np.array(positions) - sess.q0, end=end,
+                           share=np.abs(np.array(torques)))
 
 
 def test_pi_holds_its_integral_torque_when_the_measured_velocity_is_not_finite():
@@ -93,11 +99,10 @@ def test_pi_holds_its_integral_torque_when_the_measured_velocity_is_not_finite()
 
 def test_free_running_run_ends_on_a_zero_reference_and_the_robot_stays():
     """The last settle sample is a position correction; after it the controller got zero."""
-    _sess, run, out, dq, end = _free_run(
-        SessionSettings(stale_samples=10 ** 9, multisine=SHORT), after_s=20.0)
-    assert run.error is None and run.result is not None
-    np.testing.assert_array_equal(out.refs[-1][1], np.zeros(3))
-    drift = np.degrees(np.abs(dq[-1] - dq[end - 1]))
+    res = _free_run(SessionSettings(stale_samples=10 ** 9, multisine=SHORT), after_s=20.0)
+    assert res.run.error is None and res.run.result is not None
+    np.testing.assert_array_equal(res.out.refs[-1][1], np.zeros(3))
+    drift = np.degrees(np.abs(res.dq[-1] - res.dq[res.end - 1]))
     assert np.all(drift < 0.01), drift                  # 1.5 deg after 60 s without the zero
 
 
@@ -107,11 +112,10 @@ def test_a_non_finite_measured_position_aborts_the_run():
         if k >= 4500:
             q[0] = np.nan
         return q
-    sess, run, out, dq, end = _free_run(
-        SessionSettings(stale_samples=10 ** 9, multisine=SHORT), corrupt)
-    assert end == 4500 and 'not finite' in run.error
-    assert any('"aborted"' in e for e in out.events)
-    np.testing.assert_array_equal(out.refs[-1][1], np.zeros(3))
+    res = _free_run(SessionSettings(stale_samples=10 ** 9, multisine=SHORT), corrupt)
+    assert res.end == 4500 and 'not finite' in res.run.error
+    assert any('"aborted"' in e for e in res.out.events)
+    np.testing.assert_array_equal(res.out.refs[-1][1], np.zeros(3))
 
 
 @pytest.mark.parametrize('kw, match', [
@@ -125,3 +129,20 @@ def test_a_non_finite_measured_position_aborts_the_run():
 def test_settings_that_switch_a_safety_check_off_are_refused(kw, match):
     with pytest.raises(DesignError, match=match):
         SessionSettings(**kw)
+
+
+def test_a_saturating_drive_aborts_the_run():
+    """
+    A multisine that drives joint 2 into its torque limit stops at once.
+
+    4 Hz resolution, one period without a transient period: the ramp onto the constant
+    velocity and the multisine need more than joint 2's limit (checked only against the
+    position bound before the run). Before this check the run ran to its end with joint 2 at
+    the limit, 'successful'.
+    """
+    ms = MultisineConfig(n_realisations=1, n_periods=1, transient_periods=0, resolution_hz=4.0,
+                         compensate=False)
+    res = _free_run(SessionSettings(stale_samples=10 ** 9, multisine=ms))
+    assert 'the drives saturate' in res.run.error
+    assert np.sum(res.share >= 0.995) <= 2 and res.share.max() >= 0.995
+    np.testing.assert_array_equal(res.out.refs[-1][1], np.zeros(3))

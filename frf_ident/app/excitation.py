@@ -132,6 +132,9 @@ class Outputs(Protocol):
 
 #: the longest ramp to zero an abort may take [s]
 MAX_ABORT_RAMP_S = 0.1
+#: a measured torque at this share of its limit is a saturated drive: the run aborts (the
+#: procedures aim at 0.95 of the limit at most, ChirpConfig.torque_margin)
+SATURATION = 0.995
 
 
 @dataclass
@@ -306,6 +309,11 @@ class ExcitationSession:
                 self._abort(f'measured position {np.degrees(q - self.q0).round(2).tolist()} deg '
                             f'from the operating point exceeds the live bound '
                             f'{math.degrees(self.live_bound):.2f} deg')
+                return
+            if (effort is not None and len(effort)
+                    and np.any(np.abs(effort) >= SATURATION * self.torque_limit)):
+                self._abort(f'measured torque {np.round(effort, 1).tolist()} N m reaches the '
+                            f'limits {self.torque_limit.tolist()}: the drives saturate')
                 return
             if run.collect and effort is not None and len(effort):
                 j = k - self.offset
