@@ -34,7 +34,7 @@ def test_free_running_frf_unbiased(tmp_path):
     from frf_ident.core.model.schema import default_model_dict, robot_from_dict
     from frf_ident.core.simulation.analytic import robot_frf_sampled
     ms = MultisineConfig(n_realisations=1, n_periods=3, resolution_hz=2.0, compensate=False,
-                         return_s=1.0, settle_s=0.3)
+                         return_s=2.0, settle_s=0.3)
     g = Graph(tmp_path, multisine=ms, lockstep=False,
               params={'excitation_node': {'stale_samples': 500}})   # a loaded shared machine
     g.start()

@@ -42,7 +42,7 @@ MODEL = ROOT / 'config' / 'model_3axis.yaml'
 
 
 def _ms() -> MultisineConfig:
-    return MultisineConfig(n_realisations=2, n_periods=2, resolution_hz=1.0, return_s=1.0,
+    return MultisineConfig(n_realisations=2, n_periods=2, resolution_hz=1.0, return_s=2.0,
                            settle_s=0.3)
 
 

@@ -34,7 +34,7 @@ REST = ('excitation_node', 'estimator_node')
 
 def _ms() -> MultisineConfig:
     return MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=2.0, compensate=False,
-                           return_s=1.0, settle_s=0.3)
+                           return_s=2.0, settle_s=0.3)
 
 
 def _run(out, middleware, domain):

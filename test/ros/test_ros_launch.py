@@ -40,7 +40,7 @@ pytestmark = pytest.mark.xdist_group('test_ros_launch')
 
 ROOT = Path(__file__).resolve().parents[2]
 SHORT = {'n_realisations': 1, 'n_periods': 2, 'resolution_hz': 2.0, 'compensate': False,
-         'return_s': 1.0, 'settle_s': 0.3}
+         'return_s': 2.0, 'settle_s': 0.3}
 
 
 @pytest.fixture(scope='module')
