@@ -94,6 +94,13 @@ def bench_discretisation() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('ripple_threshold')
+def bench_ripple_threshold() -> list[tuple[str, str, str, str]]:
+    """Measure the ripple scan's false-alarm rate on white noise, calibrated vs ln(M / alpha)."""
+    from benchmarks.ripple_threshold import rows
+    return rows()
+
+
 @section('estimation')
 def bench_estimation() -> list[tuple[str, str, str, str]]:
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation

@@ -28,8 +28,7 @@ from frf_ident.cli import main
 from frf_ident.core.diagnosis.common import bridge_gaps, GAP_GUARD_S, simulate_like
 from frf_ident.core.diagnosis.experiments import missing_reference, residual_bands
 from frf_ident.core.diagnosis.residual import (
-    delayed_effort, effective_samples, find_ripple, lowpass, regress_axis,
-    RIPPLE_LEVEL_WINDOW, ripple_range, ripple_threshold)
+    delayed_effort, effective_samples, find_ripple, lowpass, regress_axis, ripple_range)
 from frf_ident.core.diagnosis.timeseries import (
     block_standard_errors, diagnose_timeseries, f_test, FC_HZ, noise_level, select_groups,
     split_blocks)
@@ -75,21 +74,18 @@ def test_ripple_scan_false_alarms_follow_the_threshold(n, travel):
 
     500 white-noise residuals per size (1,800 / 9,000 resolution cells): the share above the
     threshold of alpha = 0.1 and 0.02 within about 2 binomial standard deviations of a factor
-    0.5-1.5 of alpha (the Monte-Carlo fit behind RIPPLE_LEVEL_DOF, RIPPLE_CELL_FACTOR gives
-    0.4-1.35 on 1,500 scans each). Before the level's own scatter was taken into account
-    (threshold ln(M / alpha)) the shares were 0.44 / 0.73 at alpha = 0.1.
+    0.5-1.5 of alpha (`python -m benchmarks ripple_threshold`, 1,500 scans per size: 0.3-1.35).
+    The threshold ln(M / alpha), which takes the level as exact, is passed by 0.44 / 0.72 of
+    the same scans at alpha = 0.1 (same command).
     """
     q, mask = np.linspace(0, travel, n), np.ones(n, bool)
     peaks = np.array([find_ripple(np.random.default_rng(seed).standard_normal(n), q, mask)[1]
                       for seed in range(500)])
-    s_min, s_max = ripple_range(q, mask)
-    cells = (s_max - s_min) * travel / (2 * math.pi)
     for alpha, lo, hi in ((0.1, 0.03, 0.17), (0.02, 0.002, 0.04)):
-        share = float(np.mean(peaks > ripple_threshold(cells, RIPPLE_LEVEL_WINDOW, alpha)))
+        # the threshold depends on the positions only: the scan's own at this alpha
+        thr = find_ripple(np.random.default_rng(0).standard_normal(n), q, mask, alpha=alpha)[2]
+        share = float(np.mean(peaks > thr))
         assert lo <= share <= hi, (alpha, share)
-    # the operating threshold is the same function at RIPPLE_FALSE_ALARM
-    assert find_ripple(np.zeros(n) + np.sin(np.arange(n)), q, mask)[2] == pytest.approx(
-        ripple_threshold(cells, RIPPLE_LEVEL_WINDOW), rel=1e-9)
 
 
 def test_ripple_scan_finds_a_ripple_at_twice_its_threshold():
@@ -103,7 +99,7 @@ def test_ripple_scan_finds_a_ripple_at_twice_its_threshold():
     n, travel = 8000, 0.3
     q, mask = np.linspace(0, travel, n), np.ones(n, bool)
     s_min, s_max = ripple_range(q, mask)
-    thr = ripple_threshold((s_max - s_min) * travel / (2 * math.pi), RIPPLE_LEVEL_WINDOW)
+    thr = find_ripple(np.random.default_rng(0).standard_normal(n), q, mask)[2]
     amp = math.sqrt(4 * (2 * thr - 1) / n)
     hits = 0
     for seed in range(40):

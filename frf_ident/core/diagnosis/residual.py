@@ -225,8 +225,8 @@ RIPPLE_MIN_CYCLES = 1.5    # lowest spatial frequency: this many cycles over the
 RIPPLE_FALSE_ALARM = 1e-3  # probability that noise alone passes the ripple scan's threshold
 RIPPLE_LEVEL_WINDOW = 161  # grid points of the running median that gives the local noise level
 #: Monte-Carlo constants of the scan's noise statistic (white noise, 1,500 scans each of 4,000 to
-#: 20,000 samples; test_ripple_scan_false_alarms_follow_the_threshold): the median over the
-#: 4x oversampled window is that of about this many independent periodogram values ...
+#: 20,000 samples: ``python -m benchmarks ripple_threshold``): the median over the 4x
+#: oversampled window is that of about this many independent periodogram values ...
 RIPPLE_LEVEL_DOF = 50.0
 #: ... and the oversampled scan's maximum behaves as that of this many independent values per
 #: resolution cell
