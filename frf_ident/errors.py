@@ -15,7 +15,9 @@
 Exception hierarchy of frf_ident.
 
 Every error a user can cause derives from :class:`FrfIdentInputError`; the CLI turns it into
-one line on stderr and exit status 2. Everything else is a failure (exit 1).
+one line on stderr and exit status 2. Everything else is a failure (exit 1). A refused or
+stopped excitation (:class:`SafetyError`) is the user's to fix too (limits, amplitudes, a
+stale sensor), so it is an input error: one line, exit 2, never a traceback.
 """
 
 __all__ = ['BagError', 'DesignError', 'EstimationError', 'FrfIdentError', 'FrfIdentInputError',
@@ -46,5 +48,5 @@ class EstimationError(FrfIdentInputError):
     """The data do not support the requested estimate (too few periods, band, rank...)."""
 
 
-class SafetyError(FrfIdentError):
+class SafetyError(FrfIdentInputError):
     """A torque or position bound would be violated; the excitation was refused or stopped."""

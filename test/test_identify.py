@@ -97,3 +97,17 @@ def test_identify_refuses_existing_bag_and_bad_model(bag, tmp_path, capsys):
     assert main(['identify', '--model', str(tmp_path / 'nope.yaml'),
                  '--out', str(tmp_path / 'b')]) == 2
     assert main(['identify', '--plant', 'no_such_mod:X', '--out', str(tmp_path / 'b')]) == 2
+
+
+def test_identify_refuses_torque_limits_below_the_excitation(tmp_path, capsys):
+    """An unsafe combination (limit below the chirp's desired torque) is input: exit 2."""
+    from frf_ident.core.model.schema import default_model_dict
+    model = default_model_dict()
+    model['axes'][1]['torque_limit'] = 120.0
+    path = tmp_path / 'low.yaml'
+    path.write_text(yaml.safe_dump(model))
+    out = tmp_path / 'b'
+    assert main(['identify', '--model', str(path), '--out', str(out), *ARGS]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and 'torque limits [300.0, 120.0, 300.0]' in err
+    assert 'Traceback' not in err and not out.exists()
