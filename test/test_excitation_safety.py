@@ -20,12 +20,13 @@ the simulated model, stepped one sample per joint state.
 """
 from __future__ import annotations
 
+import json
 from types import SimpleNamespace
 
 from frf_ident.app.excitation import ExcitationSession, SessionSettings
 from frf_ident.core.excitation.procedures import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
-from frf_ident.errors import DesignError
+from frf_ident.errors import DesignError, SafetyError
 from frf_ident.io.model_file import load_model
 import numpy as np
 import pytest
@@ -38,6 +39,7 @@ class _Out:
     def __init__(self) -> None:
         self.refs: list[tuple[int, np.ndarray]] = []
         self.events: list[str] = []
+        self.logs: list[str] = []
 
     def reference(self, k, r, x) -> None:
         self.refs.append((k, np.array(r, float)))
@@ -49,24 +51,27 @@ class _Out:
         pass
 
     def log(self, level, text) -> None:
-        pass
+        self.logs.append(text)
 
 
-def _free_run(settings: SessionSettings, corrupt=None, after_s: float = 0.0):
+def _free_run(settings: SessionSettings, corrupt=None, after_s: float = 0.0,
+              predict: bool = False):
     """
     Run a multisine on the free-running simulated robot.
 
     The controller holds the latest reference it got (controller_node's rule) and keeps
     running ``after_s`` seconds after the procedure ended; ``corrupt(k, q)`` may alter the
-    measured position the session sees. Returns the run, the session's output, the
-    positions from the operating point, the sample the run ended at and |torque| / limit.
+    measured position the session sees; ``predict`` gives the session the model (its plans'
+    torque predicted before they run). Returns the run, the session's output, the positions
+    from the operating point, the sample the run ended at and |torque| / limit.
     """
     robot, ctrl = load_model(None)[1:]
     plant = FlexibleJointPlant(robot)
     lim = np.minimum(ctrl.torque_limit, robot.torque_limits())
     ctrl.torque_limit = lim
     out = _Out()
-    sess = ExcitationSession(settings, robot.joint_names, robot.dt, lim, out)
+    sess = ExcitationSession(settings, robot.joint_names, robot.dt, lim, out,
+                             model=(robot, ctrl.copy()) if predict else None)
     q, v = plant.state[0].copy(), np.zeros(robot.n_axes)
     sess.on_state(0, q.copy(), ctrl.integral.copy())
     run = sess.start_multisine()
@@ -146,3 +151,107 @@ def test_a_saturating_drive_aborts_the_run():
     assert 'the drives saturate' in res.run.error
     assert np.sum(res.share >= 0.995) <= 2 and res.share.max() >= 0.995
     np.testing.assert_array_equal(res.out.refs[-1][1], np.zeros(3))
+
+
+def test_a_plan_predicted_to_saturate_is_refused_before_it_runs():
+    """
+    With the model, the saturating plan above is refused at its start: nothing is sent.
+
+    The dry run on the nominal model from the operating point predicts joint 2 at its limit;
+    the default plan passes, and the free-running robot (here the model itself) then needs
+    what was predicted: the prediction replays the session's plan, moves included.
+    """
+    robot, ctrl = load_model(None)[1:]
+    lim = np.minimum(ctrl.torque_limit, robot.torque_limits())
+    ms = MultisineConfig(n_realisations=1, n_periods=1, transient_periods=0, resolution_hz=4.0,
+                         compensate=False)
+    out = _Out()
+    sess = ExcitationSession(SessionSettings(multisine=ms), robot.joint_names, robot.dt, lim,
+                             out, model=(robot, ctrl))
+    sess.on_state(0, FlexibleJointPlant(robot).state[0].copy(), None)
+    with pytest.raises(SafetyError, match=r'multisine: the peak torque predicted .* joint_2 '
+                                          r'\d+\.\d of 400 N m') as exc:
+        sess.start_multisine()
+    assert float(str(exc.value).split('joint_2 ')[1].split(' of')[0]) >= 0.95 * 400
+    assert out.refs == [] and out.events == [] and sess.run is None
+    res = _free_run(SessionSettings(stale_samples=10 ** 9, multisine=SHORT), predict=True)
+    assert res.run.error is None
+    lines = [t for t in res.out.logs if 'predicted peak torque' in t]
+    assert len(lines) == 1
+    predicted = np.array(json.loads(lines[0].split('torque ')[1].split(' N m')[0]))
+    measured = res.share.max(axis=0) * lim
+    np.testing.assert_allclose(measured, predicted, rtol=0.02)
+
+
+@pytest.mark.parametrize('f_hz', [3.0, 17.0, 45.0])
+def test_predicted_peak_torque_of_a_sine_is_the_analytic_closed_loop_amplitude(f_hz):
+    """
+    Truth written here, not by the simulator: u = (I + C P)^-1 C r for the linear 3-axis robot.
+
+    P: motors (J_m, viscous b) on springs (k, d) to links coupled through the link inertia
+    matrix, states (v_m, v_o, deflection), sampled with a zero-order hold (scipy);
+    C(z) = kp + ki dt / (1 - 1/z) per axis (the PI's accumulation). The sines' amplitude fades
+    in smoothly over 2 s, so each peak is the steady amplitude of the torque samples (measured
+    within 0.08 %: over 6 s the samples come close to a crest) on top of the constant load the
+    axis holds.
+    """
+    from scipy.signal import cont2discrete
+
+    from frf_ident.core.excitation.procedures import Phase
+    from frf_ident.core.simulation.runner import predict_peak_torque
+    robot, ctrl = load_model(None)[1:]
+    dt, n_ax = robot.dt, robot.n_axes
+    n = int(8 / dt)
+    t = np.arange(n) * dt
+    amp = np.array([0.02, 0.01, 0.03])
+    fade = np.sin(0.5 * np.pi * np.minimum(t / 2.0, 1.0)) ** 2
+    ref = amp * (fade * np.sin(2 * np.pi * f_hz * t))[:, None]
+    peak = predict_peak_torque([Phase('excite', n, reference=ref, excitation=ref)], robot, ctrl)
+    for ax in robot.axes:
+        assert ax.coulomb_friction == 0 and not ax.torque_ripple and ax.time_delay == 0
+        assert not ax.gravity and ax.backlash == 0 and ax.stiffness_k2 is None
+
+    def diag(key):
+        return np.diag([getattr(ax, key) for ax in robot.axes])
+    jm_inv = np.linalg.inv(diag('motor_inertia'))
+    m_inv = np.linalg.inv(robot.link_inertia_matrix())
+    k, d, b = diag('stiffness'), diag('damping'), diag('viscous_friction')
+    zero, eye = np.zeros((n_ax, n_ax)), np.eye(n_ax)
+    a = np.block([[-jm_inv @ (b + d), jm_inv @ d, -jm_inv @ k],     # J_m v_m' = u - b v_m - f
+                  [m_inv @ d, -m_inv @ d, m_inv @ k],               # M v_o' = f
+                  [eye, -eye, zero]])                               # f = k e + d e'
+    ad, bd, cv, _dd, _ = cont2discrete((a, np.vstack([jm_inv, zero, zero]),
+                                        np.hstack([eye, zero, zero]), zero), dt)
+    z = np.exp(2j * np.pi * f_hz * dt)
+    p = cv @ np.linalg.solve(z * np.eye(3 * n_ax) - ad, bd)
+    c = np.diag(ctrl.kp + ctrl.ki * dt / (1 - 1 / z))
+    u = np.linalg.solve(np.eye(n_ax) + c @ p, c @ amp)
+    hold = np.abs([ax.gravity_torque for ax in robot.axes])
+    np.testing.assert_allclose(peak, hold + np.abs(u), rtol=0.003)
+
+
+def test_a_first_chirp_step_predicted_to_need_95_percent_of_a_limit_is_refused():
+    """
+    r_initial 0.08 rad/s on joint 2 needs about 300 N m there: refused against a 300 N m limit.
+
+    The default 0.006 rad/s (134 N m predicted) starts; only the first step is predicted on
+    the model, later ones from what the earlier steps measured.
+    """
+    from frf_ident.core.excitation.procedures import ChirpConfig
+    robot, ctrl = load_model(None)[1:]
+    lim = np.array([300.0, 300.0, 300.0])
+    q0 = FlexibleJointPlant(robot).state[0].copy()
+    for r2, refused in ((0.08, True), (0.006, False)):
+        out = _Out()
+        cfg = ChirpConfig(r_initial=np.array([0.006, r2, 0.012]))
+        sess = ExcitationSession(SessionSettings(chirp=cfg), robot.joint_names, robot.dt, lim,
+                                 out, model=(robot, ctrl))
+        sess.on_state(0, q0, None)
+        if refused:
+            with pytest.raises(SafetyError, match=r'chirp_iteration_1: .* joint_2 '):
+                sess.start_chirp_iteration()
+            assert out.refs == [] and sess.run is None
+        else:
+            sess.start_chirp_iteration()
+            assert out.refs and any('chirp_iteration_1: predicted peak torque' in t
+                                    for t in out.logs)

@@ -107,7 +107,28 @@ def test_identify_refuses_torque_limits_below_the_excitation(tmp_path, capsys):
     path = tmp_path / 'low.yaml'
     path.write_text(yaml.safe_dump(model))
     out = tmp_path / 'b'
-    assert main(['identify', '--model', str(path), '--out', str(out), *ARGS]) == 2
+    assert main(['identify', '--model', str(path), '--out', str(out), *ARGS,
+                 '--procedures', 'chirp']) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and 'torque limits [300.0, 120.0, 300.0]' in err
     assert 'Traceback' not in err and not out.exists()
+
+
+def test_identify_refuses_a_multisine_predicted_to_need_95_percent_of_a_limit(tmp_path, capsys):
+    """
+    Joint 2's limit at 200 N m: the chirp's 150 N m fits, the multisine needs 198 N m.
+
+    The dry run on the model predicts it (the limit itself is not reached, so the run would
+    not even have saturated): refused with one line naming the joint, nothing recorded.
+    """
+    from frf_ident.core.model.schema import default_model_dict
+    model = default_model_dict()
+    model['axes'][1]['torque_limit'] = 200.0
+    path = tmp_path / 'tight.yaml'
+    path.write_text(yaml.safe_dump(model))
+    out = tmp_path / 'b'
+    assert main(['identify', '--model', str(path), '--out', str(out), *ARGS]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and 'multisine: the peak torque predicted' in err
+    peak = float(err.split('joint_2 ')[1].split(' of 200 N m')[0])
+    assert 190.0 <= peak < 200.0 and not out.exists()

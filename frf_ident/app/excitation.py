@@ -32,8 +32,11 @@ torque applied from t_k, so the torque of sample k is the effort of joint state 
 free-running -- the effort of joint state k is the torque applied at t_k (a robot's measured
 torque; the free-running plant node reports it so), so the torque of sample k is in joint state k.
 
-Safety: a plan is checked before it runs (position bound; for chirps the predicted torque); a
-run aborts when /joint_states is stale or a measured position leaves the live bound: the
+Safety: a plan is checked before it runs: its planned position against the position bound,
+and its peak torque, predicted by a dry run on the nominal model from the operating point
+(the multisine plan with its moves, and the first chirp step; later chirp steps from what the
+previous ones measured), against 0.95 of each limit. A run aborts when /joint_states is stale,
+a measured position leaves the live bound or a measured torque reaches its limit: the
 reference ramps to zero, a zero reference is published and an ``aborted`` descriptor sent.
 """
 from __future__ import annotations
@@ -46,10 +49,13 @@ import time
 from typing import Any, Callable, Optional, Protocol
 
 from frf_ident.core.excitation.engine import PhaseEngine, PhaseStream, SegmentEvent
-from frf_ident.core.excitation.procedures import (check_position_bound, ChirpConfig,
-                                                  ChirpIteration, multisine_procedure,
-                                                  MultisineConfig)
+from frf_ident.core.excitation.procedures import (check_position_bound, check_torque_bound,
+                                                  ChirpConfig, ChirpIteration,
+                                                  multisine_procedure, MultisineConfig)
+from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Segment
+from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.simulation.runner import predict_peak_torque
 from frf_ident.errors import DesignError
 import numpy as np
 
@@ -237,11 +243,16 @@ class ExcitationSession:
         Per joint [N m] (chirp iteration scaling and refusal).
     out
         Where references, descriptors, events and log lines go.
+    model
+        The nominal model and its controller: each plan's peak torque is predicted on it
+        before the plan runs (refused at 0.95 of a limit). None: no prediction (only the
+        runtime saturation abort guards the torque).
 
     """
 
     def __init__(self, settings: SessionSettings, joints: list[str], dt: float,
-                 torque_limit: np.ndarray, out: Outputs) -> None:
+                 torque_limit: np.ndarray, out: Outputs,
+                 model: Optional[tuple[RobotParams, PIVelocity]] = None) -> None:
         self.s = settings
         self.joints = list(joints)
         self.n = len(self.joints)
@@ -250,6 +261,7 @@ class ExcitationSession:
         self.dt_ns = int(round(self.dt * 1e9))
         self.torque_limit = np.asarray(torque_limit, float)
         self.out = out
+        self.model = model
         self.lookahead = int(settings.lookahead) if settings.lockstep else 1
         self.lag = 0 if settings.lockstep else 1       # held samples: next_k - k_js allowed
         self.offset = torque_sample_offset(settings.lockstep)
@@ -392,13 +404,19 @@ class ExcitationSession:
 
     # -- starting runs ------------------------------------------------------------------------
     def _start(self, name: str, phases: list, collect: bool,
-               on_end: Callable[[Run], dict]) -> Run:
+               on_end: Callable[[Run], dict], predict: bool) -> Run:
         with self.lock:
             if self.q0 is None:
                 raise RuntimeError('no /joint_states received yet: is the robot (plant) running?')
             if self.run is not None and not self.run.done.is_set():
                 raise RuntimeError(f'experiment {self.run.name!r} is still running')
             check_position_bound(phases, np.zeros(self.n), self.bound, self.dt)
+            if predict and self.model is not None:
+                robot, ctrl = self.model
+                peak = predict_peak_torque(phases, robot, ctrl, self.q0)
+                check_torque_bound(peak, self.torque_limit, self.joints, name)
+                self.out.log('info', f'{name}: predicted peak torque '
+                                     f'{np.round(peak, 1).tolist()} N m on the nominal model')
             self.next_k = max(self.next_k, self.k_js + self.lag)
             self.runs += 1
             run = Run(self.runs, name, PhaseStream(self.engine, phases, self.next_k), collect,
@@ -423,7 +441,8 @@ class ExcitationSession:
         RuntimeError
             No joint state received yet, or another procedure is still running.
         SafetyError
-            The planned position leaves the position bound.
+            The planned position leaves the position bound, or the predicted peak torque
+            reaches 0.95 of a limit.
 
         """
         phases, design = multisine_procedure(self.s.multisine, self.n, self.fs)
@@ -431,7 +450,7 @@ class ExcitationSession:
         def end(run: Run) -> dict:
             return {'procedure': 'multisine', 'segments': len(run.stream.segments),
                     'lines': int(design.harmonics.size)}
-        return self._start('multisine', phases, False, end)
+        return self._start('multisine', phases, False, end, predict=True)
 
     def chirp_iteration(self) -> ChirpIteration:
         """
@@ -462,7 +481,8 @@ class ExcitationSession:
             The iteration has already converged, the predicted peak torque exceeds the torque
             limit, no joint state received yet, or another procedure is still running.
         SafetyError
-            The planned position leaves the position bound.
+            The planned position leaves the position bound, or (first step) the predicted
+            peak torque reaches 0.95 of a limit.
 
         """
         it = self.chirp_iteration()
@@ -485,7 +505,8 @@ class ExcitationSession:
                     'error_db_per_channel': np.asarray(s['error_db_per_channel']).tolist(),
                     'converged': bool(s['converged']),
                     'max_abs_torque': np.asarray(s['max_abs_torque']).tolist()}
-        return self._start(f'chirp_iteration_{it.iteration}', it.phases(), True, end)
+        return self._start(f'chirp_iteration_{it.iteration}', it.phases(), True, end,
+                           predict=not it.history)
 
     # -- safety -------------------------------------------------------------------------------
     def _abort(self, reason: str) -> None:

@@ -50,7 +50,9 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
     ------
     FrfIdentInputError
         ``out`` exists, the model file is invalid (:class:`~frf_ident.errors.ModelFileError`)
-        or the plant plug-in cannot be loaded.
+        or the plant plug-in cannot be loaded; a plan beyond the position bound or predicted
+        on the model to reach 0.95 of a torque limit (:class:`~frf_ident.errors.SafetyError`,
+        nothing run).
 
     """
     from frf_ident.bag import write_recording
@@ -62,6 +64,6 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
     model, robot, ctrl = load_model(model_path)
     plant = load_plant(plant_spec, model)
     rec = run_identification(plant, ctrl, config, progress=progress,
-                             meta={'model': model, 'plant': plant_spec or 'model'})
+                             meta={'model': model, 'plant': plant_spec or 'model'}, model=robot)
     write_recording(rec, out)
     return rec

@@ -116,7 +116,8 @@ class ExcitationNode:
                                              mw.qos_transient_local(100))
         self.progress_pub = node.create_publisher(self.String, t['progress_topic'],
                                                   mw.qos_transient_local(10))
-        self.session = ExcitationSession(settings, self.joints, robot.dt, torque_limit, self)
+        self.session = ExcitationSession(settings, self.joints, robot.dt, torque_limit, self,
+                                         model=(robot, ctrl))
         self.dt_ns = self.session.dt_ns
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None

@@ -120,6 +120,25 @@ def test_gravity_equilibrium_holds_at_rest():
     assert np.max(np.abs(res.velocity)) < 1e-9
 
 
+def test_rest_at_a_configuration_with_its_gravity_load():
+    """reset(position=q) rests there: sin(q2 + phi) and sin(q2 + q3 + phi) loads held, no drift."""
+    rob = default_robot()
+    rob.axes[1].gravity = [{'amplitude': 300.0, 'phase': 0.2},
+                           {'amplitude': 90.0, 'phase': -0.4, 'joints': ['joint_2', 'joint_3']}]
+    rob.axes[2].gravity = [{'amplitude': 90.0, 'phase': -0.4, 'joints': ['joint_2', 'joint_3']}]
+    q = np.array([0.3, 0.7, -1.1])
+    plant = FlexibleJointPlant(rob)
+    plant.reset(position=q)
+    hold = plant.equilibrium_torque(q)
+    expect = [0.0, 120 + 300 * np.sin(0.9) + 90 * np.sin(-0.8), 40 + 90 * np.sin(-0.8)]
+    np.testing.assert_allclose(hold, expect, rtol=1e-12)
+    np.testing.assert_allclose(plant.state[2], q, rtol=0, atol=0)          # links at q
+    res = plant.simulate(torque=np.tile(hold, (2000, 1)))
+    assert np.max(np.abs(res.velocity)) < 1e-9
+    np.testing.assert_allclose(res.position[-1], plant.state[0], atol=1e-12)
+    np.testing.assert_allclose(plant.state[2], q, atol=1e-12)
+
+
 @pytest.mark.parametrize('name, order', [
     ('Coulomb friction 15 N m', 1.0), ('backlash 5e-5 rad', 1.0),
     ('stiffening k2 = 1.5 k1 beyond 2.5e-4 rad', 2.0), ('torque ripple 4 N m at 120 /rad', 2.0)])

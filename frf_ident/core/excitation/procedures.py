@@ -230,6 +230,48 @@ def check_position_bound(phases: list[Phase], start: np.ndarray, bound: float, d
             q = traj[-1]
 
 
+#: share of each torque limit a plan may use (the predicted peak torque; the rest is left for
+#: what the model does not know)
+TORQUE_MARGIN = 0.95
+
+
+def check_torque_bound(peak: np.ndarray, torque_limit: np.ndarray, joints: list[str],
+                       what: str, margin: float = TORQUE_MARGIN) -> None:
+    """
+    Refuse a plan whose predicted peak torque reaches ``margin`` times a torque limit.
+
+    Parameters
+    ----------
+    peak : array_like, shape (n,)
+        Predicted peak absolute torque [N m] of every axis.
+    torque_limit : array_like, shape (n,)
+        Torque limit [N m] of every axis.
+    joints : list of str
+        Joint names, for the message.
+    what : str
+        The plan's name, for the message.
+    margin : float, optional
+        Share of each limit the plan may use.
+
+    Raises
+    ------
+    SafetyError
+        An axis's predicted peak reaches ``margin`` times its limit (the message names the
+        axes, their peaks and limits).
+
+    """
+    peak = np.asarray(peak, dtype=float)
+    limit = np.asarray(torque_limit, dtype=float)
+    over = np.flatnonzero(~(peak < margin * limit))
+    if over.size:
+        where = ', '.join(f'{joints[i]} {peak[i]:.1f} of {limit[i]:g} N m'
+                          + (' (saturated)' if peak[i] >= limit[i] * (1 - 1e-9) else '')
+                          for i in over)
+        raise SafetyError(f'{what}: the peak torque predicted on the nominal model reaches '
+                          f'{margin:g} x the torque limit: {where}; lower the excitation '
+                          f'amplitude or the velocities')
+
+
 # --- chirp iteration (Section 5.3) ----------------------------------------------------------
 
 TABLE1_AMPLITUDES = np.array([[100.0, 50.0], [150.0, 75.0], [120.0, 60.0]])   # N m, <>40 Hz
@@ -252,7 +294,7 @@ class ChirpConfig:
     lead_s: float = 0.5
     settle_s: float = 1.0
     max_gain_step: float = 100.0
-    torque_margin: float = 0.95
+    torque_margin: float = TORQUE_MARGIN
     regularisation: float = 1e-3
 
     def __post_init__(self) -> None:

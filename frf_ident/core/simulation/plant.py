@@ -533,25 +533,49 @@ class FlexibleJointPlant:
         """Return true state as a (4, n) view: rows q_m, v_m, q_o, v_o."""
         return self.x.reshape(4, self.n_axes)
 
-    def equilibrium_torque(self) -> np.ndarray:
-        """Motor torque that holds the robot at rest against gravity (links at q_o = 0)."""
-        return self.params.gravity_load(np.zeros(self.n_axes))
+    def equilibrium_torque(self, position: np.ndarray | None = None) -> np.ndarray:
+        """
+        Return the motor torque that holds the robot at rest against gravity.
 
-    def reset(self, seed: int | None = None) -> None:
+        Parameters
+        ----------
+        position : array_like, shape (n,), optional
+            Link positions [rad]; default all zero.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Holding torque [N m] of every axis.
+
+        """
+        q = np.zeros(self.n_axes) if position is None else np.asarray(position, dtype=float)
+        return self.params.gravity_load(q)
+
+    def reset(self, seed: int | None = None, position: np.ndarray | None = None) -> None:
         """
         Back to rest at the static equilibrium under gravity.
 
         The noise generator continues (new noise in every run) unless ``seed`` is given.
+
+        Parameters
+        ----------
+        seed : int, optional
+            Restart the noise generator with this seed.
+        position : array_like, shape (n,), optional
+            Link positions [rad] of the rest state; default all zero.
+
         """
         n = self.n_axes
+        q_link = np.zeros(n) if position is None else np.asarray(position, dtype=float)
+        hold = self.equilibrium_torque(q_link)
         self.x = np.zeros(4 * n)  # flat [q_m, v_m, q_o, v_o]; see ``state``
-        self.x[:n] = [static_deflection(a, g)
-                      for a, g in zip(self.params.axes, self.equilibrium_torque())]
+        self.x[2 * n:3 * n] = q_link
+        self.x[:n] = q_link + [static_deflection(a, g) for a, g in zip(self.params.axes, hold)]
         self.qprev = self.x[:n].copy()
         enc = self._packed.enc
         self.qprev = np.where(enc > 0, enc * np.floor(self.qprev / np.where(enc > 0, enc, 1)
                                                       + 0.5), self.qprev)
-        self.buf = np.tile(self.equilibrium_torque(), (self._packed.nbuf, 1))
+        self.buf = np.tile(hold, (self._packed.nbuf, 1))
         self._scratch = np.zeros((_NSCRATCH, 4 * n))
         self.k = 0
         if seed is not None or not hasattr(self, 'rng'):

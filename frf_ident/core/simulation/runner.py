@@ -22,14 +22,15 @@ PI. Everything lands in one :class:`~frf_ident.core.recording.Recording` on a si
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import time
 from typing import Any, Callable
 
 from frf_ident.core.excitation.engine import PhaseEngine
-from frf_ident.core.excitation.procedures import (ChirpConfig, ChirpIteration,
+from frf_ident.core.excitation.procedures import (check_torque_bound, ChirpConfig, ChirpIteration,
                                                   multisine_procedure, MultisineConfig, Phase,
                                                   POSITION_GAIN)
+from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
@@ -42,7 +43,8 @@ Progress = Callable[[str], None]
 class ClosedLoop:
     """A plant in closed loop with the velocity PI; runs reference arrays and keeps the log."""
 
-    def __init__(self, plant: Any, controller: PIVelocity) -> None:
+    def __init__(self, plant: Any, controller: PIVelocity,
+                 position: np.ndarray | None = None) -> None:
         for attr in ('dt', 'joint_names', 'reset', 'step'):
             if not hasattr(plant, attr):
                 raise FrfIdentInputError(f'plant {type(plant).__name__} lacks {attr!r} '
@@ -55,7 +57,13 @@ class ClosedLoop:
             raise FrfIdentInputError(f'controller has {controller.n_axes} axes, plant '
                                      f'{self.n} joints {plant.joint_names}')
         self.fast = isinstance(plant, FlexibleJointPlant)
-        plant.reset()
+        if position is not None and not self.fast:
+            raise FrfIdentInputError('a start position needs a FlexibleJointPlant: the plug-in '
+                                     'interface resets to its own rest state')
+        if self.fast:
+            plant.reset(position=position)
+        else:
+            plant.reset()
         self.k = 0
         if self.fast:
             self.q_last = plant.state[0].copy()
@@ -121,6 +129,48 @@ class ClosedLoop:
                          cat['r'], cat['x'], list(self.segments), dict(meta or {}))
 
 
+def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIVelocity,
+                        position: np.ndarray | None = None) -> np.ndarray:
+    """
+    Dry-run a plan on the nominal model and return the peak torque of every axis.
+
+    The plan's phases run in closed loop with a copy of ``controller`` on a noiseless
+    :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` of ``robot`` (its friction,
+    gravity and other effects included), from rest at ``position``. What a robot will need is
+    this plus what its model lacks: the runtime saturation check stays the last guard.
+
+    Parameters
+    ----------
+    phases : list of Phase
+        The plan, as :func:`~frf_ident.core.excitation.procedures.multisine_procedure` or
+        :meth:`~frf_ident.core.excitation.procedures.ChirpIteration.phases` return it.
+    robot : RobotParams
+        The nominal model.
+    controller : PIVelocity
+        The velocity controller (not modified).
+    position : array_like, shape (n,), optional
+        Link positions [rad] the plan starts from (the operating point); default zero.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Peak absolute motor torque [N m] of every axis over the whole plan.
+
+    """
+    quiet = [replace(a, velocity_noise=0.0, torque_noise=0.0) for a in robot.axes]
+    plant = FlexibleJointPlant(replace(robot, axes=quiet))
+    ctrl = controller.copy()
+    q0 = np.zeros(robot.n_axes) if position is None else np.asarray(position, dtype=float)
+    ctrl.reset(plant.equilibrium_torque(q0))
+    loop = ClosedLoop(plant, ctrl, position=q0)
+    peak = np.zeros(loop.n)
+    for ph in phases:
+        _q, _v, u = loop.run_phase(ph)
+        if u.size:
+            peak = np.maximum(peak, np.max(np.abs(u), axis=0))
+    return peak
+
+
 @dataclass
 class IdentificationConfig:
     multisine: MultisineConfig | None = field(default_factory=MultisineConfig)
@@ -130,12 +180,39 @@ class IdentificationConfig:
 def run_identification(plant: Any, controller: PIVelocity,
                        config: IdentificationConfig | None = None, *,
                        progress: Progress | None = None,
-                       meta: dict[str, Any] | None = None) -> Recording:
+                       meta: dict[str, Any] | None = None,
+                       model: RobotParams | None = None) -> Recording:
     """
     Run the Section 7 procedures (multisine with compensation run, iterated chirps).
 
-    Returns the recording with all segments; ``meta['summary']`` holds per procedure the
-    experiment time and, for the chirp iteration, every iteration's error to u_des.
+    Parameters
+    ----------
+    plant : FlexibleJointPlant or plug-in
+        The robot (docs/CONTRACT.md §4 interface).
+    controller : PIVelocity
+        The velocity controller in the loop.
+    config : IdentificationConfig, optional
+        The procedures; default both with their defaults.
+    progress : callable, optional
+        Called with one line per segment and per chirp iteration.
+    meta : dict, optional
+        Copied into the recording's metadata.
+    model : RobotParams, optional
+        The nominal model: the multisine plan and the first chirp step are refused when their
+        peak torque predicted on it (:func:`predict_peak_torque`) reaches 0.95 of a limit,
+        as the excitation node refuses them on a robot. None: no prediction.
+
+    Returns
+    -------
+    Recording
+        All segments on one timeline; ``meta['summary']`` holds per procedure the experiment
+        time and, for the chirp iteration, every iteration's error to u_des.
+
+    Raises
+    ------
+    SafetyError
+        A plan's planned position or predicted torque is beyond its bound.
+
     """
     cfg = config or IdentificationConfig()
     say = progress or (lambda _m: None)
@@ -145,6 +222,9 @@ def run_identification(plant: Any, controller: PIVelocity,
     wall0 = time.perf_counter()
     if cfg.multisine is not None:
         phases, design = multisine_procedure(cfg.multisine, loop.n, fs)
+        if model is not None:
+            check_torque_bound(predict_peak_torque(phases, model, controller, loop.q0),
+                               controller.torque_limit, model.joint_names, 'multisine')
         t_start = loop.t
         n_exc = sum(1 for p in phases if p.segment)
         done = 0
@@ -163,6 +243,9 @@ def run_identification(plant: Any, controller: PIVelocity,
                                         'constant_velocity']}
     if cfg.chirp is not None:
         it = ChirpIteration(cfg.chirp, loop.n, fs, controller.torque_limit)
+        if model is not None:
+            check_torque_bound(predict_peak_torque(it.phases(), model, controller, loop.q_last),
+                               controller.torque_limit, model.joint_names, 'chirp_iteration_1')
         t_start = loop.t
         iterations = []
         for _ in range(cfg.chirp.max_iterations):
