@@ -255,3 +255,26 @@ def test_a_first_chirp_step_predicted_to_need_95_percent_of_a_limit_is_refused()
             sess.start_chirp_iteration()
             assert out.refs and any('chirp_iteration_1: predicted peak torque' in t
                                     for t in out.logs)
+
+
+def test_a_held_reference_drops_to_zero_when_not_renewed():
+    """controller_node's free-running rule, in joint-state time (the robot's clock)."""
+    from frf_ident.errors import FrfIdentInputError
+    from frf_ident.nodes.controller_node import HeldReference
+    held = HeldReference(3, 0.1)
+    r = np.array([0.01, -0.02, 0.0])
+    held.renew(r, -1)                       # before the first joint state: held from it
+    t0 = 5_000_000_000
+    for dt_ns, expect, expired in ((0, r, False), (100_000_000, r, False),
+                                   (100_000_001, 0 * r, True), (200_000_000, 0 * r, False)):
+        got, flag = held.at(t0 + dt_ns)
+        np.testing.assert_array_equal(got, expect)
+        assert flag is expired
+    np.testing.assert_array_equal(held.expired, r)
+    held.renew(r, t0 + 300_000_000)         # renewed: held again from then
+    assert held.at(t0 + 390_000_000)[0] is r
+    held.renew(0 * r, t0 + 400_000_000)     # a zero reference never expires (nothing logged)
+    assert held.at(t0 + 10 ** 10)[1] is False
+    for bad in (0.0, -1.0, float('nan'), float('inf')):
+        with pytest.raises(FrfIdentInputError, match='reference_timeout_s='):
+            HeldReference(3, bad)

@@ -21,7 +21,12 @@ anti-windup, and non-finite references count as zero).
 lockstep: true  -- references are consumed in order, one per joint-state sample: the excitation
                    node publishes them ahead, so each step costs one hop plant -> controller ->
                    plant. A joint state without its reference waits for it.
-lockstep: false -- the latest reference is used (as ros2_control's forward controllers do).
+lockstep: false -- the latest reference is used (as ros2_control's forward controllers do),
+                   for at most ``reference_timeout_s`` of joint-state time: a non-zero
+                   reference that is not renewed within it (the excitation node died or
+                   stalls) is dropped to zero, logged once, so the robot stops instead of
+                   running on at the last velocity. The excitation node renews its reference
+                   with every joint state while it runs and ends on zero.
 Joint states with a stamp not newer than the last one are ignored (the idle re-send).
 """
 from __future__ import annotations
@@ -31,8 +36,83 @@ import math
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
+from frf_ident.errors import FrfIdentInputError
 from frf_ident.nodes import common as c
 import numpy as np
+
+#: free-running: joint-state time [s] a non-zero velocity reference is held without renewal
+REFERENCE_TIMEOUT_S = 0.1
+
+
+class HeldReference:
+    """
+    The latest velocity reference, dropped to zero when not renewed within a timeout.
+
+    Time is the joint states' stamp time (the robot's clock), so a stalled reference source
+    counts however the messages are delayed.
+
+    Parameters
+    ----------
+    n : int
+        Number of joints.
+    timeout_s : float
+        How long [s] a non-zero reference is held without renewal (> 0).
+
+    Raises
+    ------
+    FrfIdentInputError
+        ``timeout_s`` is not a positive number.
+
+    """
+
+    def __init__(self, n: int, timeout_s: float) -> None:
+        if not (math.isfinite(timeout_s) and timeout_s > 0):
+            raise FrfIdentInputError(f'reference_timeout_s={timeout_s} must be a positive '
+                                     f'number of seconds')
+        self.timeout_ns = int(round(timeout_s * 1e9))
+        self.value = np.zeros(n)
+        self.stamp_ns: Optional[int] = None     # joint-state time the reference came at
+        self.expired: Optional[np.ndarray] = None   # the reference that expired last
+
+    def renew(self, r: np.ndarray, now_ns: int) -> None:
+        """
+        Take a new reference.
+
+        Parameters
+        ----------
+        r : ndarray, shape (n,)
+            Velocity reference [rad/s].
+        now_ns : int
+            Stamp [ns] of the newest joint state, or a negative number before the first one.
+
+        """
+        self.value = r
+        self.stamp_ns = now_ns if now_ns >= 0 else None
+
+    def at(self, now_ns: int) -> tuple[np.ndarray, bool]:
+        """
+        Return the reference to use at a joint state, and whether it just expired.
+
+        Parameters
+        ----------
+        now_ns : int
+            Stamp [ns] of the joint state.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The held reference, or zero once it expired.
+        bool
+            True at the joint state where a non-zero reference expired (log it).
+
+        """
+        if self.stamp_ns is None:
+            self.stamp_ns = now_ns
+        if now_ns - self.stamp_ns > self.timeout_ns and np.any(self.value != 0):
+            self.expired = self.value
+            self.value = np.zeros_like(self.value)
+            return self.value, True
+        return self.value, False
 
 
 class VelocityLoop:
@@ -87,7 +167,8 @@ class ControllerNode:
         self.cmd = F64(data=[0.0] * self.n)
         self.pub = node.create_publisher(F64, t['effort_topic'], mw.qos_default(c.DEEP))
         self.refs: deque = deque()
-        self.latest = np.zeros(self.n)
+        self.timeout_s = float(c.param(node, 'reference_timeout_s', REFERENCE_TIMEOUT_S))
+        self.held = HeldReference(self.n, self.timeout_s)
         self.pending: Optional[np.ndarray] = None
         self.last_stamp = -1
         self.order: Optional[list[int]] = None
@@ -103,7 +184,7 @@ class ControllerNode:
     def _on_ref(self, msg: Any) -> None:
         r = self._ref(msg.data)
         if not self.lockstep:
-            self.latest = r
+            self.held.renew(r, self.last_stamp)
             return
         if self.pending is not None:
             y, self.pending = self.pending, None
@@ -130,7 +211,12 @@ class ControllerNode:
         self.last_stamp = s
         y = self._velocity(msg)
         if not self.lockstep:
-            self._control(self.latest, y)
+            r, expired = self.held.at(s)
+            if expired:
+                self.node.get_logger().warn(
+                    f'no velocity reference for {self.timeout_s:g} s (reference_timeout_s): '
+                    f'zero velocity instead of {np.round(self.held.expired, 4).tolist()} rad/s')
+            self._control(r, y)
         elif self.refs:
             self._control(self.refs.popleft(), y)
         else:

@@ -22,6 +22,7 @@ sampled FRF: a one-sample error in the torque pairing would show as a phase erro
 360 f dt (21.6 deg at 60 Hz) and a relative error |exp(j 2 pi f dt) - 1| (38 % at 60 Hz).
 """
 import dataclasses
+import json
 
 from frf_ident.app.graph import Graph
 from frf_ident.core.excitation.procedures import MultisineConfig
@@ -35,8 +36,9 @@ def test_free_running_frf_unbiased(tmp_path):
     from frf_ident.core.simulation.analytic import robot_frf_sampled
     ms = MultisineConfig(n_realisations=1, n_periods=3, resolution_hz=2.0, compensate=False,
                          return_s=2.0, settle_s=0.3)
-    g = Graph(tmp_path, multisine=ms, lockstep=False,
-              params={'excitation_node': {'stale_samples': 500}})   # a loaded shared machine
+    g = Graph(tmp_path, multisine=ms, lockstep=False,      # a loaded shared machine:
+              params={'excitation_node': {'stale_samples': 500},
+                      'controller_node': {'reference_timeout_s': 0.5}})
     g.start()
     try:
         res = g.drive(multisine=True, iterations=0)
@@ -62,3 +64,43 @@ def test_free_running_frf_unbiased(tmp_path):
     rel_wrong = np.abs(wrong.response[idx, idx] - truth[idx, idx]) / np.abs(truth[idx, idx])
     print(f'the same data paired as in lockstep: above 30 Hz {np.median(rel_wrong[:, high]):.3f}')
     assert np.median(rel_wrong[:, high]) > 3 * np.median(rel[:, high]) + 0.1
+
+
+def test_controller_stops_the_robot_when_its_references_stop(tmp_path):
+    """
+    The excitation node killed mid-run (no abort ramp): the controller drops its reference.
+
+    Free-running, the controller held the last velocity reference for good and the robot
+    drove on at it. Now a non-zero reference not renewed within reference_timeout_s (0.1 s
+    of joint-state time) becomes zero: the joints come to rest within a second of the kill.
+    """
+    import time
+
+    from frf_ident.bag import read_recording
+    ms = MultisineConfig(n_realisations=1, n_periods=20, resolution_hz=1.0, compensate=False,
+                         return_s=2.0, settle_s=0.3)
+    g = Graph(tmp_path, multisine=ms, lockstep=False,
+              params={'excitation_node': {'stale_samples': 500}})
+    g.start()
+    drv = g.driver(multisine=True, iterations=0)
+    try:
+        time.sleep(6.0)                    # into the run: a move, the ramp or the multisine
+        assert drv.poll() is None
+        g.kill('excitation_node')
+        time.sleep(2.5)
+    finally:
+        drv.kill()
+        drv.wait(10)
+        bag = g.stop()
+    log = (tmp_path / 'controller_node.log').read_text()
+    warn = [line for line in log.splitlines() if 'no velocity reference for 0.1 s' in line]
+    assert len(warn) == 1, log[-800:]
+    held = np.array(json.loads(warn[0].split('instead of ')[1].split(' rad/s')[0]))
+    assert np.any(held != 0)
+    rec, _ = read_recording(bag)
+    t_last = rec.t[np.isfinite(rec.reference).all(axis=1)][-1]    # the last reference sent
+    rest = rec.velocity[(rec.t > t_last + 1.0) & (rec.t < t_last + 2.0)]
+    print(f'held reference {held.tolist()} rad/s; |velocity| 1-2 s after the last reference '
+          f'{np.abs(rest).max(axis=0).tolist()} rad/s')
+    assert rest.shape[0] > 900
+    assert np.all(np.abs(rest).max(axis=0) < 0.1 * np.abs(held).max())
