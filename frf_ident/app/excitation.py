@@ -403,20 +403,26 @@ class ExcitationSession:
         run.done.set()
 
     # -- starting runs ------------------------------------------------------------------------
+    def _refuse_while_running(self) -> None:
+        run = self.run
+        if run is not None and not run.done.is_set():
+            raise RuntimeError(f'experiment {run.name!r} is still running')
+
     def _start(self, name: str, phases: list, collect: bool,
                on_end: Callable[[Run], dict], predict: bool) -> Run:
+        if self.q0 is None:
+            raise RuntimeError('no /joint_states received yet: is the robot (plant) running?')
+        self._refuse_while_running()
+        check_position_bound(phases, np.zeros(self.n), self.bound, self.dt)
+        if predict and self.model is not None:
+            # outside the lock: joint states keep coming while the dry run takes its second
+            robot, ctrl = self.model
+            peak = predict_peak_torque(phases, robot, ctrl, self.q0)
+            check_torque_bound(peak, self.torque_limit, self.joints, name)
+            self.out.log('info', f'{name}: predicted peak torque '
+                                 f'{np.round(peak, 1).tolist()} N m on the nominal model')
         with self.lock:
-            if self.q0 is None:
-                raise RuntimeError('no /joint_states received yet: is the robot (plant) running?')
-            if self.run is not None and not self.run.done.is_set():
-                raise RuntimeError(f'experiment {self.run.name!r} is still running')
-            check_position_bound(phases, np.zeros(self.n), self.bound, self.dt)
-            if predict and self.model is not None:
-                robot, ctrl = self.model
-                peak = predict_peak_torque(phases, robot, ctrl, self.q0)
-                check_torque_bound(peak, self.torque_limit, self.joints, name)
-                self.out.log('info', f'{name}: predicted peak torque '
-                                     f'{np.round(peak, 1).tolist()} N m on the nominal model')
+            self._refuse_while_running()     # again: another start may have come meanwhile
             self.next_k = max(self.next_k, self.k_js + self.lag)
             self.runs += 1
             run = Run(self.runs, name, PhaseStream(self.engine, phases, self.next_k), collect,
