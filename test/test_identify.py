@@ -12,12 +12,12 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """`frf-ident identify` -> bag -> `frf-ident estimate`: the bag carries everything."""
-import argparse
 import json
 
 from frf_ident.bag import read_recording
 from frf_ident.cli import main
 from frf_ident.cli.identify import identification_config
+from frf_ident.cli.main import build_parser
 from frf_ident.core.estimation.described import estimate_recording
 from frf_ident.core.simulation.runner import run_identification
 from frf_ident.io.model_file import load_model, load_plant
@@ -66,9 +66,7 @@ def test_bag_is_rosbag2_mcap_v9_readable_by_rosbags_and_mcap(bag):
 
 def test_estimate_from_bag_equals_in_memory_run(bag, tmp_path):
     model, _, ctrl = load_model(None)
-    parser_args = argparse.Namespace(procedures='multisine,chirp', realisations=2, periods=2,
-                                     resolution=0.5, no_compensation=False,
-                                     chirp_duration=8.0, max_iterations=2, seed=0)
+    parser_args = build_parser().parse_args(['identify', '--out', str(bag), *ARGS])
     rec = run_identification(load_plant(None, model), ctrl, identification_config(parser_args))
     mem = estimate_recording(rec)
     from_bag = estimate_recording(read_recording(bag)[0])
@@ -119,7 +117,8 @@ def test_identify_refuses_a_multisine_predicted_to_need_95_percent_of_a_limit(tm
     Joint 2's limit at 200 N m: the chirp's 150 N m fits, the multisine needs 198 N m.
 
     The dry run on the model predicts it (the limit itself is not reached, so the run would
-    not even have saturated): refused with one line naming the joint, nothing recorded.
+    not even have saturated): refused with one line naming the joint and the remedy, nothing
+    recorded; with the remedy applied the run goes ahead and stays below 0.95 of the limit.
     """
     from frf_ident.core.model.schema import default_model_dict
     model = default_model_dict()
@@ -132,3 +131,11 @@ def test_identify_refuses_a_multisine_predicted_to_need_95_percent_of_a_limit(tm
     assert len(err.splitlines()) == 1 and 'multisine: the peak torque predicted' in err
     peak = float(err.split('joint_2 ')[1].split(' of 200 N m')[0])
     assert 190.0 <= peak < 200.0 and not out.exists()
+    assert 'amplitude_ratio (0.75) or position_bound_deg (4' in err
+    # the remedy it names: half the travel, half the velocities; the run then stays below
+    assert main(['identify', '--model', str(path), '--out', str(out), *ARGS,
+                 '--procedures', 'multisine', '--position-bound', '2']) == 0
+    rec, _ = read_recording(out)
+    print(f'predicted {peak} N m refused; at --position-bound 2: measured peak '
+          f'{np.abs(rec.effort[:, 1]).max():.1f} N m')
+    assert np.abs(rec.effort[:, 1]).max() < 0.95 * 200.0

@@ -90,14 +90,13 @@ def test_blocks_of_a_foreign_bag_give_the_in_memory_estimate(foreign_bags):
 
 
 def test_streamed_estimate_of_an_own_bag_equals_the_in_memory_one(tmp_path, capsys):
-    from argparse import Namespace
-
     from frf_ident.app.identify import run_identify
     from frf_ident.cli.identify import identification_config
+    from frf_ident.cli.main import build_parser
     bag = tmp_path / 'own'
-    cfg = identification_config(Namespace(
-        procedures='multisine,chirp', realisations=2, periods=2, resolution=0.5,
-        no_compensation=False, chirp_duration=6.0, max_iterations=1, seed=0))
+    cfg = identification_config(build_parser().parse_args(
+        ['identify', '--out', str(bag), '--realisations', '2', '--periods', '2',
+         '--resolution', '0.5', '--chirp-duration', '6', '--max-iterations', '1']))
     run_identify(None, None, cfg, bag, progress=lambda _m: None)
     exp = read_experiment(bag)
     assert len(segment_windows(exp.segments)) == 1 + 2 * 3 + 3

@@ -409,18 +409,19 @@ class ExcitationSession:
             raise RuntimeError(f'experiment {run.name!r} is still running')
 
     def _start(self, name: str, phases: list, collect: bool,
-               on_end: Callable[[Run], dict], predict: bool) -> Run:
+               on_end: Callable[[Run], dict], predict: Optional[str]) -> Run:
+        """Start a run; ``predict``: the remedy of a refusal, None: no torque prediction."""
         if self.q0 is None:
             raise RuntimeError('no /joint_states received yet: is the robot (plant) running?')
         self._refuse_while_running()
         check_position_bound(phases, np.zeros(self.n), self.bound, self.dt)
-        if predict and self.model is not None:
+        if predict is not None and self.model is not None:
             # outside the lock: joint states keep coming while the dry run takes its second
             robot, ctrl = self.model
             peak = predict_peak_torque(phases, robot, ctrl, self.q0)
-            check_torque_bound(peak, self.torque_limit, self.joints, name)
+            check_torque_bound(peak, self.torque_limit, self.joints, name, predict)
             self.out.log('info', f'{name}: predicted peak torque '
-                                 f'{np.round(peak, 1).tolist()} N m on the nominal model')
+                                 f'{np.round(peak, 1).tolist()} N m on the model')
         with self.lock:
             self._refuse_while_running()     # again: another start may have come meanwhile
             self.next_k = max(self.next_k, self.k_js + self.lag)
@@ -456,7 +457,7 @@ class ExcitationSession:
         def end(run: Run) -> dict:
             return {'procedure': 'multisine', 'segments': len(run.stream.segments),
                     'lines': int(design.harmonics.size)}
-        return self._start('multisine', phases, False, end, predict=True)
+        return self._start('multisine', phases, False, end, predict=self.s.multisine.remedy())
 
     def chirp_iteration(self) -> ChirpIteration:
         """
@@ -512,7 +513,7 @@ class ExcitationSession:
                     'converged': bool(s['converged']),
                     'max_abs_torque': np.asarray(s['max_abs_torque']).tolist()}
         return self._start(f'chirp_iteration_{it.iteration}', it.phases(), True, end,
-                           predict=not it.history)
+                           predict=None if it.history else self.s.chirp.remedy())
 
     # -- safety -------------------------------------------------------------------------------
     def _abort(self, reason: str) -> None:

@@ -49,6 +49,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--resolution', type=float, default=ms.resolution_hz,
                    help=f'multisine frequency resolution [Hz] (default {ms.resolution_hz}; '
                         f'paper: 0.1 -> 12.3 s periods)')
+    p.add_argument('--amplitude-ratio', type=float, default=ms.amplitude_ratio,
+                   help=f'multisine amplitude / constant velocity, at most 0.75 (default '
+                        f'{ms.amplitude_ratio})')
+    p.add_argument('--position-bound', type=float, default=ms.position_bound_deg,
+                   help=f'multisine travel bound around the operating point [deg], sets the '
+                        f'constant velocity (default {ms.position_bound_deg})')
     p.add_argument('--no-compensation', action='store_true',
                    help='skip the constant-velocity run (no periodic-disturbance compensation)')
     p.add_argument('--chirp-duration', type=float, default=ch.duration)
@@ -84,6 +90,8 @@ def identification_config(args: argparse.Namespace):
                                  f'multisine, chirp')
     ms = MultisineConfig(n_realisations=args.realisations, n_periods=args.periods,
                          resolution_hz=args.resolution, compensate=not args.no_compensation,
+                         amplitude_ratio=args.amplitude_ratio,
+                         position_bound_deg=args.position_bound,
                          seed=args.seed) if 'multisine' in procs else None
     ch = ChirpConfig(duration=args.chirp_duration, max_iterations=args.max_iterations) \
         if 'chirp' in procs else None

@@ -137,6 +137,19 @@ class MultisineConfig:
         if not self.position_bound_deg > 0:
             raise DesignError(f'position_bound_deg={self.position_bound_deg} must be positive')
 
+    def remedy(self) -> str:
+        """
+        Return what lowers this design's torque, for a refusal message.
+
+        Returns
+        -------
+        str
+            The settings to lower, with their values.
+
+        """
+        return (f'lower the multisine amplitude_ratio ({self.amplitude_ratio:g}) or '
+                f'position_bound_deg ({self.position_bound_deg:g}: the constant velocity)')
+
 
 def constant_velocity_for_bound(bound_rad: float, travel_time: float, ramp_time: float,
                                 ms_position_peak: float) -> float:
@@ -236,7 +249,7 @@ TORQUE_MARGIN = 0.95
 
 
 def check_torque_bound(peak: np.ndarray, torque_limit: np.ndarray, joints: list[str],
-                       what: str, margin: float = TORQUE_MARGIN) -> None:
+                       what: str, remedy: str, margin: float = TORQUE_MARGIN) -> None:
     """
     Refuse a plan whose predicted peak torque reaches ``margin`` times a torque limit.
 
@@ -250,6 +263,8 @@ def check_torque_bound(peak: np.ndarray, torque_limit: np.ndarray, joints: list[
         Joint names, for the message.
     what : str
         The plan's name, for the message.
+    remedy : str
+        What to change, for the message (``MultisineConfig.remedy()``...).
     margin : float, optional
         Share of each limit the plan may use.
 
@@ -267,9 +282,8 @@ def check_torque_bound(peak: np.ndarray, torque_limit: np.ndarray, joints: list[
         where = ', '.join(f'{joints[i]} {peak[i]:.1f} of {limit[i]:g} N m'
                           + (' (saturated)' if peak[i] >= limit[i] * (1 - 1e-9) else '')
                           for i in over)
-        raise SafetyError(f'{what}: the peak torque predicted on the nominal model reaches '
-                          f'{margin:g} x the torque limit: {where}; lower the excitation '
-                          f'amplitude or the velocities')
+        raise SafetyError(f'{what}: the peak torque predicted on the model reaches '
+                          f'{margin:g} x the torque limit: {where}; {remedy}')
 
 
 # --- chirp iteration (Section 5.3) ----------------------------------------------------------
@@ -305,6 +319,18 @@ class ChirpConfig:
                               f'{self.r_initial.tolist()} must be positive')
         if self.max_iterations < 1:
             raise DesignError(f'max_iterations={self.max_iterations} must be at least 1')
+
+    def remedy(self) -> str:
+        """
+        Return what lowers the first step's torque, for a refusal message.
+
+        Returns
+        -------
+        str
+            The setting to lower, with its value.
+
+        """
+        return f'lower the chirp r_initial ({self.r_initial.tolist()} rad/s)'
 
 
 class ChirpIteration:

@@ -224,7 +224,8 @@ def run_identification(plant: Any, controller: PIVelocity,
         phases, design = multisine_procedure(cfg.multisine, loop.n, fs)
         if model is not None:
             check_torque_bound(predict_peak_torque(phases, model, controller, loop.q0),
-                               controller.torque_limit, model.joint_names, 'multisine')
+                               controller.torque_limit, model.joint_names, 'multisine',
+                               cfg.multisine.remedy())
         t_start = loop.t
         n_exc = sum(1 for p in phases if p.segment)
         done = 0
@@ -245,7 +246,8 @@ def run_identification(plant: Any, controller: PIVelocity,
         it = ChirpIteration(cfg.chirp, loop.n, fs, controller.torque_limit)
         if model is not None:
             check_torque_bound(predict_peak_torque(it.phases(), model, controller, loop.q_last),
-                               controller.torque_limit, model.joint_names, 'chirp_iteration_1')
+                               controller.torque_limit, model.joint_names, 'chirp_iteration_1',
+                               cfg.chirp.remedy())
         t_start = loop.t
         iterations = []
         for _ in range(cfg.chirp.max_iterations):
