@@ -55,17 +55,20 @@ class _Out:
 
 
 def _free_run(settings: SessionSettings, corrupt=None, after_s: float = 0.0,
-              predict: bool = False):
+              predict: bool = False, hide=None, model=None, moved=None):
     """
     Run a multisine on the free-running simulated robot.
 
     The controller holds the latest reference it got (controller_node's rule) and keeps
     running ``after_s`` seconds after the procedure ended; ``corrupt(k, q)`` may alter the
     measured position the session sees; ``predict`` gives the session the model (its plans'
-    torque predicted before they run). Returns the run, the session's output, the positions
-    from the operating point, the sample the run ended at and |torque| / limit.
+    torque predicted before they run); the session never sees joint state k when ``hide(k)``
+    (its executor was busy); ``model`` (robot, controller) replaces the default one; with
+    ``moved`` (link positions) the robot rests there when the run starts, away from the
+    operating point the session saw first. Returns the run, the session's output, the
+    positions from the operating point, the sample the run ended at and |torque| / limit.
     """
-    robot, ctrl = load_model(None)[1:]
+    robot, ctrl = model or load_model(None)[1:]
     plant = FlexibleJointPlant(robot)
     lim = np.minimum(ctrl.torque_limit, robot.torque_limits())
     ctrl.torque_limit = lim
@@ -74,8 +77,14 @@ def _free_run(settings: SessionSettings, corrupt=None, after_s: float = 0.0,
                              model=(robot, ctrl.copy()) if predict else None)
     q, v = plant.state[0].copy(), np.zeros(robot.n_axes)
     sess.on_state(0, q.copy(), ctrl.integral.copy())
+    k = 0
+    if moved is not None:
+        plant.reset(position=moved)
+        ctrl.reset(plant.equilibrium_torque(moved))
+        q, k = plant.state[0].copy(), 1
+        sess.on_state(k, q.copy(), ctrl.integral.copy())
     run = sess.start_multisine()
-    positions, torques, k, end = [], [], 0, None
+    positions, torques, end = [], [], None
     while end is None or k < end + int(after_s / robot.dt):
         r = out.refs[-1][1] if out.refs else np.zeros(robot.n_axes)
         u = np.clip(ctrl.step(r, v), -lim, lim)
@@ -83,7 +92,8 @@ def _free_run(settings: SessionSettings, corrupt=None, after_s: float = 0.0,
         k += 1
         positions.append(q.copy())
         torques.append(u / lim)
-        sess.on_state(k, corrupt(k, q.copy()) if corrupt else q.copy(), effort.copy())
+        if hide is None or not hide(k):
+            sess.on_state(k, corrupt(k, q.copy()) if corrupt else q.copy(), effort.copy())
         if end is None and run.done.is_set():
             end = k
     return SimpleNamespace(run=run, out=out, dq=np.array(positions) - sess.q0, end=end,
@@ -253,6 +263,7 @@ def test_a_first_chirp_step_predicted_to_need_95_percent_of_a_limit_is_refused()
             assert out.refs == [] and sess.run is None
         else:
             sess.start_chirp_iteration()
+            sess.on_state(1, q0, None)      # free-running: the run starts at this one
             assert out.refs and any('chirp_iteration_1: predicted peak torque' in t
                                     for t in out.logs)
 
@@ -275,6 +286,66 @@ def test_a_held_reference_drops_to_zero_when_not_renewed():
     assert held.at(t0 + 390_000_000)[0] is r
     held.renew(0 * r, t0 + 400_000_000)     # a zero reference never expires (nothing logged)
     assert held.at(t0 + 10 ** 10)[1] is False
+    # renewed with every joint state, a single late one (stamps jump 150 ms) keeps it
+    held.renew(r, t0 + 10 ** 10)
+    assert held.at(t0 + 10 ** 10 + 150_000_000) == (r, False)
+    held.renew(r, t0 + 10 ** 10 + 150_000_000)
+    assert held.at(t0 + 10 ** 10 + 151_000_000) == (r, False)
     for bad in (0.0, -1.0, float('nan'), float('inf')):
         with pytest.raises(FrfIdentInputError, match='reference_timeout_s='):
             HeldReference(3, bad)
+
+
+def test_a_run_starts_at_the_first_joint_state_after_its_start():
+    """
+    The service call blocks the node's executor (plan and dry run: seconds): no burst after it.
+
+    Free-running, the run was placed at the newest joint state known when the service came;
+    the robot's next joint state, 1000 samples later, then released 1000 references at once,
+    the move to the start position among them: the joints went 7.6 deg from the operating
+    point instead of within the plan's 4 deg. Now the stream starts at that next joint state.
+    """
+    res = _free_run(SessionSettings(stale_samples=10 ** 9, multisine=SHORT), predict=True,
+                    hide=lambda k: k <= 1000)
+    assert res.run.error is None and res.run.start_k == 1002
+    sent = [k for k, _r in res.out.refs]
+    assert sent[0] == 1002 and np.all(np.diff(sent) == 1)
+    peak_deg = np.degrees(np.abs(res.dq).max())
+    print(f'largest excursion {peak_deg:.2f} deg')
+    assert peak_deg < 4.2
+
+
+def test_joint_states_jumping_past_the_stream_abort_the_run():
+    """A stall of the node mid-run (50 samples unseen, limit 10): abort, not a burst."""
+    res = _free_run(SessionSettings(stale_samples=10, multisine=SHORT),
+                    hide=lambda k: 6000 <= k < 6050)
+    assert res.end == 6050 and 'did not see 50 joint states' in res.run.error
+    np.testing.assert_array_equal(res.out.refs[-1][1], np.zeros(3))
+
+
+def test_the_dry_run_starts_where_the_robot_is_now():
+    """
+    With gravity, a run started 7.5 deg away from the operating point needs other torques.
+
+    Joint 2 carries 300 N m sin(q2 + 0.2) beside its constant 120 N m; the robot rests 7.5 deg
+    from where the session first saw it. The prediction from the operating point was 10 % low
+    on joint 2 (more than the 5 % margin); from the current position it is what the run needs.
+    """
+    from frf_ident.core.excitation.procedures import multisine_procedure
+    from frf_ident.core.simulation.runner import predict_peak_torque
+    robot, ctrl = load_model(None)[1:]
+    robot.axes[1].gravity = [{'amplitude': 300.0, 'phase': 0.2}]
+    ctrl.reset(robot.gravity_load(np.zeros(3)))
+    moved = np.radians([0.0, 7.5, 0.0])
+    res = _free_run(SessionSettings(stale_samples=10 ** 9, multisine=SHORT), predict=True,
+                    model=(robot, ctrl), moved=moved)
+    assert res.run.error is None
+    line, = [t for t in res.out.logs if 'predicted peak torque' in t]
+    predicted = np.array(json.loads(line.split('torque ')[1].split(' N m')[0]))
+    measured = res.share.max(axis=0) * np.minimum(ctrl.torque_limit, robot.torque_limits())
+    phases, _ = multisine_procedure(SHORT, 3, 1.0 / robot.dt)
+    at_origin = predict_peak_torque(phases, robot, ctrl, np.zeros(3))
+    print(f'joint 2: measured {measured[1]:.1f}, predicted {predicted[1]:.1f}, from the '
+          f'operating point {at_origin[1]:.1f} N m')
+    np.testing.assert_allclose(measured, predicted, rtol=0.02)
+    assert measured[1] > 1.04 * at_origin[1]

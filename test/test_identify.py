@@ -139,3 +139,20 @@ def test_identify_refuses_a_multisine_predicted_to_need_95_percent_of_a_limit(tm
     print(f'predicted {peak} N m refused; at --position-bound 2: measured peak '
           f'{np.abs(rec.effort[:, 1]).max():.1f} N m')
     assert np.abs(rec.effort[:, 1]).max() < 0.95 * 200.0
+
+
+def test_identify_checks_every_plan_before_anything_runs(tmp_path):
+    """Joint 1's limit at 100 N m refuses the chirp: before the multisine, not after it."""
+    from frf_ident.app.identify import run_identify
+    from frf_ident.core.model.schema import default_model_dict
+    from frf_ident.errors import SafetyError
+    model = default_model_dict()
+    model['axes'][0]['torque_limit'] = 100.0
+    path = tmp_path / 'j1.yaml'
+    path.write_text(yaml.safe_dump(model))
+    lines = []
+    cfg = identification_config(build_parser().parse_args(
+        ['identify', '--out', str(tmp_path / 'b'), *ARGS]))
+    with pytest.raises(SafetyError, match=r'reach the torque limits \[100.0, 400.0, 300.0\]'):
+        run_identify(path, None, cfg, tmp_path / 'b', progress=lines.append)
+    assert lines == [] and not (tmp_path / 'b').exists()

@@ -217,6 +217,9 @@ class Run:
         self.id, self.name, self.stream, self.collect = run_id, name, stream, collect
         self.on_end = on_end
         self.start_k = stream.k
+        #: free-running: the stream starts at the first joint state after the start (the
+        #: newest one known when the service was called may be seconds old by then)
+        self.anchored = True
         self.u: dict[int, np.ndarray] = {}     # segment index -> torque (collect)
         self.end_k: Optional[int] = None
         self.done = threading.Event()
@@ -307,6 +310,7 @@ class ExcitationSession:
                     self._abort(f'measured position {q.tolist()} is not finite')
                 return
             now = time.monotonic()
+            unseen = k - self.k_js - 1
             if run is not None and k > run.start_k + 1:
                 run.max_gap = max(run.max_gap, now - self.t_js)
             self.k_js, self.q_js, self.t_js = k, q, now
@@ -316,6 +320,13 @@ class ExcitationSession:
             if self.next_k < 0:
                 self.next_k = k
             if run is None or run.done.is_set():
+                return
+            if not run.anchored:
+                self._anchor(run, k)
+            elif not self.s.lockstep and unseen > self.s.stale_samples:
+                self._abort(f'the excitation node did not see {unseen} joint states (limit '
+                            f'stale_samples={self.s.stale_samples}): it stalled while the '
+                            f'robot ran on')
                 return
             if np.any(np.abs(q - self.q0) > self.live_bound):
                 self._abort(f'measured position {np.degrees(q - self.q0).round(2).tolist()} deg '
@@ -416,9 +427,10 @@ class ExcitationSession:
         self._refuse_while_running()
         check_position_bound(phases, np.zeros(self.n), self.bound, self.dt)
         if predict is not None and self.model is not None:
-            # outside the lock: joint states keep coming while the dry run takes its second
+            # outside the lock, which the watchdog thread takes; the node's executor is busy
+            # here (no joint states), so a free-running run starts at the next one (_anchor)
             robot, ctrl = self.model
-            peak = predict_peak_torque(phases, robot, ctrl, self.q0)
+            peak = predict_peak_torque(phases, robot, ctrl, self.q_js, origin=self.q0)
             check_torque_bound(peak, self.torque_limit, self.joints, name, predict)
             self.out.log('info', f'{name}: predicted peak torque '
                                  f'{np.round(peak, 1).tolist()} N m on the model')
@@ -431,8 +443,18 @@ class ExcitationSession:
             self.run = run
             self.t_js = time.monotonic()
             self.out.progress(self._progress(run, 'started'))
-            self._stream()
+            if self.s.lockstep:
+                self._stream()
+            else:
+                run.anchored = False
         return run
+
+    def _anchor(self, run: Run, k: int) -> None:
+        """Free-running: start the run's stream at joint state ``k``, the first after start."""
+        self.next_k = k + self.lag
+        run.stream = PhaseStream(self.engine, run.stream.phases, self.next_k)
+        run.start_k = self.next_k
+        run.anchored = True
 
     def start_multisine(self) -> Run:
         """

@@ -49,7 +49,10 @@ class HeldReference:
     The latest velocity reference, dropped to zero when not renewed within a timeout.
 
     Time is the joint states' stamp time (the robot's clock), so a stalled reference source
-    counts however the messages are delayed.
+    counts however the messages are delayed. It expires only once at least two joint states
+    came without a renewal: a single late joint state (a jump of the stamps) never drops a
+    reference that is renewed with every joint state. A jog by hand must be renewed at least
+    every ``timeout_s`` (``ros2 topic pub -r 20``).
 
     Parameters
     ----------
@@ -73,6 +76,7 @@ class HeldReference:
         self.value = np.zeros(n)
         self.stamp_ns: Optional[int] = None     # joint-state time the reference came at
         self.expired: Optional[np.ndarray] = None   # the reference that expired last
+        self.states = 0                         # joint states since the renewal
 
     def renew(self, r: np.ndarray, now_ns: int) -> None:
         """
@@ -88,6 +92,7 @@ class HeldReference:
         """
         self.value = r
         self.stamp_ns = now_ns if now_ns >= 0 else None
+        self.states = 0
 
     def at(self, now_ns: int) -> tuple[np.ndarray, bool]:
         """
@@ -108,7 +113,9 @@ class HeldReference:
         """
         if self.stamp_ns is None:
             self.stamp_ns = now_ns
-        if now_ns - self.stamp_ns > self.timeout_ns and np.any(self.value != 0):
+        self.states += 1
+        if (now_ns - self.stamp_ns > self.timeout_ns and self.states >= 2
+                and np.any(self.value != 0)):
             self.expired = self.value
             self.value = np.zeros_like(self.value)
             return self.value, True

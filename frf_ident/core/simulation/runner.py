@@ -44,7 +44,8 @@ class ClosedLoop:
     """A plant in closed loop with the velocity PI; runs reference arrays and keeps the log."""
 
     def __init__(self, plant: Any, controller: PIVelocity,
-                 position: np.ndarray | None = None) -> None:
+                 position: np.ndarray | None = None,
+                 origin: np.ndarray | None = None) -> None:
         for attr in ('dt', 'joint_names', 'reset', 'step'):
             if not hasattr(plant, attr):
                 raise FrfIdentInputError(f'plant {type(plant).__name__} lacks {attr!r} '
@@ -73,7 +74,9 @@ class ClosedLoop:
             q, v, _ = plant.step(hold)
             self.q_last, self.y_last = np.asarray(q, float), np.asarray(v, float)
         self.q0 = self.q_last.copy()
-        self.engine = PhaseEngine(self.q0, self.dt)   # the same engine the excitation node streams
+        # the same engine the excitation node streams; moves go to targets around ``origin``
+        self.engine = PhaseEngine(self.q0 if origin is None else np.asarray(origin, float),
+                                  self.dt)
         self.log: dict[str, list[np.ndarray]] = {k: [] for k in ('q', 'v', 'u', 'r', 'x')}
         self.segments: list[Segment] = []
 
@@ -130,7 +133,8 @@ class ClosedLoop:
 
 
 def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIVelocity,
-                        position: np.ndarray | None = None) -> np.ndarray:
+                        position: np.ndarray | None = None,
+                        origin: np.ndarray | None = None) -> np.ndarray:
     """
     Dry-run a plan on the nominal model and return the peak torque of every axis.
 
@@ -149,7 +153,10 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
     controller : PIVelocity
         The velocity controller (not modified).
     position : array_like, shape (n,), optional
-        Link positions [rad] the plan starts from (the operating point); default zero.
+        Link positions [rad] the plan starts from (where the robot is now); default zero.
+    origin : array_like, shape (n,), optional
+        The operating point [rad] the plan's move targets are relative to; default
+        ``position``.
 
     Returns
     -------
@@ -162,7 +169,7 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
     ctrl = controller.copy()
     q0 = np.zeros(robot.n_axes) if position is None else np.asarray(position, dtype=float)
     ctrl.reset(plant.equilibrium_torque(q0))
-    loop = ClosedLoop(plant, ctrl, position=q0)
+    loop = ClosedLoop(plant, ctrl, position=q0, origin=origin)
     peak = np.zeros(loop.n)
     for ph in phases:
         _q, _v, u = loop.run_phase(ph)
@@ -220,12 +227,19 @@ def run_identification(plant: Any, controller: PIVelocity,
     fs = 1.0 / loop.dt
     summary: dict[str, Any] = {}
     wall0 = time.perf_counter()
-    if cfg.multisine is not None:
-        phases, design = multisine_procedure(cfg.multisine, loop.n, fs)
-        if model is not None:
-            check_torque_bound(predict_peak_torque(phases, model, controller, loop.q0),
-                               controller.torque_limit, model.joint_names, 'multisine',
-                               cfg.multisine.remedy())
+    # every plan is checked before anything runs: a refusal costs no experiment
+    phases, design = (multisine_procedure(cfg.multisine, loop.n, fs)
+                      if cfg.multisine is not None else (None, None))
+    it = (ChirpIteration(cfg.chirp, loop.n, fs, controller.torque_limit)
+          if cfg.chirp is not None else None)
+    if model is not None:
+        for name, plan, remedy in (('multisine', phases, cfg.multisine),
+                                   ('chirp_iteration_1', it and it.phases(), cfg.chirp)):
+            if plan is not None:
+                check_torque_bound(predict_peak_torque(plan, model, controller, loop.q0),
+                                   controller.torque_limit, model.joint_names, name,
+                                   remedy.remedy())
+    if phases is not None:
         t_start = loop.t
         n_exc = sum(1 for p in phases if p.segment)
         done = 0
@@ -242,12 +256,7 @@ def run_identification(plant: Any, controller: PIVelocity,
                                 'constant_velocity':
                                     next(p.segment for p in phases if p.segment)[
                                         'constant_velocity']}
-    if cfg.chirp is not None:
-        it = ChirpIteration(cfg.chirp, loop.n, fs, controller.torque_limit)
-        if model is not None:
-            check_torque_bound(predict_peak_torque(it.phases(), model, controller, loop.q_last),
-                               controller.torque_limit, model.joint_names, 'chirp_iteration_1',
-                               cfg.chirp.remedy())
+    if it is not None:
         t_start = loop.t
         iterations = []
         for _ in range(cfg.chirp.max_iterations):
