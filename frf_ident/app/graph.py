@@ -45,6 +45,7 @@ import time
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
+from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.share import share_dir, SOURCE_ROOT
 import numpy as np
 import yaml
@@ -58,6 +59,9 @@ LOCKSTEP_NODES = ('plant_node', 'excitation_node', 'estimator_node')
 
 #: random domains (when neither domain_id nor ROS_DOMAIN_ID is given) come from this range
 RANDOM_DOMAINS = (100, 149)
+#: exit status of the driver when the excitation node refused a run (unsafe or invalid
+#: settings: the user's to change); Graph.drive raises FrfIdentInputError for it
+REFUSED = 2
 
 
 def default_domain_id(env: Optional[dict] = None) -> int:
@@ -224,7 +228,12 @@ class Graph:
                                 stderr=open(self.out / 'driver.log', 'w'), cwd=str(SOURCE_ROOT))
 
     def drive(self, **kw: Any) -> dict:
-        """Run the identification (blocking); returns the driver's results."""
+        """
+        Run the identification (blocking); returns the driver's results.
+
+        Raises FrfIdentInputError when the excitation node refused a run (its error, e.g. a
+        torque predicted beyond 0.95 of a limit), RuntimeError when a run failed or aborted.
+        """
         proc = self.driver(**kw)
         results: dict[str, Any] = {'iterations': []}
         for line in proc.stdout:
@@ -236,6 +245,11 @@ class Graph:
                     results['iterations'].append(d)
                 self.say(f"{d.get('kind')}: {json.dumps(d.get('reply'))[:200]}")
         rc = proc.wait()
+        if rc == REFUSED:
+            last = (results['iterations'] or [results.get('multisine')])[-1]
+            what = 'multisine' if last['kind'] == 'multisine' else 'chirp iteration'
+            error = last['reply']['error']
+            raise FrfIdentInputError(f'excitation_node refused the {what}: {error}')
         if rc != 0:
             raise RuntimeError(f'graph driver failed ({rc}); see {self.out / "driver.log"}')
         return results
@@ -344,13 +358,13 @@ def _drive(args: argparse.Namespace) -> int:
             print('FRF_RESULT ' + json.dumps({'kind': 'multisine', 'success': ok,
                                               'reply': reply}), flush=True)
             if not ok:
-                return 1
+                return REFUSED if reply.get('refused') else 1
         for _ in range(args.iterations):
             ok, reply = _run(cl_it, Trigger, waiter, args.timeout)
             print('FRF_RESULT ' + json.dumps({'kind': 'iteration', 'success': ok,
                                               'reply': reply}), flush=True)
             if not ok:
-                return 1
+                return REFUSED if reply.get('refused') else 1
             if reply.get('converged'):
                 break
         return 0

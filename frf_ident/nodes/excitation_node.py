@@ -41,6 +41,7 @@ from typing import Any, Optional, Sequence
 from frf_ident import middleware as mw
 from frf_ident.app.excitation import ExcitationSession, SessionSettings
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.errors import FrfIdentInputError
 from frf_ident.nodes import common as c
 import numpy as np
 
@@ -251,7 +252,9 @@ class ExcitationNode:
         except Exception as exc:
             self.log('error', f'not started: {exc}')
             response.success = False
-            response.message = json.dumps({'accepted': False, 'error': str(exc)})
+            # refused: unsafe or invalid settings, the user's to change (not a failure)
+            response.message = json.dumps({'accepted': False, 'error': str(exc),
+                                           'refused': isinstance(exc, FrfIdentInputError)})
         return response
 
     def _on_run_multisine(self, request: Any, response: Any) -> Any:

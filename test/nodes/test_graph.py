@@ -239,3 +239,29 @@ mw.shutdown()
         rec, _ = read_recording(g.bag)
         assert rec.t.size == n
         np.testing.assert_array_equal(rec.velocity[:, 0], np.arange(n, dtype=float))
+
+
+def test_demo_of_a_robot_its_plan_would_saturate_exits_2_with_one_line(
+        tmp_path, capsys, new_domain, monkeypatch):
+    """
+    Joint 2's limit at 160 N m: excitation_node refuses the multisine (predicted torque).
+
+    The refusal travels from the service answer through the driver (exit REFUSED) to the CLI:
+    one line naming the joint, exit 2, no traceback; every node stopped.
+    """
+    import yaml
+
+    from frf_ident.cli import main
+    robot = yaml.safe_load(MODEL.read_text())
+    robot['axes'][1]['torque_limit'] = 160.0
+    path = tmp_path / 'tight.yaml'
+    path.write_text(yaml.safe_dump(robot))
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(new_domain()))
+    rc = main(['demo', '--out', str(tmp_path / 'demo'), '--robot', str(path), '--model',
+               str(MODEL), '--realisations', '1', '--periods', '1', '--resolution', '1',
+               '--max-iterations', '1'])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert 'excitation_node refused the multisine' in err[0] and 'joint_2' in err[0], err
+    logs = tmp_path / 'demo' / 'graph'
+    assert 'not started' in (logs / 'excitation_node.log').read_text()
