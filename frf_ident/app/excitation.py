@@ -33,11 +33,13 @@ free-running -- the effort of joint state k is the torque applied at t_k (a robo
 torque; the free-running plant node reports it so), so the torque of sample k is in joint state k.
 
 Safety: a plan is checked before it runs: its planned position against the position bound,
-and its peak torque, predicted by a dry run on the nominal model from the operating point
-(the multisine plan with its moves, and the first chirp step; later chirp steps from what the
-previous ones measured), against 0.95 of each limit. A run aborts when /joint_states is stale,
-a measured position leaves the live bound or a measured torque reaches its limit: the
-reference ramps to zero, a zero reference is published and an ``aborted`` descriptor sent.
+and its peak torque, predicted by a dry run on the model from where the robot is (the
+multisine plan with its moves, and the first chirp step; later chirp steps from what the
+previous ones measured), against 0.95 of each limit. Free-running, a run starts at the first
+joint state after its start (the node's executor was busy planning). A run aborts when
+/joint_states is stale, the node missed more than ``stale_samples`` joint states, a measured
+position leaves the live bound or a measured torque reaches its limit: the reference ramps to
+zero, a zero reference is published and an ``aborted`` descriptor sent.
 """
 from __future__ import annotations
 
@@ -420,18 +422,18 @@ class ExcitationSession:
             raise RuntimeError(f'experiment {run.name!r} is still running')
 
     def _start(self, name: str, phases: list, collect: bool,
-               on_end: Callable[[Run], dict], predict: Optional[str]) -> Run:
-        """Start a run; ``predict``: the remedy of a refusal, None: no torque prediction."""
+               on_end: Callable[[Run], dict], remedy: Optional[str]) -> Run:
+        """Start a run; its torque is predicted unless ``remedy`` (for a refusal) is None."""
         if self.q0 is None:
             raise RuntimeError('no /joint_states received yet: is the robot (plant) running?')
         self._refuse_while_running()
         check_position_bound(phases, np.zeros(self.n), self.bound, self.dt)
-        if predict is not None and self.model is not None:
+        if remedy is not None and self.model is not None:
             # outside the lock, which the watchdog thread takes; the node's executor is busy
             # here (no joint states), so a free-running run starts at the next one (_anchor)
             robot, ctrl = self.model
             peak = predict_peak_torque(phases, robot, ctrl, self.q_js, origin=self.q0)
-            check_torque_bound(peak, self.torque_limit, self.joints, name, predict)
+            check_torque_bound(peak, self.torque_limit, self.joints, name, remedy)
             self.out.log('info', f'{name}: predicted peak torque '
                                  f'{np.round(peak, 1).tolist()} N m on the model')
         with self.lock:
@@ -479,7 +481,7 @@ class ExcitationSession:
         def end(run: Run) -> dict:
             return {'procedure': 'multisine', 'segments': len(run.stream.segments),
                     'lines': int(design.harmonics.size)}
-        return self._start('multisine', phases, False, end, predict=self.s.multisine.remedy())
+        return self._start('multisine', phases, False, end, remedy=self.s.multisine.remedy())
 
     def chirp_iteration(self) -> ChirpIteration:
         """
@@ -535,7 +537,7 @@ class ExcitationSession:
                     'converged': bool(s['converged']),
                     'max_abs_torque': np.asarray(s['max_abs_torque']).tolist()}
         return self._start(f'chirp_iteration_{it.iteration}', it.phases(), True, end,
-                           predict=None if it.history else self.s.chirp.remedy())
+                           remedy=None if it.history else self.s.chirp.remedy())
 
     # -- safety -------------------------------------------------------------------------------
     def _abort(self, reason: str) -> None:
