@@ -58,7 +58,7 @@ from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Segment
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.runner import predict_peak_torque
-from frf_ident.errors import DesignError
+from frf_ident.errors import DesignError, SafetyError
 import numpy as np
 
 __all__ = ['ExcitationSession', 'Outputs', 'SessionSettings', 'torque_sample_offset']
@@ -509,11 +509,11 @@ class ExcitationSession:
         Raises
         ------
         RuntimeError
-            The iteration has already converged, the predicted peak torque exceeds the torque
-            limit, no joint state received yet, or another procedure is still running.
+            The iteration has already converged, no joint state received yet, or another
+            procedure is still running.
         SafetyError
-            The planned position leaves the position bound, or (first step) the predicted
-            peak torque reaches 0.95 of a limit.
+            The planned position leaves the position bound, the predicted peak torque (first
+            step: on the model; later steps: from the measured ones) exceeds a limit.
 
         """
         it = self.chirp_iteration()
@@ -522,8 +522,8 @@ class ExcitationSession:
         last = it.history[-1] if it.history else {}
         pred = last.get('predicted_peak_torque')
         if pred is not None and np.any(np.asarray(pred) > self.torque_limit + 1e-9):
-            raise RuntimeError(f'predicted torque {pred} exceeds the limit '
-                               f'{self.torque_limit.tolist()}; refusing to run')
+            raise SafetyError(f'predicted torque {pred} exceeds the limit '
+                              f'{self.torque_limit.tolist()}; refusing to run')
 
         def end(run: Run) -> dict:
             r_runs = [r for (_k0, _k1, r) in run.stream.segments]
@@ -546,6 +546,9 @@ class ExcitationSession:
         if run is None or run.done.is_set():
             return
         run.error = reason
+        # the ramp goes out after the newest joint state (a stall or an abort before the run's
+        # first joint state leaves next_k behind it: the recording would date it back)
+        self.next_k = max(self.next_k, self.k_js + self.lag)
         run.end_k = self.next_k
         self.out.log('error', f'experiment {run.name!r} aborted: {reason}')
         steps = 4

@@ -60,8 +60,9 @@ LOCKSTEP_NODES = ('plant_node', 'excitation_node', 'estimator_node')
 #: random domains (when neither domain_id nor ROS_DOMAIN_ID is given) come from this range
 RANDOM_DOMAINS = (100, 149)
 #: exit status of the driver when the excitation node refused a run (unsafe or invalid
-#: settings: the user's to change); Graph.drive raises FrfIdentInputError for it
-REFUSED = 2
+#: settings: the user's to change); Graph.drive raises FrfIdentInputError for it (argparse
+#: uses 2)
+REFUSED = 3
 
 
 def default_domain_id(env: Optional[dict] = None) -> int:
@@ -245,8 +246,8 @@ class Graph:
                     results['iterations'].append(d)
                 self.say(f"{d.get('kind')}: {json.dumps(d.get('reply'))[:200]}")
         rc = proc.wait()
-        if rc == REFUSED:
-            last = (results['iterations'] or [results.get('multisine')])[-1]
+        last = (results['iterations'] or [results.get('multisine')])[-1]
+        if rc == REFUSED and last and last.get('reply', {}).get('refused'):
             what = 'multisine' if last['kind'] == 'multisine' else 'chirp iteration'
             error = last['reply']['error']
             raise FrfIdentInputError(f'excitation_node refused the {what}: {error}')

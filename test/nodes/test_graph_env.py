@@ -15,6 +15,7 @@
 import importlib.util
 
 from frf_ident.app import graph
+import pytest
 
 
 def test_domain_from_ros_domain_id(monkeypatch):
@@ -47,3 +48,26 @@ def test_free_running_graph_is_wall_time(tmp_path):
     g = graph.Graph(tmp_path, domain_id=9, lockstep=False)
     common = yaml.safe_load(g.params_file.read_text())['/**']['ros__parameters']
     assert common['lockstep'] is False and common['use_sim_time'] is False
+
+
+@pytest.mark.parametrize('lines, rc, error', [
+    (['FRF_RESULT {"kind": "multisine", "success": false, "reply": {"error": "joint_2 198.4 of '
+      '200 N m", "refused": true}}'], 3, 'excitation_node refused the multisine: joint_2'),
+    ([], 3, 'graph driver failed'),          # no result line: a failure, not a refusal
+    (['FRF_RESULT {"kind": "iteration", "success": false, "reply": {"error": "aborted: '
+      'stale"}}'], 1, 'graph driver failed'),
+    ([], 2, 'graph driver failed'),          # argparse's usage error
+])
+def test_drive_raises_input_error_only_for_a_refusal(tmp_path, monkeypatch, lines, rc, error):
+    import subprocess
+    import sys
+
+    from frf_ident.errors import FrfIdentInputError
+    code = ''.join(f'print({line!r});' for line in lines) + f'raise SystemExit({rc})'
+    g = graph.Graph(tmp_path, domain_id=9)
+    monkeypatch.setattr(g, 'driver', lambda **kw: subprocess.Popen(
+        [sys.executable, '-c', code], stdout=subprocess.PIPE, text=True))
+    expected = FrfIdentInputError if 'refused' in error else RuntimeError
+    with pytest.raises(expected, match=error) as exc:
+        g.drive()
+    assert type(exc.value) is expected
