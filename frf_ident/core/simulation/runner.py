@@ -236,9 +236,11 @@ def run_identification(plant: Any, controller: PIVelocity,
         for name, plan, remedy in (('multisine', phases, cfg.multisine),
                                    ('chirp_iteration_1', it and it.phases(), cfg.chirp)):
             if plan is not None:
-                check_torque_bound(predict_peak_torque(plan, model, controller, loop.q0),
-                                   controller.torque_limit, model.joint_names, name,
+                peak = predict_peak_torque(plan, model, controller, loop.q0)
+                check_torque_bound(peak, controller.torque_limit, model.joint_names, name,
                                    remedy.remedy())
+                say(f'{name}: predicted peak torque {np.round(peak, 1).tolist()} N m on the '
+                    f'model (limits {controller.torque_limit.tolist()})')
     if phases is not None:
         t_start = loop.t
         n_exc = sum(1 for p in phases if p.segment)
