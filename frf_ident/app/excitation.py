@@ -51,13 +51,13 @@ import time
 from typing import Any, Callable, Optional, Protocol
 
 from frf_ident.core.excitation.engine import PhaseEngine, PhaseStream, SegmentEvent
-from frf_ident.core.excitation.procedures import (check_position_bound, check_torque_bound,
-                                                  ChirpConfig, ChirpIteration,
-                                                  multisine_procedure, MultisineConfig)
+from frf_ident.core.excitation.procedures import (check_position_bound, ChirpConfig,
+                                                  ChirpIteration, multisine_procedure,
+                                                  MultisineConfig)
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Segment
 from frf_ident.core.simulation.controller import PIVelocity
-from frf_ident.core.simulation.runner import predict_peak_torque
+from frf_ident.core.simulation.runner import check_plan_torque
 from frf_ident.errors import DesignError, SafetyError
 import numpy as np
 
@@ -141,7 +141,7 @@ class Outputs(Protocol):
 #: the longest ramp to zero an abort may take [s]
 MAX_ABORT_RAMP_S = 0.1
 #: a measured torque at this share of its limit is a saturated drive: the run aborts (the
-#: procedures aim at 0.95 of the limit at most, ChirpConfig.torque_margin)
+#: procedures aim at 0.95 of the limit at most, procedures.TORQUE_MARGIN)
 SATURATION = 0.995
 
 
@@ -219,9 +219,9 @@ class Run:
         self.id, self.name, self.stream, self.collect = run_id, name, stream, collect
         self.on_end = on_end
         self.start_k = stream.k
-        #: free-running: the stream starts at the first joint state after the start (the
-        #: newest one known when the service was called may be seconds old by then)
-        self.anchored = True
+        #: False until the stream starts: free-running, at the first joint state after the
+        #: start (the newest one known when the service was called may be seconds old)
+        self.anchored = False
         self.u: dict[int, np.ndarray] = {}     # segment index -> torque (collect)
         self.end_k: Optional[int] = None
         self.done = threading.Event()
@@ -432,8 +432,8 @@ class ExcitationSession:
             # outside the lock, which the watchdog thread takes; the node's executor is busy
             # here (no joint states), so a free-running run starts at the next one (_anchor)
             robot, ctrl = self.model
-            peak = predict_peak_torque(phases, robot, ctrl, self.q_js, origin=self.q0)
-            check_torque_bound(peak, self.torque_limit, self.joints, name, remedy)
+            peak = check_plan_torque(phases, robot, ctrl, self.torque_limit, name, remedy,
+                                     self.q_js, origin=self.q0)
             self.out.log('info', f'{name}: predicted peak torque '
                                  f'{np.round(peak, 1).tolist()} N m on the model')
         with self.lock:
@@ -445,10 +445,9 @@ class ExcitationSession:
             self.run = run
             self.t_js = time.monotonic()
             self.out.progress(self._progress(run, 'started'))
-            if self.s.lockstep:
+            run.anchored = self.s.lockstep     # lockstep: the stream waits for its states
+            if run.anchored:
                 self._stream()
-            else:
-                run.anchored = False
         return run
 
     def _anchor(self, run: Run, k: int) -> None:

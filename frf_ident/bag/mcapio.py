@@ -366,20 +366,29 @@ def chunk_starts(path: Path | str) -> list[int]:
 
     Empty when the file has no intact summary.
     """
+    out = []
     try:
-        buf = _summary_bytes(Path(path))
+        for op, rec in _summary_records(_summary_bytes(Path(path))):
+            if op == OP_CHUNK_INDEX and len(rec) >= 24:
+                out.append(int(_U64.unpack_from(rec, 16)[0]))
     except (McapFormatError, struct.error, OSError, ValueError):
-        return []
-    out, off = [], 0
+        pass                          # a damaged summary: the chunks indexed before it
+    return sorted(out)
+
+
+def _summary_records(buf: bytes | None) -> Iterator[tuple[int, memoryview]]:
+    """
+    Yield (opcode, body) of every record of a summary section (none for None).
+
+    Raises McapFormatError when a record claims more bytes than the section holds.
+    """
+    off = 0
     while buf is not None and off + 9 <= len(buf):
         op, length = _REC.unpack_from(buf, off)
         body, off = off + 9, off + 9 + length
         if off > len(buf):
-            break
-        if op == OP_CHUNK_INDEX and length >= 24:
-            (start,) = _U64.unpack_from(buf, body + 16)
-            out.append(int(start))
-    return sorted(out)
+            raise McapFormatError(f'summary record (opcode 0x{op:02x}) overruns the section')
+        yield op, memoryview(buf)[body:off]
 
 
 def _summary_bytes(path: Path) -> bytes | None:
@@ -413,19 +422,10 @@ def read_summary(path: Path | str) -> Summary | None:
 
 
 def _read_summary(path: Path) -> Summary | None:
-    buf = _summary_bytes(path)
-    if buf is None:
-        return None
     schemas: dict[int, str] = {}
     chans: list[tuple[int, int, str, str, dict[str, str]]] = []
     stats: tuple[dict[int, int], int, int] | None = None
-    off = 0
-    while off + 9 <= len(buf):
-        op, length = _REC.unpack_from(buf, off)
-        body, off = off + 9, off + 9 + length
-        if off > len(buf):
-            return None
-        rec = memoryview(buf)[body:off]
+    for op, rec in _summary_records(_summary_bytes(path)):
         if op == OP_SCHEMA:
             (sid,) = _U16.unpack_from(rec, 0)
             schemas[sid], _ = _string(rec, 2)

@@ -75,7 +75,6 @@ class HeldReference:
         self.timeout_ns = int(round(timeout_s * 1e9))
         self.value = np.zeros(n)
         self.stamp_ns: Optional[int] = None     # joint-state time the reference came at
-        self.expired: Optional[np.ndarray] = None   # the reference that expired last
         self.states = 0                         # joint states since the renewal
 
     def renew(self, r: np.ndarray, now_ns: int) -> None:
@@ -94,9 +93,9 @@ class HeldReference:
         self.stamp_ns = now_ns if now_ns >= 0 else None
         self.states = 0
 
-    def at(self, now_ns: int) -> tuple[np.ndarray, bool]:
+    def at(self, now_ns: int) -> tuple[np.ndarray, Optional[np.ndarray]]:
         """
-        Return the reference to use at a joint state, and whether it just expired.
+        Return the reference to use at a joint state, and the one that just expired.
 
         Parameters
         ----------
@@ -107,8 +106,8 @@ class HeldReference:
         -------
         ndarray, shape (n,)
             The held reference, or zero once it expired.
-        bool
-            True at the joint state where a non-zero reference expired (log it).
+        ndarray or None
+            The non-zero reference that expired at this joint state (log it), else None.
 
         """
         if self.stamp_ns is None:
@@ -116,10 +115,9 @@ class HeldReference:
         self.states += 1
         if (now_ns - self.stamp_ns > self.timeout_ns and self.states >= 2
                 and np.any(self.value != 0)):
-            self.expired = self.value
-            self.value = np.zeros_like(self.value)
-            return self.value, True
-        return self.value, False
+            dropped, self.value = self.value, np.zeros_like(self.value)
+            return self.value, dropped
+        return self.value, None
 
 
 class VelocityLoop:
@@ -218,11 +216,11 @@ class ControllerNode:
         self.last_stamp = s
         y = self._velocity(msg)
         if not self.lockstep:
-            r, expired = self.held.at(s)
-            if expired:
+            r, dropped = self.held.at(s)
+            if dropped is not None:
                 self.node.get_logger().warn(
                     f'no velocity reference for {self.timeout_s:g} s (reference_timeout_s): '
-                    f'zero velocity instead of {np.round(self.held.expired, 4).tolist()} rad/s')
+                    f'zero velocity instead of {np.round(dropped, 4).tolist()} rad/s')
             self._control(r, y)
         elif self.refs:
             self._control(self.refs.popleft(), y)

@@ -178,6 +178,44 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
     return peak
 
 
+def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVelocity,
+                      torque_limit: np.ndarray, name: str, remedy: str,
+                      position: np.ndarray | None = None,
+                      origin: np.ndarray | None = None) -> np.ndarray:
+    """
+    Predict a plan's peak torque and refuse the plan when it reaches 0.95 of a limit.
+
+    :func:`predict_peak_torque` followed by
+    :func:`~frf_ident.core.excitation.procedures.check_torque_bound`: what the excitation node
+    and ``identify`` run before every plan they can predict.
+
+    Parameters
+    ----------
+    phases, robot, controller, position, origin
+        As for :func:`predict_peak_torque`.
+    torque_limit : array_like, shape (n,)
+        Torque limit [N m] of every axis.
+    name : str
+        The plan's name, for the message.
+    remedy : str
+        What lowers the plan's torque, for the message.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The predicted peak torque [N m] of every axis.
+
+    Raises
+    ------
+    SafetyError
+        An axis' predicted peak reaches 0.95 of its limit.
+
+    """
+    peak = predict_peak_torque(phases, robot, controller, position, origin)
+    check_torque_bound(peak, torque_limit, robot.joint_names, name, remedy)
+    return peak
+
+
 @dataclass
 class IdentificationConfig:
     multisine: MultisineConfig | None = field(default_factory=MultisineConfig)
@@ -236,9 +274,8 @@ def run_identification(plant: Any, controller: PIVelocity,
         for name, plan, remedy in (('multisine', phases, cfg.multisine),
                                    ('chirp_iteration_1', it and it.phases(), cfg.chirp)):
             if plan is not None:
-                peak = predict_peak_torque(plan, model, controller, loop.q0)
-                check_torque_bound(peak, controller.torque_limit, model.joint_names, name,
-                                   remedy.remedy())
+                peak = check_plan_torque(plan, model, controller, controller.torque_limit,
+                                         name, remedy.remedy(), loop.q0)
                 say(f'{name}: predicted peak torque {np.round(peak, 1).tolist()} N m on the '
                     f'model (limits {controller.torque_limit.tolist()})')
     if phases is not None:
