@@ -39,10 +39,14 @@ previous ones measured), against 0.95 of each limit. Free-running, a run starts 
 joint state after its start (the node's executor was busy planning). A run aborts when
 /joint_states is stale, the node missed more than ``stale_samples`` joint states, a measured
 position leaves the live bound or a measured torque reaches its limit: the reference ramps to
-zero, a zero reference is published and an ``aborted`` descriptor sent.
+zero, a zero reference is published and an ``aborted`` descriptor sent. Free-running, one
+reference goes out per joint state, so the joint states must come at the model's sample rate:
+a run is refused, or aborted, when they come regularly at a fifth of that rate or less (the
+steps between the newest ``RATE_WINDOW``).
 """
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass, field
 import json
 import math
@@ -61,7 +65,8 @@ from frf_ident.core.simulation.runner import check_plan_torque
 from frf_ident.errors import DesignError, SafetyError
 import numpy as np
 
-__all__ = ['ExcitationSession', 'Outputs', 'SessionSettings', 'torque_sample_offset']
+__all__ = ['ExcitationSession', 'fill_torque_gaps', 'Outputs', 'SessionSettings',
+           'torque_sample_offset']
 
 
 def torque_sample_offset(lockstep: bool) -> int:
@@ -143,6 +148,18 @@ MAX_ABORT_RAMP_S = 0.1
 #: a measured torque at this share of its limit is a saturated drive: the run aborts (the
 #: procedures aim at 0.95 of the limit at most, procedures.TORQUE_MARGIN)
 SATURATION = 0.995
+#: free-running: the joint states whose stamp steps judge their rate (at least half of them)
+RATE_WINDOW = 16
+#: free-running: a median step of this many samples between the joint states the node sees,
+#: regular, refuses or aborts a run: the robot publishes at a fifth of the model's rate or
+#: less. (A node that misses two of three joint states on a loaded machine still measures an
+#: unbiased FRF: the reference stays the instrument, only the spectrum the robot gets
+#: changes; test/nodes/test_free_running.py.)
+SLOW_STEP = 5
+#: free-running: the share of steps within one sample of their median that makes them regular
+REGULAR = 0.75
+#: the longest run of missed joint states whose torque a chirp step fills in [samples]
+MAX_TORQUE_GAP = 3
 
 
 @dataclass
@@ -274,6 +291,8 @@ class ExcitationSession:
         self.live_bound = math.radians(settings.live_position_bound_deg)
         self.lock = threading.RLock()
         self.k_js = -1
+        #: free-running: samples between consecutive joint states the node saw
+        self.steps: deque[int] = deque(maxlen=RATE_WINDOW)
         self.q_js: Optional[np.ndarray] = None
         self.q0: Optional[np.ndarray] = None
         self.engine: Optional[PhaseEngine] = None
@@ -302,6 +321,8 @@ class ExcitationSession:
 
         """
         with self.lock:
+            if not self.s.lockstep and k > self.k_js >= 0:
+                self.steps.append(k - self.k_js)
             if k <= self.k_js:
                 return
             run = self.run
@@ -329,6 +350,10 @@ class ExcitationSession:
                 self._abort(f'the excitation node did not see {unseen} joint states (limit '
                             f'stale_samples={self.s.stale_samples}): it stalled while the '
                             f'robot ran on')
+                return
+            rate = self._rate_problem()
+            if rate is not None:
+                self._abort(rate)
                 return
             if np.any(np.abs(q - self.q0) > self.live_bound):
                 self._abort(f'measured position {np.degrees(q - self.q0).round(2).tolist()} deg '
@@ -383,6 +408,27 @@ class ExcitationSession:
                     self._segment(ev)
             self.next_k = st.k
 
+    def _rate_problem(self) -> Optional[str]:
+        """
+        Free-running: why the robot's joint-state rate does not suit the model, or None.
+
+        A robot stamps its joint states from its control loop: at a lower rate than the
+        model's, the steps between them are regular (``REGULAR`` of them at the median). A
+        node too busy to take each one sees irregular steps; that is left to the watchdog
+        (``stale_samples``): the FRF stays unbiased (``SLOW_STEP``).
+        """
+        d = np.asarray(self.steps, float)
+        if self.s.lockstep or d.size < RATE_WINDOW // 2:
+            return None
+        step = float(np.median(d))
+        if step < SLOW_STEP or np.mean(np.abs(d - step) <= 1.0) < REGULAR:
+            return None
+        return (f"/joint_states come every {step:g} samples of the model's sample_rate "
+                f'{self.fs:g} Hz (about {self.fs / step:.0f} Hz), so most references would '
+                "never reach the robot: set the robot's joint-state rate "
+                f"(joint_state_broadcaster update_rate) to {self.fs:g} Hz, or the model file's "
+                'sample_rate to the rate the robot publishes')
+
     def _progress(self, run: Run, event: str, **extra: Any) -> dict:
         wall = time.monotonic() - run.t0
         st = run.stream
@@ -427,6 +473,10 @@ class ExcitationSession:
         if self.q0 is None:
             raise RuntimeError('no /joint_states received yet: is the robot (plant) running?')
         self._refuse_while_running()
+        with self.lock:
+            rate = self._rate_problem()
+        if rate is not None:
+            raise SafetyError(rate)
         check_position_bound(phases, np.zeros(self.n), self.bound, self.dt)
         if remedy is not None and self.model is not None:
             # outside the lock, which the watchdog thread takes; the node's executor is busy
@@ -471,8 +521,9 @@ class ExcitationSession:
         RuntimeError
             No joint state received yet, or another procedure is still running.
         SafetyError
-            The planned position leaves the position bound, or the predicted peak torque
-            reaches 0.95 of a limit.
+            The planned position leaves the position bound, the predicted peak torque
+            reaches 0.95 of a limit, or (free-running) the joint states come at a fifth of
+            the model's sample rate or less.
 
         """
         phases, design = multisine_procedure(self.s.multisine, self.n, self.fs)
@@ -512,7 +563,9 @@ class ExcitationSession:
             procedure is still running.
         SafetyError
             The planned position leaves the position bound, the predicted peak torque (first
-            step: on the model; later steps: from the measured ones) exceeds a limit.
+            step: on the model; later steps: from the measured ones) exceeds a limit, or
+            (free-running) the joint states come at a fifth of the model's sample rate or
+            less.
 
         """
         it = self.chirp_iteration()
@@ -526,9 +579,7 @@ class ExcitationSession:
 
         def end(run: Run) -> dict:
             r_runs = [r for (_k0, _k1, r) in run.stream.segments]
-            u_runs = [run.u[i] for i in range(len(run.stream.segments))]
-            if any(np.isnan(u).any() for u in u_runs):
-                raise RuntimeError('torque samples missing from /joint_states')
+            u_runs = [fill_torque_gaps(run.u[i]) for i in range(len(run.stream.segments))]
             s = it.update(r_runs, u_runs)
             return {'procedure': 'chirp_iteration', 'iteration': s['iteration'],
                     'error_db': s['max_abs_error_db'],
@@ -583,6 +634,51 @@ class ExcitationSession:
         with self.lock:
             if self.run is not None and not self.run.done.is_set():
                 self._abort('shutdown')
+
+
+def fill_torque_gaps(u: np.ndarray, max_gap: int = MAX_TORQUE_GAP) -> np.ndarray:
+    """
+    Fill the torque samples of joint states the node missed, linearly between their neighbours.
+
+    At an end of the segment the nearest sample is held.
+
+    A free-running node acts on the newest joint state only, so a busy one misses some (their
+    torque stays NaN). Gaps of up to ``max_gap`` samples are filled: at the chirp's 60 Hz and
+    1 kHz a filled sample is at most 1.8 % off a sine, the torque spectrum far less.
+
+    Parameters
+    ----------
+    u : ndarray, shape (N, n)
+        Torque per sample [N m], NaN where no joint state was seen.
+    max_gap : int, optional
+        The longest run of missing samples that is filled.
+
+    Returns
+    -------
+    ndarray, shape (N, n)
+        ``u`` with its gaps filled.
+
+    Raises
+    ------
+    RuntimeError
+        A gap is longer than ``max_gap``.
+
+    """
+    miss = np.isnan(u).any(axis=1)
+    if not miss.any():
+        return u
+    k = np.arange(len(u))
+    edges = np.diff(np.r_[0, miss.astype(int), 0])
+    longest = int((np.flatnonzero(edges < 0) - np.flatnonzero(edges > 0)).max())
+    if longest > max_gap:
+        raise RuntimeError(f'{int(miss.sum())} of {len(u)} torque samples missing from '
+                           f'/joint_states, the longest gap {longest} samples (at most '
+                           f'{max_gap} are filled): did the node fall behind '
+                           'or the robot drop joint states?')
+    out = u.copy()
+    for j in range(u.shape[1]):
+        out[miss, j] = np.interp(k[miss], k[~miss], u[~miss, j])
+    return out
 
 
 def _json(**d: Any) -> str:
