@@ -49,6 +49,7 @@ from typing import Any, Callable
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
+from frf_ident.errors import EstimationError
 import numpy as np
 from scipy import signal, stats
 
@@ -68,6 +69,9 @@ MIN_SHARE = 0.10          # ... when it is also at least this share of the nomin
 BEARING_SHARE = 0.5       # a link's weight dominates what friction and inertia leave of its axis
 REST_NOISE = 0.3          # an axis is at rest below this many velocity-noise levels ...
 REST_SHARE = 0.05         # ... or below this share of its 95th-percentile speed
+#: an axis whose 95th-percentile speed is below this many velocity-noise levels does not move
+#: at all (a record of a robot at rest)
+STILL_NOISE = 3.0
 ONE_WAY = 0.05            # an axis with fewer moving samples in one direction moves one way
 MIN_TRAVEL = 1e-3         # [rad] a joint set whose angle sum spans less is no gravity candidate
 
@@ -483,6 +487,54 @@ def _block_length(fs: float) -> int:
     return max(int(round(BLOCK_S * fs)), 8)
 
 
+def check_diagnosable(rec: Recording, names: list[str], fit: np.ndarray | None = None,
+                      held: np.ndarray | None = None) -> None:
+    """
+    Refuse a record the time-series diagnosis cannot judge.
+
+    It needs HOLD_EVERY blocks of BLOCK_S (fit and held-out data), an effort that varies on
+    every axis (an all-zero effort is a wrong column, not a robot) and, given ``fit`` and
+    ``held``, an axis that moves in both the fit and the held-out blocks and moves at all:
+    its 95th-percentile low-passed speed above STILL_NOISE velocity-noise levels (the rest
+    masks of :func:`moving` are relative, so a robot at rest shows its noise as motion).
+
+    Parameters
+    ----------
+    rec : Recording
+        The record.
+    names : list of str
+        The model's joint names (recording column order).
+    fit, held : ndarray of bool, shape (N - 1, n), optional
+        Where each axis moves (:func:`moving`) in the fit and in the held-out blocks
+        (:func:`split_blocks`); not checked when omitted.
+
+    Raises
+    ------
+    EstimationError
+        The record is too short, an axis' effort is constant, or no axis moves.
+
+    """
+    need = HOLD_EVERY * _block_length(rec.fs)
+    if rec.t.size < need:
+        raise EstimationError(f'the record holds {rec.t.size} samples ({rec.t.size / rec.fs:.3g} '
+                              f's): the diagnosis needs at least {need} ({need / rec.fs:.3g} s: '
+                              f'{HOLD_EVERY} blocks of {BLOCK_S} s, one of them held out)')
+    for i, name in enumerate(names):
+        e = rec.effort[:, i]
+        e = e[np.isfinite(e)]
+        if e.size and np.ptp(e) == 0.0:
+            raise EstimationError(f'the effort of {name} is {e[0]:g} N m at every sample: no '
+                                  "measured torque (check the map's effort column)")
+    if fit is not None and held is not None:
+        v = np.nan_to_num(rec.velocity)
+        vnoise = np.std(np.diff(v, axis=0), axis=0) / math.sqrt(2)
+        speed = np.percentile(np.abs(lowpass(v, rec.fs, FC_HZ)), 95, axis=0)
+        if not np.any(fit.any(axis=0) & held.any(axis=0) & (speed > STILL_NOISE * vnoise)):
+            raise EstimationError('no axis moves in this record (each axis rests or creeps '
+                                  'below its velocity noise): the diagnosis compares torques '
+                                  'along a motion')
+
+
 def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
     """
     Return the fit and held-out masks of interleaved blocks.
@@ -608,6 +660,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
 
     """
     say = progress or (lambda _m: None)
+    check_diagnosable(rec, robot.joint_names)
     rec, lost = bridge_gaps(rec)
     fs = rec.fs
     N = rec.t.size
@@ -621,6 +674,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     ext_axes = list(robot.axes)
     names = robot.joint_names
     move = moving(vh, rec.velocity, fs, fc)
+    check_diagnosable(rec, names, move & fit_m[:, None], move & val_m[:, None])
     prep = [_axis_masks(rec, f, move, i, fit_m, val_m, fc) for i in range(robot.n_axes)]
     skips = [one_way_sets(qh, vh, _gravity_sets(robot.n_axes, i), prep[i][1], fs, fc)
              for i in range(robot.n_axes)]
