@@ -547,6 +547,8 @@ def recovery_report(bag: BagFiles, stats: list[ScanStats], read_counts: dict[str
         'problems': [p for s in stats for p in s.problems],
         'metadata_yaml': bag.metadata is not None,
     }
+    # a chunk whose CRC or decompression failed loses its messages though every byte was read
+    rec['damaged'] = bool(rec['bytes_lost'] or rec['chunks_lost'] or not rec['complete'])
     if expected:
         lost = {t: expected[t] - n for t, n in read_counts.items()
                 if expected.get(t, 0) > n}       # topics not read are not lost
@@ -640,8 +642,9 @@ def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
 
 
 def _lost_hint(recovery: dict[str, Any]) -> str:
-    if recovery.get('bytes_lost'):
-        return f'; {recovery["bytes_lost"]} bytes of the file were unreadable'
+    if recovery.get('bytes_lost') or recovery.get('chunks_lost'):
+        return (f'; the file is damaged: {recovery.get("bytes_lost", 0)} bytes unreadable, '
+                f'{recovery.get("chunks_lost", 0)} chunks lost')
     return ''
 
 

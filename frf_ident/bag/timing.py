@@ -108,11 +108,12 @@ class TimingReport:
                  f't = {self.t_start_s:.3f} .. {self.t_end_s:.3f} s, grid: {self.grid}'
                  + (' (resampled)' if self.resampled else '')]
         lines += [t.line() for t in self.topics.values()]
-        if self.recovery.get('bytes_lost') or not self.recovery.get('complete', True):
+        if self.recovery.get('damaged'):
             r = self.recovery
             lines.append(f'recovered a damaged/unfinished bag: {r.get("bytes_lost", 0)} bytes '
                          f'lost, {r.get("chunks_lost", 0)} chunks lost, messages lost: '
-                         f'{r.get("messages_lost", "unknown")}')
+                         f'{r.get("messages_lost", "unknown")}'
+                         + ''.join(f'; {p}' for p in (r.get('problems') or [])[:3]))
         if self.missing:
             n = sum(int(round((b - a) / self.dt_s)) + 1 for a, b in self.missing)
             where = ', '.join(f'{a:.3f}..{b:.3f} s' for a, b in self.missing[:6])

@@ -318,7 +318,7 @@ def _timing_section(t: Mapping[str, Any]) -> str:
                              'gaps', 'missing samples', 'duplicates', 'non-monotonic',
                              'log - header [ms]'], rows))
     rec = t.get('recovery') or {}
-    if rec.get('bytes_lost') or rec.get('complete') is False:
+    if rec.get('damaged'):
         parts.append(f'<p class="warn">Recovered a damaged or unfinished bag: '
                      f'{rec.get("bytes_lost", 0)} bytes and {rec.get("chunks_lost", 0)} chunks '
                      f'lost, messages lost: {html.escape(str(rec.get("messages_lost", "?")))}'

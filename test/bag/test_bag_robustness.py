@@ -113,7 +113,8 @@ def test_corrupt_chunk_costs_that_chunk_only(chunky_bag: Path, small_rec: Record
     leaves at 0, as ros2 bag record's writer does); on a record frame the scan resumes at the
     next chunk the summary indexes. Every other message is read as written; a stretch of lost
     joint states is marked as missing (``gaps='mark'``, as diagnose reads). At four places in
-    the file: both kinds of damage occur and at least one hits the joint states.
+    the file: both kinds of damage occur and at least one hits the joint states. The summary
+    says the bag was damaged, naming the problem (a CRC mismatch reads every byte).
     """
     hit = crc = frame = False
     for at in (0.3, 0.4, 0.5, 0.6):
@@ -122,6 +123,9 @@ def test_corrupt_chunk_costs_that_chunk_only(chunky_bag: Path, small_rec: Record
         rec, rep = read_recording(bag, gaps='mark')
         r = rep.recovery
         assert r['chunks_lost'] == 1 and r['complete'] and r['problems'], r
+        # every byte read, yet damaged: the summary says so (it printed only the gap before)
+        line, = [x for x in rep.summary() if x.startswith('recovered a damaged')]
+        assert r['damaged'] and '1 chunks lost' in line and r['problems'][0] in line, line
         crc |= any('CRC mismatch' in p for p in r['problems'])
         frame |= any('resumed at the next chunk' in p for p in r['problems'])
         # what survived is what was written, at its own times; the lost stretch is marked
