@@ -348,9 +348,15 @@ class BagRecorder:
             raise BagError(f'recorder already open on {str(self.path)!r}')
         if path.exists():
             raise BagError(f'bag path {str(path)!r} exists; refusing to overwrite recorded data')
-        path.parent.mkdir(parents=True, exist_ok=True)
-        writer = _FlushingWriter(path, version=9, storage_plugin=StoragePlugin.MCAP)
-        writer.open()
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            writer = _FlushingWriter(path, version=9, storage_plugin=StoragePlugin.MCAP)
+            writer.open()
+        except OSError as err:       # a file on the way, no permission, a read-only disk
+            on_way = next((p for p in path.parents if p.exists()), None)
+            why = (f'{on_way} is a file, not a directory' if on_way and not on_way.is_dir()
+                   else err.strerror or str(err))
+            raise BagError(f'bag path {str(path)!r} cannot be created: {why}') from err
         storage = writer.storage
         assert isinstance(storage, _FlushingMcapWriter)
         storage.chunk_bytes = self.chunk_bytes

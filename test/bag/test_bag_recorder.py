@@ -153,3 +153,20 @@ def test_recorder_api(tmp_path: Path) -> None:
         rec.write('/joint_states', 'sensor_msgs/msg/JointState', 8, b'')
     raw = bag_info(path)
     assert {t['name']: t['count'] for t in raw['topics']}['/joint_states'] == 2
+
+
+def test_a_bag_path_that_cannot_be_created_is_one_line(tmp_path: Path) -> None:
+    """A file on the way gave estimator_node a FileExistsError traceback (exit 1)."""
+    (tmp_path / 'afile').write_text('x')
+    with pytest.raises(BagError, match=r"bag path '.*afile/run1' cannot be created: .*afile is "
+                                       r'a file, not a directory'):
+        BagRecorder().open(tmp_path / 'afile' / 'run1')
+    ro = tmp_path / 'ro'
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        if not os.access(ro, os.W_OK):          # root writes anyway
+            with pytest.raises(BagError, match='cannot be created: Permission denied'):
+                BagRecorder().open(ro / 'run1')
+    finally:
+        ro.chmod(0o700)
