@@ -22,14 +22,16 @@ Arguments: ``model`` (model file; '' = the package's default), ``bag`` (bag dire
 estimator creates; '' = ./frf_bag_<date>_<time>), ``sim`` (true: simulated plant and
 its PI in lockstep on sim time; false: a real robot, the nodes run free on wall time and the
 robot's joint_state_broadcaster and velocity controller take the plant's place),
-``use_sim_time`` (default: the value of ``sim``). Parameters come from the package's
-config/frf_ident.yaml; ``lockstep`` always equals ``sim``.
+``use_sim_time`` (default: the value of ``sim``), ``params_file`` (default: the package's
+config/frf_ident.yaml; a copy of it with your settings). ``lockstep`` always equals ``sim``.
+Parameters are read at start-up and read-only afterwards. When a node exits (it refused its
+parameters, or crashed) the launch shuts down: no half graph accepts runs it cannot record.
 """
 import os
 
 from ament_index_python.packages import get_package_share_directory
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument
+from launch.actions import DeclareLaunchArgument, Shutdown
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
@@ -40,7 +42,7 @@ def generate_launch_description():
     """Return plant (sim only), excitation and estimator, one per process and name."""
     params = os.path.join(get_package_share_directory('frf_ident'), 'config', 'frf_ident.yaml')
     sim = LaunchConfiguration('sim')
-    common = [params, {
+    common = [LaunchConfiguration('params_file'), {
         'use_sim_time': ParameterValue(LaunchConfiguration('use_sim_time'), value_type=bool),
         'lockstep': ParameterValue(sim, value_type=bool),
         'model': ParameterValue(LaunchConfiguration('model'), value_type=str)}]
@@ -49,7 +51,8 @@ def generate_launch_description():
     def node(executable, extra=(), condition=None):
         """Launch one node of the package under its own name."""
         return Node(package='frf_ident', executable=executable, name=executable,
-                    parameters=common + list(extra), output='screen', condition=condition)
+                    parameters=common + list(extra), output='screen', condition=condition,
+                    on_exit=Shutdown(reason=f'{executable} exited'))
 
     return LaunchDescription([
         DeclareLaunchArgument('model', default_value='', description='model file'),
@@ -58,6 +61,8 @@ def generate_launch_description():
         DeclareLaunchArgument('use_sim_time', default_value=sim,
                               description='default: the value of sim'),
         DeclareLaunchArgument('bag', default_value='', description='bag directory'),
+        DeclareLaunchArgument('params_file', default_value=params,
+                              description="node parameters (default: the package's)"),
         # simulation: the plant hosts the velocity PI (as ros2_control hosts its controllers)
         node('plant_node', [{'velocity_control': True}], condition=IfCondition(sim)),
         node('excitation_node'),

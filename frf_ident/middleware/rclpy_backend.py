@@ -139,10 +139,15 @@ class Node(RclpyNode):
     def declare_parameter(self, name: str, value: Any = None,
                           descriptor: Optional[ParameterDescriptor] = None,
                           ignore_override: bool = False) -> Parameter:
-        """As rclpy, but ``None`` and ``[]`` defaults declare a dynamically typed parameter."""
-        if descriptor is None and (value is None or (isinstance(value, (list, tuple))
-                                                     and not value)):
-            descriptor = ParameterDescriptor(dynamic_typing=True)
+        """
+        As rclpy, but read-only, and ``None`` and ``[]`` defaults are dynamically typed.
+
+        The nodes read their parameters once, at start-up, where they are checked: a
+        ``ros2 param set`` at run time would report success and change nothing, so it fails.
+        """
+        if descriptor is None:
+            descriptor = ParameterDescriptor(read_only=True, dynamic_typing=(
+                value is None or (isinstance(value, (list, tuple)) and not value)))
         return super().declare_parameter(name, value, descriptor, ignore_override)
 
     def create_publisher(self, msg_type: Any, topic: str, qos: 'QosSpec | int | QoSProfile',

@@ -18,8 +18,9 @@ The package is pip-installed into a temporary prefix (the setup.py data_files gi
 share/frf_ident/{package.xml, launch, config} and the ament index marker; the console scripts
 are linked into lib/frf_ident as ``ros2 run`` expects), the prefix goes on AMENT_PREFIX_PATH and
 PYTHONPATH, and the installed config is shortened to a 16 s multisine. Checked: unique node
-names, the service answers at once, progress and the end on topics, the bag where ``bag:=``
-says with ``ros_distro: jazzy``, and ``sim:=false`` (free-running, wall time) starts.
+names, the service answers, progress and the end on topics, the bag where ``bag:=``
+says with ``ros_distro: jazzy``, ``sim:=false`` (free-running, wall time) starts with
+read-only parameters, and a node's refusal ends the launch.
 """
 import json
 import os
@@ -220,8 +221,42 @@ def test_launch_real_robot_mode(ros_env, prefix, tmp_path):
         _until(fut.done, 20, 'get_parameters')
         values = [v.bool_value for v in fut.result().values]
         assert values == [False, False], values
+        # read at start-up, so read-only: a set used to report success and change nothing
+        from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+        from rcl_interfaces.srv import SetParameters
+        cl = obs.node.create_client(SetParameters, '/excitation_node/set_parameters')
+        assert cl.wait_for_service(timeout_sec=20.0)
+        value = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=0.01)
+        fut = cl.call_async(SetParameters.Request(parameters=[
+            Parameter(name='live_position_bound_deg', value=value)]))
+        _until(fut.done, 20, 'set_parameters')
+        res, = fut.result().results
+        assert not res.successful and 'read-only' in res.reason, res
         del rclpy
     finally:
         _stop(proc, log)
         obs.close()
     assert 'refused' not in log[0], log[0][-1000:]
+
+
+def test_launch_ends_when_a_node_refuses(ros_env, prefix, tmp_path):
+    """
+    An existing bag: the estimator refuses it (exit 2) and the launch shuts down.
+
+    Before, plant and excitation stayed up and accepted runs nothing recorded.
+    """
+    env = _env(ros_env, prefix, tmp_path)
+    bag = tmp_path / 'taken'
+    bag.mkdir()
+    proc = _launch(env, tmp_path, f'bag:={bag}')
+    log = []
+    try:
+        proc.wait(90)
+    except subprocess.TimeoutExpired:
+        pass
+    finally:
+        ended = proc.poll() is not None
+        _stop(proc, log)
+    assert ended, log[0][-2000:]
+    assert 'refusing to overwrite recorded data' in log[0], log[0][-2000:]
+    assert 'shutting down launched system' in log[0], log[0][-2000:]
