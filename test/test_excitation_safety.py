@@ -98,7 +98,7 @@ def _free_run(settings: SessionSettings, corrupt=None, after_s: float = 0.0,
         if end is None and run.done.is_set():
             end = k
     return SimpleNamespace(run=run, out=out, dq=np.array(positions) - sess.q0, end=end,
-                           share=np.abs(np.array(torques)))
+                           share=np.abs(np.array(torques)), session=sess)
 
 
 def test_pi_holds_its_integral_torque_when_the_measured_velocity_is_not_finite():
@@ -449,3 +449,42 @@ def test_a_chirp_step_fills_the_torque_of_missed_joint_states():
     u[50] = np.nan
     with pytest.raises(RuntimeError, match='1 of 200 torque samples missing'):
         fill_torque_gaps(u, max_gap=0)
+
+
+def test_a_start_during_a_run_is_refused_before_planning_and_the_run_goes_on(monkeypatch):
+    """
+    A start during a run is refused before planning: the run is untouched.
+
+    A second start came, planned for seconds on the node's executor, and the run's own
+    watchdog aborted it for stale joint states, after which "still running" passed and a
+    second run began.
+    """
+    robot, ctrl = load_model(None)[1:]
+    out = _Out()
+    sess = ExcitationSession(SessionSettings(multisine=SHORT), robot.joint_names, robot.dt,
+                             ctrl.torque_limit, out)
+    q = FlexibleJointPlant(robot).state[0].copy()
+    sess.on_state(0, q, None)
+    run = sess.start_multisine()
+    sess.on_state(1, q, None)
+
+    def no_plan(*args, **kw):
+        raise AssertionError('planned while a run was running')
+    monkeypatch.setattr('frf_ident.app.excitation.multisine_procedure', no_plan)
+    monkeypatch.setattr('frf_ident.app.excitation.ChirpIteration', no_plan)
+    for start in (sess.start_multisine, sess.start_chirp_iteration):
+        with pytest.raises(RuntimeError, match="experiment 'multisine' is still running"):
+            start()
+    sess.watch()
+    assert sess.run is run and not run.done.is_set() and run.error is None
+
+
+def test_the_chirp_iteration_stops_at_max_iterations():
+    """max_iterations=1: a second step is refused (the node ran a fourth of three before)."""
+    from frf_ident.core.excitation.procedures import ChirpConfig
+    cfg = ChirpConfig(duration=3.0, lead_s=0.2, settle_s=0.3, max_iterations=1)
+    res = _free_run(SessionSettings(stale_samples=10 ** 9, chirp=cfg), chirp=True)
+    assert res.run.result['iteration'] == 1 and not res.run.result['converged']
+    with pytest.raises(RuntimeError, match=r'ran its max_iterations=1 steps without '
+                                           r'converging \(last error 33\.\d+ dB\)'):
+        res.session.start_chirp_iteration()

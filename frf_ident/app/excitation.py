@@ -526,6 +526,8 @@ class ExcitationSession:
             the model's sample rate or less.
 
         """
+        with self.lock:
+            self._refuse_while_running()     # first: planning blocks the node for seconds
         phases, design = multisine_procedure(self.s.multisine, self.n, self.fs)
 
         def end(run: Run) -> dict:
@@ -559,8 +561,8 @@ class ExcitationSession:
         Raises
         ------
         RuntimeError
-            The iteration has already converged, no joint state received yet, or another
-            procedure is still running.
+            The iteration has already converged or ran its ``max_iterations`` steps, no joint
+            state received yet, or another procedure is still running.
         SafetyError
             The planned position leaves the position bound, the predicted peak torque (first
             step: on the model; later steps: from the measured ones) exceeds a limit, or
@@ -568,9 +570,15 @@ class ExcitationSession:
             less.
 
         """
+        with self.lock:
+            self._refuse_while_running()     # first: planning blocks the node for seconds
         it = self.chirp_iteration()
         if it.history and it.history[-1].get('converged'):
             raise RuntimeError('the chirp iteration has already converged')
+        if len(it.history) >= self.s.chirp.max_iterations:
+            raise RuntimeError(f'the chirp iteration ran its max_iterations='
+                               f'{self.s.chirp.max_iterations} steps without converging '
+                               f'(last error {it.history[-1].get("max_abs_error_db", "?")} dB)')
         last = it.history[-1] if it.history else {}
         pred = last.get('predicted_peak_torque')
         if pred is not None and np.any(np.asarray(pred) > self.torque_limit + 1e-9):

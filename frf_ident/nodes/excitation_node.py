@@ -130,12 +130,23 @@ class ExcitationNode:
         node.create_service(Trigger, '/frf/run_iteration', self._on_run_iteration)
         # the watchdog runs on wall time: a dead simulated plant also stops /clock
         self._stop = threading.Event()
+        self._signalled = threading.Event()      # SIGINT/SIGTERM (spin's stop event)
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
 
     def _watch(self) -> None:
         while not self._stop.wait(0.002):
+            if self._signalled.is_set():
+                # at once: the executor stops with the signal, and a run aborted later would
+                # record "/joint_states stale" as its reason instead
+                self.session.close()
+                return
             self.session.watch()
+
+    def spin(self, stop: threading.Event) -> None:
+        """Spin the node until ``stop`` (a signal); the watchdog stops a run at the signal."""
+        self._signalled = stop
+        mw.spin(self.node, stop)
 
     # -- Outputs of the session ------------------------------------------------------------
     def reference(self, k: int, r: np.ndarray, x: np.ndarray) -> None:
