@@ -131,7 +131,7 @@ def test_t_range_cutting_a_segment_refused(ms_rec, ms_bag, capsys, mode):
     t_end = seg.t_start + 2.5 * period
     err = refused(ms_bag, capsys, *mode, '--t-range', str(seg.t_start - 1), str(t_end),
                   match=(f'multisine segment {seg.t_start:.3f}..{seg.t_end:.3f} s realisation 0 '
-                         'experiment 0', '1 whole steady-state period; expected at least need=2',
+                         'experiment 0', '1 whole steady-state period; expected at least 2',
                          'a time range must include the whole segment'))
     assert str(ms_bag) in err
 

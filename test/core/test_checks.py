@@ -111,8 +111,8 @@ def test_periods_and_coverage():
     check_periods(2, where='w')
     msg = _refused(check_periods, 1, where='multisine segment 3.000..9.000 s', hint='more')
     assert msg == ('multisine segment 3.000..9.000 s: 1 whole steady-state period; expected at '
-                   'least need=2 — more')
-    assert 'need=5' in _refused(check_periods, 4, need=5, where='w')
+                   'least 2 — more')
+    assert 'expected at least 5' in _refused(check_periods, 4, need=5, where='w')
     check_covers(0.0, 9.999, 1.0, 10.0, dt=0.001, where='w')
     msg = _refused(check_covers, 0.0, 5.0, 1.0, 10.0, dt=0.001, where='chirp')
     assert 'segment 1.000..10.000 s but the data cover 0.000..5.000 s' in msg

@@ -11,6 +11,8 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
+import re
+
 from frf_ident.core.excitation import multisine as ms
 from frf_ident.errors import DesignError
 import numpy as np
@@ -84,3 +86,30 @@ def test_eq9_phase_shifts_condition_number_one():
 def test_bad_design_names_value(kwargs, needle):
     with pytest.raises(DesignError, match=needle.replace('(', r'\(')):
         ms.design_odd_multisine(**kwargs)
+
+
+@pytest.mark.parametrize('kw, match', [
+    ({'resolution_hz': float('nan')}, 'resolution_hz=nan must be a finite number, positive'),
+    ({'f_low': 70.0}, 'f_low=70.0, f_high=60.0: expected 0 < f_low < f_high'),
+    ({'settle_s': -1.0}, 'settle_s=-1.0 must be a finite number, at least 0'),
+    ({'transient_periods': -1}, 'transient_periods=-1 must be at least 0'),
+])
+def test_multisine_config_refuses_non_finite_and_empty_settings(kw, match):
+    """A node took resolution_hz NaN at start-up and refused it only at the service call."""
+    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.errors import DesignError
+    with pytest.raises(DesignError, match=re.escape(match)):
+        MultisineConfig(**kw)
+
+
+@pytest.mark.parametrize('kw, match', [
+    ({'duration': float('nan')}, 'duration=nan must be a finite number, positive'),
+    ({'f_high': float('inf')}, 'f_low=2.0, f_high=inf'),
+    ({'torque_margin': 1.5}, 'torque_margin=1.5 must be at most 1'),
+    ({'r_initial': [0.006, float('nan'), 0.012]}, 'must be finite'),
+])
+def test_chirp_config_refuses_non_finite_and_empty_settings(kw, match):
+    from frf_ident.core.excitation.procedures import ChirpConfig
+    from frf_ident.errors import DesignError
+    with pytest.raises(DesignError, match=re.escape(match)):
+        ChirpConfig(**kw)

@@ -314,7 +314,7 @@ def check_periods(n_periods: int, *, need: int = 2, where: str, hint: str = '') 
     """
     if n_periods < need:
         raise EstimationError(f'{where}: {n_periods} whole steady-state period'
-                              f'{"" if n_periods == 1 else "s"}; expected at least {need=}'
+                              f'{"" if n_periods == 1 else "s"}; expected at least {need}'
                               f'{f" — {hint}" if hint else ""}')
 
 

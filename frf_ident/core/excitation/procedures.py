@@ -101,6 +101,50 @@ def _ramp(v_from: np.ndarray, v_to: np.ndarray, n: int) -> np.ndarray:
     return v_from + np.outer(w, v_to - v_from)
 
 
+def check_band(f_low: float, f_high: float) -> None:
+    """
+    Refuse an excitation band that is not 0 < f_low < f_high (finite).
+
+    Parameters
+    ----------
+    f_low, f_high : float
+        Band edges [Hz].
+
+    Raises
+    ------
+    DesignError
+        The band is empty, negative or not finite.
+
+    """
+    if not (math.isfinite(f_low) and math.isfinite(f_high) and 0 < f_low < f_high):
+        raise DesignError(f'f_low={f_low}, f_high={f_high}: expected 0 < f_low < f_high Hz')
+
+
+def check_finite(*, minimum: float, positive: tuple[str, ...] = (), **values: float) -> None:
+    """
+    Refuse a setting that is not a finite number of at least ``minimum``.
+
+    Parameters
+    ----------
+    minimum : float
+        The smallest value allowed.
+    positive : tuple of str, optional
+        Names that must also be above zero.
+    **values : float
+        The settings by name.
+
+    Raises
+    ------
+    DesignError
+        Naming the first setting that is NaN, infinite, below ``minimum`` or not positive.
+
+    """
+    for name, v in values.items():
+        if not math.isfinite(v) or v < minimum or (name in positive and v <= 0):
+            need = 'positive' if name in positive else f'at least {minimum:g}'
+            raise DesignError(f'{name}={v} must be a finite number, {need}')
+
+
 # --- multisine on a constant velocity (Sections 4.4 and 7) ----------------------------------
 
 @dataclass
@@ -127,6 +171,12 @@ class MultisineConfig:
     seed: int = 0
 
     def __post_init__(self) -> None:
+        check_band(self.f_low, self.f_high)
+        check_finite(resolution_hz=self.resolution_hz, ramp_s=self.ramp_s,
+                     settle_s=self.settle_s, return_s=self.return_s, minimum=0.0,
+                     positive=('resolution_hz', 'ramp_s'))
+        if self.transient_periods < 0:
+            raise DesignError(f'transient_periods={self.transient_periods} must be at least 0')
         if self.n_periods < 1:
             raise DesignError(f'n_periods={self.n_periods} must be at least 1')
         if self.n_realisations < 1:
@@ -314,6 +364,18 @@ class ChirpConfig:
     def __post_init__(self) -> None:
         self.u_des = np.atleast_2d(np.asarray(self.u_des, dtype=float))
         self.r_initial = np.atleast_1d(np.asarray(self.r_initial, dtype=float))
+        check_band(self.f_low, self.f_high)
+        check_finite(duration=self.duration, tolerance_db=self.tolerance_db,
+                     lead_s=self.lead_s, settle_s=self.settle_s,
+                     max_gain_step=self.max_gain_step, torque_margin=self.torque_margin,
+                     regularisation=self.regularisation, minimum=0.0,
+                     positive=('duration', 'tolerance_db', 'max_gain_step', 'torque_margin'))
+        if self.torque_margin > 1.0 or self.n_lines < 1:
+            raise DesignError(f'torque_margin={self.torque_margin} must be at most 1 and '
+                              f'n_lines={self.n_lines} at least 1')
+        if not (np.all(np.isfinite(self.u_des)) and np.all(np.isfinite(self.r_initial))):
+            raise DesignError(f'u_des {self.u_des.tolist()} and r_initial '
+                              f'{self.r_initial.tolist()} must be finite')
         if np.any(self.u_des <= 0) or np.any(self.r_initial <= 0):
             raise DesignError(f'u_des {self.u_des.tolist()} and r_initial '
                               f'{self.r_initial.tolist()} must be positive')
