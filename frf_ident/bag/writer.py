@@ -23,7 +23,8 @@ Two writers:
 
 Both use rosbags' ``Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)``, the
 ROS2_JAZZY typestore (message definitions and RIHS01 hashes) and always record
-``offered_qos_profiles`` (docs/ROS2_CONVENTIONS.md section 3.4).
+``offered_qos_profiles`` (frf_ident/bag/README_bag.md; ros2 bag play offers each topic
+with them, e.g. /frf/experiment transient-local).
 """
 from __future__ import annotations
 
