@@ -22,4 +22,6 @@ Application functions used by both the CLI and the nodes: one module per job.
 - :mod:`frf_ident.app.reproduce` — the paper's Section 6 example
 - :mod:`frf_ident.app.demo` and :mod:`frf_ident.app.graph` — the node graph driven end to end
 - :mod:`frf_ident.app.console` — progress output
+- :mod:`frf_ident.app.outdir` — every command's ``--out``: checked before any work, a
+  command's own earlier outputs replaced only with ``--overwrite``
 """

@@ -32,10 +32,16 @@ import json
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['diagnose', 'has_experiments', 'load_data']
+__all__ = ['OUTPUT_FILES', 'diagnose', 'has_experiments', 'load_data']
+
+#: the files :func:`diagnose` writes into its output directory (report.html's figures: an
+#: experiments diagnosis draws bode.png and residual.png, a time-series one residual.png)
+OUTPUT_FILES = ('report.json', 'extended_model.yaml', 'report.html', 'bode.png',
+                'residual.png')
 
 
 def load_data(path: Path, map_path: Path | None = None) -> Recording:
@@ -116,7 +122,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     model_path
         Nominal model file (docs/CONTRACT.md §5).
     out
-        Output directory.
+        Output directory; its :data:`OUTPUT_FILES` of an earlier run are removed before
+        the new ones are written.
     map_path
         Import map for CSV/MAT records (DATA and every OTHER).
     validate
@@ -157,6 +164,7 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         res['metrics']['validation_records'] = [
             validate_on(str(p), o, robot, res['extended'], ctrl) for p, o in others]
     out.mkdir(parents=True, exist_ok=True)
+    clear_outputs(out, OUTPUT_FILES)
     found = ', '.join(e.name for e in res['effects']) or 'none'
     save_model(out / 'extended_model.yaml', res['extended'], ctrl,
                extra={'description': f'{model.get("description", "nominal model")} + diagnosed '

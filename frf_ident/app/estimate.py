@@ -26,10 +26,14 @@ from typing import Callable
 
 from frf_ident.app import stream_estimate
 from frf_ident.app.console import say
+from frf_ident.app.outdir import clear_outputs
 from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['dropped_text', 'estimate_bag', 'read_estimates']
+__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'read_estimates']
+
+#: the files :func:`estimate_bag` writes into its output directory
+OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png')
 
 
 def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max_memory_mb,
@@ -102,7 +106,8 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     bag
         Bag directory or .mcap file.
     out
-        Output directory (created; untouched when the bag is refused).
+        Output directory (created; untouched when the bag is refused). Its
+        :data:`OUTPUT_FILES` of an earlier run are removed before the new ones are written.
     joints
         Joint names to analyse (default: all).
     t_range
@@ -147,6 +152,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     if key not in estimates:
         raise FrfIdentInputError(f'--primary {key!r}: the bag supports {sorted(estimates)}')
     out.mkdir(parents=True, exist_ok=True)
+    clear_outputs(out, OUTPUT_FILES)
     frf = estimates[key]
     doc = frf.to_dict()
     doc['estimate'] = key

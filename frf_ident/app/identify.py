@@ -18,13 +18,13 @@ from pathlib import Path
 from typing import Any, Callable
 
 from frf_ident.app.console import say
-from frf_ident.errors import FrfIdentInputError
+from frf_ident.app.outdir import check_out
 
 __all__ = ['run_identify']
 
 
 def run_identify(model_path: str | Path | None, plant_spec: str | None, config: Any,
-                 out: Path, *, progress: Callable[[str], None] = say):
+                 out: str | Path, *, progress: Callable[[str], None] = say):
     """
     Run the identification experiments in closed loop and write the bag.
 
@@ -36,8 +36,9 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
         Plant plug-in ``'package.module:Class'``, or None for the model's simulation.
     config : IdentificationConfig
         The procedures (:class:`~frf_ident.core.simulation.runner.IdentificationConfig`).
-    out : Path
-        Bag directory to create; an existing path is refused (nothing is overwritten).
+    out : str or Path
+        Bag directory to create; an existing path, or one that cannot be created, is
+        refused before anything runs (:func:`~frf_ident.app.outdir.check_out`).
     progress : callable, optional
         Called with one line per step; default :func:`~frf_ident.app.console.say`.
 
@@ -58,9 +59,7 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
     from frf_ident.bag import write_recording
     from frf_ident.core.simulation.runner import run_identification
     from frf_ident.io.model_file import load_model, load_plant
-    if out.exists():
-        raise FrfIdentInputError(f'{out}: already exists; choose a new bag path (nothing was '
-                                 f'overwritten)')
+    out = check_out(out, outputs=None, overwrite=False)
     model, robot, ctrl = load_model(model_path)
     plant = load_plant(plant_spec, model)
     rec = run_identification(plant, ctrl, config, progress=progress,

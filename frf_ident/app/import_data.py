@@ -18,12 +18,12 @@ from pathlib import Path
 from typing import Callable
 
 from frf_ident.app.console import say
-from frf_ident.errors import FrfIdentInputError
+from frf_ident.app.outdir import check_out
 
 __all__ = ['import_file']
 
 
-def import_file(file: Path, map_path: Path, out: Path, *,
+def import_file(file: Path, map_path: Path, out: str | Path, *,
                 progress: Callable[[str], None] = say) -> Path:
     """
     Import a measured table as a bag and say what excitation each joint carries.
@@ -35,7 +35,8 @@ def import_file(file: Path, map_path: Path, out: Path, *,
     map_path
         YAML map naming the time, joints, columns and unit scales (see README, "Files").
     out
-        Bag directory to create; an existing path is refused (nothing is overwritten).
+        Bag directory to create; an existing path, or one that cannot be created, is
+        refused before the file is read (:func:`~frf_ident.app.outdir.check_out`).
     progress
         Called with one line per step.
 
@@ -49,9 +50,7 @@ def import_file(file: Path, map_path: Path, out: Path, *,
     from frf_ident.core.excitation.detect import detect_excitation, excitation_source
     from frf_ident.errors import EstimationError
     from frf_ident.io.importer import import_table
-    if out.exists():
-        raise FrfIdentInputError(f'--out {str(out)!r} already exists; choose a new bag path '
-                                 f'(nothing was overwritten)')
+    out = check_out(out, outputs=None, overwrite=False)
     rec = import_table(file, map_path)
     info = rec.meta['import']
     progress(f'{file.name}: {rec.t.size} samples at {rec.fs:.6g} Hz '

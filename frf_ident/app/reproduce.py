@@ -26,6 +26,7 @@ import json
 from pathlib import Path
 from typing import Any, Callable
 
+from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.excitation.chirp import chirp_phase_flips, ChirpDesign
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
 from frf_ident.core.model.params import AxisParams, RobotParams
@@ -35,8 +36,9 @@ from frf_ident.core.simulation.open_loop import (resonance_peak, run_open_loop_c
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 import numpy as np
 
-__all__ = ['CASES', 'PAPER_AXIS', 'PAPER_REALISATIONS', 'PAPER_SEED', 'RESONANCE_BAND',
-           'analytic_linear', 'findings', 'paper_plant', 'reproduce_paper', 'write_results']
+__all__ = ['CASES', 'OUTPUT_FILES', 'PAPER_AXIS', 'PAPER_REALISATIONS', 'PAPER_SEED',
+           'RESONANCE_BAND', 'analytic_linear', 'findings', 'paper_plant', 'reproduce_paper',
+           'write_results']
 
 PAPER_AXIS = {'name': 'joint_1', 'motor_inertia': 35.0, 'link_inertia': 150.0,
               'stiffness': 1.5e5, 'damping': 400.0, 'torque_limit': 150.0}
@@ -46,6 +48,8 @@ CASES = {
     'stiffness': {'stiffness_k2': 1.7 * 1.5e5, 'stiffness_breakpoint': 1e-3},
 }
 RESONANCE_BAND = (6.0, 40.0)
+#: the files :func:`write_results` writes into its output directory, results.json first
+OUTPUT_FILES = ('results.json', 'figure4_coulomb.png', 'figure5_stiffness.png')
 
 
 def paper_plant(case: str, fs: float = 1000.0, substeps: int = 4) -> FlexibleJointPlant:
@@ -255,7 +259,8 @@ def write_results(results: dict[str, Any], out_dir: Path) -> list[Path]:
     results : dict
         The result of :func:`reproduce_paper`.
     out_dir : Path
-        Output directory (created if missing; files in it are overwritten).
+        Output directory (created if missing); its :data:`OUTPUT_FILES` of an earlier run
+        are removed before the new ones are written, nothing else is touched.
 
     Returns
     -------
@@ -265,10 +270,11 @@ def write_results(results: dict[str, Any], out_dir: Path) -> list[Path]:
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / 'results.json'
+    clear_outputs(out_dir, OUTPUT_FILES)
+    path = out_dir / OUTPUT_FILES[0]
     path.write_text(json.dumps(results, indent=1))
     from frf_ident.report.figures import paper_figure
     written = [path]
-    for fig_no, case in ((4, 'coulomb'), (5, 'stiffness')):
-        written.append(paper_figure(results, case, out_dir / f'figure{fig_no}_{case}.png'))
+    for name, case in zip(OUTPUT_FILES[1:], ('coulomb', 'stiffness')):
+        written.append(paper_figure(results, case, out_dir / name))
     return written

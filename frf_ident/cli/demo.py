@@ -34,7 +34,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """
     from frf_ident.app.demo import DEMO_CHIRP, DEMO_MODEL, DEMO_MULTISINE, DEMO_ROBOT
     ms, ch = DEMO_MULTISINE, DEMO_CHIRP
-    p.add_argument('--out', type=Path, required=True, help='output directory')
+    p.add_argument('--out', required=True,
+                   help='output directory (refused when it already holds a demo bag)')
     p.add_argument('--model', type=Path,
                    help=f'nominal model for diagnosis (default config/{DEMO_MODEL})')
     p.add_argument('--robot', type=Path,
@@ -63,13 +64,15 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     FrfIdentInputError
-        A model or robot file is missing, or ``--out`` already holds a bag.
+        A model or robot file is missing, or ``--out`` is unusable or already holds a bag.
 
     """
     from dataclasses import replace
 
     from frf_ident.app.demo import DEMO_CHIRP, DEMO_MULTISINE, run_demo
+    from frf_ident.app.outdir import check_out
+    out = check_out(args.out, outputs=(), overwrite=False)
     ms = replace(DEMO_MULTISINE, n_realisations=args.realisations, n_periods=args.periods,
                  resolution_hz=args.resolution)
     ch = replace(DEMO_CHIRP, duration=args.chirp_duration, max_iterations=args.max_iterations)
-    return run_demo(args.out, model=args.model, robot=args.robot, multisine=ms, chirp=ch)
+    return run_demo(out, model=args.model, robot=args.robot, multisine=ms, chirp=ch)

@@ -35,7 +35,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """
     p.add_argument('data', type=Path, help='bag (identify or robot), or CSV/MAT with --map')
     p.add_argument('--model', type=Path, required=True, help='nominal model file')
-    p.add_argument('--out', type=Path, required=True, help='output directory')
+    p.add_argument('--out', required=True,
+                   help='output directory (refused when it holds the outputs of an earlier '
+                        'run, unless --overwrite)')
+    p.add_argument('--overwrite', action='store_true',
+                   help='replace the outputs of an earlier run in --out (report.json, '
+                        'extended_model.yaml, report.html, bode.png, residual.png; nothing '
+                        'else is touched)')
     p.add_argument('--map', type=Path, default=None,
                    help='import map for CSV/MAT data (config/map_*.yaml), used for --validate too')
     p.add_argument('--validate', type=Path, action='append', default=[], metavar='OTHER',
@@ -60,12 +66,15 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     FrfIdentInputError
-        The data, map or model file is unusable (one line naming it).
+        The data, map or model file or ``--out`` is unusable, or ``--out`` holds an earlier
+        run's outputs without ``--overwrite`` (one line naming it).
 
     """
     from frf_ident.app.console import say
-    from frf_ident.app.diagnose import diagnose
-    res = diagnose(args.data, args.model, args.out, map_path=args.map, validate=args.validate,
+    from frf_ident.app.diagnose import diagnose, OUTPUT_FILES
+    from frf_ident.app.outdir import check_out
+    out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
+    res = diagnose(args.data, args.model, out, map_path=args.map, validate=args.validate,
                    progress=say)
     rep = res['report']
     for k, e in enumerate(rep['effects']):
@@ -84,6 +93,6 @@ def run(args: argparse.Namespace) -> int:
     for v in m.get('validation_records', []):
         print(f"on {v['record']}: nominal time NRMSE {v['baseline']['time_nrmse']}, extended "
               f"{v['extended']['time_nrmse']}")
-    print(f'wrote {args.out / "report.json"}, {args.out / "extended_model.yaml"}, '
-          f'{args.out / "report.html"}')
+    print(f'wrote {out / "report.json"}, {out / "extended_model.yaml"}, '
+          f'{out / "report.html"}')
     return 0

@@ -34,7 +34,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """
     from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
     p.add_argument('bag', type=Path)
-    p.add_argument('--out', type=Path, required=True, help='output directory')
+    p.add_argument('--out', required=True,
+                   help='output directory (refused when it holds the outputs of an earlier '
+                        'run, unless --overwrite)')
+    p.add_argument('--overwrite', action='store_true',
+                   help='replace the outputs of an earlier run in --out (frf.json, '
+                        'estimates.json, summary.json, bode.png; nothing else is touched)')
     p.add_argument('--joints', help='comma list of joint names to analyse (default: all)')
     p.add_argument('--t-range', type=float, nargs=2, metavar=('START', 'END'),
                    help='analyse only this time range [s]')
@@ -106,12 +111,15 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     FrfIdentInputError
-        The bag cannot be read or does not support an estimate (one line naming it).
+        ``--out`` is unusable or holds an earlier run's outputs without ``--overwrite``, or
+        the bag cannot be read or does not support an estimate (one line naming it).
 
     """
-    from frf_ident.app.estimate import estimate_bag
+    from frf_ident.app.estimate import estimate_bag, OUTPUT_FILES
+    from frf_ident.app.outdir import check_out
+    out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
-    estimate_bag(args.bag, args.out, joints=joints,
+    estimate_bag(args.bag, out, joints=joints,
                  t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary,
                  options=excitation_options(args), stream=args.stream,
                  max_memory_mb=args.max_memory, window_s=args.window)

@@ -39,7 +39,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--model', type=Path, help='model file (default: the embedded 3-axis model)')
     p.add_argument('--plant', help='plant plug-in "package.module:Class" (default: the '
                                    "model's own simulation)")
-    p.add_argument('--out', type=Path, required=True, help='bag directory to create')
+    p.add_argument('--out', required=True, help='bag directory to create (must not exist)')
     p.add_argument('--procedures', default='multisine,chirp',
                    help='comma list of multisine, chirp (default both)')
     p.add_argument('--realisations', type=int, default=ms.n_realisations,

@@ -36,7 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--map', type=Path, required=True,
                    help='YAML map: time, joints and their columns/variables, unit scales '
                         '(see README, "Files"; examples in config/map_*.yaml)')
-    p.add_argument('--out', type=Path, required=True, help='bag directory to create')
+    p.add_argument('--out', required=True, help='bag directory to create (must not exist)')
 
 
 def run(args: argparse.Namespace) -> int:

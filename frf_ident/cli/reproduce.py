@@ -15,7 +15,6 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from frf_ident.app.reproduce import PAPER_REALISATIONS, PAPER_SEED
 from frf_ident.errors import FrfIdentInputError
@@ -36,7 +35,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     """
     p.add_argument('what', choices=['paper'])
-    p.add_argument('--out', required=True, type=Path, help='output directory')
+    p.add_argument('--out', required=True,
+                   help='output directory (refused when it holds the outputs of an earlier '
+                        'run, unless --overwrite)')
+    p.add_argument('--overwrite', action='store_true',
+                   help='replace the outputs of an earlier run in --out (results.json, '
+                        'figure4_coulomb.png, figure5_stiffness.png; nothing else is '
+                        'touched)')
     p.add_argument('--realisations', type=int, default=PAPER_REALISATIONS,
                    help=f'multisine n_p (paper: {PAPER_REALISATIONS})')
     p.add_argument('--seed', type=int, default=PAPER_SEED)
@@ -59,15 +64,18 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     FrfIdentInputError
-        ``--realisations`` < 2.
+        ``--realisations`` < 2, or ``--out`` is unusable or holds an earlier run's outputs
+        without ``--overwrite``.
 
     """
     from frf_ident.app.console import say
-    from frf_ident.app.reproduce import reproduce_paper, write_results
+    from frf_ident.app.outdir import check_out
+    from frf_ident.app.reproduce import OUTPUT_FILES, reproduce_paper, write_results
+    out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     if args.realisations < 2:
         raise FrfIdentInputError(f'--realisations={args.realisations}: need at least 2')
     results = reproduce_paper(n_realisations=args.realisations, seed=args.seed, progress=say)
-    for path in write_results(results, args.out):
+    for path in write_results(results, out):
         say(f'wrote {path}')
     f = results['findings']
     say(f"linear: median |error| multisine {f['linear']['multisine']['median_abs_error_db']:.2g}"
