@@ -15,7 +15,7 @@
 Launch the frf_ident nodes: plant with its velocity PI (sim only), excitation, estimator.
 
     ros2 launch frf_ident frf_ident.launch.py model:=/path/model.yaml bag:=/tmp/run1
-    ros2 service call /frf/run_multisine std_srvs/srv/Trigger     # answers at once
+    ros2 service call /frf/run_multisine std_srvs/srv/Trigger     # answers after planning
     ros2 topic echo /frf/progress                                 # progress and the end
 
 Arguments: ``model`` (model file; '' = the package's default), ``bag`` (bag directory the
