@@ -25,7 +25,8 @@ Map file (YAML)
     description: free text            # optional, copied into the recording's meta
     csv:                              # optional, CSV files only
       delimiter: ','                  #   default: sniffed among , ; tab, else whitespace
-      header: true                    #   default: true when the first row is not numeric
+      header: true                    #   true/false; default: true when the first row is
+                                      #   not numeric
     time:                             # either a time signal ...
       column: t                       #   CSV column name / 0-based index, or MAT variable
       scale: 1.0                      #   factor to seconds (e.g. 0.001 or ms for milliseconds)
@@ -41,13 +42,19 @@ Map file (YAML)
         excitation: {column: e1}                  # optional excitation part of r
         units: {position: rad, velocity: rad/s, effort: N m}   # optional, informational
 
+Unknown keys are refused at every level; ``units`` values must be names of :data:`UNITS`;
+boolean fields (``csv.header``, ``derivative``) take YAML ``true`` / ``false`` only. The map
+and CSV files must be UTF-8 (a leading byte-order mark is dropped).
+
 A *signal* is a column name (a plain string) or a mapping with
 
 ``column`` (alias ``variable``)
     CSV: header name or 0-based column index. MAT: variable name; a dotted path reaches
     into structs (``rec.act_pos_mot_deg``).
 ``row`` / ``col``
-    0-based row or column of a 2-D MAT variable (time runs along the other dimension).
+    0-based row or column (>= 0) of a 2-D MAT variable (time runs along the other
+    dimension). A 1 x N or N x 1 vector accepts ``row: 0`` / ``col: 0`` (the MAT reader
+    squeezes vectors and does not keep their orientation).
 ``scale``
     a number, a unit name converted to SI (``deg`` = pi/180, ``rpm``, ``mm``, ``ms``, ...;
     see :data:`UNITS`), the name of a scalar MAT variable (``gtau``), or a list of these
@@ -77,12 +84,14 @@ import os
 from pathlib import Path
 from typing import Any, Callable
 
+from frf_ident.core.model.fields import expect_bool, expect_int
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
+from frf_ident.io.yamlio import read_utf8, read_yaml_file
 import numpy as np
 
-__all__ = ['JOINT_KEYS', 'PathLike', 'SIGNALS', 'SIGNAL_KEYS', 'TIME_KEYS', 'TOP_KEYS', 'Table',
-           'UNITS', 'check_map', 'import_table', 'load_map', 'read_table']
+__all__ = ['CSV_KEYS', 'JOINT_KEYS', 'PathLike', 'SIGNALS', 'SIGNAL_KEYS', 'TIME_KEYS',
+           'TOP_KEYS', 'Table', 'UNITS', 'check_map', 'import_table', 'load_map', 'read_table']
 
 PathLike = str | os.PathLike[str]
 SIGNALS = ('position', 'velocity', 'effort', 'reference', 'excitation')
@@ -91,6 +100,7 @@ JOINT_KEYS = {'name', 'units', *SIGNALS}
 TOP_KEYS = {'frf_ident_map', 'description', 'csv', 'time', 'joints'}
 TIME_KEYS = {'column', 'variable', 'row', 'col', 'scale', 'offset', 'sample_time', 'start',
              'range'}
+CSV_KEYS = {'delimiter', 'header'}
 
 UNITS: dict[str, float] = {
     'rad': 1.0, 'deg': math.pi / 180.0, 'rad/s': 1.0, 'deg/s': math.pi / 180.0,
@@ -190,6 +200,11 @@ class Table:
         obj: Any = self.data
         done: list[str] = []
         for part in ref.split('.'):
+            if not (isinstance(obj, dict) or hasattr(obj, '_fieldnames')):
+                raise FrfIdentInputError(f'{where}: variable={ref!r} not found in '
+                                         f'{self.name()}: {".".join(done)} is not a struct '
+                                         f'(it is {_describe(obj)}), so it has no field '
+                                         f'{part!r}')
             obj = _mat_member(obj, part)
             if obj is None:
                 scope = '.'.join(done) or 'the file'
@@ -230,10 +245,22 @@ class Table:
             raise FrfIdentInputError(f'{where}: scale={ref!r} is not a unit '
                                      f'({", ".join(UNITS)}) and {self.name()} has no variables')
         v = self._mat_var(ref, where)
-        if v.size != 1 or not np.isfinite(v).all():
+        if v.size != 1:
             raise FrfIdentInputError(f'{where}: scale variable {ref!r} in {self.name()} must be '
-                                     f'a finite scalar, got shape {v.shape}')
-        return float(v.reshape(-1)[0])
+                                     f'a scalar, got shape {v.shape}')
+        value = float(v.reshape(-1)[0])
+        if not math.isfinite(value):
+            raise FrfIdentInputError(f'{where}: scale variable {ref!r} in {self.name()} is not '
+                                     f'finite ({value}); expected a finite number')
+        return value
+
+
+def _describe(obj: Any) -> str:
+    """Short description of a MAT value for messages, e.g. ``a 6x2501 double array``."""
+    if isinstance(obj, np.ndarray):
+        shape = 'x'.join(str(n) for n in obj.shape) or 'scalar'
+        return f'a {shape} {obj.dtype} array'
+    return f'a {type(obj).__name__}'
 
 
 def _mat_member(obj: Any, part: str) -> Any:
@@ -301,15 +328,14 @@ def _read_mat(path: Path) -> Table:
 
 
 def _read_csv(path: Path, opts: dict[str, Any]) -> Table:
-    try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FrfIdentInputError(f'cannot read CSV file {str(path)!r}: {exc}') from None
+    text = read_utf8(path, 'CSV file')   # utf-8-sig: Excel's "CSV UTF-8" starts with a BOM
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith('#')]
     if not lines:
         raise FrfIdentInputError(f'CSV file {str(path)!r} has no data')
     rows = _split_rows(lines, opts.get('delimiter'), path)
     header_opt = opts.get('header')
+    if header_opt is not None:
+        header_opt = expect_bool('map field csv.header', header_opt)
     has_header = header_opt if header_opt is not None else not _numeric_row(rows[0])
     header = [h.strip() for h in rows[0]] if has_header else None
     body = rows[1:] if has_header else rows
@@ -382,20 +408,12 @@ def load_map(path: PathLike) -> dict[str, Any]:
     Raises
     ------
     FrfIdentInputError
-        The file cannot be read, is not valid YAML, or fails :func:`check_map`.
+        The file cannot be read, is not UTF-8 text, is not valid YAML, or fails
+        :func:`check_map`.
 
     """
-    import yaml
     path = Path(path)
-    try:
-        doc = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise FrfIdentInputError(f'cannot read map file {str(path)!r}: {exc}') from None
-    except yaml.YAMLError as exc:
-        where = getattr(exc, 'problem_mark', None)
-        at = f' at line {where.line + 1}' if where is not None else ''
-        raise FrfIdentInputError(f'map file {str(path)!r} is not valid YAML{at}: '
-                                 f'{getattr(exc, "problem", exc)}') from None
+    doc = read_yaml_file(path, 'map file')
     check_map(doc, str(path))
     return doc
 
@@ -404,8 +422,11 @@ def check_map(doc: Any, where: str = 'map') -> None:
     """
     Validate the structure of a map dict.
 
-    Checks the version, the known fields, the time specification (exactly one of a time
-    signal or ``sample_time``) and every joint (unique name, effort, position or velocity).
+    Checks the version, the known fields (also inside ``csv``, ``time``, signals and
+    ``units``), the time specification (exactly one of a time signal or ``sample_time``), every
+    joint (unique name, effort, position or velocity), the types of boolean fields
+    (``csv.header``, ``derivative``: YAML true or false only), ``row`` / ``col`` (integers
+    >= 0) and the unit names in ``units`` (:data:`UNITS`).
 
     Parameters
     ----------
@@ -427,11 +448,20 @@ def check_map(doc: Any, where: str = 'map') -> None:
         raise FrfIdentInputError(f"{where}: frf_ident_map={doc.get('frf_ident_map')!r}; "
                                  f'expected 1 (the map format version)')
     _unknown(doc, TOP_KEYS, where)
+    csv_opts = doc.get('csv')
+    if csv_opts is not None:
+        if not isinstance(csv_opts, dict):
+            raise FrfIdentInputError(f'{where}: csv={csv_opts!r}; expected a mapping with '
+                                     f'{", ".join(sorted(CSV_KEYS))}')
+        _unknown(csv_opts, CSV_KEYS, f'{where}: csv')
+        if csv_opts.get('header') is not None:
+            expect_bool(f'{where}: csv.header', csv_opts['header'])
     time = doc.get('time')
     if not isinstance(time, dict):
         raise FrfIdentInputError(f'{where}: time={time!r}; expected a mapping with column or '
                                  f'sample_time')
     _unknown(time, TIME_KEYS, f'{where}: time')
+    _check_signal(time, f'{where}: time')
     has_col = 'column' in time or 'variable' in time
     if has_col == ('sample_time' in time):
         raise FrfIdentInputError(f'{where}: time needs exactly one of column (a time signal) '
@@ -457,6 +487,31 @@ def check_map(doc: Any, where: str = 'map') -> None:
             spec = j.get(sig)
             if spec is not None and isinstance(spec, dict):
                 _unknown(spec, SIGNAL_KEYS, f'{jw}.{sig}')
+                _check_signal(spec, f"{jw} ({j['name']}).{sig}")
+        _check_units(j.get('units'), f"{jw} ({j['name']}).units")
+
+
+def _check_signal(spec: dict[str, Any], where: str) -> None:
+    """Types of a signal's ``derivative`` (bool) and ``row`` / ``col`` (0-based indices)."""
+    if 'derivative' in spec:
+        expect_bool(f'{where}.derivative', spec['derivative'])
+    for key in ('row', 'col'):
+        if spec.get(key) is not None:
+            expect_int(f'{where}.{key}', spec[key], 0)
+
+
+def _check_units(units: Any, where: str) -> None:
+    """``units``: a mapping of signal names to unit names of :data:`UNITS`."""
+    if units is None:
+        return
+    if not isinstance(units, dict):
+        raise FrfIdentInputError(f'{where}={units!r}; expected a mapping like '
+                                 f'{{position: rad, velocity: rad/s, effort: N m}}')
+    _unknown(units, set(SIGNALS), where)
+    for sig, unit in units.items():
+        if not isinstance(unit, str) or unit not in UNITS:
+            raise FrfIdentInputError(f'{where}.{sig}={unit!r}: unknown unit; expected one of '
+                                     f'{", ".join(UNITS)}')
 
 
 def _unknown(d: dict[str, Any], allowed: set[str], where: str) -> None:
@@ -490,17 +545,24 @@ def _select(v: np.ndarray, spec: dict[str, Any], where: str, table: Table,
             n: int | None) -> np.ndarray:
     row, col = spec.get('row'), spec.get('col')
     for key, idx in (('row', row), ('col', col)):
-        if idx is not None and (isinstance(idx, bool) or not isinstance(idx, int)):
-            raise FrfIdentInputError(f'{where}: {key}={idx!r} must be a 0-based integer')
+        if idx is not None:
+            expect_int(f'{where}: {key}', idx, 0)
     if row is not None and col is not None:
         raise FrfIdentInputError(f'{where}: give row or col, not both')
     if v.ndim == 2 and (row is not None or col is not None):
         axis, idx = (0, row) if row is not None else (1, col)
-        if not -v.shape[axis] <= idx < v.shape[axis]:
+        if not 0 <= idx < v.shape[axis]:
             key = 'row' if axis == 0 else 'col'
             raise FrfIdentInputError(f'{where}: {key}={idx} is out of range for shape '
                                      f'{v.shape} (0-based)')
         v = v[idx] if axis == 0 else v[:, idx]
+    elif v.ndim == 1 and table.kind == 'mat' and (row is not None or col is not None):
+        # the MAT reader squeezes 1 x N and N x 1 variables to (N,): index 0 is the vector
+        key, idx = ('row', row) if row is not None else ('col', col)
+        if idx != 0:
+            raise FrfIdentInputError(f'{where}: {key}={idx} is out of range: the variable is '
+                                     f'a vector (1 x {v.size} or {v.size} x 1); use {key} 0 '
+                                     f'or omit it')
     elif row is not None or col is not None:
         raise FrfIdentInputError(f'{where}: row/col given but the data has shape {v.shape}')
     if v.ndim != 1:
@@ -548,6 +610,14 @@ def _time_axis(table: Table, spec: dict[str, Any], n_rows: int,
                    where, None)
 
 
+def _time_source(spec: dict[str, Any], table: Table) -> str:
+    """Where the time comes from, for messages: ``column 't' in d.csv``."""
+    if 'sample_time' in spec:
+        return f"sample_time={spec['sample_time']!r} s"
+    key = 'column' if 'column' in spec else 'variable'
+    return f'{key} {spec[key]!r} in {table.name()}'
+
+
 def _uniform_grid(t: np.ndarray, where: str) -> tuple[np.ndarray, float]:
     """Exact grid t0 + k dt replacing a measured uniform time vector. Returns (t, dt)."""
     n = t.size
@@ -559,7 +629,7 @@ def _uniform_grid(t: np.ndarray, where: str) -> tuple[np.ndarray, float]:
     if np.any(steps <= 0):
         k = int(np.flatnonzero(steps <= 0)[0])
         raise FrfIdentInputError(f'{where}: time does not increase at sample {k + 1} '
-                                 f'(t={t[k]!r} -> {t[k + 1]!r})')
+                                 f'(t={float(t[k]):.9g} s -> {float(t[k + 1]):.9g} s)')
     k = np.arange(n, dtype=float)
     dt, t0 = np.polyfit(k, t, 1)
     res = t - (t0 + dt * k)
@@ -626,7 +696,7 @@ def import_table(path: PathLike, map: dict[str, Any] | PathLike) -> Recording:  
                          f'{map_name}: joints[0].effort', None).size
     t_raw = _time_axis(table, tspec, n_rows, f'{map_name}: time')
     keep = _time_range(t_raw, tspec.get('range'), f'{map_name}: time.range')
-    t, dt = _uniform_grid(t_raw[keep], f'{table.name()} time')
+    t, dt = _uniform_grid(t_raw[keep], f'{map_name}: time ({_time_source(tspec, table)})')
     shift = 0.0
     if t[0] < 0:
         shift, t = -float(t[0]), t - t[0]
@@ -676,7 +746,8 @@ def _import_joint(table: Table, joint: dict[str, Any], j: int, n: int, keep: np.
             continue
         where = f'{map_name}: joints[{j}] ({name}).{sig}'
         x = _signal(table, spec, where, n)[keep]
-        if isinstance(spec, dict) and spec.get('derivative'):
+        if isinstance(spec, dict) and expect_bool(f'{where}.derivative',
+                                                  spec.get('derivative', False)):
             x = _derivative(x, dt)
             info['derived'][f'{name}.{sig}'] = 'central differences of the mapped signal'
         bad = ~np.isfinite(x)

@@ -29,7 +29,7 @@ from frf_ident.core.model.schema import (controller_from_dict, default_model_dic
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import FrfIdentInputError, ModelFileError
-from frf_ident.io.yamlio import load_yaml
+from frf_ident.io.yamlio import read_yaml_file
 import yaml
 
 __all__ = ['load_model', 'load_plant', 'read_model_dict', 'save_model']
@@ -54,24 +54,12 @@ def read_model_dict(path: str | Path) -> dict[str, Any]:
     Raises
     ------
     ModelFileError
-        The file is missing or unreadable, not valid YAML (the line is named), or not a
-        mapping.
+        The file is missing or unreadable, not UTF-8 text, not valid YAML (the line is
+        named), or not a mapping.
 
     """
     p = Path(path)
-    try:
-        text = p.read_text()
-    except FileNotFoundError:
-        raise ModelFileError(f'{p}: model file not found') from None
-    except OSError as exc:
-        raise ModelFileError(f'{p}: cannot read model file ({exc.strerror})') from None
-    try:
-        d = load_yaml(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, 'problem_mark', None)
-        where = f' line {mark.line + 1}' if mark else ''
-        raise ModelFileError(f'{p}:{where} not valid YAML ({getattr(exc, "problem", exc)})') \
-            from None
+    d = read_yaml_file(p, 'model file', ModelFileError)
     if not isinstance(d, dict):
         raise ModelFileError(f'{p}: expected a mapping with frf_ident_model, axes, ...')
     return d

@@ -213,9 +213,9 @@ class RobotParams:
     Raises
     ------
     ModelFileError
-        No axes, a non-positive ``sample_rate``, ``substeps`` < 1, a malformed
-        ``link_coupling``, a gravity term naming an unknown joint, or a link inertia matrix
-        that is not positive definite.
+        No axes, a non-positive ``sample_rate``, ``substeps`` < 1 or not an integer, a negative
+        ``seed``, a ``link_coupling`` that is not an n x n symmetric matrix, a gravity term
+        naming an unknown joint, or a link inertia matrix that is not positive definite.
 
     """
 
@@ -231,14 +231,23 @@ class RobotParams:
             raise ModelFileError('model has no axes')
         if not (self.sample_rate > 0):
             raise ModelFileError(f'sample_rate={self.sample_rate!r} must be positive')
-        if int(self.substeps) < 1:
-            raise ModelFileError(f'substeps={self.substeps!r} must be >= 1')
+        if int(self.substeps) != self.substeps or self.substeps < 1:
+            raise ModelFileError(f'substeps={self.substeps!r} must be an integer >= 1')
+        if int(self.seed) != self.seed or self.seed < 0:
+            raise ModelFileError(f'seed={self.seed!r} must be an integer >= 0')
         n = len(self.axes)
         if self.link_coupling is not None:
             c = np.asarray(self.link_coupling, dtype=float)
-            if c.shape != (n, n) or not np.allclose(c, c.T):
-                raise ModelFileError(f'link_coupling must be a symmetric {n}x{n} matrix, '
-                                     f'got shape {c.shape}')
+            if c.shape != (n, n):
+                raise ModelFileError(f'link_coupling must be a {n}x{n} matrix (one row and '
+                                     f'column per axis), got shape {c.shape}')
+            if not np.all(np.isfinite(c)):
+                raise ModelFileError('link_coupling must be finite numbers, got '
+                                     f'{c.tolist()}')
+            if not np.allclose(c, c.T):
+                i, j = np.unravel_index(int(np.argmax(np.abs(c - c.T))), c.shape)
+                raise ModelFileError(f'link_coupling is not symmetric: [{i}][{j}]='
+                                     f'{c[i, j]:g} but [{j}][{i}]={c[j, i]:g}')
             self.link_coupling = c
         for a in self.axes:
             for k in range(len(a.gravity)):

@@ -31,6 +31,7 @@ from dataclasses import asdict, fields
 import math
 from typing import Any
 
+from frf_ident.core.model.fields import expect_bool, expect_int
 from frf_ident.core.model.params import AxisParams, RobotParams
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.errors import ModelFileError
@@ -40,6 +41,7 @@ MODEL_VERSION = 1
 _AXIS_KEYS = {f.name for f in fields(AxisParams)}
 _TOP_KEYS = {'frf_ident_model', 'sample_rate', 'axes', 'controller', 'link_coupling',
              'simulation', 'description'}
+_SIM_KEYS = {'substeps', 'velocity_from_encoder', 'seed'}
 
 
 def _number(where: str, value: Any, *, allow_none: bool = False) -> float | None:
@@ -124,7 +126,22 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
     if not isinstance(axes_in, list) or not axes_in:
         raise ModelFileError(f'axes: expected a non-empty list, got {axes_in!r}')
     axes = [axis_from_dict(a, i) for i, a in enumerate(axes_in)]
-    sim = d.get('simulation') or {}
+    first: dict[str, int] = {}
+    for i, a in enumerate(axes):
+        if a.name in first:
+            raise ModelFileError(f'axes[{i}].name: {a.name!r} is used twice (also '
+                                 f'axes[{first[a.name]}]); axis names must be unique')
+        first[a.name] = i
+    sim = d.get('simulation')
+    if sim is None:
+        sim = {}
+    if not isinstance(sim, dict):
+        raise ModelFileError(f'simulation: expected a mapping with {", ".join(sorted(_SIM_KEYS))}'
+                             f', got {sim!r}')
+    unknown = set(sim) - _SIM_KEYS
+    if unknown:
+        raise ModelFileError(f'simulation: unknown key(s) {sorted(unknown)}; expected some of '
+                             f'{sorted(_SIM_KEYS)}')
     coupling = d.get('link_coupling')
     if coupling is not None:
         try:
@@ -135,11 +152,14 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
     return RobotParams(
         axes=axes, link_coupling=coupling,
         sample_rate=_number('sample_rate', d.get('sample_rate', RobotParams.sample_rate)),
-        substeps=int(_number('simulation.substeps',
-                             sim.get('substeps', RobotParams.substeps))),
-        velocity_from_encoder=bool(sim.get('velocity_from_encoder',
-                                           RobotParams.velocity_from_encoder)),
-        seed=int(_number('simulation.seed', sim.get('seed', RobotParams.seed))))
+        substeps=expect_int('simulation.substeps', sim.get('substeps', RobotParams.substeps),
+                            1, ModelFileError),
+        velocity_from_encoder=expect_bool('simulation.velocity_from_encoder',
+                                          sim.get('velocity_from_encoder',
+                                                  RobotParams.velocity_from_encoder),
+                                          ModelFileError),
+        seed=expect_int('simulation.seed', sim.get('seed', RobotParams.seed), 0,
+                        ModelFileError))
 
 
 def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
