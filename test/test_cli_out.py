@@ -201,3 +201,11 @@ def test_help_documents_overwrite(command, capsys):
         main([command, '--help'])
     assert exc.value.code == 0
     assert '--overwrite' in capsys.readouterr().out
+
+
+def test_a_joint_given_twice_is_refused(data, tmp_path, capsys):
+    """--joints q,q gave a '2x2' FRF of one joint (or a wrong 'no periods' cause)."""
+    assert main(['estimate', str(data['bag']), '--out', str(tmp_path / 'e'),
+                 '--joints', 'q,q']) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == 'frf-ident estimate: error: --joints q,q: q given twice', err

@@ -263,3 +263,16 @@ def test_row_0_of_a_1xn_and_col_0_of_an_nx1_variable(tmp_path):
     with pytest.raises(FrfIdentInputError) as exc:
         import_table(tmp_path / 'd.mat', mp)
     _one_line(exc, 'row=1', 'out of range')
+
+
+@pytest.mark.parametrize('args, match', [
+    (['identify', '--seed', '-1', '--procedures', 'multisine'], 'seed=-1 must be at least 0'),
+    (['reproduce', 'paper', '--seed', '-1'], '--seed -1: expected an integer >= 0'),
+    (['identify', '--plant', 'os:path'], "'path' is a module, not a class taking the model"),
+])
+def test_cli_values_a_user_could_type_are_refused_with_one_line(args, match, tmp_path, capsys):
+    """A negative seed and a --plant that is no class exited 1 (ValueError, TypeError)."""
+    assert main(args + ['--out', str(tmp_path / 'o')]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and match in err[0], err
+    assert not (tmp_path / 'o').exists()

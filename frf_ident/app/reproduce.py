@@ -34,6 +34,7 @@ from frf_ident.core.simulation.analytic import two_mass_frf
 from frf_ident.core.simulation.open_loop import (resonance_peak, run_open_loop_chirp,
                                                  run_open_loop_multisine)
 from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.errors import DesignError
 import numpy as np
 
 __all__ = ['CASES', 'OUTPUT_FILES', 'PAPER_AXIS', 'PAPER_REALISATIONS', 'PAPER_SEED',
@@ -139,9 +140,11 @@ def reproduce_paper(*, n_realisations: int = PAPER_REALISATIONS, seed: int = PAP
     Raises
     ------
     DesignError
-        ``n_realisations`` < 1.
+        ``n_realisations`` < 1, or ``seed`` negative.
 
     """
+    if seed < 0:
+        raise DesignError(f'--seed {seed}: expected an integer >= 0')
     say = progress or (lambda _msg: None)
     design = design_odd_multisine(1.0, 60.0, bound=150.0, resolution_hz=0.1, fs=fs)
     rng = np.random.default_rng(seed)

@@ -168,7 +168,14 @@ def load_plant(spec: str | None, model: dict[str, Any]) -> Any:
     cls = getattr(mod, cls_name, None)
     if cls is None:
         raise FrfIdentInputError(f'--plant {spec!r}: module {mod_name!r} has no {cls_name!r}')
-    plant = cls(model)
+    if not callable(cls):
+        raise FrfIdentInputError(f'--plant {spec!r}: {cls_name!r} is a {type(cls).__name__}, '
+                                 f'not a class taking the model mapping (docs/CONTRACT.md §4)')
+    try:
+        plant = cls(model)
+    except TypeError as exc:
+        raise FrfIdentInputError(f'--plant {spec!r}: {cls_name}(model) failed ({exc}); a plant '
+                                 f'takes the model mapping (docs/CONTRACT.md §4)') from exc
     for attr in ('dt', 'joint_names', 'reset', 'step'):
         if not hasattr(plant, attr):
             raise FrfIdentInputError(f'--plant {spec!r}: the plant lacks {attr!r} '

@@ -93,6 +93,7 @@ def test_bad_design_names_value(kwargs, needle):
     ({'f_low': 70.0}, 'f_low=70.0, f_high=60.0: expected 0 < f_low < f_high'),
     ({'settle_s': -1.0}, 'settle_s=-1.0 must be a finite number, at least 0'),
     ({'transient_periods': -1}, 'transient_periods=-1 must be at least 0'),
+    ({'seed': -1}, 'seed=-1 must be at least 0'),
 ])
 def test_multisine_config_refuses_non_finite_and_empty_settings(kw, match):
     """A node took resolution_hz NaN at start-up and refused it only at the service call."""

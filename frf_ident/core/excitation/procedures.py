@@ -175,8 +175,9 @@ class MultisineConfig:
         check_finite(resolution_hz=self.resolution_hz, ramp_s=self.ramp_s,
                      settle_s=self.settle_s, return_s=self.return_s, minimum=0.0,
                      positive=('resolution_hz', 'ramp_s'))
-        if self.transient_periods < 0:
-            raise DesignError(f'transient_periods={self.transient_periods} must be at least 0')
+        for name in ('transient_periods', 'seed'):
+            if getattr(self, name) < 0:
+                raise DesignError(f'{name}={getattr(self, name)} must be at least 0')
         if self.n_periods < 1:
             raise DesignError(f'n_periods={self.n_periods} must be at least 1')
         if self.n_realisations < 1:
