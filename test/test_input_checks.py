@@ -276,3 +276,18 @@ def test_cli_values_a_user_could_type_are_refused_with_one_line(args, match, tmp
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and match in err[0], err
     assert not (tmp_path / 'o').exists()
+
+
+def test_every_option_has_help_and_validate_takes_several_records():
+    """--help showed bare options; ``--validate a b`` was refused as an unknown argument."""
+    import argparse
+
+    from frf_ident.cli.main import build_parser
+    p = build_parser()
+    sub = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction))
+    bare = [f'{name} {a.option_strings[0]}' for name, sp in sub.choices.items()
+            for a in sp._actions if a.option_strings and a.help is None]
+    assert bare == [], bare
+    args = p.parse_args(['diagnose', 'D', '--model', 'm', '--out', 'o', '--validate', 'a', 'b',
+                         '--validate', 'c'])
+    assert [str(v) for v in args.validate] == ['a', 'b', 'c']

@@ -44,9 +44,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         'else is touched)')
     p.add_argument('--map', type=Path, default=None,
                    help='import map for CSV/MAT data (config/map_*.yaml), used for --validate too')
-    p.add_argument('--validate', type=Path, action='append', default=[], metavar='OTHER',
-                   help='another record of the same robot (any supported format): report '
-                        'baseline and extended metrics on it; repeatable')
+    p.add_argument('--validate', type=Path, action='extend', nargs='+', default=[],
+                   metavar='OTHER',
+                   help='other records of the same robot (any supported format): report '
+                        'baseline and extended metrics on each; several after one flag, or '
+                        'the flag repeated')
 
 
 def run(args: argparse.Namespace) -> int:

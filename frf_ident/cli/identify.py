@@ -57,9 +57,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         f'constant velocity (default {ms.position_bound_deg})')
     p.add_argument('--no-compensation', action='store_true',
                    help='skip the constant-velocity run (no periodic-disturbance compensation)')
-    p.add_argument('--chirp-duration', type=float, default=ch.duration)
-    p.add_argument('--max-iterations', type=int, default=ch.max_iterations)
-    p.add_argument('--seed', type=int, default=ms.seed)
+    p.add_argument('--chirp-duration', type=float, default=ch.duration,
+                   help=f'chirp length [s] (default {ch.duration}; paper: 20)')
+    p.add_argument('--max-iterations', type=int, default=ch.max_iterations,
+                   help=f'chirp iteration steps at most (default {ch.max_iterations})')
+    p.add_argument('--seed', type=int, default=ms.seed,
+                   help=f'random phases of the multisine realisations (default {ms.seed})')
 
 
 def identification_config(args: argparse.Namespace):

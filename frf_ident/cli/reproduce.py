@@ -44,7 +44,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         'touched)')
     p.add_argument('--realisations', type=int, default=PAPER_REALISATIONS,
                    help=f'multisine n_p (paper: {PAPER_REALISATIONS})')
-    p.add_argument('--seed', type=int, default=PAPER_SEED)
+    p.add_argument('--seed', type=int, default=PAPER_SEED,
+                   help=f'random phases of the multisine realisations (default {PAPER_SEED})')
 
 
 def run(args: argparse.Namespace) -> int:
