@@ -655,6 +655,7 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
     segs: dict[str, Segment] = {}
     started: set[str] = set()
     other: dict[str, int] = {}
+    aborted: list[str] = []
     for log, text in sorted(events, key=lambda e: e[0]):
         try:
             d = json.loads(text)
@@ -663,6 +664,12 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
             if d.get('event') == 'recording_meta':
                 d.pop('event')
                 meta.update(d)
+                continue
+            if d.get('event') == 'procedure_end':      # our own end marker (CONTRACT §3)
+                continue
+            if d.get('event') == 'aborted':
+                aborted.append(f'{d.get("procedure", "a procedure")} aborted at '
+                               f'{float(d.get("t_end", 0.0)):.3f} s: {d.get("reason", "?")}')
                 continue
             if d.get('event', 'start') not in ('start', 'end'):
                 other[str(d.get('event'))] = other.get(str(d.get('event')), 0) + 1
@@ -678,7 +685,7 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
     warnings = [f'segment {s.t_start:.3f}..{s.t_end:.3f} s has an end event but no start event'
                 for k, s in segs.items() if k not in started]
     warnings += [f'{topics.experiment}: ignored {n} event(s) {name!r} (not start/end)'
-                 for name, n in other.items()]
+                 for name, n in other.items()] + aborted
     return meta, list(segs.values()), warnings
 
 

@@ -275,3 +275,26 @@ def test_fuzz_truncation_and_corruption(chunky_bag: Path, data: st.DataObject) -
             assert '\n' not in str(exc)
     finally:
         shutil.rmtree(tmp)
+
+
+def test_our_own_end_and_abort_events_are_no_warnings() -> None:
+    """
+    procedure_end is ours: no 'ignored' warning; an abort is named with its reason.
+
+    Every bag the package wrote printed "ignored 1 event(s) 'procedure_end'".
+    """
+    import json
+    from types import SimpleNamespace
+
+    from frf_ident.bag.reader import read_descriptors
+    from frf_ident.bag.topics import BagTopics
+    ev = [(1, json.dumps({'event': 'start', 't_start': 0.0, 't_end': 1.0, 'kind': 'x'})),
+          (2, json.dumps({'event': 'end', 't_start': 0.0, 't_end': 1.0, 'kind': 'x'})),
+          (3, json.dumps({'event': 'procedure_end', 'procedure': 'multisine'})),
+          (4, json.dumps({'event': 'aborted', 'procedure': 'chirp_iteration_2',
+                          'reason': 'shutdown', 't_start': 1.0, 't_end': 1.5})),
+          (5, json.dumps({'event': 'mystery'}))]
+    _meta, segs, warnings = read_descriptors(ev, SimpleNamespace(name='b'), BagTopics())
+    assert len(segs) == 1
+    assert warnings == ["/frf/experiment: ignored 1 event(s) 'mystery' (not start/end)",
+                        'chirp_iteration_2 aborted at 1.500 s: shutdown'], warnings
