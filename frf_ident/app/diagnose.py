@@ -151,7 +151,10 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
                      f'({sum(b - a for a, b in gaps):.3f} s, first at {gaps[0][0]:.3f} s) left '
                      f'out of fit and validation')
     if abs(robot.sample_rate - rec.fs) > 1e-6 * rec.fs:
-        robot = replace(robot, sample_rate=rec.fs)
+        fs = float(f'{rec.fs:.9g}')     # 999.9999999952 from float stamps is 1000
+        progress(f'{model_path}: sample_rate {robot.sample_rate:g} Hz, the record {data} is '
+                 f'sampled at {fs:g} Hz: the diagnosis and extended_model.yaml use {fs:g} Hz')
+        robot = replace(robot, sample_rate=fs)
     if has_experiments(rec):
         progress('identification experiments found: FRF and closed-loop simulation evidence')
         res = diagnose_experiments(rec, robot, ctrl, progress=progress)

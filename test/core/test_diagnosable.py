@@ -80,3 +80,22 @@ def test_a_record_that_cannot_be_diagnosed_is_refused(emps, tmp_path, kind, matc
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and 'Traceback' not in err[0], err
     assert not (tmp_path / 'd' / 'report.json').exists()
+
+
+def test_a_model_sampled_at_another_rate_is_named_and_the_record_rate_written(emps, tmp_path):
+    """A model at 500 Hz on the 1 kHz record: a line says so; extended_model.yaml has 1000."""
+    import yaml
+
+    from frf_ident.app.diagnose import diagnose
+    from frf_ident.bag import write_recording
+    model = yaml.safe_load((CFG / 'model_emps.yaml').read_text())
+    model['sample_rate'] = 500.0
+    path = tmp_path / 'm500.yaml'
+    path.write_text(yaml.safe_dump(model))
+    bag = write_recording(_variant(emps, n=6000), tmp_path / 'bag')
+    lines = []
+    diagnose(bag, path, tmp_path / 'd', progress=lines.append)
+    said = [t for t in lines if 'sample_rate 500 Hz' in t]
+    assert len(said) == 1 and 'sampled at 1000 Hz' in said[0], lines
+    written = yaml.safe_load((tmp_path / 'd' / 'extended_model.yaml').read_text())
+    assert written['sample_rate'] == 1000.0
