@@ -97,9 +97,10 @@ def test_rclpy_node_translation(rclpy_backend):
     assert (node.calls[3][2].depth, node.calls[3][2].reliability) == (7, Policy.RELIABLE)
     assert node.calls[0][2].depth == 1000  # native profile passed through
     assert node.declare_parameter('joints', []).value == []
-    assert node.calls[-1][3] == ('descriptor', {'dynamic_typing': True})
+    # read once at start-up: read-only, so a runtime set fails instead of doing nothing
+    assert node.calls[-1][3] == ('descriptor', {'read_only': True, 'dynamic_typing': True})
     assert node.declare_parameter('rate_hz', 1.0).value == 5.0
-    assert node.calls[-1][3] is None
+    assert node.calls[-1][3] == ('descriptor', {'read_only': True, 'dynamic_typing': False})
     client = node.create_client('Trigger', '/frf/run_iteration')
     assert node.calls[-1][2]['callback_group'] is node._client_group
     assert client.service_name == '/frf/run_iteration' and not node.is_spinning()
