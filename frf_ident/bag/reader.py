@@ -650,10 +650,18 @@ def _lost_hint(recovery: dict[str, Any]) -> str:
 
 def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
                      topics: BagTopics) -> tuple[dict[str, Any], list[Segment], list[str]]:
-    """recording_meta and segments (start/end events paired) from /frf/experiment."""
+    """
+    Return recording_meta and segments (start/end events paired) from /frf/experiment.
+
+    A segment that started but never ended, in a bag whose producer writes end events (ours
+    do) or reports aborts, is left out with a warning: its run was aborted or the recording
+    stopped inside it, and the segments that ended before are analysed as they are
+    (``meta['segments_left_out']`` counts them).
+    """
     meta: dict[str, Any] = {}
     segs: dict[str, Segment] = {}
     started: set[str] = set()
+    ended: set[str] = set()
     other: dict[str, int] = {}
     aborted: list[str] = []
     for log, text in sorted(events, key=lambda e: e[0]):
@@ -680,10 +688,17 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
             raise BagError(f'{bag.name}: {topics.experiment} message at {log * 1e-9:.6f} s is '
                            f'not a segment descriptor (JSON with t_start, t_end): {exc}') from None
         segs.setdefault(key, seg)
-        if event == 'start':
-            started.add(key)
+        (started if event == 'start' else ended).add(key)
     warnings = [f'segment {s.t_start:.3f}..{s.t_end:.3f} s has an end event but no start event'
                 for k, s in segs.items() if k not in started]
+    if ended or aborted:
+        cut = [k for k in segs if k not in ended]
+        warnings += [f'segment {segs[k].t_start:.3f}..{segs[k].t_end:.3f} s '
+                     f'({segs[k].info.get("design", "?")}) never ended (its run was aborted or '
+                     f'the recording stopped): left out' for k in cut]
+        segs = {k: v for k, v in segs.items() if k not in cut}
+        if cut:
+            meta['segments_left_out'] = len(cut)
     warnings += [f'{topics.experiment}: ignored {n} event(s) {name!r} (not start/end)'
                  for name, n in other.items()] + aborted
     return meta, list(segs.values()), warnings

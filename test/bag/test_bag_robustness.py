@@ -298,3 +298,36 @@ def test_our_own_end_and_abort_events_are_no_warnings() -> None:
     assert len(segs) == 1
     assert warnings == ["/frf/experiment: ignored 1 event(s) 'mystery' (not start/end)",
                         'chirp_iteration_2 aborted at 1.500 s: shutdown'], warnings
+
+
+def test_a_segment_that_never_ended_is_left_out() -> None:
+    """An aborted run's last segment had a start only: the estimate failed on its coverage."""
+    import json
+    from types import SimpleNamespace
+
+    from frf_ident.bag.reader import read_descriptors
+    from frf_ident.bag.topics import BagTopics
+
+    def seg(event, r, t0):
+        return json.dumps({'event': event, 't_start': t0, 't_end': t0 + 1.0,
+                           'design': 'multisine', 'realisation': r})
+    done = [(1, seg('start', 0, 0.0)), (2, seg('end', 0, 0.0)), (3, seg('start', 1, 1.0))]
+    abort = [(4, json.dumps({'event': 'aborted', 'procedure': 'multisine',
+                             'reason': 'shutdown', 't_start': 0.0, 't_end': 1.4}))]
+    # ours (end events, or an abort) cut it; a producer writing start descriptors only keeps it
+    for events, kept, n_cut in ((done, [0], 1), (done[2:] + abort, [], 1), (done[2:], [1], 0)):
+        meta, segs, warnings = read_descriptors(events, SimpleNamespace(name='b'), BagTopics())
+        assert [s.info['realisation'] for s in segs] == kept, events
+        cut = [w for w in warnings if 'never ended' in w]
+        assert len(cut) == n_cut and meta.get('segments_left_out', 0) == n_cut, warnings
+
+
+def test_a_recording_whose_every_run_was_cut_short_says_so(small_rec: Recording) -> None:
+    """It fell through to excitation detection and a line about autocorrelations."""
+    from frf_ident.core.estimation.described import estimate_recording
+    from frf_ident.errors import EstimationError
+    rec = Recording(small_rec.t, small_rec.joint_names, small_rec.position, small_rec.velocity,
+                    small_rec.effort, meta={'segments_left_out': 3})
+    with pytest.raises(EstimationError, match=r'every experiment of the recording was cut '
+                                              r'short: its 3 started segment\(s\) never ended'):
+        estimate_recording(rec)

@@ -443,6 +443,13 @@ def estimate_recording(rec: Recording, *, options=None, block_s: float | None = 
     est = SegmentEstimator(rec.segments)
     est.add_window(rec)
     out = est.results()
+    left_out = rec.meta.get('segments_left_out', 0)
+    if not out and left_out and not any(
+            s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
+        raise EstimationError(f'every experiment of the recording was cut short: its '
+                              f'{left_out} started segment(s) never ended (run aborted or '
+                              f'recording stopped; the warnings name them); expected at least '
+                              f'one complete multisine realisation or chirp iteration')
     if not out:
         out = estimate_detected(rec, options, block_s=block_s)
     return out
