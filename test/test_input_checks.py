@@ -291,3 +291,15 @@ def test_every_option_has_help_and_validate_takes_several_records():
     args = p.parse_args(['diagnose', 'D', '--model', 'm', '--out', 'o', '--validate', 'a', 'b',
                          '--validate', 'c'])
     assert [str(v) for v in args.validate] == ['a', 'b', 'c']
+
+
+def test_complex_mat_variable_refused(tmp_path):
+    """Its imaginary part was dropped with a numpy ComplexWarning and exit 0."""
+    savemat(tmp_path / 'd.mat', {'t': np.arange(50) * 0.01, 'q': np.ones(50) * (1 + 2j),
+                                 'u': np.ones(50)})
+    (tmp_path / 'm.yaml').write_text(
+        'frf_ident_map: 1\ntime: {variable: t}\njoints:\n  - name: a\n'
+        '    position: {variable: q}\n    effort: {variable: u}\n')
+    with pytest.raises(FrfIdentInputError) as exc:
+        import_table(tmp_path / 'd.mat', tmp_path / 'm.yaml')
+    _one_line(exc, 'm.yaml', 'position', "variable='q'", 'is complex')

@@ -212,6 +212,10 @@ class Table:
                                          f'{self.name()} (no {part!r} in {scope}; it has '
                                          f'{", ".join(_mat_members(self.data, done)[:15])})')
             done.append(part)
+        if np.iscomplexobj(obj):
+            raise FrfIdentInputError(f'{where}: variable={ref!r} in {self.name()} is complex; '
+                                     f'expected real samples (map its real part into a '
+                                     f'variable of its own)')
         try:
             return np.asarray(obj, dtype=float)
         except (TypeError, ValueError):
