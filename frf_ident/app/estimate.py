@@ -86,12 +86,22 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
             'windows': st.windows, 'peak_rows': st.peak_rows, 'messages': st.messages,
             'budget_bytes': budget}
     from frf_ident.bag import read_recording
-    from frf_ident.core.estimation.described import estimate_recording
-    rec, timing = read_recording(bag, joints=joints, t_range=t_range, gaps='mark')
+    from frf_ident.core.estimation.described import (check_joints, estimate_recording,
+                                                     joint_channels)
+    rec, timing = read_recording(bag, t_range=t_range, gaps='mark')
     for line in timing.summary():
         progress(line)
-    return (estimate_recording(rec, options=options, block_s=window_s), timing,
-            rec.meta.get('summary', {}), None)
+    if joints is None:
+        return (estimate_recording(rec, options=options, block_s=window_s), timing,
+                rec.meta.get('summary', {}), None)
+    check_joints(joints, rec.joint_names)
+    if any(s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
+        # every joint the experiments excited takes part; the wanted channels are picked
+        est = estimate_recording(rec, options=options, block_s=window_s)
+        est = {k: joint_channels(v, joints) for k, v in est.items()}
+    else:
+        est = estimate_recording(rec.select_joints(joints), options=options, block_s=window_s)
+    return est, timing, rec.meta.get('summary', {}), None
 
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,

@@ -39,7 +39,8 @@ from typing import Any, Callable
 
 from frf_ident.bag import timing as tm
 from frf_ident.bag import windows as bs
-from frf_ident.core.estimation.described import check_recording, SegmentEstimator
+from frf_ident.core.estimation.described import (check_joints, check_recording,
+                                                 joint_channels, SegmentEstimator)
 from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, estimate_in_blocks
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.errors import EstimationError
@@ -175,6 +176,8 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     say = progress or (lambda _msg: None)
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
         raise EstimationError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
+    if joints is not None:
+        check_joints(joints)
     exp = bs.read_experiment(bag)
     segments = [s for s in exp.segments
                 if s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
@@ -189,10 +192,13 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     if segments:
         windows = _in_range(bs.segment_windows(segments), t_range)
         say(f'streaming: {len(segments)} experiment segments in {len(windows)} windows')
-        reader = bs.WindowReader(bag, windows=windows, joints=joints, experiment=exp,
-                                 progress=bar, gaps='mark')
+        # every joint the experiments excited takes part; the wanted channels are picked
+        reader = bs.WindowReader(bag, windows=windows, experiment=exp, progress=bar,
+                                 gaps='mark')
         est = SegmentEstimator(segments)
         for rec, report in reader:
+            if joints is not None:
+                check_joints(joints, rec.joint_names)
             check_recording(rec, options)
             est.add_window(rec)
             reports.append(report)
@@ -203,6 +209,8 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                                   f'in the bag, first {s.info.get("design")} at '
                                   f'{s.t_start:.3f}..{s.t_end:.3f} s')
         estimates = est.results()
+        if joints is not None:
+            estimates = {k: joint_channels(v, joints) for k, v in estimates.items()}
     else:
         say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '
             f'{block_s:g} s')

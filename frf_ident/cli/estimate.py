@@ -17,8 +17,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from frf_ident.errors import FrfIdentInputError
-
 __all__ = ['HELP', 'add_arguments', 'excitation_options', 'run']
 
 HELP = 'estimate FRFs offline from a bag'
@@ -121,9 +119,6 @@ def run(args: argparse.Namespace) -> int:
     from frf_ident.app.outdir import check_out
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
-    twice = sorted({j for j in joints or () if joints.count(j) > 1})
-    if twice:
-        raise FrfIdentInputError(f'--joints {args.joints}: {", ".join(twice)} given twice')
     estimate_bag(args.bag, out, joints=joints,
                  t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary,
                  options=excitation_options(args), stream=args.stream,

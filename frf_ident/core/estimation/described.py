@@ -36,12 +36,64 @@ from frf_ident.core.estimation.spectra import (best_linear_approximation,
                                                frf_from_spectra, periodic_spectra)
 from frf_ident.core.excitation.chirp import ChirpDesign
 from frf_ident.core.recording import Recording, Segment
-from frf_ident.errors import EstimationError
+from frf_ident.errors import EstimationError, FrfIdentInputError
 import numpy as np
 
 
 def _names(joint_names: list[str]) -> tuple[list[str], list[str]]:
     return ([f'tau_m/{j}' for j in joint_names], [f'dq_m/{j}' for j in joint_names])
+
+
+def joint_channels(frf: FrequencyResponse, joints: list[str]) -> FrequencyResponse:
+    """
+    Return the channels of ``frf`` from and to the named joints, in their order.
+
+    A MIMO multisine excites every joint at once, so it is estimated with all of them and
+    its channels are picked afterwards: an estimate from a subset of the inputs takes the
+    others' response for its own (up to 2.7 dB off on a 3-axis robot with two realisations).
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        An estimate with channel names ``'<signal>/<joint>'``.
+    joints : list of str
+        The joints wanted.
+
+    Returns
+    -------
+    FrequencyResponse
+        Its inputs and outputs of those joints.
+
+    """
+    def pick(names):
+        return [n for j in joints for n in names if n.split('/', 1)[-1] == j]
+    return frf.channels(pick(frf.outputs), pick(frf.inputs))
+
+
+def check_joints(joints: list[str], names: list[str] | None = None) -> None:
+    """
+    Refuse ``--joints`` naming a joint the bag does not have, or one twice.
+
+    Parameters
+    ----------
+    joints : list of str
+        The joints asked for.
+    names : list of str, optional
+        The bag's joints; not checked when omitted.
+
+    Raises
+    ------
+    FrfIdentInputError
+        Naming the joint and the bag's joints.
+
+    """
+    twice = sorted({j for j in joints if joints.count(j) > 1})
+    if twice:
+        raise FrfIdentInputError(f'--joints {",".join(joints)}: {", ".join(twice)} given twice')
+    missing = [j for j in joints if names is not None and j not in names]
+    if missing:
+        raise FrfIdentInputError(f'--joints: {", ".join(missing)} not in the bag (its joints: '
+                                 f'{", ".join(names)})')
 
 
 def _segment_arrays(rec: Recording, seg: Segment) -> dict[str, np.ndarray]:

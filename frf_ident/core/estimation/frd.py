@@ -174,6 +174,40 @@ class FrequencyResponse:
         i = self.inputs.index(inp) if isinstance(inp, str) else int(inp)
         return self.response[o, i]
 
+    def channels(self, outputs: list[int | str] | None = None,
+                 inputs: list[int | str] | None = None) -> 'FrequencyResponse':
+        """
+        Return the sub-system of some outputs and inputs (python-control's ``sys[outs, ins]``).
+
+        Parameters
+        ----------
+        outputs, inputs : list of int or str, optional
+            Indices or names, in the wanted order; default: all.
+
+        Returns
+        -------
+        FrequencyResponse
+            Those channels with their variances; ``meta`` copied shallowly.
+
+        Raises
+        ------
+        ValueError
+            A name is not among ``outputs`` / ``inputs``.
+
+        """
+        def idx(want, names):
+            if want is None:
+                return list(range(len(names)))
+            return [names.index(w) if isinstance(w, str) else int(w) for w in want]
+        o, i = idx(outputs, self.outputs), idx(inputs, self.inputs)
+
+        def pick(a):
+            return None if a is None else a[np.ix_(o, i)]
+        return FrequencyResponse(self.freq_hz.copy(), pick(self.response),
+                                 [self.inputs[k] for k in i], [self.outputs[k] for k in o],
+                                 pick(self.noise_variance), pick(self.total_variance),
+                                 dict(self.meta))
+
     def std_db(self, which: str = 'total') -> np.ndarray | None:
         """
         Return the 1-sigma magnitude uncertainty in dB.
