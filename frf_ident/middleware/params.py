@@ -24,7 +24,7 @@ import re
 from typing import Any, Iterator, Sequence
 
 from frf_ident.errors import FrfIdentInputError
-from frf_ident.io.yamlio import Yaml12FloatLoader
+from frf_ident.io.yamlio import read_utf8, Yaml12FloatLoader
 import yaml
 
 _PARAMS_KEY = 'ros__parameters'
@@ -71,11 +71,9 @@ def load_params_file(path: 'str | Path', node_name: 'str | None',
     With ``node_name=None`` only the all-nodes section ``/**`` applies.
     """
     path = str(path)
+    text = read_utf8(path, 'parameter file')      # missing, unreadable, not UTF-8: one line
     try:
-        with open(path, encoding='utf-8') as f:
-            tree = yaml.load(f, Loader=Yaml12FloatLoader)
-    except OSError as exc:
-        raise FrfIdentInputError(f'cannot read parameter file {path=}: {exc}') from exc
+        tree = yaml.load(text, Loader=Yaml12FloatLoader)
     except yaml.YAMLError as exc:
         raise FrfIdentInputError(f'parameter file {path=} is not valid YAML: {exc}') from exc
     if tree is None:

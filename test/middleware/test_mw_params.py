@@ -96,6 +96,12 @@ def test_bad_params_file(tmp_path):
     bad.write_text('a: [unclosed\n')
     with pytest.raises(FrfIdentInputError, match='not valid YAML'):
         load_params_file(bad, 'node')
+    # a Latin-1 degree sign in a comment: one line naming the file (a UnicodeDecodeError before)
+    bad.write_bytes(b'node:\n  ros__parameters:\n    # \xb0\n    a: 1\n')
+    with pytest.raises(FrfIdentInputError, match=r'bad\.yaml: not UTF-8 text \(byte 0xb0'):
+        load_params_file(bad, 'node')
+    with pytest.raises(FrfIdentInputError, match='parameter file not found'):
+        load_params_file(tmp_path / 'none.yaml', 'node')
 
 
 def test_node_parameter_precedence(params_file, domain_env):
