@@ -33,13 +33,15 @@ import threading
 from types import ModuleType
 from typing import Any, Optional, Sequence
 
-from frf_ident.middleware.params import load_params_file, parse_ros_args, strip_ros_args
+from frf_ident.middleware.params import (check_params_files, load_params_file, parse_ros_args,
+                                         strip_ros_args)
 from frf_ident.middleware.qos import (qos_clock, qos_default, qos_sensor_data, qos_transient_local,
                                       QosSpec)
 
 __all__ = [
-    'READY', 'QosSpec', 'backend', 'backend_name', 'create_node', 'init', 'load_params_file',
-    'msg', 'ok', 'parameter_errors', 'parse_ros_args', 'qos_clock', 'qos_default',
+    'READY', 'QosSpec', 'backend', 'backend_name', 'check_params_files', 'create_node', 'init',
+    'load_params_file', 'msg', 'ok', 'parameter_errors', 'parse_ros_args', 'qos_clock',
+    'qos_default',
     'qos_sensor_data', 'qos_transient_local', 'shutdown', 'spin', 'spin_once', 'srv',
     'strip_ros_args',
 ]

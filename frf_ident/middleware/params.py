@@ -136,6 +136,32 @@ _IGNORED_FLAGS = {'--enable-rosout-logs', '--disable-rosout-logs', '--enable-std
                   '--disable-external-lib-logs'}
 
 
+def check_params_files(argv: Sequence[str], node_name: 'str | None' = None) -> None:
+    """
+    Read every ``--params-file`` of ``argv`` (other ROS arguments are not looked at).
+
+    rcl's own parser fails on an unreadable or non-UTF-8 file with a traceback; this one
+    names the file in one line.
+
+    Parameters
+    ----------
+    argv : sequence of str
+        The command line.
+    node_name : str, optional
+        The node whose sections are read.
+
+    Raises
+    ------
+    FrfIdentInputError
+        A file is missing, not UTF-8, not YAML or not a map of node names.
+
+    """
+    args = ros_args_sections(argv)
+    for arg, value in zip(args, args[1:]):
+        if arg == '--params-file':
+            load_params_file(value, node_name)
+
+
 def parse_ros_args(argv: Sequence[str], node_name: 'str | None' = None,
                    namespace: str = '/') -> tuple[dict[str, Any], dict[str, Any]]:
     """

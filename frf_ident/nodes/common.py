@@ -76,12 +76,18 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
         0, or 2 when the node refused its parameters (one line on stderr).
 
     """
+    try:
+        # our reader first: rcl's parser fails on a bad --params-file with a traceback
+        mw.check_params_files(list(sys.argv if argv is None else argv), name)
+    except FrfIdentInputError as exc:
+        print(f'{name}: bad parameter: {exc}', file=sys.stderr, flush=True)
+        return 2
     init(argv)
     stop = StopOnSignal()
     try:
-        node = mw.create_node(name, use_sim_time=use_sim_time)
-        stop.nodes.append(node)
         try:
+            node = mw.create_node(name, use_sim_time=use_sim_time)
+            stop.nodes.append(node)
             wired = wiring(node)
         except Refused as exc:
             print(f'{name}: refused: {exc}', file=sys.stderr, flush=True)

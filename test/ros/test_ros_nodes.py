@@ -134,6 +134,9 @@ def test_every_node_on_rclpy_unique_names_and_quick_service_reply(ros_env, rcl, 
     ('controller_node', ['-p', 'use_sim_time:=false'], 'lockstep: true needs the simulated'),
     ('excitation_node', ['-p', 'lookahead:=2.5'], 'bad parameter'),
     ('plant_node', ['-p', 'clock_every:=ten'], 'bad parameter'),
+    # rcl's parser failed on these with a traceback, the bag writer with a FileExistsError
+    ('excitation_node', ['--params-file', '/nonexistent/p.yaml'], 'parameter file not found'),
+    ('estimator_node', ['-p', 'bag:=/etc/hostname/run1'], '/etc/hostname is a file'),
 ])
 def test_refused_with_one_line(ros_env, tmp_path, name, args, expect):
     p = _start(name, ros_env, '-p', f'bag:={tmp_path / "bag"}', *args, cwd=str(tmp_path))
