@@ -81,7 +81,7 @@ def test_parse_ros_args(params_file):
     (['--ros-args', '-p', 'novalue'], 'name:=value'),
     (['--ros-args', '--params-file'], 'needs a value'),
     (['--ros-args', '--bogus'], 'unknown ROS argument'),
-    (['--ros-args', '--params-file', '/nonexistent/p.yaml'], 'cannot read'),
+    (['--ros-args', '--params-file', '/nonexistent/p.yaml'], 'parameter file not found'),
 ])
 def test_bad_ros_args(argv, match):
     with pytest.raises(FrfIdentInputError, match=match):
