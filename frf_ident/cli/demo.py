@@ -17,6 +17,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from frf_ident.cli.options import add_design_arguments
+
 __all__ = ['HELP', 'add_arguments', 'run']
 
 HELP = 'the main job: node graph on the simulated robot, estimation, diagnosis'
@@ -40,16 +42,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f'nominal model for diagnosis (default config/{DEMO_MODEL})')
     p.add_argument('--robot', type=Path,
                    help=f'the simulated "real" robot (default config/{DEMO_ROBOT})')
-    p.add_argument('--realisations', type=int, default=ms.n_realisations,
-                   help=f'multisine n_p (default {ms.n_realisations})')
-    p.add_argument('--periods', type=int, default=ms.n_periods,
-                   help=f'multisine n_q (default {ms.n_periods})')
-    p.add_argument('--resolution', type=float, default=ms.resolution_hz,
-                   help=f'multisine frequency resolution [Hz] (default {ms.resolution_hz})')
-    p.add_argument('--chirp-duration', type=float, default=ch.duration,
-                   help=f'chirp length [s] (default {ch.duration})')
-    p.add_argument('--max-iterations', type=int, default=ch.max_iterations,
-                   help=f'chirp iteration steps at most (default {ch.max_iterations})')
+    add_design_arguments(p, ms, ch)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -17,6 +17,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from frf_ident.cli.options import add_output_arguments
+
 __all__ = ['HELP', 'add_arguments', 'run']
 
 HELP = ('compare data with the nominal model, name the effects it lacks, extend the model '
@@ -35,13 +37,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """
     p.add_argument('data', type=Path, help='bag (identify or robot), or CSV/MAT with --map')
     p.add_argument('--model', type=Path, required=True, help='nominal model file')
-    p.add_argument('--out', required=True,
-                   help='output directory (refused when it holds the outputs of an earlier '
-                        'run, unless --overwrite)')
-    p.add_argument('--overwrite', action='store_true',
-                   help='replace the outputs of an earlier run in --out (report.json, '
-                        'extended_model.yaml, report.html, bode.png, residual.png; nothing '
-                        'else is touched)')
+    add_output_arguments(p)
     p.add_argument('--map', type=Path, default=None,
                    help='import map for CSV/MAT data (config/map_*.yaml), used for --validate too')
     p.add_argument('--validate', type=Path, action='extend', nargs='+', default=[],

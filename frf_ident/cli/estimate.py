@@ -17,6 +17,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from frf_ident.cli.options import add_output_arguments
+
 __all__ = ['HELP', 'add_arguments', 'excitation_options', 'run']
 
 HELP = 'estimate FRFs offline from a bag'
@@ -34,12 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """
     from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
     p.add_argument('bag', type=Path)
-    p.add_argument('--out', required=True,
-                   help='output directory (refused when it holds the outputs of an earlier '
-                        'run, unless --overwrite)')
-    p.add_argument('--overwrite', action='store_true',
-                   help='replace the outputs of an earlier run in --out (frf.json, '
-                        'estimates.json, summary.json, bode.png; nothing else is touched)')
+    add_output_arguments(p)
     p.add_argument('--joints', help='comma list of joint names to analyse (default: all)')
     p.add_argument('--t-range', type=float, nargs=2, metavar=('START', 'END'),
                    help='analyse only this time range [s]')

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from frf_ident.cli.options import add_design_arguments
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 from frf_ident.errors import FrfIdentInputError
 
@@ -42,13 +43,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--out', required=True, help='bag directory to create (must not exist)')
     p.add_argument('--procedures', default='multisine,chirp',
                    help='comma list of multisine, chirp (default both)')
-    p.add_argument('--realisations', type=int, default=ms.n_realisations,
-                   help=f'multisine n_p (default {ms.n_realisations}; paper: 10)')
-    p.add_argument('--periods', type=int, default=ms.n_periods,
-                   help=f'multisine n_q (default {ms.n_periods}; paper: 5)')
-    p.add_argument('--resolution', type=float, default=ms.resolution_hz,
-                   help=f'multisine frequency resolution [Hz] (default {ms.resolution_hz}; '
-                        f'paper: 0.1 -> 12.3 s periods)')
     p.add_argument('--amplitude-ratio', type=float, default=ms.amplitude_ratio,
                    help=f'multisine amplitude / constant velocity, at most 0.75 (default '
                         f'{ms.amplitude_ratio})')
@@ -57,10 +51,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         f'constant velocity (default {ms.position_bound_deg})')
     p.add_argument('--no-compensation', action='store_true',
                    help='skip the constant-velocity run (no periodic-disturbance compensation)')
-    p.add_argument('--chirp-duration', type=float, default=ch.duration,
-                   help=f'chirp length [s] (default {ch.duration}; paper: 20)')
-    p.add_argument('--max-iterations', type=int, default=ch.max_iterations,
-                   help=f'chirp iteration steps at most (default {ch.max_iterations})')
+    add_design_arguments(p, ms, ch)
     p.add_argument('--seed', type=int, default=ms.seed,
                    help=f'random phases of the multisine realisations (default {ms.seed})')
 

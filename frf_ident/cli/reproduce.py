@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 
 from frf_ident.app.reproduce import PAPER_REALISATIONS, PAPER_SEED
+from frf_ident.cli.options import add_output_arguments
 from frf_ident.errors import FrfIdentInputError
 
 __all__ = ['HELP', 'add_arguments', 'run']
@@ -35,13 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     """
     p.add_argument('what', choices=['paper'])
-    p.add_argument('--out', required=True,
-                   help='output directory (refused when it holds the outputs of an earlier '
-                        'run, unless --overwrite)')
-    p.add_argument('--overwrite', action='store_true',
-                   help='replace the outputs of an earlier run in --out (results.json, '
-                        'figure4_coulomb.png, figure5_stiffness.png; nothing else is '
-                        'touched)')
+    add_output_arguments(p)
     p.add_argument('--realisations', type=int, default=PAPER_REALISATIONS,
                    help=f'multisine n_p (paper: {PAPER_REALISATIONS})')
     p.add_argument('--seed', type=int, default=PAPER_SEED,

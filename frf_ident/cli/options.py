@@ -1,0 +1,65 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""Options several commands share: the output directory, the experiment design."""
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+__all__ = ['add_design_arguments', 'add_output_arguments']
+
+
+def add_output_arguments(p: argparse.ArgumentParser) -> None:
+    """
+    Add ``--out DIR`` and ``--overwrite`` (estimate, diagnose, reproduce).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+
+    """
+    p.add_argument('--out', required=True,
+                   help='output directory (refused when it holds the outputs of an earlier '
+                        'run, unless --overwrite)')
+    p.add_argument('--overwrite', action='store_true',
+                   help="replace this command's outputs of an earlier run in --out (its own "
+                        'files only; nothing else is touched)')
+
+
+def add_design_arguments(p: argparse.ArgumentParser, ms: Any, ch: Any) -> None:
+    """
+    Add the multisine and chirp design options with the defaults of ``ms`` and ``ch``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser (identify, demo).
+    ms : MultisineConfig
+        Default multisine design.
+    ch : ChirpConfig
+        Default chirp design.
+
+    """
+    p.add_argument('--realisations', type=int, default=ms.n_realisations,
+                   help=f'multisine n_p (default {ms.n_realisations}; paper: 10)')
+    p.add_argument('--periods', type=int, default=ms.n_periods,
+                   help=f'multisine n_q (default {ms.n_periods}; paper: 5)')
+    p.add_argument('--resolution', type=float, default=ms.resolution_hz,
+                   help=f'multisine frequency resolution [Hz] (default {ms.resolution_hz}; '
+                        f'paper: 0.1 -> 12.3 s periods)')
+    p.add_argument('--chirp-duration', type=float, default=ch.duration,
+                   help=f'chirp length [s] (default {ch.duration}; paper: 20)')
+    p.add_argument('--max-iterations', type=int, default=ch.max_iterations,
+                   help=f'chirp iteration steps at most (default {ch.max_iterations})')
