@@ -264,3 +264,54 @@ def test_joints_pick_channels_of_the_estimate_with_every_excited_joint(ms_bag, t
     np.testing.assert_allclose(b.response, a.response[np.ix_([0, 2], [0, 2])], rtol=1e-12)
     assert main(['estimate', str(ms_bag), '--out', str(tmp_path / 'x'), '--joints',
                  'joint_1,joint_9', *mode]) == 2
+
+
+@STREAM
+def test_joints_leave_out_a_joint_the_experiment_never_drove(ms_rec, ms_bag, tmp_path, mode):
+    """
+    A fourth joint without excitation (a gripper) stays out of the estimate.
+
+    Taking every joint of /joint_states, '4 inputs from 3 experiments' was refused.
+    """
+    from frf_ident.core.estimation.frd import FrequencyResponse
+    n = ms_rec.t.size
+
+    def add(a, fill):
+        return None if a is None else np.c_[a, np.full(n, fill)]
+    rec = _copy_rec(ms_rec, joint_names=list(ms_rec.joint_names) + ['gripper'],
+                    position=add(ms_rec.position, 0.0), velocity=add(ms_rec.velocity, 0.0),
+                    effort=add(ms_rec.effort, 0.0), reference=add(ms_rec.reference, np.nan),
+                    excitation=add(ms_rec.excitation, np.nan))
+    bag = write_recording(rec, tmp_path / 'four')
+    full, sub = tmp_path / 'full', tmp_path / 'sub'
+    assert main(['estimate', str(ms_bag), '--out', str(full)]) == 0
+    assert main(['estimate', str(bag), '--out', str(sub), '--joints', 'joint_1,joint_3',
+                 *mode]) == 0
+    a, b = (FrequencyResponse.from_dict(json.loads((d / 'frf.json').read_text()))
+            for d in (full, sub))
+    np.testing.assert_allclose(b.response, a.response[np.ix_([0, 2], [0, 2])], rtol=1e-9)
+
+
+@STREAM
+def test_a_bag_whose_runs_were_all_cut_short_says_so(ms_rec, tmp_path, capsys, monkeypatch,
+                                                     mode):
+    """
+    No end events, an abort: one line, exit 2, in memory and streamed alike.
+
+    Streamed, it fell through to excitation detection ('no experiment descriptors'), or ended
+    in a StopIteration (exit 1) when a segment that did end gave no estimate.
+    """
+    import frf_ident.bag.writer as writer
+    events = writer._experiment_events
+
+    def cut(rec, stamps):
+        out = [e for e in events(rec, stamps) if json.loads(e[2]).get('event') != 'end']
+        abort = {'event': 'aborted', 'procedure': 'multisine', 'reason': 'shutdown',
+                 't_start': 0.0, 't_end': float(rec.t[-1])}
+        return out + [(out[-1][0] + 1, 3, json.dumps(abort))]
+    monkeypatch.setattr(writer, '_experiment_events', cut)
+    bag = write_recording(ms_rec, tmp_path / 'cut')
+    capsys.readouterr()
+    assert main(['estimate', str(bag), '--out', str(tmp_path / 'e'), *mode]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'every experiment of the recording was cut short' in err[0], err

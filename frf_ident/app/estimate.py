@@ -87,8 +87,17 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
             'budget_bytes': budget}
     from frf_ident.bag import read_recording
     from frf_ident.core.estimation.described import (check_joints, estimate_recording,
-                                                     joint_channels)
-    rec, timing = read_recording(bag, t_range=t_range, gaps='mark')
+                                                     experiment_joints, joint_channels)
+    from frf_ident.errors import FrfIdentInputError as InputError
+    if joints is not None:
+        check_joints(joints)
+    try:
+        rec, timing = read_recording(bag, t_range=t_range, gaps='mark')
+    except InputError:
+        if joints is None:
+            raise
+        # a joint not asked for is unreadable (inf, say): the asked ones alone, as before
+        rec, timing = read_recording(bag, joints=joints, t_range=t_range, gaps='mark')
     for line in timing.summary():
         progress(line)
     if joints is None:
@@ -97,7 +106,8 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     check_joints(joints, rec.joint_names)
     if any(s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
         # every joint the experiments excited takes part; the wanted channels are picked
-        est = estimate_recording(rec, options=options, block_s=window_s)
+        part = rec.select_joints(experiment_joints(rec, joints))
+        est = estimate_recording(part, options=options, block_s=window_s)
         est = {k: joint_channels(v, joints) for k, v in est.items()}
     else:
         est = estimate_recording(rec.select_joints(joints), options=options, block_s=window_s)

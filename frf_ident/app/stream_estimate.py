@@ -40,6 +40,7 @@ from typing import Any, Callable
 from frf_ident.bag import timing as tm
 from frf_ident.bag import windows as bs
 from frf_ident.core.estimation.described import (check_joints, check_recording,
+                                                 cut_short_error, experiment_joints,
                                                  joint_channels, SegmentEstimator)
 from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, estimate_in_blocks
 from frf_ident.core.estimation.frd import FrequencyResponse
@@ -199,6 +200,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         for rec, report in reader:
             if joints is not None:
                 check_joints(joints, rec.joint_names)
+                rec = rec.select_joints(experiment_joints(rec, joints))
             check_recording(rec, options)
             est.add_window(rec)
             reports.append(report)
@@ -209,8 +211,16 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                                   f'in the bag, first {s.info.get("design")} at '
                                   f'{s.t_start:.3f}..{s.t_end:.3f} s')
         estimates = est.results()
+        left_out = len(exp.meta.get('segments_left_out', []))
+        if not estimates:
+            raise EstimationError(f'no complete multisine realisation or chirp iteration '
+                                  f'({left_out} segment(s) never ended: run aborted or '
+                                  f'recording stopped)' if left_out else
+                                  'the experiment segments give no estimate')
         if joints is not None:
             estimates = {k: joint_channels(v, joints) for k, v in estimates.items()}
+    elif exp.meta.get('segments_left_out') and t_range is None:
+        raise cut_short_error(len(exp.meta['segments_left_out']))
     else:
         say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '
             f'{block_s:g} s')

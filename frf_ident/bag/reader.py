@@ -656,7 +656,7 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
     A segment that started but never ended, in a bag whose producer writes end events (ours
     do) or reports aborts, is left out with a warning: its run was aborted or the recording
     stopped inside it, and the segments that ended before are analysed as they are
-    (``meta['segments_left_out']`` counts them).
+    (``meta['segments_left_out']`` lists their [t_start, t_end]).
     """
     meta: dict[str, Any] = {}
     segs: dict[str, Segment] = {}
@@ -696,9 +696,9 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
         warnings += [f'segment {segs[k].t_start:.3f}..{segs[k].t_end:.3f} s '
                      f'({segs[k].info.get("design", "?")}) never ended (its run was aborted or '
                      f'the recording stopped): left out' for k in cut]
-        segs = {k: v for k, v in segs.items() if k not in cut}
+        segs_all, segs = segs, {k: v for k, v in segs.items() if k not in cut}
         if cut:
-            meta['segments_left_out'] = len(cut)
+            meta['segments_left_out'] = [[segs_all[k].t_start, segs_all[k].t_end] for k in cut]
     warnings += [f'{topics.experiment}: ignored {n} event(s) {name!r} (not start/end)'
                  for name, n in other.items()] + aborted
     return meta, list(segs.values()), warnings

@@ -319,7 +319,7 @@ def test_a_segment_that_never_ended_is_left_out() -> None:
         meta, segs, warnings = read_descriptors(events, SimpleNamespace(name='b'), BagTopics())
         assert [s.info['realisation'] for s in segs] == kept, events
         cut = [w for w in warnings if 'never ended' in w]
-        assert len(cut) == n_cut and meta.get('segments_left_out', 0) == n_cut, warnings
+        assert len(cut) == n_cut and len(meta.get('segments_left_out', [])) == n_cut, warnings
 
 
 def test_a_recording_whose_every_run_was_cut_short_says_so(small_rec: Recording) -> None:
@@ -327,7 +327,7 @@ def test_a_recording_whose_every_run_was_cut_short_says_so(small_rec: Recording)
     from frf_ident.core.estimation.described import estimate_recording
     from frf_ident.errors import EstimationError
     rec = Recording(small_rec.t, small_rec.joint_names, small_rec.position, small_rec.velocity,
-                    small_rec.effort, meta={'segments_left_out': 3})
+                    small_rec.effort, meta={'segments_left_out': [[0.0, 1.0]] * 3})
     with pytest.raises(EstimationError, match=r'every experiment of the recording was cut '
                                               r'short: its 3 started segment\(s\) never ended'):
         estimate_recording(rec)

@@ -70,6 +70,32 @@ def joint_channels(frf: FrequencyResponse, joints: list[str]) -> FrequencyRespon
     return frf.channels(pick(frf.outputs), pick(frf.inputs))
 
 
+def experiment_joints(rec: Recording, wanted: list[str]) -> list[str]:
+    """
+    Return the joints an estimate of ``wanted`` takes part with: those the experiments excite.
+
+    The joints /frf/excitation names (a finite excitation somewhere), and ``wanted``, in the
+    recording's order; a joint the experiment never drove (a gripper, a passive axis) stays
+    out. Without an excitation record, ``wanted``.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording with all joints.
+    wanted : list of str
+        The joints asked for.
+
+    Returns
+    -------
+    list of str
+
+    """
+    if rec.excitation is None:
+        return list(wanted)
+    driven = np.isfinite(rec.excitation).any(axis=0)
+    return [j for j, d in zip(rec.joint_names, driven) if d or j in wanted]
+
+
 def check_joints(joints: list[str], names: list[str] | None = None) -> None:
     """
     Refuse ``--joints`` naming a joint the bag does not have, or one twice.
@@ -495,16 +521,52 @@ def estimate_recording(rec: Recording, *, options=None, block_s: float | None = 
     est = SegmentEstimator(rec.segments)
     est.add_window(rec)
     out = est.results()
-    left_out = rec.meta.get('segments_left_out', 0)
+    left_out = cut_short(rec, rec.meta.get('segments_left_out', []))
     if not out and left_out and not any(
             s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
-        raise EstimationError(f'every experiment of the recording was cut short: its '
-                              f'{left_out} started segment(s) never ended (run aborted or '
-                              f'recording stopped; the warnings name them); expected at least '
-                              f'one complete multisine realisation or chirp iteration')
+        raise cut_short_error(left_out)
     if not out:
         out = estimate_detected(rec, options, block_s=block_s)
     return out
+
+
+def cut_short(rec: Recording, spans: list) -> int:
+    """
+    Return how many segments left out as never ended lie within the recording's time.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (or the window of it that a time range kept).
+    spans : list of [t_start, t_end]
+        The left-out segments (``meta['segments_left_out']`` of the bag reader).
+
+    Returns
+    -------
+    int
+
+    """
+    return sum(1 for a, b in spans if b >= rec.t[0] and a <= rec.t[-1]) if rec.t.size else 0
+
+
+def cut_short_error(n: int) -> EstimationError:
+    """
+    Return the error of a recording whose every experiment segment was cut short.
+
+    Parameters
+    ----------
+    n : int
+        The segments left out as never ended.
+
+    Returns
+    -------
+    EstimationError
+
+    """
+    return EstimationError(f'every experiment of the recording was cut short: its {n} started '
+                           f'segment(s) never ended (run aborted or recording stopped; the '
+                           f'warnings name them); expected at least one complete multisine '
+                           f'realisation or chirp iteration')
 
 
 def check_recording(rec: Recording, options=None) -> None:
