@@ -19,9 +19,9 @@ as ``python -m frf_ident.nodes.<node> --ros-args --params-file F`` with a loopba
 environment (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, CYCLONEDDS_URI =
 config/cyclonedds-localhost.xml), waits until every node reports ready, then drives the
 identification from a driver process (``/frf/run_multisine``, then ``/frf/run_iteration`` until
-converged or max_iterations; each service answers at once and the driver waits for the run's
-``finished`` event on /frf/progress) and stops the graph with SIGINT (the estimator drains and
-finalises the bag).
+converged or max_iterations; each service answers once the plan is checked and the driver
+waits for the run's ``finished`` event on /frf/progress) and stops the graph with SIGINT (the
+estimator drains and finalises the bag).
 
 Middleware: rclpy when ROS 2 is sourced, else the Cyclone DDS backend (``middleware=`` or
 FRF_IDENT_MIDDLEWARE choose). Domain: ``domain_id=``, else ROS_DOMAIN_ID when set (so
@@ -321,7 +321,7 @@ class _Waiter:
 
 
 def _run(client: Any, Trigger: Any, waiter: _Waiter, timeout_s: float) -> tuple[bool, dict]:
-    """Start a procedure (the service answers at once) and wait for its end."""
+    """Start a procedure (the service answers once it is planned) and wait for its end."""
     deadline = time.monotonic() + 10.0
     while True:
         rep = client.call(Trigger.Request(), 30.0)

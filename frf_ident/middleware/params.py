@@ -24,7 +24,7 @@ import re
 from typing import Any, Iterator, Sequence
 
 from frf_ident.errors import FrfIdentInputError
-from frf_ident.io.yamlio import read_utf8, Yaml12FloatLoader
+from frf_ident.io.yamlio import read_yaml_file, Yaml12FloatLoader
 import yaml
 
 _PARAMS_KEY = 'ros__parameters'
@@ -71,11 +71,8 @@ def load_params_file(path: 'str | Path', node_name: 'str | None',
     With ``node_name=None`` only the all-nodes section ``/**`` applies.
     """
     path = str(path)
-    text = read_utf8(path, 'parameter file')      # missing, unreadable, not UTF-8: one line
-    try:
-        tree = yaml.load(text, Loader=Yaml12FloatLoader)
-    except yaml.YAMLError as exc:
-        raise FrfIdentInputError(f'parameter file {path=} is not valid YAML: {exc}') from exc
+    # missing, unreadable, not UTF-8, not YAML: one line naming the file
+    tree = read_yaml_file(path, 'parameter file')
     if tree is None:
         return {}
     if not isinstance(tree, dict):

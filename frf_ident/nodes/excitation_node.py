@@ -21,7 +21,8 @@ transient-local) and progress on /frf/progress (String JSON, transient-local: ``
 ``progress`` every ``progress_period_s``, ``finished`` with the result). Subscribes
 /joint_states.
 
-Services (std_srvs/Trigger), answering at once with ``{"accepted": true, "run": id, ...}``:
+Services (std_srvs/Trigger), answering once the plan is made and checked (seconds; a start
+during a run is refused at once) with ``{"accepted": true, "run": id, ...}``:
 ``/frf/run_multisine`` starts the multisine procedure, ``/frf/run_iteration`` one step of the
 chirp iteration (its ``finished`` event carries ``iteration``, ``error_db``, ``converged``).
 

@@ -94,8 +94,9 @@ def test_bad_params_file(tmp_path):
     with pytest.raises(FrfIdentInputError, match='must be a map'):
         load_params_file(bad, 'node')
     bad.write_text('a: [unclosed\n')
-    with pytest.raises(FrfIdentInputError, match='not valid YAML'):
+    with pytest.raises(FrfIdentInputError, match='not valid YAML') as exc:
         load_params_file(bad, 'node')
+    assert '\n' not in str(exc.value)          # PyYAML's message took 7 lines
     # a Latin-1 degree sign in a comment: one line naming the file (a UnicodeDecodeError before)
     bad.write_bytes(b'node:\n  ros__parameters:\n    # \xb0\n    a: 1\n')
     with pytest.raises(FrfIdentInputError, match=r'bad\.yaml: not UTF-8 text \(byte 0xb0'):
