@@ -262,6 +262,9 @@ def test_joints_pick_channels_of_the_estimate_with_every_excited_joint(ms_bag, t
     assert b.inputs == ['tau_m/joint_1', 'tau_m/joint_3'], b.inputs
     assert b.outputs == ['dq_m/joint_1', 'dq_m/joint_3'], b.outputs
     np.testing.assert_allclose(b.response, a.response[np.ix_([0, 2], [0, 2])], rtol=1e-12)
+    lines_a, lines_b = (e.meta.get('detection_lines') for e in (a, b))
+    # per output channel: those of joints 1 and 3
+    assert lines_b['odd_db'] == [lines_a['odd_db'][i] for i in (0, 2)]
     assert main(['estimate', str(ms_bag), '--out', str(tmp_path / 'x'), '--joints',
                  'joint_1,joint_9', *mode]) == 2
 

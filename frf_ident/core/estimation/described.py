@@ -67,7 +67,15 @@ def joint_channels(frf: FrequencyResponse, joints: list[str]) -> FrequencyRespon
     """
     def pick(names):
         return [n for j in joints for n in names if n.split('/', 1)[-1] == j]
-    return frf.channels(pick(frf.outputs), pick(frf.inputs))
+    outs = pick(frf.outputs)
+    out = frf.channels(outs, pick(frf.inputs))
+    lines = frf.meta.get('detection_lines')
+    if isinstance(lines, dict):          # per output channel: the picked ones
+        idx = [frf.outputs.index(o) for o in outs]
+        out.meta['detection_lines'] = {
+            k: [v[i] for i in idx] if isinstance(v, list) and len(v) == len(frf.outputs)
+            else v for k, v in lines.items()}
+    return out
 
 
 def experiment_joints(rec: Recording, wanted: list[str]) -> list[str]:
