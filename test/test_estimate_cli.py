@@ -318,3 +318,37 @@ def test_a_bag_whose_runs_were_all_cut_short_says_so(ms_rec, tmp_path, capsys, m
     assert main(['estimate', str(bag), '--out', str(tmp_path / 'e'), *mode]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and 'every experiment of the recording was cut short' in err[0], err
+
+
+@STREAM
+def test_a_realisation_cut_short_is_left_out_and_the_rest_estimated(tmp_path, capsys,
+                                                                    monkeypatch, mode):
+    """
+    Abort in realisation 1's last experiment: realisation 0 is estimated, the cut one named.
+
+    The estimate refused the whole design ('multisine segments incomplete').
+    """
+    import frf_ident.bag.writer as writer
+    model, _, ctrl = load_model(None)
+    cfg = IdentificationConfig(MultisineConfig(n_realisations=2, n_periods=2, resolution_hz=1.0,
+                                               compensate=False), None)
+    rec = run_identification(load_plant(None, model), ctrl, cfg)
+    last = max((s for s in rec.segments if s.info.get('realisation') == 1),
+               key=lambda s: s.t_start)
+    events = writer._experiment_events
+
+    def cut(r, stamps):
+        out = [e for e in events(r, stamps)
+               if not (json.loads(e[2]).get('event') == 'end'
+                       and json.loads(e[2]).get('t_start') == last.t_start)]
+        abort = {'event': 'aborted', 'procedure': 'multisine', 'reason': 'shutdown',
+                 't_start': 0.0, 't_end': last.t_end}
+        return out + [(out[-1][0] + 1, 3, json.dumps(abort))]
+    monkeypatch.setattr(writer, '_experiment_events', cut)
+    bag = write_recording(rec, tmp_path / 'cut')
+    capsys.readouterr()
+    assert main(['estimate', str(bag), '--out', str(tmp_path / 'e'), *mode]) == 0
+    said = capsys.readouterr().out
+    assert 'realisation(s) [1] cut short' in said, said
+    frf = json.loads((tmp_path / 'e' / 'frf.json').read_text())
+    assert frf['meta']['n_p'] == 1 and frf['meta']['dropped']['incomplete'] == [1]

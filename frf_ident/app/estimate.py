@@ -225,8 +225,11 @@ def dropped_text(d: dict) -> str:
                 seen.add(k)
                 parts.append(f'realisation {k[0]} period {k[1]} at '
                              f'{it["t_start"]:.2f}..{it["t_end"]:.2f} s')
-        gone = d.get('realisations') or []
+        cut = d.get('incomplete') or []
+        gone = [p for p in d.get('realisations') or [] if p not in cut]
         tail = f'; realisation(s) {gone} left without a period' if gone else ''
+        if cut:
+            tail += f'; realisation(s) {cut} cut short (a segment never ended) left out'
     else:
         parts = [f'{a:.2f}..{b:.2f} s' for a, b in d.get('times', [])]
         tail = ''

@@ -231,13 +231,23 @@ class MultisineSpectra:
         self.spec[(seg.info['realisation'], seg.info['experiment'])] = out
 
     def _check_complete(self) -> tuple[int, int]:
+        """
+        Return n_p and n_ex; a realisation missing an experiment's segment takes no part.
+
+        Its run was cut short (the bag reader leaves out a segment that never ended), so its
+        periods count as dropped (:meth:`dropped`); refused only when no realisation is
+        complete.
+        """
         n_p = 1 + max(p for p, _ in self.spec)
         n_ex = 1 + max(m for _, m in self.spec)
         missing = [(p, m) for p in range(n_p) for m in range(n_ex) if (p, m) not in self.spec]
-        if missing:
+        if len({p for p, _ in missing}) == n_p:
             raise EstimationError(f'multisine segments incomplete: expected {n_p} realisations '
                                   f'x {n_ex} experiments, missing (p, m) = {missing[:4]}')
         return n_p, n_ex
+
+    def _complete(self, p: int, n_ex: int) -> bool:
+        return all((p, m) in self.spec for m in range(n_ex))
 
     def used_periods(self) -> dict[int, np.ndarray]:
         """
@@ -251,6 +261,8 @@ class MultisineSpectra:
         n_p, n_ex = self._check_complete()
         out = {}
         for p in range(n_p):
+            if not self._complete(p, n_ex):
+                continue
             ok = np.all([self.spec[(p, m)]['valid'] for m in range(n_ex)], axis=0)
             if np.any(ok):
                 out[p] = np.flatnonzero(ok)
@@ -261,7 +273,8 @@ class MultisineSpectra:
         Report the periods that gaps removed.
 
         What gaps removed: the count and, per dropped period, realisation, period index and
-        times [s] of the segment whose samples were missing.
+        times [s] of the segment whose samples were missing; ``incomplete`` lists the
+        realisations missing a segment (cut short), whose periods count as dropped.
         """
         n_p, n_ex = self._check_complete()
         used = self.used_periods()
@@ -271,13 +284,14 @@ class MultisineSpectra:
                 if p in used and q in used[p]:
                     continue
                 for m in range(n_ex):
-                    s = self.spec[(p, m)]
-                    if not s['valid'][q]:
+                    s = self.spec.get((p, m))
+                    if s is not None and not s['valid'][q]:
                         items.append({'realisation': p, 'experiment': m, 'period': q,
                                       't_start': float(s['t'][q]),
                                       't_end': float(s['t'][q + 1])})
         return {'periods': n_p * self.n_q - sum(v.size for v in used.values()),
-                'realisations': [p for p in range(n_p) if p not in used], 'items': items}
+                'realisations': [p for p in range(n_p) if p not in used], 'items': items,
+                'incomplete': [p for p in range(n_p) if not self._complete(p, n_ex)]}
 
     def _stack(self, key: str, compensate: bool) -> list[np.ndarray]:
         """One (n_q_p, F, n, n_ex) array per realisation that kept periods."""
