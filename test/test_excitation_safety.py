@@ -400,8 +400,8 @@ def test_a_busy_node_missing_most_joint_states_is_left_to_the_watchdog():
     """
     Irregular steps of 2-10 samples (median 7): the node, not the robot, is slow; it starts.
 
-    On the loaded test machine the free-running graph's node saw every 3rd-5th joint state;
-    the multisine's FRF stays unbiased there (test/nodes/test_free_running.py).
+    A busy node's misses are irregular; the multisine's FRF stays unbiased then
+    (test/nodes/test_free_running.py runs the free-running graph on a loaded machine).
     """
     robot, ctrl = load_model(None)[1:]
     sess = ExcitationSession(SessionSettings(multisine=SHORT), robot.joint_names, robot.dt,

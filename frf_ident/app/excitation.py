@@ -152,9 +152,9 @@ SATURATION = 0.995
 RATE_WINDOW = 16
 #: free-running: a median step of this many samples between the joint states the node sees,
 #: regular, refuses or aborts a run: the robot publishes at a fifth of the model's rate or
-#: less. (A node that misses two of three joint states on a loaded machine still measures an
-#: unbiased FRF: the reference stays the instrument, only the spectrum the robot gets
-#: changes; test/nodes/test_free_running.py.)
+#: less. (A busy node that misses joint states still measures an unbiased FRF: the reference
+#: stays the instrument, only the spectrum the robot gets changes; the free-running graph of
+#: test/nodes/test_free_running.py runs on a loaded machine.)
 SLOW_STEP = 5
 #: free-running: the share of steps within 15 % (at least one sample) of their median that
 #: makes them regular (a robot's stamps jitter by a share of its own period)
@@ -352,7 +352,9 @@ class ExcitationSession:
                             f'stale_samples={self.s.stale_samples}): it stalled while the '
                             f'robot ran on')
                 return
-            rate = self._rate_problem()
+            # judged only after a step of two or more samples: at the model's rate (every
+            # state one sample on) the per-state cost stays one comparison
+            rate = self._rate_problem() if unseen >= 1 else None
             if rate is not None:
                 self._abort(rate)
                 return
