@@ -547,10 +547,7 @@ def _signal(table: Table, spec: Any, where: str, n: int | None) -> np.ndarray:
 
 def _select(v: np.ndarray, spec: dict[str, Any], where: str, table: Table,
             n: int | None) -> np.ndarray:
-    row, col = spec.get('row'), spec.get('col')
-    for key, idx in (('row', row), ('col', col)):
-        if idx is not None:
-            expect_int(f'{where}: {key}', idx, 0)
+    row, col = spec.get('row'), spec.get('col')      # integers >= 0: check_map
     if row is not None and col is not None:
         raise FrfIdentInputError(f'{where}: give row or col, not both')
     if v.ndim == 2 and (row is not None or col is not None):
@@ -689,9 +686,11 @@ def import_table(path: PathLike, map: dict[str, Any] | PathLike) -> Recording:  
         value).
 
     """
-    mp = load_map(map) if not isinstance(map, dict) else map
-    map_name = str(map) if not isinstance(map, dict) else 'map'
-    check_map(mp, map_name)
+    if isinstance(map, dict):
+        mp, map_name = map, 'map'
+        check_map(mp, map_name)
+    else:
+        mp, map_name = load_map(map), str(map)       # load_map checks it
     table = read_table(path, mp.get('csv'))
     tspec = mp['time']
     n_rows = table.data.shape[0] if table.kind == 'csv' else None
@@ -750,8 +749,7 @@ def _import_joint(table: Table, joint: dict[str, Any], j: int, n: int, keep: np.
             continue
         where = f'{map_name}: joints[{j}] ({name}).{sig}'
         x = _signal(table, spec, where, n)[keep]
-        if isinstance(spec, dict) and expect_bool(f'{where}.derivative',
-                                                  spec.get('derivative', False)):
+        if isinstance(spec, dict) and spec.get('derivative'):    # a bool: check_map
             x = _derivative(x, dt)
             info['derived'][f'{name}.{sig}'] = 'central differences of the mapped signal'
         bad = ~np.isfinite(x)
