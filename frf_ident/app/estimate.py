@@ -104,14 +104,11 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
         return (estimate_recording(rec, options=options, block_s=window_s), timing,
                 rec.meta.get('summary', {}), None)
     check_joints(joints, rec.joint_names)
-    if any(s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
-        # every joint the experiments excited takes part; the wanted channels are picked
-        part = rec.select_joints(experiment_joints(rec, joints))
-        est = estimate_recording(part, options=options, block_s=window_s)
-        est = {k: joint_channels(v, joints) for k, v in est.items()}
-    else:
-        est = estimate_recording(rec.select_joints(joints), options=options, block_s=window_s)
-    return est, timing, rec.meta.get('summary', {}), None
+    # every joint the experiments excited takes part; the wanted channels are picked
+    part = rec.select_joints(experiment_joints(rec, joints))
+    est = estimate_recording(part, options=options, block_s=window_s)
+    return ({k: joint_channels(v, joints) for k, v in est.items()}, timing,
+            rec.meta.get('summary', {}), None)
 
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,

@@ -211,12 +211,10 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                                   f'in the bag, first {s.info.get("design")} at '
                                   f'{s.t_start:.3f}..{s.t_end:.3f} s')
         estimates = est.results()
-        left_out = len(exp.meta.get('segments_left_out', []))
         if not estimates:
-            raise EstimationError(f'no complete multisine realisation or chirp iteration '
-                                  f'({left_out} segment(s) never ended: run aborted or '
-                                  f'recording stopped)' if left_out else
-                                  'the experiment segments give no estimate')
+            left_out = len(exp.meta.get('segments_left_out', []))
+            raise (cut_short_error(left_out) if left_out else
+                   EstimationError('the experiment segments give no estimate'))
         if joints is not None:
             estimates = {k: joint_channels(v, joints) for k, v in estimates.items()}
     elif exp.meta.get('segments_left_out') and t_range is None:

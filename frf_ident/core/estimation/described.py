@@ -82,9 +82,10 @@ def experiment_joints(rec: Recording, wanted: list[str]) -> list[str]:
     """
     Return the joints an estimate of ``wanted`` takes part with: those the experiments excite.
 
-    The joints /frf/excitation names (a finite excitation somewhere), and ``wanted``, in the
-    recording's order; a joint the experiment never drove (a gripper, a passive axis) stays
-    out. Without an excitation record, ``wanted``.
+    With multisine or chirp descriptors: the joints /frf/excitation names (a finite excitation
+    somewhere), and ``wanted``, in the recording's order; a joint the experiment never drove
+    (a gripper, a passive axis) stays out. Otherwise (excitation detected per joint)
+    ``wanted``.
 
     Parameters
     ----------
@@ -98,7 +99,8 @@ def experiment_joints(rec: Recording, wanted: list[str]) -> list[str]:
     list of str
 
     """
-    if rec.excitation is None:
+    if rec.excitation is None or not any(s.info.get('design') in ('multisine', 'chirp')
+                                         for s in rec.segments):
         return list(wanted)
     driven = np.isfinite(rec.excitation).any(axis=0)
     return [j for j, d in zip(rec.joint_names, driven) if d or j in wanted]
