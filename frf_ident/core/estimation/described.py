@@ -50,7 +50,8 @@ def joint_channels(frf: FrequencyResponse, joints: list[str]) -> FrequencyRespon
 
     A MIMO multisine excites every joint at once, so it is estimated with all of them and
     its channels are picked afterwards: an estimate from a subset of the inputs takes the
-    others' response for its own (up to 2.7 dB off on a 3-axis robot with two realisations).
+    others' response for its own (median error to the analytic FRF 0.029 dB against 0.004 dB
+    picked, ``pytest -s test/test_estimate_cli.py -k pick_channels``).
 
     Parameters
     ----------
