@@ -17,6 +17,8 @@ from frf_ident.core.excitation import multisine as ms
 from frf_ident.core.excitation.detect import (ChirpDetection, detect_chirp, detect_excitation,
                                               detect_multisine, MultisineDetection)
 from frf_ident.errors import EstimationError
+from hypothesis import example, given, HealthCheck, settings
+from hypothesis import strategies as st
 import numpy as np
 import pytest
 
@@ -55,6 +57,37 @@ def test_multisine_period_lines_start(design, lead, n_periods, tail, noise):
     assert abs(det.start - lead) <= tol
     text = det.describe()
     assert 'odd multisine' in text and '3072 samples' in text and f'{n_periods} whole' in text
+
+
+# a start-up transient (a different signal) before six periods, then a gap of any length up
+# to 1.6 periods anywhere; 1 % noise
+GAP_P, GAP_PERIODS, GAP_LEAD = 3072, 6, 40
+
+
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(start=st.integers(0, GAP_PERIODS * GAP_P - 100), length=st.integers(4, 4900))
+@example(start=9528, length=3072)   # the period came out tripled, and the record refused
+@example(start=3000, length=500)    # the transient's comparison one period on lost: start 0
+def test_multisine_with_a_gap(design, start, length):
+    """
+    A gap (NaN) neither changes the period nor lets the start-up transient into the block.
+
+    The autocorrelation compares present samples only, and a sample whose partner one
+    period on is missing is compared with a later period. Before, the two examples gave a
+    tripled period (9216 samples: the record was refused) and a block from sample 0, the
+    transient in it.
+    """
+    x = _multisine(design, GAP_PERIODS, lead=GAP_LEAD, noise=0.01)
+    x[:GAP_LEAD] = np.random.default_rng(start).standard_normal(GAP_LEAD) * x.std()
+    x[GAP_LEAD + start:GAP_LEAD + start + length] = np.nan
+    det = detect_multisine(x, fs=FS)
+    assert det.period_samples == GAP_P
+    np.testing.assert_array_equal(det.harmonics, design.harmonics)
+    # the block begins after the transient (or where a gap right after it ends the
+    # comparison) and holds every whole period after it
+    assert GAP_LEAD - 3 <= det.start <= max(GAP_LEAD + 3, GAP_LEAD + start + length)
+    assert det.n_periods == (x.size - det.start) // GAP_P
 
 
 def test_paper_design_mimo_channel(design):

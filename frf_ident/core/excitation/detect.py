@@ -370,20 +370,33 @@ def _prepare(x: np.ndarray, fs: float, min_samples: int = 16
 
 # --------------------------------------------------------------------------- multisine
 
-def _lag_correlation(x: np.ndarray, max_lag: int) -> np.ndarray:
+def _lag_correlation(x: np.ndarray, max_lag: int, valid: np.ndarray | None = None
+                     ) -> np.ndarray:
     """
-    Compute a Pearson-like autocorrelation per lag.
+    Compute a Pearson-like autocorrelation per lag over the pairs of present samples.
 
-    Pearson-like autocorrelation per lag: sum x[n] x[n+k] over the overlap, normalised by
-    the energies of both overlapping parts (1 exactly for a noise-free periodic signal).
+    sum x[n] x[n+k] over the pairs (n, n+k) whose samples are both present (``valid``),
+    normalised by the energies of both members of those pairs: 1 exactly for a noise-free
+    periodic signal, whatever is missing. A bridged gap never enters: a gap longer than a
+    period made the true period lose to a multiple of it whose overlap happened to miss the
+    gap more.
     """
     n = x.size
+    v = np.ones(n) if valid is None else valid.astype(float)
+    xm = x * v
     nfft = sfft.next_fast_len(2 * n, real=True)
-    spec = sfft.rfft(x, nfft)
-    acf = sfft.irfft(spec * np.conj(spec), nfft)[:max_lag + 1]
-    cum = np.concatenate([[0.0], np.cumsum(x ** 2)])
-    k = np.arange(max_lag + 1)
-    norm = np.sqrt(cum[n - k] * (cum[n] - cum[k]))
+
+    def xcorr(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """sum_n a[n] b[n + k] for k = 0 .. max_lag."""
+        return sfft.irfft(np.conj(sfft.rfft(a, nfft)) * sfft.rfft(b, nfft), nfft)[:max_lag + 1]
+    acf = xcorr(xm, xm)
+    if valid is None or np.all(valid):
+        cum = np.concatenate([[0.0], np.cumsum(x ** 2)])
+        k = np.arange(max_lag + 1)
+        norm = np.sqrt(cum[n - k] * (cum[n] - cum[k]))
+    else:
+        e2 = xm ** 2
+        norm = np.sqrt(np.clip(xcorr(e2, v), 0.0, None) * np.clip(xcorr(v, e2), 0.0, None))
     return acf / np.maximum(norm, 1e-300)
 
 
@@ -426,6 +439,8 @@ def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
     w = max(1, p // 16)
     e2 = (x[p:] - x[:-p]) ** 2
     both = np.ones(e2.size) if valid is None else (valid[p:] & valid[:-p]).astype(float)
+    if valid is not None:
+        _compare_past_gaps(x, valid, p, e2, both)
     e2 = e2 * both
     seen = _moving_mean(both, w)
     ee = _moving_mean(e2, w) / np.maximum(seen, 1e-12)
@@ -442,6 +457,29 @@ def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
     a, b = _refine_edges(e2, a, b, w, floor=1e-12 * float(np.mean(x ** 2)))
     n_periods = min((b - a + p + w // 2) // p, (x.size - a) // p)
     return int(a), int(n_periods)
+
+
+def _compare_past_gaps(x: np.ndarray, valid: np.ndarray, p: int, e2: np.ndarray,
+                       both: np.ndarray) -> None:
+    """
+    Compare a present sample whose partner one period on is missing with a later period.
+
+    In place: where x[n] is present but x[n + P] lies in a gap, e2[n] becomes
+    (x[n + k P] - x[n])^2 of the first later period k >= 2 present there and both[n] 1. A
+    start-up transient right before a gap is then still seen (compared with nothing, it
+    had joined the periodic block and its leakage came out as excited lines).
+    """
+    idx = np.flatnonzero((both == 0) & valid[:e2.size])
+    for k in range(2, x.size // p + 1):
+        j = idx + k * p
+        idx = idx[j < x.size]
+        j = j[j < x.size]
+        if idx.size == 0:
+            return
+        hit = valid[j]
+        e2[idx[hit]] = (x[j[hit]] - x[idx[hit]]) ** 2
+        both[idx[hit]] = 1.0
+        idx = idx[~hit]
 
 
 def _refine_edges(e2: np.ndarray, a: int, b: int, w: int, *,
@@ -562,7 +600,7 @@ def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
     max_lag = n // max(2, int(min_periods))
     if max_lag < 4:
         raise EstimationError(f'signal of {n} samples too short for {min_periods=} periods')
-    r = _lag_correlation(x, max_lag)
+    r = _lag_correlation(x, max_lag, valid)
     p, corr = _period_candidate(r, min_correlation)
     if p == 0:
         best = f'{corr:.2f}' if np.isfinite(corr) else 'none'
