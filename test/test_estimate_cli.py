@@ -340,7 +340,7 @@ def test_a_realisation_cut_short_is_left_out_and_the_rest_estimated(tmp_path, ca
     """
     Abort in realisation 1's last experiment: realisation 0 is estimated, the cut one named.
 
-    The estimate refused the whole design ('multisine segments incomplete').
+    The estimate refused the whole design (then 'multisine segments incomplete').
     """
     import frf_ident.bag.writer as writer
     model, _, ctrl = load_model(None)
@@ -366,3 +366,58 @@ def test_a_realisation_cut_short_is_left_out_and_the_rest_estimated(tmp_path, ca
     assert 'realisation(s) [1] cut short' in said, said
     frf = json.loads((tmp_path / 'e' / 'frf.json').read_text())
     assert frf['meta']['n_p'] == 1 and frf['meta']['dropped']['incomplete'] == [1]
+
+
+@pytest.fixture(scope='module')
+def ms_and_chirp_rec():
+    """One multisine realisation (3 experiments) and one chirp iteration per axis."""
+    from frf_ident.core.excitation.procedures import ChirpConfig
+    model, _, ctrl = load_model(None)
+    cfg = IdentificationConfig(MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0,
+                                               compensate=False),
+                               ChirpConfig(duration=4.0, max_iterations=1))
+    return run_identification(load_plant(None, model), ctrl, cfg)
+
+
+@STREAM
+def test_a_multisine_cut_in_its_last_experiment_takes_no_chirp_with_it(
+        ms_and_chirp_rec, tmp_path, capsys, monkeypatch, mode):
+    """
+    The run aborted in the multisine's last experiment; the chirps after it completed.
+
+    The bag was refused ('n_ex=2 experiments cannot identify n_u=3 inputs': the missing third
+    experiment went unnoticed) and the chirp lost with it. The chirp estimate must equal that
+    of the same bag with nothing cut; without the chirp the refusal names the missing
+    experiment.
+    """
+    import frf_ident.bag.writer as writer
+    rec = ms_and_chirp_rec
+    last = max((s for s in rec.segments if s.info.get('design') == 'multisine'),
+               key=lambda s: s.t_start)
+    whole = write_recording(rec, tmp_path / 'whole')
+    events = writer._experiment_events
+
+    def cut(r, stamps):
+        return [e for e in events(r, stamps)
+                if not (json.loads(e[2]).get('event') == 'end'
+                        and json.loads(e[2]).get('t_start') == last.t_start)]
+    monkeypatch.setattr(writer, '_experiment_events', cut)
+    bag = write_recording(rec, tmp_path / 'cut')
+    capsys.readouterr()
+    assert main(['estimate', str(bag), '--out', str(tmp_path / 'e'), *mode]) == 0
+    said = capsys.readouterr().out
+    assert 'left out: multisine: every realisation was cut short' in said, said
+    assert main(['estimate', str(whole), '--out', str(tmp_path / 'w'), *mode]) == 0
+    cut_est, whole_est = (json.loads((d / 'estimates.json').read_text())
+                          for d in (tmp_path / 'e', tmp_path / 'w'))
+    assert sorted(cut_est) == ['chirp', 'chirp_reference']
+    assert 'multisine' in whole_est
+    for key in ('freq_hz', 're', 'im'):
+        np.testing.assert_array_equal(cut_est['chirp'][key], whole_est['chirp'][key])
+    no_chirp = Recording(rec.t, rec.joint_names, rec.position, rec.velocity, rec.effort,
+                         reference=rec.reference, excitation=rec.excitation,
+                         segments=[s for s in rec.segments if s.info.get('design') != 'chirp'],
+                         meta=dict(rec.meta))
+    only = write_recording(no_chirp, tmp_path / 'only')
+    refused(only, capsys, *mode, match=('no multisine realisation is complete',
+                                        '(realisation, experiment) = [(0, 2)]'))

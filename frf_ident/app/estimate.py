@@ -163,8 +163,11 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     if streamed is not None:
         for line in timing.summary():
             progress(line)
-    for line in next(iter(estimates.values())).meta.get('detected', []):
+    first = next(iter(estimates.values())).meta
+    for line in first.get('detected', []):
         progress(f'detected: {line}')
+    for line in first.get('left_out', []):
+        progress(f'left out: {line}')
     key = primary or ('multisine' if 'multisine' in estimates else next(iter(estimates)))
     if key not in estimates:
         raise FrfIdentInputError(f'--primary {key!r}: the bag supports {sorted(estimates)}')

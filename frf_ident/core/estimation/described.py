@@ -242,15 +242,35 @@ class MultisineSpectra:
         complete.
         """
         n_p = 1 + max(p for p, _ in self.spec)
-        n_ex = 1 + max(m for _, m in self.spec)
+        # one experiment per axis (eq. 9): a realisation cut short in its last experiment
+        # lacks one no other realisation shows
+        n_ex = max(1 + max(m for _, m in self.spec), int(self.info.get('n_axes', 0)))
         missing = [(p, m) for p in range(n_p) for m in range(n_ex) if (p, m) not in self.spec]
         if len({p for p, _ in missing}) == n_p:
-            raise EstimationError(f'multisine segments incomplete: expected {n_p} realisations '
-                                  f'x {n_ex} experiments, missing (p, m) = {missing[:4]}')
+            raise EstimationError(f'no multisine realisation is complete: expected {n_p} '
+                                  f'realisation(s) x {n_ex} experiments (one per axis), missing '
+                                  f'(realisation, experiment) = {missing[:4]} (a run cut short '
+                                  f'or a time range that leaves them out)')
         return n_p, n_ex
 
     def _complete(self, p: int, n_ex: int) -> bool:
         return all((p, m) in self.spec for m in range(n_ex))
+
+    def any_complete(self) -> bool:
+        """
+        Whether some realisation has every experiment's segment.
+
+        Returns
+        -------
+        bool
+            False when every realisation was cut short (then :meth:`frf` is refused).
+
+        """
+        try:
+            self._check_complete()
+        except EstimationError:
+            return False
+        return True
 
     def used_periods(self) -> dict[int, np.ndarray]:
         """
@@ -482,6 +502,8 @@ class SegmentEstimator:
         self.chirp = ChirpSpectra() if any(s.info.get('design') == 'chirp'
                                            for s in segments) else None
         self.done: set[int] = set()
+        #: what :meth:`results` left out, one line each (meta['left_out'] of every estimate)
+        self.left_out: list[str] = []
 
     def add_window(self, rec: Recording, *, compensate: bool = True) -> int:
         """
@@ -515,15 +537,23 @@ class SegmentEstimator:
         """Every estimate, keyed as :func:`estimate_recording` documents."""
         out: dict[str, FrequencyResponse] = {}
         ms = self.multisine
+        chirp = self.chirp is not None and bool(self.chirp.spec)
+        if ms is not None and ms.spec and chirp and not ms.any_complete():
+            # an aborted multisine takes no chirp with it
+            self.left_out = ['multisine: every realisation was cut short (a segment never '
+                             'ended), no multisine estimate; the chirp is estimated']
+            ms = None
         if ms is not None and ms.spec:
             cv = ms.cv is not None
             out['multisine'] = ms.frf(compensate=cv)[0]
             out['multisine_plain'] = ms.frf(compensate=cv, method='plain')[0]
             if cv:
                 out['multisine_uncompensated'] = ms.frf(compensate=False)[0]
-        if self.chirp is not None and self.chirp.spec:
+        if chirp:
             out['chirp'] = self.chirp.frf()
             out['chirp_reference'] = self.chirp.frf(method='reference')
+        for v in out.values():
+            v.meta['left_out'] = list(self.left_out)
         return out
 
 
