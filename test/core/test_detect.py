@@ -144,6 +144,35 @@ def test_chirp_band_within_2_percent(f_low, f_high, duration, lead, phi, noise):
         detect_multisine(x, fs=FS)
 
 
+@settings(max_examples=40, deadline=None)
+@given(start=st.floats(0.0, 19.9), length=st.floats(0.05, 3.0))
+@example(start=0.2, length=2.0)     # the onset was found after the gap: t0 4.09 s
+@example(start=0.1, length=0.3)
+def test_chirp_with_a_gap(start, length):
+    """
+    A gap (NaN) in a 2-60 Hz chirp leaves its band and interval where they are.
+
+    The on- and offset search counts two cycles of present samples, reaching across a gap;
+    before, a gap within the first cycles put the onset after it (4.09 s for the first
+    example: the band from 2.85 Hz).
+    """
+    lead, duration = 2.0, 20.0
+    a0, a1 = ch.exponential_chirp_coefficients(2.0, 60.0, lead, lead + duration)
+    t = np.arange(int((lead + duration + 1.5) * FS)) / FS
+    x = ch.exponential_chirp(t, a0, a1, lead, lead + duration, 1.0, 0.0)
+    x = x + 0.1 * np.random.default_rng(4).standard_normal(x.size)
+    g0, g1 = lead + start, min(lead + start + length, lead + duration - 0.5)
+    x[(t >= g0) & (t < g1)] = np.nan
+    det = detect_chirp(x, fs=FS)
+    assert det.a0 == pytest.approx(a0, rel=0.01)
+    # an edge inside the gap cannot be seen: then anywhere in it will do
+    assert lead - 0.05 <= det.t0 <= max(lead + 0.05, g1 + 0.05 if g0 <= lead + 0.05 else 0)
+    assert det.t1 == pytest.approx(lead + duration, abs=0.05)
+    assert det.f_high == pytest.approx(60.0, rel=0.02)
+    if det.t0 <= lead + 0.05:
+        assert det.f_low == pytest.approx(2.0, rel=0.02)
+
+
 def test_chirp_design_table1_amplitudes_mimo():
     """Return a ChirpDesign with Table 1 amplitude steps (100 / 50 below / above 40 Hz)."""
     d = ch.ChirpDesign(2.0, 60.0, 20.0, np.array([[100.0, 50.0], [150.0, 75.0]]), [40.0], t0=1.0)

@@ -805,25 +805,41 @@ def _robust_loglinear(t: np.ndarray, f: np.ndarray, iterations: int = 5
     return float(a0), float(a1), keep, float(np.std(res)) if res.size else float('inf')
 
 
-def _onset(x: np.ndarray, model: np.ndarray, lo: int, hi: int, fit: slice) -> int:
+def _onset(x: np.ndarray, model: np.ndarray, lo: int, hi: int, fit: slice,
+           valid: np.ndarray) -> int:
     """
     Index k in [lo, hi] minimising sum_{n<k} x^2 + sum_{n>=k} (x - A cos - B sin)^2.
 
     ``model`` is (2, N) cos/sin of the fitted chirp phase; A, B are least-squares fitted on
     ``fit`` (whole cycles inside the chirp). Matching the whole waveform makes the onset
-    independent of the chirp's starting phase and robust to noise.
+    independent of the chirp's starting phase and robust to noise. Missing samples
+    (``valid`` false) count in neither sum nor the fit.
     """
-    coef, *_ = np.linalg.lstsq(model[:, fit].T, x[fit], rcond=None)
+    w = valid[fit]
+    coef, *_ = np.linalg.lstsq(model[:, fit][:, w].T, x[fit][w], rcond=None)
     m = coef @ model[:, lo:hi]
-    seg = x[lo:hi]
-    off = np.concatenate([[0.0], np.cumsum(seg ** 2)])          # x^2 before k
-    on = np.concatenate([[0.0], np.cumsum((seg - m) ** 2)])     # residual from k on
+    seg, v = x[lo:hi], valid[lo:hi]
+    off = np.concatenate([[0.0], np.cumsum(seg ** 2 * v)])          # x^2 before k
+    on = np.concatenate([[0.0], np.cumsum((seg - m) ** 2 * v)])     # residual from k on
     cost = off + (on[-1] - on)
     return lo + int(np.argmin(cost))
 
 
+def _cycles_back(phase: np.ndarray, valid: np.ndarray, i: int, cycles: float) -> int:
+    """
+    Return the index ``cycles`` cycles of present samples before ``i``.
+
+    The phase advance of the missing samples is not counted, so a search window reaches
+    across a gap to as many cycles of data as without one. 0 when the data end first.
+    """
+    step = np.abs(np.diff(phase[:i + 1])) * valid[1:i + 1]
+    have = np.cumsum(step[::-1])
+    k = int(np.searchsorted(have, 2 * np.pi * cycles))
+    return max(0, i - k - 1)
+
+
 def _chirp_extent(x: np.ndarray, fs: float, a0: float, a1: float, t_first: float,
-                  t_last: float) -> tuple[int, int]:
+                  t_last: float, valid: np.ndarray) -> tuple[int, int]:
     """Start index and last index of the chirp around the fitted half cycles [t_first, t_last]."""
     n = x.size
     t = np.arange(n) / fs
@@ -833,11 +849,11 @@ def _chirp_extent(x: np.ndarray, fs: float, a0: float, a1: float, t_first: float
     p_first, p_last = int(np.ceil(fs / f_first)), int(np.ceil(fs / f_last))
     i_first = min(max(int(np.floor(t_first * fs)), 0), n - 1)
     i_last = min(max(int(np.ceil(t_last * fs)), 0), n - 1)
-    i0 = _onset(x, model, max(0, i_first - 2 * p_first), min(n, i_first + p_first),
-                slice(i_first, min(n, i_first + 2 * p_first)))
-    rev = _onset(x[::-1], model[:, ::-1], max(0, n - 1 - i_last - 2 * p_last),
-                 min(n, n - 1 - i_last + p_last),
-                 slice(n - 1 - i_last, min(n, n - 1 - i_last + 2 * p_last)))
+    i0 = _onset(x, model, _cycles_back(ph, valid, i_first, 2.0), min(n, i_first + p_first),
+                slice(i_first, min(n, i_first + 2 * p_first)), valid)
+    j = n - 1 - i_last
+    rev = _onset(x[::-1], model[:, ::-1], _cycles_back(ph[::-1], valid[::-1], j, 2.0),
+                 min(n, j + p_last), slice(j, min(n, j + 2 * p_last)), valid[::-1])
     return i0, n - rev
 
 
@@ -879,7 +895,7 @@ def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
         Band, active interval, eq. 16 coefficients and quality of the fit.
 
     """
-    x, channel, _ = _prepare(x, fs)
+    x, channel, valid = _prepare(x, fs)
     h = hysteresis * float(np.quantile(np.abs(x), 0.99))
     if h <= 0:
         raise EstimationError('no chirp: the signal is constant')
@@ -897,7 +913,7 @@ def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
             f'ln f = a0 t + a1 with {100 * scatter:.2g} % scatter over a frequency ratio '
             f'{ratio:.3g} (need {100 * min_inliers:.0f} %, < {100 * max_scatter:.2g} %, '
             f'>= {min_ratio:g})')
-    i0, i1 = _chirp_extent(x, fs, a0, a1, float(tk[0]), float(tk[-1]))
+    i0, i1 = _chirp_extent(x, fs, a0, a1, float(tk[0]), float(tk[-1]), valid)
     t0, t1 = i0 / fs, (i1 - 1) / fs
     return ChirpDetection(float(fs), float(np.exp(a0 * t0 + a1)), float(np.exp(a0 * t1 + a1)),
                           float(t0), float(t1), a0, a1, int(keep.sum()), scatter, channel)
