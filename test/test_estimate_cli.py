@@ -370,13 +370,26 @@ def test_a_realisation_cut_short_is_left_out_and_the_rest_estimated(tmp_path, ca
 
 @pytest.fixture(scope='module')
 def ms_and_chirp_rec():
-    """One multisine realisation (3 experiments) and one chirp iteration per axis."""
+    """One multisine realisation (3 experiments) and two chirp iterations (3 experiments each)."""
     from frf_ident.core.excitation.procedures import ChirpConfig
     model, _, ctrl = load_model(None)
     cfg = IdentificationConfig(MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0,
                                                compensate=False),
-                               ChirpConfig(duration=4.0, max_iterations=1))
+                               ChirpConfig(duration=4.0, max_iterations=2))
     return run_identification(load_plant(None, model), ctrl, cfg)
+
+
+def _never_ended(monkeypatch, segments):
+    """Write bags as if ``segments`` never ended (their 'end' events lost: a run aborted)."""
+    import frf_ident.bag.writer as writer
+    events = writer._experiment_events
+    starts = {s.t_start for s in segments}
+
+    def cut(r, stamps):
+        return [e for e in events(r, stamps)
+                if not (json.loads(e[2]).get('event') == 'end'
+                        and json.loads(e[2]).get('t_start') in starts)]
+    monkeypatch.setattr(writer, '_experiment_events', cut)
 
 
 @STREAM
@@ -390,18 +403,11 @@ def test_a_multisine_cut_in_its_last_experiment_takes_no_chirp_with_it(
     of the same bag with nothing cut; without the chirp the refusal names the missing
     experiment.
     """
-    import frf_ident.bag.writer as writer
     rec = ms_and_chirp_rec
     last = max((s for s in rec.segments if s.info.get('design') == 'multisine'),
                key=lambda s: s.t_start)
     whole = write_recording(rec, tmp_path / 'whole')
-    events = writer._experiment_events
-
-    def cut(r, stamps):
-        return [e for e in events(r, stamps)
-                if not (json.loads(e[2]).get('event') == 'end'
-                        and json.loads(e[2]).get('t_start') == last.t_start)]
-    monkeypatch.setattr(writer, '_experiment_events', cut)
+    _never_ended(monkeypatch, [last])
     bag = write_recording(rec, tmp_path / 'cut')
     capsys.readouterr()
     assert main(['estimate', str(bag), '--out', str(tmp_path / 'e'), *mode]) == 0
@@ -421,3 +427,51 @@ def test_a_multisine_cut_in_its_last_experiment_takes_no_chirp_with_it(
     only = write_recording(no_chirp, tmp_path / 'only')
     refused(only, capsys, *mode, match=('no multisine realisation is complete',
                                         '(realisation, experiment) = [(0, 2)]'))
+
+
+@STREAM
+def test_a_chirp_iteration_cut_short_leaves_the_last_complete_one(
+        ms_and_chirp_rec, tmp_path, capsys, monkeypatch, mode):
+    """
+    Iteration 2 aborted in its last experiment: iteration 1 is the chirp estimate.
+
+    Every iteration cut: the multisine alone, named; a chirp-only bag so cut is refused.
+    The audit's bag with chirp iteration 1 aborted after its first experiment was refused
+    with 'n_ex=1 experiments cannot identify n_u=3 inputs'.
+    """
+    from frf_ident.bag import read_recording
+    from frf_ident.core.estimation.described import chirp_frf
+    rec = ms_and_chirp_rec
+    chirps = [s for s in rec.segments if s.info.get('design') == 'chirp']
+    last_of = {it: max((s for s in chirps if s.info['iteration'] == it),
+                       key=lambda s: s.t_start) for it in (1, 2)}
+    whole = write_recording(rec, tmp_path / 'whole')
+    with monkeypatch.context() as m:
+        _never_ended(m, [last_of[2]])
+        bag = write_recording(rec, tmp_path / 'cut2')
+    capsys.readouterr()
+    assert main(['estimate', str(bag), '--out', str(tmp_path / 'e'), *mode]) == 0
+    said = capsys.readouterr().out
+    assert 'left out: chirp: iteration 2 was cut short; iteration 1 is estimated' in said, said
+    got = json.loads((tmp_path / 'e' / 'estimates.json').read_text())['chirp']
+    want = chirp_frf(read_recording(whole)[0], iteration=1)
+    assert got['meta']['iteration'] == 1
+    np.testing.assert_allclose(np.asarray(got['re']) + 1j * np.asarray(got['im']),
+                               want.response, rtol=1e-9)     # streamed: 5e-11
+    with monkeypatch.context() as m:
+        _never_ended(m, list(last_of.values()))
+        both = write_recording(rec, tmp_path / 'cut12')
+    capsys.readouterr()
+    assert main(['estimate', str(both), '--out', str(tmp_path / 'b'), *mode]) == 0
+    assert 'left out: chirp: every iteration was cut short' in capsys.readouterr().out
+    assert sorted(json.loads((tmp_path / 'b' / 'estimates.json').read_text())) == [
+        'multisine', 'multisine_plain']
+    only = Recording(rec.t, rec.joint_names, rec.position, rec.velocity, rec.effort,
+                     reference=rec.reference, excitation=rec.excitation, segments=chirps,
+                     meta=dict(rec.meta))
+    with monkeypatch.context() as m:
+        _never_ended(m, list(last_of.values()))
+        chirp_only = write_recording(only, tmp_path / 'chirp_only')
+    refused(chirp_only, capsys, *mode, match=('chirp iteration 2 is incomplete',
+                                              'experiments [0, 1] of 3',
+                                              'no chirp iteration is complete'))

@@ -40,8 +40,9 @@ from typing import Any, Callable
 from frf_ident.bag import timing as tm
 from frf_ident.bag import windows as bs
 from frf_ident.core.estimation.described import (check_joints, check_recording,
-                                                 cut_short_error, experiment_joints,
-                                                 joint_channels, SegmentEstimator)
+                                                 chirp_complete, cut_short_error,
+                                                 experiment_joints, joint_channels,
+                                                 SegmentEstimator)
 from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, estimate_in_blocks
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.errors import EstimationError
@@ -182,10 +183,17 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     exp = bs.read_experiment(bag)
     segments = [s for s in exp.segments
                 if s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
-    chirps = [s.info.get('iteration', 0) for s in segments if s.info.get('design') == 'chirp']
+    chirps: dict[int, list[Any]] = {}
+    for s in segments:
+        if s.info.get('design') == 'chirp':
+            chirps.setdefault(s.info.get('iteration', 0), []).append(s)
     if chirps:
+        # the last iteration is the estimate, or the last complete one when it was cut short
+        done = [it for it, ss in sorted(chirps.items())
+                if chirp_complete({x.info.get('experiment', 0) for x in ss}, ss[0].info)]
+        keep = {max(chirps)} | set(done[-1:])
         segments = [s for s in segments if s.info.get('design') != 'chirp'
-                    or s.info.get('iteration', 0) == max(chirps)]
+                    or s.info.get('iteration', 0) in keep]
     if t_range is not None:
         segments = [s for s in segments if s.t_end >= t_range[0] and s.t_start <= t_range[1]]
     reports: list[tm.TimingReport] = []

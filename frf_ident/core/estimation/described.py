@@ -425,6 +425,19 @@ class ChirpSpectra:
     def iterations(self) -> list[int]:
         return sorted(self.spec)
 
+    def complete(self) -> list[int]:
+        """
+        Return the iterations that hold every experiment's segment, sorted.
+
+        Returns
+        -------
+        list of int
+            Iterations with one experiment per axis (an iteration cut short lacks some).
+
+        """
+        return [it for it in self.iterations()
+                if chirp_complete(set(self.spec[it]), self.info[it])]
+
     def frf(self, *, iteration: int | None = None, method: str = 'plain',
             path: str = 'u->y') -> FrequencyResponse:
         """
@@ -435,11 +448,18 @@ class ChirpSpectra:
         """
         if not self.spec:
             raise EstimationError('recording has no chirp segments')
-        it = self.iterations()[-1] if iteration is None else iteration
+        done = self.complete()
+        it = (done or self.iterations())[-1] if iteration is None else iteration
         if it not in self.spec:
             raise EstimationError(f'{iteration=}: the recording holds chirp iterations '
                                   f'{self.iterations()}')
         exps = self.spec[it]
+        if it not in done:
+            raise EstimationError(f'chirp iteration {it} is incomplete: it holds experiments '
+                                  f'{sorted(exps)} of {chirp_experiments(exps, self.info[it])} '
+                                  f'(one per axis; a run cut short)'
+                                  + (f'; complete: {done}' if done else
+                                     '; no chirp iteration is complete'))
         Y, U, R = (np.stack([exps[m][k] for m in sorted(exps)], axis=-1)
                    for k in ('y', 'u', 'r'))
         freqs = np.asarray(self.info[it]['freq_hz'])
@@ -471,13 +491,57 @@ def chirp_iterations(rec: Recording) -> list[int]:
     return sorted({s.info['iteration'] for s in rec.segments if s.info.get('design') == 'chirp'})
 
 
+def chirp_experiments(experiments: set[int] | dict, info: dict[str, Any]) -> int:
+    """
+    Return how many experiments a chirp iteration has: one per axis.
+
+    Parameters
+    ----------
+    experiments
+        The experiment indices present.
+    info
+        A segment descriptor of the iteration (its ``n_axes``, when the recorder wrote it).
+
+    Returns
+    -------
+    int
+
+    """
+    return max(1 + max(experiments, default=-1), int(info.get('n_axes', 0)))
+
+
+def chirp_complete(experiments: set[int], info: dict[str, Any]) -> bool:
+    """
+    Whether a chirp iteration holds every experiment (:func:`chirp_experiments`).
+
+    Parameters
+    ----------
+    experiments
+        The experiment indices present.
+    info
+        A segment descriptor of the iteration.
+
+    Returns
+    -------
+    bool
+
+    """
+    return set(range(chirp_experiments(experiments, info))) <= set(experiments)
+
+
 def chirp_frf(rec: Recording, *, iteration: int | None = None, method: str = 'plain',
               path: str = 'u->y') -> FrequencyResponse:
     """Chirp estimate of one iteration (default: the last), see :meth:`ChirpSpectra.frf`."""
     its = chirp_iterations(rec)
     if not its:
         raise EstimationError('recording has no chirp segments')
-    it = its[-1] if iteration is None else iteration
+    if iteration is None:                      # the last complete one (else its refusal)
+        segs = {i: rec.segments_where(design='chirp', iteration=i) for i in its}
+        done = [i for i in its if chirp_complete({s.info['experiment'] for s in segs[i]},
+                                                 segs[i][0].info)]
+        it = (done or its)[-1]
+    else:
+        it = iteration
     acc = ChirpSpectra()
     for s in rec.segments_where(design='chirp', iteration=it):
         acc.add(rec, s)
@@ -536,22 +600,33 @@ class SegmentEstimator:
     def results(self) -> dict[str, FrequencyResponse]:
         """Every estimate, keyed as :func:`estimate_recording` documents."""
         out: dict[str, FrequencyResponse] = {}
-        ms = self.multisine
-        chirp = self.chirp is not None and bool(self.chirp.spec)
-        if ms is not None and ms.spec and chirp and not ms.any_complete():
-            # an aborted multisine takes no chirp with it
-            self.left_out = ['multisine: every realisation was cut short (a segment never '
-                             'ended), no multisine estimate; the chirp is estimated']
+        ms = self.multisine if self.multisine is not None and self.multisine.spec else None
+        ch = self.chirp if self.chirp is not None and self.chirp.spec else None
+        ms_ok = ms is not None and ms.any_complete()
+        ch_done = ch.complete() if ch is not None else []
+        notes = []
+        # an aborted procedure takes the other one with it no more; alone it is refused
+        if ms is not None and not ms_ok and ch_done:
+            notes.append('multisine: every realisation was cut short (a segment never ended), '
+                         'no multisine estimate')
             ms = None
-        if ms is not None and ms.spec:
+        if ch is not None and not ch_done and ms_ok:
+            notes.append('chirp: every iteration was cut short (a segment never ended), no '
+                         'chirp estimate')
+            ch = None
+        if ch is not None and ch_done and ch.iterations()[-1] not in ch_done:
+            notes.append(f'chirp: iteration {ch.iterations()[-1]} was cut short; iteration '
+                         f'{ch_done[-1]} is estimated')
+        self.left_out = notes
+        if ms is not None:
             cv = ms.cv is not None
             out['multisine'] = ms.frf(compensate=cv)[0]
             out['multisine_plain'] = ms.frf(compensate=cv, method='plain')[0]
             if cv:
                 out['multisine_uncompensated'] = ms.frf(compensate=False)[0]
-        if chirp:
-            out['chirp'] = self.chirp.frf()
-            out['chirp_reference'] = self.chirp.frf(method='reference')
+        if ch is not None:
+            out['chirp'] = ch.frf()
+            out['chirp_reference'] = ch.frf(method='reference')
         for v in out.values():
             v.meta['left_out'] = list(self.left_out)
         return out
