@@ -40,7 +40,7 @@ from typing import Any, Callable
 from frf_ident.bag import timing as tm
 from frf_ident.bag import windows as bs
 from frf_ident.core.estimation.described import (check_joints, check_recording,
-                                                 chirp_complete, cut_short_error,
+                                                 complete_chirp_iterations, cut_short_error,
                                                  experiment_joints, joint_channels,
                                                  SegmentEstimator)
 from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, estimate_in_blocks
@@ -183,15 +183,10 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     exp = bs.read_experiment(bag)
     segments = [s for s in exp.segments
                 if s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
-    chirps: dict[int, list[Any]] = {}
-    for s in segments:
-        if s.info.get('design') == 'chirp':
-            chirps.setdefault(s.info.get('iteration', 0), []).append(s)
+    chirps = [s.info.get('iteration', 0) for s in segments if s.info.get('design') == 'chirp']
     if chirps:
         # the last iteration is the estimate, or the last complete one when it was cut short
-        done = [it for it, ss in sorted(chirps.items())
-                if chirp_complete({x.info.get('experiment', 0) for x in ss}, ss[0].info)]
-        keep = {max(chirps)} | set(done[-1:])
+        keep = {max(chirps)} | set(complete_chirp_iterations(segments)[-1:])
         segments = [s for s in segments if s.info.get('design') != 'chirp'
                     or s.info.get('iteration', 0) in keep]
     if t_range is not None:

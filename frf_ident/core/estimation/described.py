@@ -242,9 +242,8 @@ class MultisineSpectra:
         complete.
         """
         n_p = 1 + max(p for p, _ in self.spec)
-        # one experiment per axis (eq. 9): a realisation cut short in its last experiment
-        # lacks one no other realisation shows
-        n_ex = max(1 + max(m for _, m in self.spec), int(self.info.get('n_axes', 0)))
+        # a realisation cut short in its last experiment lacks one no other realisation shows
+        n_ex = expected_experiments({m for _, m in self.spec}, self.info)
         missing = [(p, m) for p in range(n_p) for m in range(n_ex) if (p, m) not in self.spec]
         if len({p for p, _ in missing}) == n_p:
             raise EstimationError(f'no multisine realisation is complete: expected {n_p} '
@@ -456,7 +455,7 @@ class ChirpSpectra:
         exps = self.spec[it]
         if it not in done:
             raise EstimationError(f'chirp iteration {it} is incomplete: it holds experiments '
-                                  f'{sorted(exps)} of {chirp_experiments(exps, self.info[it])} '
+                                  f'{sorted(exps)} of {expected_experiments(exps, self.info[it])} '
                                   f'(one per axis; a run cut short)'
                                   + (f'; complete: {done}' if done else
                                      '; no chirp iteration is complete'))
@@ -491,16 +490,19 @@ def chirp_iterations(rec: Recording) -> list[int]:
     return sorted({s.info['iteration'] for s in rec.segments if s.info.get('design') == 'chirp'})
 
 
-def chirp_experiments(experiments: set[int] | dict, info: dict[str, Any]) -> int:
+def expected_experiments(experiments: set[int] | dict, info: dict[str, Any]) -> int:
     """
-    Return how many experiments a chirp iteration has: one per axis.
+    Return how many experiments a multisine realisation or chirp iteration has.
+
+    One per axis (eq. 9): the descriptor's ``n_axes`` when the recorder wrote it, else as
+    many as the highest experiment index present says.
 
     Parameters
     ----------
     experiments
         The experiment indices present.
     info
-        A segment descriptor of the iteration (its ``n_axes``, when the recorder wrote it).
+        A segment descriptor of the design.
 
     Returns
     -------
@@ -512,7 +514,7 @@ def chirp_experiments(experiments: set[int] | dict, info: dict[str, Any]) -> int
 
 def chirp_complete(experiments: set[int], info: dict[str, Any]) -> bool:
     """
-    Whether a chirp iteration holds every experiment (:func:`chirp_experiments`).
+    Whether a chirp iteration holds every experiment (:func:`expected_experiments`).
 
     Parameters
     ----------
@@ -526,7 +528,30 @@ def chirp_complete(experiments: set[int], info: dict[str, Any]) -> bool:
     bool
 
     """
-    return set(range(chirp_experiments(experiments, info))) <= set(experiments)
+    return set(range(expected_experiments(experiments, info))) <= set(experiments)
+
+
+def complete_chirp_iterations(segments: list[Segment]) -> list[int]:
+    """
+    Return the chirp iterations whose every experiment's segment is among ``segments``.
+
+    Parameters
+    ----------
+    segments
+        Experiment segments (those of other designs are ignored).
+
+    Returns
+    -------
+    list of int
+        Sorted iteration numbers.
+
+    """
+    by_it: dict[int, list[Segment]] = {}
+    for s in segments:
+        if s.info.get('design') == 'chirp':
+            by_it.setdefault(int(s.info.get('iteration', 0)), []).append(s)
+    return [it for it, ss in sorted(by_it.items())
+            if chirp_complete({int(x.info.get('experiment', 0)) for x in ss}, ss[0].info)]
 
 
 def chirp_frf(rec: Recording, *, iteration: int | None = None, method: str = 'plain',
@@ -535,13 +560,9 @@ def chirp_frf(rec: Recording, *, iteration: int | None = None, method: str = 'pl
     its = chirp_iterations(rec)
     if not its:
         raise EstimationError('recording has no chirp segments')
-    if iteration is None:                      # the last complete one (else its refusal)
-        segs = {i: rec.segments_where(design='chirp', iteration=i) for i in its}
-        done = [i for i in its if chirp_complete({s.info['experiment'] for s in segs[i]},
-                                                 segs[i][0].info)]
-        it = (done or its)[-1]
-    else:
-        it = iteration
+    # the last complete iteration (else the last one, refused naming what it lacks)
+    it = (complete_chirp_iterations(rec.segments) or its)[-1] if iteration is None \
+        else iteration
     acc = ChirpSpectra()
     for s in rec.segments_where(design='chirp', iteration=it):
         acc.add(rec, s)
@@ -607,12 +628,12 @@ class SegmentEstimator:
         notes = []
         # an aborted procedure takes the other one with it no more; alone it is refused
         if ms is not None and not ms_ok and ch_done:
-            notes.append('multisine: every realisation was cut short (a segment never ended), '
-                         'no multisine estimate')
+            notes.append('multisine: no realisation is complete (a run cut short, or a time '
+                         'range leaving experiments out), no multisine estimate')
             ms = None
         if ch is not None and not ch_done and ms_ok:
-            notes.append('chirp: every iteration was cut short (a segment never ended), no '
-                         'chirp estimate')
+            notes.append('chirp: no iteration is complete (a run cut short, or a time range '
+                         'leaving experiments out), no chirp estimate')
             ch = None
         if ch is not None and ch_done and ch.iterations()[-1] not in ch_done:
             notes.append(f'chirp: iteration {ch.iterations()[-1]} was cut short; iteration '
