@@ -11,7 +11,9 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Excitation detection against analytic truth: designed multisines and chirps."""
+"""Excitation detection against analytic truth (designed multisines, chirps) and real data."""
+from pathlib import Path
+
 from frf_ident.core.excitation import chirp as ch
 from frf_ident.core.excitation import multisine as ms
 from frf_ident.core.excitation.detect import (ChirpDetection, detect_chirp, detect_excitation,
@@ -201,3 +203,24 @@ def test_neither_raises_one_line():
 def test_bad_input(x, fs, needle):
     with pytest.raises(EstimationError, match=needle):
         detect_excitation(x, fs)
+
+
+DAISY = Path(__file__).resolve().parents[2].parent / 'shared' / 'data' / 'DaISy_robot_arm' \
+    / 'robot_arm.dat'
+
+
+@pytest.mark.skipif(not DAISY.is_file(), reason='shared DaISy data absent')
+def test_a_real_sweep_recorded_over_one_period_is_refused_not_guessed():
+    """
+    The DaISy flexible robot arm (real data, read in place): a sine sweep of one period.
+
+    Its 1024 samples hold less than two periods of anything, and its sweep is not
+    exponential: detection must refuse with both reasons in one line rather than invent a
+    period or a band (its sample time is unknown: fs = 1).
+    """
+    u = np.loadtxt(DAISY)[:, 0]
+    with pytest.raises(EstimationError) as err:
+        detect_excitation(u, 1.0)
+    msg = str(err.value)
+    assert '\n' not in msg
+    assert 'only 1 whole periods repeat' in msg and 'no exponential chirp' in msg, msg
