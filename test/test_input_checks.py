@@ -49,6 +49,17 @@ def _files(tmp_path, map_text: str, csv_text: str = CSV) -> tuple[Path, Path]:
     return tmp_path / 'd.csv', tmp_path / 'm.yaml'
 
 
+def _mat_refused(tmp_path, variables: dict, map_spec, *needles: str) -> str:
+    """Import a MAT file of ``variables`` with ``map_spec`` (text or dict): one-line refusal."""
+    savemat(tmp_path / 'd.mat', variables)
+    if isinstance(map_spec, str):
+        (tmp_path / 'm.yaml').write_text(map_spec, encoding='utf-8')
+        map_spec = tmp_path / 'm.yaml'
+    with pytest.raises(FrfIdentInputError) as exc:
+        import_table(tmp_path / 'd.mat', map_spec)
+    return _one_line(exc, *needles)
+
+
 def _model(tmp_path, old: str, new: str) -> Path:
     text = MODEL.read_text(encoding='utf-8')
     assert old in text
@@ -119,23 +130,18 @@ def test_model_quoted_velocity_from_encoder_refused(tmp_path):
 # ------------------------------------------------------------------ 3: negative row/col
 
 def test_map_negative_row_refused(tmp_path):
-    savemat(tmp_path / 'd.mat', {'t': np.arange(50) * 0.01, 'm': np.ones((6, 50))})
-    (tmp_path / 'm.yaml').write_text(
-        'frf_ident_map: 1\ntime: {variable: t}\njoints:\n  - name: a\n'
-        '    position: {variable: m, row: 0}\n    effort: {variable: m, row: -6}\n')
-    with pytest.raises(FrfIdentInputError) as exc:
-        import_table(tmp_path / 'd.mat', tmp_path / 'm.yaml')
-    _one_line(exc, 'm.yaml', 'effort.row', '-6', '>= 0')
+    _mat_refused(tmp_path, {'t': np.arange(50) * 0.01, 'm': np.ones((6, 50))},
+                 'frf_ident_map: 1\ntime: {variable: t}\njoints:\n  - name: a\n'
+                 '    position: {variable: m, row: 0}\n    effort: {variable: m, row: -6}\n',
+                 'm.yaml', 'effort.row', '-6', '>= 0')
 
 
 def test_map_negative_col_refused_in_dict_map(tmp_path):
-    savemat(tmp_path / 'd.mat', {'t': np.arange(50) * 0.01, 'm': np.ones((50, 3))})
     mp = {'frf_ident_map': 1, 'time': {'variable': 't'},
           'joints': [{'name': 'a', 'position': {'variable': 'm', 'col': 0},
                       'effort': {'variable': 'm', 'col': -1}}]}
-    with pytest.raises(FrfIdentInputError) as exc:
-        import_table(tmp_path / 'd.mat', mp)
-    _one_line(exc, 'effort.col', '-1')
+    _mat_refused(tmp_path, {'t': np.arange(50) * 0.01, 'm': np.ones((50, 3))}, mp,
+                 'effort.col', '-1')
 
 
 # ------------------------------------------------------------------ 4: duplicate axes
@@ -210,14 +216,11 @@ def test_non_increasing_time_plain_numbers_and_field(tmp_path):
 
 
 def test_nan_scale_variable_says_not_finite(tmp_path):
-    savemat(tmp_path / 'd.mat', {'t': np.arange(50) * 0.01, 'x': np.ones(50),
-                                 'gain': np.nan})
     mp = {'frf_ident_map': 1, 'time': {'variable': 't'},
           'joints': [{'name': 'a', 'position': 'x',
                       'effort': {'variable': 'x', 'scale': 'gain'}}]}
-    with pytest.raises(FrfIdentInputError) as exc:
-        import_table(tmp_path / 'd.mat', mp)
-    msg = _one_line(exc, "'gain'", 'not finite', 'nan')
+    msg = _mat_refused(tmp_path, {'t': np.arange(50) * 0.01, 'x': np.ones(50), 'gain': np.nan},
+                       mp, "'gain'", 'not finite', 'nan')
     assert 'shape' not in msg
 
 
@@ -237,13 +240,11 @@ def test_csv_with_utf8_bom_reads(tmp_path):
 
 
 def test_path_into_non_struct_says_not_a_struct(tmp_path):
-    savemat(tmp_path / 'd.mat', {'rec': {'t': np.arange(50) * 0.01, 'm': np.ones((2, 50))}})
     mp = {'frf_ident_map': 1, 'time': {'variable': 'rec.t'},
           'joints': [{'name': 'a', 'position': {'variable': 'rec.m', 'row': 0},
                       'effort': {'variable': 'rec.m.foo', 'row': 0}}]}
-    with pytest.raises(FrfIdentInputError) as exc:
-        import_table(tmp_path / 'd.mat', mp)
-    msg = _one_line(exc, "'rec.m.foo'", 'rec.m is not a struct', "'foo'")
+    msg = _mat_refused(tmp_path, {'rec': {'t': np.arange(50) * 0.01, 'm': np.ones((2, 50))}},
+                       mp, "'rec.m.foo'", 'rec.m is not a struct', "'foo'")
     assert 'it has )' not in msg
 
 
@@ -295,11 +296,8 @@ def test_every_option_has_help_and_validate_takes_several_records():
 
 def test_complex_mat_variable_refused(tmp_path):
     """Its imaginary part was dropped with a numpy ComplexWarning and exit 0."""
-    savemat(tmp_path / 'd.mat', {'t': np.arange(50) * 0.01, 'q': np.ones(50) * (1 + 2j),
-                                 'u': np.ones(50)})
-    (tmp_path / 'm.yaml').write_text(
-        'frf_ident_map: 1\ntime: {variable: t}\njoints:\n  - name: a\n'
-        '    position: {variable: q}\n    effort: {variable: u}\n')
-    with pytest.raises(FrfIdentInputError) as exc:
-        import_table(tmp_path / 'd.mat', tmp_path / 'm.yaml')
-    _one_line(exc, 'm.yaml', 'position', "variable='q'", 'is complex')
+    _mat_refused(tmp_path, {'t': np.arange(50) * 0.01, 'q': np.ones(50) * (1 + 2j),
+                            'u': np.ones(50)},
+                 'frf_ident_map: 1\ntime: {variable: t}\njoints:\n  - name: a\n'
+                 '    position: {variable: q}\n    effort: {variable: u}\n',
+                 'm.yaml', 'position', "variable='q'", 'is complex')
