@@ -20,6 +20,10 @@ then it measures :func:`benchmarks.pingpong.pingpong` of the same backend (one
 Float64MultiArray ping + one JointState pong between two processes). Goals: >= 1,000 samples/s
 under rclpy, the DDS graph >= 50 % of its ping-pong.
 
+``free_running_gaps()`` runs the graph free-running on wall time, as on a robot, and reads the
+longest gap between the joint states the excitation node saw in each run: what the default
+``stale_samples`` (the watchdog's limit) must leave room for on this machine.
+
 Run: ``python -m benchmarks.graph``.
 """
 from __future__ import annotations
@@ -32,12 +36,14 @@ from typing import Any, Optional
 from frf_ident.app.graph import Graph
 
 
-def _graph_rate(out: Path, nodes: tuple[str, ...], model: Optional[str],
-                middleware: Optional[str] = None) -> dict[str, Any]:
+def _graph_rate(out: Path, nodes: Optional[tuple[str, ...]], model: Optional[str],
+                middleware: Optional[str] = None, lockstep: bool = True) -> dict[str, Any]:
     from frf_ident.core.excitation.procedures import MultisineConfig
     ms = MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0, compensate=False)
+    # the watchdog out of the way: the run is measured, not judged
+    params = {'excitation_node': {'stale_s': 2.0} if lockstep else {'stale_samples': 10 ** 6}}
     g = Graph(out, model=model, multisine=ms, nodes=nodes, middleware=middleware,
-              params={'excitation_node': {'stale_s': 2.0}})
+              lockstep=lockstep, params=params)
     g.start()
     try:
         res = g.drive(multisine=True, iterations=0)
@@ -78,6 +84,30 @@ def bench_backends(model: Optional[str] = None, n_pingpong: int = 3000) -> list[
     return rows
 
 
+def free_running_gaps(runs: int = 3, middleware: Optional[str] = None) -> list[float]:
+    """
+    Return the longest joint-state gap [ms] the excitation node saw in each free-running run.
+
+    Parameters
+    ----------
+    runs : int, optional
+        How many multisine runs of the free-running graph (about 20 s each).
+    middleware : str, optional
+        The backend; default: the one the graph picks.
+
+    Returns
+    -------
+    list of float
+
+    """
+    gaps = []
+    for k in range(runs):
+        with tempfile.TemporaryDirectory(prefix='frf_bench_') as tmp:
+            gaps.append(_graph_rate(Path(tmp) / f'free{k}', None, None, middleware,
+                                    lockstep=False)['max_gap_ms'])
+    return gaps
+
+
 def rows() -> list[tuple[str, str, str, str]]:
     """Return the ``make bench`` rows: per backend, graph samples/s beside its ping-pong."""
     out = []
@@ -90,6 +120,12 @@ def rows() -> list[tuple[str, str, str, str]]:
             rate = r[f'graph{key}_steps_per_s']
             out.append((f'{be} {label}', f'{rate:,.0f} samples/s', base,
                         f'{100 * rate / pp:.0f} %'))
+    from frf_ident.app.excitation import SessionSettings
+    limit = SessionSettings().stale_samples          # samples at the graph's 1 kHz: ms
+    gaps = free_running_gaps()
+    out.append(('free-running: longest joint-state gap per run', ' / '.join(
+        f'{g:.1f}' for g in gaps) + ' ms', f'stale_samples default {limit} ms',
+        f'{max(gaps) / limit:.2f} of the limit'))
     return out
 
 

@@ -202,8 +202,8 @@ class SessionSettings:
     lookahead: int = 20            # lockstep: references published ahead [samples]
     stale_s: float = 0.5           # watchdog, lockstep: wall s without /joint_states
     # watchdog, free-running, in samples: 50 ms at 1 kHz. A Python node on a Linux PC
-    # without a real-time kernel saw joint-state gaps of up to 16 ms in 22 s runs
-    # (README, 'stale_samples'); 10 aborted runs that were fine
+    # without a real-time kernel saw joint-state gaps of 3.6-23 ms in 12 of 13 runs, 69 ms in
+    # one (`make bench`, section nodes; README, 'stale_samples'): 10 aborted good runs
     stale_samples: int = 50
     start_grace_s: float = 0.2     # the first answer of a run may take this long
     abort_ramp_s: float = 0.01     # ramp to zero reference within this wall time
