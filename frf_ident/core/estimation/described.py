@@ -233,24 +233,11 @@ class MultisineSpectra:
                     np.nan_to_num(x[steady]).reshape(shape), int(self.bins[-1]), axis=1)
         self.spec[(seg.info['realisation'], seg.info['experiment'])] = out
 
-    def _check_complete(self) -> tuple[int, int]:
-        """
-        Return n_p and n_ex; a realisation missing an experiment's segment takes no part.
-
-        Its run was cut short (the bag reader leaves out a segment that never ended), so its
-        periods count as dropped (:meth:`dropped`); refused only when no realisation is
-        complete.
-        """
+    def _shape(self) -> tuple[int, int]:
+        """n_p realisations and n_ex experiments the design has (one per axis, eq. 9)."""
         n_p = 1 + max(p for p, _ in self.spec)
         # a realisation cut short in its last experiment lacks one no other realisation shows
-        n_ex = expected_experiments({m for _, m in self.spec}, self.info)
-        missing = [(p, m) for p in range(n_p) for m in range(n_ex) if (p, m) not in self.spec]
-        if len({p for p, _ in missing}) == n_p:
-            raise EstimationError(f'no multisine realisation is complete: expected {n_p} '
-                                  f'realisation(s) x {n_ex} experiments (one per axis), missing '
-                                  f'(realisation, experiment) = {missing[:4]} (a run cut short '
-                                  f'or a time range that leaves them out)')
-        return n_p, n_ex
+        return n_p, expected_experiments({m for _, m in self.spec}, self.info)
 
     def _complete(self, p: int, n_ex: int) -> bool:
         return all((p, m) in self.spec for m in range(n_ex))
@@ -265,11 +252,26 @@ class MultisineSpectra:
             False when every realisation was cut short (then :meth:`frf` is refused).
 
         """
-        try:
-            self._check_complete()
-        except EstimationError:
-            return False
-        return True
+        n_p, n_ex = self._shape()
+        return any(self._complete(p, n_ex) for p in range(n_p))
+
+    def _check_complete(self) -> tuple[int, int]:
+        """
+        Return n_p and n_ex; a realisation missing an experiment's segment takes no part.
+
+        Its run was cut short (the bag reader leaves out a segment that never ended), so its
+        periods count as dropped (:meth:`dropped`); refused only when no realisation is
+        complete.
+        """
+        n_p, n_ex = self._shape()
+        if not self.any_complete():
+            missing = [(p, m) for p in range(n_p) for m in range(n_ex)
+                       if (p, m) not in self.spec]
+            raise EstimationError(f'no multisine realisation is complete: expected {n_p} '
+                                  f'realisation(s) x {n_ex} experiments (one per axis), missing '
+                                  f'(realisation, experiment) = {missing[:4]} (a run cut short '
+                                  f'or a time range that leaves them out)')
+        return n_p, n_ex
 
     def used_periods(self) -> dict[int, np.ndarray]:
         """
@@ -587,8 +589,6 @@ class SegmentEstimator:
         self.chirp = ChirpSpectra() if any(s.info.get('design') == 'chirp'
                                            for s in segments) else None
         self.done: set[int] = set()
-        #: what :meth:`results` left out, one line each (meta['left_out'] of every estimate)
-        self.left_out: list[str] = []
 
     def add_window(self, rec: Recording, *, compensate: bool = True) -> int:
         """
@@ -625,7 +625,7 @@ class SegmentEstimator:
         ch = self.chirp if self.chirp is not None and self.chirp.spec else None
         ms_ok = ms is not None and ms.any_complete()
         ch_done = ch.complete() if ch is not None else []
-        notes = []
+        notes = []                     # meta['left_out'] of every estimate, one line each
         # an aborted procedure takes the other one with it no more; alone it is refused
         if ms is not None and not ms_ok and ch_done:
             notes.append('multisine: no realisation is complete (a run cut short, or a time '
@@ -638,7 +638,6 @@ class SegmentEstimator:
         if ch is not None and ch_done and ch.iterations()[-1] not in ch_done:
             notes.append(f'chirp: iteration {ch.iterations()[-1]} was cut short; iteration '
                          f'{ch_done[-1]} is estimated')
-        self.left_out = notes
         if ms is not None:
             cv = ms.cv is not None
             out['multisine'] = ms.frf(compensate=cv)[0]
@@ -649,7 +648,7 @@ class SegmentEstimator:
             out['chirp'] = ch.frf()
             out['chirp_reference'] = ch.frf(method='reference')
         for v in out.values():
-            v.meta['left_out'] = list(self.left_out)
+            v.meta['left_out'] = list(notes)
         return out
 
 
