@@ -382,20 +382,20 @@ def _lag_correlation(x: np.ndarray, max_lag: int, valid: np.ndarray | None = Non
     gap more.
     """
     n = x.size
-    v = np.ones(n) if valid is None else valid.astype(float)
-    xm = x * v
+    whole = valid is None or bool(np.all(valid))
+    xm = x if whole else x * valid
     nfft = sfft.next_fast_len(2 * n, real=True)
 
     def xcorr(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """sum_n a[n] b[n + k] for k = 0 .. max_lag."""
         return sfft.irfft(np.conj(sfft.rfft(a, nfft)) * sfft.rfft(b, nfft), nfft)[:max_lag + 1]
     acf = xcorr(xm, xm)
-    if valid is None or np.all(valid):
+    if whole:
         cum = np.concatenate([[0.0], np.cumsum(x ** 2)])
         k = np.arange(max_lag + 1)
         norm = np.sqrt(cum[n - k] * (cum[n] - cum[k]))
     else:
-        e2 = xm ** 2
+        e2, v = xm ** 2, valid.astype(float)
         norm = np.sqrt(np.clip(xcorr(e2, v), 0.0, None) * np.clip(xcorr(v, e2), 0.0, None))
     return acf / np.maximum(norm, 1e-300)
 
