@@ -169,3 +169,29 @@ def test_kuka_validate_on_another_record(tmp_path):
     assert v['record'] == str(paths[1])
     assert v['extended']['time_nrmse'] < v['baseline']['time_nrmse']
     assert set(v['extended']['per_axis']) == {'joint_1', 'joint_2', 'joint_3'}
+
+
+@pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
+def test_kuka_validate_refuses_a_record_of_other_joints(tmp_path, capsys):
+    """
+    Refuse a --validate record whose joints are not those of DATA.
+
+    Both were matched to the model's axes in order, so a record of another robot (here: the
+    second half with its joints renamed) was judged with this robot's model, with only a
+    note. Now one line naming the record and both joint lists, exit 2, nothing written.
+    """
+    from frf_ident.bag import write_recording
+    from frf_ident.core.recording import Recording
+    first, _ = _kuka_halves(tmp_path)
+    rec = load_data(KUKA, CFG / 'map_kuka_kr300.yaml')
+    n = rec.t.size // 2
+    other = write_recording(Recording(rec.t[n:] - rec.t[n], [f'x{j}' for j in range(6)],
+                                      rec.position[n:], rec.velocity[n:], rec.effort[n:]),
+                            tmp_path / 'other_robot')
+    out = tmp_path / 'val'
+    assert main(['diagnose', str(first), '--model', str(CFG / 'model_kuka_kr300_axes123.yaml'),
+                 '--out', str(out), '--validate', str(other)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert str(other) in err[0] and "'x0'" in err[0] and "'a1'" in err[0], err
+    assert not out.exists()

@@ -144,6 +144,15 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     rec = _match_axes(load_data(data, map_path), robot, model_path, progress)
     others = [(p, _match_axes(load_data(p, map_path), robot, model_path, progress))
               for p in validate]
+    for p, o in others:
+        # another record of the same robot names the same joints; matched in order, a
+        # record of another robot would be judged with this robot's model and look like
+        # evidence
+        if list(o.joint_names) != list(rec.joint_names):
+            raise FrfIdentInputError(
+                f'--validate {p}: joints {list(o.joint_names)} are not the joints '
+                f'{list(rec.joint_names)} of {data} (another robot? name them alike in the '
+                f'import map)')
     for p, r in [(data, rec)] + others:
         gaps = r.meta.get('gaps') or []
         if gaps:

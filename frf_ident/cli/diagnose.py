@@ -43,8 +43,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--validate', type=Path, action='extend', nargs='+', default=[],
                    metavar='OTHER',
                    help='other records of the same robot (any supported format): report '
-                        'baseline and extended metrics on each; several after one flag, or '
-                        'the flag repeated')
+                        'baseline and extended metrics on each (joints named as in DATA); '
+                        'several after one flag, or the flag repeated')
 
 
 def run(args: argparse.Namespace) -> int:
