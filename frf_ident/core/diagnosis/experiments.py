@@ -1275,6 +1275,8 @@ def rival_instead(ev: Evaluator, base: RobotParams, kept: list[Effect], pm: Effe
             for k, t in zip(out + [r], trial):
                 k.parameters = t.parameters
             r.score = float(np.clip(r.gain, 0.0, 1.0))
+            r.evidence += ('; named in place of a parameter mismatch that had won over it on '
+                           'the held-out data but left the axis unexplained')
             return out + [r]
     return None
 
