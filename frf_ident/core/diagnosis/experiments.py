@@ -1555,11 +1555,11 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         lacking.append(c)
     for c in lacking:
         trial = rival_instead(ev, robot, kept, c, rivals, val_base, say)
-        stay = {id(k) for k in (trial if trial is not None else kept) if k is not c}
-        for k in [k for k in kept if id(k) not in stay]:
-            kept.remove(k)
-            k.gain = 0.0
-        kept += [k for k in trial or [] if id(k) not in {id(x) for x in kept}]
+        new = trial if trial is not None else [k for k in kept if k is not c]
+        for k in kept:
+            if all(k is not x for x in new):
+                k.gain = 0.0
+        kept[:] = new
     if lacking:
         ext = _rebuild(robot, kept)
         sim_ext = ev._sim(ext)
