@@ -23,54 +23,26 @@ bandwidth; :func:`loop_check` then checks them on the measured FRF itself.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+import json
+from pathlib import Path
+from typing import Any, Callable
 import warnings
 
+from frf_ident.app.console import say
+from frf_ident.app.frf_source import axis_channels, frf_variance, read_source
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.jsonable import jsonable
 from frf_ident.core.loop.check import (AxisMargins, draw_responses, DRAWS, loop_response,
                                        LoopCheck, Margin, pi_response, sensitivity_peak)
 from frf_ident.core.loop.design import PIProposal, propose_pi
 from frf_ident.errors import FrfIdentInputError
+from frf_ident.io.model_file import load_model
+from frf_ident.report.fit_figures import loop_figure
 import numpy as np
 
-__all__ = ['axis_channels', 'frf_variance', 'loop_check', 'margins', 'propose_gains']
-
-
-def frf_variance(frf: FrequencyResponse) -> np.ndarray | None:
-    """Return the total variance of ``frf`` if present, else its noise variance, else None."""
-    return frf.total_variance if frf.total_variance is not None else frf.noise_variance
-
-
-def axis_channels(frf: FrequencyResponse) -> list[tuple[str, int, int]]:
-    """
-    Return (axis, output index, input index) of every axis's own channel P_ii.
-
-    Parameters
-    ----------
-    frf : FrequencyResponse
-        Torque -> velocity FRF; each input is an axis, its output is the output of the same
-        name (else the output of the same index).
-
-    Returns
-    -------
-    list of tuple
-        One entry per input.
-
-    Raises
-    ------
-    FrfIdentInputError
-        An input has no output of its name and no output at its index.
-
-    """
-    out = []
-    for i, name in enumerate(frf.inputs):
-        if name in frf.outputs:
-            out.append((name, frf.outputs.index(name), i))
-        elif i < frf.noutputs:
-            out.append((name, i, i))
-        else:
-            raise FrfIdentInputError(f'FRF input {name!r} has no output of its name '
-                                     f'(outputs {frf.outputs})')
-    return out
+__all__ = ['LoopData', 'LoopOutcome', 'OUTPUT_FILES', 'check_dict', 'loop_check', 'loop_data',
+           'margins', 'propose_gains', 'run_loop']
 
 
 def margins(loop: np.ndarray, omega: np.ndarray) -> np.ndarray:
@@ -111,6 +83,75 @@ def _margin(nominal: float, draws: np.ndarray | None) -> Margin:
     return Margin(float(nominal), float(ok.std(ddof=1)) if ok.size > 2 else float('nan'))
 
 
+@dataclass
+class LoopData:
+    """
+    The loops a check looks at.
+
+    Attributes
+    ----------
+    channels : list of tuple
+        (axis, output index, input index) of every axis (:func:`axis_channels`).
+    controller : ndarray of complex, shape (n_axes, n_freq)
+        C_i of every axis.
+    draws : ndarray of complex, shape (n_draws, n_out, n_in, n_freq), or None
+        Draws of the FRF from its variance (None without variance).
+
+    """
+
+    channels: list[tuple[str, int, int]]
+    controller: np.ndarray
+    draws: np.ndarray | None
+
+    def axis_loops(self, response: np.ndarray) -> np.ndarray:
+        """Return L_i = C_i P_ii of every axis, shape (..., n_axes, n_freq)."""
+        return np.stack([response[..., o, i, :] * self.controller[j]
+                         for j, (_, o, i) in enumerate(self.channels)], axis=-2)
+
+
+def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
+              dt: float | None = None, draws: int = DRAWS, seed: int = 0) -> LoopData:
+    """
+    Return the controller responses and the FRF's draws for a check (args of loop_check).
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        Torque -> velocity FRF.
+    kp, ki : array_like, shape (n_axes,)
+        PI gains per axis (in input order).
+    dt : float, optional
+        Sample time of the discrete PI; None: continuous PI.
+    draws : int, optional
+        Monte-Carlo draws of the FRF.
+    seed : int, optional
+        Seed of the draws.
+
+    Returns
+    -------
+    LoopData
+        Channels, controller responses and draws.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The number of gains is not the number of axes.
+
+    """
+    chans = axis_channels(frf)
+    kp, ki = np.atleast_1d(np.asarray(kp, float)), np.atleast_1d(np.asarray(ki, float))
+    if kp.size != len(chans) or ki.size != len(chans):
+        raise FrfIdentInputError(f'controller gains: expected {len(chans)} kp and ki values '
+                                 f'(one per FRF input {frf.inputs}), got {kp.size} and '
+                                 f'{ki.size}')
+    var = frf_variance(frf)
+    sample = None
+    if var is not None and draws > 0:
+        sample = draw_responses(frf.response, var, draws, np.random.default_rng(seed))
+    c = np.stack([pi_response(frf.freq_hz, kp[j], ki[j], dt) for j in range(len(chans))])
+    return LoopData(chans, c, sample)
+
+
 def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
                dt: float | None = None, draws: int = DRAWS, seed: int = 0) -> LoopCheck:
     """
@@ -141,30 +182,20 @@ def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         The number of gains is not the number of axes.
 
     """
-    chans = axis_channels(frf)
-    kp, ki = np.atleast_1d(np.asarray(kp, float)), np.atleast_1d(np.asarray(ki, float))
-    if kp.size != len(chans) or ki.size != len(chans):
-        raise FrfIdentInputError(f'controller gains: expected {len(chans)} kp and ki values '
-                                 f'(one per FRF input {frf.inputs}), got {kp.size} and '
-                                 f'{ki.size}')
-    var = frf_variance(frf)
-    n_draws = draws if var is not None else 0
-    rng = np.random.default_rng(seed)
-    sample = (draw_responses(frf.response, var, n_draws, rng) if n_draws else None)
-    c = np.stack([pi_response(frf.freq_hz, kp[j], ki[j], dt) for j in range(len(chans))])
+    data = loop_data(frf, kp, ki, dt=dt, draws=draws, seed=seed)
+    nominal = margins(data.axis_loops(frf.response), frf.omega)
+    drawn = None if data.draws is None else margins(data.axis_loops(data.draws), frf.omega)
     axes = []
-    for j, (name, o, i) in enumerate(chans):
-        nom = margins(frf.response[o, i] * c[j], frf.omega)
-        drawn = margins(sample[:, o, i] * c[j], frf.omega) if n_draws else None
-        axes.append(AxisMargins(name, float(kp[j]), float(ki[j]),
-                                *[_margin(nom[q], None if drawn is None else drawn[:, q])
-                                  for q in range(4)]))
+    for j, (name, _, _) in enumerate(data.channels):
+        axes.append(AxisMargins(name, float(np.atleast_1d(kp)[j]), float(np.atleast_1d(ki)[j]),
+                                *[_margin(nominal[j, q], None if drawn is None
+                                          else drawn[:, j, q]) for q in range(4)]))
     peak = None
-    if len(chans) > 1 and frf.noutputs == frf.ninputs:
-        nominal = float(sensitivity_peak(loop_response(frf.response, c)))
-        drawn = sensitivity_peak(loop_response(sample, c)) if n_draws else None
-        peak = _margin(nominal, drawn)
-    return LoopCheck(axes, peak, n_draws, dt)
+    if len(data.channels) > 1 and frf.noutputs == frf.ninputs:
+        peak = _margin(float(sensitivity_peak(loop_response(frf.response, data.controller))),
+                       None if data.draws is None else
+                       sensitivity_peak(loop_response(data.draws, data.controller)))
+    return LoopCheck(axes, peak, 0 if data.draws is None else data.draws.shape[0], dt)
 
 
 def propose_gains(frf: FrequencyResponse, bandwidth_hz: float, phase_margin_deg: float
@@ -200,3 +231,138 @@ def propose_gains(frf: FrequencyResponse, bandwidth_hz: float, phase_margin_deg:
         except ValueError as err:
             raise FrfIdentInputError(f'--bandwidth: axis {name}: {err}') from err
     return out
+
+
+#: the files :func:`run_loop` writes into its output directory
+OUTPUT_FILES = ('loop.json', 'loop.png')
+
+
+@dataclass
+class LoopOutcome:
+    """
+    What ``loop`` found and wrote.
+
+    Attributes
+    ----------
+    check : LoopCheck or None
+        The given controller on the measured FRF (None when only a proposal was asked).
+    proposals : list of PIProposal
+        PI gains proposed for the target (empty without ``propose``).
+    proposal_check : LoopCheck or None
+        The proposed gains checked on the measured FRF.
+    files : list of Path
+        Files written.
+
+    """
+
+    check: LoopCheck | None
+    proposals: list[PIProposal]
+    proposal_check: LoopCheck | None
+    files: list[Path]
+
+
+def _finite(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
+
+
+def check_dict(check: LoopCheck) -> dict[str, Any]:
+    """Return a LoopCheck as the JSON mapping of loop.json (non-finite values as null)."""
+    def m(v: Margin) -> dict[str, float | None]:
+        return {'value': _finite(v.value), 'std': _finite(v.std)}
+    return {'draws': check.draws, 'discrete_dt': check.discrete_dt,
+            'axes': [{'axis': a.axis, 'kp': a.kp, 'ki': a.ki,
+                      'gain_margin_db': m(a.gain_margin_db),
+                      'phase_margin_deg': m(a.phase_margin_deg),
+                      'crossover_hz': m(a.crossover_hz),
+                      'modulus_margin': m(a.modulus_margin)} for a in check.axes],
+            'peak_sensitivity': None if check.peak_sensitivity is None
+            else m(check.peak_sensitivity)}
+
+
+def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
+             ki: list[float] | None = None, dt: float | None = None,
+             model: str | Path | None = None,
+             propose: tuple[float, float] | None = None, draws: int = DRAWS,
+             progress: Callable[[str], None] = say) -> LoopOutcome:
+    """
+    Check a velocity PI on a measured FRF (and/or propose one); write loop.json, loop.png.
+
+    Parameters
+    ----------
+    source : str or Path
+        Directory with frf.json, or an FRF file.
+    out : Path
+        Output directory (created if missing; the caller has checked it).
+    kp, ki : list of float, optional
+        Gains per axis; they take precedence over the model file's.
+    dt : float, optional
+        Sample time of a discrete PI for the given gains; with the model file's gains its
+        sample time is used.
+    model : str or Path, optional
+        Model file whose ``controller`` (velocity PI, discrete at the model's sample rate) is
+        checked.
+    propose : tuple of float, optional
+        (bandwidth [Hz], phase margin [deg]): propose PI gains and check them too.
+    draws : int, optional
+        Monte-Carlo draws of the FRF for the standard deviations.
+    progress : callable, optional
+        Called with one line of text per stage.
+
+    Returns
+    -------
+    LoopOutcome
+        The checks, proposals and files.
+
+    Raises
+    ------
+    FrfIdentInputError
+        No controller given and nothing to propose, gains of the wrong count, or a target
+        bandwidth outside the measured band.
+
+    """
+    frf = read_source(source)
+    if kp is None and model is not None:
+        _, robot, ctrl = load_model(model)
+        kp, ki, dt = ctrl.kp.tolist(), ctrl.ki.tolist(), robot.dt
+    if (kp is None) != (ki is None):
+        raise FrfIdentInputError('--kp and --ki: give both (one value per axis)')
+    if kp is None and propose is None:
+        raise FrfIdentInputError('loop: nothing to check: give --model, --kp/--ki or --propose')
+    out.mkdir(parents=True, exist_ok=True)
+    progress(f'loop: {frf.noutputs}x{frf.ninputs} FRF, {frf.freq_hz.size} lines '
+             f'{frf.freq_hz.min():.3g}-{frf.freq_hz.max():.3g} Hz; PI '
+             f'{"discrete, dt " + format(dt, "g") + " s" if dt else "continuous"}')
+    check = None
+    figure_gains = None
+    if kp is not None:
+        check = loop_check(frf, kp, ki, dt=dt, draws=draws)
+        figure_gains = (kp, ki, dt, check)
+        for line in check.summary():
+            progress(f'  {line}')
+    proposals, pcheck = [], None
+    if propose is not None:
+        proposals = propose_gains(frf, *propose)
+        pkp, pki = [p.kp for p in proposals], [p.ki for p in proposals]
+        pcheck = loop_check(frf, pkp, pki, draws=draws)
+        progress(f'  proposed PI for {propose[1]:g} deg at {propose[0]:g} Hz, checked on the '
+                 f'measured FRF:')
+        for p, line in zip(proposals, pcheck.summary()):
+            progress(f'    {line}' + ('' if p.feasible else ' (target not reachable by a PI)'))
+        if figure_gains is None:
+            figure_gains = (pkp, pki, None, pcheck)
+    gkp, gki, gdt, gcheck = figure_gains
+    data = loop_data(frf, gkp, gki, dt=gdt, draws=draws)
+    files = [loop_figure(frf.freq_hz, data.axis_loops(frf.response),
+                         None if data.draws is None else data.axis_loops(data.draws),
+                         [c[0] for c in data.channels],
+                         [a.modulus_margin.value for a in gcheck.axes], out / 'loop.png')]
+    doc = {'source': str(source), 'check': None if check is None else check_dict(check),
+           'proposal': None if propose is None else {
+               'bandwidth_hz': propose[0], 'phase_margin_deg': propose[1],
+               'gains': [{'axis': c[0], 'kp': p.kp, 'ki': p.ki, 'feasible': p.feasible}
+                         for c, p in zip(axis_channels(frf), proposals)],
+               'check': check_dict(pcheck)}}
+    (out / 'loop.json').write_text(json.dumps(jsonable(doc), indent=1))
+    files.append(out / 'loop.json')
+    progress(f'loop: wrote {", ".join(p.name for p in files)} to {out}')
+    return LoopOutcome(check, proposals, pcheck, files)

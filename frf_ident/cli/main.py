@@ -26,7 +26,7 @@ import argparse
 import os
 import sys
 
-from frf_ident.cli import demo, diagnose, estimate, identify, import_data, reproduce
+from frf_ident.cli import demo, diagnose, estimate, fit, identify, import_data, loop, reproduce
 from frf_ident.errors import FrfIdentInputError
 
 __all__ = ['COMMANDS', 'OneLineParser', 'build_parser', 'main']
@@ -36,6 +36,8 @@ COMMANDS = {
     'identify': identify,
     'estimate': estimate,
     'import': import_data,
+    'fit': fit,
+    'loop': loop,
     'diagnose': diagnose,
     'demo': demo,
     'reproduce': reproduce,

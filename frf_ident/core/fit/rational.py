@@ -336,7 +336,7 @@ class OrderSelection:
 def select_order(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray | None,
                  orders: list[int] | range, **kwargs) -> OrderSelection:
     """
-    Fit each order and choose by the cost test, else by AIC.
+    Fit the orders from the lowest up; stop at the first that passes the cost test.
 
     Parameters
     ----------
@@ -351,11 +351,13 @@ def select_order(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
     Returns
     -------
     OrderSelection
-        All fits and the chosen one.
+        The fits made (up to the first passing one) and the chosen one: the first passing
+        the cost test, else the lowest AIC of all.
 
     """
-    fits = [fit_rational(freq_hz, response, variance, int(o), **kwargs) for o in sorted(orders)]
-    for i, fit in enumerate(fits):
-        if fit.cost.weighted and not fit.cost.structure_missing:
-            return OrderSelection(fits, i, 'cost test')
+    fits = []
+    for o in sorted(orders):
+        fits.append(fit_rational(freq_hz, response, variance, int(o), **kwargs))
+        if fits[-1].cost.weighted and not fits[-1].cost.structure_missing:
+            return OrderSelection(fits, len(fits) - 1, 'cost test')
     return OrderSelection(fits, int(np.argmin([f.aic for f in fits])), 'AIC')

@@ -83,7 +83,7 @@ def test_order_selection_by_the_cost_test():
     """Noisy two-mass FRF (3 poles): orders 1-5 tried, 3 is the lowest the noise explains."""
     pn, var = noisy(two_mass_frf(FREQ, *SECTION6), 40.0, np.random.default_rng(1))
     sel = select_order(FREQ, pn, var, range(1, 6))
-    assert sel.best.order == 3 and sel.reason == 'cost test'
+    assert sel.best.order == 3 and sel.reason == 'cost test' and len(sel.fits) == 3
     assert sel.fits[1].cost.structure_missing
 
 

@@ -1,0 +1,213 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+`frf-ident fit`: a parametric model fitted to a measured FRF, with its uncertainty.
+
+Stages of :func:`fit_frf`: read the FRF (an ``estimate`` directory's frf.json, or any FRF file
+:func:`~frf_ident.io.export.read_frf` reads), keep the band, fit (the physical two-mass model
+per axis with ``physical``, else a common-denominator rational model of the given order or the
+lowest order the cost test accepts), write fit.json, the figure and the model: model.yaml (the
+model file the other commands take) for the physical fit, model.mat (A, B, C, D) for the
+rational one.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+import json
+from pathlib import Path
+from typing import Any, Callable
+
+from frf_ident.app.console import say
+from frf_ident.app.frf_source import axis_channels, frf_variance, read_source
+from frf_ident.core.fit.cost import CostTest
+from frf_ident.core.fit.physical import fit_two_mass, PhysicalFit
+from frf_ident.core.fit.rational import OrderSelection, select_order
+from frf_ident.core.jsonable import jsonable
+from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.errors import FrfIdentInputError
+from frf_ident.io.lti import write_lti_mat
+from frf_ident.io.model_file import load_model, save_model
+from frf_ident.report.fit_figures import fit_figure
+import numpy as np
+
+__all__ = ['FitOutcome', 'MAX_ORDER', 'OUTPUT_FILES', 'cost_dict', 'fit_frf']
+
+#: the files :func:`fit_frf` may write into its output directory
+OUTPUT_FILES = ('fit.json', 'fit.png', 'model.yaml', 'model.mat')
+#: highest order tried when no --order is given: 9 states (3 twists, 6 velocities) describe the
+#: 3-axis robot's velocity FRF; 12 leaves room for a second mode per axis
+MAX_ORDER = 12
+
+
+@dataclass
+class FitOutcome:
+    """
+    What ``fit`` found and wrote.
+
+    Attributes
+    ----------
+    physical : list of PhysicalFit or None
+        Per-axis physical fits (``physical=True``).
+    rational : OrderSelection or None
+        The rational fits tried and the chosen one (``physical=False``).
+    files : list of Path
+        The files written.
+
+    """
+
+    physical: list[PhysicalFit] | None
+    rational: OrderSelection | None
+    files: list[Path]
+
+
+def cost_dict(c: CostTest) -> dict[str, Any]:
+    """Return the cost test as the JSON mapping of fit.json."""
+    def num(x):
+        return float(x) if np.isfinite(x) else None
+    return {'cost': c.cost, 'dof': c.dof, 'ratio': c.ratio, 'p_value': num(c.p_value),
+            'limit': num(c.limit), 'weighted': c.weighted,
+            'structure_missing': c.structure_missing}
+
+
+def _physical_dict(fit: PhysicalFit) -> dict[str, Any]:
+    fa, fr = fit.resonances_hz()
+    return {'axis': fit.name, 'parameters': fit.parameters(), 'std': fit.standard_errors(),
+            'start': dict(zip(fit.names, fit.start.tolist())), 'antiresonance_hz': fa,
+            'resonance_hz': fr, 'cost': cost_dict(fit.cost)}
+
+
+def _rational_dict(sel: OrderSelection) -> dict[str, Any]:
+    best = sel.best
+    return {'order': best.order, 'n_num': best.num_scaled.shape[-1] - 1,
+            'inputs': best.inputs, 'outputs': best.outputs, 'num': best.num, 'den': best.den,
+            'modes': [asdict(m) for m in best.modes()], 'cost': cost_dict(best.cost),
+            'aic': best.aic, 'selected_by': sel.reason,
+            'tried': [{'order': f.order, 'cost': f.cost.cost, 'dof': f.cost.dof, 'aic': f.aic}
+                      for f in sel.fits]}
+
+
+def _fitted_model(fits: list[PhysicalFit], model: str | Path | None, out: Path) -> Path:
+    """
+    Write model.yaml: the base model (``model``, else the embedded default) with fitted axes.
+
+    Every fitted axis keeps the other keys (limits, nonlinear effects) and the PI gains of
+    the base model's axis of the same name, else of its first axis; the link coupling is not
+    fitted and left out.
+    """
+    _, base, ctrl = load_model(model)
+    names = base.joint_names
+    pick = [names.index(f.name) if f.name in names else 0 for f in fits]
+    axes = [fit.axis_params(replace(base.axes[k], name=fit.name)) for fit, k in zip(fits, pick)]
+    robot = replace(base, axes=axes, link_coupling=None)
+    pi = PIVelocity(ctrl.kp[pick], ctrl.ki[pick], robot.torque_limits(), robot.dt)
+    return save_model(out / 'model.yaml', robot, pi,
+                      extra={'description': f'two-mass parameters fitted by frf-ident fit; '
+                                            f'other keys from {model or "the default model"} '
+                                            f'(link_coupling not fitted: left out)'})
+
+
+def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical: bool = False,
+            delay_s: float = 0.0, band: tuple[float, float] | None = None,
+            model: str | Path | None = None,
+            progress: Callable[[str], None] = say) -> FitOutcome:
+    """
+    Fit a model to a measured FRF and write fit.json, fit.png and the model.
+
+    Parameters
+    ----------
+    source : str or Path
+        Directory with frf.json, or an FRF file.
+    out : Path
+        Output directory (created if missing; the caller has checked it).
+    order : int, optional
+        Rational model order; None: the lowest of 1..:data:`MAX_ORDER` the cost test accepts
+        (else the lowest AIC). Ignored with ``physical``.
+    physical : bool, optional
+        Fit the two-mass flexible joint per axis instead and write model.yaml.
+    delay_s : float, optional
+        Known input delay of the physical model [s] (half a sample for a zero-order hold).
+    band : tuple of float, optional
+        (low, high) [Hz]: fit only these lines.
+    model : str or Path, optional
+        Model file whose other keys (limits, controller, sample rate) model.yaml keeps.
+    progress : callable, optional
+        Called with one line of text per stage.
+
+    Returns
+    -------
+    FitOutcome
+        The fits and the files written.
+
+    Raises
+    ------
+    FrfIdentInputError
+        The source cannot be read, the band keeps too few lines, or an order is not >= 1.
+
+    """
+    frf = read_source(source)
+    if band is not None:
+        frf = frf.select((frf.freq_hz >= band[0]) & (frf.freq_hz <= band[1]))
+    if frf.freq_hz.size < 4:
+        raise FrfIdentInputError(f'--band {band}: keeps {frf.freq_hz.size} lines of '
+                                 f'{source}; a fit needs at least 4')
+    var = frf_variance(frf)
+    which = ('total' if frf.total_variance is not None else
+             'noise' if frf.noise_variance is not None else None)
+    progress(f'fit: {frf.noutputs}x{frf.ninputs} FRF, {frf.freq_hz.size} lines '
+             f'{frf.freq_hz.min():.3g}-{frf.freq_hz.max():.3g} Hz, weights: '
+             f'{which + " variance" if which else "none (relative error)"}')
+    out.mkdir(parents=True, exist_ok=True)
+    files: list[Path] = []
+    phys, sel = None, None
+    if physical:
+        phys = []
+        for name, o, i in axis_channels(frf):
+            phys.append(fit_two_mass(frf.freq_hz, frf.response[o, i],
+                                     None if var is None else var[o, i], delay_s=delay_s,
+                                     name=name))
+            for line in phys[-1].summary():
+                progress(f'  {line}')
+        files.append(_fitted_model(phys, model, out))
+        chans = axis_channels(frf)
+        measured = np.stack([frf.response[o, i] for _, o, i in chans])
+        fitted = np.stack([f.model for f in phys])
+        v = None if var is None else np.stack([var[o, i] for _, o, i in chans])
+        names = [f'{n}: two-mass fit' for n, _, _ in chans]
+    else:
+        if order is not None and order < 1:
+            raise FrfIdentInputError(f'--order {order}: expected an order >= 1')
+        orders = [order] if order is not None else range(1, MAX_ORDER + 1)
+        sel = select_order(frf.freq_hz, frf.response, var, orders,
+                           inputs=list(frf.inputs), outputs=list(frf.outputs))
+        for line in sel.best.summary():
+            progress(f'  {line}')
+        if order is None:
+            progress(f'  order {sel.best.order} chosen by the {sel.reason} '
+                     f'(tried {sel.fits[0].order}-{sel.fits[-1].order})')
+        files.append(write_lti_mat(sel.best, out / 'model.mat'))
+        measured = frf.response.reshape(-1, frf.freq_hz.size)
+        fitted = sel.best.model.reshape(measured.shape)
+        v = None if var is None else var.reshape(measured.shape)
+        names = [f'{a} -> {b}' for b in frf.outputs for a in frf.inputs]
+    files.append(fit_figure(frf.freq_hz, measured, fitted, v, names, out / 'fit.png'))
+    doc = {'source': str(source), 'freq_hz': [float(frf.freq_hz.min()),
+                                              float(frf.freq_hz.max())],
+           'n_lines': int(frf.freq_hz.size), 'variance': which, 'delay_s': float(delay_s),
+           'physical': None if phys is None else [_physical_dict(f) for f in phys],
+           'rational': None if sel is None else _rational_dict(sel),
+           'files': [p.name for p in files] + ['fit.json']}
+    (out / 'fit.json').write_text(json.dumps(jsonable(doc), indent=1))
+    files.append(out / 'fit.json')
+    progress(f'fit: wrote {", ".join(p.name for p in files)} to {out}')
+    return FitOutcome(phys, sel, files)

@@ -1,0 +1,81 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""`frf-ident loop DIR_OR_FRF --out DIR [--model M.yaml | --kp .. --ki ..] [--propose BW PM]`."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from frf_ident.cli.options import add_output_arguments
+
+__all__ = ['HELP', 'add_arguments', 'run']
+
+HELP = 'check a velocity PI on the measured loop L = C P-hat: margins with uncertainty'
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """
+    Add the arguments of ``loop``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The subcommand's parser; the arguments are added to it.
+
+    """
+    p.add_argument('source', type=Path, metavar='DIR_OR_FRF',
+                   help='output directory of estimate (its frf.json) or an FRF file')
+    add_output_arguments(p)
+    p.add_argument('--model', type=Path, default=None,
+                   help='model file whose controller (discrete velocity PI) is checked')
+    p.add_argument('--kp', type=float, nargs='+', help='PI kp per axis [N m s/rad]')
+    p.add_argument('--ki', type=float, nargs='+', help='PI ki per axis [N m/rad]')
+    p.add_argument('--dt', type=float, default=None, metavar='S',
+                   help='sample time of a discrete PI for --kp/--ki (default: continuous)')
+    p.add_argument('--propose', type=float, nargs=2, metavar=('BANDWIDTH_HZ', 'PM_DEG'),
+                   help='propose PI gains for this crossover and phase margin and check them '
+                        'on the measured FRF')
+    p.add_argument('--draws', type=int, default=None,
+                   help='Monte-Carlo draws of the FRF for the uncertainties (default 50)')
+
+
+def run(args: argparse.Namespace) -> int:
+    """
+    Check the loop and write the output directory.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit status: 0 (success).
+
+    Raises
+    ------
+    FrfIdentInputError
+        ``--out`` is unusable, the FRF or model cannot be read, or the gains do not match
+        the axes (one line).
+
+    """
+    from frf_ident.app.loop import OUTPUT_FILES, run_loop
+    from frf_ident.app.outdir import check_out
+    from frf_ident.core.loop.check import DRAWS
+    out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
+    run_loop(args.source, out, kp=args.kp, ki=args.ki, dt=args.dt, model=args.model,
+             propose=tuple(args.propose) if args.propose else None,
+             draws=DRAWS if args.draws is None else args.draws)
+    return 0
