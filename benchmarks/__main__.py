@@ -383,6 +383,13 @@ def bench_replay() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('fit')
+def bench_fit() -> list[tuple[str, str, str, str]]:
+    """Time the rational and physical fits of a 3x3 FRF of 100 lines beside baselines."""
+    from benchmarks.fit import rows
+    return rows()
+
+
 def main(argv: list[str] | None = None) -> int:
     names = (argv if argv is not None else sys.argv[1:]) or list(SECTIONS)
     print(f"{'measurement':48s} {'frf_ident':>26s} {'baseline (same run)':>26s} {'ratio':>18s}")

@@ -68,19 +68,26 @@ def sk_common_denominator(s: np.ndarray, response: np.ndarray, weight: np.ndarra
     a = np.zeros(n_den)
     b = np.zeros((m, nb))
     for _ in range(iterations + 1):
-        mat = np.zeros((m, nf, m * nb + n_den), dtype=complex)
-        scale = weight / np.abs(d_prev)[None, :]
-        for i in range(m):
-            mat[i, :, i * nb:(i + 1) * nb] = vn * scale[i][:, None]
-            mat[i, :, m * nb:] = -(response[i] * scale[i])[:, None] * vd
-        rhs = (response * scale * s[None, :] ** n_den).reshape(-1)
-        mat = mat.reshape(m * nf, -1)
-        mr = np.vstack([mat.real, mat.imag])
-        norm = np.linalg.norm(mr, axis=0)
+        scale = weight / np.abs(d_prev)[None, :]                        # (m, nf)
+        num_cols = vn[None] * scale[:, :, None]                          # (m, nf, nb)
+        den_cols = -(response * scale)[:, :, None] * vd[None]            # (m, nf, n_den)
+        rhs = response * scale * s[None, :] ** n_den                     # (m, nf)
+
+        def real(x):
+            return np.concatenate([x.real, x.imag], axis=1)
+        # the numerators are separate per channel: project them out with each channel's QR
+        # (small stacked QRs), solve the shared denominator, then back-substitute
+        q, r = np.linalg.qr(real(num_cols), mode='complete')             # (m, 2nf, 2nf)
+        q1, q2 = q[:, :, :nb], q[:, :, nb:]
+        dr, rr = real(den_cols), real(rhs[:, :, None])
+        red = np.einsum('mki,mkj->mij', q2, dr).reshape(-1, n_den)
+        red_rhs = np.einsum('mki,mkj->mij', q2, rr).reshape(-1)
+        norm = np.linalg.norm(red, axis=0)
         norm[norm == 0] = 1.0
-        x = np.linalg.lstsq(mr / norm, np.concatenate([rhs.real, rhs.imag]), rcond=None)[0]
-        x = x / norm
-        b, a = x[:m * nb].reshape(m, nb), x[m * nb:]
+        a = np.linalg.lstsq(red / norm, red_rhs, rcond=None)[0] / norm
+        resid = rr[..., 0] - dr @ a                                      # (m, 2nf)
+        b = np.linalg.solve(r[:, :nb, :nb], np.einsum('mki,mk->mi', q1, resid)[..., None])
+        b = b[..., 0]
         d_prev = vd @ a + s ** n_den
     return b, np.concatenate([a, [1.0]])
 
