@@ -23,7 +23,7 @@ Fit timing (section ``fit``): the parametric fits on a 3x3 FRF of 100 lines.
 """
 from __future__ import annotations
 
-import time
+import timeit
 
 import numpy as np
 
@@ -37,12 +37,8 @@ def _noisy(p, rng, rel=0.01):
 
 
 def _best(fn, repeat=3):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
+    """Return (best wall time of ``repeat`` calls [s], the result of one more call)."""
+    return min(timeit.repeat(fn, number=1, repeat=repeat)), fn()
 
 
 def rows() -> list[tuple[str, str, str, str]]:
