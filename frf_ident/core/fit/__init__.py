@@ -17,6 +17,6 @@ Parametric models fitted to a measured FRF, with their uncertainty.
 - :mod:`frf_ident.core.fit.cost` — the ML cost of a fit against its chi-square expectation
 - :mod:`frf_ident.core.fit.levy` — linear least-squares start: Levy / Sanathanan-Koerner
 - :mod:`frf_ident.core.fit.physical` — the two-mass flexible joint per axis (eqs. 20-22)
+- :mod:`frf_ident.core.fit.coupled` — all axes and the link coupling from the MIMO FRF
 - :mod:`frf_ident.core.fit.rational` — a continuous-time rational model of chosen order
-- :mod:`frf_ident.core.fit.loop` — the loop L = C P-hat a velocity PI closes on the FRF
 """

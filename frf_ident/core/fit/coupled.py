@@ -1,0 +1,204 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Physical fit of the coupled robot: every axis's two-mass parameters plus the link coupling.
+
+The MIMO FRF tau_m -> dq_m of the linearised robot (eqs. 20-22 with a full link inertia
+matrix M_o = diag(Jo) + offdiag(link_coupling), as
+:func:`~frf_ident.core.simulation.analytic.robot_frf`)::
+
+    P(s) = s (Jm s^2 + Bv s + Z - Z (M_o s^2 + Z)^-1 Z)^-1,   Z = K + D s
+
+is fitted to the whole n x n FRF by maximum likelihood (Levenberg-Marquardt on the residual of
+every channel over its standard deviation), started from the per-axis fits of the diagonal
+(:func:`~frf_ident.core.fit.physical.fit_two_mass`) and no coupling. Cramer-Rao standard
+errors and the cost test as for one axis.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from frf_ident.core.fit.cost import cost_test, CostTest, normalised_residual
+from frf_ident.core.fit.physical import fit_two_mass, PARAMETERS, PhysicalFit
+import numpy as np
+from scipy import optimize
+
+__all__ = ['COUPLING_SCALE_SHARE', 'CoupledFit', 'coupled_response', 'fit_coupled']
+
+#: scale of a link-coupling term (started at 0): this share of sqrt(Jo_i Jo_j); it sets only
+#: the conditioning of the first LM steps, not the minimum
+COUPLING_SCALE_SHARE = 0.05
+
+
+def _unpack(theta: np.ndarray, n: int):
+    per = theta[:5 * n].reshape(5, n)              # rows in the order of PARAMETERS
+    mo = np.diag(per[1])
+    iu = np.triu_indices(n, 1)
+    mo[iu] = theta[5 * n:]
+    mo[(iu[1], iu[0])] = theta[5 * n:]
+    return per, mo
+
+
+def coupled_response(theta: np.ndarray, freq_hz: np.ndarray, n: int,
+                     delay_s: float = 0.0) -> np.ndarray:
+    """
+    Return the MIMO FRF of the coupled robot.
+
+    Parameters
+    ----------
+    theta : ndarray, shape (5 n + n (n - 1) / 2,)
+        Jm (n), Jo (n), k (n), d (n), bv (n), then the upper off-diagonal link-coupling
+        terms row by row [kg m^2].
+    freq_hz : ndarray, shape (n_freq,)
+        Frequencies in Hz.
+    n : int
+        Number of axes.
+    delay_s : float, optional
+        Known input delay [s].
+
+    Returns
+    -------
+    ndarray of complex, shape (n, n, n_freq)
+        P[i, j]: motor velocity of axis i per motor torque of axis j.
+
+    """
+    per, mo = _unpack(np.asarray(theta, dtype=float), n)
+    jm, _, k, d, bv = per
+    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)[:, None, None]
+    z = np.diag(k) + np.diag(d) * s                                   # (F, n, n)
+    dyn = np.diag(jm) * s ** 2 + np.diag(bv) * s + z - z @ np.linalg.solve(mo * s ** 2 + z, z)
+    p = s * np.linalg.inv(dyn) * np.exp(-s * delay_s)
+    return np.moveaxis(p, 0, -1)
+
+
+@dataclass
+class CoupledFit:
+    """
+    The coupled robot fitted to its MIMO FRF.
+
+    Attributes
+    ----------
+    names : list of str
+        The axes.
+    value, std : ndarray, shape (n_par,)
+        ML estimate and Cramer-Rao standard errors, ordered as ``theta`` of
+        :func:`coupled_response`.
+    covariance : ndarray, shape (n_par, n_par)
+        Inverse Fisher information at the estimate.
+    per_axis : list of PhysicalFit
+        The per-axis fits of the diagonal that started it.
+    cost : CostTest
+        The minimum cost against its chi-square expectation.
+    model : ndarray of complex, shape (n, n, n_freq)
+        The fitted FRF.
+
+    """
+
+    names: list[str]
+    value: np.ndarray
+    std: np.ndarray
+    covariance: np.ndarray
+    per_axis: list[PhysicalFit]
+    cost: CostTest
+    model: np.ndarray
+
+    def axis_parameters(self, i: int) -> dict[str, float]:
+        """Return axis i's five parameters as {model-file key: value}."""
+        n = len(self.names)
+        return {k: float(self.value[r * n + i]) for r, k in enumerate(PARAMETERS)}
+
+    def axis_std(self, i: int) -> dict[str, float]:
+        """Return axis i's standard errors as {model-file key: value}."""
+        n = len(self.names)
+        return {k: float(self.std[r * n + i]) for r, k in enumerate(PARAMETERS)}
+
+    def link_coupling(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the link-coupling matrix (zero diagonal) and its standard errors."""
+        n = len(self.names)
+        out = []
+        for v in (self.value, self.std):
+            m = np.zeros((n, n))
+            iu = np.triu_indices(n, 1)
+            m[iu] = v[5 * n:]
+            out.append(m + m.T)
+        return out[0], out[1]
+
+    def summary(self) -> list[str]:
+        """Return the coupling terms with their standard errors and the cost test."""
+        c, sd = self.link_coupling()
+        iu = np.triu_indices(len(self.names), 1)
+        terms = ', '.join(f'{self.names[i]}-{self.names[j]} {c[i, j]:.4g} +- {sd[i, j]:.2g}'
+                          for i, j in zip(*iu))
+        return [f'link coupling [kg m^2]: {terms}', f'coupled: {self.cost.summary()}']
+
+
+def fit_coupled(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray | None = None,
+                *, delay_s: float = 0.0, names: list[str] | None = None) -> CoupledFit:
+    """
+    Fit every axis's two-mass parameters and the link coupling to a square MIMO FRF.
+
+    Parameters
+    ----------
+    freq_hz : ndarray, shape (n_freq,)
+        Frequencies in Hz.
+    response : ndarray of complex, shape (n, n, n_freq)
+        Measured FRF tau_m -> dq_m, inputs and outputs in the same axis order.
+    variance : ndarray, shape (n, n, n_freq), optional
+        Its variance; without it the relative error is minimised (see :func:`fit_two_mass`).
+    delay_s : float, optional
+        Known input delay [s].
+    names : list of str, optional
+        Axis names.
+
+    Returns
+    -------
+    CoupledFit
+        Estimate, standard errors, the per-axis start and the cost test.
+
+    Raises
+    ------
+    ValueError
+        ``response`` is not square (n, n, n_freq) with n >= 2.
+
+    """
+    f = np.asarray(freq_hz, dtype=float)
+    p = np.asarray(response, dtype=complex)
+    n = p.shape[0]
+    if p.ndim != 3 or p.shape[1] != n or n < 2:
+        raise ValueError(f'a coupled fit needs a square MIMO FRF (n, n, n_freq), n >= 2; got '
+                         f'{p.shape}')
+    names = list(names or [f'axis_{i}' for i in range(n)])
+    per_axis = [fit_two_mass(f, p[i, i], None if variance is None else variance[i, i],
+                             delay_s=delay_s, name=names[i]) for i in range(n)]
+    start = np.concatenate([np.array([a.value[r] for a in per_axis]) for r in range(5)]
+                           + [np.zeros(n * (n - 1) // 2)])
+    jo = np.array([a.value[1] for a in per_axis])
+    iu = np.triu_indices(n, 1)
+    scale = np.concatenate([np.maximum(np.abs(start[:5 * n]), 1e-9 * np.abs(start).max()),
+                            COUPLING_SCALE_SHARE * np.sqrt(jo[iu[0]] * jo[iu[1]])])
+    var = None if variance is None else np.asarray(variance, dtype=float).reshape(-1)
+
+    def resid(x):
+        return normalised_residual(coupled_response(x * scale, f, n, delay_s).reshape(-1),
+                                   p.reshape(-1), var)
+
+    sol = optimize.least_squares(resid, start / scale, method='lm', x_scale=1.0)
+    test = cost_test(sol.fun, sol.x.size, variance is not None)
+    cov_x = np.linalg.pinv(sol.jac.T @ sol.jac)
+    if variance is None:
+        cov_x = cov_x * test.cost / max(test.dof, 1)
+    value = sol.x * scale
+    cov = cov_x * np.outer(scale, scale)
+    return CoupledFit(names, value, np.sqrt(np.diag(cov)), cov, per_axis, test,
+                      coupled_response(value, f, n, delay_s))
