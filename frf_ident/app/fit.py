@@ -30,7 +30,9 @@ from typing import Any, Callable
 
 from frf_ident.app.console import say
 from frf_ident.app.frf_source import axis_channels, frf_variance, read_source
+from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.fit.cost import CostTest
+from frf_ident.core.fit.coupled import CoupledFit, fit_coupled
 from frf_ident.core.fit.physical import fit_two_mass, PhysicalFit
 from frf_ident.core.fit.rational import OrderSelection, select_order
 from frf_ident.core.jsonable import jsonable
@@ -59,6 +61,8 @@ class FitOutcome:
     ----------
     physical : list of PhysicalFit or None
         Per-axis physical fits (``physical=True``).
+    coupled : CoupledFit or None
+        All axes and the link coupling (``physical=True`` on a square FRF of >= 2 axes).
     rational : OrderSelection or None
         The rational fits tried and the chosen one (``physical=False``).
     files : list of Path
@@ -67,6 +71,7 @@ class FitOutcome:
     """
 
     physical: list[PhysicalFit] | None
+    coupled: CoupledFit | None
     rational: OrderSelection | None
     files: list[Path]
 
@@ -97,24 +102,62 @@ def _rational_dict(sel: OrderSelection) -> dict[str, Any]:
                       for f in sel.fits]}
 
 
-def _fitted_model(fits: list[PhysicalFit], model: str | Path | None, out: Path) -> Path:
+def _coupled_dict(fit: CoupledFit) -> dict[str, Any]:
+    c, sd = fit.link_coupling()
+    return {'axes': [{'axis': n, 'parameters': fit.axis_parameters(i), 'std': fit.axis_std(i)}
+                     for i, n in enumerate(fit.names)],
+            'link_coupling': c, 'link_coupling_std': sd, 'cost': cost_dict(fit.cost)}
+
+
+def _fitted_model(values: dict[str, dict[str, float]], coupling: np.ndarray | None,
+                  model: str | Path | None, out: Path) -> Path:
     """
     Write model.yaml: the base model (``model``, else the embedded default) with fitted axes.
 
-    Every fitted axis keeps the other keys (limits, nonlinear effects) and the PI gains of
-    the base model's axis of the same name, else of its first axis; the link coupling is not
-    fitted and left out.
+    ``values`` maps each fitted axis to its five parameters. Every fitted axis keeps the other
+    keys (limits, nonlinear effects) and the PI gains of the base model's axis of the same
+    name, else of its first axis; a negative viscous friction estimate is written as 0. The
+    link coupling is ``coupling`` (the coupled fit's), else left out.
     """
     _, base, ctrl = load_model(model)
     names = base.joint_names
-    pick = [names.index(f.name) if f.name in names else 0 for f in fits]
-    axes = [fit.axis_params(replace(base.axes[k], name=fit.name)) for fit, k in zip(fits, pick)]
-    robot = replace(base, axes=axes, link_coupling=None)
+    pick = [names.index(n) if n in names else 0 for n in values]
+    axes = [replace(base.axes[k], name=n, **dict(v, viscous_friction=max(
+        v['viscous_friction'], 0.0))) for (n, v), k in zip(values.items(), pick)]
+    robot = replace(base, axes=axes, link_coupling=coupling)
     pi = PIVelocity(ctrl.kp[pick], ctrl.ki[pick], robot.torque_limits(), robot.dt)
+    how = 'fitted with the link coupling' if coupling is not None else \
+        'fitted per axis (link_coupling not fitted: left out)'
     return save_model(out / 'model.yaml', robot, pi,
-                      extra={'description': f'two-mass parameters fitted by frf-ident fit; '
-                                            f'other keys from {model or "the default model"} '
-                                            f'(link_coupling not fitted: left out)'})
+                      extra={'description': f'two-mass parameters {how} by frf-ident fit; '
+                                            f'other keys from {model or "the default model"}'})
+
+
+def _physical(frf: FrequencyResponse, var: np.ndarray | None, delay_s: float,
+              progress: Callable[[str], None]):
+    """Fit per axis, and the coupled robot when the FRF is square with >= 2 axes."""
+    chans = axis_channels(frf)
+    outs, ins = [o for _, o, _ in chans], [i for _, _, i in chans]
+    names = [n for n, _, _ in chans]
+    if len(chans) >= 2 and len(set(outs)) == len(outs) == frf.noutputs:
+        sub = frf.response[np.ix_(outs, ins)]
+        coupled = fit_coupled(frf.freq_hz, sub, None if var is None else var[np.ix_(outs, ins)],
+                              delay_s=delay_s, names=names)
+        for fit in coupled.per_axis:
+            for line in fit.summary():
+                progress(f'  per axis: {line}')
+        for line in coupled.summary():
+            progress(f'  {line}')
+        values = {n: coupled.axis_parameters(k) for k, n in enumerate(names)}
+        return coupled.per_axis, coupled, values, sub, coupled.model
+    phys = [fit_two_mass(frf.freq_hz, frf.response[o, i], None if var is None else var[o, i],
+                         delay_s=delay_s, name=n) for n, o, i in chans]
+    for fit in phys:
+        for line in fit.summary():
+            progress(f'  {line}')
+    measured = np.stack([frf.response[o, i] for _, o, i in chans])[:, None]
+    return phys, None, {f.name: f.parameters() for f in phys}, measured, \
+        np.stack([f.model for f in phys])[:, None]
 
 
 def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical: bool = False,
@@ -169,21 +212,22 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
              f'{which + " variance" if which else "none (relative error)"}')
     out.mkdir(parents=True, exist_ok=True)
     files: list[Path] = []
-    phys, sel = None, None
+    phys, sel, coupled = None, None, None
     if physical:
-        phys = []
-        for name, o, i in axis_channels(frf):
-            phys.append(fit_two_mass(frf.freq_hz, frf.response[o, i],
-                                     None if var is None else var[o, i], delay_s=delay_s,
-                                     name=name))
-            for line in phys[-1].summary():
-                progress(f'  {line}')
-        files.append(_fitted_model(phys, model, out))
+        phys, coupled, values, measured, fitted = _physical(frf, var, delay_s, progress)
+        files.append(_fitted_model(values, None if coupled is None else
+                                   coupled.link_coupling()[0], model, out))
         chans = axis_channels(frf)
-        measured = np.stack([frf.response[o, i] for _, o, i in chans])
-        fitted = np.stack([f.model for f in phys])
-        v = None if var is None else np.stack([var[o, i] for _, o, i in chans])
-        names = [f'{n}: two-mass fit' for n, _, _ in chans]
+        if coupled is not None:
+            v = None if var is None else var[np.ix_([o for _, o, _ in chans],
+                                                    [i for _, _, i in chans])]
+            names = [f'{a} -> {b}: coupled fit' for b, _, _ in chans for a, _, _ in chans]
+        else:
+            v = None if var is None else np.stack([var[o, i] for _, o, i in chans])
+            names = [f'{n}: two-mass fit' for n, _, _ in chans]
+        measured = measured.reshape(-1, frf.freq_hz.size)
+        fitted = fitted.reshape(measured.shape)
+        v = None if v is None else v.reshape(measured.shape)
     else:
         if order is not None and order < 1:
             raise FrfIdentInputError(f'--order {order}: expected an order >= 1')
@@ -205,9 +249,10 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
                                               float(frf.freq_hz.max())],
            'n_lines': int(frf.freq_hz.size), 'variance': which, 'delay_s': float(delay_s),
            'physical': None if phys is None else [_physical_dict(f) for f in phys],
+           'coupled': None if coupled is None else _coupled_dict(coupled),
            'rational': None if sel is None else _rational_dict(sel),
            'files': [p.name for p in files] + ['fit.json']}
     (out / 'fit.json').write_text(json.dumps(jsonable(doc), indent=1))
     files.append(out / 'fit.json')
     progress(f'fit: wrote {", ".join(p.name for p in files)} to {out}')
-    return FitOutcome(phys, sel, files)
+    return FitOutcome(phys, coupled, sel, files)

@@ -63,7 +63,7 @@ def fit_figure(freq_hz: np.ndarray, measured: np.ndarray, model: np.ndarray,
 
     """
     n = measured.shape[0]
-    fig, axs = plt.subplots(3, n, figsize=(4.5 * n, 8), sharex=True, squeeze=False)
+    fig, axs = plt.subplots(3, n, figsize=(min(4.5 * n, 27.0), 8), sharex=True, squeeze=False)
     for c in range(n):
         am, ap, ar = axs[:, c]
         am.semilogx(freq_hz, _db(measured[c]), 'k.', ms=3, label='measured FRF')

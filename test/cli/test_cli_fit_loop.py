@@ -93,3 +93,26 @@ def test_bad_input_is_one_line_and_exit_2(frf_dir, tmp_path, capsys, argv, needl
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert needle in err and len(err.splitlines()) == 1, err
+
+
+def test_fit_physical_on_the_coupled_robot_writes_the_link_coupling(tmp_path):
+    """The default robot's sampled 3x3 FRF (1 % noise): model.yaml gets the coupling."""
+    from frf_ident.core.model.schema import default_robot
+    robot = default_robot()
+    f = np.arange(0.5, 40.01, 0.5)
+    p = robot_frf_sampled(robot, f)
+    var = (0.01 * np.abs(p)) ** 2
+    rng = np.random.default_rng(6)
+    pn = p + np.sqrt(var / 2) * (rng.standard_normal(p.shape) + 1j * rng.standard_normal(p.shape))
+    write_frf(FrequencyResponse(f, pn, robot.joint_names, robot.joint_names, total_variance=var),
+              tmp_path / 'frf.json')
+    out = tmp_path / 'fit'
+    assert main(['fit', str(tmp_path / 'frf.json'), '--out', str(out), '--physical',
+                 '--delay', '0.0005']) == 0
+    doc = json.loads((out / 'fit.json').read_text())
+    assert not doc['coupled']['cost']['structure_missing']
+    c = np.array(doc['coupled']['link_coupling'])
+    sd = np.array(doc['coupled']['link_coupling_std'])
+    assert np.all(np.abs(c - robot.link_coupling) <= 4 * sd + 1e-12)
+    _, fitted, _ = load_model(out / 'model.yaml')
+    assert np.allclose(fitted.link_coupling, c)

@@ -135,12 +135,15 @@ class CoupledFit:
         return out[0], out[1]
 
     def summary(self) -> list[str]:
-        """Return the coupling terms with their standard errors and the cost test."""
+        """Return each axis's parameters, the coupling terms (with standard errors), the cost."""
+        lines = [f'{name}: ' + ', '.join(f'{k} {v:.5g} +- {self.axis_std(i)[k]:.2g}'
+                                         for k, v in self.axis_parameters(i).items())
+                 for i, name in enumerate(self.names)]
         c, sd = self.link_coupling()
         iu = np.triu_indices(len(self.names), 1)
         terms = ', '.join(f'{self.names[i]}-{self.names[j]} {c[i, j]:.4g} +- {sd[i, j]:.2g}'
                           for i, j in zip(*iu))
-        return [f'link coupling [kg m^2]: {terms}', f'coupled: {self.cost.summary()}']
+        return lines + [f'link coupling [kg m^2]: {terms}', f'coupled: {self.cost.summary()}']
 
 
 def fit_coupled(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray | None = None,
