@@ -80,14 +80,14 @@ def sk_common_denominator(s: np.ndarray, response: np.ndarray, weight: np.ndarra
         q, r = np.linalg.qr(real(num_cols), mode='complete')             # (m, 2nf, 2nf)
         q1, q2 = q[:, :, :nb], q[:, :, nb:]
         dr, rr = real(den_cols), real(rhs[:, :, None])
-        red = np.einsum('mki,mkj->mij', q2, dr).reshape(-1, n_den)
-        red_rhs = np.einsum('mki,mkj->mij', q2, rr).reshape(-1)
+        q2t = np.swapaxes(q2, 1, 2)
+        red = (q2t @ dr).reshape(-1, n_den)
+        red_rhs = (q2t @ rr).reshape(-1)
         norm = np.linalg.norm(red, axis=0)
         norm[norm == 0] = 1.0
         a = np.linalg.lstsq(red / norm, red_rhs, rcond=None)[0] / norm
         resid = rr[..., 0] - dr @ a                                      # (m, 2nf)
-        b = np.linalg.solve(r[:, :nb, :nb], np.einsum('mki,mk->mi', q1, resid)[..., None])
-        b = b[..., 0]
+        b = np.linalg.solve(r[:, :nb, :nb], np.swapaxes(q1, 1, 2) @ resid[..., None])[..., 0]
         d_prev = vd @ a + s ** n_den
     return b, np.concatenate([a, [1.0]])
 
