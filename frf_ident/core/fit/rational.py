@@ -114,8 +114,16 @@ class RationalFit:
 
     @property
     def aic(self) -> float:
-        """Return Akaike's criterion cost + 2 p (-2 log-likelihood up to a constant)."""
-        return self.cost.cost + 2.0 * self.n_params
+        """
+        Return Akaike's criterion: -2 log-likelihood (up to a constant) + 2 p.
+
+        With the FRF's variance that is cost + 2 p; without it the noise level is estimated
+        from the residual too, N ln(cost / N) + 2 p over the N real residuals.
+        """
+        if self.cost.weighted:
+            return self.cost.cost + 2.0 * self.n_params
+        n = self.cost.dof + self.n_params
+        return n * float(np.log(self.cost.cost / n)) + 2.0 * self.n_params
 
     @property
     def num(self) -> np.ndarray:

@@ -85,6 +85,10 @@ def test_order_selection_by_the_cost_test():
     sel = select_order(FREQ, pn, var, range(1, 6))
     assert sel.best.order == 3 and sel.reason == 'cost test' and len(sel.fits) == 3
     assert sel.fits[1].cost.structure_missing
+    # without the variance the cost test cannot decide: AIC with the noise level estimated
+    # from the residual tries every order and never keeps one too low
+    blind = select_order(FREQ, pn, None, range(1, 6))
+    assert blind.reason == 'AIC' and len(blind.fits) == 5 and blind.best.order >= 3
 
 
 SILVERBOX = Path(__file__).resolve().parents[3].parent / 'shared' / 'data' / 'Silverbox'
