@@ -60,13 +60,14 @@ def frf_variance(frf: FrequencyResponse) -> np.ndarray | None:
 
 def axis_channels(frf: FrequencyResponse) -> list[tuple[str, int, int]]:
     """
-    Return (axis, output index, input index) of every axis's own channel P_ii.
+    Return (joint, output index, input index) of every axis's own channel P_ii.
 
     Parameters
     ----------
     frf : FrequencyResponse
-        Torque -> velocity FRF; each input is an axis, its output is the output of the same
-        name (else the output of the same index).
+        Torque -> velocity FRF. The joint of a channel name is the part after its last
+        ``/`` (``estimate`` names inputs ``tau_m/<joint>`` and outputs ``dq_m/<joint>``);
+        each input's own output is the output of the same joint, else of the same index.
 
     Returns
     -------
@@ -76,16 +77,18 @@ def axis_channels(frf: FrequencyResponse) -> list[tuple[str, int, int]]:
     Raises
     ------
     FrfIdentInputError
-        An input has no output of its name and no output at its index.
+        An input has no output of its joint and no output at its index.
 
     """
+    joints = [n.rsplit('/', 1)[-1] for n in frf.outputs]
     out = []
     for i, name in enumerate(frf.inputs):
-        if name in frf.outputs:
-            out.append((name, frf.outputs.index(name), i))
+        joint = name.rsplit('/', 1)[-1]
+        if joint in joints:
+            out.append((joint, joints.index(joint), i))
         elif i < frf.noutputs:
-            out.append((name, i, i))
+            out.append((joint, i, i))
         else:
-            raise FrfIdentInputError(f'FRF input {name!r} has no output of its name '
+            raise FrfIdentInputError(f'FRF input {name!r} has no output of its joint '
                                      f'(outputs {frf.outputs})')
     return out

@@ -92,3 +92,11 @@ def test_mimo_sensitivity_peak_of_the_coupled_robot():
     s = control.feedback(eye, frd * c).frequency_response(2 * np.pi * f).complex
     peak = np.linalg.svd(np.moveaxis(s, -1, 0), compute_uv=False)[:, 0].max()
     assert abs(check.peak_sensitivity.value / peak - 1) < 1e-6
+
+
+def test_axis_channels_match_estimate_names_by_joint():
+    """estimate names inputs tau_m/<joint> and outputs dq_m/<joint>, maybe in another order."""
+    from frf_ident.app.frf_source import axis_channels
+    frf = FrequencyResponse(FREQ[:5], np.ones((2, 2, 5)), ['tau_m/a', 'tau_m/b'],
+                            ['dq_m/b', 'dq_m/a'])
+    assert axis_channels(frf) == [('a', 1, 0), ('b', 0, 1)]
