@@ -95,7 +95,7 @@ def test_mimo_sensitivity_peak_of_the_coupled_robot():
 
 
 def test_axis_channels_match_estimate_names_by_joint():
-    """estimate names inputs tau_m/<joint> and outputs dq_m/<joint>, maybe in another order."""
+    """Match `estimate`'s names: inputs tau_m/<joint>, outputs dq_m/<joint> (any order)."""
     from frf_ident.app.frf_source import axis_channels
     frf = FrequencyResponse(FREQ[:5], np.ones((2, 2, 5)), ['tau_m/a', 'tau_m/b'],
                             ['dq_m/b', 'dq_m/a'])
