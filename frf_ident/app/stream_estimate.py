@@ -117,7 +117,7 @@ def needs_streaming(bag: str | Path, budget_bytes: int) -> bool:
         exceeds ``budget_bytes``.
 
     """
-    from frf_ident.bag.reader import locate
+    from frf_ident.bag.layout import locate
     size = sum(f.stat().st_size for f in locate(bag).files)
     return size * MEMORY_PER_BAG_BYTE > budget_bytes
 

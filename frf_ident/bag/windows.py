@@ -41,9 +41,12 @@ from frf_ident.errors import BagError
 import numpy as np
 
 from . import timing as tm
+from .assemble import assemble
+from .collect import Collector, iter_batches
+from .layout import BagFiles, expected_counts, locate
 from .mcapio import ScanStats
-from .reader import (assemble, BagFiles, Collector, expected_counts, iter_batches, locate,
-                     read_descriptors, recovery_report)
+from .reader import read_descriptors
+from .repair import recovery_report
 from .topics import BagTopics
 
 _PAD_NS = 10_000_000          # windows reach 10 ms beyond their segment

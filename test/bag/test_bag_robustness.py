@@ -21,7 +21,7 @@ import tempfile
 
 from bag_synth import make_recording
 from frf_ident.bag import bag_info, BagRecorder, read_recording, write_recording
-from frf_ident.bag.reader import iter_raw
+from frf_ident.bag.repair import iter_raw
 from frf_ident.bag.topics import QOS_DEFAULT
 from frf_ident.core.recording import Recording
 from frf_ident.errors import BagError
