@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / 'config' / 'model_3axis.yaml'
 
 CSV = 't,q,tau\n' + ''.join(f'{k * 0.001:.3f},{k},{2 * k}\n' for k in range(8))

@@ -371,7 +371,7 @@ def f_test(rss0: float, rss1: float, q: int, p: int, n_eff: float) -> float:
     (:func:`.residual.effective_samples`), and a regressor as slow as the residual picks up
     N / n_eff times a sample's noise variance per coefficient. ``rss1 / (n_eff - p)`` is that
     variance, so the plain F ratio has the F(q, n_eff - p) distribution under the null
-    (test/core/test_diagnosis.py checks the false-alarm rate by Monte Carlo).
+    (test/core/diagnosis/test_diagnosis.py checks the false-alarm rate by Monte Carlo).
 
     Parameters
     ----------

@@ -51,7 +51,7 @@ def joint_channels(frf: FrequencyResponse, joints: list[str]) -> FrequencyRespon
     A MIMO multisine excites every joint at once, so it is estimated with all of them and
     its channels are picked afterwards: an estimate from a subset of the inputs takes the
     others' response for its own (median error to the analytic FRF 0.029 dB against 0.004 dB
-    picked, ``pytest -s test/test_estimate_cli.py -k pick_channels``).
+    picked, ``pytest -s test/cli/test_estimate_cli.py -k pick_channels``).
 
     Parameters
     ----------
