@@ -35,6 +35,12 @@ from .layout import BagFiles
 from .topics import BagTopics
 from .writer import FRF_BAG_KEY, grid_times
 
+#: what a gap of more than :data:`~frf_ident.bag.timing.MAX_GAP_SAMPLES` missing joint states
+#: becomes unless a caller says otherwise: 'mark' keeps it as missing data (NaN rows, listed in
+#: the report), which estimate, diagnose and the streamed estimate all need; 'refuse' (a
+#: one-line BagError) is for callers that cannot handle missing samples
+DEFAULT_GAPS = 'mark'
+
 
 def _stamp_source(ns: np.ndarray) -> str:
     return 'header' if tm.valid_header_stamps(ns) else 'log'
@@ -49,7 +55,7 @@ def _window(ns: np.ndarray, t_range: tuple[float, float] | None) -> np.ndarray:
 
 def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, Any],
              segments: list[Segment], warnings: list[str], recovery: dict[str, Any],
-             t_range: tuple[float, float] | None, gaps: str = 'refuse'
+             t_range: tuple[float, float] | None, gaps: str
              ) -> tuple[Recording, tm.TimingReport]:
     """
     Assemble the collected messages into a Recording on a uniform grid.
@@ -278,4 +284,4 @@ def _rate_warnings(report: tm.TimingReport, master: str) -> None:
                                    f'{base:.3f} Hz (unequal rates; zero-order hold applied)')
 
 
-__all__ = ['assemble']
+__all__ = ['DEFAULT_GAPS', 'assemble']

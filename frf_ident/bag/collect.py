@@ -23,8 +23,10 @@ from __future__ import annotations
 
 from contextlib import nullcontext
 from operator import itemgetter
+import time
 from typing import Any, Callable, Iterator
 
+from frf_ident.core.progress import Progress
 from frf_ident.errors import BagError
 import numpy as np
 
@@ -314,19 +316,22 @@ class Collector:
         return self.ref
 
 
-def iter_batches(bag: BagFiles, topics: set[str] | None, progress: bool,
+def iter_batches(bag: BagFiles, topics: set[str] | None, progress: Progress | None,
                  stats: list[ScanStats]) -> Iterator[Batch]:
     """
     Yield the wanted messages of every file of a bag in chunks.
 
     The wanted messages of every file of ``bag``, chunk by chunk; each file's
-    :class:`ScanStats` is appended to ``stats`` when its scan ends.
+    :class:`ScanStats` is appended to ``stats`` when its scan ends. With a ``progress`` sink
+    a tqdm bar of the bytes read is drawn on stderr (on a terminal only) and the finished
+    scan is reported as one line (:mod:`frf_ident.core.progress`); None: silent.
     """
     total = sum(f.stat().st_size for f in bag.files)
     bar_cm: Any = nullcontext(None)
-    if progress:
+    if progress is not None:
         from tqdm import tqdm
-        bar_cm = tqdm(total=total, unit='B', unit_scale=True, desc=bag.path.name)
+        bar_cm = tqdm(total=total, unit='B', unit_scale=True, desc=bag.path.name, disable=None)
+    t0 = time.perf_counter()
     with bar_cm as bar:
         for f in bag.files:
             with readable(bag, f) as path:
@@ -338,9 +343,12 @@ def iter_batches(bag: BagFiles, topics: set[str] | None, progress: bool,
                 except McapFormatError as exc:
                     raise BagError(f'{f}: not a readable MCAP file ({exc})') from None
                 stats.append(scanner.stats)
+    if progress is not None:
+        progress(f'{bag.name}: read {total / 1e6:.1f} MB in {len(bag.files)} file(s), '
+                 f'{time.perf_counter() - t0:.1f} s')
 
 
-def scan(bag: BagFiles, topics: set[str] | None, progress: bool,
+def scan(bag: BagFiles, topics: set[str] | None, progress: Progress | None,
          sink: Callable[[Batch], None]) -> list[ScanStats]:
     """Feed every batch of :func:`iter_batches` to ``sink``; return the files' scan stats."""
     stats: list[ScanStats] = []

@@ -32,11 +32,12 @@ from pathlib import Path
 import struct
 from typing import Any
 
+from frf_ident.core.progress import checked, Progress
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import BagError
 
 from . import timing as tm
-from .assemble import assemble
+from .assemble import assemble, DEFAULT_GAPS
 from .collect import Collector, scan
 from .layout import BagFiles, expected_counts, locate
 from .repair import recovery_report
@@ -46,7 +47,7 @@ from .topics import BagTopics, JOINT_STATE
 def read_recording(path: str | Path, *, joints: list[str] | None = None,
                    topics: BagTopics | None = None,
                    t_range: tuple[float, float] | None = None,
-                   progress: bool = False, gaps: str = 'refuse'
+                   progress: Progress | None = None, gaps: str = DEFAULT_GAPS
                    ) -> tuple[Recording, tm.TimingReport]:
     """
     Read a bag into a uniformly sampled :class:`Recording` plus its :class:`TimingReport`.
@@ -70,10 +71,12 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
         Topic names; default: the standard ones (/joint_states, /frf/experiment ...).
     t_range : tuple of float, optional
         (t0, t1) in s of the bag clock, t0 < t1: keep only this window; default: everything.
-    progress : bool, optional
-        Show a progress bar of the bytes read.
-    gaps : {'refuse', 'mark'}, optional
-        What to do with gaps of missing joint states (see above); default 'refuse'.
+    progress : callable, optional
+        Progress sink (:mod:`frf_ident.core.progress`): given, a bar of the bytes read is
+        drawn on a terminal and the finished scan reported as one line; None: silent.
+    gaps : {'mark', 'refuse'}, optional
+        What to do with gaps of missing joint states (see above); default
+        :data:`~frf_ident.bag.assemble.DEFAULT_GAPS` ('mark').
 
     Returns
     -------
@@ -90,6 +93,7 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
         raise BagError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
     if gaps not in tm.GAP_MODES:
         raise ValueError(f'{gaps=}: expected one of {tm.GAP_MODES}')
+    checked(progress)
     bag = locate(path)
     try:
         return _read(bag, joints, topics, t_range, progress, gaps)
@@ -102,7 +106,7 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
 
 def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
           t_range: tuple[float, float] | None,
-          progress: bool, gaps: str) -> tuple[Recording, tm.TimingReport]:
+          progress: Progress | None, gaps: str) -> tuple[Recording, tm.TimingReport]:
     expected = expected_counts(bag)
     col = Collector(bag, topics, joints, expected)
     stats = scan(bag, set(col.expected), progress, col.feed)

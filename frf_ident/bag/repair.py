@@ -88,7 +88,7 @@ def reindex(path: str | Path, out: str | Path) -> Path:
             ch = batch.channel
             for log, a, b in zip(batch.logs, batch.starts, batch.ends):
                 rec.write(ch.topic, ch.msgtype, log, batch.buf[a:b])
-        scan(bag, None, False, copy)
+        scan(bag, None, None, copy)
     finally:
         rec.close()
     return Path(out)
@@ -115,7 +115,7 @@ def iter_raw(path: str | Path, topics: set[str] | None = None) -> Iterator[tuple
     """
     bag = locate(path)
     stats: list[ScanStats] = []
-    for batch in iter_batches(bag, topics, False, stats):
+    for batch in iter_batches(bag, topics, None, stats):
         ch = batch.channel
         for log, a, b in zip(batch.logs, batch.starts, batch.ends):
             yield ch.topic, ch.msgtype, log, bytes(batch.buf[a:b])
