@@ -334,9 +334,10 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
     import tempfile
 
     from benchmarks.bag_read import measure
-    from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S, stream_estimate
+    from frf_ident.app.stream_estimate import stream_estimate
     from frf_ident.bag import read_recording, write_recording
     from frf_ident.core.estimation.described import estimate_recording
+    from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S
     rows = []
     mb = 1024 ** 2
     with tempfile.TemporaryDirectory() as tmp:

@@ -32,7 +32,7 @@ import time
 import tracemalloc
 from typing import Any, Callable
 
-from frf_ident.bag.reader import bag_info, read_recording
+from frf_ident.bag import bag_info, read_recording
 from frf_ident.bag.topics import BagTopics
 import numpy as np
 

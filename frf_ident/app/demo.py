@@ -22,10 +22,9 @@ echo`` in the same shell sees the run), :func:`frf_ident.app.estimate.estimate_b
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Callable
 
-from frf_ident.app.console import say
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.share import config_file
 
@@ -41,7 +40,7 @@ DEMO_ROBOT = 'robot_3axis_demo.yaml'
 
 def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
              multisine: MultisineConfig = DEMO_MULTISINE, chirp: ChirpConfig = DEMO_CHIRP,
-             progress: Callable[[str], None] = say) -> int:
+             progress: Progress | None = None) -> int:
     """
     Run the node graph, estimate from its bag and diagnose against the nominal model.
 
@@ -56,7 +55,7 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
     multisine, chirp
         The experiments.
     progress
-        Called with one line per step.
+        Called with one line per step; None: silent.
 
     Returns
     -------
@@ -64,6 +63,7 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
         0 on success.
 
     """
+    progress = sink(progress)
     from frf_ident.app.diagnose import diagnose
     from frf_ident.app.estimate import estimate_bag
     from frf_ident.app.graph import run_graph

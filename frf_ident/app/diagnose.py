@@ -30,9 +30,10 @@ from __future__ import annotations
 from dataclasses import replace
 import json
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 from frf_ident.app.outdir import clear_outputs
+from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 
@@ -65,8 +66,9 @@ def load_data(path: Path, map_path: Path | None = None) -> Recording:
         raise FrfIdentInputError(f'{path}: no such bag or file')
     if path.is_dir() or path.suffix == '.mcap':
         from frf_ident.bag import read_recording
-        # gaps a recorder lost are kept as missing rows: the diagnosis leaves them out
-        rec, _ = read_recording(path, gaps='mark')
+        # gaps a recorder lost are kept as missing rows (the reader's default, gaps='mark'):
+        # the diagnosis leaves them out
+        rec, _ = read_recording(path)
         return rec
     if map_path is None:
         raise FrfIdentInputError(f'{path}: a {path.suffix or "table"} file needs --map MAP.yaml '
@@ -110,7 +112,7 @@ def _match_axes(rec: Recording, robot, model_path: Path, progress) -> Recording:
 
 
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
-             validate: Sequence[Path] = (), progress: Callable[[str], None] = print
+             validate: Sequence[Path] = (), progress: Progress | None = None
              ) -> dict[str, Any]:
     """
     Run the diagnosis and write DIR/report.json, extended_model.yaml, report.html.
@@ -129,7 +131,7 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     validate
         Other records of the same robot: baseline and extended metrics on each.
     progress
-        Callback for progress lines.
+        Called with one line per step; None: silent.
 
     Returns
     -------
@@ -137,6 +139,7 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     'recording': the diagnosed data, its joints matched to the model's axes}
 
     """
+    progress = sink(progress)
     from frf_ident.core.diagnosis import diagnose_experiments, diagnose_timeseries
     from frf_ident.io.model_file import load_model, save_model
     from frf_ident.report.html import write_diagnosis_report

@@ -21,13 +21,10 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-import sys
-from typing import Callable
 
 from frf_ident.app import stream_estimate
-from frf_ident.app.console import say
 from frf_ident.app.outdir import clear_outputs
-from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
+from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 
 __all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'read_estimates']
@@ -37,7 +34,7 @@ OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png')
 
 
 def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max_memory_mb,
-                   window_s: float, progress: Callable[[str], None]):
+                   window_s: float | None, progress: Progress):
     """
     Read the bag (in memory or streamed) and estimate.
 
@@ -58,8 +55,9 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     max_memory_mb : float or None
         Memory budget of the in-memory reader in MB (> 0); None: a quarter of the physical
         memory, at most 4 GiB (:func:`~frf_ident.app.stream_estimate.default_memory_budget`).
-    window_s : float
-        Block length in s (> 0) for bags without experiment descriptors.
+    window_s : float or None
+        Block length in s (> 0) for bags without experiment descriptors; None: the
+        default :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
     progress : callable
         Called with one line of text per step.
 
@@ -71,14 +69,14 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     """
     if max_memory_mb is not None and not max_memory_mb > 0:
         raise FrfIdentInputError(f'--max-memory {max_memory_mb}: expected a size in MB > 0')
-    if not window_s > 0:
+    if window_s is not None and not window_s > 0:
         raise FrfIdentInputError(f'--window {window_s}: expected a block length in s > 0')
     budget = stream_estimate.default_memory_budget() if max_memory_mb is None else \
         int(max_memory_mb * (1 << 20))
     if stream or stream_estimate.needs_streaming(bag, budget):
         res = stream_estimate.stream_estimate(bag, joints=joints, t_range=t_range,
                                               block_s=window_s, options=options,
-                                              progress=progress, bar=sys.stderr.isatty())
+                                              progress=progress)
         st = res.stats
         progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
                  f'at most {st.peak_rows} held at once')
@@ -92,12 +90,12 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     if joints is not None:
         check_joints(joints)
     try:
-        rec, timing = read_recording(bag, t_range=t_range, gaps='mark')
+        rec, timing = read_recording(bag, t_range=t_range)
     except InputError:
         if joints is None:
             raise
         # a joint not asked for is unreadable (inf, say): the asked ones alone, as before
-        rec, timing = read_recording(bag, joints=joints, t_range=t_range, gaps='mark')
+        rec, timing = read_recording(bag, joints=joints, t_range=t_range)
     for line in timing.summary():
         progress(line)
     if joints is None:
@@ -113,8 +111,7 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,
                  options=None, stream: bool | None = None, max_memory_mb: float | None = None,
-                 window_s: float = DEFAULT_BLOCK_S,
-                 progress: Callable[[str], None] = say) -> dict:
+                 window_s: float | None = None, progress: Progress | None = None) -> dict:
     """
     Estimate every FRF the bag supports; write frf.json, estimates.json, summary.json, bode.png.
 
@@ -138,9 +135,10 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     max_memory_mb
         Memory budget of the in-memory reader (default: a quarter of RAM).
     window_s
-        Streaming block length for bags without experiment descriptors [s].
+        Block length for bags without experiment descriptors [s]; None: the default
+        :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
     progress
-        Called with one line per step.
+        Called with one line per step; None: silent.
 
     Returns
     -------
@@ -155,6 +153,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     """
     from frf_ident.errors import EstimationError
     from frf_ident.report.figures import bode_figure
+    progress = sink(progress)
     try:
         estimates, timing, experiment, streamed = read_estimates(
             bag, joints, t_range, options, stream, max_memory_mb, window_s, progress)

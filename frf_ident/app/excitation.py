@@ -660,7 +660,7 @@ def fill_torque_gaps(u: np.ndarray, max_gap: int = MAX_TORQUE_GAP) -> np.ndarray
     torque stays NaN). Gaps of up to ``max_gap`` samples are filled. A filled sample at a
     sine's crest at the chirp's 60 Hz and 1 kHz reads 7 % (one missed) or 16 % (two) low, but
     the step's peak and spectrum come from every sample over many cycles: with every third
-    joint state missed the peak torque was 0.02 % off (test_excitation_safety.py).
+    joint state missed the peak torque was 0.02 % off (test/app/test_excitation_safety.py).
 
     Parameters
     ----------

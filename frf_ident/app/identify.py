@@ -15,16 +15,16 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
-from frf_ident.app.console import say
 from frf_ident.app.outdir import check_out
+from frf_ident.core.progress import Progress
 
 __all__ = ['run_identify']
 
 
 def run_identify(model_path: str | Path | None, plant_spec: str | None, config: Any,
-                 out: str | Path, *, progress: Callable[[str], None] = say):
+                 out: str | Path, *, progress: Progress | None = None):
     """
     Run the identification experiments in closed loop and write the bag.
 
@@ -40,7 +40,7 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
         Bag directory to create; an existing path, or one that cannot be created, is
         refused before anything runs (:func:`~frf_ident.app.outdir.check_out`).
     progress : callable, optional
-        Called with one line per step; default :func:`~frf_ident.app.console.say`.
+        Called with one line per step; default None: silent.
 
     Returns
     -------

@@ -15,16 +15,15 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Callable
 
-from frf_ident.app.console import say
 from frf_ident.app.outdir import check_out
+from frf_ident.core.progress import Progress, sink
 
 __all__ = ['import_file']
 
 
 def import_file(file: Path, map_path: Path, out: str | Path, *,
-                progress: Callable[[str], None] = say) -> Path:
+                progress: Progress | None = None) -> Path:
     """
     Import a measured table as a bag and say what excitation each joint carries.
 
@@ -38,7 +37,7 @@ def import_file(file: Path, map_path: Path, out: str | Path, *,
         Bag directory to create; an existing path, or one that cannot be created, is
         refused before the file is read (:func:`~frf_ident.app.outdir.check_out`).
     progress
-        Called with one line per step.
+        Called with one line per step; None: silent.
 
     Returns
     -------
@@ -46,6 +45,7 @@ def import_file(file: Path, map_path: Path, out: str | Path, *,
         ``out``.
 
     """
+    progress = sink(progress)
     from frf_ident.bag import write_recording
     from frf_ident.core.excitation.detect import detect_excitation, excitation_source
     from frf_ident.errors import EstimationError

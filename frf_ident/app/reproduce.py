@@ -24,12 +24,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.excitation.chirp import chirp_phase_flips, ChirpDesign
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
 from frf_ident.core.model.params import AxisParams, RobotParams
+from frf_ident.core.progress import Progress, sink
 from frf_ident.core.simulation.analytic import two_mass_frf
 from frf_ident.core.simulation.open_loop import (resonance_peak, run_open_loop_chirp,
                                                  run_open_loop_multisine)
@@ -109,7 +110,7 @@ PAPER_SEED = 2015
 
 def reproduce_paper(*, n_realisations: int = PAPER_REALISATIONS, seed: int = PAPER_SEED,
                     fs: float = 1000.0, substeps: int = 4,
-                    progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                    progress: Progress | None = None) -> dict[str, Any]:
     """
     Run all cases and designs of Section 6; return the results.json content.
 
@@ -145,7 +146,7 @@ def reproduce_paper(*, n_realisations: int = PAPER_REALISATIONS, seed: int = PAP
     """
     if seed < 0:
         raise DesignError(f'--seed {seed}: expected an integer >= 0')
-    say = progress or (lambda _msg: None)
+    say = sink(progress)
     design = design_odd_multisine(1.0, 60.0, bound=150.0, resolution_hz=0.1, fs=fs)
     rng = np.random.default_rng(seed)
     realisations = [multisine_realisation(design, 1, rng, fs=fs) for _ in range(n_realisations)]

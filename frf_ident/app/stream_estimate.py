@@ -35,7 +35,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import os
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from frf_ident.bag import timing as tm
 from frf_ident.bag import windows as bs
@@ -43,8 +43,9 @@ from frf_ident.core.estimation.described import (check_joints, check_recording,
                                                  complete_chirp_iterations, cut_short_error,
                                                  experiment_joints, joint_channels,
                                                  SegmentEstimator)
-from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, estimate_in_blocks
+from frf_ident.core.estimation.detected import block_length, estimate_in_blocks
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import EstimationError
 
 #: in-memory arrays take about this many bytes per byte of MCAP data (measured: 3-joint
@@ -117,7 +118,7 @@ def needs_streaming(bag: str | Path, budget_bytes: int) -> bool:
         exceeds ``budget_bytes``.
 
     """
-    from frf_ident.bag.reader import locate
+    from frf_ident.bag.layout import locate
     size = sum(f.stat().st_size for f in locate(bag).files)
     return size * MEMORY_PER_BAG_BYTE > budget_bytes
 
@@ -131,9 +132,9 @@ def _in_range(windows: list[tuple[int, int]], t_range: tuple[float, float] | Non
 
 
 def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
-                    t_range: tuple[float, float] | None = None, block_s: float = DEFAULT_BLOCK_S,
-                    options: Any = None, progress: Callable[[str], None] | None = None,
-                    bar: bool = False) -> StreamedEstimate:
+                    t_range: tuple[float, float] | None = None, block_s: float | None = None,
+                    options: Any = None, progress: Progress | None = None
+                    ) -> StreamedEstimate:
     """
     Every estimate the bag supports, read window by window (see the module docstring).
 
@@ -154,13 +155,14 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         (t_start, t_end) in s of the bag clock, t_start < t_end: analyse only the segments
         or blocks inside this range; default: the whole bag.
     block_s : float, optional
-        Block length in s for bags without experiment descriptors.
+        Block length in s for bags without experiment descriptors; default
+        :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
     options : ExcitationOptions, optional
         Excitation options replacing detection; default None: detect the excitation.
     progress : callable, optional
-        Called with one line of text per step; default: silent.
-    bar : bool, optional
-        Show a progress bar of the bytes scanned.
+        Called with one line of text per step; default None: silent. Given, the
+        bag's scan also draws a bar of the bytes read on a terminal
+        (:mod:`frf_ident.core.progress`).
 
     Returns
     -------
@@ -175,7 +177,8 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         lies inside the analysed windows, or the data do not support an estimate.
 
     """
-    say = progress or (lambda _msg: None)
+    say = sink(progress)
+    block_s = block_length(block_s)
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
         raise EstimationError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
     if joints is not None:
@@ -197,8 +200,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         windows = _in_range(bs.segment_windows(segments), t_range)
         say(f'streaming: {len(segments)} experiment segments in {len(windows)} windows')
         # every joint the experiments excited takes part; the wanted channels are picked
-        reader = bs.WindowReader(bag, windows=windows, experiment=exp, progress=bar,
-                                 gaps='mark')
+        reader = bs.WindowReader(bag, windows=windows, experiment=exp, progress=progress)
         est = SegmentEstimator(segments)
         for rec, report in reader:
             if joints is not None:
@@ -227,7 +229,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
             f'{block_s:g} s')
         span = None if t_range is None else tuple(int(round(x * 1e9)) for x in t_range)
         reader = bs.WindowReader(bag, block_s=block_s, joints=joints, experiment=exp,
-                                 span=span, progress=bar, gaps='mark')
+                                 span=span, progress=progress)
 
         def blocks():
             for rec, report in reader:
@@ -245,5 +247,5 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     return StreamedEstimate(estimates, timing, reader.stats, meta, notes)
 
 
-__all__ = ['DEFAULT_BLOCK_S', 'MEMORY_PER_BAG_BYTE', 'StreamedEstimate', 'default_memory_budget',
+__all__ = ['MEMORY_PER_BAG_BYTE', 'StreamedEstimate', 'default_memory_budget',
            'needs_streaming', 'stream_estimate']

@@ -12,7 +12,9 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """rosbag2 MCAP input/output of frf_ident (see README_bag.md)."""
-from .reader import bag_info, read_recording, reindex
+from .info import bag_info
+from .reader import read_recording
+from .repair import reindex
 from .timing import TimingReport, TopicTiming
 from .topics import BagTopics
 from .writer import BagRecorder, write_recording

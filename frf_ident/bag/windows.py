@@ -36,14 +36,18 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from frf_ident.core.estimation.detected import MIN_ADVANCE_S
+from frf_ident.core.progress import checked, Progress
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import BagError
 import numpy as np
 
 from . import timing as tm
+from .assemble import assemble, DEFAULT_GAPS
+from .collect import Collector, iter_batches
+from .layout import BagFiles, expected_counts, locate
 from .mcapio import ScanStats
-from .reader import (assemble, BagFiles, Collector, expected_counts, iter_batches, locate,
-                     read_descriptors, recovery_report)
+from .reader import read_descriptors
+from .repair import recovery_report
 from .topics import BagTopics
 
 _PAD_NS = 10_000_000          # windows reach 10 ms beyond their segment
@@ -94,7 +98,7 @@ def read_experiment(path: str | Path, *, topics: BagTopics | None = None) -> Exp
     bag = locate(path)
     col = Collector(bag, topics, None, {})
     stats: list[ScanStats] = []
-    for batch in iter_batches(bag, {topics.experiment}, False, stats):
+    for batch in iter_batches(bag, {topics.experiment}, None, stats):
         col.feed(batch)
     meta, segments, warnings = read_descriptors(col.events, bag, topics)
     return ExperimentIndex(meta, segments, warnings, len(col.events))
@@ -184,10 +188,11 @@ class WindowReader:
         and rows this close to a window are kept for it.
     drain_rows : int, optional
         Messages fed between two attempts to emit windows and drop passed rows.
-    progress : bool, optional
-        Show a progress bar of the bytes read.
-    gaps : {'refuse', 'mark'}, optional
-        Gaps of missing joint states, as in :func:`read_recording`; default 'refuse'.
+    progress : callable, optional
+        Progress sink, as in :func:`read_recording`; default None: silent.
+    gaps : {'mark', 'refuse'}, optional
+        Gaps of missing joint states, as in :func:`read_recording`; default
+        :data:`~frf_ident.bag.assemble.DEFAULT_GAPS` ('mark').
 
     Raises
     ------
@@ -203,7 +208,7 @@ class WindowReader:
                  topics: BagTopics | None = None, experiment: ExperimentIndex | None = None,
                  span: tuple[int, int] | None = None,
                  margin_s: float = 1.0, drain_rows: int = 1 << 16,
-                 progress: bool = False, gaps: str = 'refuse') -> None:
+                 progress: Progress | None = None, gaps: str = DEFAULT_GAPS) -> None:
         if (windows is None) == (block_s is None):
             raise ValueError('give exactly one of windows= or block_s=')
         if block_s is not None and not block_s > 0:
@@ -219,7 +224,7 @@ class WindowReader:
         self.margin_ns = int(round(margin_s * 1e9))
         self.drain_rows = int(drain_rows)
         self.span = span
-        self.progress = progress
+        self.progress = checked(progress)
         if gaps not in tm.GAP_MODES:
             raise ValueError(f'{gaps=}: expected one of {tm.GAP_MODES}')
         self.gaps = gaps

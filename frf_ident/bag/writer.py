@@ -318,7 +318,7 @@ class BagRecorder:
     ``fsync=True``); only the open chunk is lost, at most ``chunk_bytes`` of data or the last
     ``flush_period_s``. Summary, footer and metadata.yaml are written by ``close()``;
     :func:`frf_ident.bag.read_recording` reads a bag without them, and
-    :func:`frf_ident.bag.reader.reindex` rewrites it as a complete bag.
+    :func:`frf_ident.bag.repair.reindex` rewrites it as a complete bag.
     """
 
     def __init__(self, *, topics: BagTopics | None = None, chunk_bytes: int = 64 * 1024,

@@ -67,10 +67,12 @@ def run(args: argparse.Namespace) -> int:
     """
     from dataclasses import replace
 
+    from frf_ident.app.console import say
     from frf_ident.app.demo import DEMO_CHIRP, DEMO_MULTISINE, run_demo
     from frf_ident.app.outdir import check_out
     out = check_out(args.out, outputs=(), overwrite=False)
     ms = replace(DEMO_MULTISINE, n_realisations=args.realisations, n_periods=args.periods,
                  resolution_hz=args.resolution)
     ch = replace(DEMO_CHIRP, duration=args.chirp_duration, max_iterations=args.max_iterations)
-    return run_demo(out, model=args.model, robot=args.robot, multisine=ms, chirp=ch)
+    return run_demo(out, model=args.model, robot=args.robot, multisine=ms, chirp=ch,
+                    progress=say)

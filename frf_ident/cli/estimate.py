@@ -34,7 +34,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The subcommand's parser; the arguments are added to it.
 
     """
-    from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
+    from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S
     p.add_argument('bag', type=Path)
     add_output_arguments(p)
     p.add_argument('--joints', help='comma list of joint names to analyse (default: all)')
@@ -48,7 +48,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--max-memory', type=float, default=None, metavar='MB',
                    help='memory the in-memory reader may use before streaming (default: a '
                         'quarter of RAM, at most 4096)')
-    p.add_argument('--window', type=float, default=DEFAULT_BLOCK_S, metavar='S',
+    p.add_argument('--window', type=float, default=None, metavar='S',
                    help=f'streaming block length for bags without experiment descriptors '
                         f'[s] (default {DEFAULT_BLOCK_S:g}; must hold a few multisine periods '
                         f'or a whole chirp)')
@@ -112,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
         the bag cannot be read or does not support an estimate (one line naming it).
 
     """
+    from frf_ident.app.console import say
     from frf_ident.app.estimate import estimate_bag, OUTPUT_FILES
     from frf_ident.app.outdir import check_out
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
@@ -119,5 +120,5 @@ def run(args: argparse.Namespace) -> int:
     estimate_bag(args.bag, out, joints=joints,
                  t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary,
                  options=excitation_options(args), stream=args.stream,
-                 max_memory_mb=args.max_memory, window_s=args.window)
+                 max_memory_mb=args.max_memory, window_s=args.window, progress=say)
     return 0

@@ -114,7 +114,8 @@ def run(args: argparse.Namespace) -> int:
     """
     from frf_ident.app.console import say
     from frf_ident.app.identify import run_identify
-    rec = run_identify(args.model, args.plant, identification_config(args), args.out)
+    rec = run_identify(args.model, args.plant, identification_config(args), args.out,
+                       progress=say)
     s = rec.meta['summary']
     if 'multisine' in s:
         m = s['multisine']

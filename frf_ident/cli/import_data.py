@@ -59,6 +59,7 @@ def run(args: argparse.Namespace) -> int:
         The file or map is unusable, or the bag exists (one line naming it).
 
     """
+    from frf_ident.app.console import say
     from frf_ident.app.import_data import import_file
-    import_file(args.file, args.map, args.out)
+    import_file(args.file, args.map, args.out, progress=say)
     return 0

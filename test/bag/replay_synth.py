@@ -180,7 +180,7 @@ def drop_bursts(src, dst, bursts: list[tuple[float, float]], *,
     (a recorder that stalls loses all streams alike). Returns how many were lost.
     """
     from frf_ident.bag import BagRecorder
-    from frf_ident.bag.reader import iter_raw
+    from frf_ident.bag.repair import iter_raw
     spans = [(int(round(a * 1e9)), int(round((a + d) * 1e9))) for a, d in bursts]
     lost = 0
     rec = BagRecorder(chunk_bytes=1 << 20, flush_period_s=1e9)

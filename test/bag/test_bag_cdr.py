@@ -98,5 +98,11 @@ def test_bench_and_progress(clean_bag: Path, capsys: pytest.CaptureFixture[str])
     assert result['frf_ident']['joint_states_per_s'] > 0
     assert result['rosbags_anyreader']['peak_bytes'] > 0
     assert json.dumps(result)
-    read_recording(clean_bag, progress=True)
-    assert 'clean' in capsys.readouterr().err
+    lines: list[str] = []
+    read_recording(clean_bag, progress=lines.append)
+    size_mb = sum(f.stat().st_size for f in clean_bag.glob('*.mcap')) / 1e6
+    assert len(lines) == 1 and lines[0].startswith(f'{clean_bag}: read {size_mb:.1f} MB in 1 '
+                                                   f'file(s), ')
+    assert capsys.readouterr().err == ''      # the bar is drawn on a terminal only
+    with pytest.raises(TypeError, match='progress=True: expected a callable'):
+        read_recording(clean_bag, progress=True)     # the bool it once took

@@ -21,7 +21,7 @@ import tempfile
 
 from bag_synth import make_recording
 from frf_ident.bag import bag_info, BagRecorder, read_recording, write_recording
-from frf_ident.bag.reader import iter_raw
+from frf_ident.bag.repair import iter_raw
 from frf_ident.bag.topics import QOS_DEFAULT
 from frf_ident.core.recording import Recording
 from frf_ident.errors import BagError
@@ -112,7 +112,7 @@ def test_corrupt_chunk_costs_that_chunk_only(chunky_bag: Path, small_rec: Record
     Inside a chunk's data its CRC fails (the writer fills in the chunk CRCs that rosbags
     leaves at 0, as ros2 bag record's writer does); on a record frame the scan resumes at the
     next chunk the summary indexes. Every other message is read as written; a stretch of lost
-    joint states is marked as missing (``gaps='mark'``, as diagnose reads). At four places in
+    joint states is marked as missing (``gaps='mark'``, the default). At four places in
     the file: both kinds of damage occur and at least one hits the joint states. The summary
     says the bag was damaged, naming the problem (a CRC mismatch reads every byte).
     """
@@ -120,7 +120,7 @@ def test_corrupt_chunk_costs_that_chunk_only(chunky_bag: Path, small_rec: Record
     for at in (0.3, 0.4, 0.5, 0.6):
         bag = _copy(chunky_bag, tmp_path / f'bad{at}')
         _damage(bag, at)
-        rec, rep = read_recording(bag, gaps='mark')
+        rec, rep = read_recording(bag)
         r = rep.recovery
         assert r['chunks_lost'] == 1 and r['complete'] and r['problems'], r
         # every byte read, yet damaged: the summary says so (it printed only the gap before)

@@ -53,13 +53,13 @@ def test_jitter_and_drops_resampled(tmp_path: Path) -> None:
 def test_gap_too_large_is_refused(tmp_path: Path) -> None:
     write_robot_bag(tmp_path / 'gap', seconds=5.0, drop=0.0, gap=(2.3, 120))
     with pytest.raises(BagError) as exc:
-        read_recording(tmp_path / 'gap')
+        read_recording(tmp_path / 'gap', gaps='refuse')
     msg = str(exc.value)
     assert '\n' not in msg
     assert 'gap of 0.120 s (120 samples) at t=102.29' in msg
     assert '/joint_states' in msg and 'exceeds 3 samples' in msg
     # reading around the gap works
-    rec, rep = read_recording(tmp_path / 'gap', t_range=(100.0, 102.25))
+    rec, rep = read_recording(tmp_path / 'gap', t_range=(100.0, 102.25), gaps='refuse')
     assert rec.t[-1] <= 102.25 and not rep.topics['/joint_states'].gaps
 
 
@@ -147,9 +147,9 @@ def test_slow_commands_are_zero_order_held(tmp_path: Path) -> None:
 
 
 def test_long_gap_kept_as_missing_data(tmp_path: Path) -> None:
-    """gaps='mark': the grid goes through the gap, its samples are NaN, the rest as usual."""
+    """gaps='mark' (the default): the grid goes through the gap, its samples NaN, rest as usual."""
     write_robot_bag(tmp_path / 'gap', seconds=5.0, drop=0.0, gap=(2.3, 120))
-    rec, rep = read_recording(tmp_path / 'gap', gaps='mark')
+    rec, rep = read_recording(tmp_path / 'gap')
     assert rec.t.size == 5000 and rep.resampled
     nan = np.flatnonzero(np.isnan(rec.velocity[:, 0]))
     np.testing.assert_array_equal(nan, np.arange(2300, 2420))

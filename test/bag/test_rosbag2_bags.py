@@ -107,7 +107,7 @@ def test_lz4_chunks_without_ros(run, reference, tmp_path):
     An MCAP with lz4-compressed chunks written by the `mcap` package (the writer rosbag2
     uses is the C++ twin of it): read like the rosbags bag.
     """
-    from frf_ident.bag.reader import iter_raw
+    from frf_ident.bag.repair import iter_raw
     from mcap.writer import CompressionType, Writer
     src = tmp_path / 'src'
     write_robot_bag(src, run, IMP, seed=1)

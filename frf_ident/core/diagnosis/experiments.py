@@ -28,6 +28,7 @@ from typing import Any, Callable
 
 from frf_ident.core.estimation.described import chirp_frf, multisine_frf
 from frf_ident.core.model.params import RobotParams
+from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.analytic import robot_frf_sampled
 from frf_ident.core.simulation.controller import PIVelocity
@@ -1288,7 +1289,7 @@ def _left_unexplained(val_ext: np.ndarray, val_base: np.ndarray, i: int) -> bool
 
 
 def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
-                         progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                         progress: Progress | None = None) -> dict[str, Any]:
     """
     Diagnose an identification recording against the nominal ``robot``.
 
@@ -1302,7 +1303,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     [...], 'candidates': [...], 'estimates': {'measured', 'nominal', 'extended'} for the plots,
     'sims': {...}, 'evaluator': ev}.
     """
-    say = progress or (lambda _m: None)
+    say = sink(progress)
     if rec.reference is None:
         raise EstimationError('recording has no velocity reference: use the time-series '
                               'diagnosis')

@@ -355,7 +355,7 @@ def regress_axis(f: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: 
     All columns are low-pass filtered like f (fc [Hz]); samples with |v| < v_eps (sticking,
     where the Coulomb force is undetermined) and outside ``mask`` are left out. t statistics
     use the effective sample count of the filtered data (:func:`effective_samples`), so under
-    white noise |t| > 1.96 has probability 0.05 (test/core/test_diagnosis.py).
+    white noise |t| > 1.96 has probability 0.05 (test/core/diagnosis/test_diagnosis.py).
     """
     sg = np.sign(lowpass(v, fs, fc))
     cols = {'offset': np.ones_like(v), 'coulomb_friction': sg, 'viscous_friction': v}

@@ -45,9 +45,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 import math
-from typing import Any, Callable
+from typing import Any
 
 from frf_ident.core.model.params import RobotParams
+from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 import numpy as np
@@ -371,7 +372,7 @@ def f_test(rss0: float, rss1: float, q: int, p: int, n_eff: float) -> float:
     (:func:`.residual.effective_samples`), and a regressor as slow as the residual picks up
     N / n_eff times a sample's noise variance per coefficient. ``rss1 / (n_eff - p)`` is that
     variance, so the plain F ratio has the F(q, n_eff - p) distribution under the null
-    (test/core/test_diagnosis.py checks the false-alarm rate by Monte Carlo).
+    (test/core/diagnosis/test_diagnosis.py checks the false-alarm rate by Monte Carlo).
 
     Parameters
     ----------
@@ -634,7 +635,7 @@ def _normal_draws(mean: np.ndarray, cov: np.ndarray, n: int = 4000) -> np.ndarra
 
 
 def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
-                        progress: Callable[[str], None] | None = None
+                        progress: Progress | None = None
                         ) -> dict[str, Any]:
     """
     Diagnose a time-series recording against the nominal ``robot``.
@@ -659,7 +660,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     'unexplained', 'rejected' (candidates with their numbers), 'residual' (for the plots).
 
     """
-    say = progress or (lambda _m: None)
+    say = sink(progress)
     check_diagnosable(rec, robot.joint_names)
     rec, lost = bridge_gaps(rec)
     fs = rec.fs

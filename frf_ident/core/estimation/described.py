@@ -51,7 +51,7 @@ def joint_channels(frf: FrequencyResponse, joints: list[str]) -> FrequencyRespon
     A MIMO multisine excites every joint at once, so it is estimated with all of them and
     its channels are picked afterwards: an estimate from a subset of the inputs takes the
     others' response for its own (median error to the analytic FRF 0.029 dB against 0.004 dB
-    picked, ``pytest -s test/test_estimate_cli.py -k pick_channels``).
+    picked, ``pytest -s test/cli/test_estimate_cli.py -k pick_channels``).
 
     Parameters
     ----------
@@ -740,8 +740,6 @@ def estimate_detected(rec: Recording, options=None, *, block_s: float | None = N
     detection where given) and checked; one entry 'detected/<joint>' per excited input, the
     detection sentences in each estimate's meta['detected'].
     """
-    from frf_ident.core.estimation.detected import (DEFAULT_BLOCK_S, estimate_in_blocks,
-                                                    RecordingBlocks)
-    block_s = DEFAULT_BLOCK_S if block_s is None else block_s
+    from frf_ident.core.estimation.detected import estimate_in_blocks, RecordingBlocks
     blocks = RecordingBlocks(rec, block_s)
     return estimate_in_blocks(blocks, options, resume=blocks.continue_from, block_s=block_s)

@@ -54,11 +54,13 @@ from frf_ident.errors import EstimationError
 import numpy as np
 
 __all__ = ['DEFAULT_BLOCK_S', 'MIN_ADVANCE_S', 'DetectedEstimator', 'ExcitationOptions',
-           'RecordingBlocks', 'check_detected_segment', 'detect_segments', 'detected_frf',
-           'estimate_in_blocks']
+           'RecordingBlocks', 'block_length', 'check_detected_segment', 'detect_segments',
+           'detected_frf', 'estimate_in_blocks']
 
 #: block length [s] in which recordings without descriptors are detected and estimated (in
-#: memory and streamed alike): a few multisine periods or a whole chirp must fit in one block
+#: memory and streamed alike): a few multisine periods or a whole chirp must fit in one block.
+#: Defined here only: every signature above (app, cli) takes ``block_s=None`` and
+#: :func:`block_length` resolves it.
 DEFAULT_BLOCK_S = 300.0
 
 #: a block that used data up to t starts the next block there (no period lost at the
@@ -654,6 +656,38 @@ def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
     return frf
 
 
+def block_length(block_s: float | None = None) -> float:
+    """
+    Return the detection block length [s]: ``block_s``, or :data:`DEFAULT_BLOCK_S` for None.
+
+    Parameters
+    ----------
+    block_s : float, optional
+        Block length [s] (> 0); None: the default.
+
+    Returns
+    -------
+    float
+        The block length [s].
+
+    Raises
+    ------
+    EstimationError
+        ``block_s`` is not > 0.
+
+    Examples
+    --------
+    >>> block_length(), block_length(60.0)
+    (300.0, 60.0)
+
+    """
+    if block_s is None:
+        return DEFAULT_BLOCK_S
+    if not block_s > 0:
+        raise EstimationError(f'{block_s=}: expected a block length > 0 s')
+    return float(block_s)
+
+
 class RecordingBlocks:
     """
     Cut an in-memory recording into blocks as a streamed bag is cut.
@@ -668,15 +702,13 @@ class RecordingBlocks:
     rec
         The recording.
     block_s
-        Block length [s].
+        Block length [s]; None: :data:`DEFAULT_BLOCK_S`.
 
     """
 
-    def __init__(self, rec: Recording, block_s: float = DEFAULT_BLOCK_S) -> None:
-        if not block_s > 0:
-            raise EstimationError(f'{block_s=}: expected a block length > 0 s')
+    def __init__(self, rec: Recording, block_s: float | None = None) -> None:
         self.rec = rec
-        self.block_ns = int(round(block_s * 1e9))
+        self.block_ns = int(round(block_length(block_s) * 1e9))
         self._lo: int | None = None
         self._resume: int | None = None
 
@@ -736,7 +768,7 @@ def _leftover(det: DetectedEstimator, rec: Recording) -> bool:
 
 def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions | None = None,
                        *, resume: Callable[[float], None] | None = None,
-                       block_s: float = DEFAULT_BLOCK_S) -> dict[str, FrequencyResponse]:
+                       block_s: float | None = None) -> dict[str, FrequencyResponse]:
     """
     Detect and estimate block by block (:class:`DetectedEstimator`).
 
@@ -754,7 +786,7 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     resume
         E.g. ``RecordingBlocks.continue_from``.
     block_s
-        Block length [s], for messages.
+        Block length [s], for messages; None: :data:`DEFAULT_BLOCK_S`.
 
     Returns
     -------
@@ -788,8 +820,9 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     if not det.entries:
         if n == 1 and first is not None:
             raise first
-        raise EstimationError(f'no multisine or chirp found in any {block_s:g} s block '
-                              f'({n} blocks; first: {notes[0] if notes else "no joint states"})')
+        raise EstimationError(f'no multisine or chirp found in any {block_length(block_s):g} s '
+                              f'block ({n} blocks; first: '
+                              f'{notes[0] if notes else "no joint states"})')
     estimates = det.results()
     for frf in estimates.values():
         frf.meta['detected'] = frf.meta['detected'] + notes

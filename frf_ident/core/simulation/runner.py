@@ -24,20 +24,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import time
-from typing import Any, Callable
+from typing import Any
 
 from frf_ident.core.excitation.engine import PhaseEngine
 from frf_ident.core.excitation.procedures import (check_torque_bound, ChirpConfig, ChirpIteration,
                                                   multisine_procedure, MultisineConfig, Phase,
                                                   POSITION_GAIN)
 from frf_ident.core.model.params import RobotParams
+from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
-
-Progress = Callable[[str], None]
 
 
 class ClosedLoop:
@@ -260,7 +259,7 @@ def run_identification(plant: Any, controller: PIVelocity,
 
     """
     cfg = config or IdentificationConfig()
-    say = progress or (lambda _m: None)
+    say = sink(progress)
     loop = ClosedLoop(plant, controller)
     fs = 1.0 / loop.dt
     summary: dict[str, Any] = {}

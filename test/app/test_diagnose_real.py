@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 from scipy.io import loadmat
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT.parent / 'shared' / 'data'
 EMPS = DATA / 'EMPS' / 'DATA_EMPS.mat'
 KUKA = DATA / 'KUKA_KR300_Weigand2021' / 'recorded_FF_A_2020-10-21.mat'

@@ -145,7 +145,7 @@ def test_stiffness_mismatch_is_named_with_its_value(scale, tmp_path):
 
 def _evaluator(scene: dict, tmp_path) -> Evaluator:
     """Return the evaluator of the reference plant's identification record of ``scene``."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
     import plants.reference as ref
     ref.SCENE = scene
     try:

@@ -30,7 +30,7 @@ import pytest
 from scipy import signal, stats
 from scipy.io import loadmat
 
-SILVERBOX = (Path(__file__).resolve().parents[2].parent / 'shared' / 'data' / 'Silverbox'
+SILVERBOX = (Path(__file__).resolve().parents[3].parent / 'shared' / 'data' / 'Silverbox'
              / 'SNLS80mV.mat')
 FS = 1e7 / 2 ** 14         # [Hz] (SOURCE.md)
 N = 8192                   # samples per period

@@ -26,7 +26,7 @@ from frf_ident.cli import main
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EMPS_MODEL = ROOT / 'config' / 'model_emps.yaml'
 IDENTIFY = ['--realisations', '2', '--periods', '2', '--resolution', '0.5',
             '--chirp-duration', '8', '--max-iterations', '2']

@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / 'config' / 'model_3axis.yaml'
 
 CSV = 't,q,tau\n' + ''.join(f'{k * 0.001:.3f},{k},{2 * k}\n' for k in range(8))
@@ -270,6 +270,7 @@ def test_row_0_of_a_1xn_and_col_0_of_an_nx1_variable(tmp_path):
     (['identify', '--seed', '-1', '--procedures', 'multisine'], 'seed=-1 must be at least 0'),
     (['reproduce', 'paper', '--seed', '-1'], '--seed -1: expected an integer >= 0'),
     (['identify', '--plant', 'os:path'], "'path' is a module, not a class taking the model"),
+    (['estimate', 'any_bag', '--window', '0'], '--window 0.0: expected a block length in s > 0'),
 ])
 def test_cli_values_a_user_could_type_are_refused_with_one_line(args, match, tmp_path, capsys):
     """A negative seed and a --plant that is no class exited 1 (ValueError, TypeError)."""

@@ -29,7 +29,7 @@ from frf_ident.cli import main
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / 'bag'))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'bag'))
 from replay_synth import Imperfections, multisine_run, truth_frf, write_robot_bag  # noqa: E402
 
 #: 6 bursts of 90 ms, drawn once (uniform over the first 80 s of a 10-period run)

@@ -32,7 +32,7 @@ from frf_ident.io.model_file import load_model
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 EMPS = ROOT.parent / 'shared' / 'data' / 'EMPS' / 'DATA_EMPS.mat'
 CFG = ROOT / 'config'
 

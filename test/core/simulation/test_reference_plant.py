@@ -29,7 +29,7 @@ import numpy as np
 from plants import reference
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 MODEL = ROOT / 'config' / 'model_3axis.yaml'
 

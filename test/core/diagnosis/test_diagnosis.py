@@ -41,7 +41,7 @@ import numpy as np
 import pytest
 import scipy.io as sio
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 RIGID = {'frf_ident_model': 1, 'sample_rate': 500.0, 'axes': [
     {'name': f'joint_{i + 1}', 'motor_inertia': j, 'link_inertia': 1e-3, 'stiffness': 1e9,

@@ -205,7 +205,7 @@ def test_bad_input(x, fs, needle):
         detect_excitation(x, fs)
 
 
-DAISY = Path(__file__).resolve().parents[2].parent / 'shared' / 'data' / 'DaISy_robot_arm' \
+DAISY = Path(__file__).resolve().parents[3].parent / 'shared' / 'data' / 'DaISy_robot_arm' \
     / 'robot_arm.dat'
 
 
