@@ -57,8 +57,8 @@ from frf_ident.errors import EstimationError
 import numpy as np
 
 __all__ = ['DEFAULT_BLOCK_S', 'MIN_ADVANCE_S', 'DetectedEstimator', 'ExcitationOptions',
-           'NoExcitationError', 'RecordingBlocks', 'check_detected_segment', 'detect_segments', 'detected_frf',
-           'estimate_in_blocks']
+           'NoExcitationError', 'RecordingBlocks', 'check_detected_segment', 'detect_segments',
+           'detected_frf', 'estimate_in_blocks']
 
 #: block length [s] in which recordings without descriptors are detected and estimated (in
 #: memory and streamed alike): a few multisine periods or a whole chirp must fit in one block
@@ -148,10 +148,10 @@ class ExcitationOptions:
 
         """
         if self.method not in (None, 'lpm'):
-            raise EstimationError(f'method={self.method!r}: expected \'lpm\' (or none: detect)')
+            raise EstimationError(f"method={self.method!r}: expected 'lpm' (or none: detect)")
         if self.method == 'lpm' and (self.chirp is not None
                                      or self.multisine_period is not None):
-            raise EstimationError(f'method=\'lpm\' with {self.text()}: the LPM is for '
+            raise EstimationError(f"method='lpm' with {self.text()}: the LPM is for "
                                   f'excitation that is neither a multisine nor a chirp')
         if self.input is not None and self.input not in rec.joint_names:
             raise EstimationError(f'input={self.input!r} is not a joint of the recording; '
@@ -299,8 +299,8 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
         notes.append(f'{rec.joint_names[j]} ({source}): {_describe(det, opts)}')
     if not found:
         raise NoExcitationError(f'no multisine or chirp found in the {source} of any joint '
-                              f'({"; ".join(notes) or "no joint moves"}); pass the experiment '
-                              f'descriptors or the excitation as options')
+                                f'({"; ".join(notes) or "no joint moves"}); pass the '
+                                f'experiment descriptors or the excitation as options')
     segments = []
     for j, det in found:
         if isinstance(det, MultisineDetection):
