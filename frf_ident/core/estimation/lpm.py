@@ -45,7 +45,7 @@ import numba
 import numpy as np
 from scipy import signal
 
-__all__ = ['DEFAULT_FRAME_S', 'DEFAULT_ORDER', 'LpmAccumulator', 'LpmLines', 'LpmResult',
+__all__ = ['DEFAULT_FRAME_SAMPLES', 'EXCITED_FRACTION', 'DEFAULT_ORDER', 'LpmAccumulator', 'LpmLines', 'LpmResult',
            'RobustLpmResult', 'default_half_width', 'lpm_frf', 'lpm_lines', 'robust_lpm',
            'welch_h1', 'welch_nperseg']
 
@@ -58,9 +58,14 @@ DEFAULT_ORDER = 2
 #: for 3 inputs while the window stays narrow (P&S ch. 7: q >= n_out for a full covariance)
 MIN_DOF_PER_INPUT = 2
 
-#: LPM frame length [s]: long records are cut into frames this long (the resolution is
-#: 1/frame), each estimated alone and the frames averaged; shorter records form one frame
-DEFAULT_FRAME_S = 30.0
+#: LPM frame length [samples]: long records are cut into frames this long (resolution
+#: fs / frame: 0.03 Hz at 1 kHz, 16384 lines per channel in frf.json), each estimated alone
+#: and the frames averaged; a shorter record is one frame
+DEFAULT_FRAME_SAMPLES = 32768
+
+#: lines whose input power (trace of S_uu) is at least this fraction of the largest line's
+#: count as excited (the band the coherence summary is taken over)
+EXCITED_FRACTION = 1e-3
 
 #: Welch segments the H1 baseline averages when the record allows (its resolution is then
 #: 8 / record length); Hann window, 50 % overlap (scipy.signal defaults)
@@ -409,9 +414,11 @@ def _h1(fs: float, nper: int, Suu, Syu, Syy, inputs, outputs) -> FrequencyRespon
     H = np.swapaxes(np.linalg.solve(Suu, np.swapaxes(Syu, 1, 2)), 1, 2)
     explained = np.real(np.einsum('fia,fia->fi', H, np.conj(Syu)))
     coh = np.clip(explained / np.maximum(Syy, 1e-300), 0.0, 1.0)
+    power = np.real(np.einsum('faa->f', Suu))
+    excited = power >= EXCITED_FRACTION * power.max()
     return FrequencyResponse(f[keep], np.moveaxis(H, 0, -1), inputs or [], outputs or [],
                              meta={'method': 'welch_h1', 'nperseg': int(nper),
-                                   'coherence': coh.T})
+                                   'coherence': coh.T, 'excited': excited})
 
 
 class LpmAccumulator:
@@ -564,7 +571,7 @@ def _indirect(fit: LpmLines, n_out: int) -> tuple[np.ndarray, np.ndarray]:
 
 def lpm_frf(y: np.ndarray, u: np.ndarray, fs: float, *, r: np.ndarray | None = None,
             order: int = DEFAULT_ORDER, half_width: int | None = None,
-            frame_s: float = DEFAULT_FRAME_S, inputs: list[str] | None = None,
+            frame_samples: int = DEFAULT_FRAME_SAMPLES, inputs: list[str] | None = None,
             outputs: list[str] | None = None) -> LpmResult:
     """
     LPM estimate of the FRF from u to y, indirect through r when given; H1 beside it.
@@ -586,8 +593,8 @@ def lpm_frf(y: np.ndarray, u: np.ndarray, fs: float, *, r: np.ndarray | None = N
         Reference signals, one per input.
     order, half_width
         As :func:`lpm_lines`.
-    frame_s : float
-        Frame length [s]; a record shorter than one frame is one frame.
+    frame_samples : int
+        Frame length; a record shorter than one frame is one frame.
     inputs, outputs : list of str, optional
         Channel names.
 
@@ -598,7 +605,7 @@ def lpm_frf(y: np.ndarray, u: np.ndarray, fs: float, *, r: np.ndarray | None = N
 
     """
     y = np.asarray(y, dtype=float).reshape(len(y), -1)
-    n = min(y.shape[0], max(1, int(round(frame_s * fs))))
+    n = min(y.shape[0], int(frame_samples))
     acc = LpmAccumulator(fs, n, order=order, half_width=half_width, inputs=inputs,
                          outputs=outputs)
     acc.add(y, u, r)

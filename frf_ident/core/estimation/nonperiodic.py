@@ -16,8 +16,8 @@ Recordings without periodic excitation (PRBS, noise, normal motion): the LPM, bl
 
 :class:`LpmBlocks` takes the blocks of a recording (in memory or a streamed bag's windows,
 :func:`frf_ident.core.estimation.detected.estimate_in_blocks`), cuts them into frames of one
-length (:data:`~frf_ident.core.estimation.lpm.DEFAULT_FRAME_S`, or the first block when it is
-shorter) and adds every frame without missing samples to an
+length (:data:`~frf_ident.core.estimation.lpm.DEFAULT_FRAME_SAMPLES`, or the first block when
+it is shorter) and adds every frame without missing samples to an
 :class:`~frf_ident.core.estimation.lpm.LpmAccumulator`. The inputs are the torques of the
 joints whose excitation source moves (the velocity reference when the bag has one, else the
 torque, as detection chooses), the outputs the velocities of every joint. With the reference
@@ -27,7 +27,7 @@ warning.
 from __future__ import annotations
 
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.estimation.lpm import (DEFAULT_FRAME_S, DIRECT_WARNING, LpmAccumulator)
+from frf_ident.core.estimation.lpm import DEFAULT_FRAME_SAMPLES, DIRECT_WARNING, LpmAccumulator
 from frf_ident.core.excitation.detect import excitation_source
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
@@ -46,8 +46,8 @@ class LpmBlocks:
 
     Parameters
     ----------
-    frame_s : float
-        LPM frame length [s] (resolution 1/frame_s); a first block shorter than that sets it.
+    frame_samples : int
+        LPM frame length (resolution fs / frame_samples); a shorter first block sets it.
     input : str, optional
         The only input joint; default: every joint whose excitation source moves.
     band : tuple of float, optional
@@ -55,9 +55,9 @@ class LpmBlocks:
 
     """
 
-    def __init__(self, frame_s: float = DEFAULT_FRAME_S, *, input: str | None = None,  # noqa: A002
+    def __init__(self, frame_samples: int = DEFAULT_FRAME_SAMPLES, *, input: str | None = None,  # noqa: A002
                  band: tuple[float, float] | None = None) -> None:
-        self.frame_s = float(frame_s)
+        self.frame_samples = int(frame_samples)
         self.input = input
         self.band = band
         self.acc: LpmAccumulator | None = None
@@ -88,7 +88,7 @@ class LpmBlocks:
                 raise EstimationError(f'no joint moves: the {source} is constant in every '
                                       f'joint; expected an excited input')
             self.inputs = [j for j in range(len(names)) if level[j] >= MIN_LEVEL * level.max()]
-        n = min(n_rows, int(round(self.frame_s * rec.fs)))
+        n = min(n_rows, self.frame_samples)
         self.acc = LpmAccumulator(rec.fs, n, inputs=[f'tau_m/{names[j]}' for j in self.inputs],
                                   outputs=[f'dq_m/{m}' for m in names])
 
@@ -181,8 +181,11 @@ class LpmBlocks:
                 f'{frf.freq_hz[0]:.4g}-{frf.freq_hz[-1]:.4g} Hz, {res.frames} frame(s) of '
                 f'{self.acc.n / self.acc.fs:.4g} s, {res.dof} dof per window'
                 + (f', {self.dropped} frame(s) dropped for gaps' if self.dropped else ''))
-        coh = np.median(h1.meta['coherence'], axis=1)
-        base = ('Welch H1 baseline (lpm_h1): median coherence '
+        ex = h1.meta['excited']
+        coh = np.median(h1.meta['coherence'][:, ex], axis=1)
+        f_ex = h1.freq_hz[ex]
+        base = (f'Welch H1 baseline (lpm_h1): median coherence over the excited '
+                f'{f_ex[0]:.4g}-{f_ex[-1]:.4g} Hz: '
                 + ', '.join(f'{n.split("/", 1)[1]} {c:.2f}' for n, c in zip(h1.outputs, coh)))
         detected = (list(notes) + [line] + ([DIRECT_WARNING] if res.method == 'direct' else [])
                     + [base])

@@ -69,7 +69,7 @@ def monte_carlo(request):
     for m in range(RUNS):
         last = run(100 + m)
         results.append(lpm_frf(last.velocity, last.effort, FS, r=last.reference,
-                               frame_s=N / FS))
+                               frame_samples=N))
     return request.param, rob, ctrl, results, last
 
 
