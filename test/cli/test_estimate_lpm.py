@@ -24,11 +24,11 @@ import json
 
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
+from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.analytic import robot_frf_sampled
 from frf_ident.core.simulation.plant import FlexibleJointPlant
-from frf_ident.core.estimation.frd import FrequencyResponse
 import numpy as np
 import pytest
 from scipy import signal
@@ -109,7 +109,8 @@ def test_csv_through_a_map_is_estimated_by_the_lpm(prbs, tmp_path, capsys):
     joints = '\n'.join(f'  - name: {n}\n    position: {{column: q{j}}}\n'
                        f'    velocity: {{column: v{j}}}\n    effort: {{column: u{j}}}\n'
                        f'    reference: {{column: r{j}}}' for j, n in enumerate(rec.joint_names))
-    (tmp_path / 'map.yaml').write_text(f'frf_ident_map: 1\ntime:\n  column: t\njoints:\n{joints}\n')
+    (tmp_path / 'map.yaml').write_text(
+        f'frf_ident_map: 1\ntime:\n  column: t\njoints:\n{joints}\n')
     bag = tmp_path / 'bag'
     assert main(['import', str(csv), '--map', str(tmp_path / 'map.yaml'), '--out', str(bag)]) == 0
     assert main(['estimate', str(bag), '--out', str(tmp_path / 'o')]) == 0

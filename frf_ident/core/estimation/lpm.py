@@ -45,7 +45,8 @@ import numba
 import numpy as np
 from scipy import signal
 
-__all__ = ['DEFAULT_FRAME_SAMPLES', 'EXCITED_FRACTION', 'DEFAULT_ORDER', 'LpmAccumulator', 'LpmLines', 'LpmResult',
+__all__ = ['DEFAULT_FRAME_SAMPLES', 'DEFAULT_ORDER', 'EXCITED_FRACTION', 'LpmAccumulator',
+           'LpmLines', 'LpmResult',
            'RobustLpmResult', 'default_half_width', 'lpm_frf', 'lpm_lines', 'robust_lpm',
            'welch_h1', 'welch_nperseg']
 

@@ -55,7 +55,8 @@ class LpmBlocks:
 
     """
 
-    def __init__(self, frame_samples: int = DEFAULT_FRAME_SAMPLES, *, input: str | None = None,  # noqa: A002
+    def __init__(self, frame_samples: int = DEFAULT_FRAME_SAMPLES, *,
+                 input: str | None = None,  # noqa: A002
                  band: tuple[float, float] | None = None) -> None:
         self.frame_samples = int(frame_samples)
         self.input = input
