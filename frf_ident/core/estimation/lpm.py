@@ -136,6 +136,48 @@ class LpmLines:
         return cv[:, None, :] * mv[None, :, :]
 
 
+#: a line's window sums are updated from the previous line's (one line out, one in, powers
+#: of r re-centred); every RESUM_LINES lines they are summed afresh so rounding cannot grow
+#: (the re-centring multiplies older rounding errors by up to (1 + RESUM_LINES / n)^(2R))
+RESUM_LINES = 32
+
+
+@numba.njit(cache=True)
+def _accumulate(X, Y, j, x, sign, suu, suy, syy, pw):  # pragma: no cover - compiled
+    """Add sign times line j at offset x = r / n to the window sums (compiled)."""
+    pw[0] = sign
+    for t in range(1, pw.size):
+        pw[t] = pw[t - 1] * x
+    n_c, n_out, R1 = suy.shape
+    for a in range(n_c):
+        ca = np.conj(X[a, j])
+        for b in range(n_c):
+            v = ca * X[b, j]
+            for t in range(pw.size):
+                suu[a, b, t] += v * pw[t]
+        for i in range(n_out):
+            v = ca * Y[i, j]
+            for t in range(R1):
+                suy[a, i, t] += v * pw[t]
+    for i in range(n_out):
+        ci = np.conj(Y[i, j]) * sign
+        for i2 in range(n_out):
+            syy[i, i2] += ci * Y[i2, j]
+
+
+@numba.njit(cache=True)
+def _shift(s, binom):  # pragma: no cover - compiled
+    """Re-centre sums of x^t to sums of (x - h)^t along the last axis (compiled, in place)."""
+    n1, n2, T = s.shape
+    for a in range(n1):
+        for b in range(n2):
+            for t in range(T - 1, 0, -1):           # descending: s[.., :t] still old
+                v = 0.0j
+                for q in range(t + 1):
+                    v += binom[t, q] * s[a, b, q]
+                s[a, b, t] = v
+
+
 @numba.njit(cache=True)
 def _lpm_kernel(Y, U, n, order, transient):  # pragma: no cover - compiled
     """
@@ -168,31 +210,30 @@ def _lpm_kernel(Y, U, n, order, transient):  # pragma: no cover - compiled
     L = np.zeros((p, p), dtype=np.complex128)
     rhs = np.empty((p, n_out + n_in), dtype=np.complex128)
     d = np.empty(p)
+    h = 1.0 / max(n, 1)
+    binom = np.zeros((2 * order + 1, 2 * order + 1))   # (x - h)^t = sum_a binom[t, a] x^a
+    for t in range(2 * order + 1):
+        c = 1.0
+        for a in range(t + 1):
+            binom[t, a] = c * (-h) ** (t - a)
+            c = c * (t - a) / (a + 1)
+    centred_before = False
     for k in range(n_lines):
         start = min(max(k - n, 0), n_lines - W)
-        suu[:] = 0.0
-        suy[:] = 0.0
-        syy[:] = 0.0
-        for w in range(W):
-            j = start + w
-            x = (j - k) / max(n, 1)
-            pw[0] = 1.0
-            for t in range(1, 2 * order + 1):
-                pw[t] = pw[t - 1] * x
-            for a in range(n_c):
-                ca = np.conj(X[a, j])
-                for b in range(n_c):
-                    v = ca * X[b, j]
-                    for t in range(2 * order + 1):
-                        suu[a, b, t] += v * pw[t]
-                for i in range(n_out):
-                    v = ca * Y[i, j]
-                    for t in range(R1):
-                        suy[a, i, t] += v * pw[t]
-            for i in range(n_out):
-                ci = np.conj(Y[i, j])
-                for i2 in range(n_out):
-                    syy[i, i2] += ci * Y[i2, j]
+        centred = start == k - n
+        if centred and centred_before and k % RESUM_LINES != 0:
+            # slide the window by one line: re-centre the sums, drop one line, add one
+            _shift(suu, binom)
+            _shift(suy, binom)
+            _accumulate(X, Y, k - 1 - n, -(n + 1) * h, -1.0, suu, suy, syy, pw)
+            _accumulate(X, Y, k + n, n * h, 1.0, suu, suy, syy, pw)
+        else:
+            suu[:] = 0.0
+            suy[:] = 0.0
+            syy[:] = 0.0
+            for w in range(W):
+                _accumulate(X, Y, start + w, (start + w - k) * h, 1.0, suu, suy, syy, pw)
+        centred_before = centred
         for a in range(n_c):
             for s in range(R1):
                 for b in range(n_c):
@@ -629,13 +670,15 @@ class RobustLpmResult:
     Attributes
     ----------
     frf : FrequencyResponse
-        The BLA at the excited lines; ``noise_variance`` and ``total_variance`` (noise plus
-        stochastic nonlinear distortion) of this one-realisation estimate.
-    nonlinear_variance : ndarray, shape (n_out, n_in, n_lines)
+        The BLA Y/U of this realisation at the excited lines (n_out, 1, n_lines), with
+        ``noise_variance`` and ``total_variance`` (noise plus stochastic nonlinear
+        distortion): the variances of this one-realisation estimate, comparable with the
+        spread over realisations of the multisine BLA.
+    nonlinear_variance : ndarray, shape (n_out, 1, n_lines)
         max(total - noise, 0).
     noise_from : str
-        'periods' (spread over >= 2 periods) or 'non-excited lines' (one period: the output
-        level at the neighbouring non-excited lines, which holds even distortions too).
+        'periods' (spread over >= 2 periods) or 'non-excited lines' (one period: the LPM
+        residual at the non-excited lines of the band; it holds even distortions too).
     dof : int
         Residual dof of the local polynomial over excited lines.
 
@@ -653,24 +696,26 @@ def robust_lpm(y: np.ndarray, u: np.ndarray, period_samples: int, lines: np.ndar
     """
     Robust LPM for periodic data: the BLA and its noise and nonlinear variance from one record.
 
-    The record holds P >= 1 whole steady-state periods. The spectra of the periods are
-    averaged at the excited ``lines``. There G_BLA is smooth over frequency while the
-    stochastic nonlinear contribution of a random-phase multisine varies randomly from line
-    to line like noise: a local polynomial of G over neighbouring excited lines (no
-    transient: steady state) leaves both in its residual, the total variance. The noise
+    The record holds P >= 1 whole steady-state periods of a random-phase multisine on one
+    input. The spectra of the periods are averaged at the excited ``lines``, where the BLA
+    is Y/U. Over neighbouring excited lines G_BLA is smooth while the stochastic nonlinear
+    contribution varies randomly from line to line like noise: the residual of a local
+    polynomial of G over the excited lines (no transient: steady state; dof-corrected)
+    estimates the variance of both at the output, total / |U|^2 that of Y/U. The noise
     variance comes from the spread over periods (P >= 2) or, with one period, from the
-    output at the non-excited lines between the excited ones (locally averaged).
+    LPM residual at the non-excited lines of the band (their input leakage regressed out,
+    transient included), averaged over the non-excited lines near each excited one.
 
     Parameters
     ----------
-    y : array_like, shape (P * period_samples, n_out)
+    y : array_like, shape (P * period_samples, n_out) or (P * period_samples,)
         Outputs.
-    u : array_like, shape (P * period_samples, n_in)
-        Inputs.
+    u : array_like, shape (P * period_samples,)
+        The input.
     period_samples : int
         Samples per period.
     lines : array_like of int
-        Excited DFT bins of one period (at least one window of them, consecutive in order).
+        Excited DFT bins of one period, increasing (at least one window of them).
     fs : float
         Sample rate [Hz] (for the frequencies).
     order, half_width
@@ -683,11 +728,15 @@ def robust_lpm(y: np.ndarray, u: np.ndarray, period_samples: int, lines: np.ndar
     Raises
     ------
     EstimationError
-        Less than one whole period, or too few excited lines for one window.
+        More than one input (one realisation cannot separate inputs), less than one whole
+        period, or too few lines for one window.
 
     """
     y = np.asarray(y, dtype=float).reshape(len(y), -1)
     u = np.asarray(u, dtype=float).reshape(len(u), -1)
+    if u.shape[1] != 1:
+        raise EstimationError(f'robust LPM of one realisation: {u.shape[1]} inputs; expected '
+                              f'one (one multisine realisation cannot separate inputs)')
     n = int(period_samples)
     n_p = y.shape[0] // n
     if n_p < 1:
@@ -701,22 +750,23 @@ def robust_lpm(y: np.ndarray, u: np.ndarray, period_samples: int, lines: np.ndar
     Ym, Um = Yp.mean(axis=0), Up.mean(axis=0)
     fit = lpm_lines(Ym[:, lines], Um[:, lines], order=order, half_width=half_width,
                     transient=False)
-    total = fit.variance()
+    total_y = np.real(np.einsum('kii->ik', fit.noise_cov))            # (n_out, n_lines)
     if n_p >= 2:
-        sv = np.sum(np.abs(Yp - Ym) ** 2, axis=0) / (n_p - 1) / n_p   # var of the mean
-        noise_y = sv[:, lines]
+        noise_y = np.sum(np.abs(Yp - Ym) ** 2, axis=0)[:, lines] / (n_p - 1) / n_p
         noise_from = 'periods'
     else:
-        free = np.setdiff1d(np.arange(1, n // 2), lines)
-        level = np.abs(Ym[:, free]) ** 2
-        # local mean of the non-excited lines' power, at each excited line
-        w = default_half_width(1, order, False) + 1
-        near = np.abs(free[None, :] - lines[:, None]) <= 2 * w
+        free = np.setdiff1d(np.arange(lines[0], lines[-1] + 1), lines)
+        fitn = lpm_lines(Ym[:, free], Um[:, free], order=order)
+        level = np.real(np.einsum('kii->ik', fitn.noise_cov))          # (n_out, n_free)
+        reach = 2 * (default_half_width(1, order, False) + 1)
+        near = np.abs(free[None, :] - lines[:, None]) <= reach
         noise_y = (near @ level.T / np.maximum(near.sum(axis=1), 1)[:, None]).T
         noise_from = 'non-excited lines'
-    mv = np.real(np.einsum('kjj->jk', fit.minv))
-    noise = noise_y[:, None, :] * mv[None, :, :]
-    frf = FrequencyResponse(lines * fs / n, fit.G, meta={
-        'method': 'robust_lpm', 'periods': n_p, 'order': order, 'dof': fit.dof,
-        'noise_from': noise_from}, noise_variance=noise, total_variance=total)
+    u2 = np.abs(Um[0, lines]) ** 2
+    total = (total_y / u2)[:, None, :]
+    noise = (noise_y / u2)[:, None, :]
+    frf = FrequencyResponse(lines * fs / n, (Ym[:, lines] / Um[0, lines])[:, None, :],
+                            noise_variance=noise, total_variance=total, meta={
+                                'method': 'robust_lpm', 'periods': n_p, 'order': order,
+                                'dof': fit.dof, 'noise_from': noise_from})
     return RobustLpmResult(frf, np.maximum(total - noise, 0.0), noise_from, fit.dof)
