@@ -64,6 +64,10 @@ MIN_DOF_PER_INPUT = 2
 #: and the frames averaged; a shorter record is one frame
 DEFAULT_FRAME_SAMPLES = 32768
 
+#: the band that holds this fraction of the regressor's power (r for the indirect estimate,
+#: u for the direct one) is reported: outside it the estimate rests on little excitation
+BAND_POWER = 0.99
+
 #: lines whose input power (trace of S_uu) is at least this fraction of the largest line's
 #: count as excited (the band the coherence summary is taken over)
 EXCITED_FRACTION = 1e-3
@@ -553,8 +557,9 @@ class LpmAccumulator:
             P, var = _indirect(fit, n_out)
         self.dof = fit.dof
         h1 = _welch_spectra(y, u, min(welch_nperseg(self.n), self.n))
+        xx = np.sum(np.abs(Uf if r is None else Rf) ** 2, axis=0)      # regressor power
         for key, val in (('P', P), ('var', var), ('cov', fit.noise_cov), ('suu', h1[0]),
-                         ('syu', h1[1]), ('syy', h1[2])):
+                         ('syu', h1[1]), ('syy', h1[2]), ('xx', xx)):
             self._sum[key] = self._sum.get(key, 0.0) + val
         self.frames += 1
 
@@ -579,12 +584,17 @@ class LpmAccumulator:
         m = self.frames
         s = self._sum
         f = np.arange(1, self.n // 2 + 1) * self.fs / self.n
-        frf = FrequencyResponse(f, s['P'] / m, self.inputs or [], self.outputs or [],
-                                s['var'] / m ** 2, None,
+        c = np.cumsum(s['xx']) / np.sum(s['xx'])
+        lo, hi = np.searchsorted(c, [(1 - BAND_POWER) / 2, (1 + BAND_POWER) / 2])
+        hi = min(hi, f.size - 1)
+        ok = np.all(np.isfinite(s['P']), axis=(0, 1))
+        frf = FrequencyResponse(f[ok], s['P'][..., ok] / m, self.inputs or [],
+                                self.outputs or [], s['var'][..., ok] / m ** 2, None,
                                 {'method': f'lpm_{self.method}', 'order': self.order,
-                                 'dof': self.dof, 'frames': m,
-                                 'frame_s': self.n / self.fs})
-        return LpmResult(frf, s['cov'] / m, self.dof, m, self.method, self._baseline())
+                                 'dof': self.dof, 'frames': m, 'frame_s': self.n / self.fs,
+                                 'excitation_band_hz': [float(f[lo]), float(f[hi])],
+                                 'singular_lines': int(np.count_nonzero(~ok))})
+        return LpmResult(frf, s['cov'][ok] / m, self.dof, m, self.method, self._baseline())
 
     def _baseline(self) -> FrequencyResponse:
         """Return H1 and coherence from the Welch spectra summed over the frames."""

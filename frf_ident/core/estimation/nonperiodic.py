@@ -175,12 +175,17 @@ class LpmBlocks:
             frf = frf.select((frf.freq_hz >= lo) & (frf.freq_hz <= hi))
             h1 = h1.select((h1.freq_hz >= lo) & (h1.freq_hz <= hi))
         ins = ', '.join(n.split('/', 1)[1] for n in frf.inputs)
+        band, singular = frf.meta['excitation_band_hz'], frf.meta['singular_lines']
         how = (f'indirect through the velocity reference r of {ins} (P = G_yr G_ur^-1)'
                if res.method == 'indirect' else f'direct, torque of {ins} as input')
         line = (f'Local Polynomial Method, {how}: '
                 f'{frf.noutputs}x{frf.ninputs} channels, {frf.freq_hz.size} lines '
                 f'{frf.freq_hz[0]:.4g}-{frf.freq_hz[-1]:.4g} Hz, {res.frames} frame(s) of '
-                f'{self.acc.n / self.acc.fs:.4g} s, {res.dof} dof per window'
+                f'{self.acc.n / self.acc.fs:.4g} s, {res.dof} dof per window; 99 % of the '
+                f'{"r" if res.method == "indirect" else "u"} power in '
+                f'{band[0]:.4g}-{band[1]:.4g} Hz'
+                + (f', {singular} line(s) without excitation of every input dropped'
+                   if singular else '')
                 + (f', {self.dropped} frame(s) dropped for gaps' if self.dropped else ''))
         ex = h1.meta['excited']
         coh = np.median(h1.meta['coherence'][:, ex], axis=1)
