@@ -24,8 +24,9 @@ over the 2n+1 lines gives G_k, and the residual the noise covariance C_V(k) with
 q = 2n+1 - (R+1)(n_in+1) degrees of freedom (the dof correction). Lines near the ends of the
 spectrum use a window shifted to stay inside it. All lines are solved in one compiled pass
 (numba): the normal equations of a line are built from the distinct window sums
-sum_r conj(x_a) x_b (r/n)^t, scaled to unit diagonal and Cholesky-solved; no Python loop over
-lines (``python -m benchmarks lpm`` compares it with per-line ``np.linalg.lstsq``).
+sum_r conj(x_a) x_b (r/n)^t (slid from the previous line's), scaled to unit diagonal and
+Cholesky-solved; no Python loop over lines (``python -m benchmarks lpm`` compares it with
+per-line ``np.linalg.lstsq``).
 
 - :func:`lpm_lines` — the LPM on given spectra (data first, every line)
 - :func:`lpm_frf` — time records of y, u (and the reference r): DFT frames, the direct or,
@@ -45,10 +46,10 @@ import numba
 import numpy as np
 from scipy import signal
 
-__all__ = ['DEFAULT_FRAME_SAMPLES', 'DEFAULT_ORDER', 'EXCITED_FRACTION', 'LpmAccumulator',
-           'LpmLines', 'LpmResult',
-           'RobustLpmResult', 'default_half_width', 'lpm_frf', 'lpm_lines', 'robust_lpm',
-           'welch_h1', 'welch_nperseg']
+__all__ = ['BAND_POWER', 'DEFAULT_FRAME_SAMPLES', 'DEFAULT_ORDER', 'DIRECT_WARNING',
+           'EXCITED_FRACTION', 'LpmAccumulator', 'LpmLines', 'LpmResult', 'RobustLpmResult',
+           'default_half_width', 'lpm_frf', 'lpm_lines', 'robust_lpm', 'welch_h1',
+           'welch_nperseg']
 
 #: polynomial degree R of G and T in each window (P&S ch. 7 recommend R = 2: the bias of a
 #: lightly damped mode falls as (resolution / 3 dB bandwidth)^(R+2))
@@ -376,6 +377,8 @@ class LpmResult:
     h1 : FrequencyResponse
         The Welch H1 estimate S_yu S_uu^-1 of y on u; ``meta['coherence']`` holds the
         multiple coherence of each output (n_out, n_freq).
+    notes : list of str
+        Warnings for the user (the bias of the direct estimate in closed loop).
 
     """
 
