@@ -355,6 +355,13 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
     return rows
 
 
+@section('lpm')
+def bench_lpm() -> list[tuple[str, str, str, str]]:
+    """Time the LPM on a 3x3 record of 10^6 samples beside per-line np.linalg.lstsq."""
+    from benchmarks.lpm import rows
+    return rows()
+
+
 @section('diagnosis')
 def bench_diagnosis() -> list[tuple[str, str, str, str]]:
     """Run the diagnosis sweep over random 3-axis scenes of the independent plant."""

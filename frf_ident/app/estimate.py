@@ -187,7 +187,8 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
                'timing': timing.to_dict(), 'experiment': experiment, 'streaming': streamed,
                'gaps': timing.missing, 'dropped': dropped}
     (out / 'summary.json').write_text(json.dumps(summary, indent=1, default=str))
-    pairs = [(k, v) for k, v in estimates.items() if k in ('multisine', 'chirp')]
+    shown = ('multisine', 'chirp', 'lpm', 'lpm_h1')
+    pairs = [(k, v) for k, v in estimates.items() if k in shown]
     bode_figure(dict(pairs or [(key, frf)]), out / 'bode.png',
                 title=f'{bag.name}: {" vs ".join(k for k, _ in pairs) or key}')
     progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '

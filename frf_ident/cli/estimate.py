@@ -64,11 +64,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help='analyse only the multisine lines in this band [Hz]')
     g.add_argument('--chirp-time', type=float, nargs=2, metavar=('T0', 'T1'),
                    help='sweep start and end [s from the first analysed sample]')
+    g.add_argument('--method', choices=('lpm',), default=None,
+                   help='lpm: the excitation is not periodic (PRBS, noise, normal motion); '
+                        'estimate with the Local Polynomial Method without detecting (used '
+                        'anyway where no multisine or chirp is found)')
 
 
 def excitation_options(args: argparse.Namespace):
     """
-    Return the --input/--multisine-period/--band/--chirp/--chirp-time options.
+    Return the --input/--multisine-period/--band/--chirp/--chirp-time/--method options.
 
     Parameters
     ----------
@@ -88,7 +92,7 @@ def excitation_options(args: argparse.Namespace):
         return tuple(v) if v is not None else None
     return ExcitationOptions(input=args.input, multisine_period=args.multisine_period,
                              band=tup(args.band), chirp=tup(args.chirp),
-                             chirp_time=tup(args.chirp_time))
+                             chirp_time=tup(args.chirp_time), method=args.method)
 
 
 def run(args: argparse.Namespace) -> int:

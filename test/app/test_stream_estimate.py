@@ -145,7 +145,10 @@ def test_bag_over_the_memory_budget_streams_automatically(foreign_bags, tmp_path
 @pytest.mark.parametrize('args, expect', [
     (['--window', '0'], '--window 0.0: expected a block length in s > 0'),
     (['--max-memory', '-5'], '--max-memory -5.0: expected a size in MB > 0'),
-    (['--stream', '--window', '0.5'], 'no multisine or chirp found in any 0.5 s block'),
+    # a window too short for the multisine and its given period (without the period the
+    # blocks hold no multisine, and the LPM estimates them instead)
+    (['--stream', '--window', '0.5', '--multisine-period', '2.0'],
+     'no multisine or chirp found in any 0.5 s block'),
 ])
 def test_bad_streaming_options_one_line(foreign_bags, tmp_path, capsys, args, expect):
     assert main(['estimate', str(foreign_bags[60.0]), '--out', str(tmp_path / 'o')]

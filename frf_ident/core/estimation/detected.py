@@ -17,6 +17,8 @@ Estimation from recordings that carry no experiment descriptors (foreign bags, i
 The excitation is detected in the data (:mod:`frf_ident.core.excitation.detect`): a periodic
 multisine or an exponential chirp, on the velocity reference when the bag has one, else on
 the torque (:func:`~frf_ident.core.excitation.detect.excitation_source`).
+Where neither is found (PRBS, noise, normal motion) the Local Polynomial Method estimates
+the FRF instead (:mod:`frf_ident.core.estimation.nonperiodic`).
 Each detection becomes a :class:`~frf_ident.core.recording.Segment`, and the FRF is estimated
 column by column for the excited inputs (one experiment cannot separate simultaneously excited
 inputs that share lines, so those are refused with the reason).
@@ -43,6 +45,7 @@ from frf_ident.core.estimation.checks import (check_band, check_covers, check_no
                                               check_periods, check_remaining, check_whole_period,
                                               JOINT_STATES, missing_rows)
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.estimation.nonperiodic import LpmBlocks
 from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
                                                periodic_spectra)
 from frf_ident.core.excitation.chirp import ChirpDesign
@@ -54,7 +57,8 @@ from frf_ident.errors import EstimationError
 import numpy as np
 
 __all__ = ['DEFAULT_BLOCK_S', 'MIN_ADVANCE_S', 'DetectedEstimator', 'ExcitationOptions',
-           'RecordingBlocks', 'block_length', 'check_detected_segment', 'detect_segments',
+           'NoExcitationError', 'RecordingBlocks', 'block_length', 'check_detected_segment',
+           'detect_segments',
            'detected_frf', 'estimate_in_blocks']
 
 #: block length [s] in which recordings without descriptors are detected and estimated (in
@@ -89,6 +93,10 @@ class ExcitationOptions:
     chirp_time : tuple of float, optional
         (t0, t1) [s] of the sweep, counted from the first analysed sample (as the
         detection reports them).
+    method : str, optional
+        'lpm': the excitation is not periodic, estimate with the Local Polynomial Method
+        (:mod:`frf_ident.core.estimation.nonperiodic`) without detecting; None: detect, and
+        use the LPM only where no multisine or chirp is found.
 
     """
 
@@ -97,6 +105,7 @@ class ExcitationOptions:
     band: tuple[float, float] | None = None
     chirp: tuple[float, float] | None = None
     chirp_time: tuple[float, float] | None = None
+    method: str | None = None
 
     def given(self) -> bool:
         """
@@ -109,7 +118,7 @@ class ExcitationOptions:
 
         """
         return any(v is not None for v in (self.input, self.multisine_period, self.band,
-                                           self.chirp, self.chirp_time))
+                                           self.chirp, self.chirp_time, self.method))
 
     def text(self) -> str:
         """
@@ -141,6 +150,12 @@ class ExcitationOptions:
             it.
 
         """
+        if self.method not in (None, 'lpm'):
+            raise EstimationError(f"method={self.method!r}: expected 'lpm' (or none: detect)")
+        if self.method == 'lpm' and (self.chirp is not None
+                                     or self.multisine_period is not None):
+            raise EstimationError(f"method='lpm' with {self.text()}: the LPM is for "
+                                  f'excitation that is neither a multisine nor a chirp')
         if self.input is not None and self.input not in rec.joint_names:
             raise EstimationError(f'input={self.input!r} is not a joint of the recording; '
                                   f'expected one of {rec.joint_names}')
@@ -177,6 +192,10 @@ class ExcitationOptions:
                 raise EstimationError(f'chirp_time={self.chirp_time}: expected 0 <= t0 < t1 <= '
                                       f'{duration:.4g} s (seconds from the first analysed '
                                       f'sample)')
+
+
+class NoExcitationError(EstimationError):
+    """No multisine or chirp found in a recording: the LPM may estimate it instead."""
 
 
 def _given_chirp(opts: ExcitationOptions, fs: float) -> ChirpDetection:
@@ -271,7 +290,7 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
             det = _excitation_of(x[:, j], fs, opts)
         except EstimationError as exc:
             if opts.input is not None:
-                raise EstimationError(f'input={opts.input!r} ({source}): {exc}') from None
+                raise NoExcitationError(f'input={opts.input!r} ({source}): {exc}') from None
             notes.append(f'{rec.joint_names[j]}: no excitation found in the {source} ({exc})')
             continue
         strongest = _strongest_channel(x, det, fs)
@@ -282,9 +301,9 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
         found.append((int(j), det))
         notes.append(f'{rec.joint_names[j]} ({source}): {_describe(det, opts)}')
     if not found:
-        raise EstimationError(f'no multisine or chirp found in the {source} of any joint '
-                              f'({"; ".join(notes) or "no joint moves"}); pass the experiment '
-                              f'descriptors or the excitation as options')
+        raise NoExcitationError(f'no multisine or chirp found in the {source} of any joint '
+                                f'({"; ".join(notes) or "no joint moves"}); pass the '
+                                f'experiment descriptors or the excitation as options')
     segments = []
     for j, det in found:
         if isinstance(det, MultisineDetection):
@@ -766,6 +785,14 @@ def _leftover(det: DetectedEstimator, rec: Recording) -> bool:
                 and rec.t[-1] - rec.t[0] + rec.dt < 2 * max(periods))
 
 
+def _add_lpm(lpm: LpmBlocks, rec: Recording, resume: Callable[[float], None] | None
+             ) -> None:
+    """Add a block's frames to the LPM; the next block starts where its last frame ends."""
+    end = lpm.add(rec)
+    if end is not None and resume is not None:
+        resume(end)
+
+
 def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions | None = None,
                        *, resume: Callable[[float], None] | None = None,
                        block_s: float | None = None) -> dict[str, FrequencyResponse]:
@@ -776,6 +803,11 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     meta['detected']); when no block contributes, the reason is raised (the only block's,
     or the first of several). ``resume`` is told where the data used by a block end (the
     next block starts there); ``block_s`` only names the block length in messages.
+
+    Where no block holds a multisine or chirp (or ``options.method == 'lpm'``), the blocks'
+    frames are estimated by the Local Polynomial Method instead
+    (:class:`~frf_ident.core.estimation.nonperiodic.LpmBlocks`: 'lpm' and its Welch H1
+    baseline 'lpm_h1').
 
     Parameters
     ----------
@@ -800,12 +832,18 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
 
     """
     det = DetectedEstimator()
+    opts = options or ExcitationOptions()
+    lpm = LpmBlocks(input=opts.input, band=opts.band)
     notes: list[str] = []
     first: EstimationError | None = None
     n = 0
     for rec in blocks:
         n += 1
         try:
+            if opts.method == 'lpm':
+                opts.check(rec)
+                _add_lpm(lpm, rec, resume)
+                continue
             det.add_detected(rec, options)
         except EstimationError as exc:
             if _leftover(det, rec):
@@ -814,9 +852,21 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
                 continue
             first = first or exc
             notes.append(f'block {rec.t[0]:.3f}..{rec.t[-1]:.3f} s: {exc}')
+            if isinstance(exc, NoExcitationError) and not det.entries:
+                try:                                # not periodic: the LPM's frames
+                    _add_lpm(lpm, rec, resume)
+                except EstimationError as why:
+                    notes.append(f'block {rec.t[0]:.3f}..{rec.t[-1]:.3f} s: LPM: {why}')
             continue
         if det.used_until is not None and resume is not None:
             resume(det.used_until)
+    if not det.entries and (lpm.frames or opts.method == 'lpm'):
+        if not lpm.frames and first is not None:
+            raise first
+        why = ([] if opts.method == 'lpm' else
+               [f'no multisine or chirp found in {n} block(s) of at most '
+                f'{block_length(block_s):g} s'])
+        return lpm.results(why)
     if not det.entries:
         if n == 1 and first is not None:
             raise first

@@ -1,0 +1,785 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The Local Polynomial Method (Pintelon & Schoukens 2012, ch. 7) for arbitrary excitation.
+
+Per DFT line k the output spectrum in the window k-n..k+n is modelled as
+
+    Y(k+r) = G(k+r) U(k+r) + T(k+r) + V(k+r),
+    G(k+r) = G_k + sum_{s=1..R} g_s r^s,   T(k+r) = T_k + sum_{s=1..R} t_s r^s,
+
+with U the DFT of the inputs, T the transient (leakage) term and V the noise. Least squares
+over the 2n+1 lines gives G_k, and the residual the noise covariance C_V(k) with
+q = 2n+1 - (R+1)(n_in+1) degrees of freedom (the dof correction). Lines near the ends of the
+spectrum use a window shifted to stay inside it. All lines are solved in one compiled pass
+(numba): the normal equations of a line are built from the distinct window sums
+sum_r conj(x_a) x_b (r/n)^t (slid from the previous line's), scaled to unit diagonal and
+Cholesky-solved; no Python loop over lines (``python -m benchmarks lpm`` compares it with
+per-line ``np.linalg.lstsq``).
+
+- :func:`lpm_lines` — the LPM on given spectra (data first, every line)
+- :func:`lpm_frf` — time records of y, u (and the reference r): DFT frames, the direct or,
+  with r, the indirect estimate P = G_yr G_ur^-1 with its propagated variance, averaged over
+  frames; beside it the Welch H1 baseline (:func:`welch_h1`)
+- :class:`LpmAccumulator` — the same, frame by frame, for streamed records
+- :func:`robust_lpm` — periodic records: noise and stochastic nonlinear variance of the BLA
+  from one realisation (local polynomial over the excited lines)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.errors import EstimationError
+import numba
+import numpy as np
+from scipy import signal
+
+__all__ = ['BAND_POWER', 'DEFAULT_FRAME_SAMPLES', 'DEFAULT_ORDER', 'DIRECT_WARNING',
+           'EXCITED_FRACTION', 'LpmAccumulator', 'LpmLines', 'LpmResult', 'RobustLpmResult',
+           'default_half_width', 'lpm_frf', 'lpm_lines', 'robust_lpm', 'welch_h1',
+           'welch_nperseg']
+
+#: polynomial degree R of G and T in each window (P&S ch. 7 recommend R = 2: the bias of a
+#: lightly damped mode falls as (resolution / 3 dB bandwidth)^(R+2))
+DEFAULT_ORDER = 2
+
+#: fewest residual degrees of freedom q per window; the noise covariance is estimated from
+#: q lines, its relative spread 1/sqrt(q) (complex); 2 n_in + 2 keeps it near 30 % per line
+#: for 3 inputs while the window stays narrow (P&S ch. 7: q >= n_out for a full covariance)
+MIN_DOF_PER_INPUT = 2
+
+#: LPM frame length [samples]: long records are cut into frames this long (resolution
+#: fs / frame: 0.03 Hz at 1 kHz, 16384 lines per channel in frf.json), each estimated alone
+#: and the frames averaged; a shorter record is one frame
+DEFAULT_FRAME_SAMPLES = 32768
+
+#: the band that holds this fraction of the regressor's power (r for the indirect estimate,
+#: u for the direct one) is reported: outside it the estimate rests on little excitation
+BAND_POWER = 0.99
+
+#: lines whose input power (trace of S_uu) is at least this fraction of the largest line's
+#: count as excited (the band the coherence summary is taken over)
+EXCITED_FRACTION = 1e-3
+
+#: Welch segments the H1 baseline averages when the record allows (its resolution is then
+#: 8 / record length); Hann window, 50 % overlap (scipy.signal defaults)
+WELCH_SEGMENTS = 8
+
+
+def default_half_width(n_in: int, order: int = DEFAULT_ORDER, transient: bool = True) -> int:
+    """
+    Return the smallest half width n with q >= MIN_DOF_PER_INPUT * (n_in + 1).
+
+    Parameters
+    ----------
+    n_in : int
+        Number of inputs of the local model.
+    order : int
+        Polynomial degree R.
+    transient : bool
+        Whether the transient term is estimated too.
+
+    Returns
+    -------
+    int
+        Half width n of the window k-n..k+n.
+
+    """
+    n_par = (order + 1) * (n_in + int(transient))
+    need = n_par + MIN_DOF_PER_INPUT * (n_in + 1)
+    return int(np.ceil((need - 1) / 2))
+
+
+@dataclass
+class LpmLines:
+    """
+    The LPM per line: local G_k, its noise covariance and the dof.
+
+    Attributes
+    ----------
+    G : ndarray, complex, shape (n_out, n_in, n_lines)
+        The local FRF at the window centre.
+    noise_cov : ndarray, complex, shape (n_lines, n_out, n_out)
+        Covariance of the output noise V(k) (in the scaling of the given spectra), residual
+        sum of squares over q.
+    minv : ndarray, complex, shape (n_lines, n_in, n_in)
+        The G_k block of (K K^H)^-1: Cov(G_k[i, :]) = noise_cov[i, i] minv (transposed).
+    dof : int
+        q = window - parameters.
+
+    """
+
+    G: np.ndarray
+    noise_cov: np.ndarray
+    minv: np.ndarray
+    dof: int
+
+    def variance(self) -> np.ndarray:
+        """
+        Return var(G_k[i, j]) = C_V[i, i] minv[j, j], shape (n_out, n_in, n_lines).
+
+        Returns
+        -------
+        ndarray
+            Variance of each element of G.
+
+        """
+        cv = np.real(np.einsum('kii->ik', self.noise_cov))
+        mv = np.real(np.einsum('kjj->jk', self.minv))
+        return cv[:, None, :] * mv[None, :, :]
+
+
+#: a line's window sums are updated from the previous line's (one line out, one in, powers
+#: of r re-centred); every RESUM_LINES lines they are summed afresh so rounding cannot grow
+#: (the re-centring multiplies older rounding errors by up to (1 + RESUM_LINES / n)^(2R))
+RESUM_LINES = 32
+
+
+@numba.njit(cache=True)
+def _accumulate(X, Y, j, x, sign, suu, suy, syy, pw):  # pragma: no cover - compiled
+    """Add sign times line j at offset x = r / n to the window sums (compiled)."""
+    pw[0] = sign
+    for t in range(1, pw.size):
+        pw[t] = pw[t - 1] * x
+    n_c, n_out, R1 = suy.shape
+    for a in range(n_c):
+        ca = np.conj(X[a, j])
+        for b in range(n_c):
+            v = ca * X[b, j]
+            for t in range(pw.size):
+                suu[a, b, t] += v * pw[t]
+        for i in range(n_out):
+            v = ca * Y[i, j]
+            for t in range(R1):
+                suy[a, i, t] += v * pw[t]
+    for i in range(n_out):
+        ci = np.conj(Y[i, j]) * sign
+        for i2 in range(n_out):
+            syy[i, i2] += ci * Y[i2, j]
+
+
+@numba.njit(cache=True)
+def _shift(s, binom):  # pragma: no cover - compiled
+    """Re-centre sums of x^t to sums of (x - h)^t along the last axis (compiled, in place)."""
+    n1, n2, T = s.shape
+    for a in range(n1):
+        for b in range(n2):
+            for t in range(T - 1, 0, -1):           # descending: s[.., :t] still old
+                v = 0.0j
+                for q in range(t + 1):
+                    v += binom[t, q] * s[a, b, q]
+                s[a, b, t] = v
+
+
+@numba.njit(cache=True)
+def _lpm_kernel(Y, U, n, order, transient):  # pragma: no cover - compiled
+    """
+    Solve the LPM normal equations of every line (compiled loop over lines).
+
+    For line k the window k-n..k+n (shifted to stay inside the spectrum at its ends) gives
+    M = K^H K, b = K^H Y^T and yy = Y^* Y^T from the distinct sums
+    sum_r conj(x_a) x_b (r/n)^t (the regressors U_m (r/n)^s and (r/n)^s are never formed);
+    M is scaled to unit diagonal (conditioning whatever the input levels), Cholesky
+    factored and solved. Returns G_k (L, n_in, n_out), the residual sums
+    S = sum conj(e_i) e_j (L, n_out, n_out) and the G_k block of M^-1 (L, n_in, n_in); a
+    line whose M is singular (an input without power in its window) gives NaN.
+    """
+    n_out, n_lines = Y.shape
+    n_in = U.shape[0]
+    R1 = order + 1
+    n_c = n_in + (1 if transient else 0)
+    p = n_c * R1
+    W = 2 * n + 1
+    G = np.empty((n_lines, n_in, n_out), dtype=np.complex128)
+    res = np.empty((n_lines, n_out, n_out), dtype=np.complex128)
+    minv = np.empty((n_lines, n_in, n_in), dtype=np.complex128)
+    X = np.ones((n_c, n_lines), dtype=np.complex128)       # the columns' factors
+    X[:n_in] = U
+    suu = np.zeros((n_c, n_c, 2 * order + 1), dtype=np.complex128)
+    suy = np.zeros((n_c, n_out, R1), dtype=np.complex128)
+    syy = np.zeros((n_out, n_out), dtype=np.complex128)
+    pw = np.empty(2 * order + 1)
+    M = np.empty((p, p), dtype=np.complex128)
+    L = np.zeros((p, p), dtype=np.complex128)
+    rhs = np.empty((p, n_out + n_in), dtype=np.complex128)
+    d = np.empty(p)
+    h = 1.0 / max(n, 1)
+    binom = np.zeros((2 * order + 1, 2 * order + 1))   # (x - h)^t = sum_a binom[t, a] x^a
+    for t in range(2 * order + 1):
+        c = 1.0
+        for a in range(t + 1):
+            binom[t, a] = c * (-h) ** (t - a)
+            c = c * (t - a) / (a + 1)
+    centred_before = False
+    for k in range(n_lines):
+        start = min(max(k - n, 0), n_lines - W)
+        centred = start == k - n
+        if centred and centred_before and k % RESUM_LINES != 0:
+            # slide the window by one line: re-centre the sums, drop one line, add one
+            _shift(suu, binom)
+            _shift(suy, binom)
+            _accumulate(X, Y, k - 1 - n, -(n + 1) * h, -1.0, suu, suy, syy, pw)
+            _accumulate(X, Y, k + n, n * h, 1.0, suu, suy, syy, pw)
+        else:
+            suu[:] = 0.0
+            suy[:] = 0.0
+            syy[:] = 0.0
+            for w in range(W):
+                _accumulate(X, Y, start + w, (start + w - k) * h, 1.0, suu, suy, syy, pw)
+        centred_before = centred
+        for a in range(n_c):
+            for s in range(R1):
+                for b in range(n_c):
+                    for s2 in range(R1):
+                        M[a * R1 + s, b * R1 + s2] = suu[a, b, s + s2]
+                for i in range(n_out):
+                    rhs[a * R1 + s, i] = suy[a, i, s]
+        for q in range(p):
+            d[q] = np.sqrt(max(M[q, q].real, 1e-300))
+        ok = True
+        for jj in range(p):                          # Cholesky of the scaled M
+            sd = M[jj, jj].real / (d[jj] * d[jj])
+            for q in range(jj):
+                sd -= L[jj, q].real ** 2 + L[jj, q].imag ** 2
+            if not sd > 1e-13:
+                ok = False
+                break
+            L[jj, jj] = np.sqrt(sd)
+            for i in range(jj + 1, p):
+                v = M[i, jj] / (d[i] * d[jj])
+                for q in range(jj):
+                    v -= L[i, q] * np.conj(L[jj, q])
+                L[i, jj] = v / L[jj, jj]
+        if not ok:
+            G[k] = np.nan
+            res[k] = np.nan
+            minv[k] = np.nan
+            continue
+        for q in range(p):
+            for i in range(n_out):
+                rhs[q, i] /= d[q]
+            for a in range(n_in):
+                rhs[q, n_out + a] = 1.0 / d[q] if q == a * R1 else 0.0
+        for col in range(n_out + n_in):
+            for i in range(p):                       # L z = rhs
+                v = rhs[i, col]
+                for q in range(i):
+                    v -= L[i, q] * rhs[q, col]
+                rhs[i, col] = v / L[i, i]
+            for i in range(p - 1, -1, -1):           # L^H x = z
+                v = rhs[i, col]
+                for q in range(i + 1, p):
+                    v -= np.conj(L[q, i]) * rhs[q, col]
+                rhs[i, col] = v / L[i, i]
+        for i in range(n_out):                       # residual: yy - b^H theta
+            for i2 in range(n_out):
+                v = syy[i, i2]
+                for a in range(n_c):
+                    for s in range(R1):
+                        v -= np.conj(suy[a, i, s]) * rhs[a * R1 + s, i2] / d[a * R1 + s]
+                res[k, i, i2] = v
+        for a in range(n_in):
+            q = a * R1
+            for i in range(n_out):
+                G[k, a, i] = rhs[q, i] / d[q]
+            for a2 in range(n_in):
+                minv[k, a, a2] = rhs[q, n_out + a2] / d[q]
+    return G, res, minv
+
+
+def lpm_lines(Y: np.ndarray, U: np.ndarray, *, order: int = DEFAULT_ORDER,
+              half_width: int | None = None, transient: bool = True) -> LpmLines:
+    """
+    Estimate G on every line by the LPM.
+
+    Parameters
+    ----------
+    Y : array_like, complex, shape (n_out, n_lines)
+        Output spectra on consecutive lines.
+    U : array_like, complex, shape (n_in, n_lines)
+        Input spectra on the same lines.
+    order : int
+        Polynomial degree R (>= 0).
+    half_width : int, optional
+        n of the window k-n..k+n; default :func:`default_half_width`.
+    transient : bool
+        Estimate the transient term T (False: steady state, e.g. periodic data).
+
+    Returns
+    -------
+    LpmLines
+        G_k, the noise covariance and (K K^H)^-1 per line.
+
+    Raises
+    ------
+    EstimationError
+        Fewer lines than one window, or no residual degree of freedom left.
+
+    """
+    Y = np.atleast_2d(np.asarray(Y, dtype=complex))
+    U = np.atleast_2d(np.asarray(U, dtype=complex))
+    n_out, n_lines = Y.shape
+    n_in = U.shape[0]
+    if U.shape[1] != n_lines:
+        raise EstimationError(f'spectra shapes {Y.shape=} {U.shape=}: expected (n_out, L) and '
+                              f'(n_in, L) on the same lines')
+    n = default_half_width(n_in, order, transient) if half_width is None else int(half_width)
+    n_par = (order + 1) * (n_in + int(transient))
+    dof = 2 * n + 1 - n_par
+    if dof < 1:
+        raise EstimationError(f'LPM window of {2 * n + 1} lines for {n_par} parameters '
+                              f'(order {order}, {n_in} inputs): expected a wider window')
+    if n_lines < 2 * n + 1:
+        raise EstimationError(f'{n_lines} frequency lines are fewer than one LPM window of '
+                              f'{2 * n + 1}; expected a longer record')
+    G, S, minv = _lpm_kernel(np.ascontiguousarray(Y), np.ascontiguousarray(U), n, int(order),
+                             bool(transient))
+    cov = np.conj(S) / dof                           # cov[i, j] = sum e_i conj(e_j) / q
+    return LpmLines(np.transpose(G, (2, 1, 0)), cov, minv, dof)
+
+
+def _frame_spectra(x: np.ndarray) -> np.ndarray:
+    """Return the DFT of a frame (N, n) -> (n, N//2 + 1), scaled by 1/sqrt(N) (P&S)."""
+    return np.fft.rfft(x, axis=0).T / np.sqrt(x.shape[0])
+
+
+@dataclass
+class LpmResult:
+    """
+    An LPM estimate with its Welch H1 baseline.
+
+    Attributes
+    ----------
+    frf : FrequencyResponse
+        P (n_out, n_in, n_freq) with ``noise_variance`` (the variance of the estimate from
+        the LPM residuals, propagated through G_ur^-1 for the indirect estimate).
+    noise_cov : ndarray, complex, shape (n_freq, n_z, n_z)
+        Mean over frames of the LPM noise covariance of the regressed outputs ([y; u] for
+        the indirect estimate, y for the direct one), DFT scaled by 1/sqrt(N).
+    dof : int
+        Residual degrees of freedom of each LPM window.
+    frames : int
+        Frames averaged.
+    method : str
+        'indirect' (P = G_yr G_ur^-1, uses r) or 'direct' (y on u).
+    h1 : FrequencyResponse
+        The Welch H1 estimate S_yu S_uu^-1 of y on u; ``meta['coherence']`` holds the
+        multiple coherence of each output (n_out, n_freq).
+    notes : list of str
+        Warnings for the user (the bias of the direct estimate in closed loop).
+
+    """
+
+    frf: FrequencyResponse
+    noise_cov: np.ndarray
+    dof: int
+    frames: int
+    method: str
+    h1: FrequencyResponse
+    notes: list[str] = field(default_factory=list)
+
+
+def welch_h1(y: np.ndarray, u: np.ndarray, fs: float, *, nperseg: int | None = None,
+             inputs: list[str] | None = None, outputs: list[str] | None = None
+             ) -> FrequencyResponse:
+    """
+    Welch H1 estimate S_yu S_uu^-1 with the multiple coherence of each output.
+
+    Parameters
+    ----------
+    y : array_like, shape (N, n_out)
+        Outputs.
+    u : array_like, shape (N, n_in)
+        Inputs.
+    fs : float
+        Sample rate [Hz].
+    nperseg : int, optional
+        Welch segment length; default :func:`welch_nperseg` of N.
+    inputs, outputs : list of str, optional
+        Channel names.
+
+    Returns
+    -------
+    FrequencyResponse
+        H1 on the Welch grid (DC dropped), ``meta['coherence']`` (n_out, n_freq) the
+        multiple coherence S_yu S_uu^-1 S_uy / S_yy, ``meta['method'] = 'welch_h1'``.
+
+    """
+    y = np.asarray(y, dtype=float).reshape(len(y), -1)
+    u = np.asarray(u, dtype=float).reshape(len(u), -1)
+    nper = min(nperseg or welch_nperseg(y.shape[0]), y.shape[0])
+    return _h1(fs, nper, *_welch_spectra(y, u, nper), inputs, outputs)
+
+
+def welch_nperseg(n: int) -> int:
+    """
+    Return the Welch segment length of a record of ``n`` samples.
+
+    Parameters
+    ----------
+    n : int
+        Samples in the record (or LPM frame).
+
+    Returns
+    -------
+    int
+        Length of WELCH_SEGMENTS Hann segments with 50 % overlap, at least 16.
+
+    """
+    return max(16, int(n / (WELCH_SEGMENTS / 2 + 0.5)))
+
+
+def _welch_spectra(y: np.ndarray, u: np.ndarray, nper: int):
+    """
+    Return the Welch spectra (per sample, fs = 1) of y (N, n_out) and u (N, n_in).
+
+    Suu (F, n_in, n_in) with Suu[a, b] = E conj(U_a) U_b (scipy's csd convention), Syu
+    (F, n_out, n_in) with Syu[i, a] = E conj(U_a) Y_i, Syy (F, n_out), F = nper // 2 + 1.
+    """
+    _, Suu = signal.csd(u.T[:, None, :], u.T[None, :, :], nperseg=nper, axis=-1)
+    _, Syu = signal.csd(u.T[None, :, :], y.T[:, None, :], nperseg=nper, axis=-1)
+    _, Syy = signal.welch(y.T, nperseg=nper, axis=-1)
+    return (np.moveaxis(Suu, -1, 0), np.moveaxis(Syu, -1, 0), np.moveaxis(Syy, -1, 0))
+
+
+def _h1(fs: float, nper: int, Suu, Syu, Syy, inputs, outputs) -> FrequencyResponse:
+    """Return H1 = Syu Suu^-T and the multiple coherence on the Welch grid without DC."""
+    f = np.arange(nper // 2 + 1) * fs / nper
+    keep = f > 0
+    Suu, Syu, Syy = Suu[keep], Syu[keep], np.real(Syy[keep])
+    # Y = H U: Syu[i, a] = sum_b H[i, b] Suu[a, b], i.e. Suu H^T = Syu^T
+    H = np.swapaxes(np.linalg.solve(Suu, np.swapaxes(Syu, 1, 2)), 1, 2)
+    explained = np.real(np.einsum('fia,fia->fi', H, np.conj(Syu)))
+    coh = np.clip(explained / np.maximum(Syy, 1e-300), 0.0, 1.0)
+    power = np.real(np.einsum('faa->f', Suu))
+    excited = power >= EXCITED_FRACTION * power.max()
+    return FrequencyResponse(f[keep], np.moveaxis(H, 0, -1), inputs or [], outputs or [],
+                             meta={'method': 'welch_h1', 'nperseg': int(nper),
+                                   'coherence': coh.T, 'excited': excited})
+
+
+class LpmAccumulator:
+    """
+    LPM estimates of frames of one length, summed frame by frame (in memory or streamed).
+
+    Every frame of ``frame_samples`` samples is estimated alone (its own transient) and the
+    per-line sums of P, of its variance and of the noise covariance are kept; the result is
+    their mean (the variance of a mean of independent frames: sum / frames^2). The Welch H1
+    baseline sums the cross spectra of the same frames.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate [Hz].
+    frame_samples : int
+        Samples per frame (the resolution is fs / frame_samples).
+    order, half_width
+        As :func:`lpm_lines`.
+    inputs, outputs : list of str
+        Channel names of u and y.
+
+    """
+
+    def __init__(self, fs: float, frame_samples: int, *, order: int = DEFAULT_ORDER,
+                 half_width: int | None = None, inputs: list[str] | None = None,
+                 outputs: list[str] | None = None) -> None:
+        self.fs = float(fs)
+        self.n = int(frame_samples)
+        self.order, self.half_width = order, half_width
+        self.inputs, self.outputs = inputs, outputs
+        self.frames = 0
+        self.method: str | None = None
+        self._sum: dict[str, np.ndarray | float] = {}
+        self.dof = 0
+
+    def add(self, y: np.ndarray, u: np.ndarray, r: np.ndarray | None = None) -> int:
+        """
+        Estimate every whole frame of a record and add it; return the samples used.
+
+        Parameters
+        ----------
+        y : array_like, shape (N, n_out)
+            Outputs.
+        u : array_like, shape (N, n_in)
+            Inputs.
+        r : array_like, shape (N, n_in), optional
+            Reference (the indirect estimate); None: the direct estimate.
+
+        Returns
+        -------
+        int
+            Samples used (whole frames from the start; the rest is left).
+
+        Raises
+        ------
+        EstimationError
+            The reference is given in some frames and not in others, or has another number
+            of channels than u.
+
+        """
+        y = np.asarray(y, dtype=float).reshape(len(y), -1)
+        u = np.asarray(u, dtype=float).reshape(len(u), -1)
+        method = 'direct' if r is None else 'indirect'
+        if self.method not in (None, method):
+            raise EstimationError(f'LPM frames mix the {self.method} and the {method} '
+                                  f'estimate; expected the reference in every frame or none')
+        self.method = method
+        if r is not None:
+            r = np.asarray(r, dtype=float).reshape(len(r), -1)
+            if r.shape[1] != u.shape[1]:
+                raise EstimationError(f'reference has {r.shape[1]} channels, the inputs '
+                                      f'{u.shape[1]}; expected one reference per input')
+        n_frames = y.shape[0] // self.n
+        for q in range(n_frames):
+            sl = slice(q * self.n, (q + 1) * self.n)
+            self._add_frame(y[sl], u[sl], None if r is None else r[sl])
+        return n_frames * self.n
+
+    def _add_frame(self, y, u, r) -> None:
+        Yf, Uf = _frame_spectra(y)[:, 1:], _frame_spectra(u)[:, 1:]   # lines 1..N/2
+        n_out = y.shape[1]
+        if r is None:
+            fit = lpm_lines(Yf, Uf, order=self.order, half_width=self.half_width)
+            P, var = fit.G, fit.variance()
+        else:
+            Rf = _frame_spectra(r)[:, 1:]
+            fit = lpm_lines(np.concatenate([Yf, Uf]), Rf, order=self.order,
+                            half_width=self.half_width)
+            P, var = _indirect(fit, n_out)
+        self.dof = fit.dof
+        h1 = _welch_spectra(y, u, min(welch_nperseg(self.n), self.n))
+        xx = np.sum(np.abs(Uf if r is None else Rf) ** 2, axis=0)      # regressor power
+        for key, val in (('P', P), ('var', var), ('cov', fit.noise_cov), ('suu', h1[0]),
+                         ('syu', h1[1]), ('syy', h1[2]), ('xx', xx)):
+            self._sum[key] = self._sum.get(key, 0.0) + val
+        self.frames += 1
+
+    def result(self) -> LpmResult:
+        """
+        Return the mean over the frames added.
+
+        Returns
+        -------
+        LpmResult
+            P with its variance on lines fs/N .. fs/2, and the H1 baseline.
+
+        Raises
+        ------
+        EstimationError
+            No whole frame was added.
+
+        """
+        if not self.frames:
+            raise EstimationError(f'no whole LPM frame of {self.n / self.fs:.4g} s '
+                                  f'({self.n} samples) in the record; expected a longer one')
+        m = self.frames
+        s = self._sum
+        f = np.arange(1, self.n // 2 + 1) * self.fs / self.n
+        c = np.cumsum(s['xx']) / np.sum(s['xx'])
+        lo, hi = np.searchsorted(c, [(1 - BAND_POWER) / 2, (1 + BAND_POWER) / 2])
+        hi = min(hi, f.size - 1)
+        ok = np.all(np.isfinite(s['P']), axis=(0, 1))
+        frf = FrequencyResponse(f[ok], s['P'][..., ok] / m, self.inputs or [],
+                                self.outputs or [], s['var'][..., ok] / m ** 2, None,
+                                {'method': f'lpm_{self.method}', 'order': self.order,
+                                 'dof': self.dof, 'frames': m, 'frame_s': self.n / self.fs,
+                                 'excitation_band_hz': [float(f[lo]), float(f[hi])],
+                                 'singular_lines': int(np.count_nonzero(~ok))})
+        return LpmResult(frf, s['cov'][ok] / m, self.dof, m, self.method, self._baseline())
+
+    def _baseline(self) -> FrequencyResponse:
+        """Return H1 and coherence from the Welch spectra summed over the frames."""
+        s = self._sum
+        return _h1(self.fs, min(welch_nperseg(self.n), self.n), s['suu'], s['syu'], s['syy'],
+                   self.inputs, self.outputs)
+
+
+def _indirect(fit: LpmLines, n_out: int) -> tuple[np.ndarray, np.ndarray]:
+    """
+    P = G_yr G_ur^-1 and its first-order variance from an LPM of [y; u] on r.
+
+    dP = [I, -P] dG_zr G_ur^-1, so var(P[i, j]) = (A C_Z A^H)[i, i] (B^H M B)[j, j] with
+    A = [I, -P], B = G_ur^-1, C_Z the noise covariance of [y; u] and M = (K K^H)^-1.
+    """
+    Gz = np.moveaxis(fit.G, -1, 0)                                    # (L, n_z, n_r)
+    B = np.linalg.inv(Gz[:, n_out:, :])                               # (L, n_r, n_in)
+    P = Gz[:, :n_out, :] @ B                                          # (L, n_out, n_in)
+    A = np.concatenate([np.broadcast_to(np.eye(n_out), P.shape[:1] + (n_out, n_out)), -P],
+                       axis=2)
+    left = np.real(np.einsum('lia,lab,lib->li', A, fit.noise_cov, np.conj(A)))
+    right = np.real(np.einsum('lmj,lmn,lnj->lj', np.conj(B), fit.minv, B))
+    var = left[:, :, None] * right[:, None, :]
+    return np.moveaxis(P, 0, -1), np.moveaxis(var, 0, -1)
+
+
+def lpm_frf(y: np.ndarray, u: np.ndarray, fs: float, *, r: np.ndarray | None = None,
+            order: int = DEFAULT_ORDER, half_width: int | None = None,
+            frame_samples: int = DEFAULT_FRAME_SAMPLES, inputs: list[str] | None = None,
+            outputs: list[str] | None = None) -> LpmResult:
+    """
+    LPM estimate of the FRF from u to y, indirect through r when given; H1 beside it.
+
+    With the reference r (closed loop), the LPM of [y; u] on r gives G_yr and G_ur and
+    P = G_yr G_ur^-1: noise fed back through the controller is uncorrelated with r and does
+    not bias P. Without r the direct LPM of y on u is biased towards -1/C wherever output
+    noise is fed back (a note in ``notes`` says so).
+
+    Parameters
+    ----------
+    y : array_like, shape (N, n_out)
+        Outputs.
+    u : array_like, shape (N, n_in)
+        Inputs.
+    fs : float
+        Sample rate [Hz].
+    r : array_like, shape (N, n_in), optional
+        Reference signals, one per input.
+    order, half_width
+        As :func:`lpm_lines`.
+    frame_samples : int
+        Frame length; a record shorter than one frame is one frame.
+    inputs, outputs : list of str, optional
+        Channel names.
+
+    Returns
+    -------
+    LpmResult
+        The estimate, its noise covariance and dof, and the Welch H1 baseline.
+
+    """
+    y = np.asarray(y, dtype=float).reshape(len(y), -1)
+    n = min(y.shape[0], int(frame_samples))
+    acc = LpmAccumulator(fs, n, order=order, half_width=half_width, inputs=inputs,
+                         outputs=outputs)
+    acc.add(y, u, r)
+    res = acc.result()
+    if r is None:
+        res.notes.append(DIRECT_WARNING)
+    return res
+
+
+#: the one-line warning of the direct estimate (no reference recorded)
+DIRECT_WARNING = ('no reference recorded: direct LPM of the outputs on the inputs, biased '
+                  'towards -1/C where output noise is fed back by the controller')
+
+
+@dataclass
+class RobustLpmResult:
+    """
+    The BLA of one periodic realisation with its noise and stochastic nonlinear variance.
+
+    Attributes
+    ----------
+    frf : FrequencyResponse
+        The BLA Y/U of this realisation at the excited lines (n_out, 1, n_lines), with
+        ``noise_variance`` and ``total_variance`` (noise plus stochastic nonlinear
+        distortion): the variances of this one-realisation estimate, comparable with the
+        spread over realisations of the multisine BLA.
+    nonlinear_variance : ndarray, shape (n_out, 1, n_lines)
+        max(total - noise, 0).
+    noise_from : str
+        'periods' (spread over >= 2 periods) or 'non-excited lines' (one period: the LPM
+        residual at the non-excited lines of the band; it holds even distortions too).
+    dof : int
+        Residual dof of the local polynomial over excited lines.
+
+    """
+
+    frf: FrequencyResponse
+    nonlinear_variance: np.ndarray
+    noise_from: str
+    dof: int
+
+
+def robust_lpm(y: np.ndarray, u: np.ndarray, period_samples: int, lines: np.ndarray, *,
+               fs: float = 1.0, order: int = DEFAULT_ORDER,
+               half_width: int | None = None) -> RobustLpmResult:
+    """
+    Robust LPM for periodic data: the BLA and its noise and nonlinear variance from one record.
+
+    The record holds P >= 1 whole steady-state periods of a random-phase multisine on one
+    input. The spectra of the periods are averaged at the excited ``lines``, where the BLA
+    is Y/U. Over neighbouring excited lines G_BLA is smooth while the stochastic nonlinear
+    contribution varies randomly from line to line like noise: the residual of a local
+    polynomial of G over the excited lines (no transient: steady state; dof-corrected)
+    estimates the variance of both at the output, total / |U|^2 that of Y/U. The noise
+    variance comes from the spread over periods (P >= 2) or, with one period, from the
+    LPM residual at the non-excited lines of the band (their input leakage regressed out,
+    transient included), averaged over the non-excited lines near each excited one.
+
+    Parameters
+    ----------
+    y : array_like, shape (P * period_samples, n_out) or (P * period_samples,)
+        Outputs.
+    u : array_like, shape (P * period_samples,)
+        The input.
+    period_samples : int
+        Samples per period.
+    lines : array_like of int
+        Excited DFT bins of one period, increasing (at least one window of them).
+    fs : float
+        Sample rate [Hz] (for the frequencies).
+    order, half_width
+        As :func:`lpm_lines` (over excited lines, without transient).
+
+    Returns
+    -------
+    RobustLpmResult
+
+    Raises
+    ------
+    EstimationError
+        More than one input (one realisation cannot separate inputs), less than one whole
+        period, or too few lines for one window.
+
+    """
+    y = np.asarray(y, dtype=float).reshape(len(y), -1)
+    u = np.asarray(u, dtype=float).reshape(len(u), -1)
+    if u.shape[1] != 1:
+        raise EstimationError(f'robust LPM of one realisation: {u.shape[1]} inputs; expected '
+                              f'one (one multisine realisation cannot separate inputs)')
+    n = int(period_samples)
+    n_p = y.shape[0] // n
+    if n_p < 1:
+        raise EstimationError(f'record of {y.shape[0]} samples holds no whole period of {n}')
+    lines = np.asarray(lines, dtype=int)
+
+    def per_period(x):                                  # (P, n_ch, n//2+1), 1/sqrt(N) scaled
+        return np.fft.rfft(x[:n_p * n].reshape(n_p, n, -1), axis=1).transpose(0, 2, 1) \
+            / np.sqrt(n)
+    Yp, Up = per_period(y), per_period(u)
+    Ym, Um = Yp.mean(axis=0), Up.mean(axis=0)
+    fit = lpm_lines(Ym[:, lines], Um[:, lines], order=order, half_width=half_width,
+                    transient=False)
+    total_y = np.real(np.einsum('kii->ik', fit.noise_cov))            # (n_out, n_lines)
+    if n_p >= 2:
+        noise_y = np.sum(np.abs(Yp - Ym) ** 2, axis=0)[:, lines] / (n_p - 1) / n_p
+        noise_from = 'periods'
+    else:
+        free = np.setdiff1d(np.arange(lines[0], lines[-1] + 1), lines)
+        fitn = lpm_lines(Ym[:, free], Um[:, free], order=order)
+        level = np.real(np.einsum('kii->ik', fitn.noise_cov))          # (n_out, n_free)
+        reach = 2 * (default_half_width(1, order, False) + 1)
+        near = np.abs(free[None, :] - lines[:, None]) <= reach
+        noise_y = (near @ level.T / np.maximum(near.sum(axis=1), 1)[:, None]).T
+        noise_from = 'non-excited lines'
+    u2 = np.abs(Um[0, lines]) ** 2
+    total = (total_y / u2)[:, None, :]
+    noise = (noise_y / u2)[:, None, :]
+    frf = FrequencyResponse(lines * fs / n, (Ym[:, lines] / Um[0, lines])[:, None, :],
+                            noise_variance=noise, total_variance=total, meta={
+                                'method': 'robust_lpm', 'periods': n_p, 'order': order,
+                                'dof': fit.dof, 'noise_from': noise_from})
+    return RobustLpmResult(frf, np.maximum(total - noise, 0.0), noise_from, fit.dof)

@@ -1,0 +1,201 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Recordings without periodic excitation (PRBS, noise, normal motion): the LPM, block by block.
+
+:class:`LpmBlocks` takes the blocks of a recording (in memory or a streamed bag's windows,
+:func:`frf_ident.core.estimation.detected.estimate_in_blocks`), cuts them into frames of one
+length (:data:`~frf_ident.core.estimation.lpm.DEFAULT_FRAME_SAMPLES`, or the first block when
+it is shorter) and adds every frame without missing samples to an
+:class:`~frf_ident.core.estimation.lpm.LpmAccumulator`. The inputs are the torques of the
+joints whose excitation source moves (the velocity reference when the bag has one, else the
+torque, as detection chooses), the outputs the velocities of every joint. With the reference
+the estimate is the indirect one, P = G_yr G_ur^-1; without it the direct one, with a
+warning.
+"""
+from __future__ import annotations
+
+from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.estimation.lpm import DEFAULT_FRAME_SAMPLES, DIRECT_WARNING, LpmAccumulator
+from frf_ident.core.excitation.detect import excitation_source
+from frf_ident.core.recording import Recording
+from frf_ident.errors import EstimationError
+import numpy as np
+
+__all__ = ['LpmBlocks', 'MIN_LEVEL']
+
+#: a joint whose excitation source has less than this fraction of the strongest joint's rms
+#: is not an input (it only follows through coupling); the rule detection applies
+MIN_LEVEL = 1e-3
+
+
+class LpmBlocks:
+    """
+    LPM estimate of a recording without periodic excitation, gathered block by block.
+
+    Parameters
+    ----------
+    frame_samples : int
+        LPM frame length (resolution fs / frame_samples); a shorter first block sets it.
+    input : str, optional
+        The only input joint; default: every joint whose excitation source moves.
+    band : tuple of float, optional
+        (f_low, f_high) [Hz]: only these lines are kept in the result.
+
+    """
+
+    def __init__(self, frame_samples: int = DEFAULT_FRAME_SAMPLES, *,
+                 input: str | None = None,  # noqa: A002
+                 band: tuple[float, float] | None = None) -> None:
+        self.frame_samples = int(frame_samples)
+        self.input = input
+        self.band = band
+        self.acc: LpmAccumulator | None = None
+        self.inputs: list[int] = []
+        self.source = ''
+        self.dropped = 0
+        self.used_until: float | None = None
+
+    @property
+    def frames(self) -> int:
+        """Return the number of frames added so far."""
+        return 0 if self.acc is None else self.acc.frames
+
+    def _start(self, rec: Recording, n_rows: int) -> None:
+        """Choose inputs and frame length from the first block."""
+        x = rec.reference if self.source == 'velocity reference' else rec.effort
+        source = self.source
+        names = rec.joint_names
+        if self.input is not None:
+            if self.input not in names:
+                raise EstimationError(f'input={self.input!r} is not a joint of the recording; '
+                                      f'expected one of {names}')
+            self.inputs = [names.index(self.input)]
+        else:
+            level = np.array([np.nanstd(x[:, j]) if np.any(np.isfinite(x[:, j])) else 0.0
+                              for j in range(x.shape[1])])
+            if not np.any(level > 0):
+                raise EstimationError(f'no joint moves: the {source} is constant in every '
+                                      f'joint; expected an excited input')
+            self.inputs = [j for j in range(len(names)) if level[j] >= MIN_LEVEL * level.max()]
+        n = min(n_rows, self.frame_samples)
+        self.acc = LpmAccumulator(rec.fs, n, inputs=[f'tau_m/{names[j]}' for j in self.inputs],
+                                  outputs=[f'dq_m/{m}' for m in names])
+
+    def add(self, rec: Recording) -> float | None:
+        """
+        Add the whole frames of a block; return where the data used end [s], None if none.
+
+        Leading samples without a value in some channel (a reference not yet commanded) are
+        skipped; a frame holding a missing sample later is dropped (counted).
+
+        Parameters
+        ----------
+        rec : Recording
+            One block of the recording, in time order after the blocks before.
+
+        Returns
+        -------
+        float or None
+            End time [s] of the last frame used (a next block may start there).
+
+        Raises
+        ------
+        EstimationError
+            No joint moves, or an unknown ``input`` joint.
+
+        """
+        y = rec.velocity
+        u = rec.effort
+        if self.acc is None:
+            self.source = excitation_source(rec.reference, rec.effort)[1]
+        ref = rec.reference if self.source == 'velocity reference' else None
+        cols = [y, u] if ref is None else [y, u, ref]
+        ok = np.all(np.concatenate([np.isfinite(c) for c in cols], axis=1), axis=1)
+        if not np.any(ok):
+            return None
+        a = int(np.argmax(ok))
+        if self.acc is None:
+            self._start(rec, ok.size - a)
+        n = self.acc.n
+        j = self.inputs
+        end = None
+        for s in range(a, ok.size - n + 1, n):
+            if not np.all(ok[s:s + n]):
+                self.dropped += 1
+                continue
+            sl = slice(s, s + n)
+            self.acc.add(y[sl], u[sl, j], None if ref is None else ref[sl, j])
+            end = float(rec.t[0] + (s + n) / rec.fs)
+        if end is not None:
+            self.used_until = end
+        return end
+
+    def results(self, notes: list[str]) -> dict[str, FrequencyResponse]:
+        """
+        Return 'lpm' and its baseline 'lpm_h1' (Welch H1 with coherence in its meta).
+
+        Parameters
+        ----------
+        notes : list of str
+            Why the blocks had no periodic excitation (kept in meta['detected']).
+
+        Returns
+        -------
+        dict of str to FrequencyResponse
+            'lpm': P with its noise variance; 'lpm_h1': the Welch H1 of the same frames,
+            ``meta['coherence']`` (n_out, n_freq). ``meta['detected']`` of both holds the
+            notes and the one-line summary of the estimator.
+
+        Raises
+        ------
+        EstimationError
+            No whole frame without missing samples.
+
+        """
+        if self.acc is None or not self.acc.frames:
+            n = 0 if self.acc is None else self.acc.n
+            raise EstimationError(f'no whole LPM frame of {n} samples without missing samples '
+                                  f'({self.dropped} dropped for gaps); expected a longer record')
+        res = self.acc.result()
+        frf, h1 = res.frf, res.h1
+        if self.band is not None:
+            lo, hi = self.band
+            frf = frf.select((frf.freq_hz >= lo) & (frf.freq_hz <= hi))
+            h1 = h1.select((h1.freq_hz >= lo) & (h1.freq_hz <= hi))
+        ins = ', '.join(n.split('/', 1)[1] for n in frf.inputs)
+        band, singular = frf.meta['excitation_band_hz'], frf.meta['singular_lines']
+        how = (f'indirect through the velocity reference r of {ins} (P = G_yr G_ur^-1)'
+               if res.method == 'indirect' else f'direct, torque of {ins} as input')
+        line = (f'Local Polynomial Method, {how}: '
+                f'{frf.noutputs}x{frf.ninputs} channels, {frf.freq_hz.size} lines '
+                f'{frf.freq_hz[0]:.4g}-{frf.freq_hz[-1]:.4g} Hz, {res.frames} frame(s) of '
+                f'{self.acc.n / self.acc.fs:.4g} s, {res.dof} dof per window; 99 % of the '
+                f'{"r" if res.method == "indirect" else "u"} power in '
+                f'{band[0]:.4g}-{band[1]:.4g} Hz'
+                + (f', {singular} line(s) without excitation of every input dropped'
+                   if singular else '')
+                + (f', {self.dropped} frame(s) dropped for gaps' if self.dropped else ''))
+        ex = h1.meta['excited']
+        coh = np.median(h1.meta['coherence'][:, ex], axis=1)
+        f_ex = h1.freq_hz[ex]
+        base = (f'Welch H1 baseline (lpm_h1): median coherence over the excited '
+                f'{f_ex[0]:.4g}-{f_ex[-1]:.4g} Hz: '
+                + ', '.join(f'{n.split("/", 1)[1]} {c:.2f}' for n, c in zip(h1.outputs, coh)))
+        detected = (list(notes) + [line] + ([DIRECT_WARNING] if res.method == 'direct' else [])
+                    + [base])
+        for v in (frf, h1):
+            v.meta['detected'] = detected
+        frf.meta['dropped'] = {'frames': self.dropped} if self.dropped else {}
+        return {'lpm': frf, 'lpm_h1': h1}
