@@ -21,11 +21,10 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-import sys
 from typing import Callable
 
 from frf_ident.app import stream_estimate
-from frf_ident.app.console import say
+from frf_ident.app.console import bars_enabled, say
 from frf_ident.app.outdir import clear_outputs
 from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
 from frf_ident.errors import FrfIdentInputError
@@ -78,7 +77,7 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     if stream or stream_estimate.needs_streaming(bag, budget):
         res = stream_estimate.stream_estimate(bag, joints=joints, t_range=t_range,
                                               block_s=window_s, options=options,
-                                              progress=progress, bar=sys.stderr.isatty())
+                                              progress=progress, bar=bars_enabled())
         st = res.stats
         progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
                  f'at most {st.peak_rows} held at once')

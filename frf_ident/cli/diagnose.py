@@ -19,8 +19,10 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_output_arguments
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
+#: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
+LOG_TO_OUT = True
 HELP = ('compare data with the nominal model, name the effects it lacks, extend the model '
         '(report.json, extended_model.yaml, report.html)')
 
