@@ -50,9 +50,11 @@ body { font-family: system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 2e
        max-width: 1200px; color: #222; line-height: 1.45; padding: 0 1em; }
 h1 { border-bottom: 2px solid #3b6ea5; padding-bottom: .2em; }
 h2 { color: #3b6ea5; margin-top: 2em; }
-figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
+body { overflow-wrap: break-word; }
+figure { margin: 1em 0; } figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { font-size: .9em; color: #555; margin-top: .3em; }
-table { border-collapse: collapse; margin: .6em 0; font-size: .9em; }
+table { border-collapse: collapse; margin: .6em 0; font-size: .9em; display: block;
+        max-width: 100%; overflow-x: auto; }
 th, td { border: 1px solid #ccc; padding: .25em .6em; text-align: left; }
 th { background: #eef3f8; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
 .warn { color: #a33; } .ok { color: #272; } .muted { color: #777; font-size: .85em; }
