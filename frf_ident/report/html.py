@@ -147,7 +147,9 @@ def _page(title: str, sections: list[tuple[str, str, str]], rec: Recording | Non
 
 
 def _figure(name: str, caption: str, alt: str) -> str:
-    return (f'<figure><img src="{html.escape(name)}" alt="{html.escape(alt)}">'
+    # the image links to itself: on a phone the page shrinks it, a tap shows it full size
+    src = html.escape(name)
+    return (f'<figure><a href="{src}"><img src="{src}" alt="{html.escape(alt)}"></a>'
             f'<figcaption>{caption}</figcaption></figure>')
 
 
