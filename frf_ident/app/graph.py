@@ -53,6 +53,10 @@ import yaml
 
 _log = logging.getLogger(__name__)
 
+#: how long a node may take to come up (import numpy/scipy/numba, compile the plant) before
+#: the graph gives up: about 15 s on an idle 2-core machine, and more than 60 s (the former
+#: limit, which failed `make demo` twice) on 2 cores at load average 20
+START_TIMEOUT_S = 300.0
 #: free-running: the PI in its own node, as a robot's velocity loop
 NODES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node')
 #: lockstep simulation: the plant hosts the PI (``velocity_control``), as ros2_control hosts its
@@ -194,7 +198,7 @@ class Graph:
             if line.startswith(mw.READY):
                 self._ready[name].set()
 
-    def start(self, timeout_s: float = 60.0) -> 'Graph':
+    def start(self, timeout_s: float = START_TIMEOUT_S) -> 'Graph':
         if self.bag.exists():
             raise FileExistsError(f'{self.bag} exists; refusing to overwrite recorded data')
         for name in self.nodes:
