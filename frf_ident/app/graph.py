@@ -54,8 +54,9 @@ import yaml
 _log = logging.getLogger(__name__)
 
 #: how long a node may take to come up (import numpy/scipy/numba, compile the plant) before
-#: the graph gives up: about 15 s on an idle 2-core machine, and more than 60 s (the former
-#: limit, which failed `make demo` twice) on 2 cores at load average 20
+#: the graph gives up: a watchdog for a node that hangs, not a speed goal. On 2 shared cores
+#: at load average 20 the plant node took more than 60 s (the former limit: `make demo`
+#: failed twice)
 START_TIMEOUT_S = 300.0
 #: free-running: the PI in its own node, as a robot's velocity loop
 NODES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node')
