@@ -55,7 +55,8 @@ figure { margin: 1em 0; } figure img { max-width: 100%; height: auto; border: 1p
 figcaption { font-size: .9em; color: #555; margin-top: .3em; }
 table { border-collapse: collapse; margin: .6em 0; font-size: .9em; display: block;
         max-width: 100%; overflow-x: auto; }
-th, td { border: 1px solid #ccc; padding: .25em .6em; text-align: left; }
+th, td { border: 1px solid #ccc; padding: .25em .6em; text-align: left; overflow-wrap: normal; }
+td:last-child { min-width: 14em; }
 th { background: #eef3f8; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
 .warn { color: #a33; } .ok { color: #272; } .muted { color: #777; font-size: .85em; }
 nav a { margin-right: 1em; }
