@@ -89,6 +89,11 @@ def frequency_axis(ax: plt.Axes, which: str = 'x', label: str | None = 'frequenc
         (ax.set_xlabel if which == 'x' else ax.set_ylabel)(label)
 
 
+def under_title(fig: plt.Figure) -> float:
+    """Return the top of the panels' area, leaving a 0.4 inch band for the suptitle."""
+    return 1.0 - 0.4 / fig.get_figheight()
+
+
 def legend_below(fig: plt.Figure, axes: Sequence[plt.Axes], ncol: int = 3) -> float:
     """
     Put one legend of every labelled line under the panels, where it hides no data.
@@ -181,7 +186,7 @@ def bode_figure(frfs: Mapping[str, FrequencyResponse], path: Path, *,
                                else None)
     bottom = legend_below(fig, [axes[0, 0]])
     fig.suptitle(title or 'Frequency response estimates (shaded: \u00b12\u03c3)')
-    fig.tight_layout(rect=(0, bottom, 1, 1))
+    fig.tight_layout(rect=(0, bottom, 1, under_title(fig)))
     return _save(fig, path)
 
 
@@ -234,7 +239,7 @@ def snr_figure(frfs: Mapping[str, FrequencyResponse], path: Path) -> Path | None
                 ax.set_ylabel('|P|\u00b2 / var [dB]')
     bottom = legend_below(fig, [axes[0, 0]])
     fig.suptitle('Signal-to-noise ratio per frequency line (higher is better)')
-    fig.tight_layout(rect=(0, bottom, 1, 1))
+    fig.tight_layout(rect=(0, bottom, 1, under_title(fig)))
     return _save(fig, path)
 
 
@@ -367,7 +372,7 @@ def paper_figure(results: dict[str, Any], case: str, path: Path) -> Path:
             frequency_axis(ax, label='frequency [Hz]' if ax is ax_p else None)
     bottom = legend_below(fig, [axes[0, 0]])
     fig.suptitle(f'Saupe & Knoblach (2015) Sec. 6 example: tau_m \u2192 dq_m, {label}')
-    fig.tight_layout(rect=(0, bottom, 1, 1))
+    fig.tight_layout(rect=(0, bottom, 1, under_title(fig)))
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
@@ -416,7 +421,7 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
                 a.grid(True, which='both', alpha=0.3)
                 frequency_axis(a, label='frequency [Hz]' if a is ax[2, i] else None)
         bottom = legend_below(fig, list(ax[0]) + list(ax[2]), ncol=4)
-        fig.tight_layout(rect=(0, bottom, 1, 1))
+        fig.tight_layout(rect=(0, bottom, 1, under_title(fig)))
         _save(fig, out / 'bode.png')
         figs.append(('bode.png', 'Measured vs nominal vs extended FRF (diagonal), and the '
                                  'residual spectrum |P_measured / P_model|'))
