@@ -111,6 +111,11 @@ def configured(*, verbose: bool = False, quiet: bool = False,
         file.setFormatter(logging.Formatter(FILE_FORMAT))
         file.setLevel(logging.DEBUG)
         handlers.append(file)
+    # a logging.config.dictConfig elsewhere in the process (e.g. import-linter's, in the test
+    # suite) disables every logger that existed before it; the command owns its output
+    for name, existing in logging.root.manager.loggerDict.items():
+        if name.split('.')[0] == PACKAGE_LOGGER and isinstance(existing, logging.Logger):
+            existing.disabled = False
     old_level = logger.level
     logger.setLevel(min(h.level for h in handlers))
     for h in handlers:

@@ -86,3 +86,14 @@ def test_lines_logged_before_the_directory_exists_are_written_once_it_does(tmp_p
     lines = out.read_text().splitlines()
     assert [line.split(': ', 1)[1] for line in lines] == ['before the directory', 'after it']
     assert not logging.getLogger('frf_ident').handlers      # removed when the command ends
+
+
+def test_a_dict_config_elsewhere_does_not_silence_the_command(capsys):
+    """import-linter's dictConfig (test_layout) disabled the package's loggers: no output."""
+    import logging.config
+    log = logging.getLogger('frf_ident.app.earlier')
+    logging.config.dictConfig({'version': 1})             # disables every existing logger
+    assert log.disabled
+    with configured():
+        log.info('still shown')
+    assert capsys.readouterr().out == 'still shown\n'
