@@ -15,42 +15,17 @@
 The few lines a person reads after a diagnosis: effects found, what is unexplained, the gain.
 
 Used by ``frf-ident diagnose`` and ``frf-ident demo``. Numbers carry 3-4 significant digits
-(the report's JSON keeps 6); parameters are written ``name value`` instead of dict reprs.
+(the report's JSON keeps 6); parameters are written ``name value`` instead of dict reprs
+(:func:`frf_ident.report.text.plain`, as in the HTML report).
 """
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any, Mapping
 
-__all__ = ['diagnosis_summary', 'plain']
+from frf_ident.report.text import plain
 
-
-def plain(value: Any) -> str:
-    """
-    Write a report value for a person: floats to 4 significant digits, no braces or quotes.
-
-    Parameters
-    ----------
-    value : Any
-        A number, string, list or dict from report.json.
-
-    Returns
-    -------
-    str
-        E.g. ``amplitude 4.01, spatial_frequency 122.3, phase 0.4`` for a ripple term.
-
-    """
-    if isinstance(value, bool) or value is None:
-        return str(value)
-    if isinstance(value, float):
-        return f'{value:.4g}'
-    if isinstance(value, Mapping):
-        return ', '.join(f'{k} {plain(v)}' for k, v in value.items())
-    if isinstance(value, (list, tuple)):
-        inner = [plain(v) for v in value]
-        return '; '.join(inner) if any(isinstance(v, Mapping) for v in value) \
-            else '[' + ', '.join(inner) + ']'
-    return str(value)
+__all__ = ['diagnosis_summary']
 
 
 def _band(signature: Mapping[str, Any]) -> str:

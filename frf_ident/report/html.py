@@ -39,6 +39,7 @@ from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import figures
+from frf_ident.report.text import plain
 import numpy as np
 
 __all__ = ['write_diagnosis_report', 'write_report']
@@ -167,6 +168,8 @@ def _cell(v: Any) -> str:
         return f'<td class="num">{int(v)}</td>'
     if isinstance(v, (float, np.floating)):
         return f'<td class="num">{_num(float(v))}</td>'
+    if isinstance(v, (Mapping, list, tuple)):
+        return f'<td>{html.escape(plain(v))}</td>'
     return f'<td>{html.escape(str(v))}</td>'
 
 
@@ -379,8 +382,8 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
         eff_html = _table(['#', 'effect', 'axis', 'score', 'parameters',
                            'standard error', 'evidence'],
                           [[k + 1, x['name'], x['axis'], x['score'],
-                            _json_short(x['parameters']),
-                            _json_short(x['standard_error']) if 'standard_error' in x else '',
+                            plain(x['parameters']),
+                            plain(x['standard_error']) if 'standard_error' in x else '',
                             x['evidence']]
                            for k, x in enumerate(eff)])
     else:
@@ -441,8 +444,3 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
     p = out / 'report.html'
     p.write_text(_page(f'Diagnosis of {data}', sections, rec))
     return p
-
-
-def _json_short(x: Any) -> str:
-    import json
-    return json.dumps(x, default=float)
