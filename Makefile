@@ -39,7 +39,7 @@ test: $(STAMP)
 	$(PY) -m pytest -q -ra --durations=15 -n auto --dist loadgroup test
 
 bench: $(STAMP)
-	$(PY) -m benchmarks
+	$(PY) -m benchmarks --markdown
 
 clean:
 	rm -rf $(VENV) $(OUT) build *.egg-info .pytest_cache

@@ -14,7 +14,8 @@
 """
 `make bench`: speed and accuracy figures, each beside a baseline measured in the same run.
 
-Sections (run all, or name some: ``python -m benchmarks simulation estimation``):
+Sections (run all, or name some: ``python -m benchmarks simulation estimation``; with
+``--markdown`` the runs also go to docs/BENCHMARKS.md, see benchmarks/markdown.py):
 
 - simulation — closed-loop 3-axis plant at 1 kHz (PI in the loop, Coulomb friction, ripple,
   gravity): simulated seconds per wall second, against real time (goal >= 1000x).
@@ -62,6 +63,7 @@ def bench_robot():
 
 @section('simulation')
 def bench_simulation() -> list[tuple[str, str, str, str]]:
+    """Simulate the 3-axis closed loop at 1 kHz (PI, friction, ripple) against real time."""
     from frf_ident.core.model.schema import controller_from_dict, default_model_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     rows = []
@@ -103,6 +105,7 @@ def bench_ripple_threshold() -> list[tuple[str, str, str, str]]:
 
 @section('estimation')
 def bench_estimation() -> list[tuple[str, str, str, str]]:
+    """Estimate a 3x3 FRF by the multisine BLA and by scipy's csd H1 from the same periods."""
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
     from frf_ident.core.model.schema import default_robot
     from frf_ident.core.simulation.analytic import robot_frf
@@ -272,6 +275,7 @@ def bench_chirp_iteration() -> list[tuple[str, str, str, str]]:
 
 @section('bag_read')
 def bench_bag_read() -> list[tuple[str, str, str, str]]:
+    """Read the joint states of a 2-minute 6-joint bag, against rosbags' AnyReader."""
     from pathlib import Path
     import tempfile
 
@@ -399,14 +403,33 @@ def bench_fit() -> list[tuple[str, str, str, str]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    names = (argv if argv is not None else sys.argv[1:]) or list(SECTIONS)
+    """
+    Run the named sections (all without names) and print their rows.
+
+    With ``--markdown`` each section's run is also stored under docs/benchmarks/ and
+    docs/BENCHMARKS.md is rendered again from every stored run (benchmarks/markdown.py).
+    """
+    args = list(argv if argv is not None else sys.argv[1:])
+    markdown = '--markdown' in args
+    args_names = [a for a in args if a != '--markdown']
+    names = args_names or list(SECTIONS)
+    unknown = [n for n in names if n not in SECTIONS]
+    if unknown:
+        print(f'unknown section {unknown[0]!r}; have {sorted(SECTIONS)}', file=sys.stderr)
+        return 2
+    from benchmarks import markdown as md
     print(f"{'measurement':48s} {'frf_ident':>26s} {'baseline (same run)':>26s} {'ratio':>18s}")
     for name in names:
-        if name not in SECTIONS:
-            print(f'unknown section {name!r}; have {sorted(SECTIONS)}', file=sys.stderr)
-            return 2
+        started, t0 = md.machine(), time.perf_counter()
+        rows = []
         for row in SECTIONS[name]():
+            rows.append(row)
             print(f'{row[0]:48s} {row[1]:>26s} {row[2]:>26s} {row[3]:>18s}', flush=True)
+        if markdown:
+            md.store(name, rows, wall_s=time.perf_counter() - t0, cmd=md.command(args_names),
+                     started=started)
+    if markdown:
+        md.write_page(SECTIONS)
     return 0
 
 

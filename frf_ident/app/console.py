@@ -11,15 +11,33 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Progress output of the application functions (one line each, flushed at once)."""
+"""
+Output for people: stage summaries through :mod:`logging`, progress bars through tqdm.
+
+Library code logs with ``logging.getLogger(__name__)``: a stage summary (what was read, what
+was found, where it was written) at INFO, search traces at DEBUG. The command line
+(:mod:`frf_ident.cli.logsetup`) decides where they go; without it INFO lines stay silent, as
+a library's should. :func:`say` is the ``progress`` callback of the application functions:
+one INFO line. :func:`progress_bar` is the one place that decides whether a bar is drawn.
+"""
 from __future__ import annotations
 
-__all__ = ['say']
+import logging
+import sys
+from typing import Any
+
+__all__ = ['bars_enabled', 'progress_bar', 'say', 'set_bars']
+
+_log = logging.getLogger('frf_ident.app')
+
+#: progress bars on long work: None = on when stderr is a terminal (tqdm's own rule),
+#: False = off (``frf-ident -q``)
+_BARS: dict[str, bool | None] = {'enabled': None}
 
 
 def say(message: str) -> None:
     """
-    Print one progress line and flush it (the default ``progress`` of :mod:`frf_ident.app`).
+    Log one stage line at INFO (the default ``progress`` of :mod:`frf_ident.app`).
 
     Parameters
     ----------
@@ -27,4 +45,56 @@ def say(message: str) -> None:
         The line, without a newline.
 
     """
-    print(message, flush=True)
+    _log.info(message)
+
+
+def set_bars(enabled: bool | None) -> None:
+    """
+    Switch progress bars off (False) or back to "on when stderr is a terminal" (None).
+
+    Parameters
+    ----------
+    enabled : bool or None
+        False for ``-q``; None for the default.
+
+    """
+    _BARS['enabled'] = enabled
+
+
+def bars_enabled() -> bool:
+    """
+    Return whether a progress bar is drawn now: stderr is a terminal and ``-q`` is not given.
+
+    Returns
+    -------
+    bool
+        True to draw.
+
+    """
+    return _BARS['enabled'] is not False and sys.stderr.isatty()
+
+
+def progress_bar(total: float | None, desc: str, unit: str = 'it', **kwargs: Any):
+    """
+    Return a tqdm bar on stderr, disabled where :func:`bars_enabled` says so.
+
+    Parameters
+    ----------
+    total : float or None
+        Units of work.
+    desc : str
+        What the bar counts, e.g. ``'reproduce'``.
+    unit : str, optional
+        The unit of ``total``.
+    **kwargs
+        Further :class:`tqdm.tqdm` arguments (``unit_scale`` ...).
+
+    Returns
+    -------
+    tqdm.tqdm
+        Use as a context manager; ``update(n)`` as work is done.
+
+    """
+    from tqdm import tqdm
+    return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, leave=False,
+                disable=not bars_enabled(), **kwargs)

@@ -21,6 +21,7 @@ echo`` in the same shell sees the run), :func:`frf_ident.app.estimate.estimate_b
 """
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
@@ -29,6 +30,8 @@ from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.share import config_file
 
 __all__ = ['DEMO_CHIRP', 'DEMO_MODEL', 'DEMO_MULTISINE', 'DEMO_ROBOT', 'run_demo']
+
+_log = logging.getLogger(__name__)
 
 #: the demo's short experiments (the identify defaults take minutes of simulated time)
 DEMO_MULTISINE = MultisineConfig(n_realisations=4, n_periods=3, resolution_hz=0.5)
@@ -65,6 +68,7 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
     """
     progress = sink(progress)
     from frf_ident.app.diagnose import diagnose
+    from frf_ident.app.diagnosis_summary import diagnosis_summary
     from frf_ident.app.estimate import estimate_bag
     from frf_ident.app.graph import run_graph
     model = Path(model) if model else config_file(DEMO_MODEL)
@@ -80,6 +84,8 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
                        log=progress)
     progress(f'demo: bag {bag}')
     estimate_bag(bag, out / 'estimate', progress=progress)
-    diagnose(Path(bag), Path(model), out / 'diagnosis', progress=progress)
-    progress(f'demo: diagnosis in {out / "diagnosis"}')
+    progress('demo: diagnosis against the nominal model (its search trace: -v, or demo.log)')
+    res = diagnose(Path(bag), Path(model), out / 'diagnosis', progress=_log.debug)
+    for line in diagnosis_summary(res['report'], out / 'diagnosis'):
+        progress(line)
     return 0

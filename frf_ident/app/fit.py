@@ -28,7 +28,6 @@ import json
 from pathlib import Path
 from typing import Any, Callable
 
-from frf_ident.app.console import say
 from frf_ident.app.frf_source import axis_channels, frf_variance, read_source
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.fit.cost import CostTest
@@ -36,6 +35,7 @@ from frf_ident.core.fit.coupled import CoupledFit, fit_coupled
 from frf_ident.core.fit.physical import fit_two_mass, PhysicalFit
 from frf_ident.core.fit.rational import OrderSelection, select_order
 from frf_ident.core.jsonable import jsonable
+from frf_ident.core.progress import Progress, sink
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.lti import write_lti_mat
@@ -163,7 +163,7 @@ def _physical(frf: FrequencyResponse, var: np.ndarray | None, delay_s: float,
 def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical: bool = False,
             delay_s: float = 0.0, band: tuple[float, float] | None = None,
             model: str | Path | None = None,
-            progress: Callable[[str], None] = say) -> FitOutcome:
+            progress: Progress | None = None) -> FitOutcome:
     """
     Fit a model to a measured FRF and write fit.json, fit.png and the model.
 
@@ -207,6 +207,7 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     var = frf_variance(frf)
     which = ('total' if frf.total_variance is not None else
              'noise' if frf.noise_variance is not None else None)
+    progress = sink(progress)
     progress(f'fit: {frf.noutputs}x{frf.ninputs} FRF, {frf.freq_hz.size} lines '
              f'{frf.freq_hz.min():.3g}-{frf.freq_hz.max():.3g} Hz, weights: '
              f'{which + " variance" if which else "none (relative error)"}')

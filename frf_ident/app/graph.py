@@ -34,6 +34,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import logging
 import os
 from pathlib import Path
 import random
@@ -50,6 +51,13 @@ from frf_ident.io.share import share_dir, SOURCE_ROOT
 import numpy as np
 import yaml
 
+_log = logging.getLogger(__name__)
+
+#: how long a node may take to come up (import numpy/scipy/numba, compile the plant) before
+#: the graph gives up: a watchdog for a node that hangs, not a speed goal. On 2 shared cores
+#: at load average 20 the plant node took more than 60 s (the former limit: `make demo`
+#: failed twice)
+START_TIMEOUT_S = 300.0
 #: free-running: the PI in its own node, as a robot's velocity loop
 NODES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node')
 #: lockstep simulation: the plant hosts the PI (``velocity_control``), as ros2_control hosts its
@@ -191,7 +199,7 @@ class Graph:
             if line.startswith(mw.READY):
                 self._ready[name].set()
 
-    def start(self, timeout_s: float = 60.0) -> 'Graph':
+    def start(self, timeout_s: float = START_TIMEOUT_S) -> 'Graph':
         if self.bag.exists():
             raise FileExistsError(f'{self.bag} exists; refusing to overwrite recorded data')
         for name in self.nodes:
@@ -244,7 +252,8 @@ class Graph:
                     results['multisine'] = d
                 else:
                     results['iterations'].append(d)
-                self.say(f"{d.get('kind')}: {json.dumps(d.get('reply'))[:200]}")
+                _log.debug('driver: %s', json.dumps(d))
+                self.say(result_line(d))
         rc = proc.wait()
         last = (results['iterations'] or [results.get('multisine')])[-1]
         if rc == REFUSED and last and last.get('reply', {}).get('refused'):
@@ -295,6 +304,40 @@ def run_graph(out_dir: str | Path, *, model: Optional[str | Path] = None,
         bag = g.stop()
     results['frf_live'] = str(g.frf_dir)
     return bag, results
+
+
+def result_line(d: dict) -> str:
+    """
+    Return one line for a person from the driver's FRF_RESULT of one run.
+
+    Parameters
+    ----------
+    d : dict
+        ``{'kind', 'success', 'reply'}`` as the driver prints it.
+
+    Returns
+    -------
+    str
+        E.g. ``iteration run 3: chirp iteration 2, error to u_des 0.41 / 0.38 / 0.52 dB,
+        converged; 20.0 s of experiment at 2,310 steps/s``.
+
+    """
+    r = d.get('reply') or {}
+    head = f"{d.get('kind')} run {r.get('run', '?')}"
+    if not d.get('success'):
+        return f"{head}: failed: {r.get('error', 'no reason given')}"
+    found = []
+    if 'iteration' in r:
+        found.append(f"chirp iteration {r['iteration']}")
+    if 'error_db' in r:
+        errs = np.atleast_1d(np.asarray(r['error_db'], dtype=float))
+        found.append('error to u_des ' + ' / '.join(f'{e:.2f}' for e in errs) + ' dB')
+    if 'converged' in r:
+        found.append('converged' if r['converged'] else 'not converged')
+    timing = f"{r.get('experiment_time_s', 0.0):.1f} s of experiment"
+    if 'steps_per_s' in r:
+        timing += f" at {r['steps_per_s']:,.0f} steps/s"
+    return f"{head}: {', '.join(found + [timing])}"
 
 
 class _Waiter:

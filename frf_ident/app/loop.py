@@ -29,13 +29,13 @@ from pathlib import Path
 from typing import Any, Callable
 import warnings
 
-from frf_ident.app.console import say
 from frf_ident.app.frf_source import axis_channels, frf_variance, read_source
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.jsonable import jsonable
 from frf_ident.core.loop.check import (AxisMargins, draw_responses, DRAWS, loop_response,
                                        LoopCheck, Margin, pi_response, sensitivity_peak)
 from frf_ident.core.loop.design import PIProposal, propose_pi
+from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.model_file import load_model
 from frf_ident.report.fit_figures import loop_figure
@@ -283,7 +283,7 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
              ki: list[float] | None = None, dt: float | None = None,
              model: str | Path | None = None,
              propose: tuple[float, float] | None = None, draws: int = DRAWS,
-             progress: Callable[[str], None] = say) -> LoopOutcome:
+             progress: Progress | None = None) -> LoopOutcome:
     """
     Check a velocity PI on a measured FRF (and/or propose one); write loop.json, loop.png.
 
@@ -329,6 +329,7 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
     if kp is None and propose is None:
         raise FrfIdentInputError('loop: nothing to check: give --model, --kp/--ki or --propose')
     out.mkdir(parents=True, exist_ok=True)
+    progress = sink(progress)
     progress(f'loop: {frf.noutputs}x{frf.ninputs} FRF, {frf.freq_hz.size} lines '
              f'{frf.freq_hz.min():.3g}-{frf.freq_hz.max():.3g} Hz; PI '
              f'{"discrete, dt " + format(dt, "g") + " s" if dt else "continuous"}')

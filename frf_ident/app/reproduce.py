@@ -23,9 +23,11 @@ and Bode plots like the paper's Figures 4 and 5.
 from __future__ import annotations
 
 import json
+import logging
 from pathlib import Path
 from typing import Any
 
+from frf_ident.app.console import progress_bar
 from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.excitation.chirp import chirp_phase_flips, ChirpDesign
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
@@ -37,6 +39,8 @@ from frf_ident.core.simulation.open_loop import (resonance_peak, run_open_loop_c
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import DesignError
 import numpy as np
+
+_log = logging.getLogger(__name__)
 
 __all__ = ['CASES', 'OUTPUT_FILES', 'PAPER_AXIS', 'PAPER_REALISATIONS', 'PAPER_SEED',
            'RESONANCE_BAND', 'analytic_linear', 'findings', 'paper_plant', 'reproduce_paper',
@@ -159,18 +163,24 @@ def reproduce_paper(*, n_realisations: int = PAPER_REALISATIONS, seed: int = PAP
         'chirp_design': chirp.to_dict(),
         'cases': {},
     }
-    for case in CASES:
-        plant = paper_plant(case, fs, substeps)
-        say(f'{case}: multisine ({n_realisations} realisations x {design.period:.1f} s)')
-        ms = run_open_loop_multisine(plant, design, n_realisations=n_realisations, n_periods=1,
-                                     rng=rng, realisations=realisations)
-        say(f'{case}: chirp (20 s)')
-        ch = run_open_loop_chirp(plant, chirp, chirp_phase_flips(1))
-        out['cases'][case] = {
-            'multisine': _estimate_entry(ms.frf, ms.input_power, detection=ms.detection,
-                                         crest_factor=ms.crest_factor),
-            'chirp': _estimate_entry(ch.frf, ch.input_power),
-        }
+    with progress_bar(2 * len(CASES), 'reproduce', unit='run') as bar:
+        for case in CASES:
+            plant = paper_plant(case, fs, substeps)
+            _log.debug('%s: multisine (%d realisations x %.1f s)', case, n_realisations,
+                       design.period)
+            ms = run_open_loop_multisine(plant, design, n_realisations=n_realisations,
+                                         n_periods=1, rng=rng, realisations=realisations)
+            bar.update()
+            _log.debug('%s: chirp (%.0f s)', case, chirp.duration)
+            ch = run_open_loop_chirp(plant, chirp, chirp_phase_flips(1))
+            bar.update()
+            say(f'{case}: multisine {n_realisations} x {design.period:.1f} s and chirp '
+                f'{chirp.duration:.0f} s simulated')
+            out['cases'][case] = {
+                'multisine': _estimate_entry(ms.frf, ms.input_power, detection=ms.detection,
+                                             crest_factor=ms.crest_factor),
+                'chirp': _estimate_entry(ch.frf, ch.input_power),
+            }
     lin_ms = out['cases']['linear']['multisine']
     out['power_ratio'] = lin_ms['input_power'] / out['cases']['linear']['chirp']['input_power']
     out['power_ratio_per_realisation'] = _power_ratios(realisations, design, fs, out)

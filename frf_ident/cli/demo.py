@@ -19,8 +19,10 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_design_arguments
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
+#: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
+LOG_TO_OUT = True
 HELP = 'the main job: node graph on the simulated robot, estimation, diagnosis'
 
 

@@ -19,8 +19,10 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_output_arguments
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
+#: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
+LOG_TO_OUT = True
 HELP = ('compare data with the nominal model, name the effects it lacks, extend the model '
         '(report.json, extended_model.yaml, report.html)')
 
@@ -70,27 +72,11 @@ def run(args: argparse.Namespace) -> int:
     """
     from frf_ident.app.console import say
     from frf_ident.app.diagnose import diagnose, OUTPUT_FILES
+    from frf_ident.app.diagnosis_summary import diagnosis_summary
     from frf_ident.app.outdir import check_out
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     res = diagnose(args.data, args.model, out, map_path=args.map, validate=args.validate,
                    progress=say)
-    rep = res['report']
-    for k, e in enumerate(rep['effects']):
-        se = f", standard error {e['standard_error']}" if 'standard_error' in e else ''
-        print(f"{k + 1}. {e['name']} ({e['axis']}, score {e['score']:.2f}): {e['parameters']}"
-              + se)
-    if not rep['effects']:
-        print('no effects: none of the candidates improves the held-out data')
-    for u in rep['unexplained']:
-        print(f"unexplained on {u['axis']}: {100 * u['misfit_share']:.0f} % of the nominal "
-              f"misfit left, signature {u['signature']}")
-    m = rep['metrics']
-    print(f"held-out error: nominal {m['baseline']['frf_error_db']} dB / time NRMSE "
-          f"{m['baseline']['time_nrmse']}, extended {m['extended']['frf_error_db']} dB / "
-          f"{m['extended']['time_nrmse']} ({m['validation']})")
-    for v in m.get('validation_records', []):
-        print(f"on {v['record']}: nominal time NRMSE {v['baseline']['time_nrmse']}, extended "
-              f"{v['extended']['time_nrmse']}")
-    print(f'wrote {out / "report.json"}, {out / "extended_model.yaml"}, '
-          f'{out / "report.html"}')
+    for line in diagnosis_summary(res['report'], out):
+        say(line)
     return 0

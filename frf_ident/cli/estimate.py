@@ -19,8 +19,10 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_output_arguments
 
-__all__ = ['HELP', 'add_arguments', 'excitation_options', 'run']
+__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'excitation_options', 'run']
 
+#: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
+LOG_TO_OUT = True
 HELP = 'estimate FRFs offline from a bag'
 
 

@@ -19,8 +19,10 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_output_arguments
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
+#: the --out DIR also gets the DEBUG trace as DIR/<command>.log (cli/main.py)
+LOG_TO_OUT = True
 HELP = 'fit a parametric model (rational or physical two-mass) to a measured FRF'
 
 
@@ -74,8 +76,9 @@ def run(args: argparse.Namespace) -> int:
 
     """
     from frf_ident.app.fit import fit_frf, OUTPUT_FILES
+    from frf_ident.app.console import say
     from frf_ident.app.outdir import check_out
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     fit_frf(args.source, out, order=args.order, physical=args.physical, delay_s=args.delay,
-            band=tuple(args.band) if args.band else None, model=args.model)
+            band=tuple(args.band) if args.band else None, model=args.model, progress=say)
     return 0

@@ -19,8 +19,10 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_output_arguments
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
+#: the --out DIR also gets the DEBUG trace as DIR/<command>.log (cli/main.py)
+LOG_TO_OUT = True
 HELP = 'check a velocity PI on the measured loop L = C P-hat: margins with uncertainty'
 
 
@@ -72,10 +74,11 @@ def run(args: argparse.Namespace) -> int:
 
     """
     from frf_ident.app.loop import OUTPUT_FILES, run_loop
+    from frf_ident.app.console import say
     from frf_ident.app.outdir import check_out
     from frf_ident.core.loop.check import DRAWS
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     run_loop(args.source, out, kp=args.kp, ki=args.ki, dt=args.dt, model=args.model,
              propose=tuple(args.propose) if args.propose else None,
-             draws=DRAWS if args.draws is None else args.draws)
+             draws=DRAWS if args.draws is None else args.draws, progress=say)
     return 0

@@ -19,14 +19,21 @@ Each module in :mod:`frf_ident.cli` has ``HELP``, ``add_arguments(parser)`` and 
 
 Exit status: 0 success, 2 usage/input error (one line on stderr naming the file, field or
 value), 1 failure. Set FRF_IDENT_DEBUG=1 to see tracebacks of failures.
+
+Output (:mod:`frf_ident.cli.logsetup`): a few INFO lines per stage on stdout; ``-v`` adds the
+DEBUG trace, ``-q`` keeps warnings only and hides progress bars; a command whose module sets
+``LOG_TO_OUT = True`` (its ``--out`` is a directory) also writes the DEBUG trace to
+``DIR/<command>.log``.
 """
 from __future__ import annotations
 
 import argparse
 import os
+from pathlib import Path
 import sys
 
 from frf_ident.cli import demo, diagnose, estimate, fit, identify, import_data, loop, reproduce
+from frf_ident.cli.logsetup import configured
 from frf_ident.errors import FrfIdentInputError
 
 __all__ = ['COMMANDS', 'OneLineParser', 'build_parser', 'main']
@@ -87,6 +94,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = OneLineParser(prog='frf-ident', description='Closed-loop FRF identification of '
                                                     'flexible-joint robots (Saupe & Knoblach '
                                                     '2015).')
+    out = p.add_mutually_exclusive_group()
+    out.add_argument('-v', '--verbose', action='store_true',
+                     help='also print the DEBUG trace (search steps) on the console')
+    out.add_argument('-q', '--quiet', action='store_true',
+                     help='print warnings and errors only; no progress bars')
     sub = p.add_subparsers(dest='command', required=True, parser_class=OneLineParser)
     for name, module in COMMANDS.items():
         module.add_arguments(sub.add_parser(name, help=module.HELP))
@@ -114,8 +126,16 @@ def main(argv: list[str] | None = None) -> int:
 
     """
     args = build_parser().parse_args(argv)
+    module = COMMANDS[args.command]
+    log_file = (Path(args.out) / f'{args.command}.log'
+                if getattr(module, 'LOG_TO_OUT', False) and str(args.out).strip() else None)
+    with configured(verbose=args.verbose, quiet=args.quiet, log_file=log_file):
+        return _run(module, args)
+
+
+def _run(module, args: argparse.Namespace) -> int:
     try:
-        return COMMANDS[args.command].run(args)
+        return module.run(args)
     except FrfIdentInputError as exc:
         print(f'frf-ident {args.command}: error: {exc}', file=sys.stderr)
         return 2

@@ -20,8 +20,10 @@ from frf_ident.app.reproduce import PAPER_REALISATIONS, PAPER_SEED
 from frf_ident.cli.options import add_output_arguments
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
+#: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
+LOG_TO_OUT = True
 HELP = "reproduce the seed paper's Section 6 example"
 
 

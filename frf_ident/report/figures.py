@@ -37,7 +37,92 @@ import numpy as np  # noqa: E402
 from scipy import signal  # noqa: E402
 
 DPI = 100
-REF_STYLE = {'color': 'k', 'lw': 1.3}
+#: models (reference, nominal, extended) are drawn under the measured data
+REF_STYLE = {'color': 'k', 'lw': 1.3, 'zorder': 2}
+#: measured data on top of every model line
+MEASURED_Z = 3
+#: the unit of an FRF from motor torque to motor velocity
+FRF_UNIT = '(rad/s)/(N m)'
+#: a log frequency axis labels 2x and 5x its decades while it spans at most this many decades
+#: (wider, the labels of a 4.6 inch panel touch; the decades alone are labelled then)
+LABELLED_MINORS_DECADES = 2.5
+
+
+def _hz_label(x: float, _pos: int | None = None) -> str:
+    return f'{x:g}'
+
+
+def frequency_axis(ax: plt.Axes, which: str = 'x', label: str | None = 'frequency [Hz]'
+                   ) -> None:
+    """
+    Make a log frequency axis read at a glance: plain numbers at 1, 2 and 5 per decade.
+
+    Decades are labelled as plain numbers (0.1, 1, 10, 100, not 10^k); 2x and 5x each decade
+    too while the view spans at most :data:`LABELLED_MINORS_DECADES` decades; the other minor
+    ticks stay unlabelled, so labels never overlap.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes; its ``which`` axis must be (or become) logarithmic.
+    which : {'x', 'y'}, optional
+        The frequency axis.
+    label : str or None, optional
+        Axis label; None leaves it.
+
+    """
+    axis = ax.xaxis if which == 'x' else ax.yaxis
+    (ax.set_xscale if which == 'x' else ax.set_yscale)('log')
+
+    def minor(x: float, pos: int | None = None) -> str:
+        lo, hi = sorted(axis.get_view_interval())
+        if lo <= 0 or np.log10(hi / lo) > LABELLED_MINORS_DECADES:
+            return ''
+        lead = round(x / 10 ** np.floor(np.log10(x) + 1e-9), 6)
+        return _hz_label(x) if lead in (2.0, 5.0) else ''
+    axis.set_major_locator(matplotlib.ticker.LogLocator(base=10.0, subs=(1.0,)))
+    axis.set_major_formatter(matplotlib.ticker.FuncFormatter(_hz_label))
+    axis.set_minor_locator(matplotlib.ticker.LogLocator(base=10.0, subs=np.arange(2, 10),
+                                                        numticks=100))
+    axis.set_minor_formatter(matplotlib.ticker.FuncFormatter(minor))
+    if label is not None:
+        (ax.set_xlabel if which == 'x' else ax.set_ylabel)(label)
+
+
+def under_title(fig: plt.Figure) -> float:
+    """Return the top of the panels' area, leaving a 0.4 inch band for the suptitle."""
+    return 1.0 - 0.4 / fig.get_figheight()
+
+
+def legend_below(fig: plt.Figure, axes: Sequence[plt.Axes], ncol: int = 3) -> float:
+    """
+    Put one legend of every labelled line under the panels, where it hides no data.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    axes : sequence of Axes
+        Panels whose labelled artists go into the legend (duplicate labels once).
+    ncol : int, optional
+        Legend columns.
+
+    Returns
+    -------
+    float
+        The fraction of the figure height the legend takes (for ``tight_layout(rect=...)``).
+
+    """
+    seen: dict[str, Any] = {}
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(lab, h)
+    if not seen:
+        return 0.0
+    rows = -(-len(seen) // ncol)
+    fig.legend(list(seen.values()), list(seen.keys()), loc='lower center', ncol=ncol,
+               fontsize=8, frameon=False)
+    return min(0.3, (0.28 * rows + 0.15) / fig.get_figheight())
 
 
 def variance_of(frf: FrequencyResponse) -> tuple[np.ndarray | None, str]:
@@ -69,13 +154,14 @@ def _channel_title(frf: FrequencyResponse, o: int, i: int) -> str:
 
 def bode_figure(frfs: Mapping[str, FrequencyResponse], path: Path, *,
                 reference: FrequencyResponse | None = None, title: str = '',
-                units: str = '') -> Path:
+                units: str = FRF_UNIT) -> Path:
     """
     Bode diagram of every channel: magnitude [dB] above phase [deg], one column per input.
 
     Estimates are markers joined by thin lines, with a shaded +-2 sigma band (from the total
     variance, else the noise variance): |P| +- 2 sigma in magnitude and +-asin(2 sigma/|P|)
-    in phase. ``reference`` is drawn as a black line.
+    in phase. ``reference`` is drawn as a black line under the estimates; ``units`` is the
+    FRF's unit (magnitude in dB re 1 of it). The legend sits under the panels.
     """
     first = next(iter(frfs.values()))
     n_out, n_in = first.noutputs, first.ninputs
@@ -92,15 +178,15 @@ def bode_figure(frfs: Mapping[str, FrequencyResponse], path: Path, *,
                 if frf.response.shape[:2] == (n_out, n_in):
                     _bode_channel(ax_m, ax_p, frf, o, i, f'C{k}', label)
             ax_m.set_title(_channel_title(first, o, i), fontsize=9)
-            ax_m.set_ylabel(f'|P| [dB{units}]' if i == 0 else '')
+            ax_m.set_ylabel(f'|P| [dB re 1 {units}]' if i == 0 else '')
             ax_p.set_ylabel('phase [deg]' if i == 0 else '')
             for ax in (ax_m, ax_p):
                 ax.grid(True, which='both', alpha=0.3)
-            if o == n_out - 1:
-                ax_p.set_xlabel('frequency [Hz]')
-    axes[0, 0].legend(fontsize=7, loc='best')
+                frequency_axis(ax, label='frequency [Hz]' if ax is ax_p and o == n_out - 1
+                               else None)
+    bottom = legend_below(fig, [axes[0, 0]])
     fig.suptitle(title or 'Frequency response estimates (shaded: \u00b12\u03c3)')
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, bottom, 1, under_title(fig)))
     return _save(fig, path)
 
 
@@ -109,11 +195,10 @@ def _bode_channel(ax_m: plt.Axes, ax_p: plt.Axes, frf: FrequencyResponse, o: int
     f, p = frf.freq_hz, frf.response[o, i]
     var, which = variance_of(frf)
     band = f' (\u00b12\u03c3 {which})' if var is not None else ''
-    ax_m.semilogx(f, _db(p), '.-', color=color, ms=3, lw=0.5, label=f'{label}{band}')
+    ax_m.semilogx(f, _db(p), '.-', color=color, ms=3, lw=0.5, label=f'{label}{band}',
+                  zorder=MEASURED_Z)
     phase = _deg(p)
-    ax_p.semilogx(f, phase, '.-', color=color, ms=3, lw=0.5)
-    for ax in (ax_m, ax_p):        # decade labels only: minor labels collide on short bands
-        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax_p.semilogx(f, phase, '.-', color=color, ms=3, lw=0.5, zorder=MEASURED_Z)
     if var is None:
         return
     sig2 = 2.0 * np.sqrt(np.maximum(var[o, i], 0.0))
@@ -149,13 +234,12 @@ def snr_figure(frfs: Mapping[str, FrequencyResponse], path: Path) -> Path | None
             ax.axhline(0, color='C3', ls=':', lw=0.8, label='0 dB: \u03c3 = |P|')
             ax.set_title(_channel_title(first, o, i), fontsize=9)
             ax.grid(True, which='both', alpha=0.3)
+            frequency_axis(ax, label='frequency [Hz]' if o == n_out - 1 else None)
             if i == 0:
                 ax.set_ylabel('|P|\u00b2 / var [dB]')
-            if o == n_out - 1:
-                ax.set_xlabel('frequency [Hz]')
-    axes[0, 0].legend(fontsize=7, loc='best')
+    bottom = legend_below(fig, [axes[0, 0]])
     fig.suptitle('Signal-to-noise ratio per frequency line (higher is better)')
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, bottom, 1, under_title(fig)))
     return _save(fig, path)
 
 
@@ -182,9 +266,8 @@ def spectrogram_figure(x: np.ndarray, fs: float, names: Sequence[str], path: Pat
         top = float(np.max(db)) if db.size else 0.0
         mesh = ax.pcolormesh(t + t0, f[sel], db, shading='gouraud', cmap='viridis',
                              vmin=top - 60, vmax=top, rasterized=True)
-        ax.set_yscale('log')
+        frequency_axis(ax, 'y', label=f'{names[j]}\nfrequency [Hz]')
         ax.set_ylim(f_range[0], f_hi)
-        ax.set_ylabel(f'{names[j]}\nfrequency [Hz]')
         fig.colorbar(mesh, ax=ax, pad=0.01).set_label(f'PSD [dB re ({unit})\u00b2/Hz]',
                                                       fontsize=8)
     axes[-1, 0].set_xlabel('time [s]')
@@ -272,24 +355,24 @@ def paper_figure(results: dict[str, Any], case: str, path: Path) -> Path:
     p_an = np.asarray(results['analytic']['re']) + 1j * np.asarray(results['analytic']['im'])
     for col, design in enumerate(('chirp', 'multisine')):
         ax_m, ax_p = axes[0, col], axes[1, col]
-        ax_m.semilogx(f_an, _db(p_an), 'k-', lw=1.2, label='linear model')
-        ax_p.semilogx(f_an, _deg(p_an), 'k-', lw=1.2)
+        ax_m.semilogx(f_an, _db(p_an), 'k-', lw=1.2, label='linear model', zorder=2)
+        ax_p.semilogx(f_an, _deg(p_an), 'k-', lw=1.2, zorder=2)
         for name, style, lab in (('linear', 'C0o', 'FRF est. Fc = 0 N m, k2 = k1'),
                                  (case, 'C3x', f'FRF est. {label}')):
             e = results['cases'][name][design]
             f = np.asarray(e['freq_hz'])
             p = np.asarray(e['re']) + 1j * np.asarray(e['im'])
-            ax_m.semilogx(f, _db(p), style, ms=3.5, label=lab)
-            ax_p.semilogx(f, _deg(p), style, ms=3.5)
+            ax_m.semilogx(f, _db(p), style, ms=3.5, label=lab, zorder=MEASURED_Z)
+            ax_p.semilogx(f, _deg(p), style, ms=3.5, zorder=MEASURED_Z)
         ax_m.set_title(f'{design} excitation')
-        ax_m.set_ylabel('|P| / dB (rad/s per N m)')
-        ax_p.set_ylabel('phase / deg')
-        ax_p.set_xlabel('f / Hz')
+        ax_m.set_ylabel(f'|P| [dB re 1 {FRF_UNIT}]')
+        ax_p.set_ylabel('phase [deg]')
         for ax in (ax_m, ax_p):
             ax.grid(True, which='both', alpha=0.3)
-    axes[0, 0].legend(fontsize=8, loc='lower left')
-    fig.suptitle(f'Saupe & Knoblach (2015) Sec. 6 example: tau_m -> dq_m, {label}')
-    fig.tight_layout()
+            frequency_axis(ax, label='frequency [Hz]' if ax is ax_p else None)
+    bottom = legend_below(fig, [axes[0, 0]])
+    fig.suptitle(f'Saupe & Knoblach (2015) Sec. 6 example: tau_m \u2192 dq_m, {label}')
+    fig.tight_layout(rect=(0, bottom, 1, under_title(fig)))
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
@@ -314,11 +397,14 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
                 if key not in est['measured']:
                     continue
                 f = est['measured'][key].freq_hz
-                for lab, col in (('measured', 'k'), ('nominal', 'tab:red'),
-                                 ('extended', 'tab:green')):
+                # models first and thinner, the measured curve last and on top
+                for lab, col, lw, z in (('nominal', 'tab:red', 1.0, 2),
+                                        ('extended', 'tab:green', 1.0, 2),
+                                        ('measured', 'k', 1.6, MEASURED_Z)):
                     p = est[lab][key].response[i, i]
-                    ax[0, i].semilogx(f, _db(p), style, color=col, label=f'{lab} {key}')
-                    ax[1, i].semilogx(f, np.degrees(np.unwrap(np.angle(p))), style, color=col)
+                    kw = {'color': col, 'lw': lw, 'zorder': z}
+                    ax[0, i].semilogx(f, _db(p), style, label=f'{lab} {key}', **kw)
+                    ax[1, i].semilogx(f, np.degrees(np.unwrap(np.angle(p))), style, **kw)
                 for lab, col in (('nominal', 'tab:red'), ('extended', 'tab:green')):
                     r = est['measured'][key].response[i, i] / est[lab][key].response[i, i]
                     ax[2, i].semilogx(f, _db(r), style, color=col,
@@ -328,12 +414,14 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
                     ax[2, i].axvspan(*u['signature']['band_hz'], color='tab:orange', alpha=0.2,
                                      label='unexplained band')
             ax[0, i].set_title(f'{rec.joint_names[i]}: dq_m/tau_m (held-out data)')
-            ax[0, i].set_ylabel('dB')
-            ax[1, i].set_ylabel('deg')
-            ax[2, i].set_ylabel('residual dB')
-            ax[2, i].set_xlabel('Hz')
-            ax[0, i].legend(fontsize=6)
-            ax[2, i].legend(fontsize=6)
+            ax[0, i].set_ylabel(f'|P| [dB re 1 {FRF_UNIT}]' if i == 0 else '')
+            ax[1, i].set_ylabel('phase [deg]' if i == 0 else '')
+            ax[2, i].set_ylabel('|P_measured / P_model| [dB]' if i == 0 else '')
+            for a in ax[:, i]:
+                a.grid(True, which='both', alpha=0.3)
+                frequency_axis(a, label='frequency [Hz]' if a is ax[2, i] else None)
+        bottom = legend_below(fig, list(ax[0]) + list(ax[2]), ncol=4)
+        fig.tight_layout(rect=(0, bottom, 1, under_title(fig)))
         _save(fig, out / 'bode.png')
         figs.append(('bode.png', 'Measured vs nominal vs extended FRF (diagonal), and the '
                                  'residual spectrum |P_measured / P_model|'))
@@ -373,11 +461,13 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
         ax[0, i].legend(fontsize=6)
         ax[1, i].plot(r['v'][:, i], nom, '.', ms=1, color='tab:red')
         ax[1, i].plot(r['v'][:, i], ext, '.', ms=1, color='tab:green')
-        ax[1, i].set_xlabel('velocity')
-        ax[1, i].set_ylabel('inverse-dynamics residual')
+        ax[0, i].set_ylabel('residual [N m]' if i == 0 else '')
+        ax[1, i].set_xlabel('velocity [rad/s]')
+        ax[1, i].set_ylabel('inverse-dynamics residual [N m]' if i == 0 else '')
         ax[2, i].plot(r['q'][:, i], nom, '.', ms=1, color='tab:red')
         ax[2, i].plot(r['q'][:, i], ext, '.', ms=1, color='tab:green')
-        ax[2, i].set_xlabel('position')
+        ax[2, i].set_xlabel('position [rad]')
+        ax[2, i].set_ylabel('inverse-dynamics residual [N m]' if i == 0 else '')
     _save(fig, out / 'residual.png')
     figs.append(('residual.png', 'Inverse-dynamics residual (measured torque minus the torque '
                                  'the model needs for the measured motion, low-passed) of the '

@@ -39,6 +39,7 @@ from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import figures
+from frf_ident.report.text import plain
 import numpy as np
 
 __all__ = ['write_diagnosis_report', 'write_report']
@@ -50,10 +51,13 @@ body { font-family: system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 2e
        max-width: 1200px; color: #222; line-height: 1.45; padding: 0 1em; }
 h1 { border-bottom: 2px solid #3b6ea5; padding-bottom: .2em; }
 h2 { color: #3b6ea5; margin-top: 2em; }
-figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
+body { overflow-wrap: break-word; }
+figure { margin: 1em 0; } figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { font-size: .9em; color: #555; margin-top: .3em; }
-table { border-collapse: collapse; margin: .6em 0; font-size: .9em; }
-th, td { border: 1px solid #ccc; padding: .25em .6em; text-align: left; }
+table { border-collapse: collapse; margin: .6em 0; font-size: .9em; display: block;
+        max-width: 100%; overflow-x: auto; }
+th, td { border: 1px solid #ccc; padding: .25em .6em; text-align: left; overflow-wrap: normal; }
+td:last-child { min-width: 14em; }
 th { background: #eef3f8; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
 .warn { color: #a33; } .ok { color: #272; } .muted { color: #777; font-size: .85em; }
 nav a { margin-right: 1em; }
@@ -145,7 +149,9 @@ def _page(title: str, sections: list[tuple[str, str, str]], rec: Recording | Non
 
 
 def _figure(name: str, caption: str, alt: str) -> str:
-    return (f'<figure><img src="{html.escape(name)}" alt="{html.escape(alt)}">'
+    # the image links to itself: on a phone the page shrinks it, a tap shows it full size
+    src = html.escape(name)
+    return (f'<figure><a href="{src}"><img src="{src}" alt="{html.escape(alt)}"></a>'
             f'<figcaption>{caption}</figcaption></figure>')
 
 
@@ -162,6 +168,8 @@ def _cell(v: Any) -> str:
         return f'<td class="num">{int(v)}</td>'
     if isinstance(v, (float, np.floating)):
         return f'<td class="num">{_num(float(v))}</td>'
+    if isinstance(v, (Mapping, list, tuple)):
+        return f'<td>{html.escape(plain(v))}</td>'
     return f'<td>{html.escape(str(v))}</td>'
 
 
@@ -374,8 +382,8 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
         eff_html = _table(['#', 'effect', 'axis', 'score', 'parameters',
                            'standard error', 'evidence'],
                           [[k + 1, x['name'], x['axis'], x['score'],
-                            _json_short(x['parameters']),
-                            _json_short(x['standard_error']) if 'standard_error' in x else '',
+                            plain(x['parameters']),
+                            plain(x['standard_error']) if 'standard_error' in x else '',
                             x['evidence']]
                            for k, x in enumerate(eff)])
     else:
@@ -436,8 +444,3 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
     p = out / 'report.html'
     p.write_text(_page(f'Diagnosis of {data}', sections, rec))
     return p
-
-
-def _json_short(x: Any) -> str:
-    import json
-    return json.dumps(x, default=float)

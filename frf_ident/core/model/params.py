@@ -38,9 +38,9 @@ class AxisParams:
     """
     Parameters of one flexible joint; keys and units of the model file (docs/CONTRACT.md §5).
 
-    Extensions beyond the contract (documented in README): ``gravity_torque`` [N m] constant
-    link-side load, ``gravity`` configuration-dependent link-side load (a list of terms
-    ``{amplitude: G [N m], phase: phi [rad], joints: [names]}``, each adding
+    Extensions beyond the contract (documented in docs/model_file.md): ``gravity_torque``
+    [N m] constant link-side load, ``gravity`` configuration-dependent link-side load (a list of
+    terms ``{amplitude: G [N m], phase: phi [rad], joints: [names]}``, each adding
     ``G sin(sum of the named joints' link positions + phi)``; ``joints`` defaults to the axis
     itself, several names give the coupled-arm case, e.g. ``G sin(q2 + q3 + phi)``),
     ``encoder_resolution`` [rad/count] (0 = ideal), ``velocity_noise`` [rad/s] and

@@ -18,7 +18,7 @@ Parsing text (YAML) lives in :mod:`frf_ident.io.model_file`; this module only va
 converts the loaded mapping, so the core stays free of I/O. Every error names the field and
 what was expected.
 
-Extensions beyond the contract (all optional, documented in README):
+Extensions beyond the contract (all optional, documented in docs/model_file.md):
 - top level ``link_coupling``: symmetric n x n off-diagonal link inertia [kg m^2]
 - top level ``simulation``: {substeps, velocity_from_encoder, seed}
 - per axis ``gravity_torque``, ``gravity`` (configuration-dependent load, list of

@@ -23,6 +23,7 @@ PI. Everything lands in one :class:`~frf_ident.core.recording.Recording` on a si
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+import logging
 import time
 from typing import Any
 
@@ -37,6 +38,8 @@ from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
+
+_log = logging.getLogger(__name__)
 
 
 class ClosedLoop:
@@ -275,8 +278,9 @@ def run_identification(plant: Any, controller: PIVelocity,
             if plan is not None:
                 peak = check_plan_torque(plan, model, controller, controller.torque_limit,
                                          name, remedy.remedy(), loop.q0)
-                say(f'{name}: predicted peak torque {np.round(peak, 1).tolist()} N m on the '
-                    f'model (limits {controller.torque_limit.tolist()})')
+                say(f"{name}: predicted peak torque {' / '.join(f'{p:.1f}' for p in peak)} N m "
+                    'on the model (limits '
+                    f"{' / '.join(f'{u:.0f}' for u in controller.torque_limit)} N m)")
     if phases is not None:
         t_start = loop.t
         n_exc = sum(1 for p in phases if p.segment)
@@ -285,9 +289,9 @@ def run_identification(plant: Any, controller: PIVelocity,
             loop.run_phase(ph)
             if ph.segment:
                 done += 1
-                say(f'multisine: segment {done}/{n_exc} '
-                    f'({ph.segment["design"]}, realisation {ph.segment["realisation"]}, '
-                    f'experiment {ph.segment["experiment"]})')
+                _log.debug(f'multisine: segment {done}/{n_exc} '
+                           f'({ph.segment["design"]}, realisation {ph.segment["realisation"]}, '
+                           f'experiment {ph.segment["experiment"]})')
         summary['multisine'] = {'experiment_time_s': loop.t - t_start,
                                 'segments': n_exc, 'lines': int(design.harmonics.size),
                                 'period_s': design.period,

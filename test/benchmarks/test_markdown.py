@@ -1,0 +1,49 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""docs/BENCHMARKS.md is rendered from stored runs: re-measuring one section keeps the others."""
+import os
+
+from benchmarks import markdown as md
+
+
+def _section_a():
+    """Measure section a."""
+
+
+def _section_b():
+    """Measure section b."""
+
+
+SECTIONS = {'a': _section_a, 'b': _section_b, 'c': _section_b}
+
+
+def test_rerunning_one_section_keeps_the_others(tmp_path, monkeypatch):
+    monkeypatch.setenv('FRF_BENCH_SCENES', '4')
+    runs, page = tmp_path / 'runs', tmp_path / 'BENCHMARKS.md'
+    machine = md.machine()
+    md.store('a', [('rows | with a bar', '1 s', 'base 2 s', '2x')], wall_s=3.0,
+             cmd=md.command(['a']), started=machine, runs_dir=runs)
+    md.store('b', [('b row', 'old', 'base', '')], wall_s=200.0, cmd=md.command(['b']),
+             started=machine, runs_dir=runs)
+    md.store('b', [('b row', 'new', 'base', '')], wall_s=200.0, cmd=md.command(['b']),
+             started=machine, runs_dir=runs)
+    text = md.write_page(SECTIONS, runs, page).read_text()
+    assert 'never edited by hand' in text
+    assert text.index('## a') < text.index('## b')          # the sections' own order
+    assert 'Not measured yet: `c`.' in text
+    assert '| rows \\| with a bar | 1 s | base 2 s | 2x |' in text
+    assert '| b row | new | base |  |' in text and 'old' not in text
+    assert 'by `FRF_BENCH_SCENES=4 python -m benchmarks --markdown b` in 3.3 min' in text
+    assert f'on {os.cpu_count()} cores (' in text and 'GiB RAM, Python 3.' in text
+    assert 'Measure section b.' in text
