@@ -26,7 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import json
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 import warnings
 
 from frf_ident.app.frf_source import axis_channels, frf_variance, read_source
