@@ -45,6 +45,7 @@ from frf_ident.core.estimation.checks import (check_band, check_covers, check_no
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
                                                periodic_spectra)
+from frf_ident.core.estimation.transient import steady_periods, SteadyState
 from frf_ident.core.excitation.chirp import ChirpDesign
 from frf_ident.core.excitation.detect import (ChirpDetection, detect_excitation, excitation_source,
                                               multisine_at_period, MultisineDetection)
@@ -459,6 +460,8 @@ class DetectedEstimator:
             e['t_end'] = max(seg.t_end, e.get('t_end', seg.t_end))
             e['dropped'].extend(d for d in dropped if d not in e['dropped'])
             e['skip'] += skip
+            if 'transient' in info:
+                e.setdefault('transient', info['transient'])
             e['blocks'] += 1
             if U.shape[0] == 0:
                 return
@@ -537,7 +540,8 @@ class DetectedEstimator:
             var = (e['m2'][keep] / (e['n'] - 1) / e['n']).T[:, None, :]
         return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
             'design': 'detected_multisine', 'periods': e['n'],
-            'transient_periods': e['skip'], 'blocks': e['blocks'],
+            'transient_periods': e['skip'], 'transient': e.get('transient', ''),
+            'blocks': e['blocks'],
             'dropped': {'periods': len(e['dropped']), 'times': [list(d) for d in e['dropped']]}})
 
 
@@ -565,20 +569,20 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
     without missing samples, the transient periods skipped and the (t_start, t_end) of the
     periods dropped for missing samples.
 
-    The first period is skipped as start-up transient when there are at least three, unless
-    the excitation was already running (``used_until``: the end [s] of the periods an
-    earlier block used; periods starting before it are skipped instead, so overlapping
-    blocks never count a period twice). Only whole periods inside the data are used.
+    Leading periods that differ from the next beyond the noise are skipped as start-up
+    transient (:func:`~frf_ident.core.estimation.transient.steady_periods`; the sentence goes
+    to ``seg.info['transient']``), unless the excitation was already running
+    (``used_until``: the end [s] of the periods an earlier block used; periods starting
+    before it are skipped instead, so overlapping blocks never count a period twice). Only
+    whole periods inside the data are used.
     """
     info = seg.info
     i0 = int(info.get('start', rec.index_of(seg.t_start)))
     n_per = int(info['period_samples'])
     n_q = max(0, min(int(info['periods']), (rec.t.size - i0) // n_per))
     starts = rec.t[0] + (i0 + np.arange(n_q) * n_per) / rec.fs
-    if used_until is None:
-        skip = 1 if n_q >= 3 else 0
-    else:
-        skip = int(np.count_nonzero(starts < used_until - 0.5 / rec.fs))
+    skip = 0 if used_until is None else int(np.count_nonzero(
+        starts < used_until - 0.5 / rec.fs))
     bins = np.asarray(info['harmonics'])
     j = int(info['input'])
     gone = missing_rows(rec.effort[:, j], rec.velocity)
@@ -589,6 +593,11 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
             dropped.append((float(starts[q]), float(starts[q] + n_per / rec.fs)))
         else:
             use.append(a)
+    if used_until is None and use:
+        # a start-up transient: leading periods that differ from the next beyond the noise
+        steady = _steady(rec, np.asarray(use), n_per, bins, j)
+        skip, use = steady.first, use[steady.first:]
+        seg.info['transient'] = steady.describe()
     if not use:
         empty = np.empty((0, bins.size, rec.velocity.shape[1]), dtype=complex)
         return bins, empty, empty, skip, dropped
@@ -596,6 +605,15 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
     U = periodic_spectra(rec.effort[idx], bins, axis=1)
     Y = periodic_spectra(rec.velocity[idx], bins, axis=1)
     return bins, U, Y, skip, dropped
+
+
+def _steady(rec: Recording, starts: np.ndarray, n_per: int, bins: np.ndarray,
+            j: int) -> SteadyState:
+    """Transient test on the periods at ``starts``: input j and every output, lines 1..band."""
+    lines = np.arange(1, min(int(np.max(bins)), n_per // 2) + 1)
+    idx = starts[:, None] + np.arange(n_per)
+    x = np.concatenate([rec.effort[idx, j][:, :, None], rec.velocity[idx]], axis=2)
+    return steady_periods(periodic_spectra(x, lines, axis=1))
 
 
 def _strong_lines(uj: np.ndarray) -> np.ndarray:

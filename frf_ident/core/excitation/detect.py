@@ -400,16 +400,23 @@ def _lag_correlation(x: np.ndarray, max_lag: int, valid: np.ndarray | None = Non
     return acf / np.maximum(norm, 1e-300)
 
 
-def _period_candidate(r: np.ndarray, min_correlation: float) -> tuple[int, float]:
-    """Smallest lag whose autocorrelation peak is close to the best one (0 if none)."""
+def _period_candidate(r: np.ndarray, min_correlation: float, max_lag: int
+                      ) -> tuple[int, float]:
+    """
+    Smallest lag up to ``max_lag`` whose autocorrelation peak is close to the best one.
+
+    ``r`` may reach a few lags beyond ``max_lag`` so that a peak at ``max_lag`` itself (a
+    record of exactly two periods) is a peak. Returns (0, best value) if there is none.
+    """
     below = np.flatnonzero(r < 0)
     if below.size == 0:
         return 0, float('nan')
     lag_min = int(below[0])
     peaks, props = signal.find_peaks(r[lag_min:], height=min_correlation)
+    inside = peaks + lag_min <= max_lag
+    peaks, heights = peaks[inside], props['peak_heights'][inside]
     if peaks.size == 0:
-        return 0, float(np.max(r[lag_min:])) if r.size > lag_min else float('nan')
-    heights = props['peak_heights']
+        return 0, float(np.max(r[lag_min:max_lag + 1])) if max_lag >= lag_min else float('nan')
     first = int(np.flatnonzero(heights >= heights.max() - 0.05 * (1.0 - min_correlation))[0])
     lag = int(peaks[first]) + lag_min
     return lag, float(r[lag])
@@ -426,7 +433,7 @@ def _moving_mean(v: np.ndarray, w: int) -> np.ndarray:
 def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
                     ) -> tuple[int, int]:
     """
-    (start, n_periods) of the longest run in which x[n + P] matches x[n].
+    (start, n_periods) of the whole periods in the longest run where x[n + P] matches x[n].
 
     rho[n] = mean (x[n+P] - x[n])^2 over P/16 samples, divided by the mean of x[n]^2 + x[n+P]^2
     over a whole period (constant for a periodic signal): 0 for identical periods, about 1
@@ -455,8 +462,12 @@ def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
     if b <= a:
         return 0, 0
     a, b = _refine_edges(e2, a, b, w, floor=1e-12 * float(np.mean(x ** 2)))
-    n_periods = min((b - a + p + w // 2) // p, (x.size - a) // p)
-    return int(a), int(n_periods)
+    # the data repeat on [a, b + P): the whole periods are taken flush with its end, so
+    # what is left over lies at the start, where a start-up transient decays (a block from
+    # a dropped the last steady period and kept a part of the transient instead)
+    end = min(b + p, x.size)
+    n_periods = min((end - a + w // 2) // p, end // p)
+    return int(end - n_periods * p), int(n_periods)
 
 
 def _compare_past_gaps(x: np.ndarray, valid: np.ndarray, p: int, e2: np.ndarray,
@@ -600,9 +611,16 @@ def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
     max_lag = n // max(2, int(min_periods))
     if max_lag < 4:
         raise EstimationError(f'signal of {n} samples too short for {min_periods=} periods')
-    r = _lag_correlation(x, max_lag, valid)
-    p, corr = _period_candidate(r, min_correlation)
+    r = _lag_correlation(x, min(n - 1, max_lag + 2), valid)
+    p, corr = _period_candidate(r, min_correlation, max_lag)
     if p == 0:
+        if np.isfinite(corr) and corr >= min_correlation:
+            raise EstimationError(
+                f'no whole periods: the autocorrelation rises to {corr:.2f} towards the '
+                f'longest lag searched ({max_lag} samples, {max_lag / fs:.4g} s = 1/'
+                f'{max(2, int(min_periods))} of the {n} samples) without a peak; a period, if '
+                f'any, is longer: expected at least {min_periods=} whole periods in the data '
+                f'(give a longer --t-range or --multisine-period)')
         best = f'{corr:.2f}' if np.isfinite(corr) else 'none'
         raise EstimationError(f'no periodicity: best autocorrelation {best} beyond the main '
                               f'lobe is below {min_correlation=} (lags up to {max_lag} samples)')
