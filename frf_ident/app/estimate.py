@@ -153,12 +153,12 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         The data do not support an estimate (the message names the bag).
 
     """
-    from frf_ident.errors import EstimationError
+    from frf_ident.errors import DesignError, EstimationError
     from frf_ident.report.figures import bode_figure
     try:
         estimates, timing, experiment, streamed = read_estimates(
             bag, joints, t_range, options, stream, max_memory_mb, window_s, progress)
-    except EstimationError as exc:
+    except (EstimationError, DesignError) as exc:      # every refusal names the bag
         raise EstimationError(f'{bag}: {exc}') from None
     if streamed is not None:
         for line in timing.summary():

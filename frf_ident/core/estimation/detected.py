@@ -50,6 +50,7 @@ from frf_ident.core.excitation.chirp import ChirpDesign
 from frf_ident.core.excitation.detect import (ChirpDetection, detect_excitation, excitation_source,
                                               multisine_at_period, MultisineDetection)
 from frf_ident.core.excitation.multisine import reference_frequency_set
+from frf_ident.core.excitation.sweep_law import MAX_MISMATCH, sweep_mismatch
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
 import numpy as np
@@ -190,10 +191,12 @@ def _excitation_of(x: np.ndarray, fs: float, opts: ExcitationOptions
                    ) -> MultisineDetection | ChirpDetection:
     """Return the excitation of one channel: from the options where given, else detected."""
     if opts.chirp is not None:
-        return _given_chirp(opts, fs)
+        return _checked_chirp(x, fs, _given_chirp(opts, fs), 'the given chirp')
     if opts.multisine_period is not None:
         return multisine_at_period(x, fs, opts.multisine_period, band=opts.band)
     det = detect_excitation(x, fs)
+    if isinstance(det, ChirpDetection):
+        det = _checked_chirp(x, fs, det, 'the detected chirp')
     if opts.band is not None:
         if not isinstance(det, MultisineDetection):
             raise EstimationError(f'band={opts.band} restricts multisine lines but a chirp was '
@@ -205,6 +208,23 @@ def _excitation_of(x: np.ndarray, fs: float, opts: ExcitationOptions
                                   f'{f[0]:.4g}-{f[-1]:.4g} Hz lies inside')
         det = replace(det, harmonics=det.harmonics[keep],
                       odd=bool(np.all(det.harmonics[keep] % 2 == 1)))
+    return det
+
+
+def _checked_chirp(x: np.ndarray, fs: float, det: ChirpDetection, what: str
+                   ) -> ChirpDetection:
+    """Refuse a down-sweep, or a chirp whose law the recorded excitation does not follow."""
+    law = (f'{what} {det.f_low:.4g} -> {det.f_high:.4g} Hz over {det.t0:.4g}-{det.t1:.4g} s '
+           f'(exponential, eq. 16)')
+    if not det.f_high > det.f_low:
+        raise EstimationError(f'{law} sweeps down; the chirp estimator needs an up-sweep '
+                              f'(f_low < f_high)')
+    dev, found = sweep_mismatch(x, fs, det.frequency, det.t0, det.t1)
+    if not dev <= MAX_MISMATCH:
+        seen = found.describe() if found is not None else 'no sweep in that interval'
+        raise EstimationError(f'{law} does not match the recorded excitation: it is a {seen}; '
+                              f'its half cycles are {100 * dev:.3g} % off the given law '
+                              f'(median; expected < {100 * MAX_MISMATCH:.0f} %)')
     return det
 
 
@@ -280,6 +300,9 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
             continue
         found.append((int(j), det))
         notes.append(f'{rec.joint_names[j]} ({source}): {_describe(det, opts)}')
+    if not found and opts.given():
+        raise EstimationError(f'the given excitation ({opts.text()}) fits the {source} of '
+                              f'no joint ({"; ".join(notes) or "no joint moves"})')
     if not found:
         raise EstimationError(f'no multisine or chirp found in the {source} of any joint '
                               f'({"; ".join(notes) or "no joint moves"}); pass the experiment '

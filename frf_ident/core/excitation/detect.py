@@ -40,6 +40,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from frf_ident.core.excitation.sweep_law import (fit_sweep_laws, half_cycles, LAW_MARGIN,
+                                                 robust_law_fit)
 from frf_ident.errors import EstimationError
 import numpy as np
 from scipy import fft as sfft
@@ -461,12 +463,16 @@ def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
     a, b = _longest_run(ok)
     if b <= a:
         return 0, 0
+    smooth_a = a
     a, b = _refine_edges(e2, a, b, w, floor=1e-12 * float(np.mean(x ** 2)))
     # the data repeat on [a, b + P): the whole periods are taken flush with its end, so
     # what is left over lies at the start, where a start-up transient decays (a block from
-    # a dropped the last steady period and kept a part of the transient instead)
+    # a dropped the last steady period and kept a part of the transient instead). A start
+    # found at a change of variance is exact to a few samples; one that is not may be up to
+    # half a smoothing window late
+    slack = 3 if a != smooth_a else w // 2
     end = min(b + p, x.size)
-    n_periods = min((end - a + w // 2) // p, end // p)
+    n_periods = min((end - a + slack) // p, end // p)
     return int(end - n_periods * p), int(n_periods)
 
 
@@ -776,53 +782,6 @@ def _refine_period(x: np.ndarray, p: int, reach: int = 2) -> int:
 
 # --------------------------------------------------------------------------- chirp
 
-def _half_cycles(x: np.ndarray, fs: float, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """
-    Zero crossings with hysteresis ``h``: returns (mid times, frequencies) of half cycles.
-
-    The state flips only when x passes +h or -h; each flip is dated by the linearly
-    interpolated zero crossing just before it, so noise below h causes no chatter.
-    """
-    state = np.where(x > h, 1.0, np.where(x < -h, -1.0, np.nan))
-    idx = np.flatnonzero(np.isfinite(state))
-    if idx.size < 3:
-        return np.zeros(0), np.zeros(0)
-    s = state[idx]
-    flips = idx[1:][s[1:] != s[:-1]]  # first sample beyond the threshold after a flip
-    sign_change = np.flatnonzero(np.signbit(x[1:]) != np.signbit(x[:-1]))  # between i, i+1
-    if flips.size < 3 or sign_change.size == 0:
-        return np.zeros(0), np.zeros(0)
-    j = np.searchsorted(sign_change, flips, side='left') - 1
-    j = np.clip(j, 0, None)
-    i = sign_change[j]
-    frac = x[i] / (x[i] - x[i + 1])
-    tz = (i + frac) / fs
-    d = np.diff(tz)
-    good = d > 0
-    mid = 0.5 * (tz[1:] + tz[:-1])
-    return mid[good], 0.5 / d[good]
-
-
-def _robust_loglinear(t: np.ndarray, f: np.ndarray, iterations: int = 5
-                      ) -> tuple[float, float, np.ndarray, float]:
-    """Fit ln f = a0 t + a1 with MAD-based outlier rejection. Returns a0, a1, inliers, std."""
-    lf = np.log(f)
-    keep = np.ones(t.size, dtype=bool)
-    a0 = a1 = 0.0
-    for _ in range(iterations):
-        if keep.sum() < 3:
-            break
-        a0, a1 = np.polyfit(t[keep], lf[keep], 1)
-        res = lf - (a0 * t + a1)
-        mad = 1.4826 * np.median(np.abs(res[keep]))
-        new = np.abs(res) <= max(4.0 * mad, 0.01)
-        if np.array_equal(new, keep):
-            break
-        keep = new
-    res = lf[keep] - (a0 * t[keep] + a1)
-    return float(a0), float(a1), keep, float(np.std(res)) if res.size else float('inf')
-
-
 def _onset(x: np.ndarray, model: np.ndarray, lo: int, hi: int, fit: slice,
            valid: np.ndarray) -> int:
     """
@@ -917,11 +876,18 @@ def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
     h = hysteresis * float(np.quantile(np.abs(x), 0.99))
     if h <= 0:
         raise EstimationError('no chirp: the signal is constant')
-    t_mid, f = _half_cycles(x, fs, h)
+    t_mid, f = half_cycles(x, fs, h)
     if t_mid.size < 10:
         raise EstimationError(f'no chirp: only {t_mid.size} half cycles above the '
                               f'hysteresis level {h:.3g}')
-    a0, a1, keep, scatter = _robust_loglinear(t_mid, f)
+    best, other = fit_sweep_laws(t_mid, f)
+    if best.law != 'exponential' and best.scatter < LAW_MARGIN * other.scatter \
+            and best.inliers >= min_inliers:
+        raise EstimationError(
+            f'a {best.describe()}, not an exponential chirp f(t) = exp(a0 t + a1) (eq. 16; '
+            f'that law leaves {100 * other.scatter:.2g} % frequency scatter): the chirp '
+            f'estimator needs the exponential law')
+    a0, a1, keep, scatter = robust_law_fit(t_mid, f, 'exponential')
     frac = float(keep.mean())
     tk = t_mid[keep]
     ratio = float(np.exp(abs(a0) * (tk[-1] - tk[0]))) if tk.size > 1 else 1.0
