@@ -30,10 +30,11 @@ from frf_ident.app.outdir import clear_outputs
 from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'read_estimates']
+__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'read_estimates',
+           'report_distortion']
 
 #: the files :func:`estimate_bag` writes into its output directory
-OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png')
+OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png', 'distortion.png')
 
 
 def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max_memory_mb,
@@ -193,7 +194,47 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
                 title=f'{bag.name}: {" vs ".join(k for k, _ in pairs) or key}')
     progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
              f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
+    report_distortion(estimates, out, title=bag.name, progress=progress)
     return estimates
+
+
+def report_distortion(estimates: dict, out: Path, *, title: str,
+                      progress: Callable[[str], None] = say) -> Path | None:
+    """
+    Print one distortion line per output and write distortion.png (multisine estimates).
+
+    The per-line levels are in each estimate's meta['distortion'] (estimates.json).
+
+    Parameters
+    ----------
+    estimates : dict
+        Estimate name -> FrequencyResponse.
+    out : Path
+        Output directory.
+    title : str
+        Figure title (the bag's name).
+    progress : callable
+        Called with one line per output.
+
+    Returns
+    -------
+    Path or None
+        The PNG, or None when no estimate carries distortion levels.
+
+    """
+    from frf_ident.core.estimation.distortion import DistortionLines
+    from frf_ident.report.distortion import distortion_figure
+    found = [(k, DistortionLines.from_dict(v.meta['distortion'])) for k, v in estimates.items()
+             if isinstance(v.meta.get('distortion'), dict)]
+    for k, levels in found:
+        for line in levels.summary():
+            progress(f'{k} distortion: {line}')
+    if not found:
+        return None
+    k, levels = found[0]
+    path = distortion_figure(levels, out / 'distortion.png', title=f'{title}: {k}')
+    progress(f'wrote {path} (output levels at excited, odd and even lines of {k})')
+    return path
 
 
 def dropped_text(d: dict) -> str:

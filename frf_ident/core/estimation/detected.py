@@ -42,6 +42,7 @@ from typing import Any, Callable, Iterable, Iterator
 from frf_ident.core.estimation.checks import (check_band, check_covers, check_not_clipped,
                                               check_periods, check_remaining, check_whole_period,
                                               JOINT_STATES, missing_rows)
+from frf_ident.core.estimation.distortion import distortion_lines
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
                                                periodic_spectra)
@@ -473,12 +474,13 @@ class DetectedEstimator:
             # and the periods that block used are not used again
             going_on = e is not None and seg.t_start - e['t_end'] < 1.5 * info[
                 'period_samples'] / rec.fs
-            bins, U, Y, skip, dropped = _multisine_periods(
+            bins, U, Y, skip, dropped, Yd = _multisine_periods(
                 rec, seg, used_until=e['t_end'] if going_on else None)
             if e is None:
                 e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
                                          'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
                                          'm2': 0.0, 'skip': 0, 'blocks': 0, 'dropped': [],
+                                         'det_y': [], 'units': _output_units(rec),
                                          'period_s': info['period_samples'] / rec.fs}
             e['t_end'] = max(seg.t_end, e.get('t_end', seg.t_end))
             e['dropped'].extend(d for d in dropped if d not in e['dropped'])
@@ -491,6 +493,7 @@ class DetectedEstimator:
             _check_single_input(U.mean(axis=0)[_strong_lines(U[:, :, j])], j,
                                 rec.joint_names[j])
             Uj = U[:, :, j]
+            e['det_y'].append(Yd)
             e['syu'] = e['syu'] + np.einsum('qfo,qf->fo', Y, np.conj(Uj))
             e['suu'] = e['suu'] + np.sum(np.abs(Uj) ** 2, axis=0)
             for Pq in Y / Uj[:, :, None]:                   # Welford over periods
@@ -561,8 +564,11 @@ class DetectedEstimator:
         var = None
         if e['n'] >= 2:
             var = (e['m2'][keep] / (e['n'] - 1) / e['n']).T[:, None, :]
+        lines = np.arange(1, e['det_y'][0].shape[1] + 1)
+        dist = distortion_lines(np.concatenate(e['det_y']), lines, e['bins'][keep], e['f0'],
+                                names_out, units=e['units'])
         return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
-            'design': 'detected_multisine', 'periods': e['n'],
+            'design': 'detected_multisine', 'periods': e['n'], 'distortion': dist.to_dict(),
             'transient_periods': e['skip'], 'transient': e.get('transient', ''),
             'blocks': e['blocks'],
             'dropped': {'periods': len(e['dropped']), 'times': [list(d) for d in e['dropped']]}})
@@ -589,8 +595,8 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
     Compute the period spectra of a detected multisine.
 
     Excited bins, the period spectra U, Y (n_q, F, n) of a detected multisine's periods
-    without missing samples, the transient periods skipped and the (t_start, t_end) of the
-    periods dropped for missing samples.
+    without missing samples, the transient periods skipped, the (t_start, t_end) of the
+    periods dropped for missing samples and Y at every detection line (n_q, L, n).
 
     Leading periods that differ from the next beyond the noise are skipped as start-up
     transient (:func:`~frf_ident.core.estimation.transient.steady_periods`; the sentence goes
@@ -621,13 +627,15 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
         steady = _steady(rec, np.asarray(use), n_per, bins, j)
         skip, use = steady.first, use[steady.first:]
         seg.info['transient'] = steady.describe()
+    # detection lines: every line up to three times the band (a cubic's products)
+    lines = np.arange(1, min(3 * int(np.max(bins)), (n_per - 1) // 2) + 1)
     if not use:
         empty = np.empty((0, bins.size, rec.velocity.shape[1]), dtype=complex)
-        return bins, empty, empty, skip, dropped
+        return bins, empty, empty, skip, dropped, empty[:, :0]
     idx = np.asarray(use)[:, None] + np.arange(n_per)         # (n_used, n_per)
     U = periodic_spectra(rec.effort[idx], bins, axis=1)
     Y = periodic_spectra(rec.velocity[idx], bins, axis=1)
-    return bins, U, Y, skip, dropped
+    return bins, U, Y, skip, dropped, periodic_spectra(rec.velocity[idx], lines, axis=1)
 
 
 def _steady(rec: Recording, starts: np.ndarray, n_per: int, bins: np.ndarray,
@@ -637,6 +645,12 @@ def _steady(rec: Recording, starts: np.ndarray, n_per: int, bins: np.ndarray,
     idx = starts[:, None] + np.arange(n_per)
     x = np.concatenate([rec.effort[idx, j][:, :, None], rec.velocity[idx]], axis=2)
     return steady_periods(periodic_spectra(x, lines, axis=1))
+
+
+def _output_units(rec: Recording) -> list[str]:
+    """Velocity unit per joint as an import map states it (rad/s where it says nothing)."""
+    units = rec.meta.get('units', {}) if isinstance(rec.meta, dict) else {}
+    return [units.get(n, {}).get('velocity', 'rad/s') for n in rec.joint_names]
 
 
 def _strong_lines(uj: np.ndarray) -> np.ndarray:

@@ -61,8 +61,8 @@ class DistortionLines:
         Noise variance of the period mean per line (smoothed); None when unknown.
     outputs : list of str
         Output channel names.
-    unit : str
-        Unit of the outputs (e.g. 'rad/s').
+    units : list of str
+        Unit of each output (e.g. 'rad/s'); '' where unknown.
     residual : ndarray or None, shape (n_out, n_lines)
         At the excited lines, with several realisations: power of Y - G U (G the
         least-squares linear response per line over the realisations), the stochastic
@@ -76,8 +76,20 @@ class DistortionLines:
     power: np.ndarray
     noise: np.ndarray | None
     outputs: list[str]
-    unit: str = ''
+    units: list[str] | None = None
     residual: np.ndarray | None = None
+
+    def unit_list(self) -> list[str]:
+        """
+        Return the unit of each output ('' where unknown).
+
+        Returns
+        -------
+        list of str
+            One unit per output.
+
+        """
+        return list(self.units) if self.units is not None else [''] * len(self.outputs)
 
     def above_noise_db(self, kind: str) -> np.ndarray:
         """
@@ -142,14 +154,14 @@ class DistortionLines:
         Returns
         -------
         dict
-            freq_hz, kind, power and noise (per output, lists), outputs, unit and the
+            freq_hz, kind, power and noise (per output, lists), outputs, units and the
             per-output medians odd_above_noise_db, even_above_noise_db.
 
         """
         return {'freq_hz': self.freq_hz.tolist(), 'kind': self.kind.tolist(),
                 'power': self.power.tolist(),
                 'noise': None if self.noise is None else self.noise.tolist(),
-                'outputs': list(self.outputs), 'unit': self.unit,
+                'outputs': list(self.outputs), 'units': self.unit_list(),
                 'residual': None if self.residual is None else self.residual.tolist(),
                 'odd_above_noise_db': self.above_noise_db('odd').tolist(),
                 'even_above_noise_db': self.above_noise_db('even').tolist()}
@@ -173,13 +185,13 @@ class DistortionLines:
         return cls(np.asarray(d['freq_hz'], float), np.asarray(d['kind']),
                    np.asarray(d['power'], float),
                    None if d.get('noise') is None else np.asarray(d['noise'], float),
-                   list(d['outputs']), d.get('unit', ''),
+                   list(d['outputs']), d.get('units'),
                    None if d.get('residual') is None else np.asarray(d['residual'], float))
 
 
 def distortion_lines(Y: np.ndarray | Sequence[np.ndarray], bins: np.ndarray,
                      excited_bins: np.ndarray, f0: float, outputs: Sequence[str], *,
-                     unit: str = '', noise: np.ndarray | None = None,
+                     units: Sequence[str] | None = None, noise: np.ndarray | None = None,
                      U: np.ndarray | Sequence[np.ndarray] | None = None) -> DistortionLines:
     """
     Per-line output levels of an odd multisine experiment.
@@ -196,8 +208,8 @@ def distortion_lines(Y: np.ndarray | Sequence[np.ndarray], bins: np.ndarray,
         Frequency of line 1 [Hz].
     outputs : sequence of str
         Output channel names.
-    unit : str, optional
-        Output unit.
+    units : sequence of str, optional
+        Unit of each output.
     noise : ndarray, optional
         Noise variance of the period mean (n_out,) or (n_out, n_bins), for records of one
         period; default: from the spread over periods (None with one period).
@@ -238,7 +250,8 @@ def distortion_lines(Y: np.ndarray | Sequence[np.ndarray], bins: np.ndarray,
         # of the scatter
         r = np.mean(np.abs(ym - g * um) ** 2, axis=0) * len(Ys) / (len(Ys) - 1)
         residual = np.where(exc[None, :], r.T, np.nan)
-    return DistortionLines(bins * float(f0), kind, power, var, list(outputs), unit, residual)
+    return DistortionLines(bins * float(f0), kind, power, var, list(outputs),
+                           None if units is None else list(units), residual)
 
 
 def _chi2_median_ratio(dof: int) -> float:

@@ -54,10 +54,10 @@ def levels():
 
     def spec(x):
         return [periodic_spectra(x[t][None, :, None], bins, axis=1) for t in take]
-    first = distortion_lines(spec(y), bins, EXCITED, FS / N, ['V2'], unit='V')
+    first = distortion_lines(spec(y), bins, EXCITED, FS / N, ['V2'], units=['V'])
     floor = (first.freq_hz > 220) & (first.kind != 'excited')
     noise = np.median(first.power[0, floor])
-    return distortion_lines(spec(y), bins, EXCITED, FS / N, ['V2'], unit='V',
+    return distortion_lines(spec(y), bins, EXCITED, FS / N, ['V2'], units=['V'],
                             noise=np.full(1, noise), U=spec(u))
 
 
