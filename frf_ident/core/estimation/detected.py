@@ -383,7 +383,8 @@ def _check_single_input(u_lines: np.ndarray, j: int, name: str) -> None:
     if others.size and np.max(others) > 0.1 * p[j]:
         raise EstimationError(f'{name}: other inputs are excited at the same lines '
                               f'({10 * np.log10(np.max(others) / p[j]):.1f} dB); one experiment '
-                              f'cannot separate them')
+                              f'cannot separate them (one input measured once and many sensors: '
+                              f'map it under inputs, the sensors under outputs)')
 
 
 class DetectedEstimator:
@@ -461,7 +462,8 @@ class DetectedEstimator:
         """
         info = seg.info
         j = int(info['input'])
-        names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{n}' for n in rec.joint_names])
+        outs = _output_columns(rec)
+        names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{rec.joint_names[k]}' for k in outs])
         if info['design'] == 'detected_multisine':
             # one excitation per input and period: a later block's detection may pick a
             # slightly different set of weak lines; the first block's lines are used
@@ -476,11 +478,16 @@ class DetectedEstimator:
                 'period_samples'] / rec.fs
             bins, U, Y, skip, dropped, Yd = _multisine_periods(
                 rec, seg, used_until=e['t_end'] if going_on else None)
+            Y, Yd = Y[:, :, outs], Yd[:, :, outs]
+            if U.shape[0]:          # refused before anything is kept (the reason, not '0 of 0')
+                _check_single_input(U.mean(axis=0)[_strong_lines(U[:, :, j])], j,
+                                    rec.joint_names[j])
             if e is None:
                 e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
                                          'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
                                          'm2': 0.0, 'skip': 0, 'blocks': 0, 'dropped': [],
-                                         'det_y': [], 'units': _output_units(rec),
+                                         'det_y': [],
+                                         'units': [_output_units(rec)[k] for k in outs],
                                          'period_s': info['period_samples'] / rec.fs}
             e['t_end'] = max(seg.t_end, e.get('t_end', seg.t_end))
             e['dropped'].extend(d for d in dropped if d not in e['dropped'])
@@ -490,8 +497,6 @@ class DetectedEstimator:
             e['blocks'] += 1
             if U.shape[0] == 0:
                 return
-            _check_single_input(U.mean(axis=0)[_strong_lines(U[:, :, j])], j,
-                                rec.joint_names[j])
             Uj = U[:, :, j]
             e['det_y'].append(Yd)
             e['syu'] = e['syu'] + np.einsum('qfo,qf->fo', Y, np.conj(Uj))
@@ -503,6 +508,7 @@ class DetectedEstimator:
                 e['m2'] = e['m2'] + np.abs(d * np.conj(Pq - e['mean']))
             return
         freqs, U, Y = _chirp_lines(rec, seg)
+        Y = Y[:, outs]
         ok = np.isfinite(U[:, j]) & np.all(np.isfinite(Y), axis=1)
         if np.any(ok):
             _check_single_input(U[ok], j, rec.joint_names[j])
@@ -645,6 +651,15 @@ def _steady(rec: Recording, starts: np.ndarray, n_per: int, bins: np.ndarray,
     idx = starts[:, None] + np.arange(n_per)
     x = np.concatenate([rec.effort[idx, j][:, :, None], rec.velocity[idx]], axis=2)
     return steady_periods(periodic_spectra(x, lines, axis=1))
+
+
+def _output_columns(rec: Recording) -> list[int]:
+    """Columns that are outputs: all joints, or the outputs of an import layout."""
+    layout = rec.meta.get('layout') if isinstance(rec.meta, dict) else None
+    if not isinstance(layout, dict):
+        return list(range(len(rec.joint_names)))
+    names = {c['name'] for c in layout.get('outputs', [])}
+    return [k for k, n in enumerate(rec.joint_names) if n in names]
 
 
 def _output_units(rec: Recording) -> list[str]:

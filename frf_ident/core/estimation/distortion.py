@@ -111,8 +111,11 @@ class DistortionLines:
             m = np.zeros_like(m)
         if self.noise is None or not np.any(m):
             return np.full(len(self.outputs), np.nan)
-        p = self.power if kind != 'residual' else self.residual
-        return np.median(_db(p[:, m], self.noise[:, m]), axis=1)
+        if kind == 'residual':
+            return np.median(_db(self.residual[:, m], self.noise[:, m]), axis=1)
+        # |Y|^2 of noise alone is exponentially distributed: its median is ln 2 of the mean;
+        # divided out, lines of noise alone come out at 0 dB
+        return np.median(_db(self.power[:, m], self.noise[:, m]), axis=1) - _db(np.log(2), 1.0)
 
     def summary(self) -> list[str]:
         """
