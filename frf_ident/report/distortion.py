@@ -31,7 +31,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
-__all__ = ['distortion_figure']
+__all__ = ['distortion_figure', 'level_comparison_figure']
 
 #: marker style per kind of line: (label, colour, marker size)
 STYLE = {'excited': ('excited lines', 'C0', 5), 'odd': ('non-excited odd lines', 'C3', 4),
@@ -40,6 +40,15 @@ STYLE = {'excited': ('excited lines', 'C0', 5), 'odd': ('non-excited odd lines',
 
 def _db(p: np.ndarray) -> np.ndarray:
     return 10 * np.log10(np.maximum(p, 1e-300))
+
+
+def _log_ticks(ax: plt.Axes) -> None:
+    """Plain numbers on a log frequency axis: 1, 2, 5, 10, 20, 50 ... (no 3x10^0)."""
+    def label(x: float, _pos: int) -> str:
+        lead = round(x / 10 ** np.floor(np.log10(x))) if x > 0 else 0
+        return f'{x:g}' if lead in (1, 2, 5) else ''
+    ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(label))
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(label))
 
 
 def distortion_figure(levels: DistortionLines, path: Path, *, title: str = '') -> Path:
@@ -83,10 +92,54 @@ def distortion_figure(levels: DistortionLines, path: Path, *, title: str = '') -
         ax.set_ylabel(f'|Y|\u00b2 [dB re 1 ({unit})\u00b2]', fontsize=8)
         ax.set_title(levels.outputs[o], fontsize=9)
         ax.grid(True, which='both', alpha=0.3)
-        ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda x, _: f'{x:g}'))
+        _log_ticks(ax)
     axes[-1, 0].set_xlabel('frequency [Hz]')
     axes[0, 0].legend(fontsize=7, loc='best')
     fig.suptitle(title or 'Output levels at excited, odd and even lines')
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return Path(path)
+
+
+def level_comparison_figure(cmp, path: Path) -> Path:
+    """
+    Write |P| of every record and its change against the first, one row per output.
+
+    Parameters
+    ----------
+    cmp : LevelComparison
+        From :func:`~frf_ident.core.estimation.compare.compare_levels`.
+    path : Path
+        The PNG to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    """
+    n = len(cmp.outputs)
+    fig, axes = plt.subplots(n, 2, figsize=(10, 2.6 * n + 0.8), sharex=True, squeeze=False)
+    f = cmp.freq_hz
+    for o in range(n):
+        ax_m, ax_c = axes[o]
+        for k, name in enumerate(cmp.names):
+            ax_m.semilogx(f, 20 * np.log10(np.maximum(np.abs(cmp.responses[k][o]), 1e-300)),
+                          '.-', ms=3, lw=0.8, color=f'C{k}', label=name)
+            ax_c.semilogx(f, cmp.change_db[k, o], '.-', ms=3, lw=0.8, color=f'C{k}')
+            for fm in cmp.modes_hz[k][o]:
+                ax_m.axvline(fm, color=f'C{k}', lw=0.6, ls=':')
+        ax_m.set_ylabel('|P| [dB]', fontsize=8)
+        ax_c.set_ylabel(f'|P| / |P of {cmp.names[0]}| [dB]', fontsize=8)
+        ax_m.set_title(f'{cmp.inputs[0]} \u2192 {cmp.outputs[o]} (dotted: modes)', fontsize=9)
+        for ax in (ax_m, ax_c):
+            ax.grid(True, which='both', alpha=0.3)
+            _log_ticks(ax)
+    for ax in axes[-1]:
+        ax.set_xlabel('frequency [Hz]')
+    axes[0, 0].legend(fontsize=7, loc='best')
+    fig.suptitle('Records at different levels: FRF and its change')
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
