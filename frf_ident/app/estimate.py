@@ -30,7 +30,7 @@ from frf_ident.app.outdir import clear_outputs
 from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'read_estimates',
+__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'frf_units', 'read_estimates',
            'report_distortion']
 
 #: the files :func:`estimate_bag` writes into its output directory
@@ -191,7 +191,8 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     (out / 'summary.json').write_text(json.dumps(summary, indent=1, default=str))
     pairs = [(k, v) for k, v in estimates.items() if k in ('multisine', 'chirp')]
     bode_figure(dict(pairs or [(key, frf)]), out / 'bode.png',
-                title=f'{bag.name}: {" vs ".join(k for k, _ in pairs) or key}')
+                title=f'{bag.name}: {" vs ".join(k for k, _ in pairs) or key}',
+                units=frf_units(frf))
     progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
              f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
     report_distortion(estimates, out, title=bag.name, progress=progress)
@@ -235,6 +236,28 @@ def report_distortion(estimates: dict, out: Path, *, title: str,
     path = distortion_figure(levels, out / 'distortion.png', title=f'{title}: {k}')
     progress(f'wrote {path} (output levels at excited, odd and even lines of {k})')
     return path
+
+
+def frf_units(frf) -> str:
+    """
+    The unit of |P| for the Bode axis, ' re 1 (out)/(in)', when the estimate knows it.
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        An estimate; its meta['units'] ({'input', 'outputs'}) says the units.
+
+    Returns
+    -------
+    str
+        e.g. ' re 1 (m/s^2)/(N)'; '' when unknown or the outputs differ.
+
+    """
+    u = frf.meta.get('units')
+    if not isinstance(u, dict) or len(set(u.get('outputs') or [''])) != 1:
+        return ''
+    out, inp = u['outputs'][0], u.get('input', '')
+    return f' re 1 ({out})/({inp})' if out and inp else ''
 
 
 def dropped_text(d: dict) -> str:

@@ -83,6 +83,9 @@ def test_one_shaker_many_accelerometers_gives_the_accelerance(shaker_csv, tmp_pa
     est = json.loads((tmp_path / 'est' / 'estimates.json').read_text())
     d = next(iter(est.values()))['meta']['distortion']
     assert d['units'] == ['m/s^2'] * 3
+    from frf_ident.app.estimate import frf_units
+    from frf_ident.core.estimation.frd import FrequencyResponse as Frd
+    assert frf_units(Frd.from_dict(next(iter(est.values())))) == ' re 1 (m/s^2)/(N)'
     if P is None:      # the FRD layout of frf.json: compare through the Python API
         from frf_ident.core.estimation.frd import FrequencyResponse
         P = FrequencyResponse.from_dict(doc).response

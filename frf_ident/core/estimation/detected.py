@@ -488,6 +488,7 @@ class DetectedEstimator:
                                          'm2': 0.0, 'skip': 0, 'blocks': 0, 'dropped': [],
                                          'det_y': [],
                                          'units': [_output_units(rec)[k] for k in outs],
+                                         'input_unit': _input_unit(rec, j),
                                          'period_s': info['period_samples'] / rec.fs}
             e['t_end'] = max(seg.t_end, e.get('t_end', seg.t_end))
             e['dropped'].extend(d for d in dropped if d not in e['dropped'])
@@ -575,6 +576,7 @@ class DetectedEstimator:
                                 names_out, units=e['units'])
         return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
             'design': 'detected_multisine', 'periods': e['n'], 'distortion': dist.to_dict(),
+            'units': {'input': e['input_unit'], 'outputs': e['units']},
             'transient_periods': e['skip'], 'transient': e.get('transient', ''),
             'blocks': e['blocks'],
             'dropped': {'periods': len(e['dropped']), 'times': [list(d) for d in e['dropped']]}})
@@ -666,6 +668,12 @@ def _output_units(rec: Recording) -> list[str]:
     """Velocity unit per joint as an import map states it (rad/s where it says nothing)."""
     units = rec.meta.get('units', {}) if isinstance(rec.meta, dict) else {}
     return [units.get(n, {}).get('velocity', 'rad/s') for n in rec.joint_names]
+
+
+def _input_unit(rec: Recording, j: int) -> str:
+    """Effort unit of joint j as an import map states it (N m where it says nothing)."""
+    units = rec.meta.get('units', {}) if isinstance(rec.meta, dict) else {}
+    return units.get(rec.joint_names[j], {}).get('effort', 'N m')
 
 
 def _strong_lines(uj: np.ndarray) -> np.ndarray:
