@@ -240,7 +240,7 @@ def report_distortion(estimates: dict, out: Path, *, title: str,
 
 def frf_units(frf) -> str:
     """
-    The unit of |P| for the Bode axis, ' re 1 (out)/(in)', when the estimate knows it.
+    Return the unit of |P| for the Bode axis, ' re 1 (out)/(in)', when the estimate knows it.
 
     Parameters
     ----------

@@ -125,9 +125,9 @@ def run(args: argparse.Namespace) -> int:
     if args.compare_levels and len(args.bag) < 2:
         raise FrfIdentInputError('--compare-levels: expected two or more bags')
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
-    kwargs = dict(joints=joints, t_range=tuple(args.t_range) if args.t_range else None,
-                  primary=args.primary, options=excitation_options(args), stream=args.stream,
-                  max_memory_mb=args.max_memory, window_s=args.window)
+    kwargs = {'joints': joints, 't_range': tuple(args.t_range) if args.t_range else None,
+              'primary': args.primary, 'options': excitation_options(args),
+              'stream': args.stream, 'max_memory_mb': args.max_memory, 'window_s': args.window}
     if args.compare_levels:
         from frf_ident.app.compare_levels import compare_bags, COMPARE_FILES
         out = check_out(args.out, outputs=COMPARE_FILES, overwrite=args.overwrite)

@@ -40,8 +40,8 @@ from typing import Any
 
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['DERIVE', 'LADDERS', 'LAYOUT_INPUT_KEYS', 'LAYOUT_OUTPUT_KEYS', 'QUANTITIES', 'check_layout',
-           'layout_to_joints', 'signal_key']
+__all__ = ['DERIVE', 'LADDERS', 'LAYOUT_INPUT_KEYS', 'LAYOUT_OUTPUT_KEYS', 'QUANTITIES',
+           'check_layout', 'layout_to_joints', 'signal_key']
 
 #: what an output can be; the estimators treat every output alike (kept as measured)
 QUANTITIES = ('position', 'velocity', 'acceleration')
@@ -176,7 +176,7 @@ def layout_to_joints(doc: dict[str, Any]) -> tuple[list[dict[str, Any]], dict[st
 
 
 def _derived_unit(unit: str, steps: int) -> str:
-    """The unit after ``steps`` time derivatives (negative: integrals), '' when unknown."""
+    """Return the unit after ``steps`` time derivatives (negative: integrals), '' if unknown."""
     for ladder in LADDERS:
         if unit in ladder:
             k = ladder.index(unit) + steps

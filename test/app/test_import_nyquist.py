@@ -31,7 +31,8 @@ def test_import_warns_when_the_band_reaches_nyquist(tmp_path, capsys):
     phases[-1] = 0.0                                    # the Nyquist line is a cosine
     tau = sum(np.cos(2 * np.pi * k * n / p + ph) for k, ph in zip(lines, phases))
     q = np.cumsum(tau) / fs
-    rows = '\n'.join(f'{a / fs!r},{b!r},{c!r}' for a, b, c in zip(n.tolist(), q.tolist(), tau.tolist()))
+    rows = '\n'.join(f'{a / fs!r},{b!r},{c!r}'
+                     for a, b, c in zip(n.tolist(), q.tolist(), tau.tolist()))
     (tmp_path / 'd.csv').write_text('t,q,tau\n' + rows + '\n')
     mp = {'frf_ident_map': 1, 'time': {'column': 't'},
           'joints': [{'name': 'j', 'position': 'q', 'effort': 'tau'}]}

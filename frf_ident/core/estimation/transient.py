@@ -67,7 +67,7 @@ class SteadyState:
 
     @property
     def steady(self) -> int:
-        """Number of steady periods (from ``first`` to the last)."""
+        """Return the number of steady periods (from ``first`` to the last)."""
         return self.n_periods - self.first
 
     def describe(self) -> str:
@@ -89,7 +89,7 @@ class SteadyState:
                     f'{self.ratio[0]:.2g}x the later ones, threshold {self.threshold[0]:.2g}x)')
         worst = ', '.join(f'{r:.3g}x' for r in self.ratio[:self.first])
         return (f'transient test: period(s) 1..{self.first} of {self.n_periods} differ from '
-                f'the next by {worst} the later periods\' difference (threshold '
+                f"the next by {worst} the later periods' difference (threshold "
                 f'{self.threshold[0]:.2g}x): {self.steady} steady periods used')
 
 

@@ -31,7 +31,7 @@ FS = 1000.0
 
 @pytest.fixture(scope='module')
 def period():
-    """One period (3072 samples) of a 2-60 Hz odd multisine, unit amplitude."""
+    """Return a 3072-sample period of a 2-60 Hz odd multisine, unit amplitude."""
     des = design_odd_multisine(2.0, 60.0, bound=1.0, resolution_hz=0.5, fs=FS)
     real = multisine_realisation(des, 1, np.random.default_rng(0), fs=FS)
     return real.evaluate(np.arange(des.period_samples(FS)) / FS)[0][:, 0]
