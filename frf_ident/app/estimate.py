@@ -169,6 +169,9 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         progress(f'detected: {line}')
     for line in first.get('left_out', []):
         progress(f'left out: {line}')
+    for k, v in estimates.items():
+        if v.meta.get('transient'):
+            progress(f'{k}: {v.meta["transient"]}')
     key = primary or ('multisine' if 'multisine' in estimates else next(iter(estimates)))
     if key not in estimates:
         raise FrfIdentInputError(f'--primary {key!r}: the bag supports {sorted(estimates)}')
