@@ -472,11 +472,11 @@ class DetectedEstimator:
             if e is not None:
                 seg = Segment(seg.t_start, seg.t_end, dict(info, harmonics=e['bins'].tolist()))
                 info = seg.info
-            # the excitation goes on from an earlier block: no start-up transient to skip,
-            # and the periods that block used are not used again
+            # the excitation goes on from an earlier block: the periods that block used are
+            # not used again
             going_on = e is not None and seg.t_start - e['t_end'] < 1.5 * info[
                 'period_samples'] / rec.fs
-            bins, U, Y, skip, dropped, Yd = _multisine_periods(
+            bins, U, Y, skip, dropped, Yd, Ul = _multisine_periods(
                 rec, seg, used_until=e['t_end'] if going_on else None)
             Y, Yd = Y[:, :, outs], Yd[:, :, outs]
             if U.shape[0]:          # refused before anything is kept (the reason, not '0 of 0')
@@ -484,29 +484,22 @@ class DetectedEstimator:
                                     rec.joint_names[j])
             if e is None:
                 e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
-                                         'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
-                                         'm2': 0.0, 'skip': 0, 'blocks': 0, 'dropped': [],
-                                         'det_y': [],
+                                         'u': [], 'y': [], 'det_y': [], 'det_u': [],
+                                         'skip': 0, 'blocks': 0, 'dropped': [],
                                          'units': [_output_units(rec)[k] for k in outs],
                                          'input_unit': _input_unit(rec, j),
                                          'period_s': info['period_samples'] / rec.fs}
             e['t_end'] = max(seg.t_end, e.get('t_end', seg.t_end))
             e['dropped'].extend(d for d in dropped if d not in e['dropped'])
             e['skip'] += skip
-            if 'transient' in info:
-                e.setdefault('transient', info['transient'])
             e['blocks'] += 1
+            e.pop('steady', None)
             if U.shape[0] == 0:
                 return
-            Uj = U[:, :, j]
-            e['det_y'].append(Yd)
-            e['syu'] = e['syu'] + np.einsum('qfo,qf->fo', Y, np.conj(Uj))
-            e['suu'] = e['suu'] + np.sum(np.abs(Uj) ** 2, axis=0)
-            for Pq in Y / Uj[:, :, None]:                   # Welford over periods
-                e['n'] += 1
-                d = Pq - e['mean']
-                e['mean'] = e['mean'] + d / e['n']
-                e['m2'] = e['m2'] + np.abs(d * np.conj(Pq - e['mean']))
+            # the periods' spectra are kept (not sums): the transient test decides on all
+            # periods of the excitation at once, in memory and streamed alike
+            for k, x in (('u', U[:, :, j]), ('y', Y), ('det_y', Yd), ('det_u', Ul)):
+                e[k].append(x)
             return
         freqs, U, Y = _chirp_lines(rec, seg)
         Y = Y[:, outs]
@@ -566,18 +559,23 @@ class DetectedEstimator:
             return FrequencyResponse(e['freqs'][ok], P, [name_in], names_out, meta={
                 'design': 'detected_chirp', 'blocks': e['blocks'],
                 'dropped': {'lines': int(lost.size), 'freq_hz': lost.tolist()}})
-        keep = _strong_lines(e['suu'][None, :])
-        P = (e['syu'][keep] / e['suu'][keep, None]).T[:, None, :]
+        steady = _steady(e)
+        first = steady.first
+        Uj, Y = np.concatenate(e['u'])[first:], np.concatenate(e['y'])[first:]
+        n = Uj.shape[0]
+        suu = np.sum(np.abs(Uj) ** 2, axis=0)
+        keep = _strong_lines(suu[None, :])
+        P = (np.einsum('qfo,qf->fo', Y, np.conj(Uj))[keep] / suu[keep, None]).T[:, None, :]
         var = None
-        if e['n'] >= 2:
-            var = (e['m2'][keep] / (e['n'] - 1) / e['n']).T[:, None, :]
-        lines = np.arange(1, e['det_y'][0].shape[1] + 1)
-        dist = distortion_lines(np.concatenate(e['det_y']), lines, e['bins'][keep], e['f0'],
-                                names_out, units=e['units'])
+        if n >= 2:
+            var = (np.var(Y / Uj[:, :, None], axis=0, ddof=1)[keep] / n).T[:, None, :]
+        det_y = np.concatenate(e['det_y'])[first:]
+        dist = distortion_lines(det_y, np.arange(1, det_y.shape[1] + 1), e['bins'][keep],
+                                e['f0'], names_out, units=e['units'])
         return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
-            'design': 'detected_multisine', 'periods': e['n'], 'distortion': dist.to_dict(),
+            'design': 'detected_multisine', 'periods': n, 'distortion': dist.to_dict(),
             'units': {'input': e['input_unit'], 'outputs': e['units']},
-            'transient_periods': e['skip'], 'transient': e.get('transient', ''),
+            'transient_periods': e['skip'] + first, 'transient': steady.describe(),
             'blocks': e['blocks'],
             'dropped': {'periods': len(e['dropped']), 'times': [list(d) for d in e['dropped']]}})
 
@@ -591,7 +589,8 @@ def _check_enough(e: dict[str, Any]) -> None:
                         where=f'detected chirp of {name}',
                         hint='the sweep must be recorded without gaps somewhere')
         return
-    check_remaining(e['n'], len(e['dropped']), need=MIN_PERIODS,
+    n = sum(u.shape[0] for u in e['u']) - (_steady(e).first if e['u'] else 0)
+    check_remaining(n, len(e['dropped']), need=MIN_PERIODS,
                     what='multisine periods', where=f'detected multisine of {name}',
                     dropped_at=e['dropped'], hint='record more periods')
 
@@ -603,20 +602,26 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
     Compute the period spectra of a detected multisine.
 
     Excited bins, the period spectra U, Y (n_q, F, n) of a detected multisine's periods
-    without missing samples, the transient periods skipped, the (t_start, t_end) of the
-    periods dropped for missing samples and Y at every detection line (n_q, L, n).
+    without missing samples, the periods skipped, the (t_start, t_end) of the periods
+    dropped for missing samples, Y at every detection line (n_q, L, n) and the input at the
+    lines up to the band (n_q, B) (for the transient test, :func:`_steady`).
 
-    Leading periods that differ from the next beyond the noise are skipped as start-up
-    transient (:func:`~frf_ident.core.estimation.transient.steady_periods`; the sentence goes
-    to ``seg.info['transient']``), unless the excitation was already running
-    (``used_until``: the end [s] of the periods an earlier block used; periods starting
-    before it are skipped instead, so overlapping blocks never count a period twice). Only
-    whole periods inside the data are used.
+    When the excitation was already running (``used_until``: the end [s] of the periods an
+    earlier block used) the periods starting before it are skipped, so overlapping blocks
+    never count a period twice, and the whole periods between it and this block's first are
+    taken. Only whole periods inside the data are used; the start-up transient is left out
+    later, on all periods of the excitation (:func:`_steady`).
     """
     info = seg.info
     i0 = int(info.get('start', rec.index_of(seg.t_start)))
     n_per = int(info['period_samples'])
     n_q = max(0, min(int(info['periods']), (rec.t.size - i0) // n_per))
+    if used_until is not None:
+        # the excitation goes on: the whole periods between the earlier block's last one and
+        # this block's (flush with its end) are periods of the same run, not a transient
+        back = min(i0 // n_per, max(0, int(np.floor(
+            (rec.t[0] + i0 / rec.fs - used_until) * rec.fs / n_per + 1e-6))))
+        i0, n_q = i0 - back * n_per, n_q + back
     starts = rec.t[0] + (i0 + np.arange(n_q) * n_per) / rec.fs
     skip = 0 if used_until is None else int(np.count_nonzero(
         starts < used_until - 0.5 / rec.fs))
@@ -630,29 +635,27 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
             dropped.append((float(starts[q]), float(starts[q] + n_per / rec.fs)))
         else:
             use.append(a)
-    if used_until is None and use:
-        # a start-up transient: leading periods that differ from the next beyond the noise
-        steady = _steady(rec, np.asarray(use), n_per, bins, j)
-        skip, use = steady.first, use[steady.first:]
-        seg.info['transient'] = steady.describe()
-    # detection lines: every line up to three times the band (a cubic's products)
+    # detection lines: every line up to three times the band (a cubic's products); the
+    # transient test looks at the input's lines up to the band
     lines = np.arange(1, min(3 * int(np.max(bins)), (n_per - 1) // 2) + 1)
+    band = np.arange(1, min(int(np.max(bins)), (n_per - 1) // 2) + 1)
     if not use:
         empty = np.empty((0, bins.size, rec.velocity.shape[1]), dtype=complex)
-        return bins, empty, empty, skip, dropped, empty[:, :0]
+        return bins, empty, empty, skip, dropped, empty[:, :0], empty[:, :0, 0]
     idx = np.asarray(use)[:, None] + np.arange(n_per)         # (n_used, n_per)
     U = periodic_spectra(rec.effort[idx], bins, axis=1)
     Y = periodic_spectra(rec.velocity[idx], bins, axis=1)
-    return bins, U, Y, skip, dropped, periodic_spectra(rec.velocity[idx], lines, axis=1)
+    return (bins, U, Y, skip, dropped, periodic_spectra(rec.velocity[idx], lines, axis=1),
+            periodic_spectra(rec.effort[idx, int(info['input'])], band, axis=1))
 
 
-def _steady(rec: Recording, starts: np.ndarray, n_per: int, bins: np.ndarray,
-            j: int) -> SteadyState:
-    """Transient test on the periods at ``starts``: input j and every output, lines 1..band."""
-    lines = np.arange(1, min(int(np.max(bins)), n_per // 2) + 1)
-    idx = starts[:, None] + np.arange(n_per)
-    x = np.concatenate([rec.effort[idx, j][:, :, None], rec.velocity[idx]], axis=2)
-    return steady_periods(periodic_spectra(x, lines, axis=1))
+def _steady(e: dict[str, Any]) -> SteadyState:
+    """Transient test on every kept period of an excitation: its input and the outputs."""
+    if 'steady' not in e:
+        u = np.concatenate(e['det_u'])
+        y = np.concatenate(e['det_y'])[:, :u.shape[1]]
+        e['steady'] = steady_periods(np.concatenate([u[:, :, None], y], axis=2))
+    return e['steady']
 
 
 def _output_columns(rec: Recording) -> list[int]:

@@ -30,12 +30,18 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-__all__ = ['TRANSIENT_ALPHA', 'SteadyState', 'steady_periods']
+__all__ = ['REFERENCE_PAIRS', 'TRANSIENT_ALPHA', 'SteadyState', 'steady_periods']
 
 #: false-alarm probability of calling a steady period transient (per record, split over
 #: the channels): 1e-3 keeps a steady record whole in all but one of a thousand records;
 #: a transient 3 dB above the noise of a 100-line band already exceeds the threshold
 TRANSIENT_ALPHA = 1e-3
+
+#: a pair of periods is compared with (at most) this many pairs after it: the decision on
+#: a period then depends on the periods near it only, so a record and its first part (a
+#: streamed block) decide alike; 4 pairs give the reference 8 (lines x 2) degrees of freedom
+#: per line, enough for an F threshold below 2x on a band of 50 lines
+REFERENCE_PAIRS = 4
 
 
 @dataclass(frozen=True)
@@ -104,7 +110,8 @@ def steady_periods(spectra: np.ndarray, *, alpha: float = TRANSIENT_ALPHA) -> St
     Find the first steady-state period of consecutive period spectra.
 
     The difference energy d_q = sum_k |X_{q+1,k} - X_{q,k}|^2 (per channel, over the lines
-    k) of pair q is compared with the mean of the later pairs' d; in steady state the ratio
+    k) of pair q is compared with the mean d of the next :data:`REFERENCE_PAIRS` pairs (of
+    the later ones, fewer at the end); in steady state the ratio
     is F-distributed with 2 K and 2 K m degrees of freedom (K the effective number of lines,
     m the later pairs). Pair q above the 1 - alpha / n_channels quantile makes period q
     transient; the test goes on with the next pair and stops at the first steady one.
@@ -135,7 +142,7 @@ def steady_periods(spectra: np.ndarray, *, alpha: float = TRANSIENT_ALPHA) -> St
     ratio, threshold = nan.copy(), nan.copy()
     first = 0
     for q in range(n_q - 2):
-        later = diff[q + 1:]
+        later = diff[q + 1:q + 1 + REFERENCE_PAIRS]
         ref = later.sum(axis=1).mean(axis=0)               # (channels,)
         k = np.array([_effective_lines(later[:, :, c].mean(axis=0)) for c in range(n_ch)])
         m = later.shape[0]

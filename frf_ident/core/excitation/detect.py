@@ -471,6 +471,13 @@ def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
     # found at a change of variance is exact to a few samples; one that is not may be up to
     # half a smoothing window late
     slack = 3 if a != smooth_a else w // 2
+    if a <= slack:                 # periodic from the first sample: the grid starts there
+        n_periods = min((b - a + p + slack) // p, (x.size - a) // p)
+        return int(a), int(n_periods)
+    # a start-up transient before a: the whole periods are taken flush with the end of the
+    # data that repeat, [a, b + P), so what is left over lies at the start, where the
+    # transient decays (a block from a dropped the last steady period and kept a part of the
+    # transient instead)
     end = min(b + p, x.size)
     n_periods = min((end - a + slack) // p, end // p)
     return int(end - n_periods * p), int(n_periods)
