@@ -27,10 +27,11 @@ from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'read_estimates']
+__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'frf_units', 'read_estimates',
+           'report_distortion']
 
 #: the files :func:`estimate_bag` writes into its output directory
-OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png')
+OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png', 'distortion.png')
 
 
 def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max_memory_mb,
@@ -151,13 +152,13 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         The data do not support an estimate (the message names the bag).
 
     """
-    from frf_ident.errors import EstimationError
+    from frf_ident.errors import DesignError, EstimationError
     from frf_ident.report.figures import bode_figure
     progress = sink(progress)
     try:
         estimates, timing, experiment, streamed = read_estimates(
             bag, joints, t_range, options, stream, max_memory_mb, window_s, progress)
-    except EstimationError as exc:
+    except (EstimationError, DesignError) as exc:      # every refusal names the bag
         raise EstimationError(f'{bag}: {exc}') from None
     if streamed is not None:
         for line in timing.summary():
@@ -167,6 +168,9 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         progress(f'detected: {line}')
     for line in first.get('left_out', []):
         progress(f'left out: {line}')
+    for k, v in estimates.items():
+        if v.meta.get('transient'):
+            progress(f'{k}: {v.meta["transient"]}')
     key = primary or ('multisine' if 'multisine' in estimates else next(iter(estimates)))
     if key not in estimates:
         raise FrfIdentInputError(f'--primary {key!r}: the bag supports {sorted(estimates)}')
@@ -190,10 +194,73 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     shown = ('multisine', 'chirp', 'lpm', 'lpm_h1')
     pairs = [(k, v) for k, v in estimates.items() if k in shown]
     bode_figure(dict(pairs or [(key, frf)]), out / 'bode.png',
-                title=f'{bag.name}: {" vs ".join(k for k, _ in pairs) or key}')
+                title=f'{bag.name}: {" vs ".join(k for k, _ in pairs) or key}',
+                units=frf_units(frf))
     progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
              f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
+    report_distortion(estimates, out, title=bag.name, progress=progress)
     return estimates
+
+
+def report_distortion(estimates: dict, out: Path, *, title: str,
+                      progress: Callable[[str], None] = say) -> Path | None:
+    """
+    Print one distortion line per output and write distortion.png (multisine estimates).
+
+    The per-line levels are in each estimate's meta['distortion'] (estimates.json).
+
+    Parameters
+    ----------
+    estimates : dict
+        Estimate name -> FrequencyResponse.
+    out : Path
+        Output directory.
+    title : str
+        Figure title (the bag's name).
+    progress : callable
+        Called with one line per output.
+
+    Returns
+    -------
+    Path or None
+        The PNG, or None when no estimate carries distortion levels.
+
+    """
+    from frf_ident.core.estimation.distortion import DistortionLines
+    from frf_ident.report.distortion import distortion_figure
+    found = [(k, DistortionLines.from_dict(v.meta['distortion'])) for k, v in estimates.items()
+             if isinstance(v.meta.get('distortion'), dict)]
+    for k, levels in found:
+        for line in levels.summary():
+            progress(f'{k} distortion: {line}')
+    if not found:
+        return None
+    k, levels = found[0]
+    path = distortion_figure(levels, out / 'distortion.png', title=f'{title}: {k}')
+    progress(f'wrote {path} (output levels at excited, odd and even lines of {k})')
+    return path
+
+
+def frf_units(frf) -> str:
+    """
+    Return the unit of |P| for the Bode axis, ' re 1 (out)/(in)', when the estimate knows it.
+
+    Parameters
+    ----------
+    frf : FrequencyResponse
+        An estimate; its meta['units'] ({'input', 'outputs'}) says the units.
+
+    Returns
+    -------
+    str
+        e.g. ' re 1 (m/s^2)/(N)'; '' when unknown or the outputs differ.
+
+    """
+    u = frf.meta.get('units')
+    if not isinstance(u, dict) or len(set(u.get('outputs') or [''])) != 1:
+        return ''
+    out, inp = u['outputs'][0], u.get('input', '')
+    return f' re 1 ({out})/({inp})' if out and inp else ''
 
 
 def dropped_text(d: dict) -> str:

@@ -47,6 +47,7 @@ def import_file(file: Path, map_path: Path, out: str | Path, *,
     """
     progress = sink(progress)
     from frf_ident.bag import write_recording
+    from frf_ident.core.estimation.checks import check_band
     from frf_ident.core.excitation.detect import detect_excitation, excitation_source
     from frf_ident.errors import EstimationError
     from frf_ident.io.importer import import_table
@@ -61,9 +62,15 @@ def import_file(file: Path, map_path: Path, out: str | Path, *,
     sig, what = excitation_source(rec.reference, rec.effort)
     for j, name in enumerate(rec.joint_names):
         try:
-            progress(f'  {name} {what}: {detect_excitation(sig[:, j], rec.fs).describe()}')
+            det = detect_excitation(sig[:, j], rec.fs)
         except EstimationError:
-            pass
+            continue
+        progress(f'  {name} {what}: {det.describe()}')
+        band = det.freq_hz if det.kind == 'multisine' else [det.f_low, det.f_high]
+        try:
+            check_band(band, rec.fs, where=f'{name} {what}')
+        except EstimationError as exc:      # `estimate` refuses it: say so now
+            progress(f'  warning: {exc}')
     write_recording(rec, out)
     progress(f'wrote {out}')
     return out

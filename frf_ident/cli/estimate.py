@@ -37,11 +37,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     """
     from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S
-    p.add_argument('bag', type=Path)
+    p.add_argument('bag', type=Path, nargs='+',
+                   help='the bag; several bags with --compare-levels')
     add_output_arguments(p)
     p.add_argument('--joints', help='comma list of joint names to analyse (default: all)')
     p.add_argument('--t-range', type=float, nargs=2, metavar=('START', 'END'),
                    help='analyse only this time range [s]')
+    p.add_argument('--compare-levels', action='store_true',
+                   help='records of the same channels at different excitation levels: '
+                        'estimate each and compare FRF change per line, modes and distortion')
     p.add_argument('--primary', default=None,
                    help='which estimate goes to frf.json (default: multisine, else chirp)')
     p.add_argument('--stream', action='store_true',
@@ -121,10 +125,22 @@ def run(args: argparse.Namespace) -> int:
     from frf_ident.app.console import say
     from frf_ident.app.estimate import estimate_bag, OUTPUT_FILES
     from frf_ident.app.outdir import check_out
-    out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
+    from frf_ident.errors import FrfIdentInputError
+    if len(args.bag) > 1 and not args.compare_levels:
+        raise FrfIdentInputError(f'{len(args.bag)} bags given; expected one, or several with '
+                                 f'--compare-levels')
+    if args.compare_levels and len(args.bag) < 2:
+        raise FrfIdentInputError('--compare-levels: expected two or more bags')
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
-    estimate_bag(args.bag, out, joints=joints,
-                 t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary,
-                 options=excitation_options(args), stream=args.stream,
-                 max_memory_mb=args.max_memory, window_s=args.window, progress=say)
+    kwargs = {'joints': joints, 't_range': tuple(args.t_range) if args.t_range else None,
+              'primary': args.primary, 'options': excitation_options(args),
+              'stream': args.stream, 'max_memory_mb': args.max_memory, 'window_s': args.window,
+              'progress': say}
+    if args.compare_levels:
+        from frf_ident.app.compare_levels import compare_bags, COMPARE_FILES
+        out = check_out(args.out, outputs=COMPARE_FILES, overwrite=args.overwrite)
+        compare_bags(args.bag, out, **kwargs)
+        return 0
+    out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
+    estimate_bag(args.bag[0], out, **kwargs)
     return 0

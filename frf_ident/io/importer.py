@@ -87,6 +87,7 @@ from typing import Any, Callable
 from frf_ident.core.model.fields import expect_bool, expect_int
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
+from frf_ident.io.layout import check_layout, layout_to_joints
 from frf_ident.io.yamlio import read_utf8, read_yaml_file
 import numpy as np
 
@@ -97,7 +98,7 @@ PathLike = str | os.PathLike[str]
 SIGNALS = ('position', 'velocity', 'effort', 'reference', 'excitation')
 SIGNAL_KEYS = {'column', 'variable', 'row', 'col', 'scale', 'offset', 'derivative'}
 JOINT_KEYS = {'name', 'units', *SIGNALS}
-TOP_KEYS = {'frf_ident_map', 'description', 'csv', 'time', 'joints'}
+TOP_KEYS = {'frf_ident_map', 'description', 'csv', 'time', 'joints', 'inputs', 'outputs'}
 TIME_KEYS = {'column', 'variable', 'row', 'col', 'scale', 'offset', 'sample_time', 'start',
              'range'}
 CSV_KEYS = {'delimiter', 'header'}
@@ -470,6 +471,9 @@ def check_map(doc: Any, where: str = 'map') -> None:
     if has_col == ('sample_time' in time):
         raise FrfIdentInputError(f'{where}: time needs exactly one of column (a time signal) '
                                  f'or sample_time [s]')
+    if 'inputs' in doc or 'outputs' in doc:        # a shaker / sensor layout
+        check_layout(doc, where)
+        return
     joints = doc.get('joints')
     if not isinstance(joints, list) or not joints:
         raise FrfIdentInputError(f'{where}: joints={joints!r}; expected a non-empty list')
@@ -693,10 +697,11 @@ def import_table(path: PathLike, map: dict[str, Any] | PathLike) -> Recording:  
         mp, map_name = load_map(map), str(map)       # load_map checks it
     table = read_table(path, mp.get('csv'))
     tspec = mp['time']
+    joints, layout = (mp['joints'], None) if 'joints' in mp else layout_to_joints(mp)
     n_rows = table.data.shape[0] if table.kind == 'csv' else None
-    if n_rows is None and 'sample_time' in tspec:   # MAT: the first joint's effort sets N
-        n_rows = _signal(table, mp['joints'][0]['effort'],
-                         f'{map_name}: joints[0].effort', None).size
+    if n_rows is None and 'sample_time' in tspec:   # MAT: the first channel's signal sets N
+        first = joints[0].get('effort', joints[0].get('velocity'))
+        n_rows = _signal(table, first, f'{map_name}: {joints[0]["name"]}', None).size
     t_raw = _time_axis(table, tspec, n_rows, f'{map_name}: time')
     keep = _time_range(t_raw, tspec.get('range'), f'{map_name}: time.range')
     t, dt = _uniform_grid(t_raw[keep], f'{map_name}: time ({_time_source(tspec, table)})')
@@ -709,16 +714,23 @@ def import_table(path: PathLike, map: dict[str, Any] | PathLike) -> Recording:  
         info['time_shift_s'] = shift
     if tspec.get('range') is not None:
         info['time_range_s'] = [float(t_raw[keep][0]), float(t_raw[keep][-1])]
-    cols = {sig: np.full((t.size, len(mp['joints'])), np.nan) for sig in SIGNALS}
-    for j, joint in enumerate(mp['joints']):
-        _import_joint(table, joint, j, t_raw.size, keep, dt, cols, info, map_name)
+    cols = {sig: np.full((t.size, len(joints)), np.nan) for sig in SIGNALS}
+    for j, joint in enumerate(joints):
+        if layout is not None:
+            _layout_channel(table, joint, j, t_raw.size, keep, dt, cols, info, map_name)
+        else:
+            _import_joint(table, joint, j, t_raw.size, keep, dt, cols, info, map_name)
     meta = {'import': info}
     if mp.get('description'):
         meta['description'] = str(mp['description'])
-    units = {jt['name']: jt['units'] for jt in mp['joints'] if jt.get('units')}
+    units = {jt['name']: jt['units'] for jt in joints if jt.get('units')}
+    if layout is not None:
+        meta['layout'] = layout
+        units = {**{c['name']: {'effort': c['unit']} for c in layout['inputs']},
+                 **{c['name']: {'velocity': c['unit']} for c in layout['outputs']}}
     if units:
         meta['units'] = units
-    return Recording(t, [jt['name'] for jt in mp['joints']], cols['position'], cols['velocity'],
+    return Recording(t, [jt['name'] for jt in joints], cols['position'], cols['velocity'],
                      cols['effort'], _optional(cols['reference']), _optional(cols['excitation']),
                      [], meta)
 
@@ -759,6 +771,28 @@ def _import_joint(table: Table, joint: dict[str, Any], j: int, n: int, keep: np.
                                      f'{table.name()}')
         cols[sig][:, j] = x
     _derive(cols, j, dt, name, info)
+
+
+def _layout_channel(table: Table, joint: dict[str, Any], j: int, n: int, keep: np.ndarray,
+                    dt: float, cols: dict[str, np.ndarray], info: dict[str, Any],
+                    map_name: str) -> None:
+    """Read one input or output of a layout; the signals it does not have are zero."""
+    name = joint['name']
+    _import_joint(table, {k: v for k, v in joint.items() if k != 'derive_steps'}, j, n, keep,
+                  dt, cols, info, map_name)
+    steps = joint['derive_steps']
+    x = cols['velocity'][:, j]
+    for _ in range(abs(steps)):
+        x = _derivative(x, dt) if steps > 0 else _integral(x - np.mean(x), dt)
+    if steps:
+        cols['velocity'][:, j] = x
+        info['derived'][f'{name}.output'] = (f'{abs(steps)} time '
+                                             f'{"derivative" if steps > 0 else "integral"}(s) '
+                                             f'of the measured signal')
+    for sig in ('position', 'velocity', 'effort'):
+        col = cols[sig][:, j]
+        if np.isnan(col).all():
+            cols[sig][:, j] = 0.0
 
 
 def _derive(cols: dict[str, np.ndarray], j: int, dt: float, name: str,

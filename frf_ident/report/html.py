@@ -22,6 +22,8 @@ next to it (referenced by relative file name, so the directory can be moved or z
 
 - ``bode.png`` — Bode magnitude/phase per channel, +-2 sigma bands, optional reference
 - ``snr.png`` — |P|^2 / variance per line in dB (only for estimates with variances)
+- ``distortion.png`` — output levels at excited, odd and even lines with the noise level
+  (multisine estimates with meta['distortion']), and one summary line per output
 - ``timeseries.png`` — torque, velocity and reference over time (with a recording)
 - ``spectrogram.png`` — PSD of the torques over time, log frequency axis 1-60 Hz (Fig. 3)
 - ``iterations.png`` — chirp iteration: error to u_des in dB per iteration and channel
@@ -35,10 +37,12 @@ import math
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from frf_ident.core.estimation.distortion import DistortionLines
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import figures
+from frf_ident.report.distortion import distortion_figure
 from frf_ident.report.text import plain
 import numpy as np
 
@@ -116,6 +120,9 @@ def write_report(out_dir: str | Path, *, frfs: Mapping[str, FrequencyResponse],
         snr = _snr_section(out, frfs)
         if snr:
             sections.append(('snr', 'Signal-to-noise ratio per line', snr))
+        dist = _distortion_section(out, frfs)
+        if dist:
+            sections.append(('distortion', 'Nonlinear distortion per line', dist))
     if recording is not None:
         sections.append(('signals', 'Recorded signals', _signals_section(out, recording)))
         sections.append(('spectrogram', 'Torque spectrogram',
@@ -231,6 +238,25 @@ def _bode_section(out: Path, frfs: Mapping[str, FrequencyResponse],
                    'without it, the noise variance; black line: reference. Wide bands and '
                    'scattered markers mark lines the data do not determine well.',
                    'Bode diagrams of the estimates')
+
+
+def _distortion_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str:
+    """Return the detection-line plot and summary of the first estimate with distortion levels."""
+    for name, frf in frfs.items():
+        d = frf.meta.get('distortion')
+        if isinstance(d, dict):
+            levels = DistortionLines.from_dict(d)
+            distortion_figure(levels, out / 'distortion.png', title=name)
+            items = ''.join(f'<li>{html.escape(line)}</li>' for line in levels.summary())
+            return f'<ul>{items}</ul>' + _figure(
+                'distortion.png',
+                'Output level |Y|² of the period mean at the excited lines (open), at the '
+                'odd lines the multisine leaves out (red: odd nonlinearities such as a cubic '
+                'spring or friction) and at the even lines (green: even nonlinearities), with '
+                'the noise level of the period mean (black). Lines near the noise carry no '
+                'distortion; lines far above it show how strongly the system departs from '
+                'linear at this level.', 'Distortion levels per line')
+    return ''
 
 
 def _snr_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str:

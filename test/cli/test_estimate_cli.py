@@ -181,7 +181,7 @@ def _frf(out):
 def test_printed_detection_given_back_gives_the_same_frf(foreign_ms_bag, tmp_path, capsys):
     assert main(['estimate', str(foreign_ms_bag), '--out', str(tmp_path / 'auto')]) == 0
     said = capsys.readouterr().out
-    m = re.search(r'detected: (\w+) \(torque\): multisine: period \d+ samples '
+    m = re.search(r'detected: (\w+) \(torque\): (?:odd )?multisine: period \d+ samples '
                   r'\(([0-9.]+) s', said)
     assert m, said
     assert main(['estimate', str(foreign_ms_bag), '--out', str(tmp_path / 'given'),

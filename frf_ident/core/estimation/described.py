@@ -28,6 +28,7 @@ from __future__ import annotations
 from typing import Any
 
 from frf_ident.core.estimation.checks import check_remaining, EXPERIMENT, missing_rows
+from frf_ident.core.estimation.distortion import distortion_lines
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.spectra import (best_linear_approximation,
                                                best_linear_approximation_reference, BLAResult,
@@ -376,7 +377,10 @@ class MultisineSpectra:
                                                      for p, v in used.items()},
                                     'dropped': drop,
                                     'cond_max': float(np.max(bla.cond)),
-                                    'detection_lines': det.to_dict()})
+                                    'detection_lines': det.to_dict(),
+                                    'distortion': distortion_lines(
+                                        Yd, np.arange(1, Yd[0].shape[1] + 1), self.bins, f0,
+                                        outs).to_dict()})
         return frf, bla
 
 

@@ -44,14 +44,17 @@ from typing import Any, Callable, Iterable, Iterator
 from frf_ident.core.estimation.checks import (check_band, check_covers, check_not_clipped,
                                               check_periods, check_remaining, check_whole_period,
                                               JOINT_STATES, missing_rows)
+from frf_ident.core.estimation.distortion import distortion_lines
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.nonperiodic import LpmBlocks
 from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
                                                periodic_spectra)
+from frf_ident.core.estimation.transient import steady_periods, SteadyState
 from frf_ident.core.excitation.chirp import ChirpDesign
 from frf_ident.core.excitation.detect import (ChirpDetection, detect_excitation, excitation_source,
                                               multisine_at_period, MultisineDetection)
 from frf_ident.core.excitation.multisine import reference_frequency_set
+from frf_ident.core.excitation.sweep_law import MAX_MISMATCH, sweep_mismatch
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
 import numpy as np
@@ -210,10 +213,12 @@ def _excitation_of(x: np.ndarray, fs: float, opts: ExcitationOptions
                    ) -> MultisineDetection | ChirpDetection:
     """Return the excitation of one channel: from the options where given, else detected."""
     if opts.chirp is not None:
-        return _given_chirp(opts, fs)
+        return _checked_chirp(x, fs, _given_chirp(opts, fs), 'the given chirp')
     if opts.multisine_period is not None:
         return multisine_at_period(x, fs, opts.multisine_period, band=opts.band)
     det = detect_excitation(x, fs)
+    if isinstance(det, ChirpDetection):
+        det = _checked_chirp(x, fs, det, 'the detected chirp')
     if opts.band is not None:
         if not isinstance(det, MultisineDetection):
             raise EstimationError(f'band={opts.band} restricts multisine lines but a chirp was '
@@ -225,6 +230,23 @@ def _excitation_of(x: np.ndarray, fs: float, opts: ExcitationOptions
                                   f'{f[0]:.4g}-{f[-1]:.4g} Hz lies inside')
         det = replace(det, harmonics=det.harmonics[keep],
                       odd=bool(np.all(det.harmonics[keep] % 2 == 1)))
+    return det
+
+
+def _checked_chirp(x: np.ndarray, fs: float, det: ChirpDetection, what: str
+                   ) -> ChirpDetection:
+    """Refuse a down-sweep, or a chirp whose law the recorded excitation does not follow."""
+    law = (f'{what} {det.f_low:.4g} -> {det.f_high:.4g} Hz over {det.t0:.4g}-{det.t1:.4g} s '
+           f'(exponential, eq. 16)')
+    if not det.f_high > det.f_low:
+        raise EstimationError(f'{law} sweeps down; the chirp estimator needs an up-sweep '
+                              f'(f_low < f_high)')
+    dev, found = sweep_mismatch(x, fs, det.frequency, det.t0, det.t1)
+    if not dev <= MAX_MISMATCH:
+        seen = found.describe() if found is not None else 'no sweep in that interval'
+        raise EstimationError(f'{law} does not match the recorded excitation: it is a {seen}; '
+                              f'its half cycles are {100 * dev:.3g} % off the given law '
+                              f'(median; expected < {100 * MAX_MISMATCH:.0f} %)')
     return det
 
 
@@ -300,6 +322,9 @@ def detect_segments(rec: Recording, options: ExcitationOptions | None = None
             continue
         found.append((int(j), det))
         notes.append(f'{rec.joint_names[j]} ({source}): {_describe(det, opts)}')
+    if not found and opts.given():
+        raise EstimationError(f'the given excitation ({opts.text()}) fits the {source} of '
+                              f'no joint ({"; ".join(notes) or "no joint moves"})')
     if not found:
         raise NoExcitationError(f'no multisine or chirp found in the {source} of any joint '
                                 f'({"; ".join(notes) or "no joint moves"}); pass the '
@@ -379,7 +404,8 @@ def _check_single_input(u_lines: np.ndarray, j: int, name: str) -> None:
     if others.size and np.max(others) > 0.1 * p[j]:
         raise EstimationError(f'{name}: other inputs are excited at the same lines '
                               f'({10 * np.log10(np.max(others) / p[j]):.1f} dB); one experiment '
-                              f'cannot separate them')
+                              f'cannot separate them (one input measured once and many sensors: '
+                              f'map it under inputs, the sensors under outputs)')
 
 
 class DetectedEstimator:
@@ -457,7 +483,8 @@ class DetectedEstimator:
         """
         info = seg.info
         j = int(info['input'])
-        names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{n}' for n in rec.joint_names])
+        outs = _output_columns(rec)
+        names = (f'tau_m/{rec.joint_names[j]}', [f'dq_m/{rec.joint_names[k]}' for k in outs])
         if info['design'] == 'detected_multisine':
             # one excitation per input and period: a later block's detection may pick a
             # slightly different set of weak lines; the first block's lines are used
@@ -466,35 +493,37 @@ class DetectedEstimator:
             if e is not None:
                 seg = Segment(seg.t_start, seg.t_end, dict(info, harmonics=e['bins'].tolist()))
                 info = seg.info
-            # the excitation goes on from an earlier block: no start-up transient to skip,
-            # and the periods that block used are not used again
+            # the excitation goes on from an earlier block: the periods that block used are
+            # not used again
             going_on = e is not None and seg.t_start - e['t_end'] < 1.5 * info[
                 'period_samples'] / rec.fs
-            bins, U, Y, skip, dropped = _multisine_periods(
+            bins, U, Y, skip, dropped, Yd, Ul = _multisine_periods(
                 rec, seg, used_until=e['t_end'] if going_on else None)
+            Y, Yd = Y[:, :, outs], Yd[:, :, outs]
+            if U.shape[0]:          # refused before anything is kept (the reason, not '0 of 0')
+                _check_single_input(U.mean(axis=0)[_strong_lines(U[:, :, j])], j,
+                                    rec.joint_names[j])
             if e is None:
                 e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
-                                         'syu': 0.0, 'suu': 0.0, 'n': 0, 'mean': 0.0,
-                                         'm2': 0.0, 'skip': 0, 'blocks': 0, 'dropped': [],
+                                         'u': [], 'y': [], 'det_y': [], 'det_u': [],
+                                         'skip': 0, 'blocks': 0, 'dropped': [],
+                                         'units': [_output_units(rec)[k] for k in outs],
+                                         'input_unit': _input_unit(rec, j),
                                          'period_s': info['period_samples'] / rec.fs}
             e['t_end'] = max(seg.t_end, e.get('t_end', seg.t_end))
             e['dropped'].extend(d for d in dropped if d not in e['dropped'])
             e['skip'] += skip
             e['blocks'] += 1
+            e.pop('steady', None)
             if U.shape[0] == 0:
                 return
-            _check_single_input(U.mean(axis=0)[_strong_lines(U[:, :, j])], j,
-                                rec.joint_names[j])
-            Uj = U[:, :, j]
-            e['syu'] = e['syu'] + np.einsum('qfo,qf->fo', Y, np.conj(Uj))
-            e['suu'] = e['suu'] + np.sum(np.abs(Uj) ** 2, axis=0)
-            for Pq in Y / Uj[:, :, None]:                   # Welford over periods
-                e['n'] += 1
-                d = Pq - e['mean']
-                e['mean'] = e['mean'] + d / e['n']
-                e['m2'] = e['m2'] + np.abs(d * np.conj(Pq - e['mean']))
+            # the periods' spectra are kept (not sums): the transient test decides on all
+            # periods of the excitation at once, in memory and streamed alike
+            for k, x in (('u', U[:, :, j]), ('y', Y), ('det_y', Yd), ('det_u', Ul)):
+                e[k].append(x)
             return
         freqs, U, Y = _chirp_lines(rec, seg)
+        Y = Y[:, outs]
         ok = np.isfinite(U[:, j]) & np.all(np.isfinite(Y), axis=1)
         if np.any(ok):
             _check_single_input(U[ok], j, rec.joint_names[j])
@@ -551,14 +580,24 @@ class DetectedEstimator:
             return FrequencyResponse(e['freqs'][ok], P, [name_in], names_out, meta={
                 'design': 'detected_chirp', 'blocks': e['blocks'],
                 'dropped': {'lines': int(lost.size), 'freq_hz': lost.tolist()}})
-        keep = _strong_lines(e['suu'][None, :])
-        P = (e['syu'][keep] / e['suu'][keep, None]).T[:, None, :]
+        steady = _steady(e)
+        first = steady.first
+        Uj, Y = np.concatenate(e['u'])[first:], np.concatenate(e['y'])[first:]
+        n = Uj.shape[0]
+        suu = np.sum(np.abs(Uj) ** 2, axis=0)
+        keep = _strong_lines(suu[None, :])
+        P = (np.einsum('qfo,qf->fo', Y, np.conj(Uj))[keep] / suu[keep, None]).T[:, None, :]
         var = None
-        if e['n'] >= 2:
-            var = (e['m2'][keep] / (e['n'] - 1) / e['n']).T[:, None, :]
+        if n >= 2:
+            var = (np.var(Y / Uj[:, :, None], axis=0, ddof=1)[keep] / n).T[:, None, :]
+        det_y = np.concatenate(e['det_y'])[first:]
+        dist = distortion_lines(det_y, np.arange(1, det_y.shape[1] + 1), e['bins'][keep],
+                                e['f0'], names_out, units=e['units'])
         return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
-            'design': 'detected_multisine', 'periods': e['n'],
-            'transient_periods': e['skip'], 'blocks': e['blocks'],
+            'design': 'detected_multisine', 'periods': n, 'distortion': dist.to_dict(),
+            'units': {'input': e['input_unit'], 'outputs': e['units']},
+            'transient_periods': e['skip'] + first, 'transient': steady.describe(),
+            'blocks': e['blocks'],
             'dropped': {'periods': len(e['dropped']), 'times': [list(d) for d in e['dropped']]}})
 
 
@@ -571,7 +610,8 @@ def _check_enough(e: dict[str, Any]) -> None:
                         where=f'detected chirp of {name}',
                         hint='the sweep must be recorded without gaps somewhere')
         return
-    check_remaining(e['n'], len(e['dropped']), need=MIN_PERIODS,
+    n = sum(u.shape[0] for u in e['u']) - (_steady(e).first if e['u'] else 0)
+    check_remaining(n, len(e['dropped']), need=MIN_PERIODS,
                     what='multisine periods', where=f'detected multisine of {name}',
                     dropped_at=e['dropped'], hint='record more periods')
 
@@ -583,23 +623,29 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
     Compute the period spectra of a detected multisine.
 
     Excited bins, the period spectra U, Y (n_q, F, n) of a detected multisine's periods
-    without missing samples, the transient periods skipped and the (t_start, t_end) of the
-    periods dropped for missing samples.
+    without missing samples, the periods skipped, the (t_start, t_end) of the periods
+    dropped for missing samples, Y at every detection line (n_q, L, n) and the input at the
+    lines up to the band (n_q, B) (for the transient test, :func:`_steady`).
 
-    The first period is skipped as start-up transient when there are at least three, unless
-    the excitation was already running (``used_until``: the end [s] of the periods an
-    earlier block used; periods starting before it are skipped instead, so overlapping
-    blocks never count a period twice). Only whole periods inside the data are used.
+    When the excitation was already running (``used_until``: the end [s] of the periods an
+    earlier block used) the periods starting before it are skipped, so overlapping blocks
+    never count a period twice, and the whole periods between it and this block's first are
+    taken. Only whole periods inside the data are used; the start-up transient is left out
+    later, on all periods of the excitation (:func:`_steady`).
     """
     info = seg.info
     i0 = int(info.get('start', rec.index_of(seg.t_start)))
     n_per = int(info['period_samples'])
     n_q = max(0, min(int(info['periods']), (rec.t.size - i0) // n_per))
+    if used_until is not None:
+        # the excitation goes on: the whole periods between the earlier block's last one and
+        # this block's (flush with its end) are periods of the same run, not a transient
+        back = min(i0 // n_per, max(0, int(np.floor(
+            (rec.t[0] + i0 / rec.fs - used_until) * rec.fs / n_per + 1e-6))))
+        i0, n_q = i0 - back * n_per, n_q + back
     starts = rec.t[0] + (i0 + np.arange(n_q) * n_per) / rec.fs
-    if used_until is None:
-        skip = 1 if n_q >= 3 else 0
-    else:
-        skip = int(np.count_nonzero(starts < used_until - 0.5 / rec.fs))
+    skip = 0 if used_until is None else int(np.count_nonzero(
+        starts < used_until - 0.5 / rec.fs))
     bins = np.asarray(info['harmonics'])
     j = int(info['input'])
     gone = missing_rows(rec.effort[:, j], rec.velocity)
@@ -610,13 +656,48 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
             dropped.append((float(starts[q]), float(starts[q] + n_per / rec.fs)))
         else:
             use.append(a)
+    # detection lines: every line up to three times the band (a cubic's products); the
+    # transient test looks at the input's lines up to the band
+    lines = np.arange(1, min(3 * int(np.max(bins)), (n_per - 1) // 2) + 1)
+    band = np.arange(1, min(int(np.max(bins)), (n_per - 1) // 2) + 1)
     if not use:
         empty = np.empty((0, bins.size, rec.velocity.shape[1]), dtype=complex)
-        return bins, empty, empty, skip, dropped
+        return bins, empty, empty, skip, dropped, empty[:, :0], empty[:, :0, 0]
     idx = np.asarray(use)[:, None] + np.arange(n_per)         # (n_used, n_per)
     U = periodic_spectra(rec.effort[idx], bins, axis=1)
     Y = periodic_spectra(rec.velocity[idx], bins, axis=1)
-    return bins, U, Y, skip, dropped
+    return (bins, U, Y, skip, dropped, periodic_spectra(rec.velocity[idx], lines, axis=1),
+            periodic_spectra(rec.effort[idx, int(info['input'])], band, axis=1))
+
+
+def _steady(e: dict[str, Any]) -> SteadyState:
+    """Transient test on every kept period of an excitation: its input and the outputs."""
+    if 'steady' not in e:
+        u = np.concatenate(e['det_u'])
+        y = np.concatenate(e['det_y'])[:, :u.shape[1]]
+        e['steady'] = steady_periods(np.concatenate([u[:, :, None], y], axis=2))
+    return e['steady']
+
+
+def _output_columns(rec: Recording) -> list[int]:
+    """Columns that are outputs: all joints, or the outputs of an import layout."""
+    layout = rec.meta.get('layout') if isinstance(rec.meta, dict) else None
+    if not isinstance(layout, dict):
+        return list(range(len(rec.joint_names)))
+    names = {c['name'] for c in layout.get('outputs', [])}
+    return [k for k, n in enumerate(rec.joint_names) if n in names]
+
+
+def _output_units(rec: Recording) -> list[str]:
+    """Velocity unit per joint as an import map states it (rad/s where it says nothing)."""
+    units = rec.meta.get('units', {}) if isinstance(rec.meta, dict) else {}
+    return [units.get(n, {}).get('velocity', 'rad/s') for n in rec.joint_names]
+
+
+def _input_unit(rec: Recording, j: int) -> str:
+    """Effort unit of joint j as an import map states it (N m where it says nothing)."""
+    units = rec.meta.get('units', {}) if isinstance(rec.meta, dict) else {}
+    return units.get(rec.joint_names[j], {}).get('effort', 'N m')
 
 
 def _strong_lines(uj: np.ndarray) -> np.ndarray:

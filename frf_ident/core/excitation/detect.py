@@ -40,6 +40,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from frf_ident.core.excitation.sweep_law import (fit_sweep_laws, half_cycles, LAW_MARGIN,
+                                                 robust_law_fit)
 from frf_ident.errors import EstimationError
 import numpy as np
 from scipy import fft as sfft
@@ -400,16 +402,23 @@ def _lag_correlation(x: np.ndarray, max_lag: int, valid: np.ndarray | None = Non
     return acf / np.maximum(norm, 1e-300)
 
 
-def _period_candidate(r: np.ndarray, min_correlation: float) -> tuple[int, float]:
-    """Smallest lag whose autocorrelation peak is close to the best one (0 if none)."""
+def _period_candidate(r: np.ndarray, min_correlation: float, max_lag: int
+                      ) -> tuple[int, float]:
+    """
+    Smallest lag up to ``max_lag`` whose autocorrelation peak is close to the best one.
+
+    ``r`` may reach a few lags beyond ``max_lag`` so that a peak at ``max_lag`` itself (a
+    record of exactly two periods) is a peak. Returns (0, best value) if there is none.
+    """
     below = np.flatnonzero(r < 0)
     if below.size == 0:
         return 0, float('nan')
     lag_min = int(below[0])
     peaks, props = signal.find_peaks(r[lag_min:], height=min_correlation)
+    inside = peaks + lag_min <= max_lag
+    peaks, heights = peaks[inside], props['peak_heights'][inside]
     if peaks.size == 0:
-        return 0, float(np.max(r[lag_min:])) if r.size > lag_min else float('nan')
-    heights = props['peak_heights']
+        return 0, float(np.max(r[lag_min:max_lag + 1])) if max_lag >= lag_min else float('nan')
     first = int(np.flatnonzero(heights >= heights.max() - 0.05 * (1.0 - min_correlation))[0])
     lag = int(peaks[first]) + lag_min
     return lag, float(r[lag])
@@ -426,7 +435,7 @@ def _moving_mean(v: np.ndarray, w: int) -> np.ndarray:
 def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
                     ) -> tuple[int, int]:
     """
-    (start, n_periods) of the longest run in which x[n + P] matches x[n].
+    (start, n_periods) of the whole periods in the longest run where x[n + P] matches x[n].
 
     rho[n] = mean (x[n+P] - x[n])^2 over P/16 samples, divided by the mean of x[n]^2 + x[n+P]^2
     over a whole period (constant for a periodic signal): 0 for identical periods, about 1
@@ -454,9 +463,24 @@ def _periodic_block(x: np.ndarray, p: int, valid: np.ndarray | None = None
     a, b = _longest_run(ok)
     if b <= a:
         return 0, 0
+    smooth_a = a
     a, b = _refine_edges(e2, a, b, w, floor=1e-12 * float(np.mean(x ** 2)))
-    n_periods = min((b - a + p + w // 2) // p, (x.size - a) // p)
-    return int(a), int(n_periods)
+    # the data repeat on [a, b + P): the whole periods are taken flush with its end, so
+    # what is left over lies at the start, where a start-up transient decays (a block from
+    # a dropped the last steady period and kept a part of the transient instead). A start
+    # found at a change of variance is exact to a few samples; one that is not may be up to
+    # half a smoothing window late
+    slack = 3 if a != smooth_a else w // 2
+    if a <= slack:                 # periodic from the first sample: the grid starts there
+        n_periods = min((b - a + p + slack) // p, (x.size - a) // p)
+        return int(a), int(n_periods)
+    # a start-up transient before a: the whole periods are taken flush with the end of the
+    # data that repeat, [a, b + P), so what is left over lies at the start, where the
+    # transient decays (a block from a dropped the last steady period and kept a part of the
+    # transient instead)
+    end = min(b + p, x.size)
+    n_periods = min((end - a + slack) // p, end // p)
+    return int(end - n_periods * p), int(n_periods)
 
 
 def _compare_past_gaps(x: np.ndarray, valid: np.ndarray, p: int, e2: np.ndarray,
@@ -600,9 +624,16 @@ def detect_multisine(x: np.ndarray, fs: float, *, min_periods: int = 2,
     max_lag = n // max(2, int(min_periods))
     if max_lag < 4:
         raise EstimationError(f'signal of {n} samples too short for {min_periods=} periods')
-    r = _lag_correlation(x, max_lag, valid)
-    p, corr = _period_candidate(r, min_correlation)
+    r = _lag_correlation(x, min(n - 1, max_lag + 2), valid)
+    p, corr = _period_candidate(r, min_correlation, max_lag)
     if p == 0:
+        if np.isfinite(corr) and corr >= min_correlation:
+            raise EstimationError(
+                f'no whole periods: the autocorrelation rises to {corr:.2f} towards the '
+                f'longest lag searched ({max_lag} samples, {max_lag / fs:.4g} s = 1/'
+                f'{max(2, int(min_periods))} of the {n} samples) without a peak; a period, if '
+                f'any, is longer: expected at least {min_periods=} whole periods in the data '
+                f'(give a longer --t-range or --multisine-period)')
         best = f'{corr:.2f}' if np.isfinite(corr) else 'none'
         raise EstimationError(f'no periodicity: best autocorrelation {best} beyond the main '
                               f'lobe is below {min_correlation=} (lags up to {max_lag} samples)')
@@ -758,53 +789,6 @@ def _refine_period(x: np.ndarray, p: int, reach: int = 2) -> int:
 
 # --------------------------------------------------------------------------- chirp
 
-def _half_cycles(x: np.ndarray, fs: float, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """
-    Zero crossings with hysteresis ``h``: returns (mid times, frequencies) of half cycles.
-
-    The state flips only when x passes +h or -h; each flip is dated by the linearly
-    interpolated zero crossing just before it, so noise below h causes no chatter.
-    """
-    state = np.where(x > h, 1.0, np.where(x < -h, -1.0, np.nan))
-    idx = np.flatnonzero(np.isfinite(state))
-    if idx.size < 3:
-        return np.zeros(0), np.zeros(0)
-    s = state[idx]
-    flips = idx[1:][s[1:] != s[:-1]]  # first sample beyond the threshold after a flip
-    sign_change = np.flatnonzero(np.signbit(x[1:]) != np.signbit(x[:-1]))  # between i, i+1
-    if flips.size < 3 or sign_change.size == 0:
-        return np.zeros(0), np.zeros(0)
-    j = np.searchsorted(sign_change, flips, side='left') - 1
-    j = np.clip(j, 0, None)
-    i = sign_change[j]
-    frac = x[i] / (x[i] - x[i + 1])
-    tz = (i + frac) / fs
-    d = np.diff(tz)
-    good = d > 0
-    mid = 0.5 * (tz[1:] + tz[:-1])
-    return mid[good], 0.5 / d[good]
-
-
-def _robust_loglinear(t: np.ndarray, f: np.ndarray, iterations: int = 5
-                      ) -> tuple[float, float, np.ndarray, float]:
-    """Fit ln f = a0 t + a1 with MAD-based outlier rejection. Returns a0, a1, inliers, std."""
-    lf = np.log(f)
-    keep = np.ones(t.size, dtype=bool)
-    a0 = a1 = 0.0
-    for _ in range(iterations):
-        if keep.sum() < 3:
-            break
-        a0, a1 = np.polyfit(t[keep], lf[keep], 1)
-        res = lf - (a0 * t + a1)
-        mad = 1.4826 * np.median(np.abs(res[keep]))
-        new = np.abs(res) <= max(4.0 * mad, 0.01)
-        if np.array_equal(new, keep):
-            break
-        keep = new
-    res = lf[keep] - (a0 * t[keep] + a1)
-    return float(a0), float(a1), keep, float(np.std(res)) if res.size else float('inf')
-
-
 def _onset(x: np.ndarray, model: np.ndarray, lo: int, hi: int, fit: slice,
            valid: np.ndarray) -> int:
     """
@@ -899,11 +883,18 @@ def detect_chirp(x: np.ndarray, fs: float, *, min_ratio: float = 1.5,
     h = hysteresis * float(np.quantile(np.abs(x), 0.99))
     if h <= 0:
         raise EstimationError('no chirp: the signal is constant')
-    t_mid, f = _half_cycles(x, fs, h)
+    t_mid, f = half_cycles(x, fs, h)
     if t_mid.size < 10:
         raise EstimationError(f'no chirp: only {t_mid.size} half cycles above the '
                               f'hysteresis level {h:.3g}')
-    a0, a1, keep, scatter = _robust_loglinear(t_mid, f)
+    best, other = fit_sweep_laws(t_mid, f)
+    if best.law != 'exponential' and best.scatter < LAW_MARGIN * other.scatter \
+            and best.inliers >= min_inliers:
+        raise EstimationError(
+            f'a {best.describe()}, not an exponential chirp f(t) = exp(a0 t + a1) (eq. 16; '
+            f'that law leaves {100 * other.scatter:.2g} % frequency scatter): the chirp '
+            f'estimator needs the exponential law')
+    a0, a1, keep, scatter = robust_law_fit(t_mid, f, 'exponential')
     frac = float(keep.mean())
     tk = t_mid[keep]
     ratio = float(np.exp(abs(a0) * (tk[-1] - tk[0]))) if tk.size > 1 else 1.0
