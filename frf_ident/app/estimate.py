@@ -203,7 +203,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
 
 
 def report_distortion(estimates: dict, out: Path, *, title: str,
-                      progress: Callable[[str], None] = say) -> Path | None:
+                      progress: Progress | None = None) -> Path | None:
     """
     Print one distortion line per output and write distortion.png (multisine estimates).
 
@@ -217,8 +217,8 @@ def report_distortion(estimates: dict, out: Path, *, title: str,
         Output directory.
     title : str
         Figure title (the bag's name).
-    progress : callable
-        Called with one line per output.
+    progress : callable, optional
+        Called with one line per output (None: silent).
 
     Returns
     -------
@@ -228,6 +228,7 @@ def report_distortion(estimates: dict, out: Path, *, title: str,
     """
     from frf_ident.core.estimation.distortion import DistortionLines
     from frf_ident.report.distortion import distortion_figure
+    progress = sink(progress)
     found = [(k, DistortionLines.from_dict(v.meta['distortion'])) for k, v in estimates.items()
              if isinstance(v.meta.get('distortion'), dict)]
     for k, levels in found:
