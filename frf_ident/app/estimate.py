@@ -30,7 +30,7 @@ from frf_ident.app.outdir import clear_outputs
 from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'read_estimates']
+__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'estimate_columns', 'read_estimates']
 
 #: the files :func:`estimate_bag` writes into its output directory
 OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png')
@@ -194,6 +194,41 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
              f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
     return estimates
+
+
+def estimate_columns(bag: Path, out: Path, progress: Callable[[str], None], **options
+                     ) -> dict:
+    """
+    Estimate one bag of a campaign (:func:`estimate_bag`) and return its summary columns.
+
+    The task :func:`frf_ident.app.campaign.run_campaign` maps over the bags: the estimates
+    stay in ``out`` (frf.json ...), the worker returns only these few numbers.
+
+    Parameters
+    ----------
+    bag : Path
+        Bag directory or .mcap file.
+    out : Path
+        Its output folder.
+    progress : callable
+        Called with one line per step (the bag's log).
+    **options
+        The keyword arguments of :func:`estimate_bag`.
+
+    Returns
+    -------
+    dict
+        ``primary`` (estimate in frf.json), ``estimates`` (all, joined by +), ``channels``
+        (outputs x inputs), ``lines`` and ``f_min_hz`` / ``f_max_hz`` of the primary estimate.
+
+    """
+    est = estimate_bag(bag, out, progress=progress, **options)
+    key = json.loads((out / 'frf.json').read_text())['estimate']
+    frf = est[key]
+    return {'primary': key, 'estimates': '+'.join(sorted(est)),
+            'channels': f'{frf.noutputs}x{frf.ninputs}', 'lines': int(frf.freq_hz.size),
+            'f_min_hz': round(float(frf.freq_hz.min()), 4),
+            'f_max_hz': round(float(frf.freq_hz.max()), 4)}
 
 
 def dropped_text(d: dict) -> str:

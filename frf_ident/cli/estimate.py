@@ -11,13 +11,13 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""`frf-ident estimate BAG --out DIR`: offline FRF estimation from a bag."""
+"""`frf-ident estimate BAG [BAG ...] --out DIR`: offline FRF estimation from bags."""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from frf_ident.cli.options import add_output_arguments
+from frf_ident.cli.options import add_campaign_arguments, add_output_arguments, run_many
 
 __all__ = ['HELP', 'add_arguments', 'excitation_options', 'run']
 
@@ -35,8 +35,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     """
     from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
-    p.add_argument('bag', type=Path)
+    p.add_argument('bag', nargs='+',
+                   help='a bag; or several, a folder of bags, a glob or @LIST.txt (one per '
+                        'line): a campaign, one folder per bag under --out plus summary.csv, '
+                        'summary.json, index.html')
     add_output_arguments(p)
+    add_campaign_arguments(p)
     p.add_argument('--joints', help='comma list of joint names to analyse (default: all)')
     p.add_argument('--t-range', type=float, nargs=2, metavar=('START', 'END'),
                    help='analyse only this time range [s]')
@@ -103,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        Exit status: 0 (success).
+        Exit status: 0 (success; a campaign: every bag), 1 (a campaign: some bag failed).
 
     Raises
     ------
@@ -112,12 +116,18 @@ def run(args: argparse.Namespace) -> int:
         the bag cannot be read or does not support an estimate (one line naming it).
 
     """
-    from frf_ident.app.estimate import estimate_bag, OUTPUT_FILES
+    from functools import partial
+
+    from frf_ident.app.campaign import is_campaign
+    from frf_ident.app.estimate import estimate_bag, estimate_columns, OUTPUT_FILES
     from frf_ident.app.outdir import check_out
-    out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
-    estimate_bag(args.bag, out, joints=joints,
-                 t_range=tuple(args.t_range) if args.t_range else None, primary=args.primary,
-                 options=excitation_options(args), stream=args.stream,
-                 max_memory_mb=args.max_memory, window_s=args.window)
+    kw = dict(joints=joints, t_range=tuple(args.t_range) if args.t_range else None,
+              primary=args.primary, options=excitation_options(args), stream=args.stream,
+              max_memory_mb=args.max_memory, window_s=args.window)
+    if is_campaign(args.bag):
+        return run_many(args, args.bag, partial(estimate_columns, **kw), OUTPUT_FILES,
+                        'estimate')
+    out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
+    estimate_bag(Path(args.bag[0]), out, **kw)
     return 0
