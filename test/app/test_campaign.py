@@ -91,11 +91,12 @@ def test_two_processes_write_the_serial_bytes(bags, serial, tmp_path):
 def test_dask_local_cluster_writes_the_serial_bytes(bags, serial, tmp_path):
     pytest.importorskip('distributed')
     out = tmp_path / 'out'
-    lst = tmp_path / 'bags.txt'
-    lst.write_text('# the three runs\n' + ''.join(f'{bags}/run_{k}\n' for k in (1, 2, 3)))
+    lst = bags / 'two.txt'     # entries relative to the list file
+    lst.write_text('# two of the runs\nrun_3\n\nrun_1\n')
     assert main(['estimate', f'@{lst}', '--out', str(out), '--scheduler', 'local',
                  '--jobs', '2']) == 0
-    assert _outputs(out) == _outputs(serial)
+    ref = _outputs(serial)
+    assert _outputs(out) == {k: v for k, v in ref.items() if k[0] in ('run_1', 'run_3')}
     assert json.loads((out / 'summary.json').read_text())['route'] == 'dask local=2'
 
 
@@ -104,8 +105,9 @@ def test_a_broken_bag_fails_in_its_row_and_the_others_go_on(bags, tmp_path, caps
     broken.mkdir()
     (broken / 'metadata.yaml').write_text('rosbag2_bagfile_information: {version: 9}\n')
     out = tmp_path / 'out'
+    # serial: the same row wrapper runs in every worker, without the cost of starting one
     assert main(['estimate', str(bags / 'run_1'), str(broken), str(bags / 'run_2'),
-                 '--out', str(out), '--jobs', '2']) == 1
+                 '--out', str(out), '--jobs', '1']) == 1
     rows = _rows(out)
     assert [r['status'] for r in rows] == ['ok', 'refused', 'ok'], rows
     assert rows[1]['error'] and '\n' not in rows[1]['error'] and rows[1]['primary'] == ''
