@@ -18,8 +18,11 @@ The diagonal channel P_ii of a flexible joint falls as 1/(J s) (rigid body), dip
 antiresonance (the link oscillating against a held motor) and peaks at the resonance. Both are
 read from the accelerance |2 pi f P_ii(f)| (torque -> acceleration), which is flat where the
 robot moves as a rigid body, so its largest interior value is the resonance and its smallest
-value below that the antiresonance. Each extremum is refined by a parabola through the
-line and its two neighbours in (f, dB), so the result falls between analysis lines.
+value below that the antiresonance. Each extremum is refined between the analysis lines by
+the vertex of a parabola through the line and its two neighbours: in 1/|A|^2 at the
+resonance and in |A|^2 at the antiresonance, which near a lightly damped pole or zero pair
+are quadratic in f ((f - f0)^2 + (zeta f0)^2), so the vertex is the mode's frequency even
+when the lines are as far apart as the mode is wide.
 """
 from __future__ import annotations
 
@@ -48,15 +51,13 @@ class AxisModes:
     antiresonance_hz: np.ndarray
 
 
-def _refine(f: np.ndarray, db: np.ndarray, k: int) -> float:
-    """Vertex of the parabola through lines k-1, k, k+1 in (f, dB); f[k] at an edge."""
-    if k <= 0 or k >= f.size - 1:
-        return float('nan')
-    x, y = f[k - 1:k + 2], db[k - 1:k + 2]
-    a, b, _ = np.polyfit(x - f[k], y, 2)
-    if not a != 0.0:
+def _refine(f: np.ndarray, y: np.ndarray, k: int) -> float:
+    """Vertex of the parabola through lines k-1, k, k+1 of y (a minimum at k), in f."""
+    x, v = f[k - 1:k + 2] - f[k], y[k - 1:k + 2]
+    a, b, _ = np.polyfit(x, v / v[1], 2)
+    if not a > 0.0:
         return float(f[k])
-    return float(f[k] + np.clip(-b / (2 * a), x[0] - f[k], x[2] - f[k]))
+    return float(f[k] + np.clip(-b / (2 * a), x[0], x[2]))
 
 
 def axis_modes(freq_hz: np.ndarray, response: np.ndarray) -> AxisModes:
@@ -84,12 +85,12 @@ def axis_modes(freq_hz: np.ndarray, response: np.ndarray) -> AxisModes:
     for i in range(n):
         ok = np.isfinite(p[i, i]) & (f_all > 0)
         f = f_all[ok]
-        db = 20 * np.log10(np.abs(2 * np.pi * f * p[i, i][ok]) + 1e-300)
-        if f.size < 3:
+        power = np.abs(2 * np.pi * f * p[i, i][ok]) ** 2
+        if f.size < 3 or not np.all(power > 0):
             continue
-        k = int(np.argmax(db[1:-1])) + 1
-        res[i] = _refine(f, db, k)
+        k = int(np.argmax(power[1:-1])) + 1
+        res[i] = _refine(f, 1.0 / power, k)
         if k >= 2:
-            j = int(np.argmin(db[1:k])) + 1
-            anti[i] = _refine(f, db, j)
+            j = int(np.argmin(power[1:k])) + 1
+            anti[i] = _refine(f, power, j)
     return AxisModes(resonance_hz=res, antiresonance_hz=anti)
