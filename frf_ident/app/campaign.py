@@ -391,7 +391,8 @@ def _row_line(r: CampaignRow) -> str:
 
 
 def run_campaign(task: Callable[..., dict], inputs: Sequence[Path], out: str | os.PathLike,
-                 *, outputs: Sequence[str], overwrite: bool = False, jobs: int | None = None,
+                 *, outputs: Sequence[str], root_outputs: Sequence[str] = (),
+                 overwrite: bool = False, jobs: int | None = None,
                  scheduler: str | None = None, title: str = 'campaign',
                  progress: Callable[[str], None] = say, bar: bool | None = None
                  ) -> CampaignResult:
@@ -410,6 +411,9 @@ def run_campaign(task: Callable[..., dict], inputs: Sequence[Path], out: str | o
     outputs : sequence of str
         The files ``task`` writes into an input's folder: every folder is checked before any
         work (:func:`~frf_ident.app.outdir.check_out`).
+    root_outputs : sequence of str
+        Further files the caller writes into ``out`` afterwards (checked with
+        :data:`CAMPAIGN_FILES`).
     overwrite : bool
         Replace the outputs of an earlier run (``--overwrite``).
     jobs : int, optional
@@ -443,7 +447,7 @@ def run_campaign(task: Callable[..., dict], inputs: Sequence[Path], out: str | o
     jobs = (os.cpu_count() or 1) if jobs is None else jobs
     if jobs < 1:
         raise FrfIdentInputError(f'--jobs {jobs}: expected a number of workers >= 1')
-    root = check_out(out, outputs=CAMPAIGN_FILES, overwrite=overwrite)
+    root = check_out(out, outputs=CAMPAIGN_FILES + tuple(root_outputs), overwrite=overwrite)
     names = campaign_dirs(inputs)
     for n in names:
         check_out(root / n, outputs=outputs, overwrite=overwrite)

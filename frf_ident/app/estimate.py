@@ -29,6 +29,7 @@ from frf_ident.app.console import say
 from frf_ident.app.outdir import clear_outputs
 from frf_ident.app.stream_estimate import DEFAULT_BLOCK_S
 from frf_ident.errors import FrfIdentInputError
+import numpy as np
 
 __all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'estimate_columns', 'read_estimates']
 
@@ -219,16 +220,35 @@ def estimate_columns(bag: Path, out: Path, progress: Callable[[str], None], **op
     -------
     dict
         ``primary`` (estimate in frf.json), ``estimates`` (all, joined by +), ``channels``
-        (outputs x inputs), ``lines`` and ``f_min_hz`` / ``f_max_hz`` of the primary estimate.
+        (outputs x inputs), ``lines`` and ``f_min_hz`` / ``f_max_hz`` of the primary
+        estimate; per excited joint J (an input that is also an output) its
+        ``resonance_hz_J`` and ``antiresonance_hz_J``
+        (:func:`~frf_ident.core.estimation.resonance.axis_modes`); per joint
+        ``pose_rad_J`` when the bag was recorded at a pose (``identify --poses``).
 
     """
+    from frf_ident.core.estimation.resonance import axis_modes
     est = estimate_bag(bag, out, progress=progress, **options)
     key = json.loads((out / 'frf.json').read_text())['estimate']
     frf = est[key]
-    return {'primary': key, 'estimates': '+'.join(sorted(est)),
+    cols = {'primary': key, 'estimates': '+'.join(sorted(est)),
             'channels': f'{frf.noutputs}x{frf.ninputs}', 'lines': int(frf.freq_hz.size),
             'f_min_hz': round(float(frf.freq_hz.min()), 4),
             'f_max_hz': round(float(frf.freq_hz.max()), 4)}
+    # channels are named 'tau_m/joint_1' -> 'dq_m/joint_1': the joint is the last part
+    ins = [c.rsplit('/', 1)[-1] for c in frf.inputs]
+    outs = [c.rsplit('/', 1)[-1] for c in frf.outputs]
+    pose = json.loads((out / 'summary.json').read_text())['experiment'].get('pose_rad')
+    if pose is not None and len(pose) == len(outs):
+        cols.update({f'pose_rad_{j}': q for j, q in zip(outs, pose)})
+    own = [j for j in ins if j in outs]
+    if own:
+        sq = frf.response[np.ix_([outs.index(j) for j in own], [ins.index(j) for j in own])]
+        modes = axis_modes(frf.freq_hz, sq)
+        for j, r, a in zip(own, modes.resonance_hz, modes.antiresonance_hz):
+            cols[f'resonance_hz_{j}'] = round(float(r), 4)
+            cols[f'antiresonance_hz_{j}'] = round(float(a), 4)
+    return cols
 
 
 def dropped_text(d: dict) -> str:

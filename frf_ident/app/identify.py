@@ -182,6 +182,7 @@ def run_identify_poses(model_path: str | Path | None, poses_path: str | Path, co
                                        'pose_rad': q, 'urdf': kin.source}, model=pose)
         for s in rec.segments:
             s.info['pose_rad'] = q
+        rec.meta['summary']['pose_rad'] = q      # estimate's summary.json carries it on
         runs.append((q, side, rec))
     out.mkdir(parents=True)
     index = []

@@ -38,7 +38,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('bag', nargs='+',
                    help='a bag; or several, a folder of bags, a glob or @LIST.txt (one per '
                         'line): a campaign, one folder per bag under --out plus summary.csv, '
-                        'summary.json, index.html')
+                        'summary.json, index.html and the FRF map (frf_map.csv, frf_map.png: '
+                        'resonance and antiresonance per axis and pose)')
     add_output_arguments(p)
     add_campaign_arguments(p)
     p.add_argument('--joints', help='comma list of joint names to analyse (default: all)')
@@ -120,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
 
     from frf_ident.app.campaign import is_campaign
     from frf_ident.app.estimate import estimate_bag, estimate_columns, OUTPUT_FILES
+    from frf_ident.app.frf_map import MAP_FILES, write_frf_map
     from frf_ident.app.outdir import check_out
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
     kw = dict(joints=joints, t_range=tuple(args.t_range) if args.t_range else None,
@@ -127,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
               max_memory_mb=args.max_memory, window_s=args.window)
     if is_campaign(args.bag):
         return run_many(args, args.bag, partial(estimate_columns, **kw), OUTPUT_FILES,
-                        'estimate')
+                        'estimate', after=write_frf_map, after_outputs=MAP_FILES)
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     estimate_bag(Path(args.bag[0]), out, **kw)
     return 0

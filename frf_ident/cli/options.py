@@ -60,7 +60,8 @@ def add_campaign_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[..., dict],
-             outputs: Sequence[str], title: str) -> int:
+             outputs: Sequence[str], title: str, *, after: Any = None,
+             after_outputs: Sequence[str] = ()) -> int:
     """
     Run a command's task over several inputs (a campaign) and return the exit status.
 
@@ -76,6 +77,11 @@ def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[...,
         The files the task writes into an input's folder.
     title : str
         The command's name.
+    after : callable, optional
+        Called with the :class:`~frf_ident.app.campaign.CampaignResult`; returns the paths
+        it wrote into ``--out`` (the FRF map of an estimate campaign).
+    after_outputs : sequence of str
+        The files ``after`` may write into ``--out`` (checked before any work).
 
     Returns
     -------
@@ -84,9 +90,12 @@ def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[...,
 
     """
     from frf_ident.app.campaign import expand_inputs, run_campaign
+    from frf_ident.app.console import say
     res = run_campaign(task, expand_inputs(specs), args.out, outputs=outputs,
-                       overwrite=args.overwrite, jobs=args.jobs, scheduler=args.scheduler,
-                       title=title)
+                       root_outputs=after_outputs, overwrite=args.overwrite, jobs=args.jobs,
+                       scheduler=args.scheduler, title=title)
+    for path in (after(res) if after is not None else []):
+        say(f'wrote {path}')
     return 1 if res.n_failed else 0
 
 
