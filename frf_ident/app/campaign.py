@@ -78,7 +78,7 @@ class CampaignRow:
 
     Attributes
     ----------
-    input : str
+    source : str
         The input path as expanded.
     out : str
         Its output folder, relative to the campaign's ``out``.
@@ -96,7 +96,7 @@ class CampaignRow:
 
     """
 
-    input: str
+    source: str
     out: str
     status: str
     seconds: float
@@ -135,7 +135,7 @@ class CampaignResult:
 
     @property
     def n_failed(self) -> int:
-        """Number of inputs that did not succeed."""
+        """Return the number of inputs that did not succeed."""
         return sum(not r.ok for r in self.rows)
 
 
@@ -298,7 +298,7 @@ def run_one(task: Callable[..., dict], inp: str, out_dir: str, name: str) -> Cam
             status, error, cols = FAILED, f'{type(exc).__name__}: {exc}', {}
         log.write(f'{status} after {time.perf_counter() - t0:.2f} s\n')
     error = ' '.join(error.split())
-    return CampaignRow(input=inp, out=name, status=status,
+    return CampaignRow(source=inp, out=name, status=status,
                        seconds=round(time.perf_counter() - t0, 3),
                        peak_rss_mb=round(_peak_rss_mb(), 1), error=error,
                        columns=dict(cols or {}))
@@ -492,10 +492,10 @@ def summary_columns(rows: Sequence[CampaignRow]) -> list[str]:
     Returns
     -------
     list of str
-        input, out, status, seconds, peak_rss_mb, error, then every task column once.
+        source, out, status, seconds, peak_rss_mb, error, then every task column once.
 
     """
-    cols = ['input', 'out', 'status', 'seconds', 'peak_rss_mb', 'error']
+    cols = ['source', 'out', 'status', 'seconds', 'peak_rss_mb', 'error']
     for r in rows:
         cols += [c for c in r.columns if c not in cols]
     return cols

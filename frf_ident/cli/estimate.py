@@ -124,9 +124,9 @@ def run(args: argparse.Namespace) -> int:
     from frf_ident.app.frf_map import MAP_FILES, write_frf_map
     from frf_ident.app.outdir import check_out
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
-    kw = dict(joints=joints, t_range=tuple(args.t_range) if args.t_range else None,
-              primary=args.primary, options=excitation_options(args), stream=args.stream,
-              max_memory_mb=args.max_memory, window_s=args.window)
+    kw = {'joints': joints, 't_range': tuple(args.t_range) if args.t_range else None,
+          'primary': args.primary, 'options': excitation_options(args), 'stream': args.stream,
+          'max_memory_mb': args.max_memory, 'window_s': args.window}
     if is_campaign(args.bag):
         return run_many(args, args.bag, partial(estimate_columns, **kw), OUTPUT_FILES,
                         'estimate', after=write_frf_map, after_outputs=MAP_FILES)

@@ -89,7 +89,7 @@ class Kinematics:
         import pinocchio as pin
         self._pin, self.model, self.source = pin, model, source
         self.data = model.createData()
-        urdf_joints = [n for n in model.names[1:]]
+        urdf_joints = list(model.names[1:])
         missing = [j for j in joint_names if j not in urdf_joints]
         extra = [j for j in urdf_joints if j not in joint_names]
         if missing or extra or model.nq != len(urdf_joints):

@@ -83,6 +83,7 @@ def write_campaign_page(path: Path, *, title: str, columns: Sequence[str],
         f'<!DOCTYPE html><html><head><meta charset="utf-8"><title>frf-ident {html.escape(title)}'
         f' campaign</title><style>{_STYLE}</style></head><body>'
         f'<h1>frf-ident {html.escape(title)}: {len(rows)} inputs, {bad} not ok</h1>'
-        f'<p>ran on {html.escape(route)} in {seconds:.1f} s; each input\'s outputs and log.txt '
-        f'are in its folder.</p><table><tr>{head}</tr>{"".join(body)}</table></body></html>\n')
+        f'<p>ran on {html.escape(route)} in {seconds:.1f} s; the outputs and log.txt of each '
+        f'input are in its folder.</p><table><tr>{head}</tr>{"".join(body)}</table>'
+        f'</body></html>\n')
     return path

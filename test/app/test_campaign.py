@@ -62,7 +62,7 @@ def _rows(out: Path) -> list[dict]:
 
 @pytest.fixture(scope='module')
 def serial(bags, tmp_path_factory):
-    """The serial reference run over the folder of bags."""
+    """Run the serial reference over the folder of bags."""
     out = tmp_path_factory.mktemp('serial') / 'out'
     assert main(['estimate', str(bags), '--out', str(out), '--jobs', '1']) == 0
     return out
