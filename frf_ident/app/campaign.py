@@ -44,6 +44,7 @@ import multiprocessing
 import os
 from pathlib import Path
 import resource
+import socket
 import time
 import traceback
 from typing import Any, Callable, Sequence
@@ -86,6 +87,10 @@ class CampaignRow:
         ``ok``, ``refused`` (an input error: the message says what to fix) or ``failed``.
     seconds : float
         Wall time of the task [s].
+    cpu_seconds : float
+        CPU time of the task in its process [s] (wall time on a loaded machine says little).
+    worker : str
+        ``host:pid`` of the process that ran it.
     peak_rss_mb : float
         Peak resident memory of the process that ran it [MiB] (the whole worker, so the
         largest input it has run so far).
@@ -100,6 +105,8 @@ class CampaignRow:
     out: str
     status: str
     seconds: float
+    cpu_seconds: float
+    worker: str
     peak_rss_mb: float
     error: str = ''
     columns: dict[str, Any] = field(default_factory=dict)
@@ -284,7 +291,7 @@ def run_one(task: Callable[..., dict], inp: str, out_dir: str, name: str) -> Cam
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     with open(out / LOG_NAME, 'w') as log:
         def progress(line: str) -> None:
             log.write(line + '\n')
@@ -300,6 +307,8 @@ def run_one(task: Callable[..., dict], inp: str, out_dir: str, name: str) -> Cam
     error = ' '.join(error.split())
     return CampaignRow(source=inp, out=name, status=status,
                        seconds=round(time.perf_counter() - t0, 3),
+                       cpu_seconds=round(time.process_time() - c0, 3),
+                       worker=f'{socket.gethostname()}:{os.getpid()}',
                        peak_rss_mb=round(_peak_rss_mb(), 1), error=error,
                        columns=dict(cols or {}))
 
@@ -492,10 +501,12 @@ def summary_columns(rows: Sequence[CampaignRow]) -> list[str]:
     Returns
     -------
     list of str
-        source, out, status, seconds, peak_rss_mb, error, then every task column once.
+        source, out, status, seconds, cpu_seconds, worker, peak_rss_mb, error, then every
+        task column once.
 
     """
-    cols = ['source', 'out', 'status', 'seconds', 'peak_rss_mb', 'error']
+    cols = ['source', 'out', 'status', 'seconds', 'cpu_seconds', 'worker', 'peak_rss_mb',
+            'error']
     for r in rows:
         cols += [c for c in r.columns if c not in cols]
     return cols
