@@ -150,9 +150,10 @@ def is_campaign(specs: Sequence[str | os.PathLike[str]]) -> bool:
     """
     Return whether the inputs name a campaign rather than one input.
 
-    One existing path that is a bag (a directory with metadata.yaml) or a file is one
-    input: the command keeps its single-input behaviour (outputs directly in ``--out``).
-    Several paths, a folder of bags, a glob or an ``@list.txt`` is a campaign.
+    Several inputs, an ``@list.txt``, a glob pattern or a folder holding bags (but not a bag
+    itself) is a campaign. Anything else alone (a bag, a file, a path that does not exist
+    or a folder without bags) is one input: the command keeps its single-input behaviour
+    and its messages (outputs directly in ``--out``).
 
     Parameters
     ----------
@@ -167,8 +168,12 @@ def is_campaign(specs: Sequence[str | os.PathLike[str]]) -> bool:
     """
     if len(specs) != 1:
         return True
-    p = Path(os.fspath(specs[0]))
-    return not (p.is_file() or (p / 'metadata.yaml').is_file())
+    text = os.fspath(specs[0])
+    if text.startswith('@') or glob.has_magic(text):
+        return True
+    p = Path(text)
+    return (p.is_dir() and not (p / 'metadata.yaml').is_file()
+            and any(_is_input(q) for q in p.iterdir()))
 
 
 def _is_input(p: Path) -> bool:
