@@ -29,6 +29,7 @@ setup(
          glob(os.path.join('launch', '*launch.[pxy][yma]*'))),
         (os.path.join('share', package_name, 'config'),
          glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))),
+        (os.path.join('share', package_name, 'urdf'), glob(os.path.join('urdf', '*.urdf'))),
     ],
     python_requires='>=3.10',
     install_requires=[
@@ -54,6 +55,10 @@ setup(
                  'flake8-quotes==3.3.2', 'pydocstyle==6.3.0',
                  'wheel'],   # test/ros installs the package into a prefix as colcon would
         'control': ['control>=0.10'],
+        # campaigns on a Dask distributed cluster (`--scheduler`); the default needs neither
+        'cluster': ['dask>=2023.1', 'distributed>=2023.1'],
+        # pose-dependent link side of the simulated robot from its URDF (frf_ident.io.kinematics)
+        'kinematics': ['pin>=2.7'],
     },
     zip_safe=True,
     maintainer='frf_ident developers',

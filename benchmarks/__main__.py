@@ -388,6 +388,13 @@ def bench_nodes() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('campaign')
+def bench_campaign() -> list[tuple[str, str, str, str]]:
+    """Estimate 8 demo bags serially and with --jobs 2: speed-up, identity, peak memory."""
+    from benchmarks.campaign import rows
+    return rows()
+
+
 @section('replay')
 def bench_replay() -> list[tuple[str, str, str, str]]:
     """Run the longer hypothesis search over bag imperfections."""

@@ -14,7 +14,11 @@
 """
 Application functions used by both the CLI and the nodes: one module per job.
 
-- :mod:`frf_ident.app.identify` — run the experiments in closed loop, record a bag
+- :mod:`frf_ident.app.identify` — run the experiments in closed loop, record a bag (or one
+  per pose, the model linearised at each from the robot's URDF)
+- :mod:`frf_ident.app.campaign` — one application function mapped over many inputs (serial,
+  worker processes or Dask), one summary table
+- :mod:`frf_ident.app.frf_map` — resonance and antiresonance per axis against the pose
 - :mod:`frf_ident.app.estimate` — estimate FRFs from a bag (in memory, or streamed by
   :mod:`frf_ident.app.stream_estimate` when it would not fit)
 - :mod:`frf_ident.app.import_data` — measured CSV/MAT tables to bags

@@ -37,7 +37,7 @@ from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['OUTPUT_FILES', 'diagnose', 'has_experiments', 'load_data']
+__all__ = ['OUTPUT_FILES', 'diagnose', 'diagnose_columns', 'has_experiments', 'load_data']
 
 #: the files :func:`diagnose` writes into its output directory (report.html's figures: an
 #: experiments diagnosis draws bode.png and residual.png, a time-series one residual.png)
@@ -196,6 +196,47 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     (out / 'report.json').write_text(json.dumps(report, indent=1))
     write_diagnosis_report(out, report, res, rec, mode, data)
     return {'report': report, 'result': res, 'mode': mode, 'recording': rec}
+
+
+def diagnose_columns(data: Path, out: Path, progress: Progress | None, *,
+                     model_path: Path, **options) -> dict[str, Any]:
+    """
+    Diagnose one record of a campaign (:func:`diagnose`) and return its summary columns.
+
+    The task :func:`frf_ident.app.campaign.run_campaign` maps over the records: the report
+    stays in ``out``, the worker returns only these few values.
+
+    Parameters
+    ----------
+    data : Path
+        The record (bag, or CSV/MAT with ``map_path`` in ``options``).
+    out : Path
+        Its output folder.
+    progress : callable
+        Called with one line per step (the record's log).
+    model_path : Path
+        Nominal model file.
+    **options
+        Further keyword arguments of :func:`diagnose` (``map_path``, ``validate``).
+
+    Returns
+    -------
+    dict
+        ``mode``, ``effects`` (names and axes, most likely first), ``unexplained`` (axes),
+        and the held-out ``baseline_frf_error_db``, ``extended_frf_error_db``,
+        ``baseline_time_nrmse``, ``extended_time_nrmse``.
+
+    """
+    res = diagnose(data, model_path, out, progress=progress, **options)
+    rep = res['report']
+    m = rep['metrics']
+    return {'mode': res['mode'],
+            'effects': ' '.join(f"{e['name']}@{e['axis']}" for e in rep['effects']) or 'none',
+            'unexplained': ' '.join(u['axis'] for u in rep['unexplained']) or 'none',
+            'baseline_frf_error_db': m['baseline']['frf_error_db'],
+            'extended_frf_error_db': m['extended']['frf_error_db'],
+            'baseline_time_nrmse': m['baseline']['time_nrmse'],
+            'extended_time_nrmse': m['extended']['time_nrmse']}
 
 
 def _rejected(c) -> dict[str, Any]:

@@ -26,9 +26,10 @@ from frf_ident.app import stream_estimate
 from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
+import numpy as np
 
-__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'frf_units', 'read_estimates',
-           'report_distortion']
+__all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'estimate_columns', 'frf_units',
+           'read_estimates', 'report_distortion']
 
 #: the files :func:`estimate_bag` writes into its output directory
 OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png', 'distortion.png')
@@ -262,6 +263,60 @@ def frf_units(frf) -> str:
         return ''
     out, inp = u['outputs'][0], u.get('input', '')
     return f' re 1 ({out})/({inp})' if out and inp else ''
+
+
+def estimate_columns(bag: Path, out: Path, progress: Progress | None, **options
+                     ) -> dict:
+    """
+    Estimate one bag of a campaign (:func:`estimate_bag`) and return its summary columns.
+
+    The task :func:`frf_ident.app.campaign.run_campaign` maps over the bags: the estimates
+    stay in ``out`` (frf.json ...), the worker returns only these few numbers.
+
+    Parameters
+    ----------
+    bag : Path
+        Bag directory or .mcap file.
+    out : Path
+        Its output folder.
+    progress : callable
+        Called with one line per step (the bag's log).
+    **options
+        The keyword arguments of :func:`estimate_bag`.
+
+    Returns
+    -------
+    dict
+        ``primary`` (estimate in frf.json), ``estimates`` (all, joined by +), ``channels``
+        (outputs x inputs), ``lines`` and ``f_min_hz`` / ``f_max_hz`` of the primary
+        estimate; per excited joint J (an input that is also an output) its
+        ``resonance_hz_J`` and ``antiresonance_hz_J``
+        (:func:`~frf_ident.core.estimation.resonance.axis_modes`); per joint
+        ``pose_rad_J`` when the bag was recorded at a pose (``identify --poses``).
+
+    """
+    from frf_ident.core.estimation.resonance import axis_modes
+    est = estimate_bag(bag, out, progress=progress, **options)
+    key = json.loads((out / 'frf.json').read_text())['estimate']
+    frf = est[key]
+    cols = {'primary': key, 'estimates': '+'.join(sorted(est)),
+            'channels': f'{frf.noutputs}x{frf.ninputs}', 'lines': int(frf.freq_hz.size),
+            'f_min_hz': round(float(frf.freq_hz.min()), 4),
+            'f_max_hz': round(float(frf.freq_hz.max()), 4)}
+    # channels are named 'tau_m/joint_1' -> 'dq_m/joint_1': the joint is the last part
+    ins = [c.rsplit('/', 1)[-1] for c in frf.inputs]
+    outs = [c.rsplit('/', 1)[-1] for c in frf.outputs]
+    pose = json.loads((out / 'summary.json').read_text())['experiment'].get('pose_rad')
+    if pose is not None and len(pose) == len(outs):
+        cols.update({f'pose_rad_{j}': q for j, q in zip(outs, pose)})
+    own = [j for j in ins if j in outs]
+    if own:
+        sq = frf.response[np.ix_([outs.index(j) for j in own], [ins.index(j) for j in own])]
+        modes = axis_modes(frf.freq_hz, sq)
+        for j, r, a in zip(own, modes.resonance_hz, modes.antiresonance_hz):
+            cols[f'resonance_hz_{j}'] = round(float(r), 4)
+            cols[f'antiresonance_hz_{j}'] = round(float(a), 4)
+    return cols
 
 
 def dropped_text(d: dict) -> str:

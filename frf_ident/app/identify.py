@@ -11,16 +11,30 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Identification on a plant: load the model and plant, run the experiments, record a bag."""
+"""
+Identification on a plant: load the model and plant, run the experiments, record a bag.
+
+:func:`run_identify` runs at the model's one operating point; :func:`run_identify_poses` runs
+the same procedures at each pose of a poses file on the model's simulation linearised there
+(link inertia, coupling and gravity from the robot's URDF), one bag per pose.
+"""
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
 
 from frf_ident.app.outdir import check_out
-from frf_ident.core.progress import Progress
+from frf_ident.core.progress import Progress, sink
+from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['run_identify']
+__all__ = ['POSE_INDEX', 'run_identify', 'run_identify_poses']
+
+#: the file :func:`run_identify_poses` writes beside its bags: pose, bag and link side of each
+POSE_INDEX = 'poses.json'
+
+#: share of a torque limit the gravity load of a pose may take: the rest is the experiment's
+#: (the plans are checked at 0.95 of the limit with the gravity load included, as identify does)
+POSE_GRAVITY_SHARE = 0.95
 
 
 def run_identify(model_path: str | Path | None, plant_spec: str | None, config: Any,
@@ -66,3 +80,119 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
                              meta={'model': model, 'plant': plant_spec or 'model'}, model=robot)
     write_recording(rec, out)
     return rec
+
+
+def _check_poses(kin, robot, poses, bound_rad: float, path) -> list:
+    """Evaluate every pose; refuse one outside the joint limits or that gravity overloads."""
+    import numpy as np
+    sides = []
+    limit = robot.torque_limits()
+    for k, q in enumerate(poses):
+        q = np.asarray(q)
+        out = (q - bound_rad < kin.lower) | (q + bound_rad > kin.upper)
+        if out.any():
+            j = int(np.argmax(out))
+            raise FrfIdentInputError(
+                f'{path}: poses[{k}] {kin.joint_names[j]} = {q[j]:.3f} rad: with the travel of '
+                f'+-{bound_rad:.3f} rad it leaves the URDF limits [{kin.lower[j]:g}, '
+                f'{kin.upper[j]:g}] rad')
+        side = kin.at(q)
+        over = np.abs(side.gravity) >= POSE_GRAVITY_SHARE * limit
+        if over.any():
+            j = int(np.argmax(over))
+            raise FrfIdentInputError(
+                f'{path}: poses[{k}] needs {side.gravity[j]:.0f} N m on {kin.joint_names[j]} '
+                f'to hold against gravity, beyond {POSE_GRAVITY_SHARE:g} of its limit '
+                f'{limit[j]:g} N m')
+        sides.append(side)
+    return sides
+
+
+def run_identify_poses(model_path: str | Path | None, poses_path: str | Path, config: Any,
+                       out: str | Path, *, urdf: str | Path | None = None,
+                       progress: Progress | None = None) -> list[dict]:
+    """
+    Run the identification experiments at every pose of a poses file, one bag per pose.
+
+    At each pose the model's simulation takes the link side of that pose from the URDF
+    (:func:`~frf_ident.core.model.operating_point.robot_at_pose`: inertia matrix, gravity
+    load and gradient), so resonances move with the pose as on the robot. Positions in a
+    bag are relative to its pose; every segment descriptor and the bag's metadata carry
+    the pose (``pose_rad``). Every pose is checked before anything runs, and every pose
+    runs before a bag is written.
+
+    Parameters
+    ----------
+    model_path : str or Path or None
+        Model file (drive side, controller), or None for the embedded 3-axis model.
+    poses_path : str or Path
+        Poses file (:func:`~frf_ident.io.kinematics.read_poses`).
+    config : IdentificationConfig
+        The procedures, the same at every pose.
+    out : str or Path
+        Folder to create: ``pose_00``, ``pose_01``... bags and :data:`POSE_INDEX`.
+    urdf : str or Path, optional
+        The robot's URDF; default the poses file's ``urdf``, else the demo robot's.
+    progress : callable, optional
+        Called with one line per pose.
+
+    Returns
+    -------
+    list of dict
+        Per pose: ``bag``, ``pose_rad``, ``inertia`` [kg m^2], ``gravity`` [N m] (as in
+        :data:`POSE_INDEX`).
+
+    Raises
+    ------
+    FrfIdentInputError
+        ``out`` exists, the model, poses file or URDF is invalid, a pose (with the
+        multisine's travel) leaves the URDF's position limits or its gravity load reaches
+        0.95 of a torque limit, or a plan is refused (:class:`~frf_ident.errors.SafetyError`).
+
+    """
+    import json
+
+    import numpy as np
+
+    from frf_ident.bag import write_recording
+    from frf_ident.core.model.operating_point import robot_at_pose
+    from frf_ident.core.model.schema import robot_to_dict
+    from frf_ident.core.simulation.plant import FlexibleJointPlant
+    from frf_ident.core.simulation.runner import run_identification
+    from frf_ident.io.kinematics import load_kinematics, read_poses
+    from frf_ident.io.model_file import load_model
+    progress = sink(progress)
+    out = check_out(out, outputs=None, overwrite=False)
+    _, robot, ctrl = load_model(model_path)
+    poses, file_urdf = read_poses(poses_path, robot.n_axes)
+    kin = load_kinematics(urdf or file_urdf, robot.joint_names)
+    ms = config.multisine
+    bound = np.deg2rad(ms.position_bound_deg) if ms is not None else 0.0
+    sides = _check_poses(kin, robot, poses, bound, poses_path)
+    runs = []
+    for k, side in enumerate(sides):
+        # every pose runs before any bag is written: a plan refused at a later pose leaves
+        # nothing behind (a pose's record is a few MB)
+        pose = robot_at_pose(robot, side.inertia, side.gravity, side.gravity_gradient)
+        q = [round(float(v), 9) for v in side.q]
+        progress(f'pose {k + 1}/{len(sides)} q = {np.round(side.q, 3).tolist()} rad: link '
+                 f'inertia diag {np.round(np.diag(side.inertia), 1).tolist()} kg m^2, gravity '
+                 f'{np.round(side.gravity, 1).tolist()} N m')
+        rec = run_identification(FlexibleJointPlant(pose), ctrl.copy(), config,
+                                 meta={'model': robot_to_dict(pose, ctrl), 'plant': 'model',
+                                       'pose_rad': q, 'urdf': kin.source}, model=pose)
+        for s in rec.segments:
+            s.info['pose_rad'] = q
+        rec.meta['summary']['pose_rad'] = q      # estimate's summary.json carries it on
+        runs.append((q, side, rec))
+    out.mkdir(parents=True)
+    index = []
+    for k, (q, side, rec) in enumerate(runs):
+        name = f'pose_{k:02d}'
+        write_recording(rec, out / name)
+        index.append({'bag': name, 'pose_rad': q, 'inertia': side.inertia.round(6).tolist(),
+                      'gravity': side.gravity.round(6).tolist()})
+    (out / POSE_INDEX).write_text(json.dumps({'joints': kin.joint_names, 'urdf': kin.source,
+                                              'poses': index}, indent=1))
+    progress(f'{len(index)} bags and {POSE_INDEX} in {out}')
+    return index

@@ -11,13 +11,13 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""`frf-ident diagnose DATA --model M.yaml --out DIR`: what the nominal model gets wrong."""
+"""`frf-ident diagnose DATA [DATA ...] --model M.yaml --out DIR`: what the model gets wrong."""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from frf_ident.cli.options import add_output_arguments
+from frf_ident.cli.options import add_campaign_arguments, add_output_arguments, run_many
 
 __all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
@@ -37,9 +37,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The subcommand's parser; the arguments are added to it.
 
     """
-    p.add_argument('data', type=Path, help='bag (identify or robot), or CSV/MAT with --map')
+    p.add_argument('data', nargs='+',
+                   help='bag (identify or robot), or CSV/MAT with --map; or several, a folder, '
+                        'a glob or @LIST.txt: a campaign, one folder per record under --out '
+                        'plus summary.csv, summary.json, index.html')
     p.add_argument('--model', type=Path, required=True, help='nominal model file')
     add_output_arguments(p)
+    add_campaign_arguments(p)
     p.add_argument('--map', type=Path, default=None,
                    help='import map for CSV/MAT data (config/map_*.yaml), used for --validate too')
     p.add_argument('--validate', type=Path, action='extend', nargs='+', default=[],
@@ -61,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        Exit status: 0 (success).
+        Exit status: 0 (success; a campaign: every record), 1 (a campaign: some failed).
 
     Raises
     ------
@@ -70,13 +74,20 @@ def run(args: argparse.Namespace) -> int:
         run's outputs without ``--overwrite`` (one line naming it).
 
     """
+    from functools import partial
+
+    from frf_ident.app.campaign import is_campaign
     from frf_ident.app.console import say
-    from frf_ident.app.diagnose import diagnose, OUTPUT_FILES
+    from frf_ident.app.diagnose import diagnose, diagnose_columns, OUTPUT_FILES
     from frf_ident.app.diagnosis_summary import diagnosis_summary
     from frf_ident.app.outdir import check_out
+    if is_campaign(args.data):
+        task = partial(diagnose_columns, model_path=args.model, map_path=args.map,
+                       validate=args.validate)
+        return run_many(args, args.data, task, OUTPUT_FILES, 'diagnose')
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
-    res = diagnose(args.data, args.model, out, map_path=args.map, validate=args.validate,
-                   progress=say)
+    res = diagnose(Path(args.data[0]), args.model, out, map_path=args.map,
+                   validate=args.validate, progress=say)
     for line in diagnosis_summary(res['report'], out):
         say(line)
     return 0

@@ -11,13 +11,13 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""`frf-ident estimate BAG --out DIR`: offline FRF estimation from a bag."""
+"""`frf-ident estimate BAG [BAG ...] --out DIR`: offline FRF estimation from bags."""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from frf_ident.cli.options import add_output_arguments
+from frf_ident.cli.options import add_campaign_arguments, add_output_arguments, run_many
 
 __all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'excitation_options', 'run']
 
@@ -37,9 +37,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     """
     from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S
-    p.add_argument('bag', type=Path, nargs='+',
-                   help='the bag; several bags with --compare-levels')
+    p.add_argument('bag', nargs='+',
+                   help='a bag; or several, a folder of bags, a glob or @LIST.txt (one per '
+                        'line): a campaign, one folder per bag under --out plus summary.csv, '
+                        'summary.json, index.html and the FRF map (frf_map.csv, frf_map.png: '
+                        'resonance and antiresonance per axis and pose); with --compare-levels '
+                        'two or more records of the same channels at different levels')
     add_output_arguments(p)
+    add_campaign_arguments(p)
     p.add_argument('--joints', help='comma list of joint names to analyse (default: all)')
     p.add_argument('--t-range', type=float, nargs=2, metavar=('START', 'END'),
                    help='analyse only this time range [s]')
@@ -113,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        Exit status: 0 (success).
+        Exit status: 0 (success; a campaign: every bag), 1 (a campaign: some bag failed).
 
     Raises
     ------
@@ -122,25 +127,28 @@ def run(args: argparse.Namespace) -> int:
         the bag cannot be read or does not support an estimate (one line naming it).
 
     """
+    from functools import partial
+
+    from frf_ident.app.campaign import is_campaign
     from frf_ident.app.console import say
-    from frf_ident.app.estimate import estimate_bag, OUTPUT_FILES
+    from frf_ident.app.estimate import estimate_bag, estimate_columns, OUTPUT_FILES
+    from frf_ident.app.frf_map import MAP_FILES, write_frf_map
     from frf_ident.app.outdir import check_out
     from frf_ident.errors import FrfIdentInputError
-    if len(args.bag) > 1 and not args.compare_levels:
-        raise FrfIdentInputError(f'{len(args.bag)} bags given; expected one, or several with '
-                                 f'--compare-levels')
     if args.compare_levels and len(args.bag) < 2:
         raise FrfIdentInputError('--compare-levels: expected two or more bags')
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
-    kwargs = {'joints': joints, 't_range': tuple(args.t_range) if args.t_range else None,
-              'primary': args.primary, 'options': excitation_options(args),
-              'stream': args.stream, 'max_memory_mb': args.max_memory, 'window_s': args.window,
-              'progress': say}
+    kw = {'joints': joints, 't_range': tuple(args.t_range) if args.t_range else None,
+          'primary': args.primary, 'options': excitation_options(args), 'stream': args.stream,
+          'max_memory_mb': args.max_memory, 'window_s': args.window}
     if args.compare_levels:
         from frf_ident.app.compare_levels import compare_bags, COMPARE_FILES
         out = check_out(args.out, outputs=COMPARE_FILES, overwrite=args.overwrite)
-        compare_bags(args.bag, out, **kwargs)
+        compare_bags([Path(b) for b in args.bag], out, progress=say, **kw)
         return 0
+    if is_campaign(args.bag):
+        return run_many(args, args.bag, partial(estimate_columns, **kw), OUTPUT_FILES,
+                        'estimate', after=write_frf_map, after_outputs=MAP_FILES)
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
-    estimate_bag(args.bag[0], out, **kwargs)
+    estimate_bag(Path(args.bag[0]), out, progress=say, **kw)
     return 0

@@ -40,7 +40,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--model', type=Path, help='model file (default: the embedded 3-axis model)')
     p.add_argument('--plant', help='plant plug-in "package.module:Class" (default: the '
                                    "model's own simulation)")
-    p.add_argument('--out', required=True, help='bag directory to create (must not exist)')
+    p.add_argument('--out', required=True, help='bag directory to create (must not exist); '
+                                                'with --poses a folder of bags, one per pose')
+    p.add_argument('--poses', type=Path, default=None, metavar='FILE',
+                   help='YAML "poses: [[q1, q2, q3], ...]" [rad] (optional "urdf: FILE"): run '
+                        'the procedures at each pose on the simulation linearised there (link '
+                        'inertia, coupling, gravity from the URDF; needs the [kinematics] '
+                        'extra), one bag per pose plus poses.json')
+    p.add_argument('--urdf', type=Path, default=None,
+                   help="with --poses: the robot's URDF (default: the poses file's, else "
+                        "the demo robot's urdf/robot_3axis_demo.urdf)")
     p.add_argument('--procedures', default='multisine,chirp',
                    help='comma list of multisine, chirp (default both)')
     p.add_argument('--amplitude-ratio', type=float, default=ms.amplitude_ratio,
@@ -113,7 +122,16 @@ def run(args: argparse.Namespace) -> int:
 
     """
     from frf_ident.app.console import say
-    from frf_ident.app.identify import run_identify
+    from frf_ident.app.identify import run_identify, run_identify_poses
+    if args.poses is not None:
+        if args.plant:
+            raise FrfIdentInputError(f'--plant {args.plant} with --poses: poses linearise the '
+                                     f"model's own simulation; leave out --plant")
+        run_identify_poses(args.model, args.poses, identification_config(args), args.out,
+                           urdf=args.urdf, progress=say)
+        return 0
+    if args.urdf is not None:
+        raise FrfIdentInputError(f'--urdf {args.urdf}: only used with --poses FILE')
     rec = run_identify(args.model, args.plant, identification_config(args), args.out,
                        progress=say)
     s = rec.meta['summary']

@@ -11,13 +11,14 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Options several commands share: the output directory, the experiment design."""
+"""Options several commands share: the output directory, campaigns, the experiment design."""
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import Any, Callable, Sequence
 
-__all__ = ['add_design_arguments', 'add_output_arguments']
+__all__ = ['add_campaign_arguments', 'add_design_arguments', 'add_output_arguments',
+           'run_many']
 
 
 def add_output_arguments(p: argparse.ArgumentParser) -> None:
@@ -36,6 +37,66 @@ def add_output_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--overwrite', action='store_true',
                    help="replace this command's outputs of an earlier run in --out (its own "
                         'files only; nothing else is touched)')
+
+
+def add_campaign_arguments(p: argparse.ArgumentParser) -> None:
+    """
+    Add ``--jobs N`` and ``--scheduler ADDRESS`` (commands that take several inputs).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+
+    """
+    p.add_argument('--jobs', type=int, default=None, metavar='N',
+                   help='with several inputs: worker processes, one input each (default: all '
+                        'cores; 1: one after the other in this process)')
+    p.add_argument('--scheduler', default=None, metavar='ADDRESS',
+                   help='with several inputs: run them on a Dask cluster, its scheduler '
+                        'address (tcp://HOST:8786; inputs and --out on a file system the '
+                        'workers share), or "local" for a LocalCluster of --jobs workers on '
+                        '127.0.0.1 (needs the [cluster] extra)')
+
+
+def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[..., dict],
+             outputs: Sequence[str], title: str, *, after: Any = None,
+             after_outputs: Sequence[str] = ()) -> int:
+    """
+    Run a command's task over several inputs (a campaign) and return the exit status.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments with ``out``, ``overwrite``, ``jobs``, ``scheduler``.
+    specs : sequence
+        The inputs as given (paths, folders, globs, ``@list.txt``).
+    task : callable
+        Picklable ``task(input, out_dir, progress) -> dict`` (the command's app function).
+    outputs : sequence of str
+        The files the task writes into an input's folder.
+    title : str
+        The command's name.
+    after : callable, optional
+        Called with the :class:`~frf_ident.app.campaign.CampaignResult`; returns the paths
+        it wrote into ``--out`` (the FRF map of an estimate campaign).
+    after_outputs : sequence of str
+        The files ``after`` may write into ``--out`` (checked before any work).
+
+    Returns
+    -------
+    int
+        0 when every input succeeded, 1 when some did not (their rows say why).
+
+    """
+    from frf_ident.app.campaign import expand_inputs, run_campaign
+    from frf_ident.app.console import say
+    res = run_campaign(task, expand_inputs(specs), args.out, outputs=outputs,
+                       root_outputs=after_outputs, overwrite=args.overwrite, jobs=args.jobs,
+                       scheduler=args.scheduler, title=title)
+    for path in (after(res) if after is not None else []):
+        say(f'wrote {path}')
+    return 1 if res.n_failed else 0
 
 
 def add_design_arguments(p: argparse.ArgumentParser, ms: Any, ch: Any) -> None:

@@ -79,6 +79,8 @@ def test_compare_levels_shows_mode_shift_and_odd_distortion_growth(bags, tmp_pat
     assert sum('level6 dq_m/j: |P| change' in line for line in text.splitlines()) == 1
 
 
-def test_several_bags_without_compare_levels_refused(bags, tmp_path, capsys):
-    assert main(['estimate', *map(str, bags), '--out', str(tmp_path / 'x')]) == 2
-    assert '--compare-levels' in capsys.readouterr().err
+def test_several_bags_without_compare_levels_are_a_campaign(bags, tmp_path):
+    """Several bags without --compare-levels are estimated one by one (issue 42), not compared."""
+    out = tmp_path / 'x'
+    assert main(['estimate', *map(str, bags), '--out', str(out), '--jobs', '1']) == 0
+    assert (out / 'summary.csv').is_file() and not (out / 'compare.json').exists()

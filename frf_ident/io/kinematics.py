@@ -1,0 +1,215 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The link side of a robot from its URDF, evaluated with pinocchio: plain arrays for the core.
+
+:func:`load_kinematics` reads a URDF (pinocchio's ``buildModelFromUrdf``; the ``pin`` package,
+extra ``[kinematics]``) and :meth:`Kinematics.at` gives, at joint positions q [rad], the
+joint-space inertia matrix M(q) (CRBA), the generalized gravity g(q) [N m] (the torque that
+holds the pose) and its gradient dg/dq [N m/rad]: the numbers
+:func:`frf_ident.core.model.operating_point.robot_at_pose` linearises the simulated link side
+with. Inertial parameters in the URDF are link-side values (gear ratios already applied), as
+in the model file. :func:`read_poses` reads a poses file for ``frf-ident identify --poses``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import os
+from pathlib import Path
+from typing import Any, Sequence
+
+from frf_ident.errors import FrfIdentInputError
+from frf_ident.io.share import share_dir
+from frf_ident.io.yamlio import read_yaml_file
+import numpy as np
+
+__all__ = ['DEMO_URDF', 'Kinematics', 'LinkSide', 'load_kinematics', 'read_poses']
+
+#: urdf/ file of the project's 3-axis demo robot (config/model_3axis.yaml at its home pose)
+DEMO_URDF = 'robot_3axis_demo.urdf'
+
+
+@dataclass(frozen=True)
+class LinkSide:
+    """
+    The link side at one pose: what the linearised simulation needs.
+
+    Attributes
+    ----------
+    q : ndarray, shape (n,)
+        The pose [rad], in the order of ``joint_names``.
+    inertia : ndarray, shape (n, n)
+        Joint-space inertia matrix M(q) [kg m^2], symmetric.
+    gravity : ndarray, shape (n,)
+        Generalized gravity g(q) [N m]: the link-side torque that holds the pose.
+    gravity_gradient : ndarray, shape (n, n)
+        dg/dq at q [N m/rad]: row i is how axis i's load changes with each joint.
+
+    """
+
+    q: np.ndarray
+    inertia: np.ndarray
+    gravity: np.ndarray
+    gravity_gradient: np.ndarray
+
+
+class Kinematics:
+    """
+    A URDF's joints, limits and link-side dynamics, evaluated with pinocchio.
+
+    Parameters
+    ----------
+    model : pinocchio.Model
+        The model built from the URDF.
+    source : str
+        Where it came from (for messages).
+    joint_names : sequence of str
+        The axes in the caller's order; each must be a one-DOF joint of the URDF, and
+        together they must be all of its joints.
+
+    Raises
+    ------
+    FrfIdentInputError
+        A name is not a joint of the URDF, or the URDF has joints not named.
+
+    """
+
+    def __init__(self, model: Any, source: str, joint_names: Sequence[str]) -> None:
+        import pinocchio as pin
+        self._pin, self.model, self.source = pin, model, source
+        self.data = model.createData()
+        urdf_joints = list(model.names[1:])
+        missing = [j for j in joint_names if j not in urdf_joints]
+        extra = [j for j in urdf_joints if j not in joint_names]
+        if missing or extra or model.nq != len(urdf_joints):
+            raise FrfIdentInputError(
+                f'{source}: joints {urdf_joints} (one revolute DOF each expected) do not '
+                f'match the model axes {list(joint_names)}')
+        self.joint_names = list(joint_names)
+        # model joint k (1-based) holds configuration index idx_qs; map our order onto it
+        self.index = np.array([model.joints[model.getJointId(j)].idx_q for j in joint_names])
+        self.lower = np.asarray(model.lowerPositionLimit)[self.index]
+        self.upper = np.asarray(model.upperPositionLimit)[self.index]
+        self.effort = np.asarray(model.effortLimit)[self.index]
+
+    def at(self, q: Sequence[float]) -> LinkSide:
+        """
+        Evaluate M(q), g(q) and dg/dq at a pose.
+
+        Parameters
+        ----------
+        q : sequence of float
+            Joint positions [rad] in the order of ``joint_names``.
+
+        Returns
+        -------
+        LinkSide
+            The link side at ``q`` (arrays in ``joint_names`` order).
+
+        """
+        pin = self._pin
+        qs = np.asarray(q, dtype=float)
+        full = np.zeros(self.model.nq)
+        full[self.index] = qs
+        m = pin.crba(self.model, self.data, full)
+        m = np.triu(m) + np.triu(m, 1).T           # CRBA fills the upper triangle
+        g = pin.computeGeneralizedGravity(self.model, self.data, full)
+        dg = pin.computeGeneralizedGravityDerivatives(self.model, self.data, full)
+        ix = np.ix_(self.index, self.index)
+        return LinkSide(q=qs, inertia=np.array(m)[ix], gravity=np.array(g)[self.index],
+                        gravity_gradient=np.array(dg)[ix])
+
+
+def load_kinematics(path: str | os.PathLike[str] | None,
+                    joint_names: Sequence[str]) -> Kinematics:
+    """
+    Read a URDF with pinocchio.
+
+    Parameters
+    ----------
+    path : str or path-like or None
+        The URDF; None: the demo robot's (:data:`DEMO_URDF` in the package's urdf/).
+    joint_names : sequence of str
+        The model's axes (the URDF's joints, in the model's order).
+
+    Returns
+    -------
+    Kinematics
+        The robot's link side.
+
+    Raises
+    ------
+    FrfIdentInputError
+        pinocchio is missing, the file is missing or not a URDF pinocchio reads, or its
+        joints are not the model's axes.
+
+    """
+    try:
+        import pinocchio as pin
+    except ImportError as err:
+        raise FrfIdentInputError('poses need pinocchio: pip install "frf_ident[kinematics]" '
+                                 '(the pin package)') from err
+    p = Path(path) if path is not None else share_dir() / 'urdf' / DEMO_URDF
+    if not p.is_file():
+        raise FrfIdentInputError(f'{p}: no such URDF file')
+    try:
+        model = pin.buildModelFromUrdf(str(p))
+    except (RuntimeError, ValueError) as err:
+        raise FrfIdentInputError(f'{p}: not a URDF pinocchio can read '
+                                 f'({" ".join(str(err).split())[:200]})') from err
+    return Kinematics(model, str(p), joint_names)
+
+
+def read_poses(path: str | os.PathLike[str], n_axes: int
+               ) -> tuple[list[list[float]], Path | None]:
+    """
+    Read a poses file: ``poses: [[q1, q2, ...], ...]`` [rad], optional ``urdf: FILE``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The YAML file. ``urdf`` is taken relative to it; absent: the demo robot's URDF.
+    n_axes : int
+        Number of model axes: every pose has one value per axis.
+
+    Returns
+    -------
+    poses : list of list of float
+        The poses [rad], in file order.
+    urdf : Path or None
+        The URDF named in the file, or None.
+
+    Raises
+    ------
+    FrfIdentInputError
+        Unreadable YAML, no ``poses`` list, a pose of the wrong length or not finite numbers.
+
+    """
+    d = read_yaml_file(path, 'poses file')
+    if not isinstance(d, dict) or not isinstance(d.get('poses'), list) or not d['poses']:
+        raise FrfIdentInputError(f'{path}: expected a mapping with poses: a non-empty list of '
+                                 f'joint positions [rad], one list of {n_axes} per pose')
+    poses = []
+    for k, q in enumerate(d['poses']):
+        ok = isinstance(q, list) and len(q) == n_axes and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+            for v in q)
+        if not ok:
+            raise FrfIdentInputError(f'{path}: poses[{k}] = {q!r}; expected {n_axes} finite '
+                                     f'joint positions [rad]')
+        poses.append([float(v) for v in q])
+    urdf = d.get('urdf')
+    if urdf is not None and not isinstance(urdf, str):
+        raise FrfIdentInputError(f'{path}: urdf = {urdf!r}; expected a file name')
+    return poses, (Path(path).parent / urdf if urdf else None)
