@@ -49,8 +49,8 @@ import time
 import traceback
 from typing import Any, Callable, Sequence
 
-from frf_ident.app.console import say
 from frf_ident.app.outdir import check_out
+from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 
 __all__ = ['CAMPAIGN_FILES', 'CampaignResult', 'CampaignRow', 'LOCAL_SCHEDULER',
@@ -408,7 +408,7 @@ def run_campaign(task: Callable[..., dict], inputs: Sequence[Path], out: str | o
                  *, outputs: Sequence[str], root_outputs: Sequence[str] = (),
                  overwrite: bool = False, jobs: int | None = None,
                  scheduler: str | None = None, title: str = 'campaign',
-                 progress: Callable[[str], None] = say, bar: bool | None = None
+                 progress: Progress | None = None, bar: bool | None = None
                  ) -> CampaignResult:
     """
     Run ``task`` on every input into ``out/<name>/`` and write the summary table.
@@ -465,6 +465,7 @@ def run_campaign(task: Callable[..., dict], inputs: Sequence[Path], out: str | o
     names = campaign_dirs(inputs)
     for n in names:
         check_out(root / n, outputs=outputs, overwrite=overwrite)
+    progress = sink(progress)
     t0 = time.perf_counter()
     ex = _executor(min(jobs, max(len(inputs), 1)) if not scheduler else jobs, scheduler)
     progress(f'{len(inputs)} inputs on {ex.route} into {root}')

@@ -93,7 +93,7 @@ def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[...,
     from frf_ident.app.console import say
     res = run_campaign(task, expand_inputs(specs), args.out, outputs=outputs,
                        root_outputs=after_outputs, overwrite=args.overwrite, jobs=args.jobs,
-                       scheduler=args.scheduler, title=title)
+                       scheduler=args.scheduler, title=title, progress=say)
     for path in (after(res) if after is not None else []):
         say(f'wrote {path}')
     return 1 if res.n_failed else 0
