@@ -118,18 +118,23 @@ class ExcitationNode:
                                              mw.qos_transient_local(100))
         self.progress_pub = node.create_publisher(self.String, t['progress_topic'],
                                                   mw.qos_transient_local(10))
+        clock = node.get_clock()
+        # lockstep: staleness in simulation time (the plant's /clock); a robot: wall time
+        sim_now = (lambda: clock.now().nanoseconds) if settings.lockstep else None
         self.session = ExcitationSession(settings, self.joints, robot.dt, torque_limit, self,
-                                         model=(robot, ctrl))
+                                         model=(robot, ctrl), sim_now_ns=sim_now)
         self.dt_ns = self.session.dt_ns
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None
         self.refuse_second_publisher(float(c.param(node, 'discovery_wait_s', 0.5)))
+        # every joint state, in order (also free-running): the torque of each sample is in its
+        # own joint state, and a busy node works through a backlog instead of losing samples
         node.create_subscription(JointState, t['joint_states_topic'], self._on_state,
-                                 c.control_qos(settings.lockstep))
+                                 mw.qos_default(c.DEEP), drain=True)
         Trigger = mw.srv('std_srvs/srv/Trigger')
         node.create_service(Trigger, '/frf/run_multisine', self._on_run_multisine)
         node.create_service(Trigger, '/frf/run_iteration', self._on_run_iteration)
-        # the watchdog runs on wall time: a dead simulated plant also stops /clock
+        # the watchdog thread: sim time from the node clock in lockstep, wall time on a robot
         self._stop = threading.Event()
         self._signalled = threading.Event()      # SIGINT/SIGTERM (spin's stop event)
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
