@@ -41,6 +41,7 @@ import yaml
 from . import timing as tm
 from .cdr import (CdrError, decode_float64_array, decode_float64_array_batch,
                   decode_joint_state_batch, decode_string, JointStateDecoder)
+from .coverage import cut_warning, split_covered
 from .mcapio import (Batch, ChannelInfo, McapFormatError, McapScanner, read_summary, ScanStats,
                      zstd_module)
 from .topics import BagTopics, JOINT_STATE
@@ -779,8 +780,10 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
     if reference is None and excitation is not None:
         reference = excitation.copy()
     _rate_warnings(report, topics.joint_states)
-    if t_range is not None:
-        segments = [s for s in segments if s.t_end >= t[0] and s.t_start <= t[-1]]
+    segments, cut = split_covered(segments, float(t[0]), float(t[-1]), st.dt_ns * 1e-9)
+    if cut:
+        report.warnings.extend(cut_warning(s, float(t[0]), float(t[-1])) for s in cut)
+        meta.setdefault('segments_left_out', []).extend([s.t_start, s.t_end] for s in cut)
     rec = Recording(t=t, joint_names=joint_names, position=cols[:, 0:nj],
                     velocity=cols[:, nj:2 * nj], effort=cols[:, 2 * nj:3 * nj],
                     reference=reference, excitation=excitation, segments=segments, meta=meta)
