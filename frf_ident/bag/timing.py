@@ -196,7 +196,7 @@ class Stamps:
 
 def valid_header_stamps(ns: np.ndarray) -> bool:
     """
-    Header stamps (file order) are usable unless zero ones (unset) follow set ones, or all are equal.
+    Header stamps (file order) are usable unless zero ones follow set ones, or all are equal.
 
     Zero stamps before the first set one are a simulation's sample 0 (stamped t = 0), which
     the lockstep plant re-sends while idle (``ros2 bag record`` keeps every copy; the
