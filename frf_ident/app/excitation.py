@@ -26,11 +26,13 @@ samples ahead of the newest joint state and the controller consumes them in orde
 the plant on a wall timer): on joint state k the reference of sample k+1 goes out, computed from
 the position at k.
 
-Sample pairing of the torque (what the chirp iteration collects and the estimator records):
+Sample pairing of the torque (what the chirp iteration collects; docs/CONTRACT.md §3):
 lockstep -- the simulated plant answers command k with joint state k+1, whose effort is the
 torque applied from t_k, so the torque of sample k is the effort of joint state k+1;
 free-running -- the effort of joint state k is the torque applied at t_k (a robot's measured
 torque; the free-running plant node reports it so), so the torque of sample k is in joint state k.
+Every segment descriptor declares this lag (``effort_lag``); recorders keep joint states as
+published and the bag reader applies it, so every recorder and replay path pairs alike.
 
 Safety: a plan is checked before it runs: its planned position against the position bound,
 and its peak torque, predicted by a dry run on the model from where the robot is (the
@@ -187,9 +189,10 @@ class SessionSettings:
         Wall time [s] the first answer of a run may take (the watchdog waits at least this).
     abort_ramp_s : float, optional
         Wall time [s] within which an abort ramps the reference to zero.
-    position_bound_deg : float, optional
+    plan_bound_deg : float, optional
         Bound [deg] of the planned position around the operating point (checked before a
-        run).
+        run); distinct from ``multisine.position_bound_deg``, the multisine design's bound of
+        its constant-velocity run.
     live_position_bound_deg : float, optional
         Bound [deg] of the measured position around the operating point (a run aborts
         beyond it).
@@ -220,7 +223,7 @@ class SessionSettings:
     stale_samples: int = 50
     start_grace_s: float = 0.2     # the first answer of a run may take this long
     abort_ramp_s: float = 0.01     # ramp to zero reference within this wall time
-    position_bound_deg: float = 4.0        # planned position bound around the operating point
+    plan_bound_deg: float = 4.0            # planned position bound around the operating point
     live_position_bound_deg: float = 8.0   # measured position bound (abort)
     progress_period_s: float = 0.5         # wall s between progress events
     multisine: MultisineConfig = field(default_factory=MultisineConfig)
@@ -231,7 +234,7 @@ class SessionSettings:
         positive = {'stale_s': self.stale_s, 'stale_samples': self.stale_samples,
                     'plant_silent_s': self.plant_silent_s,
                     'start_grace_s': self.start_grace_s, 'abort_ramp_s': self.abort_ramp_s,
-                    'position_bound_deg': self.position_bound_deg,
+                    'plan_bound_deg': self.plan_bound_deg,
                     'live_position_bound_deg': self.live_position_bound_deg,
                     'progress_period_s': self.progress_period_s, 'lookahead': self.lookahead}
         for name, value in positive.items():
@@ -240,9 +243,9 @@ class SessionSettings:
         if self.abort_ramp_s > MAX_ABORT_RAMP_S:
             raise DesignError(f'abort_ramp_s={self.abort_ramp_s} s: an abort must stop the '
                               f'robot within {MAX_ABORT_RAMP_S} s')
-        if self.live_position_bound_deg < self.position_bound_deg:
+        if self.live_position_bound_deg < self.plan_bound_deg:
             raise DesignError(f'live_position_bound_deg={self.live_position_bound_deg} is below '
-                              f'position_bound_deg={self.position_bound_deg}: every run would '
+                              f'plan_bound_deg={self.plan_bound_deg}: every run would '
                               'abort on its planned motion')
 
 
@@ -310,7 +313,7 @@ class ExcitationSession:
         self.lookahead = int(settings.lookahead) if settings.lockstep else 1
         self.lag = 0 if settings.lockstep else 1       # held samples: next_k - k_js allowed
         self.offset = torque_sample_offset(settings.lockstep)
-        self.bound = math.radians(settings.position_bound_deg)
+        self.bound = math.radians(settings.plan_bound_deg)
         self.live_bound = math.radians(settings.live_position_bound_deg)
         self.lock = threading.RLock()
         self.k_js = -1
@@ -404,7 +407,10 @@ class ExcitationSession:
 
     # -- streaming ----------------------------------------------------------------------------
     def _segment(self, ev: SegmentEvent) -> None:
-        text = Segment(ev.k0 * self.dt, ev.k1 * self.dt, ev.info).descriptor(ev.event)
+        # every descriptor says which sample a joint state's effort belongs to: recorders
+        # store joint states as published, the bag reader pairs (frf_ident/bag/pairing.py)
+        info = dict(ev.info, effort_lag=self.offset)
+        text = Segment(ev.k0 * self.dt, ev.k1 * self.dt, info).descriptor(ev.event)
         self.out.experiment(text)
         if self.run is not None and self.run.collect and ev.event == 'start':
             self.run.u[ev.index] = np.full((ev.k1 - ev.k0, self.n), np.nan)
@@ -458,7 +464,8 @@ class ExcitationSession:
         wall = time.monotonic() - run.t0
         st = run.stream
         return dict(event=event, run=run.id, procedure=run.name, samples=st.sent,
-                    of=st.total, fraction=st.sent / max(st.total, 1), wall_s=wall, **extra)
+                    of=st.total, fraction=round(st.sent / max(st.total, 1), 4),
+                    wall_s=round(wall, 3), **extra)
 
     def _finish(self, run: Run) -> None:
         if not self.s.lockstep and np.any(self.last_ref != 0):
@@ -689,6 +696,28 @@ class ExcitationSession:
             return (f'/joint_states stale for {1e3 * age:.0f} ms wall (limit '
                     f'plant_silent_s={1e3 * limit:.0f} ms): is the plant running?')
         return None
+
+    def abort(self, reason: str) -> Optional[Run]:
+        """
+        Abort the running procedure on request (ramp to zero, ``aborted`` events).
+
+        Parameters
+        ----------
+        reason
+            Why (logged, and in the ``aborted`` descriptor and progress event).
+
+        Returns
+        -------
+        Run or None
+            The aborted run, None when no run was running.
+
+        """
+        with self.lock:
+            run = self.run
+            if run is None or run.done.is_set():
+                return None
+            self._abort(reason)
+            return run
 
     def close(self) -> None:
         """Abort a running procedure (shutdown)."""

@@ -44,6 +44,7 @@ from .cdr import (CdrError, decode_float64_array, decode_float64_array_batch,
 from .coverage import cut_warning, split_covered
 from .mcapio import (Batch, ChannelInfo, McapFormatError, McapScanner, read_summary, ScanStats,
                      zstd_module)
+from .pairing import align_effort, effort_lag
 from .topics import BagTopics, JOINT_STATE
 from .writer import FRF_BAG_KEY, grid_times
 
@@ -729,6 +730,7 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
     report; ``gaps`` as in :func:`read_recording`.
     """
     assert col.js.data is not None and col.js.joints is not None
+    lag = effort_lag(segments, bag.name)     # declared by the producer (bag/pairing.py)
     joint_names = list(col.js.joints)
     frf = meta.pop(FRF_BAG_KEY, None)
     stamps, logs, vals = col.js.data.arrays()
@@ -784,8 +786,9 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
     if cut:
         report.warnings.extend(cut_warning(s, float(t[0]), float(t[-1])) for s in cut)
         meta.setdefault('segments_left_out', []).extend([s.t_start, s.t_end] for s in cut)
+    effort = align_effort(cols[:, 2 * nj:3 * nj], lag)
     rec = Recording(t=t, joint_names=joint_names, position=cols[:, 0:nj],
-                    velocity=cols[:, nj:2 * nj], effort=cols[:, 2 * nj:3 * nj],
+                    velocity=cols[:, nj:2 * nj], effort=effort,
                     reference=reference, excitation=excitation, segments=segments, meta=meta)
     return rec, report
 

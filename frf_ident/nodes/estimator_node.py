@@ -20,9 +20,10 @@ Recorded (docs/CONTRACT.md §3): /joint_states, /velocity_controller/commands,
 loses at most the open chunk; SIGINT/SIGTERM drain every message already delivered and close
 the bag cleanly).
 
-In lockstep the plant reports in joint state k+1 the torque it applied from t_k (u_k); the
-recorder writes joint state k once k+1 has arrived, with that effort, so the bag has the
-offline recordings' convention (y_k and u_k at t_k; the newest sample keeps its own effort).
+Joint states are written as published, as ``ros2 bag record`` writes them: in lockstep the
+plant reports in joint state k+1 the torque it applied from t_k, and the excitation node's
+descriptors say so (``effort_lag``: 1); the bag reader pairs (docs/CONTRACT.md §3, one rule
+for every recorder and replay path).
 
 Log times are sample times: a joint state or excitation message is logged at its header stamp;
 a velocity command at the stamp of the /frf/excitation message the excitation node sends right
@@ -62,6 +63,13 @@ def _header_stamp_ns(data: bytes) -> int:
     return sec * 1_000_000_000 + nanosec
 
 
+def _stamped(msg: Any) -> tuple[bytes, int]:
+    """Return the CDR bytes and header stamp [ns] of a stamped message (or its raw bytes)."""
+    if isinstance(msg, bytes):
+        return msg, _header_stamp_ns(msg)
+    return c.to_cdr(msg), c.stamp_ns(msg)
+
+
 class Estimator:
     def __init__(self, node: Any) -> None:
         from frf_ident.bag import BagRecorder
@@ -83,7 +91,6 @@ class Estimator:
         self.rec.open(bag)
         self.bag = Path(bag)
         self.last_js = -1
-        self.held_js: Any = None
         self.js_stamps: deque = deque()     # joint-state stamps not yet answered by a command
         self.exc_stamps: deque = deque()    # excitation stamps not yet paired with a command
         self.cmd_wait: deque = deque()      # velocity commands waiting for their stamp
@@ -96,11 +103,10 @@ class Estimator:
         deep = mw.qos_default(c.DEEP)
         # rclpy hands over the CDR bytes themselves (raw=True) where only bytes and the header
         # stamp are needed: no deserialise + serialise per message (the recorder is the graph's
-        # busiest node); joint states stay messages (lockstep rewrites their effort)
+        # busiest node)
         raw = {'raw': True} if mw.backend_name() == 'rclpy' else {}
         raw['drain'] = True     # every queued message per wake (rclpy takes one per wait)
-        node.create_subscription(mw.msg(JS), t['joint_states_topic'], self._on_js, deep,
-                                 drain=True)
+        node.create_subscription(mw.msg(JS), t['joint_states_topic'], self._on_js, deep, **raw)
         node.create_subscription(mw.msg(JS), t['excitation_topic'], self._on_exc, deep, **raw)
         node.create_subscription(mw.msg(F64), t['velocity_topic'], self._on_vel, deep, **raw)
         node.create_subscription(mw.msg(F64), t['effort_topic'], self._on_eff, deep, **raw)
@@ -112,19 +118,13 @@ class Estimator:
         self.counts[topic] += 1
 
     def _on_js(self, msg: Any) -> None:
-        s = c.stamp_ns(msg)
+        data, s = _stamped(msg)
         if s <= self.last_js:
             return                      # the plant's idle re-send of the same sample
         self.last_js = s
+        self._write(self.t['joint_states_topic'], JS, s, data)   # as published
         if not self.lockstep:
-            self._write(self.t['joint_states_topic'], JS, s, c.to_cdr(msg))
             return
-        # lockstep: joint state k is written when k+1 arrives, with effort = the torque the
-        # plant reports for the sample starting at t_k (u_k), the offline recording convention
-        held, self.held_js = self.held_js, msg
-        if held is not None:
-            held.effort = msg.effort
-            self._write(self.t['joint_states_topic'], JS, c.stamp_ns(held), c.to_cdr(held))
         if self.eff_wait:
             self._write(self.t['effort_topic'], F64, s, self.eff_wait.popleft())
         else:
@@ -142,10 +142,7 @@ class Estimator:
             self.eff_wait.append(data)
 
     def _on_exc(self, msg: Any) -> None:
-        if isinstance(msg, bytes):
-            data, s = msg, _header_stamp_ns(msg)
-        else:
-            data, s = c.to_cdr(msg), c.stamp_ns(msg)
+        data, s = _stamped(msg)
         self._write(self.t['excitation_topic'], JS, s, data)
         if self.cmd_wait:
             self._write(self.t['velocity_topic'], F64, s, self.cmd_wait.popleft())
@@ -207,9 +204,6 @@ class Estimator:
             now = sum(self.counts.values())
             if now != total:
                 total, quiet_since = now, time.monotonic()
-        if self.held_js is not None:    # the newest sample: its u_k was never applied
-            held, self.held_js = self.held_js, None
-            self._write(self.t['joint_states_topic'], JS, c.stamp_ns(held), c.to_cdr(held))
         # unpaired commands (should not happen in a complete run): keep them, at the last stamp
         for q, topic in ((self.cmd_wait, 'velocity_topic'), (self.eff_wait, 'effort_topic')):
             while q:
