@@ -630,7 +630,7 @@ class ExcitationSession:
                            remedy=None if it.history else self.s.chirp.remedy())
 
     # -- safety -------------------------------------------------------------------------------
-    def _abort(self, reason: str) -> None:
+    def _abort(self, reason: str, level: str = 'error') -> None:
         """Ramp the reference to zero within abort_ramp_s (wall), publish zero, report."""
         run = self.run
         if run is None or run.done.is_set():
@@ -640,7 +640,7 @@ class ExcitationSession:
         # first joint state leaves next_k behind it: the recording would date it back)
         self.next_k = max(self.next_k, self.k_js + self.lag)
         run.end_k = self.next_k
-        self.out.log('error', f'experiment {run.name!r} aborted: {reason}')
+        self.out.log(level, f'experiment {run.name!r} aborted: {reason}')
         steps = 4
         r0 = self.last_ref.copy()
         for s in range(1, steps + 1):
@@ -716,7 +716,7 @@ class ExcitationSession:
             run = self.run
             if run is None or run.done.is_set():
                 return None
-            self._abort(reason)
+            self._abort(reason, level='warn')     # asked for: no error
             return run
 
     def close(self) -> None:

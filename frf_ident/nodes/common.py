@@ -14,6 +14,7 @@
 """Shared plumbing of the node processes: parameters, stamps, signals, readiness, CDR bytes."""
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
@@ -82,8 +83,8 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
     except FrfIdentInputError as exc:
         print(f'{name}: bad parameter: {exc}', file=sys.stderr, flush=True)
         return 2
+    stop = StopOnSignal()        # before rclpy: its own handlers stay off (middleware.init)
     init(argv)
-    stop = StopOnSignal()
     try:
         try:
             node = mw.create_node(name, use_sim_time=use_sim_time)
@@ -95,6 +96,7 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
         except (FrfIdentInputError, ValueError) + mw.parameter_errors() as exc:
             print(f'{name}: bad parameter: {exc}', file=sys.stderr, flush=True)
             return 2
+        stop.starting = False
         announce_ready(name)
         try:
             spin = getattr(wired, 'spin', None)
@@ -108,7 +110,23 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
                 close()
     finally:
         mw.shutdown()
-    return 0
+    return leave(0)
+
+
+def leave(code: int) -> int:
+    """
+    End a node process at once with ``code`` once its work is done (bag closed, DDS left).
+
+    The interpreter's own finalisation (numba, llvmlite, rclpy modules) took 4-5 s on a loaded
+    2-core PC, so ``ros2 launch`` escalated Ctrl-C to SIGTERM after its 5 s and logged the
+    node as died (issue 44). Outside a node process (a test calling ``main``) it returns.
+    """
+    from frf_ident.nodes import is_node_process
+    if is_node_process():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
 
 
 def control_qos(lockstep: bool) -> Any:
@@ -150,19 +168,29 @@ def to_cdr(msg: Any) -> bytes:
 
 
 class StopOnSignal:
-    """SIGINT/SIGTERM set ``event`` (and wake the given nodes); a second signal exits hard."""
+    """
+    SIGINT/SIGTERM set ``event`` and wake the given nodes.
+
+    During start-up, and at a second signal, the process exits 0 at once (SystemExit: the
+    finally blocks still run).
+    """
 
     def __init__(self) -> None:
         self.event = threading.Event()
         self.nodes: list[Any] = []
         self.callbacks: list[Any] = []
+        #: True while the node is being created and wired (seconds under load: model, numba
+        #: kernels, discovery): a signal then stops it at once, the finally blocks close what
+        #: is open (the estimator's bag), so launch never has to escalate to SIGTERM
+        self.starting = True
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, self._handler)
             signal.signal(signal.SIGTERM, self._handler)
 
     def _handler(self, signum: int, frame: Any) -> None:
-        if self.event.is_set():
-            raise SystemExit(128 + signum)
+        if self.starting or self.event.is_set():
+            self.event.set()
+            raise SystemExit(0)      # Ctrl-C is a normal end: exit 0, no traceback
         self.event.set()
         for cb in self.callbacks:
             cb()

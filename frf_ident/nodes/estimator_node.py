@@ -48,6 +48,9 @@ from frf_ident import middleware as mw
 from frf_ident.nodes import common as c
 
 JS, F64 = 'sensor_msgs/msg/JointState', 'std_msgs/msg/Float64MultiArray'
+#: at shutdown, wall s to wait for a live estimate still running: drain, this and the bag's
+#: close stay within the 5 s ``ros2 launch`` grants after Ctrl-C before it sends SIGTERM
+ESTIMATE_WAIT_S = 2.0
 STR = 'std_msgs/msg/String'
 
 
@@ -89,6 +92,13 @@ class Estimator:
             effort_commands=t['effort_topic'], excitation=t['excitation_topic'],
             experiment=t['experiment_topic']))
         self.rec.open(bag)
+        try:
+            self._wire(node, t, bag)
+        except BaseException:
+            self.rec.close()         # a signal during start-up: never a bag without metadata
+            raise
+
+    def _wire(self, node: Any, t: dict[str, str], bag: str) -> None:
         self.bag = Path(bag)
         self.last_js = -1
         self.js_stamps: deque = deque()     # joint-state stamps not yet answered by a command
@@ -209,7 +219,10 @@ class Estimator:
             while q:
                 self._write(self.t[topic], F64, max(self.last_js, 0), q.popleft())
         if self.worker is not None:
-            self.worker.join(60.0)
+            self.worker.join(ESTIMATE_WAIT_S)
+            if self.worker.is_alive():
+                self.log.info(f'live estimate still running at shutdown: left out (run '
+                              f'`frf-ident estimate {self.bag}`)')
         self.rec.close()
         self.log.info(f'bag closed: {self.bag} ({json.dumps(self.counts)})')
 
