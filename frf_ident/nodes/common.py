@@ -18,6 +18,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
@@ -40,6 +41,10 @@ READY = mw.READY
 LOCKSTEP = SessionSettings.lockstep
 #: deep queues: lockstep references are published ahead, recorders must never drop a sample
 DEEP = 20000
+#: a second SIGINT/SIGTERM within this many wall s of the first is the same Ctrl-C (a terminal
+#: signals the whole process group, and ``ros2 launch`` forwards its own copy): ignored; a
+#: later one stops the node at once
+SAME_SIGNAL_S = 2.0
 
 
 class Refused(Exception):
@@ -108,6 +113,8 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
             close = getattr(wired, 'close', None)
             if close is not None:
                 close()
+    except SystemExit:
+        pass                         # a signal during start-up, or a second one: a normal end
     finally:
         mw.shutdown()
     return leave(0)
@@ -183,14 +190,19 @@ class StopOnSignal:
         #: kernels, discovery): a signal then stops it at once, the finally blocks close what
         #: is open (the estimator's bag), so launch never has to escalate to SIGTERM
         self.starting = True
+        self.t_signal = 0.0
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, self._handler)
             signal.signal(signal.SIGTERM, self._handler)
 
     def _handler(self, signum: int, frame: Any) -> None:
+        now = time.monotonic()
+        if self.event.is_set() and not self.starting and now - self.t_signal < SAME_SIGNAL_S:
+            return                   # the same Ctrl-C again (terminal's group + launch's copy)
         if self.starting or self.event.is_set():
             self.event.set()
             raise SystemExit(0)      # Ctrl-C is a normal end: exit 0, no traceback
+        self.t_signal = now
         self.event.set()
         for cb in self.callbacks:
             cb()
