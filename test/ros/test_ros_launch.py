@@ -327,14 +327,21 @@ def test_abort_then_ctrl_c_at_start_up(ros_env, prefix, tmp_path):
                           capture_output=True, timeout=120)
     print(info.stdout)
     assert info.returncode == 0 and '/joint_states' in info.stdout, info.stderr
-    # Ctrl-C during the nodes' start-up (rclpy init, numba kernels, discovery), once the
-    # estimator created its bag: issue 44 saw it ignore SIGINT and SIGTERM there and leave
-    # the bag without metadata.yaml. (A signal inside the interpreter's own bootstrap, site.py,
-    # before any frf_ident code runs, still ends in Python's KeyboardInterrupt.)
+    # Ctrl-C during the nodes' start-up (wiring: numba kernels, the bag, discovery), as soon
+    # as all three are on the graph: issue 44 saw the estimator ignore SIGINT and SIGTERM
+    # there and leave the bag without metadata.yaml. (A signal inside the interpreter's own
+    # bootstrap, site.py, before any frf_ident code runs, still ends in Python's
+    # KeyboardInterrupt: under load 20 that window lasted seconds.)
     early = tmp_path / 'early'
+    obs = _Observer(int(env['ROS_DOMAIN_ID']))
     proc = _launch(env, tmp_path, f'bag:={early}')
-    _until(early.exists, 120, 'the estimator to create its bag')
-    log = []
-    _stop(proc, log)
+    try:
+        obs.names(['plant_node', 'excitation_node', 'estimator_node'])
+    finally:
+        log = []
+        _stop(proc, log)
+        obs.close()
+    print('ready before Ctrl-C:', [n for n in ('plant_node', 'excitation_node', 'estimator_node')
+                                   if f'FRF_NODE_READY {n}' in log[0]])
     _quiet_exit(proc, log[0])
     assert not early.exists() or (early / 'metadata.yaml').is_file(), list(early.iterdir())
