@@ -14,8 +14,9 @@
 """
 An abort on request (the ``/frf/abort`` service) stops a lockstep run at once.
 
-The session runs a multisine against the simulated plant; after 4000 samples (inside the first segment) the abort
-comes: the reference ramps to zero in the 4 samples after those already published, an
+The session runs a multisine against the simulated plant; after 4000 samples (inside the
+first segment) the abort comes: the reference ramps to zero in the 4 samples after those
+already published, an
 ``aborted`` descriptor and a ``finished`` progress event with ``aborted`` go out, and the
 descriptors declare the effort lag of the lockstep plant (1 sample, bag/pairing.py).
 """
