@@ -15,7 +15,9 @@
 estimator_node: records the experiment topics to a rosbag2 MCAP bag and estimates the FRF.
 
 Recorded (docs/CONTRACT.md §3): /joint_states, /velocity_controller/commands,
-/effort_controller/commands, /frf/excitation, /frf/experiment, with
+/effort_controller/commands, /frf/excitation, /frf/experiment (free-running, a robot: only
+around experiments, from 0.5 s before a segment starts to 0.5 s after its procedure ended,
+unless ``record_all: true``; the simulation records everything), with
 :class:`frf_ident.bag.BagRecorder` (chunks handed to the OS every 64 KiB / 0.5 s, so a crash
 loses at most the open chunk; SIGINT/SIGTERM drain every message already delivered and close
 the bag cleanly).
@@ -48,6 +50,10 @@ from frf_ident import middleware as mw
 from frf_ident.nodes import common as c
 
 JS, F64 = 'sensor_msgs/msg/JointState', 'std_msgs/msg/Float64MultiArray'
+#: ``record_all: false`` (a robot): joint states and commands this long before a segment's
+#: start [s, stamp time] are kept (its descriptor may arrive after them), and this long after
+#: a procedure's end or abort
+GATE_MARGIN_S = 0.5
 #: at shutdown, wall s to wait for a live estimate still running: drain, this and the bag's
 #: close stay within the 5 s ``ros2 launch`` grants after Ctrl-C before it sends SIGTERM
 ESTIMATE_WAIT_S = 2.0
@@ -73,6 +79,45 @@ def _stamped(msg: Any) -> tuple[bytes, int]:
     return c.to_cdr(msg), c.stamp_ns(msg)
 
 
+class ExperimentGate:
+    """
+    Which messages a robot's recording keeps: those of experiments, not the idle time between.
+
+    Closed until a segment starts (its ``start`` descriptor): the messages stamped from
+    ``margin_s`` before its t_start are then written from a buffer; open until ``margin_s``
+    of stamp time after the procedure's ``procedure_end`` or ``aborted`` event.
+    """
+
+    def __init__(self, margin_s: float, buffered: int) -> None:
+        self.margin_ns = int(round(margin_s * 1e9))
+        self.open = False
+        self.until_ns: Optional[int] = None
+        self.buffer: deque = deque(maxlen=buffered)
+
+    def admit(self, item: tuple[str, str, int, bytes]) -> bool:
+        """Return whether to write ``item`` (topic, type, stamp, data) now; else buffer it."""
+        if self.open and self.until_ns is not None and item[2] > self.until_ns:
+            self.open, self.until_ns = False, None
+        if not self.open:
+            self.buffer.append(item)
+        return self.open
+
+    def start(self, t_start_ns: int) -> list[tuple[str, str, int, bytes]]:
+        """Open at a segment start; return the buffered items to write (from the margin)."""
+        self.until_ns = None
+        if self.open:
+            return []
+        self.open = True
+        keep = [it for it in self.buffer if it[2] >= t_start_ns - self.margin_ns]
+        self.buffer.clear()
+        return keep
+
+    def end(self, t_end_ns: int) -> None:
+        """Close the gate ``margin_s`` of stamp time after a procedure ended or aborted."""
+        if self.open:
+            self.until_ns = t_end_ns + self.margin_ns
+
+
 class Estimator:
     def __init__(self, node: Any) -> None:
         from frf_ident.bag import BagRecorder
@@ -83,6 +128,10 @@ class Estimator:
         self.out_dir = Path(c.param(node, 'output_dir', '') or f'{bag}_frf')
         self.estimate = bool(c.param(node, 'estimate', True))
         self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
+        # a robot publishes all day: record experiments only, unless asked (the simulated
+        # plant is silent while idle, so the simulation records everything)
+        self.record_all = bool(c.param(node, 'record_all', self.lockstep))
+        self.gate = None if self.record_all else ExperimentGate(GATE_MARGIN_S, 4 * c.DEEP)
         c.refuse_lockstep_without_sim(node, self.lockstep)
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic',
                             'excitation_topic', 'experiment_topic'))
@@ -124,8 +173,11 @@ class Estimator:
                                  mw.qos_transient_local(100))
 
     def _write(self, topic: str, msg_type: str, stamp: int, data: bytes) -> None:
-        self.rec.write(topic, msg_type, stamp, data)
         self.counts[topic] += 1
+        if self.gate is not None and topic != self.t['experiment_topic'] and not \
+                self.gate.admit((topic, msg_type, stamp, data)):
+            return
+        self.rec.write(topic, msg_type, stamp, data)
 
     def _on_js(self, msg: Any) -> None:
         data, s = _stamped(msg)
@@ -176,6 +228,12 @@ class Estimator:
         t_s = d.get(t_key)
         stamp = int(round(float(t_s) * 1e9)) if t_s is not None else max(self.last_js, 0)
         self._write(self.t['experiment_topic'], STR, stamp, c.to_cdr(msg))
+        if self.gate is not None:
+            if event == 'start':
+                for item in self.gate.start(stamp):
+                    self.rec.write(*item)
+            elif event in ('procedure_end', 'aborted'):
+                self.gate.end(stamp)
         if event == 'procedure_end' and self.estimate:
             self.pending_end.append(stamp)
             self._maybe_estimate()
