@@ -782,7 +782,10 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
     if reference is None and excitation is not None:
         reference = excitation.copy()
     _rate_warnings(report, topics.joint_states)
-    segments, cut = split_covered(segments, float(t[0]), float(t[-1]), st.dt_ns * 1e-9)
+    covered, cut = split_covered(segments, float(t[0]), float(t[-1]), st.dt_ns * 1e-9)
+    # a time range drops the segments outside it too; without one they stay, as recorded
+    segments = covered if t_range is not None else [
+        s for s in segments if all(s is not c for c in cut)]
     if cut:
         report.warnings.extend(cut_warning(s, float(t[0]), float(t[-1])) for s in cut)
         meta.setdefault('segments_left_out', []).extend([s.t_start, s.t_end] for s in cut)
