@@ -783,9 +783,11 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
         reference = excitation.copy()
     _rate_warnings(report, topics.joint_states)
     covered, cut = split_covered(segments, float(t[0]), float(t[-1]), st.dt_ns * 1e-9)
-    # a time range drops the segments outside it too; without one they stay, as recorded
-    segments = covered if t_range is not None else [
-        s for s in segments if all(s is not c for c in cut)]
+    if t_range is None and len(covered) + len(cut) < len(segments):
+        # a recorder started late still gets the latched descriptors of earlier segments
+        report.warnings.append(f'{len(segments) - len(covered) - len(cut)} segment(s) lie '
+                               f'wholly outside the record: left out')
+    segments = covered
     if cut:
         report.warnings.extend(cut_warning(s, float(t[0]), float(t[-1])) for s in cut)
         meta.setdefault('segments_left_out', []).extend([s.t_start, s.t_end] for s in cut)
