@@ -395,6 +395,13 @@ def bench_campaign() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('busy_graph')
+def bench_busy_graph() -> list[tuple[str, str, str, str]]:
+    """Run the lockstep graph (multisine + 3 chirp iterations) beside two busy loops."""
+    from benchmarks.busy_graph import rows
+    return rows()
+
+
 @section('replay')
 def bench_replay() -> list[tuple[str, str, str, str]]:
     """Run the longer hypothesis search over bag imperfections."""

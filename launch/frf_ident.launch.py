@@ -25,17 +25,43 @@ robot's joint_state_broadcaster and velocity controller take the plant's place),
 ``use_sim_time`` (default: the value of ``sim``), ``params_file`` (default: the package's
 config/frf_ident.yaml; a copy of it with your settings). ``lockstep`` always equals ``sim``.
 Parameters are read at start-up and read-only afterwards. When a node exits (it refused its
-parameters, or crashed) the launch shuts down: no half graph accepts runs it cannot record.
+parameters, or crashed) the launch shuts down: no half graph accepts runs it cannot record;
+a node that exited non-zero makes ``ros2 launch`` exit 1 (scripts can tell). ``sim:=false``
+with ``use_sim_time:=true`` is refused (a real robot publishes no /clock).
 """
 import os
 
 from ament_index_python.packages import get_package_share_directory
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, Shutdown
+from launch.actions import DeclareLaunchArgument, OpaqueFunction, Shutdown
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
+
 from launch_ros.actions import Node
 from launch_ros.parameter_descriptions import ParameterValue
+
+
+class NodeFailed(RuntimeError):
+    """A node exited non-zero: launch logs this one line, shuts down and exits 1."""
+
+
+def _node_exited(event, context):
+    """Shut the launch down when a node exits; non-zero (it refused, or crashed): exit 1."""
+    name = str(event.action.process_details['name']).rsplit('-', 1)[0]   # 'plant_node-1'
+    if event.returncode != 0:
+        raise NodeFailed(f'{name} exited with code {event.returncode} (see its log above)')
+    return [Shutdown(reason=f'{name} exited')]
+
+
+def _check_time_source(context):
+    """Refuse sim:=false use_sim_time:=true: no /clock on a real robot, every node would wait."""
+    sim = LaunchConfiguration('sim').perform(context).lower() in ('true', '1', 'yes')
+    sim_time = LaunchConfiguration('use_sim_time').perform(context).lower() in ('true', '1',
+                                                                                'yes')
+    if sim_time and not sim:
+        raise NodeFailed('sim:=false with use_sim_time:=true: a real robot publishes no /clock;'
+                         ' leave use_sim_time at its default (the value of sim)')
+    return []
 
 
 def generate_launch_description():
@@ -52,7 +78,7 @@ def generate_launch_description():
         """Launch one node of the package under its own name."""
         return Node(package='frf_ident', executable=executable, name=executable,
                     parameters=common + list(extra), output='screen', condition=condition,
-                    on_exit=Shutdown(reason=f'{executable} exited'))
+                    on_exit=_node_exited)
 
     return LaunchDescription([
         DeclareLaunchArgument('model', default_value='', description='model file'),
@@ -63,6 +89,7 @@ def generate_launch_description():
         DeclareLaunchArgument('bag', default_value='', description='bag directory'),
         DeclareLaunchArgument('params_file', default_value=params,
                               description="node parameters (default: the package's)"),
+        OpaqueFunction(function=_check_time_source),
         # simulation: the plant hosts the velocity PI (as ros2_control hosts its controllers)
         node('plant_node', [{'velocity_control': True}], condition=IfCondition(sim)),
         node('excitation_node'),

@@ -351,8 +351,13 @@ def dropped_text(d: dict) -> str:
         cut = d.get('incomplete') or []
         gone = [p for p in d.get('realisations') or [] if p not in cut]
         tail = f'; realisation(s) {gone} left without a period' if gone else ''
+        if cut and not parts:     # nothing lost to gaps: the periods went with the cut
+            return (f'{d["periods"]} multisine period(s) dropped: realisation(s) {cut} cut '
+                    'short (a segment missing, never ended or only partly recorded) left '
+                    f'out{tail}')
         if cut:
-            tail += f'; realisation(s) {cut} cut short (a segment never ended) left out'
+            tail += (f'; realisation(s) {cut} cut short (a segment missing, never ended or '
+                     'only partly recorded) left out')
     else:
         parts = [f'{a:.2f}..{b:.2f} s' for a, b in d.get('times', [])]
         tail = ''

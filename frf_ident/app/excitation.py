@@ -26,11 +26,13 @@ samples ahead of the newest joint state and the controller consumes them in orde
 the plant on a wall timer): on joint state k the reference of sample k+1 goes out, computed from
 the position at k.
 
-Sample pairing of the torque (what the chirp iteration collects and the estimator records):
+Sample pairing of the torque (what the chirp iteration collects; docs/CONTRACT.md §3):
 lockstep -- the simulated plant answers command k with joint state k+1, whose effort is the
 torque applied from t_k, so the torque of sample k is the effort of joint state k+1;
 free-running -- the effort of joint state k is the torque applied at t_k (a robot's measured
 torque; the free-running plant node reports it so), so the torque of sample k is in joint state k.
+Every segment descriptor declares this lag (``effort_lag``); recorders keep joint states as
+published and the bag reader applies it, so every recorder and replay path pairs alike.
 
 Safety: a plan is checked before it runs: its planned position against the position bound,
 and its peak torque, predicted by a dry run on the model from where the robot is (the
@@ -176,16 +178,21 @@ class SessionSettings:
     lookahead : int, optional
         Lockstep: references published ahead of the newest joint state [samples].
     stale_s : float, optional
-        Watchdog, lockstep: wall time [s] without /joint_states before a run aborts.
+        Watchdog, lockstep: simulation time [s] the plant's clock (/clock) may run ahead of
+        the newest joint state the node saw before a run aborts.
+    plant_silent_s : float, optional
+        Watchdog, lockstep: wall time [s] without any joint state (the simulated plant died
+        or hangs) before a run aborts.
     stale_samples : int, optional
         Watchdog, free-running: the same limit in samples.
     start_grace_s : float, optional
         Wall time [s] the first answer of a run may take (the watchdog waits at least this).
     abort_ramp_s : float, optional
         Wall time [s] within which an abort ramps the reference to zero.
-    position_bound_deg : float, optional
+    plan_bound_deg : float, optional
         Bound [deg] of the planned position around the operating point (checked before a
-        run).
+        run); distinct from ``multisine.position_bound_deg``, the multisine design's bound of
+        its constant-velocity run.
     live_position_bound_deg : float, optional
         Bound [deg] of the measured position around the operating point (a run aborts
         beyond it).
@@ -200,14 +207,23 @@ class SessionSettings:
 
     lockstep: bool = False         # free-running unless the simulation says otherwise
     lookahead: int = 20            # lockstep: references published ahead [samples]
-    stale_s: float = 0.5           # watchdog, lockstep: wall s without /joint_states
+    # watchdog, lockstep: simulation s the plant's clock runs ahead of the newest joint state.
+    # The plant waits for references, so its clock leads by `lookahead` samples (20 ms) at most
+    # while nothing is lost: 0.5 s is a measurement that really went missing, however slowly
+    # a loaded PC runs the simulation (issue 44: wall-time staleness aborted 3 of 4 runs at
+    # load 4-12, stalls of 1.46 s wall)
+    stale_s: float = 0.5
+    # watchdog, lockstep: wall s without any joint state (a dead or hung simulated plant; its
+    # /clock stops too). Far above the 1.46 s stalls of a loaded 2-core PC; only a dead plant
+    # reaches it (a simulation drives no robot: there is no hurry)
+    plant_silent_s: float = 10.0
     # watchdog, free-running, in samples: 50 ms at 1 kHz. A Python node on a Linux PC
     # without a real-time kernel saw joint-state gaps of 3.6-23 ms in 12 of 13 runs, 69 ms in
     # one (`make bench`, section nodes; README, 'stale_samples'): 10 aborted good runs
     stale_samples: int = 50
     start_grace_s: float = 0.2     # the first answer of a run may take this long
     abort_ramp_s: float = 0.01     # ramp to zero reference within this wall time
-    position_bound_deg: float = 4.0        # planned position bound around the operating point
+    plan_bound_deg: float = 4.0            # planned position bound around the operating point
     live_position_bound_deg: float = 8.0   # measured position bound (abort)
     progress_period_s: float = 0.5         # wall s between progress events
     multisine: MultisineConfig = field(default_factory=MultisineConfig)
@@ -216,8 +232,9 @@ class SessionSettings:
     def __post_init__(self) -> None:
         """Refuse settings that switch a safety check off or make it slow (DesignError)."""
         positive = {'stale_s': self.stale_s, 'stale_samples': self.stale_samples,
+                    'plant_silent_s': self.plant_silent_s,
                     'start_grace_s': self.start_grace_s, 'abort_ramp_s': self.abort_ramp_s,
-                    'position_bound_deg': self.position_bound_deg,
+                    'plan_bound_deg': self.plan_bound_deg,
                     'live_position_bound_deg': self.live_position_bound_deg,
                     'progress_period_s': self.progress_period_s, 'lookahead': self.lookahead}
         for name, value in positive.items():
@@ -226,9 +243,9 @@ class SessionSettings:
         if self.abort_ramp_s > MAX_ABORT_RAMP_S:
             raise DesignError(f'abort_ramp_s={self.abort_ramp_s} s: an abort must stop the '
                               f'robot within {MAX_ABORT_RAMP_S} s')
-        if self.live_position_bound_deg < self.position_bound_deg:
+        if self.live_position_bound_deg < self.plan_bound_deg:
             raise DesignError(f'live_position_bound_deg={self.live_position_bound_deg} is below '
-                              f'position_bound_deg={self.position_bound_deg}: every run would '
+                              f'plan_bound_deg={self.plan_bound_deg}: every run would '
                               'abort on its planned motion')
 
 
@@ -273,12 +290,17 @@ class ExcitationSession:
         The nominal model and its controller: each plan's peak torque is predicted on it
         before the plan runs (refused at 0.95 of a limit). None: no prediction (only the
         runtime saturation abort guards the torque).
+    sim_now_ns
+        Lockstep: the simulation clock [ns] (the node clock on /clock); staleness is judged
+        on it. None: on the stamps of the joint states alone.
 
     """
 
     def __init__(self, settings: SessionSettings, joints: list[str], dt: float,
                  torque_limit: np.ndarray, out: Outputs,
-                 model: Optional[tuple[RobotParams, PIVelocity]] = None) -> None:
+                 model: Optional[tuple[RobotParams, PIVelocity]] = None,
+                 sim_now_ns: Optional[Callable[[], int]] = None) -> None:
+        self.sim_now_ns = sim_now_ns
         self.s = settings
         self.joints = list(joints)
         self.n = len(self.joints)
@@ -291,7 +313,7 @@ class ExcitationSession:
         self.lookahead = int(settings.lookahead) if settings.lockstep else 1
         self.lag = 0 if settings.lockstep else 1       # held samples: next_k - k_js allowed
         self.offset = torque_sample_offset(settings.lockstep)
-        self.bound = math.radians(settings.position_bound_deg)
+        self.bound = math.radians(settings.plan_bound_deg)
         self.live_bound = math.radians(settings.live_position_bound_deg)
         self.lock = threading.RLock()
         self.k_js = -1
@@ -385,7 +407,10 @@ class ExcitationSession:
 
     # -- streaming ----------------------------------------------------------------------------
     def _segment(self, ev: SegmentEvent) -> None:
-        text = Segment(ev.k0 * self.dt, ev.k1 * self.dt, ev.info).descriptor(ev.event)
+        # every descriptor says which sample a joint state's effort belongs to: recorders
+        # store joint states as published, the bag reader pairs (frf_ident/bag/pairing.py)
+        info = dict(ev.info, effort_lag=self.offset)
+        text = Segment(ev.k0 * self.dt, ev.k1 * self.dt, info).descriptor(ev.event)
         self.out.experiment(text)
         if self.run is not None and self.run.collect and ev.event == 'start':
             self.run.u[ev.index] = np.full((ev.k1 - ev.k0, self.n), np.nan)
@@ -439,7 +464,8 @@ class ExcitationSession:
         wall = time.monotonic() - run.t0
         st = run.stream
         return dict(event=event, run=run.id, procedure=run.name, samples=st.sent,
-                    of=st.total, fraction=st.sent / max(st.total, 1), wall_s=wall, **extra)
+                    of=st.total, fraction=round(st.sent / max(st.total, 1), 4),
+                    wall_s=round(wall, 3), **extra)
 
     def _finish(self, run: Run) -> None:
         if not self.s.lockstep and np.any(self.last_ref != 0):
@@ -604,7 +630,7 @@ class ExcitationSession:
                            remedy=None if it.history else self.s.chirp.remedy())
 
     # -- safety -------------------------------------------------------------------------------
-    def _abort(self, reason: str) -> None:
+    def _abort(self, reason: str, level: str = 'error') -> None:
         """Ramp the reference to zero within abort_ramp_s (wall), publish zero, report."""
         run = self.run
         if run is None or run.done.is_set():
@@ -614,7 +640,7 @@ class ExcitationSession:
         # first joint state leaves next_k behind it: the recording would date it back)
         self.next_k = max(self.next_k, self.k_js + self.lag)
         run.end_k = self.next_k
-        self.out.log('error', f'experiment {run.name!r} aborted: {reason}')
+        self.out.log(level, f'experiment {run.name!r} aborted: {reason}')
         steps = 4
         r0 = self.last_ref.copy()
         for s in range(1, steps + 1):
@@ -629,19 +655,69 @@ class ExcitationSession:
         run.done.set()
 
     def watch(self) -> None:
-        """Watchdog tick: abort the running procedure when the joint states went stale."""
+        """
+        Watchdog tick: abort the running procedure when the joint states went stale.
+
+        Lockstep (simulation): in simulation time, the plant's clock ahead of the newest joint
+        state by more than ``stale_s``; and in wall time only ``plant_silent_s`` without any
+        joint state (a dead plant). Free-running (a robot): ``stale_samples`` sample times of
+        wall time without a joint state.
+        """
         with self.lock:
             run = self.run
             if run is None or run.done.is_set():
                 return
-            limit = self.s.stale_s if self.s.lockstep else self.s.stale_samples * self.dt
-            if self.k_js <= run.start_k:
-                limit = max(limit, self.s.start_grace_s)
-            waiting = self.next_k > self.k_js or not self.s.lockstep
             age = time.monotonic() - self.t_js
-            if waiting and age > limit:
-                self._abort(f'/joint_states stale for {1e3 * age:.0f} ms (limit '
-                            f'{1e3 * limit:.0f} ms)')
+            if self.s.lockstep:
+                reason = self._stale_lockstep(run, age)
+            else:
+                limit = self.s.stale_samples * self.dt
+                if self.k_js <= run.start_k:
+                    limit = max(limit, self.s.start_grace_s)
+                reason = (f'/joint_states stale for {1e3 * age:.0f} ms (limit '
+                          f'{1e3 * limit:.0f} ms)') if age > limit else None
+            if reason is not None:
+                self._abort(reason)
+
+    def _stale_lockstep(self, run: Run, age: float) -> Optional[str]:
+        """Lockstep: why the joint states count as stale (sim time, or a silent plant)."""
+        if self.next_k <= self.k_js:
+            return None             # nothing published waits for an answer
+        if self.sim_now_ns is not None and self.k_js >= 0:
+            lead = (self.sim_now_ns() - self.k_js * self.dt_ns) * 1e-9
+            if lead > self.s.stale_s:
+                return (f'/joint_states stale for {1e3 * lead:.0f} ms of simulation time '
+                        f'(limit stale_s={1e3 * self.s.stale_s:.0f} ms): the plant ran on '
+                        f'without them')
+        limit = self.s.plant_silent_s
+        if self.k_js <= run.start_k:
+            limit = max(limit, self.s.start_grace_s)
+        if age > limit:
+            return (f'/joint_states stale for {1e3 * age:.0f} ms wall (limit '
+                    f'plant_silent_s={1e3 * limit:.0f} ms): is the plant running?')
+        return None
+
+    def abort(self, reason: str) -> Optional[Run]:
+        """
+        Abort the running procedure on request (ramp to zero, ``aborted`` events).
+
+        Parameters
+        ----------
+        reason
+            Why (logged, and in the ``aborted`` descriptor and progress event).
+
+        Returns
+        -------
+        Run or None
+            The aborted run, None when no run was running.
+
+        """
+        with self.lock:
+            run = self.run
+            if run is None or run.done.is_set():
+                return None
+            self._abort(reason, level='warn')     # asked for: no error
+            return run
 
     def close(self) -> None:
         """Abort a running procedure (shutdown)."""

@@ -39,6 +39,7 @@ from typing import Any
 
 from frf_ident.bag import timing as tm
 from frf_ident.bag import windows as bs
+from frf_ident.bag.coverage import cut_warning, split_covered
 from frf_ident.core.estimation.described import (check_joints, check_recording,
                                                  complete_chirp_iterations, cut_short_error,
                                                  experiment_joints, joint_channels,
@@ -192,8 +193,13 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         keep = {max(chirps)} | set(complete_chirp_iterations(segments)[-1:])
         segments = [s for s in segments if s.info.get('design') != 'chirp'
                     or s.info.get('iteration', 0) in keep]
+    cut: list = []
     if t_range is not None:
-        segments = [s for s in segments if s.t_end >= t_range[0] and s.t_start <= t_range[1]]
+        # a segment the range cuts is left out, named (its samples are not all in the range)
+        segments, cut = split_covered(segments, t_range[0], t_range[1], 0.0)
+        for s in cut:
+            say(f'warning: {cut_warning(s, *t_range)}')
+        exp.meta.setdefault('segments_left_out', []).extend([s.t_start, s.t_end] for s in cut)
     reports: list[tm.TimingReport] = []
     notes: list[str] = []
     if segments:
@@ -222,7 +228,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                    EstimationError('the experiment segments give no estimate'))
         if joints is not None:
             estimates = {k: joint_channels(v, joints) for k, v in estimates.items()}
-    elif exp.meta.get('segments_left_out') and t_range is None:
+    elif exp.meta.get('segments_left_out') and (t_range is None or cut):
         raise cut_short_error(len(exp.meta['segments_left_out']))
     else:
         say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '

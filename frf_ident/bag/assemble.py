@@ -31,7 +31,9 @@ import numpy as np
 
 from . import timing as tm
 from .collect import Collector
+from .coverage import cut_warning, split_covered
 from .layout import BagFiles
+from .pairing import align_effort, effort_lag
 from .topics import BagTopics
 from .writer import FRF_BAG_KEY, grid_times
 
@@ -64,6 +66,7 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
     report; ``gaps`` as in :func:`read_recording`.
     """
     assert col.js.data is not None and col.js.joints is not None
+    lag = effort_lag(segments, bag.name)     # declared by the producer (bag/pairing.py)
     joint_names = list(col.js.joints)
     frf = meta.pop(FRF_BAG_KEY, None)
     stamps, logs, vals = col.js.data.arrays()
@@ -115,10 +118,18 @@ def assemble(bag: BagFiles, col: Collector, topics: BagTopics, meta: dict[str, A
     if reference is None and excitation is not None:
         reference = excitation.copy()
     _rate_warnings(report, topics.joint_states)
-    if t_range is not None:
-        segments = [s for s in segments if s.t_end >= t[0] and s.t_start <= t[-1]]
+    covered, cut = split_covered(segments, float(t[0]), float(t[-1]), st.dt_ns * 1e-9)
+    if t_range is None and len(covered) + len(cut) < len(segments):
+        # a recorder started late still gets the latched descriptors of earlier segments
+        report.warnings.append(f'{len(segments) - len(covered) - len(cut)} segment(s) lie '
+                               f'wholly outside the record: left out')
+    segments = covered
+    if cut:
+        report.warnings.extend(cut_warning(s, float(t[0]), float(t[-1])) for s in cut)
+        meta.setdefault('segments_left_out', []).extend([s.t_start, s.t_end] for s in cut)
+    effort = align_effort(cols[:, 2 * nj:3 * nj], lag)
     rec = Recording(t=t, joint_names=joint_names, position=cols[:, 0:nj],
-                    velocity=cols[:, nj:2 * nj], effort=cols[:, 2 * nj:3 * nj],
+                    velocity=cols[:, nj:2 * nj], effort=effort,
                     reference=reference, excitation=excitation, segments=segments, meta=meta)
     return rec, report
 

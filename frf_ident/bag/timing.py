@@ -196,11 +196,16 @@ class Stamps:
 
 def valid_header_stamps(ns: np.ndarray) -> bool:
     """
-    Header stamps are usable unless several are zero (unset) or all are equal.
+    Header stamps (file order) are usable unless zero ones follow set ones, or all are equal.
 
-    One zero stamp is allowed: a simulation's first sample is stamped t = 0.
+    Zero stamps before the first set one are a simulation's sample 0 (stamped t = 0), which
+    the lockstep plant re-sends while idle (``ros2 bag record`` keeps every copy; the
+    duplicates are dropped by :func:`analyse`).
     """
-    if ns.size == 0 or np.count_nonzero(ns <= 0) > 1:
+    if ns.size == 0:
+        return False
+    unset = ns <= 0
+    if unset.any() and (unset.all() or unset[int(np.argmin(unset)):].any()):
         return False
     return ns.size == 1 or bool(np.ptp(ns) > 0)
 

@@ -190,7 +190,12 @@ class Node(RclpyNode):
 
 def init(args: Optional[Sequence[str]] = None) -> None:
     if not rclpy.ok():
-        rclpy.init(args=None if args is None else list(args))
+        # signals stay the application's (nodes: common.StopOnSignal; else KeyboardInterrupt):
+        # rclpy's handler shut the context down under a node still draining its queues (a
+        # traceback in the estimator's final drain at Ctrl-C, issue 44)
+        from rclpy.signals import SignalHandlerOptions
+        rclpy.init(args=None if args is None else list(args),
+                   signal_handler_options=SignalHandlerOptions.NO)
 
 
 def ok() -> bool:

@@ -14,9 +14,11 @@
 """Shared plumbing of the node processes: parameters, stamps, signals, readiness, CDR bytes."""
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
+import time
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
@@ -39,6 +41,10 @@ READY = mw.READY
 LOCKSTEP = SessionSettings.lockstep
 #: deep queues: lockstep references are published ahead, recorders must never drop a sample
 DEEP = 20000
+#: a second SIGINT/SIGTERM within this many wall s of the first is the same Ctrl-C (a terminal
+#: signals the whole process group, and ``ros2 launch`` forwards its own copy): ignored; a
+#: later one stops the node at once
+SAME_SIGNAL_S = 2.0
 
 
 class Refused(Exception):
@@ -82,8 +88,8 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
     except FrfIdentInputError as exc:
         print(f'{name}: bad parameter: {exc}', file=sys.stderr, flush=True)
         return 2
+    stop = StopOnSignal()        # before rclpy: its own handlers stay off (middleware.init)
     init(argv)
-    stop = StopOnSignal()
     try:
         try:
             node = mw.create_node(name, use_sim_time=use_sim_time)
@@ -95,6 +101,7 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
         except (FrfIdentInputError, ValueError) + mw.parameter_errors() as exc:
             print(f'{name}: bad parameter: {exc}', file=sys.stderr, flush=True)
             return 2
+        stop.starting = False
         announce_ready(name)
         try:
             spin = getattr(wired, 'spin', None)
@@ -106,9 +113,27 @@ def run_node(name: str, wiring: Any, argv: Optional[Sequence[str]] = None, *,
             close = getattr(wired, 'close', None)
             if close is not None:
                 close()
+    except SystemExit:
+        pass                         # a signal during start-up, or a second one: a normal end
     finally:
         mw.shutdown()
-    return 0
+    return leave(0)
+
+
+def leave(code: int) -> int:
+    """
+    End a node process at once with ``code`` once its work is done (bag closed, DDS left).
+
+    The interpreter's own finalisation (numba, llvmlite, rclpy modules) took 4-5 s on a loaded
+    2-core PC, so ``ros2 launch`` escalated Ctrl-C to SIGTERM after its 5 s and logged the
+    node as died (issue 44). Outside a node process (a test calling ``main``) it returns.
+    """
+    from frf_ident.nodes import is_node_process
+    if is_node_process():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
 
 
 def control_qos(lockstep: bool) -> Any:
@@ -150,19 +175,34 @@ def to_cdr(msg: Any) -> bytes:
 
 
 class StopOnSignal:
-    """SIGINT/SIGTERM set ``event`` (and wake the given nodes); a second signal exits hard."""
+    """
+    SIGINT/SIGTERM set ``event`` and wake the given nodes.
+
+    During start-up, and at a second signal, the process exits 0 at once (SystemExit: the
+    finally blocks still run).
+    """
 
     def __init__(self) -> None:
         self.event = threading.Event()
         self.nodes: list[Any] = []
         self.callbacks: list[Any] = []
+        #: True while the node is being created and wired (seconds under load: model, numba
+        #: kernels, discovery): a signal then stops it at once, the finally blocks close what
+        #: is open (the estimator's bag), so launch never has to escalate to SIGTERM
+        self.starting = True
+        self.t_signal = 0.0
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, self._handler)
             signal.signal(signal.SIGTERM, self._handler)
 
     def _handler(self, signum: int, frame: Any) -> None:
-        if self.event.is_set():
-            raise SystemExit(128 + signum)
+        now = time.monotonic()
+        if self.event.is_set() and not self.starting and now - self.t_signal < SAME_SIGNAL_S:
+            return                   # the same Ctrl-C again (terminal's group + launch's copy)
+        if self.starting or self.event.is_set():
+            self.event.set()
+            raise SystemExit(0)      # Ctrl-C is a normal end: exit 0, no traceback
+        self.t_signal = now
         self.event.set()
         for cb in self.callbacks:
             cb()

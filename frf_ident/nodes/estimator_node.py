@@ -15,14 +15,17 @@
 estimator_node: records the experiment topics to a rosbag2 MCAP bag and estimates the FRF.
 
 Recorded (docs/CONTRACT.md §3): /joint_states, /velocity_controller/commands,
-/effort_controller/commands, /frf/excitation, /frf/experiment, with
+/effort_controller/commands, /frf/excitation, /frf/experiment (free-running, a robot: only
+around experiments, from 0.5 s before a segment starts to 0.5 s after its procedure ended,
+unless ``record_all: true``; the simulation records everything), with
 :class:`frf_ident.bag.BagRecorder` (chunks handed to the OS every 64 KiB / 0.5 s, so a crash
 loses at most the open chunk; SIGINT/SIGTERM drain every message already delivered and close
 the bag cleanly).
 
-In lockstep the plant reports in joint state k+1 the torque it applied from t_k (u_k); the
-recorder writes joint state k once k+1 has arrived, with that effort, so the bag has the
-offline recordings' convention (y_k and u_k at t_k; the newest sample keeps its own effort).
+Joint states are written as published, as ``ros2 bag record`` writes them: in lockstep the
+plant reports in joint state k+1 the torque it applied from t_k, and the excitation node's
+descriptors say so (``effort_lag``: 1); the bag reader pairs (docs/CONTRACT.md §3, one rule
+for every recorder and replay path).
 
 Log times are sample times: a joint state or excitation message is logged at its header stamp;
 a velocity command at the stamp of the /frf/excitation message the excitation node sends right
@@ -47,6 +50,13 @@ from frf_ident import middleware as mw
 from frf_ident.nodes import common as c
 
 JS, F64 = 'sensor_msgs/msg/JointState', 'std_msgs/msg/Float64MultiArray'
+#: ``record_all: false`` (a robot): joint states and commands this long before a segment's
+#: start [s, stamp time] are kept (its descriptor may arrive after them), and this long after
+#: a procedure's end or abort
+GATE_MARGIN_S = 0.5
+#: at shutdown, wall s to wait for a live estimate still running: drain, this and the bag's
+#: close stay within the 5 s ``ros2 launch`` grants after Ctrl-C before it sends SIGTERM
+ESTIMATE_WAIT_S = 2.0
 STR = 'std_msgs/msg/String'
 
 
@@ -62,6 +72,52 @@ def _header_stamp_ns(data: bytes) -> int:
     return sec * 1_000_000_000 + nanosec
 
 
+def _stamped(msg: Any) -> tuple[bytes, int]:
+    """Return the CDR bytes and header stamp [ns] of a stamped message (or its raw bytes)."""
+    if isinstance(msg, bytes):
+        return msg, _header_stamp_ns(msg)
+    return c.to_cdr(msg), c.stamp_ns(msg)
+
+
+class ExperimentGate:
+    """
+    Which messages a robot's recording keeps: those of experiments, not the idle time between.
+
+    Closed until a segment starts (its ``start`` descriptor): the messages stamped from
+    ``margin_s`` before its t_start are then written from a buffer; open until ``margin_s``
+    of stamp time after the procedure's ``procedure_end`` or ``aborted`` event.
+    """
+
+    def __init__(self, margin_s: float, buffered: int) -> None:
+        self.margin_ns = int(round(margin_s * 1e9))
+        self.open = False
+        self.until_ns: Optional[int] = None
+        self.buffer: deque = deque(maxlen=buffered)
+
+    def admit(self, item: tuple[str, str, int, bytes]) -> bool:
+        """Return whether to write ``item`` (topic, type, stamp, data) now; else buffer it."""
+        if self.open and self.until_ns is not None and item[2] > self.until_ns:
+            self.open, self.until_ns = False, None
+        if not self.open:
+            self.buffer.append(item)
+        return self.open
+
+    def start(self, t_start_ns: int) -> list[tuple[str, str, int, bytes]]:
+        """Open at a segment start; return the buffered items to write (from the margin)."""
+        self.until_ns = None
+        if self.open:
+            return []
+        self.open = True
+        keep = [it for it in self.buffer if it[2] >= t_start_ns - self.margin_ns]
+        self.buffer.clear()
+        return keep
+
+    def end(self, t_end_ns: int) -> None:
+        """Close the gate ``margin_s`` of stamp time after a procedure ended or aborted."""
+        if self.open:
+            self.until_ns = t_end_ns + self.margin_ns
+
+
 class Estimator:
     def __init__(self, node: Any) -> None:
         from frf_ident.bag import BagRecorder
@@ -72,6 +128,10 @@ class Estimator:
         self.out_dir = Path(c.param(node, 'output_dir', '') or f'{bag}_frf')
         self.estimate = bool(c.param(node, 'estimate', True))
         self.lockstep = bool(c.param(node, 'lockstep', c.LOCKSTEP))
+        # a robot publishes all day: record experiments only, unless asked (the simulated
+        # plant is silent while idle, so the simulation records everything)
+        self.record_all = bool(c.param(node, 'record_all', self.lockstep))
+        self.gate = None if self.record_all else ExperimentGate(GATE_MARGIN_S, 4 * c.DEEP)
         c.refuse_lockstep_without_sim(node, self.lockstep)
         t = c.topics(node, ('joint_states_topic', 'effort_topic', 'velocity_topic',
                             'excitation_topic', 'experiment_topic'))
@@ -81,9 +141,15 @@ class Estimator:
             effort_commands=t['effort_topic'], excitation=t['excitation_topic'],
             experiment=t['experiment_topic']))
         self.rec.open(bag)
+        try:
+            self._wire(node, t, bag)
+        except BaseException:
+            self.rec.close()         # a signal during start-up: never a bag without metadata
+            raise
+
+    def _wire(self, node: Any, t: dict[str, str], bag: str) -> None:
         self.bag = Path(bag)
         self.last_js = -1
-        self.held_js: Any = None
         self.js_stamps: deque = deque()     # joint-state stamps not yet answered by a command
         self.exc_stamps: deque = deque()    # excitation stamps not yet paired with a command
         self.cmd_wait: deque = deque()      # velocity commands waiting for their stamp
@@ -96,11 +162,10 @@ class Estimator:
         deep = mw.qos_default(c.DEEP)
         # rclpy hands over the CDR bytes themselves (raw=True) where only bytes and the header
         # stamp are needed: no deserialise + serialise per message (the recorder is the graph's
-        # busiest node); joint states stay messages (lockstep rewrites their effort)
+        # busiest node)
         raw = {'raw': True} if mw.backend_name() == 'rclpy' else {}
         raw['drain'] = True     # every queued message per wake (rclpy takes one per wait)
-        node.create_subscription(mw.msg(JS), t['joint_states_topic'], self._on_js, deep,
-                                 drain=True)
+        node.create_subscription(mw.msg(JS), t['joint_states_topic'], self._on_js, deep, **raw)
         node.create_subscription(mw.msg(JS), t['excitation_topic'], self._on_exc, deep, **raw)
         node.create_subscription(mw.msg(F64), t['velocity_topic'], self._on_vel, deep, **raw)
         node.create_subscription(mw.msg(F64), t['effort_topic'], self._on_eff, deep, **raw)
@@ -108,23 +173,20 @@ class Estimator:
                                  mw.qos_transient_local(100))
 
     def _write(self, topic: str, msg_type: str, stamp: int, data: bytes) -> None:
-        self.rec.write(topic, msg_type, stamp, data)
         self.counts[topic] += 1
+        if self.gate is not None and topic != self.t['experiment_topic'] and not \
+                self.gate.admit((topic, msg_type, stamp, data)):
+            return
+        self.rec.write(topic, msg_type, stamp, data)
 
     def _on_js(self, msg: Any) -> None:
-        s = c.stamp_ns(msg)
+        data, s = _stamped(msg)
         if s <= self.last_js:
             return                      # the plant's idle re-send of the same sample
         self.last_js = s
+        self._write(self.t['joint_states_topic'], JS, s, data)   # as published
         if not self.lockstep:
-            self._write(self.t['joint_states_topic'], JS, s, c.to_cdr(msg))
             return
-        # lockstep: joint state k is written when k+1 arrives, with effort = the torque the
-        # plant reports for the sample starting at t_k (u_k), the offline recording convention
-        held, self.held_js = self.held_js, msg
-        if held is not None:
-            held.effort = msg.effort
-            self._write(self.t['joint_states_topic'], JS, c.stamp_ns(held), c.to_cdr(held))
         if self.eff_wait:
             self._write(self.t['effort_topic'], F64, s, self.eff_wait.popleft())
         else:
@@ -142,10 +204,7 @@ class Estimator:
             self.eff_wait.append(data)
 
     def _on_exc(self, msg: Any) -> None:
-        if isinstance(msg, bytes):
-            data, s = msg, _header_stamp_ns(msg)
-        else:
-            data, s = c.to_cdr(msg), c.stamp_ns(msg)
+        data, s = _stamped(msg)
         self._write(self.t['excitation_topic'], JS, s, data)
         if self.cmd_wait:
             self._write(self.t['velocity_topic'], F64, s, self.cmd_wait.popleft())
@@ -169,6 +228,12 @@ class Estimator:
         t_s = d.get(t_key)
         stamp = int(round(float(t_s) * 1e9)) if t_s is not None else max(self.last_js, 0)
         self._write(self.t['experiment_topic'], STR, stamp, c.to_cdr(msg))
+        if self.gate is not None:
+            if event == 'start':
+                for item in self.gate.start(stamp):
+                    self.rec.write(*item)
+            elif event in ('procedure_end', 'aborted'):
+                self.gate.end(stamp)
         if event == 'procedure_end' and self.estimate:
             self.pending_end.append(stamp)
             self._maybe_estimate()
@@ -207,15 +272,15 @@ class Estimator:
             now = sum(self.counts.values())
             if now != total:
                 total, quiet_since = now, time.monotonic()
-        if self.held_js is not None:    # the newest sample: its u_k was never applied
-            held, self.held_js = self.held_js, None
-            self._write(self.t['joint_states_topic'], JS, c.stamp_ns(held), c.to_cdr(held))
         # unpaired commands (should not happen in a complete run): keep them, at the last stamp
         for q, topic in ((self.cmd_wait, 'velocity_topic'), (self.eff_wait, 'effort_topic')):
             while q:
                 self._write(self.t[topic], F64, max(self.last_js, 0), q.popleft())
         if self.worker is not None:
-            self.worker.join(60.0)
+            self.worker.join(ESTIMATE_WAIT_S)
+            if self.worker.is_alive():
+                self.log.info(f'live estimate still running at shutdown: left out (run '
+                              f'`frf-ident estimate {self.bag}`)')
         self.rec.close()
         self.log.info(f'bag closed: {self.bag} ({json.dumps(self.counts)})')
 

@@ -25,6 +25,9 @@ Services (std_srvs/Trigger), answering once the plan is made and checked (second
 during a run is refused at once) with ``{"accepted": true, "run": id, ...}``:
 ``/frf/run_multisine`` starts the multisine procedure, ``/frf/run_iteration`` one step of the
 chirp iteration (its ``finished`` event carries ``iteration``, ``error_db``, ``converged``).
+``/frf/abort`` stops the running procedure (reference ramped to zero within ``abort_ramp_s``,
+an ``aborted`` event on /frf/experiment, a ``finished`` event with ``"aborted": true`` on
+/frf/progress); it answers ``{"aborted": false, ...}`` (success false) when nothing runs.
 
 Refused at start-up (one line, exit 2): ``lockstep: true`` with ``use_sim_time: false``
 (lockstep exists only with the simulated plant; a real robot runs free), and a second
@@ -35,6 +38,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import threading
 import time
 from typing import Any, Optional, Sequence
@@ -69,8 +73,17 @@ def _config(node: Any, prefix: str, cls: type) -> Any:
     return cls(**kw)
 
 
+#: node-level parameter names that were renamed: old -> new (a value set under the old name
+#: is refused, never silently ignored)
+RENAMED = {'position_bound_deg': 'plan_bound_deg'}
+
+
 def settings_from_parameters(node: Any) -> SessionSettings:
     """Build the SessionSettings from the node's parameters (defaults: its own)."""
+    for old, new in RENAMED.items():
+        if not math.isnan(c.param(node, old, float('nan'))):     # set by the user
+            raise c.Refused(f'parameter {old} is now {new} (multisine.{old} is the multisine '
+                            f"design's own bound)")
     proto = SessionSettings()
     kw = {f.name: c.param(node, f.name, getattr(proto, f.name))
           for f in dataclasses.fields(SessionSettings) if f.name not in ('multisine', 'chirp')}
@@ -118,18 +131,24 @@ class ExcitationNode:
                                              mw.qos_transient_local(100))
         self.progress_pub = node.create_publisher(self.String, t['progress_topic'],
                                                   mw.qos_transient_local(10))
+        clock = node.get_clock()
+        # lockstep: staleness in simulation time (the plant's /clock); a robot: wall time
+        sim_now = (lambda: clock.now().nanoseconds) if settings.lockstep else None
         self.session = ExcitationSession(settings, self.joints, robot.dt, torque_limit, self,
-                                         model=(robot, ctrl))
+                                         model=(robot, ctrl), sim_now_ns=sim_now)
         self.dt_ns = self.session.dt_ns
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None
         self.refuse_second_publisher(float(c.param(node, 'discovery_wait_s', 0.5)))
+        # every joint state, in order (also free-running): the torque of each sample is in its
+        # own joint state, and a busy node works through a backlog instead of losing samples
         node.create_subscription(JointState, t['joint_states_topic'], self._on_state,
-                                 c.control_qos(settings.lockstep))
+                                 mw.qos_default(c.DEEP), drain=True)
         Trigger = mw.srv('std_srvs/srv/Trigger')
         node.create_service(Trigger, '/frf/run_multisine', self._on_run_multisine)
         node.create_service(Trigger, '/frf/run_iteration', self._on_run_iteration)
-        # the watchdog runs on wall time: a dead simulated plant also stops /clock
+        node.create_service(Trigger, '/frf/abort', self._on_abort)
+        # the watchdog thread: sim time from the node clock in lockstep, wall time on a robot
         self._stop = threading.Event()
         self._signalled = threading.Event()      # SIGINT/SIGTERM (spin's stop event)
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
@@ -192,7 +211,9 @@ class ExcitationNode:
             JSON-serialisable event (see :meth:`frf_ident.app.excitation.Outputs.progress`).
 
         """
-        self.progress_pub.publish(self.String(data=json.dumps(event, sort_keys=True)))
+        # compact: `ros2 topic echo` shows 128 characters unless --full-length
+        self.progress_pub.publish(self.String(data=json.dumps(event, sort_keys=True,
+                                                              separators=(',', ':'))))
 
     def log(self, level: str, text: str) -> None:
         """
@@ -274,6 +295,15 @@ class ExcitationNode:
 
     def _on_run_iteration(self, request: Any, response: Any) -> Any:
         return self._start(self.session.start_chirp_iteration, response)
+
+    def _on_abort(self, request: Any, response: Any) -> Any:
+        """Stop the running procedure: the reference ramps to zero within abort_ramp_s."""
+        run = self.session.abort('abort requested (/frf/abort)')
+        response.success = run is not None
+        response.message = json.dumps({'aborted': True, 'run': run.id, 'procedure': run.name}
+                                      if run is not None else
+                                      {'aborted': False, 'error': 'no procedure is running'})
+        return response
 
     def close(self) -> None:
         self._stop.set()

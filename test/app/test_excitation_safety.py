@@ -136,7 +136,7 @@ def test_a_non_finite_measured_position_aborts_the_run():
 
 @pytest.mark.parametrize('kw, match', [
     ({'live_position_bound_deg': float('nan')}, 'live_position_bound_deg=nan'),
-    ({'live_position_bound_deg': 3.0}, 'below position_bound_deg=4.0'),
+    ({'live_position_bound_deg': 3.0}, 'below plan_bound_deg=4.0'),
     ({'abort_ramp_s': -0.01}, 'abort_ramp_s=-0.01 must be a positive'),
     ({'abort_ramp_s': 8.0}, 'must stop the robot within 0.1 s'),
     ({'stale_samples': 0}, 'stale_samples=0'),

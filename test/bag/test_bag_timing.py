@@ -117,6 +117,47 @@ def test_header_stamps_unset_use_log_time(tmp_path: Path) -> None:
     np.testing.assert_array_equal(rec.position[:, 0], np.arange(500.0))
 
 
+def test_idle_resent_sample_zero_keeps_header_stamps(tmp_path: Path) -> None:
+    """
+    ``ros2 bag record`` of a lockstep simulation: sample 0 re-sent while idle, then the run.
+
+    The idle plant re-sends its stamp-0 joint state every 0.2 s wall; the reader took the
+    several zero stamps for "header stamps unset", fell back to the (wall) log time and
+    refused with "stamp jitter of 18.7 % of dt" (issue 44). The copies are one sample.
+    """
+    from frf_ident.bag.topics import QOS_DEFAULT
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import get_typestore, Stores
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    js = store.types['sensor_msgs/msg/JointState']
+    rng = np.random.default_rng(3)
+    stamps = [0] * 6 + [k * 1_000_000 for k in range(1, 2000)]
+    logs = np.cumsum(np.r_[[2e8] * 6, rng.uniform(1e4, 2e6, 1999)]).astype(np.int64)
+    with Writer(tmp_path / 'rec', version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        c = w.add_connection('/joint_states', js.__msgtype__, typestore=store,
+                             offered_qos_profiles=[QOS_DEFAULT])
+        for ns, log in zip(stamps, logs):
+            sec, nsec = divmod(ns, 10**9)
+            m = js(header=store.types['std_msgs/msg/Header'](
+                stamp=store.types['builtin_interfaces/msg/Time'](sec=sec, nanosec=nsec),
+                frame_id=''), name=['a'], position=np.array([ns * 1e-6]),
+                velocity=np.array([1.0]), effort=np.array([0.0]))
+            w.write(c, int(log), store.serialize_cdr(m, js.__msgtype__))
+    rec, rep = read_recording(tmp_path / 'rec')
+    assert rep.topics['/joint_states'].stamp_source == 'header'
+    assert rep.topics['/joint_states'].duplicates == 5
+    np.testing.assert_allclose(rec.t, np.arange(2000) * 1e-3, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(rec.position[:, 0], np.arange(2000.0))
+
+
+def test_zero_stamps_after_set_ones_count_as_unset() -> None:
+    from frf_ident.bag.timing import valid_header_stamps
+    assert valid_header_stamps(np.array([0, 0, 0, 1, 2, 3]))
+    assert not valid_header_stamps(np.array([0, 1, 0, 2, 0, 3]))
+    assert not valid_header_stamps(np.zeros(5, dtype=np.int64))
+
+
 def test_slow_commands_are_zero_order_held(tmp_path: Path) -> None:
     """A ros2_control-style bag: 1 kHz joint states, velocity commands at 100 Hz (log time)."""
     f64 = None

@@ -47,6 +47,11 @@ def test_free_running_frf_unbiased(tmp_path):
         bag = g.stop()
     assert res['multisine']['success'], res
     rec, _ = read_recording(bag)
+    # a robot's recording keeps the experiments only (record_all false free-running): it
+    # starts at most the gate's margin before the first segment, not at the graph's start
+    from frf_ident.nodes.estimator_node import GATE_MARGIN_S
+    first = min(s.t_start for s in rec.segments)
+    assert first - GATE_MARGIN_S - 0.01 <= rec.t[0] <= first, (rec.t[0], first)
     est, _ = multisine_frf(rec, compensate=False)
     truth = robot_frf_sampled(robot_from_dict(default_model_dict()).linear(), est.freq_hz)
     idx = range(3)

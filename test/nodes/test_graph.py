@@ -152,14 +152,14 @@ def test_kill_plant(tmp_path):
 
 def _kill_plant(tmp_path):
     from frf_ident.bag import read_recording
-    # On the DDS backend: the zero reference comes stale_s + abort_ramp_s after the last joint
-    # state the excitation node processed. Under rclpy on a loaded 2-core machine the node
-    # still works through up to `lookahead` queued joint states after the kill (measured
+    # On the DDS backend: the zero reference comes plant_silent_s + abort_ramp_s after the last
+    # joint state the excitation node processed. Under rclpy on a loaded 2-core machine the
+    # node still works through up to `lookahead` queued joint states after the kill (measured
     # 114-154 ms from kill to zero), so the 50 ms figure is the DDS backend's.
     tmp_path.mkdir()
     g = Graph(tmp_path, model=MODEL, multisine=MultisineConfig(
         n_realisations=1, n_periods=2, resolution_hz=1.0, compensate=False),
-        params={'excitation_node': {'stale_s': 0.03}},   # + 10 ms ramp: < 50 ms
+        params={'excitation_node': {'plant_silent_s': 0.03}},   # + 10 ms ramp: < 50 ms
         middleware='dds')
     g.start()
     obs_file = tmp_path / 'observed.json'

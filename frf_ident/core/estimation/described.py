@@ -718,9 +718,10 @@ def cut_short_error(n: int) -> EstimationError:
 
     """
     return EstimationError(f'every experiment of the recording was cut short: its {n} started '
-                           f'segment(s) never ended (run aborted or recording stopped; the '
-                           f'warnings name them); expected at least one complete multisine '
-                           f'realisation or chirp iteration')
+                           f'segment(s) never ended or were recorded only in part (run '
+                           f'aborted, recording started or stopped inside one, or a time range '
+                           f'cutting one; the warnings name them); expected at least one '
+                           f'complete multisine realisation or chirp iteration')
 
 
 def check_recording(rec: Recording, options=None) -> None:
