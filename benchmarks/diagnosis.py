@@ -47,6 +47,7 @@ from typing import Any, TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from frf_ident.core.diagnosis import DiagnosisResult
     from frf_ident.core.model.params import RobotParams
     from frf_ident.core.recording import Recording
 
@@ -199,7 +200,7 @@ def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
         wall = time.perf_counter() - t0
     finally:
         ref.SCENE = {}
-    return score_scene(scene, res['report'], wall, res['result'].get('n_sims', 0))
+    return score_scene(scene, res['report'], wall, res['result'].n_sims)
 
 
 def param_error(name: str, truth: dict[str, Any], found: dict[str, Any]) -> float:
@@ -373,9 +374,9 @@ def bench_rows() -> list[tuple[str, str, str, str]]:
             res = diagnose(bag, MODEL, Path(tmp), progress=lambda _m: None)
             wall = time.perf_counter() - t0
         rows.append(('diagnose on the demo bag: wall time', f'{wall:.0f} s',
-                     f'{res["result"].get("n_sims", 0)} simulations', 'goal < 120 s'))
-        ev = res['result']['evaluator']
-        robot = res['result']['extended']
+                     f'{res["result"].n_sims} simulations', 'goal < 120 s'))
+        ev = res['result'].detail.evaluator
+        robot = res['result'].extended
         t_loss = min(_timed(lambda: ev.loss(robot, 0)) for _ in range(3))
         rows.append(('... one candidate evaluation (simulate + estimate)', f'{t_loss:.2f} s',
                      '', ''))
@@ -555,7 +556,7 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
                            progress=lambda _m: None)
             rep = res['report']
             est[x] = _estimates(rep)
-            slopes[x] = _slopes_by_direction(res['recording'], res['result']['extended'])
+            slopes[x] = _slopes_by_direction(res['recording'], res['result'].extended)
             m = rep['metrics']
             rows.append((f'KUKA trajectory {x} fitted: held-out NRMSE nominal -> extended',
                          f'{m["baseline"]["time_nrmse"]:.3f} -> {m["extended"]["time_nrmse"]:.3f}',
@@ -646,9 +647,9 @@ def _estimates(report: dict[str, Any]) -> dict[tuple[str, str], tuple]:
     return out
 
 
-def _report(res: dict[str, Any]) -> dict[str, Any]:
+def _report(res: DiagnosisResult) -> dict[str, Any]:
     """Return the effects and rejected candidates of a core result as report.json has them."""
-    return {'effects': [e.to_dict() for e in res['effects']], 'rejected': res['rejected']}
+    return {'effects': [e.to_dict() for e in res.effects], 'rejected': res.rejected}
 
 
 def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
@@ -674,7 +675,7 @@ def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
     rec = full.select_joints(full.joint_names[:robot.n_axes])
     whole = diagnose_timeseries(rec, robot)
     truth = _estimates(_report(whole))
-    f = model_residual(rec, whole['extended'])[0]
+    f = model_residual(rec, whole.extended)[0]
     sigma = np.sqrt(noise_level(f, rec.fs) * rec.fs / 2)
     n = rec.t.size // 2
 

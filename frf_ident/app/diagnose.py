@@ -133,7 +133,7 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
 
     Returns
     -------
-    {'report': report.json content, 'result': the diagnosis result, 'mode': ...,
+    {'report': report.json content, 'result': the :class:`DiagnosisResult`, 'mode': its mode,
     'recording': the diagnosed data, its joints matched to the model's axes}
 
     """
@@ -167,37 +167,31 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     if has_experiments(rec):
         progress('identification experiments found: FRF and closed-loop simulation evidence')
         res = diagnose_experiments(rec, robot, ctrl, progress=progress)
-        mode = 'experiments'
     else:
         progress('no identification experiments: time-series (inverse-dynamics) evidence')
         res = diagnose_timeseries(rec, robot, progress=progress)
-        mode = 'timeseries'
+    mode = res.mode
     if others:
-        res['metrics']['validation_records'] = [
-            validate_on(str(p), o, robot, res['extended'], ctrl) for p, o in others]
+        res.metrics['validation_records'] = [
+            validate_on(str(p), o, robot, res.extended, ctrl) for p, o in others]
     out.mkdir(parents=True, exist_ok=True)
     clear_outputs(out, OUTPUT_FILES)
-    found = ', '.join(e.name for e in res['effects']) or 'none'
-    save_model(out / 'extended_model.yaml', res['extended'], ctrl,
+    found = ', '.join(e.name for e in res.effects) or 'none'
+    save_model(out / 'extended_model.yaml', res.extended, ctrl,
                extra={'description': f'{model.get("description", "nominal model")} + diagnosed '
                                      f'effects: {found}'})
-    report = {'effects': [e.to_dict() for e in res['effects']],
-              'metrics': _plain_metrics(res['metrics']),
-              'unexplained': res.get('unexplained', []),
-              'rejected': res.get('rejected', [_rejected(c) for c in res.get('candidates', [])]),
+    report = {'effects': [e.to_dict() for e in res.effects],
+              'metrics': _plain_metrics(res.metrics),
+              'unexplained': res.unexplained,
+              'rejected': res.rejected,
               'extended_model': 'extended_model.yaml'}
-    if 'discretisation' in res:
-        report['discretisation'] = res['discretisation']
+    if res.discretisation is not None:
+        report['discretisation'] = res.discretisation
     if rec.meta.get('gaps'):
         report['gaps'] = rec.meta['gaps']
     (out / 'report.json').write_text(json.dumps(report, indent=1))
     write_diagnosis_report(out, report, res, rec, mode, data)
     return {'report': report, 'result': res, 'mode': mode, 'recording': rec}
-
-
-def _rejected(c) -> dict[str, Any]:
-    return {'name': c.name, 'axis': c.axis, 'misfit_share_removed': round(float(c.gain), 4),
-            'parameters': c.to_dict()['parameters']}
 
 
 def _plain_metrics(m: Any) -> Any:
@@ -222,11 +216,11 @@ def validate_on(name: str, other: Recording, robot, ext, ctrl) -> dict[str, Any]
     robot = _r(robot, sample_rate=other.fs)
     ext = _r(ext, sample_rate=other.fs)
     if has_experiments(other):
-        from frf_ident.core.diagnosis.experiments import Evaluator
+        from frf_ident.core.diagnosis import Evaluator
         ev = Evaluator(other, ctrl)
         b, e = ev.metrics(robot), ev.metrics(ext)
     else:
-        from frf_ident.core.diagnosis.timeseries import predict_metrics
+        from frf_ident.core.diagnosis.prediction import predict_metrics
         b, e = (predict_metrics(other, m) for m in (robot, ext))
     keep = ('frf_error_db', 'time_nrmse', 'per_axis')
     return {'record': name, 'baseline': {k: b[k] for k in keep},

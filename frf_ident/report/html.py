@@ -35,6 +35,7 @@ import math
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from frf_ident.core.diagnosis.result import DiagnosisResult
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
@@ -335,7 +336,7 @@ def _timing_section(t: Mapping[str, Any]) -> str:
 # --------------------------------------------------------------------------- diagnosis
 
 def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
-                           res: Mapping[str, Any], rec: Recording, mode: str,
+                           res: DiagnosisResult, rec: Recording, mode: str,
                            data: str | Path) -> Path:
     """
     Write the HTML report of ``frf-ident diagnose``.
@@ -351,7 +352,8 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
     report
         The report.json content (docs/CONTRACT.md §7).
     res
-        The diagnosis result (estimates, simulations or residuals for the figures).
+        The diagnosis result (its ``detail``: estimates, simulations or residuals for the
+        figures).
     rec
         The diagnosed recording.
     mode
