@@ -178,11 +178,14 @@ def identification_config():
                                 ChirpConfig(duration=10.0, max_iterations=3))
 
 
-def _diagnosis_log():
-    """Return the diagnosis' progress sink: stderr with FRF_DIAG_LOG=1, else nothing."""
+def _diagnosis_log() -> None:
+    """With FRF_DIAG_LOG=1 send the diagnosis' search trace (DEBUG log lines) to stderr."""
     if os.environ.get('FRF_DIAG_LOG', '') not in ('', '0'):
-        return lambda m: print(m, file=sys.stderr, flush=True)
-    return lambda _m: None
+        import logging
+        lg = logging.getLogger('frf_ident.core.diagnosis')
+        if not lg.handlers:
+            lg.addHandler(logging.StreamHandler(sys.stderr))
+        lg.setLevel(logging.DEBUG)
 
 
 def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
@@ -196,7 +199,8 @@ def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
         bag = work / 'bag'
         run_identify(MODEL, PLANT, identification_config(), bag, progress=lambda _m: None)
         t0 = time.perf_counter()
-        res = diagnose(bag, MODEL, work / 'diag', progress=_diagnosis_log())
+        _diagnosis_log()
+        res = diagnose(bag, MODEL, work / 'diag', progress=lambda _m: None)
         wall = time.perf_counter() - t0
     finally:
         ref.SCENE = {}

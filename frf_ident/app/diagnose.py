@@ -129,7 +129,10 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     validate
         Other records of the same robot: baseline and extended metrics on each.
     progress
-        Callback for progress lines.
+        Callback for the lines people read (what was read, the route, the effects found with
+        their values, where the files went). The diagnosis' own stages log to
+        ``logging.getLogger('frf_ident.core.diagnosis.*')``: a few INFO lines per stage, the
+        search trace at DEBUG level.
 
     Returns
     -------
@@ -166,10 +169,10 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         robot = replace(robot, sample_rate=fs)
     if has_experiments(rec):
         progress('identification experiments found: FRF and closed-loop simulation evidence')
-        res = diagnose_experiments(rec, robot, ctrl, progress=progress)
+        res = diagnose_experiments(rec, robot, ctrl)
     else:
         progress('no identification experiments: time-series (inverse-dynamics) evidence')
-        res = diagnose_timeseries(rec, robot, progress=progress)
+        res = diagnose_timeseries(rec, robot)
     mode = res.mode
     if others:
         res.metrics['validation_records'] = [

@@ -181,9 +181,10 @@ def gravity_with_shape(ev: Evaluator, base: RobotParams, kept: list[Effect], can
     of it, the right load worsens the axis. Of the stage-1 candidates only the load acts on
     the link side: friction and ripple act at the motor and leave the gear's static deflection
     alone, so they are offered on top. The candidate is added, the axis' kept effects are
-    refitted jointly by simulation (:func:`.refit.refit_jointly`), and the pair replaces the axis' effects if it passes the
-    acceptance rule of :func:`accept` against the model without the load (share of the
-    misfit above the floor >= MIN_SHARE, drop >= MIN_Z standard deviations under noise).
+    refitted jointly by simulation (:func:`.refit.refit_jointly`), and the pair replaces the
+    axis' effects if it passes the acceptance rule of :func:`accept` against the model
+    without the load (share of the misfit above the floor >= MIN_SHARE, drop >= MIN_Z
+    standard deviations under noise).
 
     Parameters
     ----------

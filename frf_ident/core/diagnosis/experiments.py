@@ -71,8 +71,8 @@ class Search:
     again: list[Effect] = field(default_factory=list)  # second-pass candidates
 
 
-def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
-                         progress: Callable[[str], None] | None = None) -> DiagnosisResult:
+def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity
+                         ) -> DiagnosisResult:
     """
     Diagnose an identification recording against the nominal ``robot``.
 
@@ -91,16 +91,20 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         The nominal model.
     ctrl : PIVelocity
         The velocity controller the recording ran through.
-    progress : callable, optional
-        Receives the search trace lines (also logged at DEBUG level).
 
     Returns
     -------
     DiagnosisResult
         Mode 'experiments', with :class:`.result.ExperimentsDetail`.
 
+    Notes
+    -----
+    A few lines per stage are logged at INFO level (logger ``frf_ident.core.diagnosis.*``),
+    the search trace (every candidate's misfit before and after, refits, held-out duels) at
+    DEBUG level.
+
     """
-    s = start(rec, robot, ctrl, progress)
+    s = start(rec, robot, ctrl)
     torque_residual_effects(s)
     frf_shape_effects(s)
     second_pass(s)
@@ -111,13 +115,8 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     return finish(s, val_ext, sim_ext, val_base)
 
 
-def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity,
-          progress: Callable[[str], None] | None) -> Search:
+def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Search:
     """Build the evaluator and simulate the nominal model: its misfit per axis."""
-    def say(m: str) -> None:
-        log.debug(m)
-        if progress is not None:
-            progress(m)
     if rec.reference is None:
         raise EstimationError('recording has no velocity reference: use the time-series '
                               'diagnosis')
@@ -131,7 +130,7 @@ def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity,
     ev.floor_seen(e0)
     log.info('nominal misfit per axis (1 = noise floor): %s (noise sd %.3g)', ', '.join(
         f'{a.name} {v:.4g}' for a, v in zip(robot.axes, e0)), ev.misfit_sd())
-    return Search(ev, robot, say, sim0, robot, e0)
+    return Search(ev, robot, log.debug, sim0, robot, e0)
 
 
 def torque_residual_effects(s: Search) -> None:
@@ -165,6 +164,7 @@ def torque_residual_effects(s: Search) -> None:
               f'not taken')
     s.ext, s.cur = accept(s.ev, robot, s.kept, s.stage1, s.cur, s.say)
     s.cands += s.stage1
+    log.info('stage 1 (torque residual): %d candidate(s), %s', len(s.stage1), _named(s.kept))
 
 
 def frf_shape_effects(s: Search) -> None:
@@ -197,6 +197,7 @@ def frf_shape_effects(s: Search) -> None:
         sim1 = ev.simulate(s.ext)
     s.stage2 = stage2_all
     s.cands += stage2_all
+    log.info('stage 2 (FRF shape): %d candidate(s), %s', len(stage2_all), _named(s.kept))
 
 
 def frf_shape_candidates(s: Search, i: int, sim_est: dict) -> list[Effect]:
@@ -370,7 +371,13 @@ def held_out_check(s: Search) -> tuple[np.ndarray, Recording]:
         s.ext = rebuild(robot, kept)
         sim_ext = ev.simulate(s.ext)
         val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+    log.info('held-out check: %s', _named(kept))
     return val_ext, sim_ext
+
+
+def _named(kept: list[Effect]) -> str:
+    """Return 'kept: name@axis, ...' for a log line."""
+    return 'kept: ' + (', '.join(f'{c.name}@{c.axis}' for c in kept) or 'none')
 
 
 def partners_without(s: Search, c: Effect, others: list[Effect]) -> dict[int, Effect]:

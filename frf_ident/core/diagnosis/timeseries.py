@@ -153,8 +153,7 @@ class Prepared:
     bearing: list           # runs of joints whose angle carries a load
 
 
-def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
-                        progress: Callable[[str], None] | None = None
+def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                         ) -> DiagnosisResult:
     """
     Diagnose a time-series recording against the nominal ``robot``.
@@ -170,19 +169,18 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
         The nominal model.
     fc
         Low-pass cut-off of residual and regressors [Hz].
-    progress
-        Receives the search trace lines (also logged at DEBUG level).
 
     Returns
     -------
     DiagnosisResult
         Mode 'timeseries', with :class:`.result.TimeseriesDetail` (the residual for the plots).
 
+    Notes
+    -----
+    The selection per axis is logged at INFO level, the rest of the trace at DEBUG level.
+
     """
-    def say(m: str) -> None:
-        log.debug(m)
-        if progress is not None:
-            progress(m)
+    say = log.debug
     d = prepare(rec, robot, fc, say)
     effects: list[Effect] = []
     rejected: list[dict[str, Any]] = []
@@ -190,12 +188,12 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     for i, ax in enumerate(robot.axes):
         groups, forced, scan = axis_groups(d, robot, i, rejected)
         groups, chosen, info, cf = select_physical(d, ax, i, groups, forced)
-        say(f'{ax.name}: selected {chosen} (ripple scan peak {scan[1]:.1f}, threshold '
-            f'{scan[2]:.1f}); ' + ', '.join(f'{k} p={v.get("p", 1):.2g} '
-                                            f'share={v.get("share", 0):.3f}'
-                                            for k, v in info.items()))
+        log.info('%s: selected %s (ripple scan peak %.1f, threshold %.1f); %s', ax.name, chosen,
+                 scan[1], scan[2], ', '.join(f'{k} p={v.get("p", 1):.2g} '
+                                             f'share={v.get("share", 0):.3f}'
+                                             for k, v in info.items()))
         rejected += rejected_groups(ax.name, chosen, info)
-        ch, found = axis_effects(d, robot, i, groups, chosen, info, cf, scan[0])
+        ch, found = axis_effects(d, robot, i, groups, chosen, info, cf, scan)
         effects += found
         ext_axes[i] = replace(ax, **ch)
     effects.sort(key=lambda x: -x.score)
