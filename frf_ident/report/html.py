@@ -411,6 +411,17 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
                            v['baseline']['time_nrmse']],
                           ['extended', v['extended']['frf_error_db'],
                            v['extended']['time_nrmse']]]))
+    ls = m.get('least_squares')
+    if ls:
+        met += ('<h3>Against the least-squares baseline</h3>'
+                f'<p>{html.escape(ls["model"])}; {html.escape(ls["metric"])}.</p>'
+                + _table(['held-out set', 'axis', 'nominal', 'least squares',
+                          'extended (as fitted)'],
+                         [[s['record'], ax, v['nominal'], v['least_squares'], v['extended']]
+                          for s in ls['held_out_as_fitted'] for ax, v in s['per_axis'].items()])
+                + '<ul>' + ''.join(f'<li>{html.escape(ax)}: the extended model '
+                                   f'{html.escape(v)}</li>'
+                                   for ax, v in ls['extended_vs_baseline'].items()) + '</ul>')
     step = report.get('discretisation')
     if step:
         met += (f'<p>Integrator check: the extended model simulated at twice its '

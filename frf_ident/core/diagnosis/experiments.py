@@ -483,6 +483,7 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
         'experiments', kept, [rejected_entry(c) for c in rest], unexplained, metrics, ext,
         ExperimentsDetail(ev, plots, {'nominal': s.sim0, 'extended': sim_ext},
                           {'baseline': val_base.tolist(), 'extended': val_ext.tolist()}),
+        ev.fit_mask[:-1], (ev.val_mask if ev.val_mask.any() else ev.fit_mask)[:-1],
         discretisation=step, n_sims=ev.n_sims, candidates=rest)
 
 

@@ -158,20 +158,60 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
 
     """
     rec, lost = bridge_gaps(rec)
-    fs = rec.fs
     f, _, vh, _ = model_residual(rec, robot)
-    N = rec.t.size
+    return torque_metrics(rec, lost, lowpass(f, rec.fs, fc), robot.joint_names, fc=fc,
+                          mask=mask)
+
+
+def default_mask(n_rows: int) -> np.ndarray:
+    """Return the rows (between samples) compared by default: all but EDGE at both ends."""
+    N = n_rows + 1
+    mask = np.zeros(N - 1, bool)
+    mask[int(EDGE * N):N - 1 - int(EDGE * N)] = True
+    return mask
+
+
+def torque_metrics(rec: Recording, lost: np.ndarray, ff: np.ndarray, names: list[str], *,
+                   fc: float = FC_HZ, mask: np.ndarray | None = None) -> dict[str, Any]:
+    """
+    Return the §7 metrics of a torque prediction given as its low-passed residual.
+
+    The one definition of ``time_nrmse`` and ``frf_error_db`` of the time-series route, for
+    any predictor (a model file through :func:`predict_metrics`, the least-squares baseline
+    of :mod:`.baseline`): on ``mask`` minus the bridged rows, per axis only where it moves
+    (at rest static friction holds any torque).
+
+    Parameters
+    ----------
+    rec : Recording
+        The gap-bridged record.
+    lost : ndarray of bool, shape (N,)
+        Its bridged rows (:func:`.common.bridge_gaps`).
+    ff : ndarray, shape (N-1, n)
+        Measured minus predicted torque, low-passed at ``fc``, between samples.
+    names : list of str
+        The axes' names.
+    fc : float
+        Low-pass cut-off [Hz].
+    mask : ndarray of bool, shape (N-1,), optional
+        The rows compared (default :func:`default_mask`).
+
+    Returns
+    -------
+    dict
+        As :func:`predict_metrics`.
+
+    """
+    fs = rec.fs
+    vh = 0.5 * (rec.velocity[1:] + rec.velocity[:-1])
     if mask is None:
-        mask = np.zeros(N - 1, bool)
-        mask[int(EDGE * N):N - 1 - int(EDGE * N)] = True
-    # per axis: only where it moves (at rest static friction holds any torque)
+        mask = default_mask(rec.t.size - 1)
     use = (mask & ~(lost[1:] | lost[:-1]))[:, None] & moving(vh, rec.velocity, fs, fc)
     uf = lowpass(rec.effort[:-1], fs, fc)
-    ff = lowpass(f, fs, fc)
     u_model = uf - ff
     per = {}
     err2, var2 = 0.0, 0.0
-    for i, name in enumerate(robot.joint_names):
+    for i, name in enumerate(names):
         m = use[:, i]
         e = ff[m, i]
         du = uf[m, i] - uf[m, i].mean() if m.any() else np.zeros(0)

@@ -81,6 +81,9 @@ class DiagnosisResult:
         Closed-loop simulations of the recorded excitation (0 for the time-series route).
     detail : ExperimentsDetail or TimeseriesDetail
         The route's data for the figures.
+    fit_rows, held_out_rows : ndarray of bool, shape (N-1,)
+        The rows (between samples) the route fitted on and held out; the least-squares
+        baseline (:mod:`.baseline`) is fitted and judged on the same.
 
     """
 
@@ -91,6 +94,8 @@ class DiagnosisResult:
     metrics: dict[str, Any]
     extended: RobotParams
     detail: ExperimentsDetail | TimeseriesDetail
+    fit_rows: np.ndarray
+    held_out_rows: np.ndarray
     discretisation: dict[str, Any] | None = None
     n_sims: int = 0
     #: the candidates that were not taken (experiments route; their rejected entries)

@@ -138,3 +138,9 @@ RIPPLE_LEVEL_DOF = 50.0
 #: ... and the oversampled scan's maximum behaves as that of this many independent values per
 #: resolution cell
 RIPPLE_CELL_FACTOR = 1.5
+
+# --- least-squares baseline (baseline.py) -------------------------------------------------------
+
+#: [rad/s] velocity scale of the smooth Coulomb term Fc tanh(qd / LS_TANH_VELOCITY) of the
+#: 4-parameter least-squares baseline (issue #41's reference fit)
+LS_TANH_VELOCITY = 0.01

@@ -207,7 +207,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
                 'pred_extended': lowpass(d.f, fs, fc) - val['extended']['residual'],
                 'val_mask': d.val_m}
     return DiagnosisResult('timeseries', effects, rejected, unexplained, metrics, ext,
-                           TimeseriesDetail(residual, floor.tolist()))
+                           TimeseriesDetail(residual, floor.tolist()), d.fit_m, d.val_m)
 
 
 def prepare(rec: Recording, robot: RobotParams, fc: float, say: Callable[[str], None]
