@@ -585,6 +585,44 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
     return rows
 
 
+def kuka_baseline_rows() -> list[tuple[str, str, str, str]]:
+    """
+    Return per axis and pooled the NRMSE of nominal / least squares / extended on B and C.
+
+    KUKA trajectory A diagnosed with B and C as ``--validate`` records (issue #41): the
+    extended model as fitted on A beside the 4-parameter least-squares baseline fitted on the
+    same data, on A's held-out blocks and on B and C, and per axis whether the effects were
+    kept. Empty unless KUKA_BC names a directory holding B.mat and C.mat.
+    """
+    bc = Path(os.environ.get(KUKA_BC_ENV, '') or '/nonexistent')
+    others = [bc / 'B.mat', bc / 'C.mat']
+    if not all(p.is_file() for p in others):
+        return []
+    from frf_ident.app.diagnose import diagnose
+    cfg = ROOT / 'config'
+    with tempfile.TemporaryDirectory() as tmp:
+        res = diagnose(KUKA, cfg / 'model_kuka_kr300_axes123.yaml', Path(tmp) / 'A',
+                       map_path=cfg / 'map_kuka_kr300.yaml', validate=others,
+                       progress=lambda _m: None)
+    ls = res['report']['metrics']['least_squares']
+    rows = []
+    for s in ls['held_out_as_fitted']:
+        name = {str(others[0]): 'B', str(others[1]): 'C'}.get(s['record'], 'A held out')
+        t = s['time_nrmse']
+        rows.append((f'KUKA A fitted, on {name}: NRMSE nominal / LS / extended',
+                     f'{t["nominal"]:.3f} / {t["least_squares"]:.3f} / {t["extended"]:.3f}',
+                     'pooled over axes 1-3', ''))
+        for ax, v in s['per_axis'].items():
+            rows.append((f'... {ax}', f'{v["nominal"]:.3f} / {v["least_squares"]:.3f} / '
+                                      f'{v["extended"]:.3f}', '',
+                         'extended wins' if v['extended'] < v['least_squares'] else
+                         'least squares wins'))
+    for ax, v in ls['extended_vs_baseline'].items():
+        rows.append((f'KUKA A: {ax} extended vs baseline', v.split(';')[0][:26],
+                     'effects rejected' if 'rejected' in v else 'effects kept', ''))
+    return rows
+
+
 def _slopes_by_direction(rec: Recording, robot: RobotParams
                          ) -> dict[str, tuple[float, float, float]]:
     """
