@@ -176,8 +176,20 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     mode = res.mode
     res = _against_least_squares(res, rec, others, robot, progress)
     if others:
+        from frf_ident.core.diagnosis.extrapolation import beyond_fitted_range
         res.metrics['validation_records'] = [
             validate_on(str(p), o, robot, res.extended, ctrl) for p, o in others]
+        for (p, o), v in zip(others, res.metrics['validation_records']):
+            far = beyond_fitted_range(rec, res.fit_rows, o, robot.joint_names)
+            v['beyond_fitted_range'] = far
+            if far:
+                progress(f'warning: --validate {p} leaves the configuration range fitted on '
+                         f'{data}: ' + '; '.join(
+                             f'{ax} reaches {r["reached_deg"][0]:.1f}..{r["reached_deg"][1]:.1f}'
+                             f' deg, fitted {r["fitted_deg"][0]:.1f}..{r["fitted_deg"][1]:.1f}'
+                             f' deg ({r["beyond_deg"]:.1f} deg beyond)'
+                             for ax, r in far.items())
+                         + ': position-dependent terms are extrapolated there')
     out.mkdir(parents=True, exist_ok=True)
     clear_outputs(out, OUTPUT_FILES)
     found = ', '.join(e.name for e in res.effects) or 'none'

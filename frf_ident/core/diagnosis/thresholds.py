@@ -144,3 +144,9 @@ RIPPLE_CELL_FACTOR = 1.5
 #: [rad/s] velocity scale of the smooth Coulomb term Fc tanh(qd / LS_TANH_VELOCITY) of the
 #: 4-parameter least-squares baseline (issue #41's reference fit)
 LS_TANH_VELOCITY = 0.01
+
+# --- validation records (extrapolation.py) ------------------------------------------------------
+
+#: [deg] a validation record that leaves the fitted configuration range of an axis by more
+#: than this is warned about (below it: the same range up to encoder and filter detail)
+RANGE_TOLERANCE_DEG = 0.5
