@@ -411,6 +411,14 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
                            v['baseline']['time_nrmse']],
                           ['extended', v['extended']['frf_error_db'],
                            v['extended']['time_nrmse']]]))
+        far = v.get('beyond_fitted_range') or {}
+        if far:
+            met += ('<p class="warn">This record leaves the configuration range the model was '
+                    'fitted on (position-dependent terms are extrapolated): '
+                    + '; '.join(f'{html.escape(ax)} reaches {r["reached_deg"][0]:.1f} .. '
+                                f'{r["reached_deg"][1]:.1f} deg, fitted {r["fitted_deg"][0]:.1f}'
+                                f' .. {r["fitted_deg"][1]:.1f} deg ({r["beyond_deg"]:.1f} deg '
+                                f'beyond)' for ax, r in far.items()) + '.</p>')
     ls = m.get('least_squares')
     if ls:
         met += ('<h3>Against the least-squares baseline</h3>'
