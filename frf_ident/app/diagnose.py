@@ -208,8 +208,6 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     (out / 'report.json').write_text(json.dumps(report, indent=1))
     write_diagnosis_report(out, report, res, rec, mode, data)
     _summary(res, progress)
-    progress(f'wrote {out / "report.json"}, {out / "report.html"}, '
-             f'{out / "extended_model.yaml"}')
     return {'report': report, 'result': res, 'mode': mode, 'recording': rec}
 
 
@@ -254,16 +252,7 @@ def _against_least_squares(res, rec: Recording, others: list, robot, progress):
 
 
 def _summary(res, progress) -> None:
-    """Print the effects found and the held-out comparison, a few lines for people."""
-    if res.effects:
-        for e in res.effects:
-            progress(f'  {e.axis} {e.name}: {_values(e.parameters)}')
-    else:
-        progress('  no effect found')
-    for u in res.unexplained:
-        band = u['signature'].get('band_hz')
-        progress(f'  {u["axis"]} unexplained ({100 * u["misfit_share"]:.0f} % of the nominal '
-                 f'misfit left' + (f', {band[0]:g}-{band[1]:g} Hz)' if band else ')'))
+    """Print the held-out comparison with the least-squares baseline (the CLI prints the rest)."""
     ls = res.metrics['least_squares']
     progress('held-out time_nrmse (torque predicted from the measured motion), nominal / '
              'least squares / extended as fitted:')
@@ -274,26 +263,6 @@ def _summary(res, progress) -> None:
     for ax, v in ls['extended_vs_baseline'].items():
         if v.startswith('does not'):
             progress(f'  {ax}: the extended model {v}')
-
-
-#: units of the model-file parameters in the printed summary
-_UNITS = {'coulomb_friction': 'N m', 'viscous_friction': 'N m s/rad', 'time_delay': 's',
-          'stiffness': 'N m/rad', 'stiffness_k2': 'N m/rad', 'stiffness_breakpoint': 'rad',
-          'backlash': 'rad', 'motor_inertia': 'kg m^2', 'link_inertia': 'kg m^2',
-          'damping': 'N m s/rad', 'gravity_torque': 'N m'}
-
-
-def _values(p: dict[str, Any]) -> str:
-    """Return 'key value unit, ...' of an effect's parameters (terms: their amplitudes)."""
-    out = []
-    for k, v in p.items():
-        if isinstance(v, list):
-            out.append(f'{k} ' + ', '.join(f'{t["amplitude"]:.4g} N m' + (
-                f' at {t["spatial_frequency"]:.4g} /rad' if 'spatial_frequency' in t else '')
-                for t in v if isinstance(t, dict) and 'amplitude' in t))
-        elif isinstance(v, (int, float)):
-            out.append(f'{k} {v:.4g} {_UNITS.get(k, "")}'.rstrip())
-    return ', '.join(out)
 
 
 def _plain_metrics(m: Any) -> Any:
