@@ -34,7 +34,7 @@ from .prediction import predict_metrics, torque_metrics
 from .regressors import moving
 from .residual import FC_HZ, lowpass
 from .result import DiagnosisResult
-from .thresholds import LS_TANH_VELOCITY
+from .thresholds import LS_TANH_VELOCITY, ONE_WAY
 
 __all__ = ['axes_not_beating', 'fit_least_squares', 'held_out_comparison', 'LeastSquaresBaseline',
            'least_squares_metrics', 'without_axes']
@@ -100,8 +100,13 @@ def fit_least_squares(rec: Recording, fit_rows: np.ndarray, *, fc: float = FC_HZ
     coef = np.zeros((X.shape[1], len(TERMS)))
     for i in range(X.shape[1]):
         m = rows & move[:, i]
-        if m.sum() > len(TERMS):
-            coef[i] = np.linalg.lstsq(X[m, i], uf[m, i], rcond=None)[0]
+        if m.sum() <= len(TERMS):
+            continue
+        up = float(np.mean(X[m, i, 1] > 0))
+        # an axis that moves one way only: tanh(qd / 0.01) is the constant column, the
+        # Coulomb term and the offset one parameter (as in the time-series route)
+        cols = [0, 1, 3] if min(up, 1.0 - up) < ONE_WAY else [0, 1, 2, 3]
+        coef[i, cols] = np.linalg.lstsq(X[m, i][:, cols], uf[m, i], rcond=None)[0]
     return LeastSquaresBaseline(list(names or rec.joint_names), coef, fc)
 
 

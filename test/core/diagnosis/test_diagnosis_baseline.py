@@ -77,3 +77,21 @@ def test_a_torque_the_four_terms_lack_is_not_fitted_and_loses_to_a_model_that_ha
                                                'extended': 0.3}}}]
     # not below the baseline on B (a tie is no win)
     assert axes_not_beating(comp) == {'j': ['B']}
+
+
+def test_an_axis_moving_one_way_fits_coulomb_and_offset_as_one_constant():
+    """
+    Fit one constant where tanh(qd / 0.01) is constant, and stay finite beyond it.
+
+    Fitted on the stretch where the axis only moves forward, tanh and the offset are the same
+    column: jointly they are not determined (a near-collinear fit extrapolated the KUKA half
+    records' torque 270 times off); their sum is what the data show.
+    """
+    rec = _record(noise=0.01)
+    v = np.diff(rec.position[:, 0]) * FS
+    fit = v > 0.2
+    ls = fit_least_squares(rec, fit)
+    got = dict(zip(TERMS, ls.coef[0]))
+    assert got['coulomb'] == 0.0, got
+    assert got['offset'] == pytest.approx(TRUE['offset'] + TRUE['coulomb'], abs=0.05), got
+    assert got['viscous'] == pytest.approx(TRUE['viscous'], rel=0.03), got
