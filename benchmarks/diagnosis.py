@@ -47,6 +47,7 @@ from typing import Any, TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from frf_ident.core.diagnosis import DiagnosisResult
     from frf_ident.core.model.params import RobotParams
     from frf_ident.core.recording import Recording
 
@@ -177,11 +178,14 @@ def identification_config():
                                 ChirpConfig(duration=10.0, max_iterations=3))
 
 
-def _diagnosis_log():
-    """Return the diagnosis' progress sink: stderr with FRF_DIAG_LOG=1, else nothing."""
+def _diagnosis_log() -> None:
+    """With FRF_DIAG_LOG=1 send the diagnosis' search trace (DEBUG log lines) to stderr."""
     if os.environ.get('FRF_DIAG_LOG', '') not in ('', '0'):
-        return lambda m: print(m, file=sys.stderr, flush=True)
-    return lambda _m: None
+        import logging
+        lg = logging.getLogger('frf_ident.core.diagnosis')
+        if not lg.handlers:
+            lg.addHandler(logging.StreamHandler(sys.stderr))
+        lg.setLevel(logging.DEBUG)
 
 
 def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
@@ -195,11 +199,12 @@ def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
         bag = work / 'bag'
         run_identify(MODEL, PLANT, identification_config(), bag, progress=lambda _m: None)
         t0 = time.perf_counter()
-        res = diagnose(bag, MODEL, work / 'diag', progress=_diagnosis_log())
+        _diagnosis_log()
+        res = diagnose(bag, MODEL, work / 'diag', progress=lambda _m: None)
         wall = time.perf_counter() - t0
     finally:
         ref.SCENE = {}
-    return score_scene(scene, res['report'], wall, res['result'].get('n_sims', 0))
+    return score_scene(scene, res['report'], wall, res['result'].n_sims)
 
 
 def param_error(name: str, truth: dict[str, Any], found: dict[str, Any]) -> float:
@@ -373,9 +378,9 @@ def bench_rows() -> list[tuple[str, str, str, str]]:
             res = diagnose(bag, MODEL, Path(tmp), progress=lambda _m: None)
             wall = time.perf_counter() - t0
         rows.append(('diagnose on the demo bag: wall time', f'{wall:.0f} s',
-                     f'{res["result"].get("n_sims", 0)} simulations', 'goal < 120 s'))
-        ev = res['result']['evaluator']
-        robot = res['result']['extended']
+                     f'{res["result"].n_sims} simulations', 'goal < 120 s'))
+        ev = res['result'].detail.evaluator
+        robot = res['result'].extended
         t_loss = min(_timed(lambda: ev.loss(robot, 0)) for _ in range(3))
         rows.append(('... one candidate evaluation (simulate + estimate)', f'{t_loss:.2f} s',
                      '', ''))
@@ -555,7 +560,7 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
                            progress=lambda _m: None)
             rep = res['report']
             est[x] = _estimates(rep)
-            slopes[x] = _slopes_by_direction(res['recording'], res['result']['extended'])
+            slopes[x] = _slopes_by_direction(res['recording'], res['result'].extended)
             m = rep['metrics']
             rows.append((f'KUKA trajectory {x} fitted: held-out NRMSE nominal -> extended',
                          f'{m["baseline"]["time_nrmse"]:.3f} -> {m["extended"]["time_nrmse"]:.3f}',
@@ -577,6 +582,44 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
         rows.append((f'... {k[0]} {k[1]}: A / B / C (standard error)', ' / '.join(cells),
                      f'B, C within 20 % of A: {sum(near)}/{len(near)}', ''))
     rows.append(('... parameters of B and C within 20 % of A', f'{agree}/{named}', '', ''))
+    return rows
+
+
+def kuka_baseline_rows() -> list[tuple[str, str, str, str]]:
+    """
+    Return per axis and pooled the NRMSE of nominal / least squares / extended on B and C.
+
+    KUKA trajectory A diagnosed with B and C as ``--validate`` records (issue #41): the
+    extended model as fitted on A beside the 4-parameter least-squares baseline fitted on the
+    same data, on A's held-out blocks and on B and C, and per axis whether the effects were
+    kept. Empty unless KUKA_BC names a directory holding B.mat and C.mat.
+    """
+    bc = Path(os.environ.get(KUKA_BC_ENV, '') or '/nonexistent')
+    others = [bc / 'B.mat', bc / 'C.mat']
+    if not all(p.is_file() for p in others):
+        return []
+    from frf_ident.app.diagnose import diagnose
+    cfg = ROOT / 'config'
+    with tempfile.TemporaryDirectory() as tmp:
+        res = diagnose(KUKA, cfg / 'model_kuka_kr300_axes123.yaml', Path(tmp) / 'A',
+                       map_path=cfg / 'map_kuka_kr300.yaml', validate=others,
+                       progress=lambda _m: None)
+    ls = res['report']['metrics']['least_squares']
+    rows = []
+    for s in ls['held_out_as_fitted']:
+        name = {str(others[0]): 'B', str(others[1]): 'C'}.get(s['record'], 'A held out')
+        t = s['time_nrmse']
+        rows.append((f'KUKA A fitted, on {name}: NRMSE nominal / LS / extended',
+                     f'{t["nominal"]:.3f} / {t["least_squares"]:.3f} / {t["extended"]:.3f}',
+                     'pooled over axes 1-3', ''))
+        for ax, v in s['per_axis'].items():
+            rows.append((f'... {ax}', f'{v["nominal"]:.3f} / {v["least_squares"]:.3f} / '
+                                      f'{v["extended"]:.3f}', '',
+                         'extended wins' if v['extended'] < v['least_squares'] else
+                         'least squares wins'))
+    for ax, v in ls['extended_vs_baseline'].items():
+        rows.append((f'KUKA A: {ax} extended vs baseline', v.split(';')[0][:26],
+                     'effects rejected' if 'rejected' in v else 'effects kept', ''))
     return rows
 
 
@@ -646,9 +689,9 @@ def _estimates(report: dict[str, Any]) -> dict[tuple[str, str], tuple]:
     return out
 
 
-def _report(res: dict[str, Any]) -> dict[str, Any]:
+def _report(res: DiagnosisResult) -> dict[str, Any]:
     """Return the effects and rejected candidates of a core result as report.json has them."""
-    return {'effects': [e.to_dict() for e in res['effects']], 'rejected': res['rejected']}
+    return {'effects': [e.to_dict() for e in res.effects], 'rejected': res.rejected}
 
 
 def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
@@ -674,7 +717,7 @@ def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
     rec = full.select_joints(full.joint_names[:robot.n_axes])
     whole = diagnose_timeseries(rec, robot)
     truth = _estimates(_report(whole))
-    f = model_residual(rec, whole['extended'])[0]
+    f = model_residual(rec, whole.extended)[0]
     sigma = np.sqrt(noise_level(f, rec.fs) * rec.fs / 2)
     n = rec.t.size // 2
 

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
+from frf_ident.core.diagnosis.result import DiagnosisResult
 from frf_ident.core.estimation.frd import FrequencyResponse
 import matplotlib
 
@@ -378,7 +379,7 @@ def paper_figure(results: dict[str, Any], case: str, path: Path) -> Path:
     return Path(path)
 
 
-def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
+def diagnosis_figures(out: Path, res: DiagnosisResult, rec: Any, mode: str
                       ) -> list[tuple[str, str]]:
     """
     Figures of ``frf-ident diagnose``: (file name, caption) pairs written into ``out``.
@@ -389,7 +390,7 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
     """
     figs: list[tuple[str, str]] = []
     if mode == 'experiments':
-        est = res['estimates']
+        est = res.detail.estimates
         n = rec.velocity.shape[1]
         fig, ax = plt.subplots(3, n, figsize=(5 * n, 9), squeeze=False, sharex=True)
         for i in range(n):
@@ -409,7 +410,7 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
                     r = est['measured'][key].response[i, i] / est[lab][key].response[i, i]
                     ax[2, i].semilogx(f, _db(r), style, color=col,
                                       label=f'{key}: measured/{lab}')
-            for u in res.get('unexplained', []):
+            for u in res.unexplained:
                 if u['axis'] == rec.joint_names[i] and 'band_hz' in u['signature']:
                     ax[2, i].axvspan(*u['signature']['band_hz'], color='tab:orange', alpha=0.2,
                                      label='unexplained band')
@@ -425,7 +426,7 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
         _save(fig, out / 'bode.png')
         figs.append(('bode.png', 'Measured vs nominal vs extended FRF (diagonal), and the '
                                  'residual spectrum |P_measured / P_model|'))
-        sims = res['sims']
+        sims = res.detail.sims
         fig, ax = plt.subplots(2, n, figsize=(5 * n, 6), squeeze=False)
         step = max(1, rec.t.size // 20000)
         for i in range(n):
@@ -442,7 +443,7 @@ def diagnosis_figures(out: Path, res: Mapping[str, Any], rec: Any, mode: str
         figs.append(('residual.png', 'Measured minus simulated torque (same reference, same '
                                      'controller) against velocity and position'))
         return figs
-    r = res['residual']
+    r = res.detail.residual
     n = r['f'].shape[1]
     fig, ax = plt.subplots(3, n, figsize=(5 * n, 9), squeeze=False)
     for i in range(n):

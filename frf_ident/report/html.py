@@ -37,6 +37,7 @@ import math
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from frf_ident.core.diagnosis.result import DiagnosisResult
 from frf_ident.core.estimation.distortion import DistortionLines
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import Recording
@@ -369,7 +370,7 @@ def _timing_section(t: Mapping[str, Any]) -> str:
 # --------------------------------------------------------------------------- diagnosis
 
 def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
-                           res: Mapping[str, Any], rec: Recording, mode: str,
+                           res: DiagnosisResult, rec: Recording, mode: str,
                            data: str | Path) -> Path:
     """
     Write the HTML report of ``frf-ident diagnose``.
@@ -385,7 +386,8 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
     report
         The report.json content (docs/CONTRACT.md §7).
     res
-        The diagnosis result (estimates, simulations or residuals for the figures).
+        The diagnosis result (its ``detail``: estimates, simulations or residuals for the
+        figures).
     rec
         The diagnosed recording.
     mode
@@ -443,6 +445,25 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
                            v['baseline']['time_nrmse']],
                           ['extended', v['extended']['frf_error_db'],
                            v['extended']['time_nrmse']]]))
+        far = v.get('beyond_fitted_range') or {}
+        if far:
+            met += ('<p class="warn">This record leaves the configuration range the model was '
+                    'fitted on (position-dependent terms are extrapolated): '
+                    + '; '.join(f'{html.escape(ax)} reaches {r["reached_deg"][0]:.1f} .. '
+                                f'{r["reached_deg"][1]:.1f} deg, fitted {r["fitted_deg"][0]:.1f}'
+                                f' .. {r["fitted_deg"][1]:.1f} deg ({r["beyond_deg"]:.1f} deg '
+                                f'beyond)' for ax, r in far.items()) + '.</p>')
+    ls = m.get('least_squares')
+    if ls:
+        met += ('<h3>Against the least-squares baseline</h3>'
+                f'<p>{html.escape(ls["model"])}; {html.escape(ls["metric"])}.</p>'
+                + _table(['held-out set', 'axis', 'nominal', 'least squares',
+                          'extended (as fitted)'],
+                         [[s['record'], ax, v['nominal'], v['least_squares'], v['extended']]
+                          for s in ls['held_out_as_fitted'] for ax, v in s['per_axis'].items()])
+                + '<ul>' + ''.join(f'<li>{html.escape(ax)}: the extended model '
+                                   f'{html.escape(v)}</li>'
+                                   for ax, v in ls['extended_vs_baseline'].items()) + '</ul>')
     step = report.get('discretisation')
     if step:
         met += (f'<p>Integrator check: the extended model simulated at twice its '

@@ -30,6 +30,8 @@ from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 import numpy as np
 
+from .thresholds import GAP_GUARD_S
+
 EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'backlash',
            'torque_ripple', 'time_delay', 'gravity', 'parameter_mismatch')
 
@@ -81,9 +83,6 @@ def quiet(robot: RobotParams) -> RobotParams:
     return robot.with_axes(velocity_noise=0.0, torque_noise=0.0, encoder_resolution=0.0)
 
 
-GAP_GUARD_S = 0.1    # bridged rows widened by this on both sides (the low-pass filters' reach)
-
-
 def bridge_gaps(rec: Recording) -> tuple[Recording, np.ndarray]:
     """
     Bridge the rows a recording lacks and return the mask of them.
@@ -92,7 +91,7 @@ def bridge_gaps(rec: Recording) -> tuple[Recording, np.ndarray]:
     closed-loop simulation must run through them, no comparison may use them: position,
     velocity and effort are interpolated linearly in time there, and the rows (widened by
     GAP_GUARD_S on both sides) lose their reference (NaN), so the experiment diagnosis leaves
-    them plus a settling time out (``experiments.missing_reference``) and the time-series
+    them plus a settling time out (``evaluator.missing_reference``) and the time-series
     diagnosis masks them.
 
     Parameters
@@ -147,7 +146,7 @@ def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recor
     c.reset(plant.equilibrium_torque())
     # where the reference is missing the controller's input is unknown: the simulation follows
     # the measured velocity there, and the diagnosis leaves these stretches out of every
-    # comparison (experiments.missing_reference) instead of commanding zero velocity
+    # comparison (evaluator.missing_reference) instead of commanding zero velocity
     r = np.where(np.isfinite(rec.reference), rec.reference, rec.velocity)
     res = plant.simulate(reference=r, controller=c)
     return Recording(rec.t.copy(), list(rec.joint_names), res.position, res.velocity,

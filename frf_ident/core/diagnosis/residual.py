@@ -35,8 +35,9 @@ from scipy import signal
 from scipy.ndimage import median_filter
 from scipy.optimize import brentq
 
-
-FC_HZ = 20.0   # low-pass of residual and regressors of both diagnosis routes [Hz]
+# re-exported: benchmarks/ripple_threshold.py reads the scan's constants from here
+from .thresholds import (FC_HZ, RIPPLE_CELL_FACTOR, RIPPLE_FALSE_ALARM,  # noqa: F401
+                         RIPPLE_LEVEL_DOF, RIPPLE_LEVEL_WINDOW, RIPPLE_MIN_CYCLES)
 
 
 def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
@@ -219,18 +220,6 @@ def _ls(X: np.ndarray, y: np.ndarray, n_eff: float):
     cov = float(res @ res) / dof * np.linalg.pinv(X.T @ X)
     se = np.sqrt(np.maximum(np.diag(cov), 1e-300))
     return coef, coef / se, res
-
-
-RIPPLE_MIN_CYCLES = 1.5    # lowest spatial frequency: this many cycles over the analysed travel
-RIPPLE_FALSE_ALARM = 1e-3  # probability that noise alone passes the ripple scan's threshold
-RIPPLE_LEVEL_WINDOW = 161  # grid points of the running median that gives the local noise level
-#: Monte-Carlo constants of the scan's noise statistic (white noise, 1,500 scans each of 4,000 to
-#: 20,000 samples: ``python -m benchmarks ripple_threshold``): the median over the 4x
-#: oversampled window is that of about this many independent periodogram values ...
-RIPPLE_LEVEL_DOF = 50.0
-#: ... and the oversampled scan's maximum behaves as that of this many independent values per
-#: resolution cell
-RIPPLE_CELL_FACTOR = 1.5
 
 
 def ripple_threshold(n_cells: float, n_level: int, alpha: float = RIPPLE_FALSE_ALARM) -> float:

@@ -26,12 +26,13 @@ from pathlib import Path
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
 from frf_ident.core.diagnosis.common import bridge_gaps, GAP_GUARD_S, simulate_like
-from frf_ident.core.diagnosis.experiments import missing_reference, residual_bands
+from frf_ident.core.diagnosis.evaluator import missing_reference
 from frf_ident.core.diagnosis.residual import (
     delayed_effort, effective_samples, find_ripple, lowpass, regress_axis, ripple_range)
 from frf_ident.core.diagnosis.timeseries import (
     block_standard_errors, diagnose_timeseries, f_test, FC_HZ, noise_level, select_groups,
     split_blocks)
+from frf_ident.core.diagnosis.unexplained import residual_bands
 from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.plant import FlexibleJointPlant
@@ -199,7 +200,7 @@ def test_timeseries_names_gravity_of_a_coupled_arm_and_friction():
     rec, truth = _arm_record(5)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     res = diagnose_timeseries(rec, robot)
-    found = {(e.name, e.axis): e.parameters for e in res['effects']}
+    found = {(e.name, e.axis): e.parameters for e in res.effects}
     # exactly the effects of the equations of motion: no false alarm beside them
     assert sorted(found) == [('coulomb_friction', 'joint_1'), ('coulomb_friction', 'joint_2'),
                              ('coulomb_friction', 'joint_3'), ('gravity', 'joint_2'),
@@ -217,9 +218,9 @@ def test_timeseries_names_gravity_of_a_coupled_arm_and_friction():
     for i, name in enumerate(rec.joint_names):
         assert found[('coulomb_friction', name)]['coulomb_friction'] == \
             pytest.approx(truth['fc'][i], rel=0.02)
-    m = res['metrics']
+    m = res.metrics
     assert m['extended']['time_nrmse'] < 0.3 < m['baseline']['time_nrmse']
-    assert res['unexplained'] == []
+    assert res.unexplained == []
 
 
 def test_position_dependent_torque_of_a_vertical_axis_does_not_tilt_the_links_beyond():
@@ -232,7 +233,7 @@ def test_position_dependent_torque_of_a_vertical_axis_does_not_tilt_the_links_be
     rec, truth = _arm_record(6, cable=30.0)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     res = diagnose_timeseries(rec, robot)
-    found = {(e.name, e.axis): e.parameters for e in res['effects']}
+    found = {(e.name, e.axis): e.parameters for e in res.effects}
     for ax in ('joint_2', 'joint_3'):
         assert all('joint_1' not in g['joints'] for g in found[('gravity', ax)]['gravity'])
     grav3 = found[('gravity', 'joint_3')]['gravity']
@@ -250,8 +251,8 @@ def test_unexplained_disturbance_gets_its_band_and_axis():
     rec, _ = _arm_record(6, disturbance_hz=7.0)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     res = diagnose_timeseries(rec, robot)
-    un = {u['axis']: u for u in res['unexplained']}
-    assert 'joint_1' in un, res['unexplained']
+    un = {u['axis']: u for u in res.unexplained}
+    assert 'joint_1' in un, res.unexplained
     f1, f2 = un['joint_1']['signature']['band_hz']
     assert f1 <= 7.0 <= f2 and f2 - f1 < 3.0
     assert 'joint_2' not in un and 'joint_3' not in un
@@ -317,7 +318,7 @@ def test_bag_with_lost_stretches_is_diagnosed_without_them(tmp_path, capsys):
     assert [round(a, 1) for a, _ in rep['gaps']] == [7.1, 19.4, 31.7]
     found = {(e['name'], e['axis']): e['parameters'] for e in rep['effects']}
     full = diagnose_timeseries(rec, replace(robot_from_dict(RIGID), sample_rate=rec.fs))
-    assert set(found) == {(e.name, e.axis) for e in full['effects']}
+    assert set(found) == {(e.name, e.axis) for e in full.effects}
     g3 = found[('gravity', 'joint_3')]['gravity'][0]['amplitude']
     assert g3 == pytest.approx(truth['g3'], rel=0.02)
     for i, name in enumerate(rec.joint_names):
@@ -434,13 +435,13 @@ def test_torque_held_at_rest_is_neither_fitted_nor_scored():
     rec, truth = _resting_record(11)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     res = diagnose_timeseries(rec, robot)
-    found = {(e.name, e.axis): e.parameters for e in res['effects']}
+    found = {(e.name, e.axis): e.parameters for e in res.effects}
     for i, name in enumerate(rec.joint_names):
         assert found[('coulomb_friction', name)]['coulomb_friction'] == \
             pytest.approx(truth['fc'][i], rel=0.03)
     grav3 = found[('gravity', 'joint_3')]['gravity']
     assert grav3[0]['amplitude'] == pytest.approx(truth['g3'], rel=0.03)
-    ext = res['metrics']['extended']
+    ext = res.metrics['extended']
     assert ext['time_nrmse'] < 0.15
     for name in rec.joint_names:
         assert 0.4 < ext['per_axis'][name]['moving_share'] < 0.95
@@ -473,7 +474,7 @@ def _diagnose_arm(rng, t, q, v, u, g2, g3, p3, fs=500.0):
     rec = Recording(t, ['joint_1', 'joint_2', 'joint_3'], q,
                     v + 1e-4 * rng.standard_normal(v.shape), u)
     res = diagnose_timeseries(rec, replace(robot_from_dict(RIGID), sample_rate=fs))
-    return res, {(e.name, e.axis): e.parameters for e in res['effects']}
+    return res, {(e.name, e.axis): e.parameters for e in res.effects}
 
 
 def test_axis_moving_one_way_keeps_friction_out_of_the_gravity_shape():
@@ -494,14 +495,14 @@ def test_axis_moving_one_way_keeps_friction_out_of_the_gravity_shape():
     res, found = _diagnose_arm(rng, t, q, v, J * a + fc * np.sign(v), 60.0, g3, p3)
     assert ('coulomb_friction', 'joint_3') not in found
     assert any(r['name'] == 'coulomb_friction' and r['axis'] == 'joint_3' and 'one way' in
-               r.get('reason', '') for r in res['rejected'])
+               r.get('reason', '') for r in res.rejected)
     grav3 = found[('gravity', 'joint_3')]['gravity']
     assert grav3[0]['amplitude'] == pytest.approx(g3, rel=0.03)
     # the constant carries the friction: -Fc plus no load
     assert found[('parameter_mismatch', 'joint_3')]['gravity_torque'] == \
         pytest.approx(-fc[2], abs=1.5)
     # ... and says so: it was not F-tested, so no p value
-    const = next(e for e in res['effects'] if e.axis == 'joint_3'
+    const = next(e for e in res.effects if e.axis == 'joint_3'
                  and 'gravity_torque' in e.parameters)
     assert 'one way' in const.evidence and 'p =' not in const.evidence
     assert found[('coulomb_friction', 'joint_2')]['coulomb_friction'] == \
@@ -532,7 +533,7 @@ def test_sinusoid_of_a_one_way_angle_is_not_taken_for_gravity(seed):
                for g in found[('gravity', ax)]['gravity'])
     assert any(r['name'] == 'gravity' and r['axis'] == 'joint_1'
                and 'q_joint_1 moves one way only' in r.get('reason', '')
-               for r in res['rejected'])
+               for r in res.rejected)
     assert found[('gravity', 'joint_3')]['gravity'][0]['amplitude'] == \
         pytest.approx(g3, rel=0.03)
 
