@@ -53,7 +53,9 @@ setup(
                  'flake8==7.0.0', 'flake8-builtins==2.1.0', 'flake8-comprehensions==3.14.0',
                  'flake8-docstrings==1.6.0', 'flake8-import-order==0.18.2',
                  'flake8-quotes==3.3.2', 'pydocstyle==6.3.0',
-                 'wheel'],   # test/ros installs the package into a prefix as colcon would
+                 'wheel',    # test/ros installs the package into a prefix as colcon would
+                 # the campaign (Dask LocalCluster) and pose (pinocchio) tests run in CI too
+                 'dask>=2023.1', 'distributed>=2023.1', 'pin>=2.7'],
         'control': ['control>=0.10'],
         # campaigns on a Dask distributed cluster (`--scheduler`); the default needs neither
         'cluster': ['dask>=2023.1', 'distributed>=2023.1'],
