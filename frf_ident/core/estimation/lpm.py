@@ -39,6 +39,7 @@ per-line ``np.linalg.lstsq``).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.errors import EstimationError
@@ -47,8 +48,10 @@ import numpy as np
 from scipy import signal
 
 __all__ = ['BAND_POWER', 'DEFAULT_FRAME_SAMPLES', 'DEFAULT_ORDER', 'DIRECT_WARNING',
-           'EXCITED_FRACTION', 'LpmAccumulator', 'LpmLines', 'LpmResult', 'RobustLpmResult',
-           'default_half_width', 'lpm_frf', 'lpm_lines', 'robust_lpm', 'welch_h1',
+           'EXCITED_FRACTION', 'LpmAccumulator', 'LpmLines', 'LpmResult', 'RobustLpmLevels',
+           'RobustLpmResult',
+           'default_half_width', 'lpm_frf', 'lpm_lines', 'robust_lpm',
+           'robust_lpm_periods', 'welch_h1',
            'welch_nperseg']
 
 #: polynomial degree R of G and T in each window (P&S ch. 7 recommend R = 2: the bias of a
@@ -702,6 +705,151 @@ class RobustLpmResult:
     noise_from: str
     dof: int
 
+    def levels(self, outputs: list[str] | None = None, units: list[str] | None = None,
+               input_unit: str = '') -> 'RobustLpmLevels':
+        """
+        Per-line noise and nonlinear variance of each output (what estimates.json keeps).
+
+        Parameters
+        ----------
+        outputs : list of str, optional
+            Output channel names (default: those of :attr:`frf`).
+        units : list of str, optional
+            Unit of each output ('' where unknown).
+        input_unit : str
+            Unit of the input.
+
+        Returns
+        -------
+        RobustLpmLevels
+            The variances of the FRF Y/U per output and line.
+
+        """
+        f = self.frf
+        units = list(units) if units is not None else [''] * f.noutputs
+        return RobustLpmLevels(f.freq_hz, f.noise_variance[:, 0], f.total_variance[:, 0],
+                               list(outputs or f.outputs),
+                               [f'({u})^2/({input_unit})^2' for u in units],
+                               int(f.meta['periods']), self.dof, self.noise_from)
+
+
+@dataclass
+class RobustLpmLevels:
+    """
+    Noise and stochastic nonlinear variance of the FRF per output and line (robust LPM).
+
+    Attributes
+    ----------
+    freq_hz : ndarray, shape (n_lines,)
+        The excited lines [Hz].
+    noise : ndarray, shape (n_out, n_lines)
+        Noise variance of the FRF Y/U of this realisation.
+    total : ndarray, shape (n_out, n_lines)
+        Noise plus stochastic nonlinear variance of the FRF (local polynomial residual).
+    outputs : list of str
+        Output channel names.
+    units : list of str
+        Unit of the variances per output, e.g. '(rad/s)^2/(N m)^2'.
+    periods : int
+        Steady periods the estimate used.
+    dof : int
+        Residual dof of the local polynomial per line (the total variance's); the noise
+        variance has 2 (periods - 1) real dof per line.
+    noise_from : str
+        As :class:`RobustLpmResult`.
+
+    """
+
+    freq_hz: np.ndarray
+    noise: np.ndarray
+    total: np.ndarray
+    outputs: list[str]
+    units: list[str]
+    periods: int
+    dof: int
+    noise_from: str
+
+    @property
+    def nonlinear(self) -> np.ndarray:
+        """Stochastic nonlinear variance of the FRF per output and line, max(total - noise, 0)."""
+        return np.maximum(self.total - self.noise, 0.0)
+
+    def above_noise_db(self) -> np.ndarray:
+        """
+        Median nonlinear variance over median noise variance per output [dB].
+
+        Returns
+        -------
+        ndarray, shape (n_out,)
+            10 log10(median(nonlinear) / median(noise)); -inf where at least half the
+            lines show none (a linear system: the total is noise alone).
+
+        """
+        with np.errstate(divide='ignore'):
+            return 10 * np.log10(np.median(self.nonlinear, axis=1)
+                                 / np.median(self.noise, axis=1))
+
+    def summary(self) -> list[str]:
+        """
+        One line per output: the nonlinear variance over the noise.
+
+        Returns
+        -------
+        list of str
+            e.g. 'dq_m/j: nonlinear variance 12.3 dB above noise (median over 40 lines,
+            1-40 Hz; 4 periods, dof 4)'.
+
+        """
+        out = []
+        span = (f'median over {self.freq_hz.size} lines, {self.freq_hz[0]:.3g}-'
+                f'{self.freq_hz[-1]:.3g} Hz; {self.periods} periods, dof {self.dof}')
+        for name, db in zip(self.outputs, self.above_noise_db()):
+            what = f'{db:.1f} dB above noise' if np.isfinite(db) else 'none above noise'
+            out.append(f'{name}: nonlinear variance {what} ({span})')
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """
+        JSON-ready per-line variances.
+
+        Returns
+        -------
+        dict
+            freq_hz, noise_variance, total_variance and nonlinear_variance (per output,
+            lists), outputs,
+            units, periods, dof, noise_dof, noise_from and per output
+            nonlinear_above_noise_db (None where no nonlinear variance shows).
+
+        """
+        db = self.above_noise_db()
+        return {'freq_hz': self.freq_hz.tolist(), 'noise_variance': self.noise.tolist(),
+                'total_variance': self.total.tolist(),
+                'nonlinear_variance': self.nonlinear.tolist(), 'outputs': list(self.outputs),
+                'units': list(self.units), 'periods': self.periods, 'dof': self.dof,
+                'noise_dof': 2 * (self.periods - 1), 'noise_from': self.noise_from,
+                'nonlinear_above_noise_db': [float(x) if np.isfinite(x) else None
+                                             for x in db]}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> 'RobustLpmLevels':
+        """
+        Read back :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            As written by :meth:`to_dict`.
+
+        Returns
+        -------
+        RobustLpmLevels
+            The same variances.
+
+        """
+        return cls(np.asarray(d['freq_hz'], float), np.asarray(d['noise_variance'], float),
+                   np.asarray(d['total_variance'], float), list(d['outputs']),
+                   list(d['units']), int(d['periods']), int(d['dof']), d['noise_from'])
+
 
 def robust_lpm(y: np.ndarray, u: np.ndarray, period_samples: int, lines: np.ndarray, *,
                fs: float = 1.0, order: int = DEFAULT_ORDER,
@@ -760,26 +908,96 @@ def robust_lpm(y: np.ndarray, u: np.ndarray, period_samples: int, lines: np.ndar
         return np.fft.rfft(x[:n_p * n].reshape(n_p, n, -1), axis=1).transpose(0, 2, 1) \
             / np.sqrt(n)
     Yp, Up = per_period(y), per_period(u)
-    Ym, Um = Yp.mean(axis=0), Up.mean(axis=0)
-    fit = lpm_lines(Ym[:, lines], Um[:, lines], order=order, half_width=half_width,
-                    transient=False)
-    total_y = np.real(np.einsum('kii->ik', fit.noise_cov))            # (n_out, n_lines)
     if n_p >= 2:
-        noise_y = np.sum(np.abs(Yp - Ym) ** 2, axis=0)[:, lines] / (n_p - 1) / n_p
-        noise_from = 'periods'
-    else:
-        free = np.setdiff1d(np.arange(lines[0], lines[-1] + 1), lines)
-        fitn = lpm_lines(Ym[:, free], Um[:, free], order=order)
-        level = np.real(np.einsum('kii->ik', fitn.noise_cov))          # (n_out, n_free)
-        reach = 2 * (default_half_width(1, order, False) + 1)
-        near = np.abs(free[None, :] - lines[:, None]) <= reach
-        noise_y = (near @ level.T / np.maximum(near.sum(axis=1), 1)[:, None]).T
-        noise_from = 'non-excited lines'
-    u2 = np.abs(Um[0, lines]) ** 2
+        return robust_lpm_periods(Yp[:, :, lines], Up[:, 0, lines], lines * fs / n,
+                                  order=order, half_width=half_width)
+    Ym, Um = Yp[0], Up[0]
+    free = np.setdiff1d(np.arange(lines[0], lines[-1] + 1), lines)
+    fitn = lpm_lines(Ym[:, free], Um[:, free], order=order)
+    level = np.real(np.einsum('kii->ik', fitn.noise_cov))              # (n_out, n_free)
+    reach = 2 * (default_half_width(1, order, False) + 1)
+    near = np.abs(free[None, :] - lines[:, None]) <= reach
+    noise_y = (near @ level.T / np.maximum(near.sum(axis=1), 1)[:, None]).T
+    return _robust_result(Ym[:, lines], Um[0, lines], noise_y, lines * fs / n, 1,
+                          'non-excited lines', order, half_width)
+
+
+def robust_lpm_periods(Y: np.ndarray, U: np.ndarray, freq_hz: np.ndarray, *,
+                       order: int = DEFAULT_ORDER, half_width: int | None = None
+                       ) -> RobustLpmResult:
+    """
+    Robust LPM from the spectra of P >= 2 steady periods of one realisation, excited lines.
+
+    The period-spectra form of :func:`robust_lpm` (same numbers): the noise variance is the
+    spread over the periods, the total (noise plus stochastic nonlinear) variance the
+    residual of the local polynomial of G over neighbouring excited lines.
+
+    Parameters
+    ----------
+    Y : array_like, shape (P, n_out, n_lines)
+        Output spectrum of each period at the excited lines (any common DFT scaling).
+    U : array_like, shape (P, n_lines)
+        Input spectrum of each period at the same lines, the same scaling.
+    freq_hz : array_like, shape (n_lines,)
+        Frequencies of the lines [Hz], increasing.
+    order, half_width
+        As :func:`lpm_lines` (over excited lines, without transient).
+
+    Returns
+    -------
+    RobustLpmResult
+
+    Raises
+    ------
+    EstimationError
+        Fewer than two periods, or too few lines for one window.
+
+    """
+    Y, U = np.asarray(Y), np.asarray(U)
+    n_p = Y.shape[0]
+    if n_p < 2:
+        raise EstimationError(f'robust LPM from period spectra: {n_p} period(s); expected '
+                              f'at least 2 (the noise is their spread)')
+    Ym = Y.mean(axis=0)
+    noise_y = np.sum(np.abs(Y - Ym) ** 2, axis=0) / (n_p - 1) / n_p
+    return _robust_result(Ym, U.mean(axis=0), noise_y, np.asarray(freq_hz, float), n_p,
+                          'periods', order, half_width)
+
+
+def _excited_residual(Ym, Um, freq_hz, order, half_width) -> tuple[np.ndarray, int]:
+    """
+    Residual variance of Y - G U, G a local polynomial in frequency, over the excited lines.
+
+    Per excited line the 2n+1 nearest excited lines (the window shifted inside at the ends);
+    the polynomial is in the lines' frequency offset, not their index, so lines spaced
+    unevenly (random-odd and log-spaced multisines) leave no model error a polynomial in
+    the index would. Returns the dof-corrected residual power (n_out, L) and the dof.
+    """
+    n = default_half_width(1, order, transient=False) if half_width is None else int(half_width)
+    w, n_lines = 2 * n + 1, freq_hz.size
+    dof = w - (order + 1)
+    if dof < 1 or n_lines < w:
+        raise EstimationError(f'robust LPM: {n_lines} excited lines, window {w} for order '
+                              f'{order}; expected at least one window with a residual dof')
+    idx = np.clip(np.arange(n_lines) - n, 0, n_lines - w)[:, None] + np.arange(w)   # (L, w)
+    d = freq_hz[idx] - freq_hz[:, None]
+    d = d / np.max(np.abs(d), axis=1, keepdims=True)
+    K = Um[idx][:, :, None] * d[:, :, None] ** np.arange(order + 1)             # (L, w, R+1)
+    Q = np.linalg.qr(K)[0]
+    Yw = Ym[:, idx]                                                            # (n_out, L, w)
+    res = Yw - np.einsum('lwp,lvp,olv->olw', Q, np.conj(Q), Yw)
+    return np.sum(np.abs(res) ** 2, axis=2) / dof, dof
+
+
+def _robust_result(Ym, Um, noise_y, freq_hz, n_p, noise_from, order, half_width
+                   ) -> RobustLpmResult:
+    """Local polynomial over the excited lines: total variance; with the noise, the result."""
+    total_y, dof = _excited_residual(Ym, Um, freq_hz, order, half_width)    # (n_out, n_lines)
+    u2 = np.abs(Um) ** 2
     total = (total_y / u2)[:, None, :]
     noise = (noise_y / u2)[:, None, :]
-    frf = FrequencyResponse(lines * fs / n, (Ym[:, lines] / Um[0, lines])[:, None, :],
+    frf = FrequencyResponse(freq_hz, (Ym / Um)[:, None, :],
                             noise_variance=noise, total_variance=total, meta={
                                 'method': 'robust_lpm', 'periods': n_p, 'order': order,
-                                'dof': fit.dof, 'noise_from': noise_from})
-    return RobustLpmResult(frf, np.maximum(total - noise, 0.0), noise_from, fit.dof)
+                                'dof': dof, 'noise_from': noise_from})
+    return RobustLpmResult(frf, np.maximum(total - noise, 0.0), noise_from, dof)
