@@ -29,7 +29,7 @@ from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
 __all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'estimate_columns', 'frf_units',
-           'read_estimates', 'report_distortion']
+           'read_estimates', 'report_distortion', 'report_robust_lpm']
 
 #: the files :func:`estimate_bag` writes into its output directory
 OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png', 'distortion.png')
@@ -200,7 +200,31 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
              f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
     report_distortion(estimates, out, title=bag.name, progress=progress)
+    report_robust_lpm(estimates, progress=progress)
     return estimates
+
+
+def report_robust_lpm(estimates: dict, *, progress: Progress | None = None) -> None:
+    """
+    Print one line per output of the robust LPM (one multisine realisation, several periods).
+
+    The per-line noise and nonlinear variances are in each estimate's meta['robust_lpm']
+    (estimates.json).
+
+    Parameters
+    ----------
+    estimates : dict
+        Estimate name -> FrequencyResponse.
+    progress : callable, optional
+        Called with one line per output (None: silent).
+
+    """
+    from frf_ident.core.estimation.lpm import RobustLpmLevels
+    progress = sink(progress)
+    for k, v in estimates.items():
+        if isinstance(v.meta.get('robust_lpm'), dict):
+            for line in RobustLpmLevels.from_dict(v.meta['robust_lpm']).summary():
+                progress(f'{k} robust LPM: {line}')
 
 
 def report_distortion(estimates: dict, out: Path, *, title: str,

@@ -46,6 +46,7 @@ from frf_ident.core.estimation.checks import (check_band, check_covers, check_no
                                               JOINT_STATES, missing_rows)
 from frf_ident.core.estimation.distortion import distortion_lines
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.estimation.lpm import default_half_width, DEFAULT_ORDER, robust_lpm_periods
 from frf_ident.core.estimation.nonperiodic import LpmBlocks
 from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
                                                periodic_spectra)
@@ -507,10 +508,14 @@ class DetectedEstimator:
                 e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
                                          'u': [], 'y': [], 'det_y': [], 'det_u': [],
                                          'skip': 0, 'blocks': 0, 'dropped': [],
+                                         'runs': 0, 'run': [],
                                          'units': [_output_units(rec)[k] for k in outs],
                                          'input_unit': _input_unit(rec, j),
                                          'period_s': info['period_samples'] / rec.fs}
             e['t_end'] = max(seg.t_end, e.get('t_end', seg.t_end))
+            # a detection that does not go on from the last one starts another run (another
+            # realisation, or the same one restarted with a new transient)
+            e['runs'] += 0 if going_on else 1
             e['dropped'].extend(d for d in dropped if d not in e['dropped'])
             e['skip'] += skip
             e['blocks'] += 1
@@ -521,6 +526,7 @@ class DetectedEstimator:
             # periods of the excitation at once, in memory and streamed alike
             for k, x in (('u', U[:, :, j]), ('y', Y), ('det_y', Yd), ('det_u', Ul)):
                 e[k].append(x)
+            e['run'].append(np.full(U.shape[0], e['runs']))
             return
         freqs, U, Y = _chirp_lines(rec, seg)
         Y = Y[:, outs]
@@ -593,12 +599,29 @@ class DetectedEstimator:
         det_y = np.concatenate(e['det_y'])[first:]
         dist = distortion_lines(det_y, np.arange(1, det_y.shape[1] + 1), e['bins'][keep],
                                 e['f0'], names_out, units=e['units'])
+        one_run = np.unique(np.concatenate(e['run'])[first:]).size == 1
+        robust = _robust_levels(Y[:, keep], Uj[:, keep], e['bins'][keep] * e['f0'], names_out,
+                                e) if one_run else None
         return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
             'design': 'detected_multisine', 'periods': n, 'distortion': dist.to_dict(),
             'units': {'input': e['input_unit'], 'outputs': e['units']},
             'transient_periods': e['skip'] + first, 'transient': steady.describe(),
-            'blocks': e['blocks'],
+            'blocks': e['blocks'], **({'robust_lpm': robust} if robust else {}),
             'dropped': {'periods': len(e['dropped']), 'times': [list(d) for d in e['dropped']]}})
+
+
+def _robust_levels(Y: np.ndarray, U: np.ndarray, freq_hz: np.ndarray, outputs: list[str],
+                   e: dict[str, Any]) -> dict[str, Any] | None:
+    """
+    Robust LPM of the steady periods of one realisation (its meta['robust_lpm']).
+
+    ``Y`` (n_q, F, n_out) and ``U`` (n_q, F) at the excited lines. None when fewer lines
+    than one local-polynomial window: the BLA's spread over periods is then all there is.
+    """
+    if freq_hz.size < 2 * default_half_width(1, DEFAULT_ORDER, transient=False) + 1:
+        return None
+    res = robust_lpm_periods(np.transpose(Y, (0, 2, 1)), U, freq_hz)
+    return res.levels(outputs, e['units'], e['input_unit']).to_dict()
 
 
 def _check_enough(e: dict[str, Any]) -> None:

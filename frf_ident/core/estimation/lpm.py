@@ -797,14 +797,16 @@ class RobustLpmLevels:
         -------
         list of str
             e.g. 'dq_m/j: nonlinear variance 12.3 dB above noise (median over 40 lines,
-            1-40 Hz; 4 periods, dof 4)'.
+            1-40 Hz; 4 periods, dof 4)'; 'below' when the median nonlinear variance is
+            under the median noise, 'none' when it is zero.
 
         """
         out = []
         span = (f'median over {self.freq_hz.size} lines, {self.freq_hz[0]:.3g}-'
                 f'{self.freq_hz[-1]:.3g} Hz; {self.periods} periods, dof {self.dof}')
         for name, db in zip(self.outputs, self.above_noise_db()):
-            what = f'{db:.1f} dB above noise' if np.isfinite(db) else 'none above noise'
+            what = ('none above noise' if not np.isfinite(db) else
+                    f'{abs(db):.1f} dB {"above" if db >= 0 else "below"} noise')
             out.append(f'{name}: nonlinear variance {what} ({span})')
         return out
 
