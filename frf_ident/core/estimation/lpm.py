@@ -882,7 +882,9 @@ def robust_lpm(y: np.ndarray, u: np.ndarray, period_samples: int, lines: np.ndar
     fs : float
         Sample rate [Hz] (for the frequencies).
     order, half_width
-        As :func:`lpm_lines` (over excited lines, without transient).
+        Degree R and half width n of the local polynomial of G in frequency over the 2n+1
+        nearest excited lines (no transient); default n: :func:`default_half_width` of
+        one input without transient.
 
     Returns
     -------
@@ -943,7 +945,9 @@ def robust_lpm_periods(Y: np.ndarray, U: np.ndarray, freq_hz: np.ndarray, *,
     freq_hz : array_like, shape (n_lines,)
         Frequencies of the lines [Hz], increasing.
     order, half_width
-        As :func:`lpm_lines` (over excited lines, without transient).
+        Degree R and half width n of the local polynomial of G in frequency over the 2n+1
+        nearest excited lines (no transient); default n: :func:`default_half_width` of
+        one input without transient.
 
     Returns
     -------
