@@ -111,6 +111,6 @@ def test_ros2_bag_play_into_the_estimator_equals_the_package_bag(tmp_path, ros_e
     deg = np.max(np.abs(np.degrees(np.angle(ratio))))
     top = np.abs(np.degrees(np.angle(ratio[..., -1]))).max()
     print(f'ros2 bag play ({"--clock" if clock else "wall"}) vs package bag: '
-          f'{got.t.size} / {own.t.size} samples, max {db:.4f} dB, {deg:.4f} deg '
-          f'({top:.4f} deg at {est_own.freq_hz[-1]:.1f} Hz) over {est_own.freq_hz.size} lines')
+          f'{got.t.size} / {own.t.size} samples, max {db:.1e} dB, {deg:.1e} deg '
+          f'({top:.1e} deg at {est_own.freq_hz[-1]:.1f} Hz) over {est_own.freq_hz.size} lines')
     assert db < 0.01 and deg < 0.1, (db, deg)
