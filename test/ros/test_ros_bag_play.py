@@ -101,7 +101,11 @@ def test_ros2_bag_play_into_the_estimator_equals_the_package_bag(tmp_path, ros_e
         time.sleep(1.0)
     finally:
         est.send_signal(signal.SIGINT)
-        log.append(est.communicate(timeout=60)[0])
+        try:
+            log.append(est.communicate(timeout=60)[0])
+        except subprocess.TimeoutExpired:
+            est.kill()
+            log.append(est.communicate()[0])
     assert est.returncode == 0, ''.join(log)[-2000:]
     own, est_own = _estimate(package_bag)
     got, est_got = _estimate(replayed)
