@@ -54,7 +54,7 @@ from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 
 __all__ = ['CAMPAIGN_FILES', 'CampaignResult', 'CampaignRow', 'LOCAL_SCHEDULER',
-           'campaign_dirs', 'expand_inputs', 'is_campaign', 'run_campaign']
+           'campaign_dirs', 'expand_inputs', 'is_bag_dir', 'is_campaign', 'run_campaign']
 
 #: the files :func:`run_campaign` writes into ``out`` itself (each input has its own folder)
 CAMPAIGN_FILES = ('summary.csv', 'summary.json', 'index.html')
@@ -172,8 +172,18 @@ def is_campaign(specs: Sequence[str | os.PathLike[str]]) -> bool:
     if text.startswith('@') or glob.has_magic(text):
         return True
     p = Path(text)
-    return (p.is_dir() and not (p / 'metadata.yaml').is_file()
-            and any(_is_input(q) for q in p.iterdir()))
+    return p.is_dir() and not is_bag_dir(p) and any(_is_input(q) for q in p.iterdir())
+
+
+def is_bag_dir(p: Path) -> bool:
+    """
+    Return whether the folder ``p`` is one bag: it has metadata.yaml or MCAP files of its own.
+
+    A rosbag2 folder whose metadata.yaml was lost (a recorder killed) still holds its split
+    .mcap files, and the bag reader reads them in order as one bag: such a folder is one
+    input, never a campaign of its files.
+    """
+    return (p / 'metadata.yaml').is_file() or any(p.glob('*.mcap'))
 
 
 def _is_input(p: Path) -> bool:

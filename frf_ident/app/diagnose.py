@@ -279,8 +279,8 @@ def _against_least_squares(res, rec: Recording, others: list, robot, progress):
         m = predict_metrics(rec, res.extended, mask=res.held_out_rows)
         res.metrics['extended'] = {k: m[k] for k in ('frf_error_db', 'time_nrmse', 'per_axis')}
         comp = held_out_comparison(robot, res.extended, ls, sets)
-    verdict = {ax: ('beats the baseline on every held-out set' if ax not in lost else
-                    'does not beat the baseline on ' + ', '.join(lost[ax])
+    verdict = {ax: ('beats the baseline (or ties it) on every held-out set' if ax not in lost
+                    else 'does not beat the baseline on ' + ', '.join(lost[ax])
                     + ('; its effects are rejected' if dropped else ''))
                for ax in ls.names}
     res.metrics['least_squares'] = {

@@ -88,8 +88,11 @@ def test_controller_stops_the_robot_when_its_references_stop(tmp_path):
     from frf_ident.bag import read_recording
     ms = MultisineConfig(n_realisations=1, n_periods=20, resolution_hz=1.0, compensate=False,
                          return_s=2.0, settle_s=0.3)
+    # record_all: the robot's default records experiments only, and this run is killed
+    # before its experiment may begin (the bag must hold the robot coming to rest)
     g = Graph(tmp_path, multisine=ms, lockstep=False,
-              params={'excitation_node': {'stale_samples': 500}})
+              params={'excitation_node': {'stale_samples': 500},
+                      'estimator_node': {'record_all': True}})
     g.start()
     drv = g.driver(multisine=True, iterations=0)
     try:

@@ -34,7 +34,7 @@ from .prediction import predict_metrics, torque_metrics
 from .regressors import moving
 from .residual import FC_HZ, lowpass
 from .result import DiagnosisResult
-from .thresholds import LS_TANH_VELOCITY, ONE_WAY
+from .thresholds import LS_BASELINE_MARGIN, LS_TANH_VELOCITY, ONE_WAY
 
 __all__ = ['axes_not_beating', 'fit_least_squares', 'held_out_comparison', 'LeastSquaresBaseline',
            'least_squares_metrics', 'without_axes']
@@ -158,11 +158,16 @@ def held_out_comparison(robot: RobotParams, ext: RobotParams, ls: LeastSquaresBa
 
 
 def axes_not_beating(comparison: list[dict[str, Any]]) -> dict[str, list[str]]:
-    """Return {axis: the sets on which the extended model is not below the baseline}."""
+    """
+    Return {axis: the held-out sets on which the extended model loses to the baseline}.
+
+    It loses where its time_nrmse exceeds the baseline's by more than
+    :data:`~frf_ident.core.diagnosis.thresholds.LS_BASELINE_MARGIN` (a tie is no loss).
+    """
     out: dict[str, list[str]] = {}
     for s in comparison:
         for ax, v in s['per_axis'].items():
-            if not v['extended'] < v['least_squares']:
+            if not v['extended'] <= (1.0 + LS_BASELINE_MARGIN) * v['least_squares']:
                 out.setdefault(ax, []).append(s['record'])
     return out
 
@@ -187,7 +192,9 @@ def without_axes(res: DiagnosisResult, robot: RobotParams, lost: dict[str, list[
                          for s in comparison if s['record'] in lost[e.axis])
         rejected.append({'name': e.name, 'axis': e.axis, 'parameters': e.to_dict()['parameters'],
                          'reason': f'the extended model does not beat the 4-parameter least-'
-                                   f'squares baseline on held-out data ({nums}): not taken'})
+                                   f'squares baseline on held-out data (more than '
+                                   f'{100 * LS_BASELINE_MARGIN:.0f} % above it: {nums}): '
+                                   f'not taken'})
     axes = [robot.axes[i] if a.name in lost else a for i, a in enumerate(res.extended.axes)]
     return replace(res, effects=kept, rejected=rejected,
                    extended=replace(res.extended, axes=axes))

@@ -72,8 +72,9 @@ DEFAULT_FRAME_SAMPLES = 32768
 #: u for the direct one) is reported: outside it the estimate rests on little excitation
 BAND_POWER = 0.99
 
-#: lines whose input power (trace of S_uu) is at least this fraction of the largest line's
-#: count as excited (the band the coherence summary is taken over)
+#: lines whose input power (trace of S_uu; for the LPM the regressor's, r or u) is at least
+#: this fraction of the largest line's count as excited (the band the coherence summary is
+#: taken over; LPM lines below it are dropped: no excitation, no estimate)
 EXCITED_FRACTION = 1e-3
 
 #: Welch segments the H1 baseline averages when the record allows (its resolution is then
@@ -593,13 +594,18 @@ class LpmAccumulator:
         c = np.cumsum(s['xx']) / np.sum(s['xx'])
         lo, hi = np.searchsorted(c, [(1 - BAND_POWER) / 2, (1 + BAND_POWER) / 2])
         hi = min(hi, f.size - 1)
-        ok = np.all(np.isfinite(s['P']), axis=(0, 1))
+        finite = np.all(np.isfinite(s['P']), axis=(0, 1))
+        # a line without excitation has no estimate: what the polynomial puts there is the
+        # neighbours' (a periodic record has power on its lines only, noise in between)
+        excited = s['xx'] >= EXCITED_FRACTION * np.max(s['xx'])
+        ok = finite & excited
         frf = FrequencyResponse(f[ok], s['P'][..., ok] / m, self.inputs or [],
                                 self.outputs or [], s['var'][..., ok] / m ** 2, None,
                                 {'method': f'lpm_{self.method}', 'order': self.order,
                                  'dof': self.dof, 'frames': m, 'frame_s': self.n / self.fs,
                                  'excitation_band_hz': [float(f[lo]), float(f[hi])],
-                                 'singular_lines': int(np.count_nonzero(~ok))})
+                                 'singular_lines': int(np.count_nonzero(~finite)),
+                                 'unexcited_lines': int(np.count_nonzero(finite & ~excited))})
         return LpmResult(frf, s['cov'][ok] / m, self.dof, m, self.method, self._baseline())
 
     def _baseline(self) -> FrequencyResponse:

@@ -27,7 +27,8 @@ warning.
 from __future__ import annotations
 
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.estimation.lpm import DEFAULT_FRAME_SAMPLES, DIRECT_WARNING, LpmAccumulator
+from frf_ident.core.estimation.lpm import (DEFAULT_FRAME_SAMPLES, DIRECT_WARNING,
+                                           EXCITED_FRACTION, LpmAccumulator)
 from frf_ident.core.excitation.detect import excitation_source
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
@@ -176,6 +177,7 @@ class LpmBlocks:
             h1 = h1.select((h1.freq_hz >= lo) & (h1.freq_hz <= hi))
         ins = ', '.join(n.split('/', 1)[1] for n in frf.inputs)
         band, singular = frf.meta['excitation_band_hz'], frf.meta['singular_lines']
+        unexcited = frf.meta['unexcited_lines']
         how = (f'indirect through the velocity reference r of {ins} (P = G_yr G_ur^-1)'
                if res.method == 'indirect' else f'direct, torque of {ins} as input')
         line = (f'Local Polynomial Method, {how}: '
@@ -186,6 +188,8 @@ class LpmBlocks:
                 f'{band[0]:.4g}-{band[1]:.4g} Hz'
                 + (f', {singular} line(s) without excitation of every input dropped'
                    if singular else '')
+                + (f', {unexcited} line(s) with less than {EXCITED_FRACTION:g} of the largest '
+                   f'line excitation dropped' if unexcited else '')
                 + (f', {self.dropped} frame(s) dropped for gaps' if self.dropped else ''))
         ex = h1.meta['excited']
         coh = np.median(h1.meta['coherence'][:, ex], axis=1)
