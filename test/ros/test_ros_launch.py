@@ -285,6 +285,9 @@ def test_launch_refuses_sim_time_without_sim(ros_env, prefix, tmp_path):
     assert not (tmp_path / 'never').exists()
 
 
+@pytest.mark.xfail(strict=False, reason='known defect (issue 44): Ctrl-C during the Python '
+                   'start-up of a node (before frf_ident code runs) ends it with 255, launch '
+                   'exits 1')
 def test_abort_then_ctrl_c_at_start_up(ros_env, prefix, tmp_path):
     """
     /frf/abort mid-run stops the run; Ctrl-C during the nodes' start-up ends each with 0.

@@ -74,7 +74,10 @@ def test_a_torque_the_four_terms_lack_is_not_fitted_and_loses_to_a_model_that_ha
                                                       m['per_axis']['j']['time_nrmse'],
                                                       'extended': 0.02}}},
             {'record': 'B', 'per_axis': {'j': {'nominal': 1.0, 'least_squares': 0.3,
-                                               'extended': 0.3}}}]
+                                               'extended': 0.35}}},
+            # a tie within LS_BASELINE_MARGIN (10 %) is no loss (EMPS: 0.0323 vs 0.0320)
+            {'record': 'C', 'per_axis': {'j': {'nominal': 1.0, 'least_squares': 0.3,
+                                               'extended': 0.32}}}]
     # not below the baseline on B (a tie is no win)
     assert axes_not_beating(comp) == {'j': ['B']}
 
