@@ -138,13 +138,14 @@ class DistortionLines:
                 ex = self.power[i, self.kind == 'excited']
                 lv = [_db(np.median(self.power[i, self.kind == k]), np.median(ex))
                       if np.any(self.kind == k) else np.nan for k in ('odd', 'even')]
-                out.append(f'{name}: odd lines {lv[0]:+.1f} dB, even lines {lv[1]:+.1f} dB '
+                out.append(f'{name}: odd lines {_level(lv[0], n_odd)}, even lines '
+                           f'{_level(lv[1], n_even)} '
                            f'relative to the excited lines (median; {band}; noise level '
                            f'unknown: one period)')
                 continue
-            text = (f'{name}: odd lines {odd[i]:+.1f} dB, even lines {even[i]:+.1f} dB '
-                    f'above the noise (median of {n_odd} and {n_even} lines, {band}); '
-                    f'excited lines {exc[i]:+.1f} dB')
+            text = (f'{name}: odd lines {_level(odd[i], n_odd)}, even lines '
+                    f'{_level(even[i], n_even)} above the noise (median of {n_odd} and '
+                    f'{n_even} lines, {band}); excited lines {exc[i]:+.1f} dB')
             if self.residual is not None:
                 text += f', their nonlinear residual {res[i]:+.1f} dB'
             out.append(text)
@@ -260,3 +261,8 @@ def distortion_lines(Y: np.ndarray | Sequence[np.ndarray], bins: np.ndarray,
 def _chi2_median_ratio(dof: int) -> float:
     """Median over mean of a chi^2 variable with ``dof`` degrees of freedom."""
     return float(stats.chi2.median(dof) / dof)
+
+
+def _level(db: float, n_lines: int) -> str:
+    """Format a median level for the summary line: 'none' where no line of that kind is free."""
+    return f'{db:+.1f} dB' if n_lines else 'none'
