@@ -267,9 +267,9 @@ def report_distortion(estimates: dict, out: Path, *, title: str,
     return path
 
 
-def frf_units(frf) -> str:
+def frf_units(frf) -> str | None:
     """
-    Return the unit of |P| for the Bode axis, ' re 1 (out)/(in)', when the estimate knows it.
+    Return the unit of P for the Bode axis, '(out)/(in)'; None when it is not one unit.
 
     Parameters
     ----------
@@ -278,15 +278,19 @@ def frf_units(frf) -> str:
 
     Returns
     -------
-    str
-        e.g. ' re 1 (m/s^2)/(N)'; '' when unknown or the outputs differ.
+    str or None
+        e.g. '(m/s^2)/(N)'; the sensor_msgs/JointState units of a revolute joint,
+        '(rad/s)/(N m)', where the estimate names none; None where the outputs' (or the
+        inputs') units differ, so no single unit labels the axis.
 
     """
+    from frf_ident.report.figures import FRF_UNIT
     u = frf.meta.get('units')
-    if not isinstance(u, dict) or len(set(u.get('outputs') or [''])) != 1:
-        return ''
-    out, inp = u['outputs'][0], u.get('input', '')
-    return f' re 1 ({out})/({inp})' if out and inp else ''
+    if not isinstance(u, dict):
+        return FRF_UNIT
+    outs = set(u.get('outputs') or [''])
+    out, inp = outs.pop(), u.get('input', '')
+    return f'({out})/({inp})' if out and inp and not outs else None
 
 
 def estimate_columns(bag: Path, out: Path, progress: Progress | None, **options

@@ -171,6 +171,60 @@ class Recording:
                 raise ValueError(f'{name} shape {val.shape} != ({self.t.size}, {n})')
             setattr(self, name, val)
 
+    def output_columns(self) -> list[int]:
+        """
+        Return the joints whose velocity is an output of the FRF.
+
+        Returns
+        -------
+        list of int
+            Every joint, or only the outputs of an import layout (meta['layout']: a shaker's
+            channel carries an effort and no motion, a sensor's a motion and no effort).
+
+        """
+        layout = self.meta.get('layout') if isinstance(self.meta, dict) else None
+        if not isinstance(layout, dict):
+            return list(range(len(self.joint_names)))
+        names = {c['name'] for c in layout.get('outputs', [])}
+        return [k for k, n in enumerate(self.joint_names) if n in names]
+
+    def velocity_unit(self, name: str) -> str:
+        """
+        Return the unit of joint ``name``'s velocity: as an import map states it, else rad/s.
+
+        Parameters
+        ----------
+        name : str
+            A joint name.
+
+        Returns
+        -------
+        str
+            meta['units'][name]['velocity'], or 'rad/s' (sensor_msgs/JointState of a revolute
+            joint) where the recording says nothing.
+
+        """
+        units = self.meta.get('units', {}) if isinstance(self.meta, dict) else {}
+        return units.get(name, {}).get('velocity', 'rad/s')
+
+    def effort_unit(self, name: str) -> str:
+        """
+        Return the unit of joint ``name``'s effort: as an import map states it, else N m.
+
+        Parameters
+        ----------
+        name : str
+            A joint name.
+
+        Returns
+        -------
+        str
+            meta['units'][name]['effort'], or 'N m' where the recording says nothing.
+
+        """
+        units = self.meta.get('units', {}) if isinstance(self.meta, dict) else {}
+        return units.get(name, {}).get('effort', 'N m')
+
     @property
     def dt(self) -> float:
         """Return the sample time [s], the median spacing of ``t`` (ValueError below 2 samples)."""

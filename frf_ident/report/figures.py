@@ -155,35 +155,54 @@ def _channel_title(frf: FrequencyResponse, o: int, i: int) -> str:
 
 def bode_figure(frfs: Mapping[str, FrequencyResponse], path: Path, *,
                 reference: FrequencyResponse | None = None, title: str = '',
-                units: str = FRF_UNIT) -> Path:
+                units: str | None = FRF_UNIT) -> Path:
     """
     Bode diagram of every channel: magnitude [dB] above phase [deg], one column per input.
 
     Estimates are markers joined by thin lines, with a shaded +-2 sigma band (from the total
     variance, else the noise variance): |P| +- 2 sigma in magnitude and +-asin(2 sigma/|P|)
     in phase. ``reference`` is drawn as a black line under the estimates; ``units`` is the
-    FRF's unit (magnitude in dB re 1 of it). The legend sits under the panels.
+    FRF's unit (magnitude in dB re 1 of it; None or '': unknown, plain dB). Every phase curve
+    of a channel is unwrapped on the branch of the first one drawn (the reference, else the
+    first estimate), so curves that agree are drawn on top of each other, never 360 deg
+    apart. Where an estimate carries the multiple coherence of its outputs
+    (``meta['coherence']``, (n_out, n_freq): the Welch H1 beside the LPM), a coherence panel
+    is drawn under each output's phase. The legend sits under the panels.
     """
     first = next(iter(frfs.values()))
     n_out, n_in = first.noutputs, first.ninputs
-    fig, axes = plt.subplots(2 * n_out, n_in, figsize=(4.6 * n_in + 0.6, 2.3 * 2 * n_out + 0.8),
-                             sharex=True, squeeze=False)
+    coherent = {k: v for k, v in frfs.items() if _coherence(v, n_out) is not None}
+    rows = 3 if coherent else 2
+    heights = [1.0, 1.0, 0.6][:rows] * n_out
+    fig, axes = plt.subplots(rows * n_out, n_in, sharex=True, squeeze=False,
+                             figsize=(4.6 * n_in + 0.6, 2.3 * sum(heights) + 0.8),
+                             gridspec_kw={'height_ratios': heights})
     for o in range(n_out):
         for i in range(n_in):
-            ax_m, ax_p = axes[2 * o, i], axes[2 * o + 1, i]
+            ax_m, ax_p = axes[rows * o, i], axes[rows * o + 1, i]
+            anchor = None
             if reference is not None and reference.response.shape[:2] == (n_out, n_in):
+                phase = _deg(reference.response[o, i])
                 ax_m.semilogx(reference.freq_hz, _db(reference.response[o, i]), **REF_STYLE,
                               label='reference')
-                ax_p.semilogx(reference.freq_hz, _deg(reference.response[o, i]), **REF_STYLE)
+                ax_p.semilogx(reference.freq_hz, phase, **REF_STYLE)
+                anchor = (reference.freq_hz, phase)
             for k, (label, frf) in enumerate(frfs.items()):
                 if frf.response.shape[:2] == (n_out, n_in):
-                    _bode_channel(ax_m, ax_p, frf, o, i, f'C{k}', label)
+                    phase = _bode_channel(ax_m, ax_p, frf, o, i, f'C{k}', label, anchor)
+                    anchor = anchor or (frf.freq_hz, phase)
             ax_m.set_title(_channel_title(first, o, i), fontsize=9)
-            ax_m.set_ylabel(f'|P| [dB re 1 {units}]' if i == 0 else '')
+            ax_m.set_ylabel((f'|P| [dB re 1 {units}]' if units else '|P| [dB]') if i == 0
+                            else '')
             ax_p.set_ylabel('phase [deg]' if i == 0 else '')
-            for ax in (ax_m, ax_p):
+            shown = [ax_m, ax_p]
+            if coherent:
+                shown.append(axes[rows * o + 2, i])
+                _coherence_panel(axes[rows * o + 2, i], coherent, o, first.outputs[o], i == 0,
+                                 colors={k: f'C{n}' for n, k in enumerate(frfs)})
+            for ax in shown:
                 ax.grid(True, which='both', alpha=0.3)
-                frequency_axis(ax, label='frequency [Hz]' if ax is ax_p and o == n_out - 1
+                frequency_axis(ax, label='frequency [Hz]' if ax is shown[-1] and o == n_out - 1
                                else None)
     bottom = legend_below(fig, [axes[0, 0]])
     fig.suptitle(title or 'Frequency response estimates (shaded: \u00b12\u03c3)')
@@ -191,23 +210,78 @@ def bode_figure(frfs: Mapping[str, FrequencyResponse], path: Path, *,
     return _save(fig, path)
 
 
+def _coherence(frf: FrequencyResponse, n_out: int) -> np.ndarray | None:
+    coh = frf.meta.get('coherence') if isinstance(frf.meta, dict) else None
+    if coh is None:
+        return None
+    coh = np.asarray(coh, dtype=float)
+    return coh if coh.shape == (n_out, frf.freq_hz.size) else None
+
+
+def _coherence_panel(ax: plt.Axes, frfs: Mapping[str, FrequencyResponse], o: int, output: str,
+                     label: bool, colors: Mapping[str, str]) -> None:
+    for k, frf in frfs.items():
+        ax.semilogx(frf.freq_hz, _coherence(frf, frf.noutputs)[o], '.-', ms=2, lw=0.5,
+                    color=colors[k], zorder=MEASURED_Z)
+    ax.set_ylim(0.0, 1.05)
+    ax.set_ylabel('coherence [-]' if label else '')
+    ax.set_title(f'multiple coherence of {output} ({", ".join(frfs)})', fontsize=8)
+
+
+def aligned_phase_deg(freq_hz: np.ndarray, p: np.ndarray,
+                      anchor: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
+    """
+    Unwrap the phase of ``p`` [deg] on the 360 deg branch closest to ``anchor``.
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        Ascending frequencies of ``p``.
+    p : ndarray
+        Complex FRF values.
+    anchor : (ndarray, ndarray) or None
+        Ascending frequencies and unwrapped phase [deg] of the curve to align with; None:
+        the plain unwrapped phase.
+
+    Returns
+    -------
+    ndarray
+        The unwrapped phase, shifted by the whole number of turns that brings its median
+        difference to the anchor (on their common band, else at the nearest ends) within
+        +-180 deg.
+
+    """
+    deg = _deg(p)
+    if anchor is None or deg.size == 0 or anchor[0].size == 0:
+        return deg
+    fa, da = anchor
+    common = (freq_hz >= fa[0]) & (freq_hz <= fa[-1])
+    if np.any(common):
+        diff = np.median(deg[common] - np.interp(freq_hz[common], fa, da))
+    else:
+        diff = deg[0] - np.interp(freq_hz[0], fa, da)
+    return deg - 360.0 * np.round(diff / 360.0)
+
+
 def _bode_channel(ax_m: plt.Axes, ax_p: plt.Axes, frf: FrequencyResponse, o: int, i: int,
-                  color: str, label: str) -> None:
+                  color: str, label: str,
+                  anchor: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     f, p = frf.freq_hz, frf.response[o, i]
     var, which = variance_of(frf)
     band = f' (\u00b12\u03c3 {which})' if var is not None else ''
     ax_m.semilogx(f, _db(p), '.-', color=color, ms=3, lw=0.5, label=f'{label}{band}',
                   zorder=MEASURED_Z)
-    phase = _deg(p)
+    phase = aligned_phase_deg(f, p, anchor)
     ax_p.semilogx(f, phase, '.-', color=color, ms=3, lw=0.5, zorder=MEASURED_Z)
     if var is None:
-        return
+        return phase
     sig2 = 2.0 * np.sqrt(np.maximum(var[o, i], 0.0))
     mag = np.abs(p)
     lo = _db(np.maximum(mag - sig2, mag * 1e-3))
     ax_m.fill_between(f, lo, _db(mag + sig2), color=color, alpha=0.2, lw=0)
     dphi = np.degrees(np.arcsin(np.clip(sig2 / np.maximum(mag, 1e-300), 0.0, 1.0)))
     ax_p.fill_between(f, phase - dphi, phase + dphi, color=color, alpha=0.2, lw=0)
+    return phase
 
 
 def snr_figure(frfs: Mapping[str, FrequencyResponse], path: Path) -> Path | None:

@@ -85,7 +85,7 @@ def test_one_shaker_many_accelerometers_gives_the_accelerance(shaker_csv, tmp_pa
     assert d['units'] == ['m/s^2'] * 3
     from frf_ident.app.estimate import frf_units
     from frf_ident.core.estimation.frd import FrequencyResponse as Frd
-    assert frf_units(Frd.from_dict(next(iter(est.values())))) == ' re 1 (m/s^2)/(N)'
+    assert frf_units(Frd.from_dict(next(iter(est.values())))) == '(m/s^2)/(N)'
     if P is None:      # the FRD layout of frf.json: compare through the Python API
         from frf_ident.core.estimation.frd import FrequencyResponse
         P = FrequencyResponse.from_dict(doc).response
@@ -167,3 +167,37 @@ def test_two_shakers_one_accelerometer(tmp_path):
         b, a = _accel_tf(fm)
         err = np.abs(frf.response[0, 0] / (np.polyval(b, z) / np.polyval(a, z)) - 1)
         assert np.median(err) < 1e-3 and np.max(err) < 0.05, (name, np.max(err))
+
+
+def test_one_shaker_driven_by_noise_gives_the_accelerance_through_the_lpm(tmp_path):
+    """
+    A noise-driven shaker (no period: the LPM route) keeps the layout's outputs only.
+
+    Before, the LPM took every channel as an output: the shaker's own channel (no motion)
+    became a fourth output, and the units of the accelerometers were lost, so the Bode axis
+    claimed (rad/s)/(N m). Truth: the analytic accelerance of each mode (lfilter).
+    """
+    rng = np.random.default_rng(3)
+    b_lp, a_lp = signal.butter(4, 80.0, fs=FS)
+    force = signal.lfilter(b_lp, a_lp, rng.standard_normal(int(60 * FS)))
+    acc = [signal.lfilter(*_accel_tf(f), force) for f in MODES]
+    acc = [a + 1e-3 * np.std(a) * rng.standard_normal(a.size) for a in acc]
+    path = tmp_path / 'noise.csv'
+    rows = zip((np.arange(force.size) / FS).tolist(), force.tolist(),
+               *[a.tolist() for a in acc])
+    path.write_text('t,F,a1,a2,a3\n' + '\n'.join(','.join(repr(v) for v in r) for r in rows))
+    bag = write_recording(import_table(path, _layout()), tmp_path / 'bag')
+    assert main(['-q', 'estimate', str(bag), '--out', str(tmp_path / 'est')]) == 0
+    est = json.loads((tmp_path / 'est' / 'estimates.json').read_text())
+    from frf_ident.app.estimate import frf_units
+    from frf_ident.core.estimation.frd import FrequencyResponse
+    lpm = FrequencyResponse.from_dict(est['lpm'])
+    assert lpm.inputs == ['tau_m/shaker']
+    assert lpm.outputs == ['dq_m/acc_1', 'dq_m/acc_2', 'dq_m/acc_3']
+    assert frf_units(lpm) == '(m/s^2)/(N)'
+    band = (lpm.freq_hz > 2.0) & (lpm.freq_hz < 70.0)
+    z = np.exp(2j * np.pi * lpm.freq_hz[band] / FS)
+    for o, fm in enumerate(MODES):
+        b, a = _accel_tf(fm)
+        err = np.abs(lpm.response[o, 0, band] / (np.polyval(b, z) / np.polyval(a, z)) - 1)
+        assert np.median(err) < 0.01, (fm, np.median(err))

@@ -80,3 +80,50 @@ def test_bode_draws_estimates_over_the_reference_with_units_and_the_legend_outsi
     for ax in (ax_m, ax_p):                              # the legend overlaps no panel
         assert not box.overlaps(ax.get_window_extent(r))
     plt.close(fig)
+
+
+def test_phases_of_curves_that_agree_are_drawn_on_one_branch(monkeypatch, tmp_path):
+    """
+    Two estimates of one FRF near +-180 deg are drawn on top of each other, not 360 deg apart.
+
+    The DaISy arm's LPM started just below -180 deg and its Welch H1 just above +180 deg:
+    np.unwrap put the two curves a whole turn apart. Truth: an FRF whose phase is -180 deg
+    +- 2 deg, sampled on two grids that start on either side of the cut.
+    """
+    kept = {}
+    monkeypatch.setattr(figures, '_save', lambda fig, path: kept.setdefault('fig', fig))
+    fa, fb = np.geomspace(0.001, 0.2, 60), np.geomspace(0.0045, 0.5, 80)
+
+    def truth(f, offset_deg):
+        return 0.1 * np.exp(1j * np.radians(-180.0 + offset_deg + 2.0 * np.sin(40 * f)))
+
+    a = FrequencyResponse(fa, truth(fa, -0.5)[None, None, :], ['u'], ['y'])
+    b = FrequencyResponse(fb, truth(fb, +0.5)[None, None, :], ['u'], ['y'])
+    assert np.degrees(np.angle(a.response[0, 0, 0])) > 170        # either side of the cut
+    assert np.degrees(np.angle(b.response[0, 0, 0])) < -170
+    figures.bode_figure({'lpm': a, 'lpm_h1': b}, tmp_path / 'b.png', units=None)
+    ax_m, ax_p = kept['fig'].axes[:2]
+    (la, lb) = ax_p.get_lines()
+    common = np.interp(lb.get_xdata(), la.get_xdata(), la.get_ydata())
+    ok = (lb.get_xdata() >= fa[0]) & (lb.get_xdata() <= fa[-1])
+    assert np.max(np.abs(lb.get_ydata()[ok] - common[ok])) < 5.0
+    assert ax_m.get_ylabel() == '|P| [dB]'                          # no unit: plain dB
+    plt.close(kept['fig'])
+
+
+def test_a_coherence_panel_is_drawn_where_an_estimate_carries_one(monkeypatch, tmp_path):
+    kept = {}
+    monkeypatch.setattr(figures, '_save', lambda fig, path: kept.setdefault('fig', fig))
+    f = np.geomspace(1, 60, 40)
+    p = (1 / (2j * np.pi * f))[None, None, :]
+    coh = np.linspace(0.2, 0.99, f.size)[None, :]
+    h1 = FrequencyResponse(f, p, ['tau_1'], ['dq_1'], meta={'coherence': coh})
+    figures.bode_figure({'lpm': FrequencyResponse(f, p, ['tau_1'], ['dq_1']), 'lpm_h1': h1},
+                        tmp_path / 'b.png')
+    fig = kept['fig']
+    ax_c = fig.axes[2]
+    (line,) = ax_c.get_lines()
+    assert np.allclose(line.get_ydata(), coh[0])
+    assert ax_c.get_ylabel() == 'coherence [-]' and ax_c.get_xlabel() == 'frequency [Hz]'
+    assert fig.axes[1].get_xlabel() == ''                           # only the bottom panel
+    plt.close(fig)

@@ -704,23 +704,17 @@ def _steady(e: dict[str, Any]) -> SteadyState:
 
 def _output_columns(rec: Recording) -> list[int]:
     """Columns that are outputs: all joints, or the outputs of an import layout."""
-    layout = rec.meta.get('layout') if isinstance(rec.meta, dict) else None
-    if not isinstance(layout, dict):
-        return list(range(len(rec.joint_names)))
-    names = {c['name'] for c in layout.get('outputs', [])}
-    return [k for k, n in enumerate(rec.joint_names) if n in names]
+    return rec.output_columns()
 
 
 def _output_units(rec: Recording) -> list[str]:
     """Velocity unit per joint as an import map states it (rad/s where it says nothing)."""
-    units = rec.meta.get('units', {}) if isinstance(rec.meta, dict) else {}
-    return [units.get(n, {}).get('velocity', 'rad/s') for n in rec.joint_names]
+    return [rec.velocity_unit(n) for n in rec.joint_names]
 
 
 def _input_unit(rec: Recording, j: int) -> str:
     """Effort unit of joint j as an import map states it (N m where it says nothing)."""
-    units = rec.meta.get('units', {}) if isinstance(rec.meta, dict) else {}
-    return units.get(rec.joint_names[j], {}).get('effort', 'N m')
+    return rec.effort_unit(rec.joint_names[j])
 
 
 def _strong_lines(uj: np.ndarray) -> np.ndarray:

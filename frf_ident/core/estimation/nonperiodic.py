@@ -26,6 +26,8 @@ warning.
 """
 from __future__ import annotations
 
+from typing import Any
+
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.lpm import (DEFAULT_FRAME_SAMPLES, DIRECT_WARNING,
                                            EXCITED_FRACTION, LpmAccumulator)
@@ -64,6 +66,7 @@ class LpmBlocks:
         self.band = band
         self.acc: LpmAccumulator | None = None
         self.inputs: list[int] = []
+        self.units: dict[str, Any] = {}
         self.source = ''
         self.dropped = 0
         self.used_until: float | None = None
@@ -91,8 +94,13 @@ class LpmBlocks:
                                       f'joint; expected an excited input')
             self.inputs = [j for j in range(len(names)) if level[j] >= MIN_LEVEL * level.max()]
         n = min(n_rows, self.frame_samples)
+        outs = [names[k] for k in rec.output_columns()]
         self.acc = LpmAccumulator(rec.fs, n, inputs=[f'tau_m/{names[j]}' for j in self.inputs],
-                                  outputs=[f'dq_m/{m}' for m in names])
+                                  outputs=[f'dq_m/{m}' for m in outs])
+        # one input unit where the inputs share it ('' where they differ: no common unit)
+        ins = {rec.effort_unit(names[j]) for j in self.inputs}
+        self.units = {'input': ins.pop() if len(ins) == 1 else '',
+                      'outputs': [rec.velocity_unit(m) for m in outs]}
 
     def add(self, rec: Recording) -> float | None:
         """
@@ -117,7 +125,7 @@ class LpmBlocks:
             No joint moves, or an unknown ``input`` joint.
 
         """
-        y = rec.velocity
+        y = rec.velocity[:, rec.output_columns()]      # a layout's sensors only
         u = rec.effort
         if self.acc is None:
             self.source = excitation_source(rec.reference, rec.effort)[1]
@@ -201,5 +209,6 @@ class LpmBlocks:
                     + [base])
         for v in (frf, h1):
             v.meta['detected'] = detected
+            v.meta['units'] = self.units
         frf.meta['dropped'] = {'frames': self.dropped} if self.dropped else {}
         return {'lpm': frf, 'lpm_h1': h1}
