@@ -417,6 +417,13 @@ def bench_fit() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('real_data')
+def bench_real_data() -> list[tuple[str, str, str, str]]:
+    """Estimate the real data sets of ../shared/data through their maps, with figures."""
+    from benchmarks.real_data import rows
+    return rows()
+
+
 def main(argv: list[str] | None = None) -> int:
     """
     Run the named sections (all without names) and print their rows.

@@ -14,7 +14,8 @@
 """
 docs/BENCHMARKS.md, generated from the runs themselves (``python -m benchmarks --markdown``).
 
-Each section's run is stored as JSON under docs/benchmarks/<section>.json: its rows, the
+Each section's run is stored as JSON under docs/benchmarks/<section>.json (a section's figures,
+docs/benchmarks/img/<section>_*.png, are shown under its table): its rows, the
 exact command, the date, the wall time and the machine (cores, CPU model, RAM, Python, load
 average when it started). The page is rendered from all stored runs, so
 ``python -m benchmarks --markdown SECTION ...`` re-measures only those sections and keeps the
@@ -185,6 +186,8 @@ def render(sections: dict[str, Callable[..., Any]], runs_dir: Path = RUNS_DIR) -
         lines += ['| ' + ' | '.join(_cell(c) for c in (list(row) + [''] * 4)[:4]) + ' |'
                   for row in run['rows']]
         lines.append('')
+        for png in sorted((runs_dir / 'img').glob(f'{name}_*.png')):
+            lines += [f'![{png.stem}](benchmarks/img/{png.name})', '']
     return '\n'.join(lines)
 
 

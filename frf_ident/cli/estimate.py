@@ -36,7 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The subcommand's parser; the arguments are added to it.
 
     """
-    from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S
+    from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, LPM_METHODS
     p.add_argument('bag', nargs='+',
                    help='a bag; or several, a folder of bags, a glob or @LIST.txt (one per '
                         'line): a campaign, one folder per bag under --out plus summary.csv, '
@@ -75,10 +75,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help='analyse only the multisine lines in this band [Hz]')
     g.add_argument('--chirp-time', type=float, nargs=2, metavar=('T0', 'T1'),
                    help='sweep start and end [s from the first analysed sample]')
-    g.add_argument('--method', choices=('lpm',), default=None,
+    g.add_argument('--method', choices=LPM_METHODS, default=None,
                    help='lpm: the excitation is not periodic (PRBS, noise, normal motion); '
                         'estimate with the Local Polynomial Method without detecting (used '
-                        'anyway where no multisine or chirp is found)')
+                        'anyway where no multisine or chirp is found), indirectly through '
+                        'the reference r where it is recorded; lpm-direct: y on u directly '
+                        '(biased towards -1/C where noise is fed back)')
 
 
 def excitation_options(args: argparse.Namespace):

@@ -47,3 +47,17 @@ def test_rerunning_one_section_keeps_the_others(tmp_path, monkeypatch):
     assert 'by `FRF_BENCH_SCENES=4 python -m benchmarks --markdown b` in 3.3 min' in text
     assert f'on {os.cpu_count()} cores (' in text and 'GiB RAM, Python 3.' in text
     assert 'Measure section b.' in text
+
+
+def test_a_sections_figures_are_shown_under_its_table(tmp_path):
+    runs, page = tmp_path / 'runs', tmp_path / 'BENCHMARKS.md'
+    md.store('a', [('row', '1', '2', '')], wall_s=1.0, cmd=md.command(['a']),
+             started=md.machine(), runs_dir=runs)
+    (runs / 'img').mkdir()
+    for name in ('a_first.png', 'a_second.png', 'b_other.png'):
+        (runs / 'img' / name).write_bytes(b'')
+    text = md.write_page(SECTIONS, runs, page).read_text()
+    block = text[text.index('## a'):]
+    assert block.index('| row | 1 | 2 |') < block.index('![a_first](benchmarks/img/a_first.png)')
+    assert '![a_second](benchmarks/img/a_second.png)' in block
+    assert 'b_other' not in text                       # section b was not measured

@@ -60,10 +60,9 @@ from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
 import numpy as np
 
-__all__ = ['DEFAULT_BLOCK_S', 'MIN_ADVANCE_S', 'DetectedEstimator', 'ExcitationOptions',
-           'NoExcitationError', 'RecordingBlocks', 'block_length', 'check_detected_segment',
-           'detect_segments',
-           'detected_frf', 'estimate_in_blocks']
+__all__ = ['DEFAULT_BLOCK_S', 'LPM_METHODS', 'MIN_ADVANCE_S', 'DetectedEstimator',
+           'ExcitationOptions', 'NoExcitationError', 'RecordingBlocks', 'block_length',
+           'check_detected_segment', 'detect_segments', 'detected_frf', 'estimate_in_blocks']
 
 #: block length [s] in which recordings without descriptors are detected and estimated (in
 #: memory and streamed alike): a few multisine periods or a whole chirp must fit in one block.
@@ -74,6 +73,10 @@ DEFAULT_BLOCK_S = 300.0
 #: a block that used data up to t starts the next block there (no period lost at the
 #: boundary), unless t is less than this far [s] into the block (the scan must move on)
 MIN_ADVANCE_S = 0.5
+
+#: the methods that force the LPM without detecting (ExcitationOptions.method): the indirect
+#: estimate through r where r is recorded, or the direct one of y on u
+LPM_METHODS = ('lpm', 'lpm-direct')
 
 #: fewest multisine periods an estimate needs (mean and noise variance over periods)
 MIN_PERIODS = 2
@@ -99,8 +102,10 @@ class ExcitationOptions:
         detection reports them).
     method : str, optional
         'lpm': the excitation is not periodic, estimate with the Local Polynomial Method
-        (:mod:`frf_ident.core.estimation.nonperiodic`) without detecting; None: detect, and
-        use the LPM only where no multisine or chirp is found.
+        (:mod:`frf_ident.core.estimation.nonperiodic`) without detecting; 'lpm-direct': the
+        same, the direct estimate of y on u even where the reference r is recorded (biased
+        towards -1/C where noise is fed back; for a reference that does not excite the band);
+        None: detect, and use the LPM only where no multisine or chirp is found.
 
     """
 
@@ -154,11 +159,12 @@ class ExcitationOptions:
             it.
 
         """
-        if self.method not in (None, 'lpm'):
-            raise EstimationError(f"method={self.method!r}: expected 'lpm' (or none: detect)")
-        if self.method == 'lpm' and (self.chirp is not None
-                                     or self.multisine_period is not None):
-            raise EstimationError(f"method='lpm' with {self.text()}: the LPM is for "
+        if self.method not in (None, *LPM_METHODS):
+            raise EstimationError(f'method={self.method!r}: expected one of {LPM_METHODS} '
+                                  f'(or none: detect)')
+        if self.method in LPM_METHODS and (self.chirp is not None
+                                           or self.multisine_period is not None):
+            raise EstimationError(f'method={self.method!r} with {self.text()}: the LPM is for '
                                   f'excitation that is neither a multisine nor a chirp')
         if self.input is not None and self.input not in rec.joint_names:
             raise EstimationError(f'input={self.input!r} is not a joint of the recording; '
@@ -931,14 +937,14 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     """
     det = DetectedEstimator()
     opts = options or ExcitationOptions()
-    lpm = LpmBlocks(input=opts.input, band=opts.band)
+    lpm = LpmBlocks(input=opts.input, band=opts.band, direct=opts.method == 'lpm-direct')
     notes: list[str] = []
     first: EstimationError | None = None
     n = 0
     for rec in blocks:
         n += 1
         try:
-            if opts.method == 'lpm':
+            if opts.method in LPM_METHODS:
                 opts.check(rec)
                 _add_lpm(lpm, rec, resume)
                 continue
@@ -958,10 +964,10 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
             continue
         if det.used_until is not None and resume is not None:
             resume(det.used_until)
-    if not det.entries and (lpm.frames or opts.method == 'lpm'):
+    if not det.entries and (lpm.frames or opts.method in LPM_METHODS):
         if not lpm.frames and first is not None:
             raise first
-        why = ([] if opts.method == 'lpm' else
+        why = ([] if opts.method in LPM_METHODS else
                [f'no multisine or chirp found in {n} block(s) of at most '
                 f'{block_length(block_s):g} s'])
         return lpm.results(why)

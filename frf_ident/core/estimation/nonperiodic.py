@@ -60,8 +60,9 @@ class LpmBlocks:
 
     def __init__(self, frame_samples: int = DEFAULT_FRAME_SAMPLES, *,
                  input: str | None = None,  # noqa: A002
-                 band: tuple[float, float] | None = None) -> None:
+                 band: tuple[float, float] | None = None, direct: bool = False) -> None:
         self.frame_samples = int(frame_samples)
+        self.direct = direct
         self.input = input
         self.band = band
         self.acc: LpmAccumulator | None = None
@@ -128,7 +129,8 @@ class LpmBlocks:
         y = rec.velocity[:, rec.output_columns()]      # a layout's sensors only
         u = rec.effort
         if self.acc is None:
-            self.source = excitation_source(rec.reference, rec.effort)[1]
+            self.source = ('torque' if self.direct
+                           else excitation_source(rec.reference, rec.effort)[1])
         ref = rec.reference if self.source == 'velocity reference' else None
         cols = [y, u] if ref is None else [y, u, ref]
         ok = np.all(np.concatenate([np.isfinite(c) for c in cols], axis=1), axis=1)
@@ -179,6 +181,8 @@ class LpmBlocks:
                                   f'({self.dropped} dropped for gaps); expected a longer record')
         res = self.acc.result()
         frf, h1 = res.frf, res.h1
+        if not frf.freq_hz.size:
+            raise EstimationError(self._no_line_text(frf))
         if self.band is not None:
             lo, hi = self.band
             frf = frf.select((frf.freq_hz >= lo) & (frf.freq_hz <= hi))
@@ -205,10 +209,25 @@ class LpmBlocks:
         base = (f'Welch H1 baseline (lpm_h1): median coherence over the excited '
                 f'{f_ex[0]:.4g}-{f_ex[-1]:.4g} Hz: '
                 + ', '.join(f'{n.split("/", 1)[1]} {c:.2f}' for n, c in zip(h1.outputs, coh)))
-        detected = (list(notes) + [line] + ([DIRECT_WARNING] if res.method == 'direct' else [])
-                    + [base])
+        warning = ([] if res.method != 'direct' else [DIRECT_WARNING] if not self.direct else
+                   [DIRECT_WARNING.replace('no reference recorded', "method='lpm-direct'")])
+        detected = list(notes) + [line] + warning + [base]
         for v in (frf, h1):
             v.meta['detected'] = detected
             v.meta['units'] = self.units
         frf.meta['dropped'] = {'frames': self.dropped} if self.dropped else {}
         return {'lpm': frf, 'lpm_h1': h1}
+
+    def _no_line_text(self, frf: FrequencyResponse) -> str:
+        """Say why no line of the LPM is determined (every line unexcited or singular)."""
+        lo, hi = frf.meta['excitation_band_hz']
+        x = 'the velocity reference r' if self.source == 'velocity reference' else 'the torque u'
+        text = (f'no line of the LPM is determined: 99 % of the power of {x} lies in '
+                f'{lo:.4g}-{hi:.4g} Hz, {frf.meta["unexcited_lines"]} line(s) hold less than '
+                f'{EXCITED_FRACTION:g} of the largest line excitation and '
+                f'{frf.meta["singular_lines"]} do not excite every input; expected {x} '
+                f'exciting every input over the band of interest')
+        if self.source == 'velocity reference':
+            text += (" (method='lpm-direct' estimates y on u directly, biased towards -1/C "
+                     'where noise is fed back)')
+        return text

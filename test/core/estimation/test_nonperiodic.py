@@ -60,3 +60,32 @@ def test_direct_lpm_with_a_gap():
     assert 0.75 < np.mean(z2) < 1.25          # the variance is that of the error
     coh = np.asarray(est['lpm_h1'].meta['coherence'])
     assert coh.shape == (2, est['lpm_h1'].freq_hz.size) and np.median(coh) > 0.95
+
+
+def test_a_reference_that_excites_no_line_is_refused_and_the_direct_estimate_offered():
+    """
+    A slow trajectory as the recorded reference: the indirect LPM has no line to estimate.
+
+    KUKA KR300 trajectory A: 99 % of r's power lies in 0.1-0.4 Hz, every line there fails
+    to excite all six inputs, and the estimate crashed with an IndexError (exit 1). Now the
+    indirect route says why in one line, and ``method='lpm-direct'`` estimates y on u (here
+    open loop, so the direct estimate is the truth's).
+    """
+    from frf_ident.core.estimation.detected import ExcitationOptions
+    from frf_ident.errors import EstimationError
+    import pytest
+    rec = _recording()
+    t = rec.t
+    ref = np.stack([np.sin(2 * np.pi * 0.2 * t), np.cos(2 * np.pi * 0.2 * t)], axis=1)
+    rec = Recording(t, rec.joint_names, rec.position, rec.velocity, rec.effort, ref, None,
+                    [], {})
+    with pytest.raises(EstimationError, match='no line of the LPM is determined.*lpm-direct'):
+        estimate_recording(rec, options=ExcitationOptions(method='lpm'), block_s=4096 / FS)
+    est = estimate_recording(rec, options=ExcitationOptions(method='lpm-direct'),
+                             block_s=4096 / FS)
+    frf = est['lpm']
+    assert frf.meta['method'] == 'lpm_direct'
+    assert any("method='lpm-direct'" in line for line in frf.meta['detected'])
+    truth = np.array([[signal.freqz(*FILTERS[i][j], worN=frf.freq_hz, fs=FS)[1]
+                       for j in range(2)] for i in range(2)])
+    assert np.median(np.abs(frf.response - truth) / np.abs(truth)) < 0.01
