@@ -30,7 +30,7 @@ from typing import Any
 from frf_ident.core.jsonable import json_default
 import numpy as np
 
-__all__ = ['Recording', 'Segment']
+__all__ = ['JOINT_STATE_UNITS', 'Recording', 'Segment']
 
 
 @dataclass
@@ -116,6 +116,11 @@ class Segment:
         return event, cls(t0, t1, d)
 
 
+#: the units of a revolute joint's sensor_msgs/JointState fields (REP 103: SI), which a
+#: recording has where an import map states no others
+JOINT_STATE_UNITS = {'position': 'rad', 'velocity': 'rad/s', 'effort': 'N m'}
+
+
 @dataclass
 class Recording:
     """
@@ -188,42 +193,27 @@ class Recording:
         names = {c['name'] for c in layout.get('outputs', [])}
         return [k for k, n in enumerate(self.joint_names) if n in names]
 
-    def velocity_unit(self, name: str) -> str:
+    def unit(self, name: str, signal: str) -> str:
         """
-        Return the unit of joint ``name``'s velocity: as an import map states it, else rad/s.
+        Return the unit of one signal of joint ``name``: as an import map states it, else SI.
 
         Parameters
         ----------
         name : str
             A joint name.
+        signal : str
+            'position', 'velocity' or 'effort'.
 
         Returns
         -------
         str
-            meta['units'][name]['velocity'], or 'rad/s' (sensor_msgs/JointState of a revolute
-            joint) where the recording says nothing.
+            meta['units'][name][signal], or the sensor_msgs/JointState unit of a revolute
+            joint (:data:`JOINT_STATE_UNITS`: rad, rad/s, N m) where the recording says
+            nothing.
 
         """
         units = self.meta.get('units', {}) if isinstance(self.meta, dict) else {}
-        return units.get(name, {}).get('velocity', 'rad/s')
-
-    def effort_unit(self, name: str) -> str:
-        """
-        Return the unit of joint ``name``'s effort: as an import map states it, else N m.
-
-        Parameters
-        ----------
-        name : str
-            A joint name.
-
-        Returns
-        -------
-        str
-            meta['units'][name]['effort'], or 'N m' where the recording says nothing.
-
-        """
-        units = self.meta.get('units', {}) if isinstance(self.meta, dict) else {}
-        return units.get(name, {}).get('effort', 'N m')
+        return units.get(name, {}).get(signal, JOINT_STATE_UNITS[signal])
 
     @property
     def dt(self) -> float:

@@ -715,12 +715,12 @@ def _output_columns(rec: Recording) -> list[int]:
 
 def _output_units(rec: Recording) -> list[str]:
     """Velocity unit per joint as an import map states it (rad/s where it says nothing)."""
-    return [rec.velocity_unit(n) for n in rec.joint_names]
+    return [rec.unit(n, 'velocity') for n in rec.joint_names]
 
 
 def _input_unit(rec: Recording, j: int) -> str:
     """Effort unit of joint j as an import map states it (N m where it says nothing)."""
-    return rec.effort_unit(rec.joint_names[j])
+    return rec.unit(rec.joint_names[j], 'effort')
 
 
 def _strong_lines(uj: np.ndarray) -> np.ndarray:

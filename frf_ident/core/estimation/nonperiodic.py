@@ -99,9 +99,9 @@ class LpmBlocks:
         self.acc = LpmAccumulator(rec.fs, n, inputs=[f'tau_m/{names[j]}' for j in self.inputs],
                                   outputs=[f'dq_m/{m}' for m in outs])
         # one input unit where the inputs share it ('' where they differ: no common unit)
-        ins = {rec.effort_unit(names[j]) for j in self.inputs}
+        ins = {rec.unit(names[j], 'effort') for j in self.inputs}
         self.units = {'input': ins.pop() if len(ins) == 1 else '',
-                      'outputs': [rec.velocity_unit(m) for m in outs]}
+                      'outputs': [rec.unit(m, 'velocity') for m in outs]}
 
     def add(self, rec: Recording) -> float | None:
         """
