@@ -44,11 +44,14 @@ from frf_ident.core.model.params import AxisParams
 import numpy as np
 from scipy import optimize
 
-__all__ = ['DELAY_START_SHARE', 'PARAMETERS', 'PhysicalFit', 'delay_from_phase', 'fit_two_mass',
-           'physical_from_rational', 'two_mass_jacobian', 'two_mass_response']
+__all__ = ['DELAY_START_SHARE', 'PARAMETERS', 'PhysicalFit', 'UNITS', 'delay_from_phase',
+           'fit_two_mass', 'physical_from_rational', 'two_mass_jacobian', 'two_mass_response']
 
 #: the fitted parameters, in the order of every array of :class:`PhysicalFit`
 PARAMETERS = ('motor_inertia', 'link_inertia', 'stiffness', 'damping', 'viscous_friction')
+#: their units (those of the model file)
+UNITS = {'motor_inertia': 'kg m^2', 'link_inertia': 'kg m^2', 'stiffness': 'N m/rad',
+         'damping': 'N m s/rad', 'viscous_friction': 'N m s/rad'}
 
 #: scale of the viscous friction when its start is about zero: this fraction of the total
 #: inertia times the lowest measured angular frequency (friction that changes |P| there by
@@ -291,10 +294,8 @@ class PhysicalFit:
 
     def summary(self) -> list[str]:
         """Return a few lines for people: parameters with standard errors, then the cost."""
-        units = {'motor_inertia': 'kg m^2', 'link_inertia': 'kg m^2', 'stiffness': 'N m/rad',
-                 'damping': 'N m s/rad', 'viscous_friction': 'N m s/rad'}
         fa, fr = self.resonances_hz()
-        parts = [f'{k} {v:.5g} +- {s:.2g} {units[k]}'
+        parts = [f'{k} {v:.5g} +- {s:.2g} {UNITS[k]}'
                  for k, v, s in zip(self.names, self.value, self.std)]
         delay = (f'delay {1e3 * self.delay_s:.4g} +- {1e3 * self.delay_std_s:.2g} ms (fitted)'
                  if self.delay_fitted else f'delay {1e3 * self.delay_s:.4g} ms (given)')

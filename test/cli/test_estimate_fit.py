@@ -1,0 +1,102 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+`frf-ident estimate BAG --fit`: the estimate, then the fit of `frf-ident fit` on its frf.json.
+
+The bag is one flexible joint (the default model's joint_1, linear) under its velocity PI at
+1 kHz, driven by a multisine reference and recorded without descriptors, with white velocity
+measurement noise. Truth the fit did not produce: the model file's parameters, and the half
+sample of delay a zero-order hold shows to the continuous model (0.5 ms).
+"""
+from __future__ import annotations
+
+import json
+import re
+
+from frf_ident.bag import write_recording
+from frf_ident.cli import main
+from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
+from frf_ident.core.fit.physical import PARAMETERS
+from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
+from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.plant import FlexibleJointPlant
+import numpy as np
+import pytest
+import yaml
+
+FS = 1000.0
+
+
+@pytest.fixture(scope='module')
+def joint(tmp_path_factory):
+    """Return (bag, model file, true axis) of the one-joint closed-loop multisine run."""
+    d = default_model_dict()
+    d['axes'] = d['axes'][:1]
+    d.pop('link_coupling')
+    d['controller'] = {'kind': 'pi_velocity', 'kp': [1500.0], 'ki': [6000.0]}
+    root = tmp_path_factory.mktemp('joint')
+    (root / 'model.yaml').write_text(yaml.safe_dump(d))
+    rob = robot_from_dict(d)
+    des = design_odd_multisine(2.0, 60.0, bound=0.01, resolution_hz=0.5, fs=FS)
+    real = multisine_realisation(des, 1, np.random.default_rng(0), fs=FS)
+    r = real.evaluate(np.arange(des.period_samples(FS)) / FS)[0][:, 0]
+    res = FlexibleJointPlant(rob).simulate(reference=np.tile(r, 6)[:, None],
+                                           controller=controller_from_dict(d, rob))
+    noisy = res.velocity + 1e-4 * np.random.default_rng(1).standard_normal(res.velocity.shape)
+    rec = Recording(res.t, rob.joint_names, res.position, noisy, res.effort)
+    return write_recording(rec, root / 'bag'), root / 'model.yaml', d['axes'][0]
+
+
+def test_estimate_fit_writes_the_fit_of_frf_ident_fit_into_the_estimate(joint, tmp_path,
+                                                                        capsys):
+    bag, model, axis = joint
+    out = tmp_path / 'est'
+    assert main(['estimate', str(bag), '--out', str(out), '--fit', '--physical',
+                 '--model', str(model)]) == 0
+    said = capsys.readouterr().out
+    assert re.search(r'delay 0\.50\d* \+- [0-9.e-]+ ms \(fitted\)', said), said
+    assert 'phase margin' in said and 'fit: report' in said
+    doc = json.loads((out / 'fit.json').read_text())
+    (fit,) = doc['physical']
+    for k in PARAMETERS[:4]:     # 3 SE, plus 0.5 %: the sampled loop vs the continuous model
+        err = abs(fit['parameters'][k] - axis[k])
+        assert err <= 3 * fit['std'][k] + 0.005 * axis[k], (k, fit['parameters'][k])
+    assert abs(fit['delay_s'] / 0.5e-3 - 1) < 0.02
+    assert doc['delay_s'] is None and fit['delay_std_s'] > 0
+    # the margins of the model file's PI, as `frf-ident loop` computes them
+    loop = json.loads((out / 'loop.json').read_text())['check']['axes'][0]
+    assert loop['kp'] == 1500.0 and 30 < loop['phase_margin_deg']['value'] < 180
+    # no second code path: `frf-ident fit` on the estimate's folder gives the same fit.json
+    again = tmp_path / 'fit'
+    assert main(['fit', str(out), '--out', str(again), '--physical', '--model',
+                 str(model)]) == 0
+    doc2 = json.loads((again / 'fit.json').read_text())
+    assert doc2['physical'] == doc['physical']
+    # the page: its sections, and every figure it shows is there
+    page = (out / 'fit.html').read_text()
+    for heading in ('Fitted model over the FRF', 'Fitted parameters', 'Margins of the '
+                    'measured loop', 'delay (fitted)', 'N m/rad', 'crossover [Hz]'):
+        assert heading in page, heading
+    for png in re.findall(r'src="([^"]+\.png)"', page):
+        assert (out / png).stat().st_size > 0, png
+    assert set(re.findall(r'src="([^"]+\.png)"', page)) == {'fit.png', 'loop.png'}
+
+
+@pytest.mark.parametrize('args', [['--physical'], ['--order', '2'], ['--delay', '0.001']])
+def test_fit_options_without_fit_are_refused(joint, tmp_path, capsys, args):
+    bag, _, _ = joint
+    assert main(['estimate', str(bag), '--out', str(tmp_path / 'x'), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'only with --fit' in err, err
+    assert not (tmp_path / 'x').exists()
