@@ -91,6 +91,13 @@ def test_estimate_fit_writes_the_fit_of_frf_ident_fit_into_the_estimate(joint, t
     for png in re.findall(r'src="([^"]+\.png)"', page):
         assert (out / png).stat().st_size > 0, png
     assert set(re.findall(r'src="([^"]+\.png)"', page)) == {'fit.png', 'loop.png'}
+    # `frf-ident loop` writes the same margins section as its own page
+    assert main(['loop', str(out), '--out', str(tmp_path / 'loop'), '--model', str(model),
+                 '--draws', '10']) == 0
+    alone = (tmp_path / 'loop' / 'loop.html').read_text()
+    pm = loop['phase_margin_deg']['value']
+    assert 'Margins of the measured loop' in alone and f'<td>{pm:.4g} \u00b1' in alone
+    assert f'<td>{pm:.4g} \u00b1' in page
 
 
 @pytest.mark.parametrize('args', [['--physical'], ['--order', '2'], ['--delay', '0.001']])
