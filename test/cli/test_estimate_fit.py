@@ -31,6 +31,7 @@ from frf_ident.core.fit.physical import PARAMETERS
 from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.io.model_file import load_model
 import numpy as np
 import pytest
 import yaml
@@ -74,6 +75,9 @@ def test_estimate_fit_writes_the_fit_of_frf_ident_fit_into_the_estimate(joint, t
         assert err <= 3 * fit['std'][k] + 0.005 * axis[k], (k, fit['parameters'][k])
     assert abs(fit['delay_s'] / 0.5e-3 - 1) < 0.02
     assert doc['delay_s'] is None and fit['delay_std_s'] > 0
+    # model.yaml: the simulation had no delay beyond its zero-order hold
+    _, robot, _ = load_model(out / 'model.yaml')
+    assert abs(robot.axes[0].time_delay) <= 3 * fit['delay_std_s'], robot.axes[0].time_delay
     # the margins of the model file's PI, as `frf-ident loop` computes them
     loop = json.loads((out / 'loop.json').read_text())['check']['axes'][0]
     assert loop['kp'] == 1500.0 and 30 < loop['phase_margin_deg']['value'] < 180
