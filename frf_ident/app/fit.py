@@ -230,7 +230,7 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     model : str or Path, optional
         Model file whose other keys (limits, controller, sample rate) model.yaml keeps, and
         whose velocity PI is checked on the measured FRF (loop.json, loop.png; the margins
-        section of fit.html).
+        section of fit.html) when it has one PI per axis of the FRF.
     progress : callable, optional
         Called with one line of text per stage.
 
@@ -315,7 +315,12 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     progress(f'fit: wrote {", ".join(p.name for p in files)} to {out}')
     loop = None
     if model is not None:
-        loop = run_loop(source, out, model=model, page=False, progress=progress)
+        n_pi, n_axes = load_model(model)[2].kp.size, len(axis_channels(frf))
+        if n_pi == n_axes:
+            loop = run_loop(source, out, model=model, page=False, progress=progress)
+        else:
+            progress(f'loop: no margins: the controller of {model} has {n_pi} axes, the FRF '
+                     f'{n_axes}')
     sections = fit_sections(physical=phys or (), coupled=coupled,
                             rational=None if sel is None else sel.best,
                             check=None if loop is None else loop.check, fit_png='fit.png',

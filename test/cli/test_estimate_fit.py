@@ -22,6 +22,7 @@ sample of delay a zero-order hold shows to the continuous model (0.5 ms).
 from __future__ import annotations
 
 import json
+from pathlib import Path
 import re
 
 from frf_ident.bag import write_recording
@@ -37,6 +38,7 @@ import pytest
 import yaml
 
 FS = 1000.0
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope='module')
@@ -102,6 +104,12 @@ def test_estimate_fit_writes_the_fit_of_frf_ident_fit_into_the_estimate(joint, t
     pm = loop['phase_margin_deg']['value']
     assert 'Margins of the measured loop' in alone and f'<td>{pm:.4g} \u00b1' in alone
     assert f'<td>{pm:.4g} \u00b1' in page
+    # a model whose controller does not have one PI per axis: the fit, and no margins
+    other = tmp_path / 'other'
+    assert main(['fit', str(out), '--out', str(other), '--physical', '--model',
+                 str(ROOT / 'config' / 'model_3axis.yaml')]) == 0
+    assert 'no margins: the controller of' in capsys.readouterr().out
+    assert (other / 'fit.html').exists() and not (other / 'loop.json').exists()
 
 
 @pytest.mark.parametrize('args', [['--physical'], ['--order', '2'], ['--delay', '0.001']])
