@@ -111,6 +111,13 @@ class FitOptions:
     band: tuple[float, float] | None = None
     model: str | Path | None = None
 
+    def __post_init__(self) -> None:
+        """Refuse a delay for the rational fit (FrfIdentInputError, one line)."""
+        if self.delay_s is not None and not self.physical:
+            raise FrfIdentInputError(f'--delay {self.delay_s}: only with --physical (the '
+                                     f'rational model has no delay: its order takes up the '
+                                     f'phase lag)')
+
 
 def cost_dict(c: CostTest) -> dict[str, Any]:
     """Return the cost test as the JSON mapping of fit.json."""
@@ -242,9 +249,11 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     Raises
     ------
     FrfIdentInputError
-        The source cannot be read, the band keeps too few lines, or an order is not >= 1.
+        The source cannot be read, the band keeps too few lines, an order is not >= 1, or a
+        delay is given without ``physical``.
 
     """
+    FitOptions(order, physical, delay_s, band, model)        # refuses what does not go together
     frf = read_source(source)
     if band is not None:
         frf = frf.select((frf.freq_hz >= band[0]) & (frf.freq_hz <= band[1]))

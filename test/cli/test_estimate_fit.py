@@ -110,12 +110,19 @@ def test_estimate_fit_writes_the_fit_of_frf_ident_fit_into_the_estimate(joint, t
                  str(ROOT / 'config' / 'model_3axis.yaml')]) == 0
     assert 'no margins: the controller of' in capsys.readouterr().out
     assert (other / 'fit.html').exists() and not (other / 'loop.json').exists()
+    # a delay for the rational fit, which has none, is refused (one line, exit 2)
+    assert main(['fit', str(out), '--out', str(tmp_path / 'r'), '--delay', '0.001']) == 2
+    assert 'only with --physical' in capsys.readouterr().err
 
 
-@pytest.mark.parametrize('args', [['--physical'], ['--order', '2'], ['--delay', '0.001']])
-def test_fit_options_without_fit_are_refused(joint, tmp_path, capsys, args):
+@pytest.mark.parametrize('args, says', [
+    (['--physical'], 'only with --fit'), (['--order', '2'], 'only with --fit'),
+    (['--delay', '0.001'], 'only with --fit'),
+    (['--fit', '--delay', '0.001'], 'only with --physical')])
+def test_fit_options_that_do_not_go_together_are_refused_before_the_estimate(
+        joint, tmp_path, capsys, args, says):
     bag, _, _ = joint
     assert main(['estimate', str(bag), '--out', str(tmp_path / 'x'), *args]) == 2
     err = capsys.readouterr().err
-    assert err.count('\n') == 1 and 'only with --fit' in err, err
+    assert err.count('\n') == 1 and says in err, err
     assert not (tmp_path / 'x').exists()
