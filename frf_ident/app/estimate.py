@@ -113,9 +113,13 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,
                  options=None, stream: bool | None = None, max_memory_mb: float | None = None,
-                 window_s: float | None = None, progress: Progress | None = None) -> dict:
+                 window_s: float | None = None, fit=None,
+                 progress: Progress | None = None) -> dict:
     """
     Estimate every FRF the bag supports; write frf.json, estimates.json, summary.json, bode.png.
+
+    With ``fit``, :func:`frf_ident.app.fit.fit_frf` (what ``frf-ident fit`` runs) then fits a
+    model to the frf.json just written and writes its files into ``out`` too.
 
     Parameters
     ----------
@@ -139,6 +143,8 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     window_s
         Block length for bags without experiment descriptors [s]; None: the default
         :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
+    fit : :class:`~frf_ident.app.fit.FitOptions`, optional
+        Fit a model to frf.json with these options (``estimate --fit``); None: no fit.
     progress
         Called with one line per step; None: silent.
 
@@ -201,6 +207,9 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
              f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
     report_distortion(estimates, out, title=bag.name, progress=progress)
     report_robust_lpm(estimates, progress=progress)
+    if fit is not None:
+        from frf_ident.app.fit import fit_frf
+        fit_frf(out, out, **vars(fit), progress=progress)
     return estimates
 
 

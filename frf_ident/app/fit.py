@@ -19,7 +19,9 @@ Stages of :func:`fit_frf`: read the FRF (an ``estimate`` directory's frf.json, o
 per axis with ``physical``, else a common-denominator rational model of the given order or the
 lowest order the cost test accepts), write fit.json, the figure and the model: model.yaml (the
 model file the other commands take) for the physical fit, model.mat (A, B, C, D) for the
-rational one.
+rational one; with a model file, check its velocity PI on the measured loop
+(:func:`frf_ident.app.loop.run_loop`: loop.json, loop.png); last fit.html, the report page
+of it all. ``estimate --fit`` runs :func:`fit_frf` on the FRF it has just written.
 """
 from __future__ import annotations
 
@@ -29,6 +31,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 from frf_ident.app.frf_source import axis_channels, frf_variance, read_source
+from frf_ident.app.loop import LoopOutcome, run_loop
+from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.fit.cost import CostTest
 from frf_ident.core.fit.coupled import CoupledFit, fit_coupled
@@ -41,12 +45,14 @@ from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.lti import write_lti_mat
 from frf_ident.io.model_file import load_model, save_model
 from frf_ident.report.fit_figures import fit_figure
+from frf_ident.report.html import fit_sections, write_fit_report
 import numpy as np
 
-__all__ = ['FitOutcome', 'MAX_ORDER', 'OUTPUT_FILES', 'cost_dict', 'fit_frf']
+__all__ = ['FitOptions', 'FitOutcome', 'MAX_ORDER', 'OUTPUT_FILES', 'cost_dict', 'fit_frf']
 
-#: the files :func:`fit_frf` may write into its output directory
-OUTPUT_FILES = ('fit.json', 'fit.png', 'model.yaml', 'model.mat')
+#: the files :func:`fit_frf` may write into its output directory (loop.*: with a model file)
+OUTPUT_FILES = ('fit.json', 'fit.png', 'fit.html', 'model.yaml', 'model.mat', 'loop.json',
+                'loop.png')
 #: highest order tried when no --order is given: 9 states (3 twists, 6 velocities) describe the
 #: 3-axis robot's velocity FRF; 12 leaves room for a second mode per axis
 MAX_ORDER = 12
@@ -67,6 +73,8 @@ class FitOutcome:
         The rational fits tried and the chosen one (``physical=False``).
     files : list of Path
         The files written.
+    loop : LoopOutcome or None
+        The model file's velocity PI checked on the measured FRF (with ``model``).
 
     """
 
@@ -74,6 +82,41 @@ class FitOutcome:
     coupled: CoupledFit | None
     rational: OrderSelection | None
     files: list[Path]
+    loop: LoopOutcome | None = None
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """
+    The keyword arguments of :func:`fit_frf` (how ``estimate --fit`` passes them on).
+
+    Attributes
+    ----------
+    order : int or None
+        Rational model order; None: chosen by the cost test.
+    physical : bool
+        Fit the two-mass joint per axis.
+    delay_s : float or None
+        Known input delay [s]; None: fitted (physical fit).
+    band : tuple of float or None
+        (low, high) [Hz] to fit.
+    model : str or Path or None
+        Model file: the base of model.yaml and the controller the margins check.
+
+    """
+
+    order: int | None = None
+    physical: bool = False
+    delay_s: float | None = None
+    band: tuple[float, float] | None = None
+    model: str | Path | None = None
+
+    def __post_init__(self) -> None:
+        """Refuse a delay for the rational fit (FrfIdentInputError, one line)."""
+        if self.delay_s is not None and not self.physical:
+            raise FrfIdentInputError(f'--delay {self.delay_s}: only with --physical (the '
+                                     f'rational model has no delay: its order takes up the '
+                                     f'phase lag)')
 
 
 def cost_dict(c: CostTest) -> dict[str, Any]:
@@ -89,7 +132,9 @@ def _physical_dict(fit: PhysicalFit) -> dict[str, Any]:
     fa, fr = fit.resonances_hz()
     return {'axis': fit.name, 'parameters': fit.parameters(), 'std': fit.standard_errors(),
             'start': dict(zip(fit.names, fit.start.tolist())), 'antiresonance_hz': fa,
-            'resonance_hz': fr, 'cost': cost_dict(fit.cost)}
+            'resonance_hz': fr, 'delay_s': fit.delay_s,
+            'delay_std_s': fit.delay_std_s if fit.delay_fitted else None,
+            'cost': cost_dict(fit.cost)}
 
 
 def _rational_dict(sel: OrderSelection) -> dict[str, Any]:
@@ -106,24 +151,30 @@ def _coupled_dict(fit: CoupledFit) -> dict[str, Any]:
     c, sd = fit.link_coupling()
     return {'axes': [{'axis': n, 'parameters': fit.axis_parameters(i), 'std': fit.axis_std(i)}
                      for i, n in enumerate(fit.names)],
-            'link_coupling': c, 'link_coupling_std': sd, 'cost': cost_dict(fit.cost)}
+            'link_coupling': c, 'link_coupling_std': sd, 'delay_s': fit.delay_s,
+            'delay_std_s': fit.delay_std_s if np.isfinite(fit.delay_std_s) else None,
+            'cost': cost_dict(fit.cost)}
 
 
 def _fitted_model(values: dict[str, dict[str, float]], coupling: np.ndarray | None,
-                  model: str | Path | None, out: Path) -> Path:
+                  delays: dict[str, float] | None, model: str | Path | None, out: Path) -> Path:
     """
     Write model.yaml: the base model (``model``, else the embedded default) with fitted axes.
 
     ``values`` maps each fitted axis to its five parameters. Every fitted axis keeps the other
     keys (limits, nonlinear effects) and the PI gains of the base model's axis of the same
     name, else of its first axis; a negative viscous friction estimate is written as 0. The
-    link coupling is ``coupling`` (the coupled fit's), else left out.
+    link coupling is ``coupling`` (the coupled fit's), else left out. A fitted delay
+    (``delays``, per axis) becomes the axis's ``time_delay`` less the half sample the
+    zero-order hold of the model's sample rate adds by itself (at least 0).
     """
     _, base, ctrl = load_model(model)
     names = base.joint_names
     pick = [names.index(n) if n in names else 0 for n in values]
+    extra = {n: {} if delays is None else {'time_delay': max(delays[n] - base.dt / 2, 0.0)}
+             for n in values}
     axes = [replace(base.axes[k], name=n, **dict(v, viscous_friction=max(
-        v['viscous_friction'], 0.0))) for (n, v), k in zip(values.items(), pick)]
+        v['viscous_friction'], 0.0)), **extra[n]) for (n, v), k in zip(values.items(), pick)]
     robot = replace(base, axes=axes, link_coupling=coupling)
     pi = PIVelocity(ctrl.kp[pick], ctrl.ki[pick], robot.torque_limits(), robot.dt)
     how = 'fitted with the link coupling' if coupling is not None else \
@@ -133,7 +184,7 @@ def _fitted_model(values: dict[str, dict[str, float]], coupling: np.ndarray | No
                                             f'other keys from {model or "the default model"}'})
 
 
-def _physical(frf: FrequencyResponse, var: np.ndarray | None, delay_s: float,
+def _physical(frf: FrequencyResponse, var: np.ndarray | None, delay_s: float | None,
               progress: Callable[[str], None]):
     """Fit per axis, and the coupled robot when the FRF is square with >= 2 axes."""
     chans = axis_channels(frf)
@@ -161,7 +212,7 @@ def _physical(frf: FrequencyResponse, var: np.ndarray | None, delay_s: float,
 
 
 def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical: bool = False,
-            delay_s: float = 0.0, band: tuple[float, float] | None = None,
+            delay_s: float | None = None, band: tuple[float, float] | None = None,
             model: str | Path | None = None,
             progress: Progress | None = None) -> FitOutcome:
     """
@@ -179,11 +230,14 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     physical : bool, optional
         Fit the two-mass flexible joint per axis instead and write model.yaml.
     delay_s : float, optional
-        Known input delay of the physical model [s] (half a sample for a zero-order hold).
+        Known input delay of the physical model [s] (half a sample for a zero-order hold);
+        None: fitted with the other parameters (ignored by the rational fit).
     band : tuple of float, optional
         (low, high) [Hz]: fit only these lines.
     model : str or Path, optional
-        Model file whose other keys (limits, controller, sample rate) model.yaml keeps.
+        Model file whose other keys (limits, controller, sample rate) model.yaml keeps, and
+        whose velocity PI is checked on the measured FRF (loop.json, loop.png; the margins
+        section of fit.html) when it has one PI per axis of the FRF.
     progress : callable, optional
         Called with one line of text per stage.
 
@@ -195,9 +249,11 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     Raises
     ------
     FrfIdentInputError
-        The source cannot be read, the band keeps too few lines, or an order is not >= 1.
+        The source cannot be read, the band keeps too few lines, an order is not >= 1, or a
+        delay is given without ``physical``.
 
     """
+    FitOptions(order, physical, delay_s, band, model)        # refuses what does not go together
     frf = read_source(source)
     if band is not None:
         frf = frf.select((frf.freq_hz >= band[0]) & (frf.freq_hz <= band[1]))
@@ -212,20 +268,27 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
              f'{frf.freq_hz.min():.3g}-{frf.freq_hz.max():.3g} Hz, weights: '
              f'{which + " variance" if which else "none (relative error)"}')
     out.mkdir(parents=True, exist_ok=True)
+    clear_outputs(out, OUTPUT_FILES)
     files: list[Path] = []
     phys, sel, coupled = None, None, None
     if physical:
         phys, coupled, values, measured, fitted = _physical(frf, var, delay_s, progress)
+        delays = None
+        if delay_s is None:
+            delays = {f.name: (f.delay_s if coupled is None else coupled.delay_s)
+                      for f in phys}
         files.append(_fitted_model(values, None if coupled is None else
-                                   coupled.link_coupling()[0], model, out))
+                                   coupled.link_coupling()[0], delays, model, out))
         chans = axis_channels(frf)
         if coupled is not None:
             v = None if var is None else var[np.ix_([o for _, o, _ in chans],
                                                     [i for _, _, i in chans])]
             names = [f'{a} -> {b}: coupled fit' for b, _, _ in chans for a, _, _ in chans]
+            verdicts = [_short(coupled.cost)] * len(names)
         else:
             v = None if var is None else np.stack([var[o, i] for _, o, i in chans])
             names = [f'{n}: two-mass fit' for n, _, _ in chans]
+            verdicts = [_short(f.cost) for f in phys]
         measured = measured.reshape(-1, frf.freq_hz.size)
         fitted = fitted.reshape(measured.shape)
         v = None if v is None else v.reshape(measured.shape)
@@ -245,10 +308,13 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
         fitted = sel.best.model.reshape(measured.shape)
         v = None if var is None else var.reshape(measured.shape)
         names = [f'{a} -> {b}' for b in frf.outputs for a in frf.inputs]
-    files.append(fit_figure(frf.freq_hz, measured, fitted, v, names, out / 'fit.png'))
+        verdicts = [_short(sel.best.cost)] * len(names)
+    files.append(fit_figure(frf.freq_hz, measured, fitted, v, names, out / 'fit.png',
+                            verdicts))
     doc = {'source': str(source), 'freq_hz': [float(frf.freq_hz.min()),
                                               float(frf.freq_hz.max())],
-           'n_lines': int(frf.freq_hz.size), 'variance': which, 'delay_s': float(delay_s),
+           'n_lines': int(frf.freq_hz.size), 'variance': which,
+           'delay_s': None if delay_s is None else float(delay_s),
            'physical': None if phys is None else [_physical_dict(f) for f in phys],
            'coupled': None if coupled is None else _coupled_dict(coupled),
            'rational': None if sel is None else _rational_dict(sel),
@@ -256,4 +322,26 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     (out / 'fit.json').write_text(json.dumps(jsonable(doc), indent=1))
     files.append(out / 'fit.json')
     progress(f'fit: wrote {", ".join(p.name for p in files)} to {out}')
-    return FitOutcome(phys, coupled, sel, files)
+    loop = None
+    if model is not None:
+        n_pi, n_axes = load_model(model)[2].kp.size, len(axis_channels(frf))
+        if n_pi == n_axes:
+            loop = run_loop(source, out, model=model, page=False, progress=progress)
+        else:
+            progress(f'loop: no margins: the controller of {model} has {n_pi} axes, the FRF '
+                     f'{n_axes}')
+    sections = fit_sections(physical=phys or (), coupled=coupled,
+                            rational=None if sel is None else sel.best,
+                            check=None if loop is None else loop.check, fit_png='fit.png',
+                            loop_png=None if loop is None else 'loop.png')
+    page = write_fit_report(out / 'fit.html', title=f'Fit of {source}', sections=sections)
+    progress(f'fit: report {page}')
+    return FitOutcome(phys, coupled, sel, files + [page], loop)
+
+
+def _short(cost: CostTest) -> str:
+    """Return the cost test's verdict in a few words for a figure title."""
+    if not cost.weighted:
+        return 'cost test: no FRF variance'
+    word = 'structure missing' if cost.structure_missing else 'explained by the noise'
+    return f'cost/dof {cost.ratio:.2f}: {word}'

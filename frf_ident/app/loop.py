@@ -39,6 +39,7 @@ from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.model_file import load_model
 from frf_ident.report.fit_figures import loop_figure
+from frf_ident.report.html import fit_sections, write_fit_report
 import numpy as np
 
 __all__ = ['LoopData', 'LoopOutcome', 'OUTPUT_FILES', 'check_dict', 'loop_check', 'loop_data',
@@ -234,7 +235,7 @@ def propose_gains(frf: FrequencyResponse, bandwidth_hz: float, phase_margin_deg:
 
 
 #: the files :func:`run_loop` writes into its output directory
-OUTPUT_FILES = ('loop.json', 'loop.png')
+OUTPUT_FILES = ('loop.json', 'loop.png', 'loop.html')
 
 
 @dataclass
@@ -283,9 +284,12 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
              ki: list[float] | None = None, dt: float | None = None,
              model: str | Path | None = None,
              propose: tuple[float, float] | None = None, draws: int = DRAWS,
-             progress: Progress | None = None) -> LoopOutcome:
+             page: bool = True, progress: Progress | None = None) -> LoopOutcome:
     """
     Check a velocity PI on a measured FRF (and/or propose one); write loop.json, loop.png.
+
+    And loop.html, the report page of the margins (unless ``page`` is False: ``fit`` puts
+    the same section into its fit.html).
 
     Parameters
     ----------
@@ -305,6 +309,8 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
         (bandwidth [Hz], phase margin [deg]): propose PI gains and check them too.
     draws : int, optional
         Monte-Carlo draws of the FRF for the standard deviations.
+    page : bool, optional
+        Write loop.html.
     progress : callable, optional
         Called with one line of text per stage.
 
@@ -365,5 +371,12 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
                'check': check_dict(pcheck)}}
     (out / 'loop.json').write_text(json.dumps(jsonable(doc), indent=1))
     files.append(out / 'loop.json')
+    if page:
+        sections = fit_sections(check=gcheck, loop_png='loop.png')
+        if check is not None and pcheck is not None:
+            sections += [('proposal', f'Margins with the PI proposed for {propose[1]:g} deg '
+                          f'at {propose[0]:g} Hz', fit_sections(check=pcheck)[0][2])]
+        files.append(write_fit_report(out / 'loop.html', title=f'Loop check of {source}',
+                                      sections=sections))
     progress(f'loop: wrote {", ".join(p.name for p in files)} to {out}')
     return LoopOutcome(check, proposals, pcheck, files)

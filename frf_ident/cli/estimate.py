@@ -17,7 +17,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from frf_ident.cli.options import add_campaign_arguments, add_output_arguments, run_many
+from frf_ident.cli.options import (add_campaign_arguments, add_fit_arguments,
+                                   add_output_arguments, fit_options, run_many)
 
 __all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'excitation_options', 'run']
 
@@ -63,6 +64,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f'streaming block length for bags without experiment descriptors '
                         f'[s] (default {DEFAULT_BLOCK_S:g}; must hold a few multisine periods '
                         f'or a whole chirp)')
+    f = p.add_argument_group('a model fitted to the estimate (what `frf-ident fit` does, into '
+                             'the same folder)')
+    f.add_argument('--fit', action='store_true',
+                   help='fit a model to frf.json: fit.json, fit.png, fit.html and model.yaml '
+                        '(--physical) or model.mat; with --model also the margins of its '
+                        'velocity PI (loop.json, loop.png)')
+    add_fit_arguments(f)
     g = p.add_argument_group('excitation of a bag without /frf/experiment descriptors '
                              '(what `detected:` prints; replaces detection)')
     g.add_argument('--input', metavar='JOINT', help='the excited joint (the only input)')
@@ -134,23 +142,34 @@ def run(args: argparse.Namespace) -> int:
     from frf_ident.app.campaign import is_campaign
     from frf_ident.app.console import say
     from frf_ident.app.estimate import estimate_bag, estimate_columns, OUTPUT_FILES
+    from frf_ident.app.fit import OUTPUT_FILES as FIT_FILES
     from frf_ident.app.frf_map import MAP_FILES, write_frf_map
     from frf_ident.app.outdir import check_out
     from frf_ident.errors import FrfIdentInputError
     if args.compare_levels and len(args.bag) < 2:
         raise FrfIdentInputError('--compare-levels: expected two or more bags')
+    alone = [o for o, v in (('--order', args.order is not None), ('--physical', args.physical),
+                            ('--delay', args.delay is not None),
+                            ('--model', args.model is not None)) if v]
+    if alone and not args.fit:
+        raise FrfIdentInputError(f'{alone[0]}: only with --fit')
+    if args.fit and args.compare_levels:
+        raise FrfIdentInputError('--fit: not with --compare-levels (fit each folder with '
+                                 '`frf-ident fit`)')
     joints = [j.strip() for j in args.joints.split(',')] if args.joints else None
     kw = {'joints': joints, 't_range': tuple(args.t_range) if args.t_range else None,
           'primary': args.primary, 'options': excitation_options(args), 'stream': args.stream,
-          'max_memory_mb': args.max_memory, 'window_s': args.window}
+          'max_memory_mb': args.max_memory, 'window_s': args.window,
+          'fit': fit_options(args) if args.fit else None}
+    outputs = OUTPUT_FILES + (FIT_FILES if args.fit else ())
     if args.compare_levels:
         from frf_ident.app.compare_levels import compare_bags, COMPARE_FILES
         out = check_out(args.out, outputs=COMPARE_FILES, overwrite=args.overwrite)
         compare_bags([Path(b) for b in args.bag], out, progress=say, **kw)
         return 0
     if is_campaign(args.bag):
-        return run_many(args, args.bag, partial(estimate_columns, **kw), OUTPUT_FILES,
+        return run_many(args, args.bag, partial(estimate_columns, **kw), outputs,
                         'estimate', after=write_frf_map, after_outputs=MAP_FILES)
-    out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
+    out = check_out(args.out, outputs=outputs, overwrite=args.overwrite)
     estimate_bag(Path(args.bag[0]), out, progress=say, **kw)
     return 0

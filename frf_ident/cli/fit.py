@@ -11,13 +11,17 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""`frf-ident fit DIR_OR_FRF --out DIR [--order N] [--physical]`: a model fitted to an FRF."""
+"""
+`frf-ident fit DIR_OR_FRF --out DIR [--order N] [--physical]`: a model fitted to an FRF.
+
+``add_arguments`` and ``run`` as every command module (:mod:`frf_ident.cli.main`).
+"""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from frf_ident.cli.options import add_output_arguments
+from frf_ident.cli.options import add_fit_arguments, add_output_arguments, fit_options
 
 __all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
@@ -27,58 +31,21 @@ HELP = 'fit a parametric model (rational or physical two-mass) to a measured FRF
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """
-    Add the arguments of ``fit``.
-
-    Parameters
-    ----------
-    p : argparse.ArgumentParser
-        The subcommand's parser; the arguments are added to it.
-
-    """
+    """Add the source, ``--out``, the fit options and ``--band`` to the parser ``p``."""
     p.add_argument('source', type=Path, metavar='DIR_OR_FRF',
                    help='output directory of estimate (its frf.json) or an FRF file '
                         '(.json/.mat/.csv)')
     add_output_arguments(p)
-    p.add_argument('--order', type=int, default=None,
-                   help='order (number of poles) of the rational model (default: the lowest '
-                        'the cost test accepts)')
-    p.add_argument('--physical', action='store_true',
-                   help='fit the two-mass flexible joint per axis and write model.yaml')
-    p.add_argument('--delay', type=float, default=0.0, metavar='S',
-                   help='known input delay of the physical model [s] (half a sample for a '
-                        'sampled FRF, e.g. 0.0005 at 1 kHz; default 0)')
+    add_fit_arguments(p)
     p.add_argument('--band', type=float, nargs=2, metavar=('F_LOW', 'F_HIGH'),
                    help='fit only the lines in this band [Hz]')
-    p.add_argument('--model', type=Path, default=None,
-                   help='model file whose other keys (limits, controller, sample rate) the '
-                        'fitted model.yaml keeps')
 
 
 def run(args: argparse.Namespace) -> int:
-    """
-    Fit and write the output directory.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed arguments of :func:`add_arguments`.
-
-    Returns
-    -------
-    int
-        Exit status: 0 (success).
-
-    Raises
-    ------
-    FrfIdentInputError
-        ``--out`` is unusable, or the FRF cannot be read or fitted as asked (one line).
-
-    """
-    from frf_ident.app.fit import fit_frf, OUTPUT_FILES
+    """Fit and write the output directory; return 0 (bad input: FrfIdentInputError)."""
     from frf_ident.app.console import say
+    from frf_ident.app.fit import fit_frf, OUTPUT_FILES
     from frf_ident.app.outdir import check_out
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
-    fit_frf(args.source, out, order=args.order, physical=args.physical, delay_s=args.delay,
-            band=tuple(args.band) if args.band else None, model=args.model, progress=say)
+    fit_frf(args.source, out, **vars(fit_options(args, args.band)), progress=say)
     return 0

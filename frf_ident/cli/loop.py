@@ -11,7 +11,11 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""`frf-ident loop DIR_OR_FRF --out DIR [--model M.yaml | --kp .. --ki ..] [--propose BW PM]`."""
+"""
+`frf-ident loop DIR_OR_FRF --out DIR [--model M.yaml | --kp .. --ki ..] [--propose BW PM]`.
+
+``add_arguments`` and ``run`` as every command module (:mod:`frf_ident.cli.main`).
+"""
 from __future__ import annotations
 
 import argparse
@@ -27,15 +31,7 @@ HELP = 'check a velocity PI on the measured loop L = C P-hat: margins with uncer
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """
-    Add the arguments of ``loop``.
-
-    Parameters
-    ----------
-    p : argparse.ArgumentParser
-        The subcommand's parser; the arguments are added to it.
-
-    """
+    """Add the source, ``--out``, the controller and ``--propose`` to the parser ``p``."""
     p.add_argument('source', type=Path, metavar='DIR_OR_FRF',
                    help='output directory of estimate (its frf.json) or an FRF file')
     add_output_arguments(p)
@@ -53,26 +49,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """
-    Check the loop and write the output directory.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed arguments of :func:`add_arguments`.
-
-    Returns
-    -------
-    int
-        Exit status: 0 (success).
-
-    Raises
-    ------
-    FrfIdentInputError
-        ``--out`` is unusable, the FRF or model cannot be read, or the gains do not match
-        the axes (one line).
-
-    """
+    """Check the loop and write the output directory; return 0 (bad input: FrfIdentInputError)."""
     from frf_ident.app.loop import OUTPUT_FILES, run_loop
     from frf_ident.app.console import say
     from frf_ident.app.outdir import check_out

@@ -15,10 +15,11 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any, Callable, Sequence
 
-__all__ = ['add_campaign_arguments', 'add_design_arguments', 'add_output_arguments',
-           'run_many']
+__all__ = ['add_campaign_arguments', 'add_design_arguments', 'add_fit_arguments',
+           'add_output_arguments', 'fit_options', 'run_many']
 
 
 def add_output_arguments(p: argparse.ArgumentParser) -> None:
@@ -124,3 +125,50 @@ def add_design_arguments(p: argparse.ArgumentParser, ms: Any, ch: Any) -> None:
                    help=f'chirp length [s] (default {ch.duration}; paper: 20)')
     p.add_argument('--max-iterations', type=int, default=ch.max_iterations,
                    help=f'chirp iteration steps at most (default {ch.max_iterations})')
+
+
+def add_fit_arguments(p: Any) -> None:
+    """
+    Add ``--order``, ``--physical``, ``--delay``, ``--model`` (``fit``, ``estimate --fit``).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser or argument group
+        Where the options go.
+
+    """
+    p.add_argument('--order', type=int, default=None,
+                   help='order (number of poles) of the rational model (default: the lowest '
+                        'the cost test accepts)')
+    p.add_argument('--physical', action='store_true',
+                   help='fit the two-mass flexible joint per axis and write model.yaml')
+    p.add_argument('--delay', type=float, default=None, metavar='S',
+                   help='input delay of the physical model [s], fixed (default: fitted with '
+                        'the parameters; a sampled FRF shows at least half a sample, e.g. '
+                        '0.0005 at 1 kHz)')
+    p.add_argument('--model', type=Path, default=None,
+                   help='model file whose other keys (limits, controller, sample rate) the '
+                        'fitted model.yaml keeps, and whose velocity PI is checked on the '
+                        'measured FRF (margins: loop.json, loop.png and fit.html)')
+
+
+def fit_options(args: argparse.Namespace, band: Any = None) -> Any:
+    """
+    Return the :class:`~frf_ident.app.fit.FitOptions` of :func:`add_fit_arguments`.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments with ``order``, ``physical``, ``delay``, ``model``.
+    band : sequence of float, optional
+        (low, high) [Hz] to fit.
+
+    Returns
+    -------
+    FitOptions
+        The keyword arguments of :func:`~frf_ident.app.fit.fit_frf`.
+
+    """
+    from frf_ident.app.fit import FitOptions
+    return FitOptions(order=args.order, physical=args.physical, delay_s=args.delay,
+                      band=tuple(band) if band else None, model=args.model)

@@ -15,7 +15,8 @@
 Figures of ``frf-ident fit`` and ``frf-ident loop`` (matplotlib, Agg backend).
 
 - :func:`fit_figure` — per channel: the fitted model over the measured FRF (magnitude and
-  phase), and the residual |model - FRF| against the FRF's standard deviation
+  phase), and the residual per line in units of the FRF's standard deviation,
+  |P - P_fit| / sigma, with the cost test's verdict
 - :func:`loop_figure` — per axis: Bode of L = C P-hat with its 2-sigma band from the FRF
   variance, and the Nyquist curve of L with the circle the modulus margin leaves around -1
 """
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from frf_ident.report.figures import frequency_axis
 import matplotlib
 
 matplotlib.use('Agg')
@@ -39,9 +41,10 @@ def _db(x: np.ndarray) -> np.ndarray:
 
 
 def fit_figure(freq_hz: np.ndarray, measured: np.ndarray, model: np.ndarray,
-               variance: np.ndarray | None, names: list[str], path: Path) -> Path:
+               variance: np.ndarray | None, names: list[str], path: Path,
+               verdicts: list[str] | None = None) -> Path:
     """
-    Write the model-over-FRF figure with residuals.
+    Write the model-over-FRF figure with the normalised residual.
 
     Parameters
     ----------
@@ -50,11 +53,14 @@ def fit_figure(freq_hz: np.ndarray, measured: np.ndarray, model: np.ndarray,
     measured, model : ndarray of complex, shape (n_ch, n_freq)
         Measured FRF and fitted model of every plotted channel.
     variance : ndarray, shape (n_ch, n_freq), or None
-        Variance of the measured FRF.
+        Variance of the measured FRF: the residual is drawn as |P - P_fit| / sigma (about 1
+        where the noise explains it); without it as the relative error |P - P_fit| / |P|.
     names : list of str
         One title per channel.
     path : Path
         PNG to write.
+    verdicts : list of str, optional
+        The cost test's verdict of each channel's fit, shown over its residual.
 
     Returns
     -------
@@ -70,16 +76,26 @@ def fit_figure(freq_hz: np.ndarray, measured: np.ndarray, model: np.ndarray,
         am.semilogx(freq_hz, _db(model[c]), 'C1-', lw=1.2, label='fitted model')
         ap.semilogx(freq_hz, np.degrees(np.unwrap(np.angle(measured[c]))), 'k.', ms=3)
         ap.semilogx(freq_hz, np.degrees(np.unwrap(np.angle(model[c]))), 'C1-', lw=1.2)
-        ar.semilogx(freq_hz, _db(model[c] - measured[c]), 'C3-', lw=1, label='|model - FRF|')
+        err = np.abs(model[c] - measured[c])
         if variance is not None:
-            ar.semilogx(freq_hz, _db(np.sqrt(variance[c])), 'k--', lw=1, label='FRF std')
+            ar.semilogx(freq_hz, err / np.sqrt(variance[c]), 'C3.-', lw=0.8, ms=3,
+                        label='|P - P_fit| / \u03c3')
+            ar.axhline(1.0, color='k', ls='--', lw=0.8, label='noise level (1 \u03c3)')
+            ar.set_ylabel('|P - P_fit| / \u03c3 [-]')
+        else:
+            ar.semilogx(freq_hz, err / np.abs(measured[c]), 'C3.-', lw=0.8, ms=3,
+                        label='|P - P_fit| / |P| (no variance)')
+            ar.set_ylabel('|P - P_fit| / |P| [-]')
+        ar.set_ylim(bottom=0)
+        if verdicts:
+            ar.set_title(verdicts[c], fontsize=8)
         am.set_title(names[c], fontsize=9)
         am.set_ylabel('|P| [dB]')
         ap.set_ylabel('phase [deg]')
-        ar.set_ylabel('[dB]')
-        ar.set_xlabel('frequency [Hz]')
         for a in (am, ap, ar):
+            frequency_axis(a, label=None)
             a.grid(True, which='both', alpha=0.3)
+        frequency_axis(ar)
     axs[0, 0].legend(fontsize=8)
     axs[2, 0].legend(fontsize=8)
     fig.tight_layout()
@@ -141,9 +157,10 @@ def loop_figure(freq_hz: np.ndarray, loops: np.ndarray, draws: np.ndarray | None
         am.set_title(f'{names[c]}: L = C P-hat', fontsize=9)
         am.set_ylabel('|L| [dB]')
         ap.set_ylabel('phase [deg]')
-        ap.set_xlabel('frequency [Hz]')
-        an.set_xlabel('Re L')
-        an.set_ylabel('Im L')
+        frequency_axis(am, label=None)
+        frequency_axis(ap)
+        an.set_xlabel('Re L [-]')
+        an.set_ylabel('Im L [-]')
         for a in (am, ap, an):
             a.grid(True, which='both', alpha=0.3)
     fig.tight_layout()

@@ -28,6 +28,11 @@ next to it (referenced by relative file name, so the directory can be moved or z
 - ``spectrogram.png`` — PSD of the torques over time, log frequency axis 1-60 Hz (Fig. 3)
 - ``iterations.png`` — chirp iteration: error to u_des in dB per iteration and channel
 - the timing findings of the bag reader (``TimingReport``) as tables
+
+``write_fit_report(path, ...)`` writes the page of ``frf-ident fit`` / ``loop`` /
+``estimate --fit`` (fit.html, loop.html): the sections of :func:`fit_sections`, the fitted
+model over the FRF with its residual against the FRF's standard deviation, the parameters
+with their standard errors and units, and the margins with their uncertainty.
 """
 from __future__ import annotations
 
@@ -40,6 +45,10 @@ from typing import Any, Mapping, Sequence
 from frf_ident.core.diagnosis.result import DiagnosisResult
 from frf_ident.core.estimation.distortion import DistortionLines
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.fit.coupled import CoupledFit
+from frf_ident.core.fit.physical import PhysicalFit, UNITS
+from frf_ident.core.fit.rational import RationalFit
+from frf_ident.core.loop.check import LoopCheck, Margin
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import figures
@@ -47,7 +56,7 @@ from frf_ident.report.distortion import distortion_figure
 from frf_ident.report.text import plain
 import numpy as np
 
-__all__ = ['write_diagnosis_report', 'write_report']
+__all__ = ['fit_sections', 'write_diagnosis_report', 'write_fit_report', 'write_report']
 
 REPORT_NAME = 'report.html'
 
@@ -491,3 +500,166 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
     p = out / 'report.html'
     p.write_text(_page(f'Diagnosis of {data}', sections, rec))
     return p
+
+
+# --------------------------------------------------------------------------- fit and loop
+
+def _pm(value: float, std: float, scale: float = 1.0) -> str:
+    """Return ``value +- std`` (4 significant digits, the error to 2) or the value alone."""
+    if not math.isfinite(value):
+        return str(value)
+    sd = f' \u00b1 {std * scale:.2g}' if math.isfinite(std) else ''
+    return f'{value * scale:.4g}{sd}'
+
+
+def _verdict(cost) -> str:
+    cls = 'warn' if cost.structure_missing else 'ok' if cost.weighted else 'muted'
+    return f'<p class="{cls}">{html.escape(cost.summary())}</p>'
+
+
+def _delay_row(name: str, delay_s: float, std_s: float) -> list[Any]:
+    how = 'fitted' if math.isfinite(std_s) else 'given (--delay)'
+    return [name, f'delay ({how})', _pm(delay_s, std_s, 1e3), 'ms',
+            _relative(delay_s, std_s)]
+
+
+def _relative(value: float, std: float) -> str:
+    return f'{100 * abs(std / value):.2g}' if value and math.isfinite(std) else '\u2014'
+
+
+def _physical_html(fits: Sequence[PhysicalFit]) -> str:
+    rows = []
+    for f in fits:
+        fa, fr = f.resonances_hz()
+        rows += [[f.name, k, _pm(v, sd), UNITS[k], _relative(v, sd)]
+                 for k, v, sd in zip(f.names, f.value, f.std)]
+        rows.append(_delay_row(f.name, f.delay_s, f.delay_std_s))
+        rows.append([f.name, 'antiresonance / resonance', f'{fa:.4g} / {fr:.4g}', 'Hz', ''])
+    verdicts = ''.join(f'<li>{html.escape(f.name)}: {_verdict(f.cost)}</li>' for f in fits)
+    return (_table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
+                    'standard error [%]'], rows)
+            + f'<p>Cost test per axis:</p><ul>{verdicts}</ul>')
+
+
+def _coupled_html(fit: CoupledFit) -> str:
+    rows = []
+    for i, name in enumerate(fit.names):
+        sd = fit.axis_std(i)
+        rows += [[name, k, _pm(v, sd[k]), UNITS[k], _relative(v, sd[k])]
+                 for k, v in fit.axis_parameters(i).items()]
+    c, csd = fit.link_coupling()
+    for i, j in zip(*np.triu_indices(len(fit.names), 1)):
+        rows.append([f'{fit.names[i]} \u2013 {fit.names[j]}', 'link coupling',
+                     _pm(c[i, j], csd[i, j]), 'kg m^2', _relative(c[i, j], csd[i, j])])
+    rows.append(_delay_row('all axes', fit.delay_s, fit.delay_std_s))
+    return (_table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
+                    'standard error [%]'], rows)
+            + '<p>Cost test of the coupled fit:</p>' + _verdict(fit.cost))
+
+
+def _rational_html(fit: RationalFit) -> str:
+    rows = [[_pm(m.frequency_hz, m.frequency_std_hz), _pm(m.damping, m.damping_std)]
+            for m in fit.modes()]
+    return (f'<p>Order {fit.order} (poles), {fit.n_params} real parameters, '
+            f'{fit.freq_hz.size} lines; the model is in model.mat (A, B, C, D).</p>'
+            + _table(['natural frequency \u00b1 SE [Hz]', 'damping ratio \u00b1 SE [-]'],
+                     rows)
+            + '<p>Cost test:</p>' + _verdict(fit.cost))
+
+
+def _margins_html(check: LoopCheck) -> str:
+    def m(v: Margin) -> str:
+        return _pm(v.value, v.std)
+    rows = [[a.axis, a.kp, a.ki, m(a.gain_margin_db), m(a.phase_margin_deg),
+             m(a.modulus_margin), m(a.crossover_hz)] for a in check.axes]
+    pi = (f'discrete at dt = {check.discrete_dt:g} s' if check.discrete_dt
+          else 'continuous')
+    text = (f'<p>L = C P-hat per axis on the measured FRF, velocity PI {pi}. Standard '
+            f'deviations over {check.draws} draws of the FRF from its variance'
+            + (' (none: the FRF has no variance).' if not check.draws else '.') + '</p>')
+    text += _table(['axis', 'kp [N m s/rad]', 'ki [N m/rad]', 'gain margin [dB]',
+                    'phase margin [deg]', 'modulus margin [-]', 'crossover [Hz]'], rows)
+    if check.peak_sensitivity is not None:
+        text += (f'<p>MIMO: peak of the largest singular value of S = (I + P C)^-1: '
+                 f'{_pm(check.peak_sensitivity.value, check.peak_sensitivity.std)}</p>')
+    return text
+
+
+def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | None = None,
+                 rational: RationalFit | None = None, check: LoopCheck | None = None,
+                 fit_png: str | None = None, loop_png: str | None = None
+                 ) -> list[tuple[str, str, str]]:
+    """
+    Return the report sections of a fit and a controller check as (anchor, heading, html).
+
+    Parameters
+    ----------
+    physical : sequence of PhysicalFit, optional
+        Per-axis two-mass fits.
+    coupled : CoupledFit, optional
+        The coupled robot fit (its per-axis starts are not shown again).
+    rational : RationalFit, optional
+        The chosen rational fit.
+    check : LoopCheck, optional
+        Margins of the velocity PI on the measured FRF.
+    fit_png, loop_png : str, optional
+        File names (next to the page) of the fit figure and the loop figure.
+
+    Returns
+    -------
+    list of tuple
+        The sections, empty when nothing is given.
+
+    """
+    out = []
+    if fit_png:
+        out.append(('fit', 'Fitted model over the FRF', _figure(
+            fit_png, 'Magnitude and phase of the measured FRF (dots) and the fitted model '
+            '(line) per channel; bottom row: the residual per line in units of the standard '
+            'deviation of the FRF, |P \u2212 P_fit| / \u03c3. A right model leaves it '
+            'scattered about 1 (dashed), its squares summing to the chi-square expectation '
+            'the cost test checks; a run of lines far above 1 is structure the model lacks.',
+            'fitted model over the measured FRF')))
+    params = ''
+    if coupled is not None:
+        params = _coupled_html(coupled)
+    elif physical:
+        params = _physical_html(physical)
+    if rational is not None:
+        params += _rational_html(rational)
+    if params:
+        out.append(('parameters', 'Fitted parameters (Cram\u00e9r-Rao standard errors)',
+                    params))
+    if check is not None:
+        body = _margins_html(check)
+        if loop_png:
+            body += _figure(loop_png, 'Bode plot of L = C P-hat per axis with the 95 % band '
+                            'of the draws of the FRF, and its Nyquist curve with the circle '
+                            'of the modulus margin around \u22121.', 'loop Bode and Nyquist')
+        out.append(('margins', 'Margins of the measured loop', body))
+    return out
+
+
+def write_fit_report(path: str | Path, *, title: str,
+                     sections: Sequence[tuple[str, str, str]]) -> Path:
+    """
+    Write the page of a fit and/or a controller check (sections of :func:`fit_sections`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The page (its figures are next to it).
+    title : str
+        Page and heading title.
+    sections : sequence of tuple
+        (anchor, heading, html) of :func:`fit_sections`.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    """
+    path = Path(path)
+    path.write_text(_page(title, list(sections), None))
+    return path

@@ -22,7 +22,8 @@ matrix M_o = diag(Jo) + offdiag(link_coupling), as
 
 is fitted to the whole n x n FRF by maximum likelihood (Levenberg-Marquardt on the residual of
 every channel over its standard deviation), started from the per-axis fits of the diagonal
-(:func:`~frf_ident.core.fit.physical.fit_two_mass`) and no coupling. Cramer-Rao standard
+(:func:`~frf_ident.core.fit.physical.fit_two_mass`) and no coupling. A delay to fit is one
+input delay of every axis, started from the median of the per-axis delays. Cramer-Rao standard
 errors and the cost test as for one axis.
 """
 from __future__ import annotations
@@ -102,6 +103,10 @@ class CoupledFit:
         The minimum cost against its chi-square expectation.
     model : ndarray of complex, shape (n, n, n_freq)
         The fitted FRF.
+    delay_s : float
+        The input delay of every axis [s]: given, or fitted.
+    delay_std_s : float
+        Cramer-Rao standard error of a fitted delay [s]; NaN when it was given.
 
     """
 
@@ -112,6 +117,8 @@ class CoupledFit:
     per_axis: list[PhysicalFit]
     cost: CostTest
     model: np.ndarray
+    delay_s: float = 0.0
+    delay_std_s: float = float('nan')
 
     def axis_parameters(self, i: int) -> dict[str, float]:
         """Return axis i's five parameters as {model-file key: value}."""
@@ -143,11 +150,15 @@ class CoupledFit:
         iu = np.triu_indices(len(self.names), 1)
         terms = ', '.join(f'{self.names[i]}-{self.names[j]} {c[i, j]:.4g} +- {sd[i, j]:.2g}'
                           for i, j in zip(*iu))
-        return lines + [f'link coupling [kg m^2]: {terms}', f'coupled: {self.cost.summary()}']
+        delay = (f'delay {1e3 * self.delay_s:.4g} +- {1e3 * self.delay_std_s:.2g} ms (fitted)'
+                 if np.isfinite(self.delay_std_s)
+                 else f'delay {1e3 * self.delay_s:.4g} ms (given)')
+        return lines + [f'link coupling [kg m^2]: {terms}; {delay}',
+                        f'coupled: {self.cost.summary()}']
 
 
 def fit_coupled(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray | None = None,
-                *, delay_s: float = 0.0, names: list[str] | None = None) -> CoupledFit:
+                *, delay_s: float | None = 0.0, names: list[str] | None = None) -> CoupledFit:
     """
     Fit every axis's two-mass parameters and the link coupling to a square MIMO FRF.
 
@@ -159,8 +170,8 @@ def fit_coupled(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray 
         Measured FRF tau_m -> dq_m, inputs and outputs in the same axis order.
     variance : ndarray, shape (n, n, n_freq), optional
         Its variance; without it the relative error is minimised (see :func:`fit_two_mass`).
-    delay_s : float, optional
-        Known input delay [s].
+    delay_s : float or None, optional
+        Known input delay of every axis [s]; None: fit it (one delay for all axes).
     names : list of str, optional
         Axis names.
 
@@ -191,17 +202,27 @@ def fit_coupled(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray 
     scale = np.concatenate([np.maximum(np.abs(start[:5 * n]), 1e-9 * np.abs(start).max()),
                             COUPLING_SCALE_SHARE * np.sqrt(jo[iu[0]] * jo[iu[1]])])
     var = None if variance is None else np.asarray(variance, dtype=float).reshape(-1)
+    fit_delay = delay_s is None
+    if fit_delay:        # one delay for all axes; scale: 1 rad of phase at the highest line
+        start = np.append(start, np.median([a.delay_s for a in per_axis]))
+        scale = np.append(scale, 1.0 / (2 * np.pi * f.max()))
+
+    def split(x):
+        th = x * scale
+        return (th[:-1], th[-1]) if fit_delay else (th, delay_s)
 
     def resid(x):
-        return normalised_residual(coupled_response(x * scale, f, n, delay_s).reshape(-1),
-                                   p.reshape(-1), var)
+        th, d = split(x)
+        return normalised_residual(coupled_response(th, f, n, d).reshape(-1), p.reshape(-1), var)
 
     sol = optimize.least_squares(resid, start / scale, method='lm', x_scale=1.0)
     test = cost_test(sol.fun, sol.x.size, variance is not None)
     cov_x = np.linalg.pinv(sol.jac.T @ sol.jac)
     if variance is None:
         cov_x = cov_x * test.cost / max(test.dof, 1)
-    value = sol.x * scale
+    value, tau = split(sol.x)
     cov = cov_x * np.outer(scale, scale)
+    tau_std = float(np.sqrt(cov[-1, -1])) if fit_delay else float('nan')
+    cov = cov[:value.size, :value.size]
     return CoupledFit(names, value, np.sqrt(np.diag(cov)), cov, per_axis, test,
-                      coupled_response(value, f, n, delay_s))
+                      coupled_response(value, f, n, tau), float(tau), tau_std)

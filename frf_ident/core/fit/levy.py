@@ -76,18 +76,19 @@ def sk_common_denominator(s: np.ndarray, response: np.ndarray, weight: np.ndarra
         def real(x):
             return np.concatenate([x.real, x.imag], axis=1)
         # the numerators are separate per channel: project them out with each channel's QR
-        # (small stacked QRs), solve the shared denominator, then back-substitute
-        q, r = np.linalg.qr(real(num_cols), mode='complete')             # (m, 2nf, 2nf)
-        q1, q2 = q[:, :, :nb], q[:, :, nb:]
+        # (small stacked reduced QRs: I - Q1 Q1^T is the projection the complete QR's Q2 Q2^T
+        # would give, without its 2nf x 2nf factor), solve the shared denominator, then
+        # back-substitute
+        q1, r = np.linalg.qr(real(num_cols))                             # (m, 2nf, nb)
         dr, rr = real(den_cols), real(rhs[:, :, None])
-        q2t = np.swapaxes(q2, 1, 2)
-        red = (q2t @ dr).reshape(-1, n_den)
-        red_rhs = (q2t @ rr).reshape(-1)
+        q1t = np.swapaxes(q1, 1, 2)
+        red = (dr - q1 @ (q1t @ dr)).reshape(-1, n_den)
+        red_rhs = (rr - q1 @ (q1t @ rr)).reshape(-1)
         norm = np.linalg.norm(red, axis=0)
         norm[norm == 0] = 1.0
         a = np.linalg.lstsq(red / norm, red_rhs, rcond=None)[0] / norm
         resid = rr[..., 0] - dr @ a                                      # (m, 2nf)
-        b = np.linalg.solve(r[:, :nb, :nb], np.swapaxes(q1, 1, 2) @ resid[..., None])[..., 0]
+        b = np.linalg.solve(r, q1t @ resid[..., None])[..., 0]
         d_prev = vd @ a + s ** n_den
     return b, np.concatenate([a, [1.0]])
 

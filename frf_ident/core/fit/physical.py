@@ -21,15 +21,18 @@ The measured FRF of this project is motor velocity per motor torque, dq_m / tau_
     D = Jm Jo s^3 + (Jm d + Jo d + bv Jo) s^2 + (Jm k + Jo k + bv d) s + bv k
 
 with the model-file parameters Jm (motor_inertia), Jo (link_inertia), k (stiffness),
-d (damping) and bv (viscous_friction), times exp(-s tau) for a known delay tau (half a sample
-for a zero-order-hold input). Stages of :func:`fit_two_mass`:
+d (damping) and bv (viscous_friction), times exp(-s tau) for an input delay tau (half a
+sample for a zero-order-hold input, more with a computation or bus delay): given, or fitted
+with the other five. Stages of :func:`fit_two_mass`:
 
 1. linear start: Sanathanan-Koerner fit of the 2/3 rational form, mapped to the five
    parameters in closed form (:func:`physical_from_rational`), so no initial guess is needed;
+   a fitted delay starts from the phase slope at high frequency (:func:`delay_from_phase`),
+   refined once by the phase the delay-compensated start leaves;
 2. maximum likelihood: Levenberg-Marquardt on the residual divided by the FRF's standard
    deviation (the ML estimate for a circular Gaussian FRF error);
-3. Cramer-Rao standard errors from the Jacobian at the minimum, and the cost test
-   (:mod:`frf_ident.core.fit.cost`).
+3. Cramer-Rao standard errors from the Jacobian at the minimum (the delay's too), and the
+   cost test (:mod:`frf_ident.core.fit.cost`).
 """
 from __future__ import annotations
 
@@ -41,16 +44,24 @@ from frf_ident.core.model.params import AxisParams
 import numpy as np
 from scipy import optimize
 
-__all__ = ['PARAMETERS', 'PhysicalFit', 'fit_two_mass', 'physical_from_rational',
-           'two_mass_jacobian', 'two_mass_response']
+__all__ = ['DELAY_START_SHARE', 'PARAMETERS', 'PhysicalFit', 'UNITS', 'delay_from_phase',
+           'fit_two_mass', 'physical_from_rational', 'two_mass_jacobian', 'two_mass_response']
 
 #: the fitted parameters, in the order of every array of :class:`PhysicalFit`
 PARAMETERS = ('motor_inertia', 'link_inertia', 'stiffness', 'damping', 'viscous_friction')
+#: their units (those of the model file)
+UNITS = {'motor_inertia': 'kg m^2', 'link_inertia': 'kg m^2', 'stiffness': 'N m/rad',
+         'damping': 'N m s/rad', 'viscous_friction': 'N m s/rad'}
 
 #: scale of the viscous friction when its start is about zero: this fraction of the total
 #: inertia times the lowest measured angular frequency (friction that changes |P| there by
 #: about 1 %); only the conditioning of the ML step depends on it, not its minimum
 VISCOUS_SCALE_SHARE = 0.01
+#: share of the lines (the highest in frequency, at least 3) whose phase slope starts a fitted
+#: delay: above the resonance the velocity FRF times s tends to 1/Jm, so its phase there is the
+#: delay's -omega tau plus a constant; a quarter keeps the resonance's phase out on the
+#: section-6 joint and the 3-axis robot measured to 60 Hz (the refinement removes the rest)
+DELAY_START_SHARE = 0.25
 
 
 def _num_den(theta: np.ndarray, s: np.ndarray):
@@ -153,6 +164,46 @@ def physical_from_rational(num: np.ndarray, den: np.ndarray) -> np.ndarray:
     return np.array([jm, jo, k, d, bv])
 
 
+def delay_from_phase(freq_hz: np.ndarray, response: np.ndarray) -> float:
+    """
+    Return a delay read off the phase slope of s P(s) over the highest lines.
+
+    The highest :data:`DELAY_START_SHARE` of the lines (at least 3): the unwrapped phase of
+    s P(j omega) is fitted by a - omega tau (least squares); above the resonance s P tends to a
+    positive constant (1 / Jm), so the slope is the delay. A start only: the resonance's
+    phase tail biases it a little.
+
+    Parameters
+    ----------
+    freq_hz : ndarray, shape (n_freq,)
+        Frequencies in Hz (increasing).
+    response : ndarray of complex, shape (n_freq,)
+        Measured velocity FRF.
+
+    Returns
+    -------
+    float
+        The delay [s], at least 0.
+
+    """
+    f = np.asarray(freq_hz, dtype=float)
+    order = np.argsort(f)
+    top = order[-max(3, int(np.ceil(DELAY_START_SHARE * f.size))):]
+    w = 2 * np.pi * f[top]
+    phase = np.unwrap(np.angle(1j * w * np.asarray(response)[top]))
+    slope = np.polyfit(w, phase, 1)[0]
+    return max(float(-slope), 0.0)
+
+
+def _delay_correction(freq_hz: np.ndarray, measured: np.ndarray, model: np.ndarray,
+                      sigma: np.ndarray) -> float:
+    """Return the delay the phase of measured / model still shows (weighted, through 0)."""
+    w = 2 * np.pi * freq_hz
+    phase = np.angle(measured / model)
+    weight = np.abs(measured) ** 2 / sigma ** 2              # 1 / variance of the phase
+    return float(-np.sum(weight * w * phase) / np.sum(weight * w ** 2))
+
+
 @dataclass
 class PhysicalFit:
     """
@@ -179,9 +230,11 @@ class PhysicalFit:
     model : ndarray of complex, shape (n_freq,)
         The fitted model's FRF at ``freq_hz``.
     delay_s : float
-        The known delay the model included [s].
+        The delay the model included [s]: given, or fitted.
     evaluations : int
         Residual evaluations of the ML step.
+    delay_std_s : float
+        Cramer-Rao standard error of a fitted delay [s]; NaN when the delay was given.
 
     """
 
@@ -196,6 +249,12 @@ class PhysicalFit:
     delay_s: float = 0.0
     evaluations: int = 0
     names: tuple[str, ...] = field(default=PARAMETERS)
+    delay_std_s: float = float('nan')
+
+    @property
+    def delay_fitted(self) -> bool:
+        """Return True when the delay was estimated (it has a standard error)."""
+        return bool(np.isfinite(self.delay_std_s))
 
     def parameters(self) -> dict[str, float]:
         """Return the estimate as {model-file key: value}."""
@@ -235,19 +294,19 @@ class PhysicalFit:
 
     def summary(self) -> list[str]:
         """Return a few lines for people: parameters with standard errors, then the cost."""
-        units = {'motor_inertia': 'kg m^2', 'link_inertia': 'kg m^2', 'stiffness': 'N m/rad',
-                 'damping': 'N m s/rad', 'viscous_friction': 'N m s/rad'}
         fa, fr = self.resonances_hz()
-        parts = [f'{k} {v:.5g} +- {s:.2g} {units[k]}'
+        parts = [f'{k} {v:.5g} +- {s:.2g} {UNITS[k]}'
                  for k, v, s in zip(self.names, self.value, self.std)]
+        delay = (f'delay {1e3 * self.delay_s:.4g} +- {1e3 * self.delay_std_s:.2g} ms (fitted)'
+                 if self.delay_fitted else f'delay {1e3 * self.delay_s:.4g} ms (given)')
         return [f'{self.name}: ' + ', '.join(parts[:3]),
                 f'{self.name}: ' + ', '.join(parts[3:])
-                + f'; antiresonance {fa:.2f} Hz, resonance {fr:.2f} Hz',
+                + f'; antiresonance {fa:.2f} Hz, resonance {fr:.2f} Hz; {delay}',
                 f'{self.name}: {self.cost.summary()}']
 
 
 def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray | None = None,
-                 *, delay_s: float = 0.0, name: str = 'joint_1') -> PhysicalFit:
+                 *, delay_s: float | None = 0.0, name: str = 'joint_1') -> PhysicalFit:
     """
     Fit the two-mass flexible joint to a measured FRF dq_m / tau_m by maximum likelihood.
 
@@ -260,8 +319,9 @@ def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
     variance : ndarray, shape (n_freq,), optional
         Its variance E|P_hat - P|^2. Without it the relative error is minimised and the
         standard errors come from the residual (the cost test cannot decide then).
-    delay_s : float, optional
-        Known input delay the model includes [s] (half a sample for a zero-order hold).
+    delay_s : float or None, optional
+        Known input delay the model includes [s] (half a sample for a zero-order hold);
+        None: fit the delay too (a sixth parameter, with its standard error).
     name : str, optional
         The axis name carried by the result.
 
@@ -285,29 +345,55 @@ def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
         if not np.all(np.isfinite(variance) & (variance > 0)):
             raise ValueError('variance must be positive and finite on every line')
     sigma = np.sqrt(variance) if variance is not None else np.abs(p)
-    # 1. linear start on the delay-free response
-    num, den = sanathanan_koerner(f, p * np.exp(2j * np.pi * f * delay_s), 2, 3, 1.0 / sigma)
-    start = physical_from_rational(num, den)
-    # 2. ML in scaled parameters x = theta / scale
+    fit_delay = delay_s is None
+    tau = delay_from_phase(f, p) if fit_delay else float(delay_s)
+    # 1. linear start on the delay-free response (a fitted delay: refined once by the phase
+    #    the compensated start leaves)
+    start = _linear_start(f, p, sigma, tau)
+    if fit_delay:
+        tau = max(tau + _delay_correction(f, p, two_mass_response(start, f, tau), sigma), 0.0)
+        start = _linear_start(f, p, sigma, tau)
+    # 2. ML in scaled parameters x = theta / scale (and tau / tau_scale)
     scale = np.abs(start)
     scale[4] = max(scale[4], VISCOUS_SCALE_SHARE * (start[0] + start[1]) * 2 * np.pi * f.min())
+    if fit_delay:        # a delay that turns the phase at the highest line by 1 rad
+        scale = np.append(scale, 1.0 / (2 * np.pi * f.max()))
     weight = np.sqrt(2.0) / sigma
 
+    def split(x):
+        th = x * scale
+        return (th[:5], th[5]) if fit_delay else (th, tau)
+
     def resid(x):
-        return normalised_residual(two_mass_response(x * scale, f, delay_s), p, variance)
+        th, d = split(x)
+        return normalised_residual(two_mass_response(th, f, d), p, variance)
 
     def jac(x):
-        j = two_mass_jacobian(x * scale, f, delay_s) * (weight[:, None] * scale[None, :])
+        th, d = split(x)
+        j = two_mass_jacobian(th, f, d)
+        if fit_delay:
+            j = np.hstack([j, (-2j * np.pi * f * two_mass_response(th, f, d))[:, None]])
+        j = j * (weight[:, None] * scale[None, :])
         return np.vstack([j.real, j.imag])
 
-    sol = optimize.least_squares(resid, start / scale, jac=jac, method='lm', x_scale=1.0)
+    x0 = np.append(start, tau) / scale if fit_delay else start / scale
+    sol = optimize.least_squares(resid, x0, jac=jac, method='lm', x_scale=1.0)
     # 3. Cramer-Rao bound (unit-variance residual) and cost test
     jr = sol.jac
     cov_x = np.linalg.pinv(jr.T @ jr)
-    test = cost_test(sol.fun, len(PARAMETERS), variance is not None)
+    test = cost_test(sol.fun, sol.x.size, variance is not None)
     if variance is None:
         cov_x = cov_x * test.cost / max(test.dof, 1)
-    value = sol.x * scale
+    value, tau = split(sol.x)
     cov = cov_x * np.outer(scale, scale)
+    tau_std = float(np.sqrt(cov[5, 5])) if fit_delay else float('nan')
+    cov = cov[:5, :5]
     return PhysicalFit(name, value, np.sqrt(np.diag(cov)), cov, start, test, f,
-                       two_mass_response(value, f, delay_s), float(delay_s), int(sol.nfev))
+                       two_mass_response(value, f, tau), float(tau), int(sol.nfev),
+                       delay_std_s=tau_std)
+
+
+def _linear_start(f: np.ndarray, p: np.ndarray, sigma: np.ndarray, tau: float) -> np.ndarray:
+    """Return the five parameters of the Sanathanan-Koerner 2/3 fit of p exp(s tau)."""
+    num, den = sanathanan_koerner(f, p * np.exp(2j * np.pi * f * tau), 2, 3, 1.0 / sigma)
+    return physical_from_rational(num, den)
