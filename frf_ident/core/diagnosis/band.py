@@ -50,7 +50,8 @@ class AnalysisBand:
 
     #: [Hz] low-pass cut-off of residual and regressors
     fc_hz: float
-    #: [Hz] per axis the frequency below which BAND_MOTION_SHARE of the motion's power lies (0 where the axis shows no motion above its noise)
+    #: [Hz] per axis the frequency below which BAND_MOTION_SHARE of the motion's power lies
+    #: (0 where the axis shows no motion above its noise)
     motion_hz: tuple[float, ...]
     #: [Hz] the largest band the sample rate leaves room for (BAND_MAX_SHARE of it)
     limit_hz: float
@@ -59,7 +60,8 @@ class AnalysisBand:
 
     def to_dict(self) -> dict:
         """Return the report.json ``analysis_band`` entry."""
-        return {'fc_hz': round(self.fc_hz, 2), 'motion_hz': [round(x, 2) for x in self.motion_hz],
+        return {'fc_hz': round(self.fc_hz, 2),
+                'motion_hz': [round(x, 2) for x in self.motion_hz],
                 'limit_hz': round(self.limit_hz, 2), 'set_by': self.reason}
 
     def describe(self) -> str:

@@ -24,7 +24,10 @@ median of that distribution (its degrees of freedom lowered for the noise of the
 itself), for a false-alarm probability RESONANCE_FALSE_ALARM per axis
 over all lines scanned (Bonferroni). A peak above it is reported as ``unexplained`` with its
 band: the run of lines around it that stay above the threshold, plus one line each side
-(a resonance's skirt above noise, not only its half-power width).
+(a resonance's skirt above noise, not only its half-power width). A peak whose half-power
+width is at most RESONANCE_MIN_WIDTH_LINES lines is as narrow as the window makes a sine: a
+``line`` (a periodic disturbance: mains hum, a rotating part), else a ``resonance`` (a mode
+of damping ratio zeta is 2 zeta f wide).
 """
 from __future__ import annotations
 
@@ -36,7 +39,7 @@ from scipy import signal, stats
 from scipy.ndimage import median_filter
 
 from .thresholds import (RESONANCE_FALSE_ALARM, RESONANCE_FLOOR_LINES, RESONANCE_MAX,
-                         RESONANCE_SEGMENT_S, RESONANCE_TOP)
+                         RESONANCE_MIN_WIDTH_LINES, RESONANCE_SEGMENT_S, RESONANCE_TOP)
 
 __all__ = ['peak_threshold', 'resonances_above', 'scan_spectrum']
 
@@ -106,6 +109,21 @@ def scan_spectrum(x: np.ndarray, fs: float, f_lo: float
     return f[sel], p[sel], floor[sel], peak_threshold(n_seg, int(sel.sum()))
 
 
+def half_power_width(f: np.ndarray, excess: np.ndarray, k: int) -> float:
+    """Return the width [Hz] over which ``excess`` stays above half its value at line k."""
+    half = 0.5 * excess[k]
+    lo, hi = k, k
+    while lo > 0 and excess[lo - 1] >= half:
+        lo -= 1
+    while hi < f.size - 1 and excess[hi + 1] >= half:
+        hi += 1
+    df = f[1] - f[0]
+    left = f[lo] - (df * (excess[lo] - half) / (excess[lo] - excess[lo - 1]) if lo > 0 else 0.0)
+    right = f[hi] + (df * (excess[hi] - half) / (excess[hi] - excess[hi + 1])
+                     if hi < f.size - 1 else 0.0)
+    return float(right - left)
+
+
 def resonances_above(f_res: np.ndarray, fs: float, fc: float, names: list[str]
                      ) -> list[dict[str, Any]]:
     """
@@ -126,8 +144,9 @@ def resonances_above(f_res: np.ndarray, fs: float, fc: float, names: list[str]
     -------
     list of dict
         Per peak above the threshold (at most RESONANCE_MAX per axis, strongest first):
-        ``axis``, ``kind`` 'resonance above the analysis band', ``signature`` with
-        ``band_hz`` [f1, f2], ``peak_hz``, ``peak_over_floor`` (PSD over its local floor),
+        ``axis``, ``kind`` 'resonance above the analysis band' or 'line above the analysis
+        band', ``signature`` with ``band_hz`` [f1, f2], ``peak_hz``,
+        ``half_power_width_hz``, ``peak_over_floor`` (PSD over its local floor),
         ``threshold`` and ``false_alarm`` (of the scan, per axis).
 
     """
@@ -147,10 +166,14 @@ def resonances_above(f_res: np.ndarray, fs: float, fc: float, names: list[str]
                 hi += 1
             lo, hi = max(lo - 1, 0), min(hi + 1, f.size - 1)
             free[lo:hi + 1] = False
-            out.append({'axis': name, 'kind': 'resonance above the analysis band',
+            width = half_power_width(f, p - floor, k)
+            kind = ('resonance' if width > RESONANCE_MIN_WIDTH_LINES * (f[1] - f[0])
+                    else 'line')
+            out.append({'axis': name, 'kind': f'{kind} above the analysis band',
                         'signature': {'band_hz': [round(float(f[lo]), 2),
                                                   round(float(f[hi]), 2)],
                                       'peak_hz': round(float(f[k]), 2),
+                                      'half_power_width_hz': round(width, 2),
                                       'peak_over_floor': round(float(ratio[k]), 1),
                                       'threshold': round(thr, 1),
                                       'false_alarm': RESONANCE_FALSE_ALARM}})

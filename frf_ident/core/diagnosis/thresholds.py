@@ -60,7 +60,11 @@ RESONANCE_FLOOR_LINES = 41
 #: the scan ends at this share of the sample rate (the anti-alias filters' band edge)
 RESONANCE_TOP = 0.45
 #: resonances listed per axis, strongest first
-RESONANCE_MAX = 3
+RESONANCE_MAX = 5
+#: a peak at most this many lines wide at half power is a line (a Hann window makes a sine
+#: 1.44 lines wide), wider a resonance (3 % damping at 39 Hz: 2.3 Hz at 1 Hz lines). Set by
+#: hand between the two (test/core/diagnosis/test_band.py)
+RESONANCE_MIN_WIDTH_LINES = 2.0
 
 # --- acceptance of an effect (both routes) ----------------------------------------------------
 

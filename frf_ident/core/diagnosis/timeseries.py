@@ -58,8 +58,8 @@ from .common import bridge_gaps, Effect
 from .prediction import noise_floor, noise_level, predict_metrics, signature
 from .regressors import (axis_masks, gravity_bearing, gravity_sets, model_residual, moving,
                          one_way_sets, regressor_groups)
-from .resonance import resonances_above
 from .residual import FC_HZ, find_ripple, lowpass
+from .resonance import resonances_above
 from .result import DiagnosisResult, TimeseriesDetail
 from .selection import (block_length, block_standard_errors, by_group, f_test, lstsq,
                         select_groups, split_blocks)

@@ -100,6 +100,7 @@ def test_unmodelled_mode_above_the_band_is_named_with_its_band(records):
     assert f1 <= 35.0 < free <= f2 and f2 - f1 < 15.0, res_modes
     assert res_modes[0]['signature']['peak_hz'] == pytest.approx(free, abs=1.5)
     assert len(res_modes) == 1, res_modes
+    assert res_modes[0]['kind'] == 'resonance above the analysis band'
 
 
 def test_same_plant_without_the_mode_leaves_nothing_unexplained(records):
@@ -128,16 +129,28 @@ def test_scan_of_a_smooth_spectrum_keeps_its_false_alarm_rate(colour):
 
 
 def test_scan_finds_a_resonance_of_known_band_in_noise():
-    """A 2nd-order resonance at 60 Hz (2 % damping) filtered into white noise is reported there."""
+    """
+    Report a resonance at its band, and a sine as a line.
+
+    White noise plus noise through a 2nd-order resonance at 60 Hz (3 % damping: 3.6 Hz at
+    half power), and white noise plus a 150.3 Hz sine (mains hum, a rotating part).
+    """
     rng = np.random.default_rng(5)
     w = 2 * np.pi * 60.0
-    b, a = signal.bilinear([w * w], [1, 2 * 0.02 * w, w * w], fs=FS)
-    x = rng.standard_normal(20000) + 0.05 * signal.lfilter(b, a, rng.standard_normal(20000))
+    b, a = signal.bilinear([w * w], [1, 2 * 0.03 * w, w * w], fs=FS)
+    x = rng.standard_normal(20000) + 0.12 * signal.lfilter(b, a, rng.standard_normal(20000))
     f, p, floor, thr = scan_spectrum(x, FS, FC_HZ)
     assert f[0] > FC_HZ and f[-1] <= 0.45 * FS
     (hit,) = resonances_above(x[:, None], FS, FC_HZ, ['a'])
     f1, f2 = hit['signature']['band_hz']
     assert f1 <= 60.0 <= f2 and f2 - f1 < 10.0
+    assert hit['kind'] == 'resonance above the analysis band'
+    assert hit['signature']['half_power_width_hz'] == pytest.approx(3.6, rel=0.4)
+    t = np.arange(20000) / FS
+    x = rng.standard_normal(t.size) + 0.3 * np.sin(2 * np.pi * 150.3 * t)
+    (hit,) = resonances_above(x[:, None], FS, FC_HZ, ['a'])
+    assert hit['kind'] == 'line above the analysis band'
+    assert hit['signature']['peak_hz'] == pytest.approx(150.3, abs=1.0)
 
 
 @pytest.mark.parametrize('data, map_name, n_axes, motion_max', [
