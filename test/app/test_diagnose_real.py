@@ -76,6 +76,8 @@ def test_emps_names_coulomb_friction_with_authors_value(tmp_path):
     scan = {round(u['signature']['peak_hz']): u['kind'].split()[0] for u in rep['unexplained']}
     assert scan.get(50) == 'line' and scan.get(100) == 'line', scan
     assert all(f > 20.0 for f in scan)
+    assert 'residual_spectrum.png' in (tmp_path / 'emps' / 'report.html').read_text()
+    assert (tmp_path / 'emps' / 'residual_spectrum.png').read_bytes()[:4] == b'\x89PNG'
 
 
 @pytest.mark.skipif(not KUKA.is_file(), reason='shared KUKA data not present')
