@@ -250,7 +250,9 @@ def diagnose_columns(data: Path, out: Path, progress: Progress | None, *,
     m = rep['metrics']
     return {'mode': res['mode'],
             'effects': ' '.join(f"{e['name']}@{e['axis']}" for e in rep['effects']) or 'none',
-            'unexplained': ' '.join(u['axis'] for u in rep['unexplained']) or 'none',
+            # an axis once, also with several resonances above the analysis band
+            'unexplained': ' '.join(dict.fromkeys(u['axis'] for u in rep['unexplained']))
+            or 'none',
             'baseline_frf_error_db': m['baseline']['frf_error_db'],
             'extended_frf_error_db': m['extended']['frf_error_db'],
             'baseline_time_nrmse': m['baseline']['time_nrmse'],
