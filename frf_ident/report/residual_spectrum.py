@@ -26,6 +26,7 @@ from frf_ident.core.diagnosis.regressors import model_residual
 from frf_ident.core.diagnosis.residual import FC_HZ
 from frf_ident.core.diagnosis.resonance import scan_spectrum
 from frf_ident.core.diagnosis.result import DiagnosisResult
+from frf_ident.core.diagnosis.thresholds import RESONANCE_FALSE_ALARM
 from frf_ident.core.recording import Recording
 
 from .figures import legend_below, plt, under_title
@@ -67,7 +68,7 @@ def residual_spectrum_figure(res: DiagnosisResult, rec: Recording, path: Path, *
         _, _, _, thr_above = scan_spectrum(f_all[:, i], rec.fs, fc)
         above = f > fc
         ax.semilogy(f[above], thr_above * floor[above], color='tab:red', lw=1.0, ls='--',
-                    label='threshold (false alarm 1e-3 per axis)')
+                    label=f'threshold (false alarm {RESONANCE_FALSE_ALARM:g} per axis)')
         ax.axvspan(0.0, fc, color='0.85', label=f'analysis band 0-{fc:.3g} Hz')
         for u in res.unexplained:
             s = u['signature']
