@@ -59,7 +59,7 @@ def residual_spectrum_figure(res: DiagnosisResult, rec: Recording, path: Path, *
     fc = res.band.fc_hz if res.band is not None else FC_HZ
     f_all = model_residual(rec, res.extended)[0]
     n = f_all.shape[1]
-    fig, axes = plt.subplots(n, 1, figsize=(8.0, 2.6 * n + 0.9), squeeze=False)
+    fig, axes = plt.subplots(n, 1, figsize=(8.0, 3.4 * n + 1.2), squeeze=False)
     for i, ax in enumerate(axes[:, 0]):
         name = res.extended.joint_names[i]
         f, p, floor, thr = scan_spectrum(f_all[:, i], rec.fs, 0.0)
@@ -76,7 +76,8 @@ def residual_spectrum_figure(res: DiagnosisResult, rec: Recording, path: Path, *
                 ax.axvspan(*s['band_hz'], color='tab:orange', alpha=0.35,
                            label='unexplained: resonance or line')
                 ax.annotate(f"{u['kind'].split()[0]} {s['peak_hz']:.0f} Hz",
-                            (s['peak_hz'], p.max()), fontsize=8, ha='center', va='top')
+                            (s['band_hz'][1], p.max()), fontsize=8, ha='left', va='top',
+                            rotation=90)
         ax.set_xlim(0.0, f[-1])
         ax.set_ylabel(f'{name}: PSD [torque^2/Hz]')
         ax.grid(True, which='both', alpha=0.3)
