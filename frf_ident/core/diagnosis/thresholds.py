@@ -34,7 +34,7 @@ FC_HZ = 20.0
 #: velocity, not the acceleration: a broadband shake (a torque dither, the pulses of the EMPS
 #: validation run) carries a share of the acceleration's power up to the Nyquist frequency but
 #: next to none of the velocity's. Set by hand: 14 Hz on EMPS (bang-bang trajectories), 3 Hz
-#: on KUKA A axes 1-3, about 1 Hz on the simulated records of the tests: all keep FC_HZ
+#: on KUKA A axes 1-3, 1.5 Hz on the dithered reference-plant record: all keep FC_HZ
 #: (test/core/diagnosis/test_band.py)
 BAND_MOTION_SHARE = 0.999
 #: a velocity line counts as motion above this many times the white velocity noise floor
@@ -48,8 +48,8 @@ BAND_MAX_SHARE = 0.25
 
 #: probability that a residual whose spectrum is smooth (no resonance) is reported with one,
 #: per axis and record. The threshold is the chi-square tail of the Welch estimate against its
-#: local median; measured on white and coloured noise (test/core/diagnosis/test_band.py,
-#: 1,000 scans each: at most the stated rate)
+#: local median; measured on white and rising noise (test/core/diagnosis/test_band.py: 600
+#: scans each of 10 s at 1 kHz, 0 and 2 alarms where 0.6 are expected)
 RESONANCE_FALSE_ALARM = 1e-3
 #: [s] Welch segment of the residual spectrum (1 Hz lines; a resonance of 3 % damping at 35 Hz
 #: is 2 Hz wide at half power)
@@ -62,8 +62,9 @@ RESONANCE_TOP = 0.45
 #: resonances listed per axis, strongest first
 RESONANCE_MAX = 5
 #: a peak at most this many lines wide at half power is a line (a Hann window makes a sine
-#: 1.44 lines wide), wider a resonance (3 % damping at 39 Hz: 2.3 Hz at 1 Hz lines). Set by
-#: hand between the two (test/core/diagnosis/test_band.py)
+#: 1.44 lines wide), wider a resonance (3 % damping at 39 Hz is 2.3 Hz wide; the test plant's
+#: mode measures 3.0 Hz, EMPS' 50 and 100 Hz mains lines 1.7 and 1.6). Set by hand between
+#: the two (test/core/diagnosis/test_band.py)
 RESONANCE_MIN_WIDTH_LINES = 2.0
 
 # --- acceptance of an effect (both routes) ----------------------------------------------------
