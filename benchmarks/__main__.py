@@ -382,6 +382,13 @@ def bench_diagnosis_real() -> list[tuple[str, str, str, str]]:
             + kuka_trajectories_rows())
 
 
+@section('band')
+def bench_band() -> list[tuple[str, str, str, str]]:
+    """Show the analysis band and the residual scan above it on EMPS and KUKA A (figure)."""
+    from benchmarks.band import rows
+    return rows()
+
+
 @section('nodes')
 def bench_nodes() -> list[tuple[str, str, str, str]]:
     """Measure the node graph's lockstep steps/s beside the same backend's ping-pong."""

@@ -42,7 +42,7 @@ __all__ = ['OUTPUT_FILES', 'diagnose', 'diagnose_columns', 'has_experiments', 'l
 #: the files :func:`diagnose` writes into its output directory (report.html's figures: an
 #: experiments diagnosis draws bode.png and residual.png, a time-series one residual.png)
 OUTPUT_FILES = ('report.json', 'extended_model.yaml', 'report.html', 'bode.png',
-                'residual.png')
+                'residual.png', 'residual_spectrum.png')
 
 
 def load_data(path: Path, map_path: Path | None = None) -> Recording:
@@ -206,6 +206,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
               'extended_model': 'extended_model.yaml'}
     if res.discretisation is not None:
         report['discretisation'] = res.discretisation
+    if res.band is not None:
+        report['analysis_band'] = res.band.to_dict()
     if rec.meta.get('gaps'):
         report['gaps'] = rec.meta['gaps']
     (out / 'report.json').write_text(json.dumps(report, indent=1))
@@ -248,7 +250,9 @@ def diagnose_columns(data: Path, out: Path, progress: Progress | None, *,
     m = rep['metrics']
     return {'mode': res['mode'],
             'effects': ' '.join(f"{e['name']}@{e['axis']}" for e in rep['effects']) or 'none',
-            'unexplained': ' '.join(u['axis'] for u in rep['unexplained']) or 'none',
+            # an axis once, also with several resonances above the analysis band
+            'unexplained': ' '.join(dict.fromkeys(u['axis'] for u in rep['unexplained']))
+            or 'none',
             'baseline_frf_error_db': m['baseline']['frf_error_db'],
             'extended_frf_error_db': m['extended']['frf_error_db'],
             'baseline_time_nrmse': m['baseline']['time_nrmse'],

@@ -61,7 +61,17 @@ def diagnosis_summary(report: Mapping[str, Any], out: Path) -> list[str]:
                      f"score {e['score']:.2f}")
     if not report['effects']:
         lines.append('no effects: none of the candidates improves the held-out data')
+    band = report.get('analysis_band')
+    if band:
+        lines.append(f"analysis band 0-{band['fc_hz']:.3g} Hz (set by the {band['set_by']}); "
+                     'residual above it scanned for resonances')
     for u in report['unexplained']:
+        if 'misfit_share' not in u:
+            s = u['signature']
+            lines.append(f"unexplained on {u['axis']}: {u['kind']}, {s['band_hz'][0]:.3g}-"
+                         f"{s['band_hz'][1]:.3g} Hz (peak {s['peak_hz']:.3g} Hz, "
+                         f"{s['peak_over_floor']:.3g}x the local noise floor)")
+            continue
         lines.append(f"unexplained on {u['axis']}: {100 * u['misfit_share']:.0f} % of the "
                      f"nominal misfit left{_band(u.get('signature', {}))}")
     m = report['metrics']

@@ -431,13 +431,18 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
                     'the signature says where the rest of the misfit lives.</p>'
                     + _table(['axis', 'share of the nominal misfit left',
                               'bands [Hz], strongest first', 'residual correlates with'],
-                             [[u['axis'], u['misfit_share'],
+                             [[u['axis'], u.get('misfit_share', u.get('kind')),
                                ', '.join(f'{b[0]:g}-{b[1]:g}' for b in u['signature'].get(
                                    'bands_hz', [u['signature']['band_hz']]
                                    if 'band_hz' in u['signature'] else [])) or '-',
                                u['signature'].get('correlates_with', '-')] for u in une]))
     else:
         une_html = '<p>nothing: every axis is explained to within its noise floor.</p>'
+    if report.get('analysis_band'):
+        b = report['analysis_band']
+        une_html += (f'<p>Effects fitted in the analysis band 0-{b["fc_hz"]:g} Hz (set by the '
+                     f'{html.escape(b["set_by"])}); the residual above it is scanned for '
+                     f'resonances (listed above as "resonance above the analysis band").</p>')
     m = report['metrics']
     rows = [['nominal', m['baseline']['frf_error_db'], m['baseline']['time_nrmse']],
             ['extended', m['extended']['frf_error_db'], m['extended']['time_nrmse']]]
@@ -488,6 +493,12 @@ def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
     rej_html = (_table(list(rej[0].keys()), [list(r.values()) for r in rej]) if rej else
                 '<p>none.</p>')
     figs = figures.diagnosis_figures(out, res, rec, mode)
+    if res.band is not None:
+        from .residual_spectrum import residual_spectrum_figure
+        residual_spectrum_figure(res, rec, out / 'residual_spectrum.png')
+        figs.append(('residual_spectrum.png',
+                     'Residual spectrum of the extended model: the analysis band (grey) and '
+                     'the peaks above it the scan reports (orange, in Unexplained)'))
     fig_html = '\n'.join(_figure(fn, html.escape(cap), cap) for fn, cap in figs)
     sections = [
         ('effects', 'Effects (most likely first)',

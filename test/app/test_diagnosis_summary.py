@@ -51,3 +51,20 @@ def test_summary_lines_read_as_sentences_with_four_digits():
 def test_no_effects_is_said_in_words():
     lines = diagnosis_summary(dict(REPORT, effects=[], unexplained=[]), Path('D'))
     assert lines[0] == 'no effects: none of the candidates improves the held-out data'
+
+
+def test_band_and_a_resonance_above_it_are_said_in_words():
+    """A time-series report: its analysis band and the scan's resonance, one line each."""
+    report = dict(REPORT, analysis_band={'fc_hz': 20.0, 'motion_hz': [13.7], 'limit_hz': 250.0,
+                                         'set_by': 'calibrated minimum'},
+                  unexplained=[{'axis': 'emps', 'kind': 'resonance above the analysis band',
+                                'signature': {'band_hz': [435.0, 450.0], 'peak_hz': 445.0,
+                                              'half_power_width_hz': 2.56,
+                                              'peak_over_floor': 16.93, 'threshold': 1.9,
+                                              'false_alarm': 0.001}}])
+    lines = diagnosis_summary(report, Path('D'))
+    assert lines[2:4] == [
+        'analysis band 0-20 Hz (set by the calibrated minimum); residual above it scanned for '
+        'resonances',
+        'unexplained on emps: resonance above the analysis band, 435-450 Hz (peak 445 Hz, 16.9x '
+        'the local noise floor)']

@@ -28,6 +28,7 @@ from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 import numpy as np
 
+from .band import AnalysisBand
 from .common import Effect
 
 
@@ -69,7 +70,10 @@ class DiagnosisResult:
     rejected : list of dict
         Candidates not taken, with their numbers (report.json ``rejected``).
     unexplained : list of dict
-        Axes whose held-out misfit stays clearly above noise, with their signature.
+        Axes whose held-out misfit stays clearly above noise, with their signature; and
+        (time-series route) resonances in the residual above the analysis band, ``kind``
+        'resonance above the analysis band' with the ``band_hz`` of each
+        (:mod:`.resonance`).
     metrics : dict
         ``baseline`` (nominal model), ``extended``, ``validation`` text; the app adds
         ``validation_records`` and ``least_squares``.
@@ -100,3 +104,6 @@ class DiagnosisResult:
     n_sims: int = 0
     #: the candidates that were not taken (experiments route; their rejected entries)
     candidates: list[Effect] = field(default_factory=list)
+    #: the band the effects were fitted in (time-series route, :func:`.band.analysis_band`);
+    #: None where the route does not choose one (experiments: FC_HZ)
+    band: AnalysisBand | None = None

@@ -23,10 +23,49 @@ test/app/test_diagnose_scenes.py; a value changed here must leave those unchange
 
 # --- analysis band ---------------------------------------------------------------------------
 
-#: [Hz] low-pass of the inverse-dynamics residual and of every regressor, both routes; the band
-#: the friction/inertia/gravity effects are read in (below the first joint resonance of the
-#: demo and KUKA models). Fixed by hand; the sweeps and the KUKA/EMPS tests run at it.
+#: [Hz] low-pass of the inverse-dynamics residual and of every regressor where no band is chosen
+#: from the record (experiments route, the time-series metrics of other records, the
+#: least-squares baseline of issue #41); and the narrowest band :func:`.band.analysis_band`
+#: chooses: the sweeps and the regression scenes are calibrated at it (below the first joint
+#: resonance of the demo and KUKA models). Fixed by hand.
 FC_HZ = 20.0
+#: the analysis band of a time-series record holds this share of the power of the motion (the
+#: measured velocity, on the lines where it stands BAND_SNR above its noise floor). The
+#: velocity, not the acceleration: a broadband shake (a torque dither, the pulses of the EMPS
+#: validation run) carries a share of the acceleration's power up to the Nyquist frequency but
+#: next to none of the velocity's. Set by hand: 14 Hz on EMPS (bang-bang trajectories), 3 Hz
+#: on KUKA A axes 1-3, 1.5 Hz on the dithered reference-plant record: all keep FC_HZ
+#: (test/core/diagnosis/test_band.py)
+BAND_MOTION_SHARE = 0.999
+#: a velocity line counts as motion above this many times the white velocity noise floor
+#: (the median PSD between 0.6 and 0.95 of Nyquist; 10 dB)
+BAND_SNR = 10.0
+#: the analysis band ends at most at this share of the sample rate, so that the residual scan
+#: above it keeps at least the band up to RESONANCE_TOP of the sample rate
+BAND_MAX_SHARE = 0.25
+
+# --- residual spectrum above the analysis band (resonance.py) ---------------------------------
+
+#: probability that a residual whose spectrum is smooth (no resonance) is reported with one,
+#: per axis and record. The threshold is the chi-square tail of the Welch estimate against its
+#: local median; measured on white and rising noise (test/core/diagnosis/test_band.py: 600
+#: scans each of 10 s at 1 kHz, 0 and 2 alarms where 0.6 are expected)
+RESONANCE_FALSE_ALARM = 1e-3
+#: [s] Welch segment of the residual spectrum (1 Hz lines; a resonance of 3 % damping at 35 Hz
+#: is 2 Hz wide at half power)
+RESONANCE_SEGMENT_S = 1.0
+#: lines of the running median that gives the residual's local noise floor (a peak narrower
+#: than half of it does not lift the floor)
+RESONANCE_FLOOR_LINES = 41
+#: the scan ends at this share of the sample rate (the anti-alias filters' band edge)
+RESONANCE_TOP = 0.45
+#: resonances listed per axis, strongest first
+RESONANCE_MAX = 5
+#: a peak at most this many lines wide at half power is a line (a Hann window makes a sine
+#: 1.44 lines wide), wider a resonance (3 % damping at 39 Hz is 2.3 Hz wide; the test plant's
+#: mode measures 3.0 Hz, EMPS' 50 and 100 Hz mains lines 1.7 and 1.6). Set by hand between
+#: the two (test/core/diagnosis/test_band.py)
+RESONANCE_MIN_WIDTH_LINES = 2.0
 
 # --- acceptance of an effect (both routes) ----------------------------------------------------
 

@@ -53,11 +53,13 @@ from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 import numpy as np
 
+from .band import analysis_band, fixed_band
 from .common import bridge_gaps, Effect
 from .prediction import noise_floor, noise_level, predict_metrics, signature
 from .regressors import (axis_masks, gravity_bearing, gravity_sets, model_residual, moving,
                          one_way_sets, regressor_groups)
 from .residual import FC_HZ, find_ripple, lowpass
+from .resonance import resonances_above
 from .result import DiagnosisResult, TimeseriesDetail
 from .selection import (block_length, block_standard_errors, by_group, f_test, lstsq,
                         select_groups, split_blocks)
@@ -153,7 +155,7 @@ class Prepared:
     bearing: list           # runs of joints whose angle carries a load
 
 
-def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
+def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None = None
                         ) -> DiagnosisResult:
     """
     Diagnose a time-series recording against the nominal ``robot``.
@@ -168,7 +170,9 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     robot
         The nominal model.
     fc
-        Low-pass cut-off of residual and regressors [Hz].
+        Low-pass cut-off of residual and regressors [Hz]; by default chosen from the record
+        (:func:`.band.analysis_band`). The residual above it is scanned for resonances
+        (:func:`.resonance.resonances_above`), reported as ``unexplained``.
 
     Returns
     -------
@@ -181,6 +185,9 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
 
     """
     say = log.debug
+    band = analysis_band(rec) if fc is None else fixed_band(rec, fc)
+    fc = band.fc_hz
+    log.info('%s', band.describe())
     d = prepare(rec, robot, fc, say)
     effects: list[Effect] = []
     rejected: list[dict[str, Any]] = []
@@ -200,14 +207,16 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     ext = replace(robot, axes=ext_axes)
     metrics, val = held_out_metrics(d, robot, ext)
     floor = noise_floor(d.rec, d.f, fc, val['extended']['rows'])
-    unexplained = unexplained_axes(d, robot, val, floor)
+    unexplained = unexplained_axes(d, robot, val, floor) + resonances_above(
+        model_residual(d.rec, ext)[0], d.rec.fs, fc, robot.joint_names)
     fs = d.rec.fs
     residual = {'t': d.rec.t[:-1], 'f': d.f, 'q': d.qh, 'v': d.vh,
                 'pred_baseline': lowpass(d.f, fs, fc) - val['baseline']['residual'],
                 'pred_extended': lowpass(d.f, fs, fc) - val['extended']['residual'],
                 'val_mask': d.val_m}
     return DiagnosisResult('timeseries', effects, rejected, unexplained, metrics, ext,
-                           TimeseriesDetail(residual, floor.tolist()), d.fit_m, d.val_m)
+                           TimeseriesDetail(residual, floor.tolist()), d.fit_m, d.val_m,
+                           band=band)
 
 
 def prepare(rec: Recording, robot: RobotParams, fc: float, say: Callable[[str], None]
