@@ -79,6 +79,11 @@ MIN_ADVANCE_S = 0.5
 #: fewest multisine periods an estimate needs (mean and noise variance over periods)
 MIN_PERIODS = 2
 
+#: what works for a sweep the chirp estimator refuses (down, linear, another law): the LPM
+#: needs no law (test/cli/test_estimate_sweep.py: a linear 15 -> 2 Hz sweep, analytic FRF)
+SWEEP_HINT = ("method='lpm' (frf-ident estimate --method lpm) estimates a sweep of any law "
+              'and direction')
+
 
 @dataclass(frozen=True)
 class ExcitationOptions:
@@ -252,13 +257,13 @@ def _checked_chirp(x: np.ndarray, fs: float, det: ChirpDetection, what: str
            f'(exponential, eq. 16)')
     if not det.f_high > det.f_low:
         raise EstimationError(f'{law} sweeps down; the chirp estimator needs an up-sweep '
-                              f'(f_low < f_high)')
+                              f'(f_low < f_high) — {SWEEP_HINT}')
     dev, found = sweep_mismatch(x, fs, det.frequency, det.t0, det.t1)
     if not dev <= MAX_MISMATCH:
         seen = found.describe() if found is not None else 'no sweep in that interval'
         raise EstimationError(f'{law} does not match the recorded excitation: it is a {seen}; '
                               f'its half cycles are {100 * dev:.3g} % off the given law '
-                              f'(median; expected < {100 * MAX_MISMATCH:.0f} %)')
+                              f'(median; expected < {100 * MAX_MISMATCH:.0f} %) — {SWEEP_HINT}')
     return det
 
 
