@@ -56,6 +56,25 @@ def _log_ticks(ax: plt.Axes) -> None:
     ax.xaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(label))
 
 
+def _rows(n: int):
+    """Return a figure with one full-width row of axes per output."""
+    return plt.subplots(n, 1, figsize=(7.5, 2.6 * n + 0.8), sharex=True, squeeze=False)
+
+
+def _save_rows(fig, axes, path: Path, title: str) -> Path:
+    """Grid, frequency axis and legend of the rows of :func:`_rows`; write and close."""
+    for ax in axes[:, 0]:
+        ax.grid(True, which='both', alpha=0.3)
+        _log_ticks(ax)
+    axes[-1, 0].set_xlabel('frequency [Hz]')
+    axes[0, 0].legend(fontsize=7, loc='best')
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return Path(path)
+
+
 def distortion_figure(levels: DistortionLines, path: Path, *, title: str = '') -> Path:
     """
     Write the detection-line plot of ``levels``: one row per output.
@@ -75,8 +94,7 @@ def distortion_figure(levels: DistortionLines, path: Path, *, title: str = '') -
         ``path``.
 
     """
-    n = len(levels.outputs)
-    fig, axes = plt.subplots(n, 1, figsize=(7.5, 2.6 * n + 0.8), sharex=True, squeeze=False)
+    fig, axes = _rows(len(levels.outputs))
     f = levels.freq_hz
     units = levels.unit_list()
     for o, ax in enumerate(axes[:, 0]):
@@ -96,15 +114,7 @@ def distortion_figure(levels: DistortionLines, path: Path, *, title: str = '') -
         unit = units[o] or 'unit'
         ax.set_ylabel(f'|Y|\u00b2 [dB re 1 ({unit})\u00b2]', fontsize=8)
         ax.set_title(levels.outputs[o], fontsize=9)
-        ax.grid(True, which='both', alpha=0.3)
-        _log_ticks(ax)
-    axes[-1, 0].set_xlabel('frequency [Hz]')
-    axes[0, 0].legend(fontsize=7, loc='best')
-    fig.suptitle(title or 'Output levels at excited, odd and even lines')
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return Path(path)
+    return _save_rows(fig, axes, path, title or 'Output levels at excited, odd and even lines')
 
 
 def _frf_unit(variance_unit: str) -> str:
@@ -140,8 +150,7 @@ def robust_lpm_figure(levels: RobustLpmLevels, frf: FrequencyResponse, path: Pat
         ``path``.
 
     """
-    n = len(levels.outputs)
-    fig, axes = plt.subplots(n, 1, figsize=(7.5, 2.6 * n + 0.8), sharex=True, squeeze=False)
+    fig, axes = _rows(len(levels.outputs))
     f = levels.freq_hz
     at = np.searchsorted(frf.freq_hz, f).clip(0, frf.freq_hz.size - 1)
     have = np.isclose(frf.freq_hz[at], f, rtol=1e-9, atol=0.0)
@@ -158,15 +167,8 @@ def robust_lpm_figure(levels: RobustLpmLevels, frf: FrequencyResponse, path: Pat
         ax.set_ylabel(f'[dB re 1 {unit}]', fontsize=8)
         ax.set_title(f'{frf.inputs[0] if frf.inputs else "input"} \u2192 {levels.outputs[o]}',
                      fontsize=9)
-        ax.grid(True, which='both', alpha=0.3)
-        _log_ticks(ax)
-    axes[-1, 0].set_xlabel('frequency [Hz]')
-    axes[0, 0].legend(fontsize=7, loc='best')
-    fig.suptitle(title or f'Robust LPM: {levels.periods} periods of one realisation')
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return Path(path)
+    return _save_rows(fig, axes, path,
+                      title or f'Robust LPM: {levels.periods} periods of one realisation')
 
 
 def level_comparison_figure(cmp, path: Path) -> Path:
