@@ -38,7 +38,7 @@ DATA = ROOT.parent / 'shared' / 'data'
 SETS = (
     ('daisy_arm', 'DaISy_robot_arm/robot_arm.dat', 'config/map_daisy_arm.yaml',
      ['--window', '2000']),
-    ('emps', 'EMPS/DATA_EMPS.mat', 'config/map_emps.yaml', ['--method', 'lpm']),
+    ('emps', 'EMPS/DATA_EMPS.mat', 'config/map_emps.yaml', []),
     ('kuka_kr300_A', 'KUKA_KR300_Weigand2021/recorded_FF_A_2020-10-21.mat',
      'config/map_kuka_kr300.yaml', ['--method', 'lpm-direct', '--joints', 'a1,a2,a3']),
 )

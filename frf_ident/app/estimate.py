@@ -32,7 +32,8 @@ __all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'estimate_columns', '
            'read_estimates', 'report_distortion', 'report_robust_lpm']
 
 #: the files :func:`estimate_bag` writes into its output directory
-OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png', 'distortion.png')
+OUTPUT_FILES = ('frf.json', 'estimates.json', 'summary.json', 'bode.png', 'distortion.png',
+                'robust_lpm.png')
 
 
 def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max_memory_mb,
@@ -206,34 +207,53 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
              f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
     report_distortion(estimates, out, title=bag.name, progress=progress)
-    report_robust_lpm(estimates, progress=progress)
+    report_robust_lpm(estimates, out, title=bag.name, progress=progress)
     if fit is not None:
         from frf_ident.app.fit import fit_frf
         fit_frf(out, out, **vars(fit), progress=progress)
     return estimates
 
 
-def report_robust_lpm(estimates: dict, *, progress: Progress | None = None) -> None:
+def report_robust_lpm(estimates: dict, out: Path | None = None, *, title: str = '',
+                      progress: Progress | None = None) -> Path | None:
     """
-    Print one line per output of the robust LPM (one multisine realisation, several periods).
+    Print one line per output of the robust LPM and write robust_lpm.png.
 
-    The per-line noise and nonlinear variances are in each estimate's meta['robust_lpm']
-    (estimates.json).
+    The robust LPM (one multisine realisation, several periods) puts the per-line noise and
+    nonlinear variances in each estimate's meta['robust_lpm'] (estimates.json); the figure
+    shows the first such estimate's |P| with both levels per line.
 
     Parameters
     ----------
     estimates : dict
         Estimate name -> FrequencyResponse.
+    out : Path, optional
+        Output directory of robust_lpm.png; None: print only.
+    title : str, optional
+        Figure title (the bag's name).
     progress : callable, optional
         Called with one line per output (None: silent).
 
+    Returns
+    -------
+    Path or None
+        The PNG, or None when no estimate carries robust-LPM levels (or ``out`` is None).
+
     """
     from frf_ident.core.estimation.lpm import RobustLpmLevels
+    from frf_ident.report.distortion import robust_lpm_figure
     progress = sink(progress)
-    for k, v in estimates.items():
-        if isinstance(v.meta.get('robust_lpm'), dict):
-            for line in RobustLpmLevels.from_dict(v.meta['robust_lpm']).summary():
-                progress(f'{k} robust LPM: {line}')
+    found = [(k, v, RobustLpmLevels.from_dict(v.meta['robust_lpm']))
+             for k, v in estimates.items() if isinstance(v.meta.get('robust_lpm'), dict)]
+    for k, _, levels in found:
+        for line in levels.summary():
+            progress(f'{k} robust LPM: {line}')
+    if not found or out is None:
+        return None
+    k, frf, levels = found[0]
+    path = robust_lpm_figure(levels, frf, out / 'robust_lpm.png', title=f'{title}: {k}')
+    progress(f'wrote {path} (|P| with its noise and nonlinear level per line, {k})')
+    return path
 
 
 def report_distortion(estimates: dict, out: Path, *, title: str,

@@ -18,12 +18,17 @@ Per output: the output level at the excited lines, at the non-excited odd lines 
 nonlinearities) and at the even lines (even ones), and the noise level of the period mean,
 in dB re 1 unit^2 over a logarithmic frequency axis (Pintelon & Schoukens' detection-line
 plot). With several realisations the excited lines' nonlinear residual is drawn too.
+
+The robust LPM plot (one realisation with several periods): per output |P| with the standard
+deviation of its noise and of its stochastic nonlinear distortion, on one dB axis.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
 from frf_ident.core.estimation.distortion import DistortionLines
+from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.estimation.lpm import RobustLpmLevels
 import matplotlib
 
 matplotlib.use('Agg')
@@ -31,7 +36,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
-__all__ = ['distortion_figure', 'level_comparison_figure']
+__all__ = ['distortion_figure', 'level_comparison_figure', 'robust_lpm_figure']
 
 #: marker style per kind of line: (label, colour, marker size)
 STYLE = {'excited': ('excited lines', 'C0', 5), 'odd': ('non-excited odd lines', 'C3', 4),
@@ -49,6 +54,25 @@ def _log_ticks(ax: plt.Axes) -> None:
         return f'{x:g}' if lead in (1, 2, 5) else ''
     ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(label))
     ax.xaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(label))
+
+
+def _rows(n: int):
+    """Return a figure with one full-width row of axes per output."""
+    return plt.subplots(n, 1, figsize=(7.5, 2.6 * n + 0.8), sharex=True, squeeze=False)
+
+
+def _save_rows(fig, axes, path: Path, title: str) -> Path:
+    """Grid, frequency axis and legend of the rows of :func:`_rows`; write and close."""
+    for ax in axes[:, 0]:
+        ax.grid(True, which='both', alpha=0.3)
+        _log_ticks(ax)
+    axes[-1, 0].set_xlabel('frequency [Hz]')
+    axes[0, 0].legend(fontsize=7, loc='best')
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return Path(path)
 
 
 def distortion_figure(levels: DistortionLines, path: Path, *, title: str = '') -> Path:
@@ -70,8 +94,7 @@ def distortion_figure(levels: DistortionLines, path: Path, *, title: str = '') -
         ``path``.
 
     """
-    n = len(levels.outputs)
-    fig, axes = plt.subplots(n, 1, figsize=(7.5, 2.6 * n + 0.8), sharex=True, squeeze=False)
+    fig, axes = _rows(len(levels.outputs))
     f = levels.freq_hz
     units = levels.unit_list()
     for o, ax in enumerate(axes[:, 0]):
@@ -91,15 +114,61 @@ def distortion_figure(levels: DistortionLines, path: Path, *, title: str = '') -
         unit = units[o] or 'unit'
         ax.set_ylabel(f'|Y|\u00b2 [dB re 1 ({unit})\u00b2]', fontsize=8)
         ax.set_title(levels.outputs[o], fontsize=9)
-        ax.grid(True, which='both', alpha=0.3)
-        _log_ticks(ax)
-    axes[-1, 0].set_xlabel('frequency [Hz]')
-    axes[0, 0].legend(fontsize=7, loc='best')
-    fig.suptitle(title or 'Output levels at excited, odd and even lines')
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return Path(path)
+    return _save_rows(fig, axes, path, title or 'Output levels at excited, odd and even lines')
+
+
+def _frf_unit(variance_unit: str) -> str:
+    """Return '(y)/(u)' of a variance unit '(y)^2/(u)^2' ('' when it is not one)."""
+    num, _, den = variance_unit.partition('^2/')
+    return f'{num}/{den[:-2]}' if den.endswith('^2') and num else ''
+
+
+def robust_lpm_figure(levels: RobustLpmLevels, frf: FrequencyResponse, path: Path, *,
+                      title: str = '') -> Path:
+    """
+    Write |P|, its noise level and its nonlinear level per line (robust LPM), one row per output.
+
+    All three on one axis in dB re 1 unit of P: 20 log10 |P|, and 10 log10 of the noise and
+    of the stochastic nonlinear variance of P (their standard deviations). Where the
+    nonlinear level stands above the noise, the nonlinear distortion dominates the
+    uncertainty of this realisation's BLA; |P| far above both is a well determined line.
+
+    Parameters
+    ----------
+    levels : RobustLpmLevels
+        The estimate's ``meta['robust_lpm']`` read back (:meth:`RobustLpmLevels.from_dict`).
+    frf : FrequencyResponse
+        The estimate (one input); |P| is drawn at the lines of ``levels`` it holds.
+    path : Path
+        The PNG to write.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    """
+    fig, axes = _rows(len(levels.outputs))
+    f = levels.freq_hz
+    at = np.searchsorted(frf.freq_hz, f).clip(0, frf.freq_hz.size - 1)
+    have = np.isclose(frf.freq_hz[at], f, rtol=1e-9, atol=0.0)
+    for o, ax in enumerate(axes[:, 0]):
+        row = frf.outputs.index(levels.outputs[o]) if levels.outputs[o] in frf.outputs else o
+        mag = np.where(have, np.abs(frf.response[row, 0, at]), np.nan)
+        ax.semilogx(f, 20 * np.log10(np.maximum(mag, 1e-300)), '-', color='C0', lw=1.2,
+                    label='|P| (BLA of this realisation)')
+        ax.semilogx(f, _db(levels.noise[o]), '-', color='k', lw=1.0,
+                    label='noise level (std of P)')
+        ax.semilogx(f, _db(levels.nonlinear[o]), '.', ms=4, color='C3',
+                    label='stochastic nonlinear level (std of P)')
+        unit = _frf_unit(levels.units[o]) or 'unit'
+        ax.set_ylabel(f'[dB re 1 {unit}]', fontsize=8)
+        ax.set_title(f'{frf.inputs[0] if frf.inputs else "input"} \u2192 {levels.outputs[o]}',
+                     fontsize=9)
+    return _save_rows(fig, axes, path,
+                      title or f'Robust LPM: {levels.periods} periods of one realisation')
 
 
 def level_comparison_figure(cmp, path: Path) -> Path:

@@ -24,6 +24,8 @@ next to it (referenced by relative file name, so the directory can be moved or z
 - ``snr.png`` — |P|^2 / variance per line in dB (only for estimates with variances)
 - ``distortion.png`` — output levels at excited, odd and even lines with the noise level
   (multisine estimates with meta['distortion']), and one summary line per output
+- ``robust_lpm.png`` — |P| with its noise and stochastic nonlinear level per line (robust
+  LPM of one realisation, estimates with meta['robust_lpm']), and one summary line per output
 - ``timeseries.png`` — torque, velocity and reference over time (with a recording)
 - ``spectrogram.png`` — PSD of the torques over time, log frequency axis 1-60 Hz (Fig. 3)
 - ``iterations.png`` — chirp iteration: error to u_des in dB per iteration and channel
@@ -45,6 +47,7 @@ from typing import Any, Mapping, Sequence
 from frf_ident.core.diagnosis.result import DiagnosisResult
 from frf_ident.core.estimation.distortion import DistortionLines
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.estimation.lpm import RobustLpmLevels
 from frf_ident.core.fit.coupled import CoupledFit
 from frf_ident.core.fit.physical import PhysicalFit, UNITS
 from frf_ident.core.fit.rational import RationalFit
@@ -52,7 +55,7 @@ from frf_ident.core.loop.check import LoopCheck, Margin
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import figures
-from frf_ident.report.distortion import distortion_figure
+from frf_ident.report.distortion import distortion_figure, robust_lpm_figure
 from frf_ident.report.text import plain
 import numpy as np
 
@@ -133,6 +136,9 @@ def write_report(out_dir: str | Path, *, frfs: Mapping[str, FrequencyResponse],
         dist = _distortion_section(out, frfs)
         if dist:
             sections.append(('distortion', 'Nonlinear distortion per line', dist))
+        robust = _robust_lpm_section(out, frfs)
+        if robust:
+            sections.append(('robust_lpm', 'Noise and nonlinear variance (robust LPM)', robust))
     if recording is not None:
         sections.append(('signals', 'Recorded signals', _signals_section(out, recording)))
         sections.append(('spectrogram', 'Torque spectrogram',
@@ -266,6 +272,25 @@ def _distortion_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str
                 'the noise level of the period mean (black). Lines near the noise carry no '
                 'distortion; lines far above it show how strongly the system departs from '
                 'linear at this level.', 'Distortion levels per line')
+    return ''
+
+
+def _robust_lpm_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str:
+    """Return the robust-LPM plot and summary of the first estimate with robust-LPM levels."""
+    for name, frf in frfs.items():
+        d = frf.meta.get('robust_lpm')
+        if isinstance(d, dict):
+            levels = RobustLpmLevels.from_dict(d)
+            robust_lpm_figure(levels, frf, out / 'robust_lpm.png', title=name)
+            items = ''.join(f'<li>{html.escape(line)}</li>' for line in levels.summary())
+            return f'<ul>{items}</ul>' + _figure(
+                'robust_lpm.png',
+                f'|P| of one multisine realisation ({levels.periods} periods; blue) with the '
+                'standard deviation of its noise (black, from the spread over periods) and of '
+                'its stochastic nonlinear distortion (red, from the local polynomial residual '
+                'over neighbouring lines less the noise). Red above black: the nonlinear '
+                'distortion, not the noise, limits this estimate; more periods will not '
+                'lower it, more realisations will.', 'Robust LPM levels per line')
     return ''
 
 

@@ -85,6 +85,7 @@ def test_estimate_splits_noise_and_nonlinear_variance_of_one_realisation(tmp_pat
     n_lines, dof, periods = noise.size, r['dof'], r['periods']
     assert r['outputs'] == ['dq_m/j'] and r['units'] == ['(rad/s)^2/(N m)^2']
     assert len(r['freq_hz']) == n_lines == len(r['nonlinear_variance'][0]) and periods >= 4
+    assert (out / 'robust_lpm.png').stat().st_size > 10_000 and 'robust_lpm.png' in text
     assert np.allclose(r['nonlinear_variance'][0], np.maximum(total - noise, 0))
     # noise alone: sum(total) / sum(noise) is 1 within its spread. The total's windows
     # (2n+1 = dof + 3 lines) overlap, so it rests on at least n_lines dof / (dof + 3)

@@ -52,7 +52,8 @@ from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp
                                                periodic_spectra)
 from frf_ident.core.estimation.transient import steady_periods, SteadyState
 from frf_ident.core.excitation.chirp import ChirpDesign
-from frf_ident.core.excitation.detect import (ChirpDetection, detect_excitation, excitation_source,
+from frf_ident.core.excitation.detect import (ChirpDetection, detect_excitation,
+                                              detect_multisine, excitation_source,
                                               multisine_at_period, MultisineDetection)
 from frf_ident.core.excitation.multisine import reference_frequency_set
 from frf_ident.core.excitation.sweep_law import MAX_MISMATCH, sweep_mismatch
@@ -61,8 +62,9 @@ from frf_ident.errors import EstimationError
 import numpy as np
 
 __all__ = ['DEFAULT_BLOCK_S', 'LPM_METHODS', 'MIN_ADVANCE_S', 'DetectedEstimator',
-           'ExcitationOptions', 'NoExcitationError', 'RecordingBlocks', 'block_length',
-           'check_detected_segment', 'detect_segments', 'detected_frf', 'estimate_in_blocks']
+           'ExcitationOptions', 'NoExcitationError', 'RecordingBlocks',
+           'UnusableExcitationError', 'block_length', 'check_detected_segment',
+           'check_not_periodic', 'detect_segments', 'detected_frf', 'estimate_in_blocks']
 
 #: block length [s] in which recordings without descriptors are detected and estimated (in
 #: memory and streamed alike): a few multisine periods or a whole chirp must fit in one block.
@@ -80,6 +82,11 @@ LPM_METHODS = ('lpm', 'lpm-direct')
 
 #: fewest multisine periods an estimate needs (mean and noise variance over periods)
 MIN_PERIODS = 2
+
+#: what works for a sweep the chirp estimator refuses (down, linear, another law): the LPM
+#: needs no law (test/cli/test_estimate_sweep.py: a linear 15 -> 2 Hz sweep, analytic FRF)
+SWEEP_HINT = ("method='lpm' (frf-ident estimate --method lpm) estimates a sweep of any law "
+              'and direction')
 
 
 @dataclass(frozen=True)
@@ -208,6 +215,16 @@ class NoExcitationError(EstimationError):
     """No multisine or chirp found in a recording: the LPM may estimate it instead."""
 
 
+class UnusableExcitationError(EstimationError):
+    """
+    An excitation was found but cannot be estimated (the message says what and why).
+
+    E.g. a multisine whose period is not a whole number of samples. The LPM must not estimate
+    such a record instead: its line spectrum leaves most LPM lines without excitation (a
+    silent wrong FRF, issue 39), so the record is refused.
+    """
+
+
 def _given_chirp(opts: ExcitationOptions, fs: float) -> ChirpDetection:
     """Return the exponential chirp f(t) = exp(a0 t + a1) through (t0, f_low) and (t1, f_high)."""
     (f_low, f_high), (t0, t1) = opts.chirp, opts.chirp_time
@@ -247,13 +264,13 @@ def _checked_chirp(x: np.ndarray, fs: float, det: ChirpDetection, what: str
            f'(exponential, eq. 16)')
     if not det.f_high > det.f_low:
         raise EstimationError(f'{law} sweeps down; the chirp estimator needs an up-sweep '
-                              f'(f_low < f_high)')
+                              f'(f_low < f_high) — {SWEEP_HINT}')
     dev, found = sweep_mismatch(x, fs, det.frequency, det.t0, det.t1)
     if not dev <= MAX_MISMATCH:
         seen = found.describe() if found is not None else 'no sweep in that interval'
         raise EstimationError(f'{law} does not match the recorded excitation: it is a {seen}; '
                               f'its half cycles are {100 * dev:.3g} % off the given law '
-                              f'(median; expected < {100 * MAX_MISMATCH:.0f} %)')
+                              f'(median; expected < {100 * MAX_MISMATCH:.0f} %) — {SWEEP_HINT}')
     return det
 
 
@@ -456,17 +473,24 @@ class DetectedEstimator:
 
         Raises
         ------
+        NoExcitationError
+            No multisine or chirp found.
+        UnusableExcitationError
+            A detection fails its checks (then nothing is added), or other inputs are
+            excited at the same lines.
         EstimationError
-            Nothing detected, a detection fails its checks (then nothing is added), or
-            other inputs are excited at the same lines.
+            The options are refused.
 
         """
         segments, notes = detect_segments(rec, options)
-        for seg in segments:
-            check_detected_segment(rec, seg)
-        self.notes.extend(n for n in notes if n not in self.notes)
-        for seg in segments:
-            self.add(rec, seg)
+        try:
+            for seg in segments:
+                check_detected_segment(rec, seg)
+            self.notes.extend(n for n in notes if n not in self.notes)
+            for seg in segments:
+                self.add(rec, seg)
+        except EstimationError as exc:      # found, but refused: never the LPM's to estimate
+            raise UnusableExcitationError(str(exc)) from exc
         self.used_until = min((s.t_end for s in segments), default=None)
         return len(segments)
 
@@ -889,6 +913,46 @@ def _leftover(det: DetectedEstimator, rec: Recording) -> bool:
                 and rec.t[-1] - rec.t[0] + rec.dt < 2 * max(periods))
 
 
+def check_not_periodic(rec: Recording, input: str | None = None) -> None:  # noqa: A002
+    """
+    Refuse a recording whose excitation is a periodic multisine (before the LPM estimates it).
+
+    A multisine has power on its lines only; the LPM's lines between them carry no
+    excitation and the polynomial's value there is not the FRF (issue 39: up to 18 dB off on
+    a simulated robot, far outside the LPM's own variance). The multisine estimator of
+    :func:`estimate_in_blocks` without ``method='lpm'`` is the one for such a record.
+
+    Parameters
+    ----------
+    rec : Recording
+        A recording (or block) without descriptors.
+    input : str, optional
+        Only this joint's excitation is checked; default: every moving joint's.
+
+    Raises
+    ------
+    UnusableExcitationError
+        The excitation source of a joint holds a periodic multisine.
+
+    """
+    x, source = excitation_source(rec.reference, rec.effort)
+    present = np.isfinite(x)
+    level = np.array([np.std(x[present[:, j], j]) if np.any(present[:, j]) else 0.0
+                      for j in range(x.shape[1])])
+    joints = ([rec.joint_names.index(input)] if input is not None
+              else [j for j in range(x.shape[1]) if level[j] >= 1e-3 * level.max() > 0])
+    for j in joints:
+        try:
+            det = detect_multisine(x[:, j], rec.fs)
+        except EstimationError:
+            continue                        # not periodic: the LPM's to estimate
+        raise UnusableExcitationError(
+            f"method='lpm': the {source} of {rec.joint_names[j]} is periodic ({det.describe()}); "
+            f'between its lines the LPM has no excitation and its FRF there would be wrong; '
+            f"expected non-periodic excitation — estimate without method='lpm' (the multisine "
+            f'estimator)')
+
+
 def _add_lpm(lpm: LpmBlocks, rec: Recording, resume: Callable[[float], None] | None
              ) -> None:
     """Add a block's frames to the LPM; the next block starts where its last frame ends."""
@@ -911,7 +975,12 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     Where no block holds a multisine or chirp (or ``options.method == 'lpm'``), the blocks'
     frames are estimated by the Local Polynomial Method instead
     (:class:`~frf_ident.core.estimation.nonperiodic.LpmBlocks`: 'lpm' and its Welch H1
-    baseline 'lpm_h1').
+    baseline 'lpm_h1'). Where a block's excitation was found but refused
+    (:class:`UnusableExcitationError`, e.g. a multisine period that is not a whole number of
+    samples) and no block was estimated, the recording is refused with that reason: the LPM
+    never estimates a periodic record instead (its lines between the multisine's carry no
+    excitation). ``method='lpm'`` on a periodic record is refused alike
+    (:func:`check_not_periodic`).
 
     Parameters
     ----------
@@ -931,6 +1000,8 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
 
     Raises
     ------
+    UnusableExcitationError
+        An excitation was found but refused, and no block was estimated.
     EstimationError
         No block holds an estimable excitation, or gaps left too little of one.
 
@@ -940,12 +1011,14 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     lpm = LpmBlocks(input=opts.input, band=opts.band, direct=opts.method == 'lpm-direct')
     notes: list[str] = []
     first: EstimationError | None = None
+    unusable: str | None = None                 # the first block whose excitation was refused
     n = 0
     for rec in blocks:
         n += 1
         try:
             if opts.method in LPM_METHODS:
                 opts.check(rec)
+                check_not_periodic(rec, opts.input)
                 _add_lpm(lpm, rec, resume)
                 continue
             det.add_detected(rec, options)
@@ -956,7 +1029,9 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
                 continue
             first = first or exc
             notes.append(f'block {rec.t[0]:.3f}..{rec.t[-1]:.3f} s: {exc}')
-            if isinstance(exc, NoExcitationError) and not det.entries:
+            if isinstance(exc, UnusableExcitationError):
+                unusable = unusable or notes[-1]
+            if isinstance(exc, NoExcitationError) and not det.entries and unusable is None:
                 try:                                # not periodic: the LPM's frames
                     _add_lpm(lpm, rec, resume)
                 except EstimationError as why:
@@ -964,6 +1039,13 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
             continue
         if det.used_until is not None and resume is not None:
             resume(det.used_until)
+    if not det.entries and unusable is not None:
+        # an excitation was found and refused: no other block's LPM stands in for it
+        if n == 1:
+            raise first
+        raise UnusableExcitationError(f'an excitation was found but refused ({unusable}); '
+                                      f'{n} blocks of at most {block_length(block_s):g} s, '
+                                      f'none estimated')
     if not det.entries and (lpm.frames or opts.method in LPM_METHODS):
         if not lpm.frames and first is not None:
             raise first
