@@ -177,6 +177,7 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         progress('no identification experiments: time-series (inverse-dynamics) evidence')
         res = diagnose_timeseries(rec, robot)
     mode = res.mode
+    res = _position_terms_on_others(res, rec, others, robot, progress)
     res = _against_least_squares(res, rec, others, robot, progress)
     if others:
         from frf_ident.core.diagnosis.extrapolation import beyond_fitted_range
@@ -253,6 +254,27 @@ def diagnose_columns(data: Path, out: Path, progress: Progress | None, *,
             'extended_frf_error_db': m['extended']['frf_error_db'],
             'baseline_time_nrmse': m['baseline']['time_nrmse'],
             'extended_time_nrmse': m['extended']['time_nrmse']}
+
+
+def _position_terms_on_others(res, rec: Recording, others: list, robot, progress):
+    """
+    Drop the gravity and ripple terms that do not generalise to the ``--validate`` records.
+
+    :func:`frf_ident.core.diagnosis.generalisation.drop_terms_not_generalising`; adds
+    ``metrics['position_terms_on_validate']`` (per axis the time_nrmse on each record with
+    and without its terms, and whether they were dropped) and prints one line per axis.
+    """
+    from frf_ident.core.diagnosis.generalisation import drop_terms_not_generalising
+    res, verdict = drop_terms_not_generalising(res, rec, robot,
+                                               [(str(p), o) for p, o in others])
+    for ax, v in verdict.items():
+        progress(f'{ax}: position-dependent terms on the --validate records, time_nrmse '
+                 f'{" / ".join(f"{x:.3f}" for x in v["with"])} with, '
+                 f'{" / ".join(f"{x:.3f}" for x in v["without"])} without: '
+                 + ('dropped (they do not generalise)' if v['dropped'] else 'kept'))
+    if verdict:
+        res.metrics['position_terms_on_validate'] = verdict
+    return res
 
 
 def _against_least_squares(res, rec: Recording, others: list, robot, progress):

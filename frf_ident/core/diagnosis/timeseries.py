@@ -54,6 +54,7 @@ from frf_ident.errors import EstimationError
 import numpy as np
 
 from .common import bridge_gaps, Effect
+from .extrapolation import failing_position_terms
 from .prediction import noise_floor, noise_level, predict_metrics, signature
 from .regressors import (axis_masks, gravity_bearing, gravity_sets, model_residual, moving,
                          one_way_sets, regressor_groups)
@@ -61,8 +62,8 @@ from .residual import FC_HZ, find_ripple, lowpass
 from .result import DiagnosisResult, TimeseriesDetail
 from .selection import (block_length, block_standard_errors, by_group, f_test, lstsq,
                         select_groups, split_blocks)
-from .thresholds import (ALPHA, BLOCK_S, HOLD_EVERY, MIN_SHARE, ONE_WAY, STILL_NOISE,
-                         UNEXPLAINED_RATIO)
+from .thresholds import (ALPHA, BLOCK_S, HOLD_EVERY, MIN_SHARE, ONE_WAY, RANGE_OUT_SHARE,
+                         STILL_NOISE, UNEXPLAINED_RATIO)
 
 __all__ = ['ALPHA', 'FC_HZ', 'block_standard_errors', 'check_diagnosable', 'diagnose_timeseries',
            'f_test', 'model_residual', 'moving', 'noise_level', 'predict_metrics',
@@ -153,8 +154,8 @@ class Prepared:
     bearing: list           # runs of joints whose angle carries a load
 
 
-def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
-                        ) -> DiagnosisResult:
+def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
+                        exclude: dict[str, set[str]] | None = None) -> DiagnosisResult:
     """
     Diagnose a time-series recording against the nominal ``robot``.
 
@@ -169,6 +170,9 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
         The nominal model.
     fc
         Low-pass cut-off of residual and regressors [Hz].
+    exclude
+        Per axis name the effects (regressor group names before any ':', e.g. 'gravity')
+        that are no candidates: terms another record showed not to generalise.
 
     Returns
     -------
@@ -187,7 +191,9 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ
     ext_axes = list(robot.axes)
     for i, ax in enumerate(robot.axes):
         groups, forced, scan = axis_groups(d, robot, i, rejected)
-        groups, chosen, info, cf = select_physical(d, ax, i, groups, forced)
+        groups = {k: x for k, x in groups.items()
+                  if k.split(':')[0] not in (exclude or {}).get(ax.name, ())}
+        groups, chosen, info, cf = select_extrapolating(d, ax, i, groups, forced)
         log.info('%s: selected %s (ripple scan peak %.1f, threshold %.1f); %s', ax.name, chosen,
                  scan[1], scan[2], ', '.join(f'{k} p={v.get("p", 1):.2g} '
                                              f'share={v.get("share", 0):.3f}'
@@ -322,6 +328,27 @@ def select_physical(d: Prepared, ax, i: int, groups: dict[str, np.ndarray], forc
     return groups, chosen, {**unphysical, **info}, cf
 
 
+def select_extrapolating(d: Prepared, ax, i: int, groups: dict[str, np.ndarray],
+                         forced: list[str]
+                         ) -> tuple[dict[str, np.ndarray], list[str], dict[str, dict], dict]:
+    """
+    Run :func:`select_physical` until every chosen position-dependent group extrapolates.
+
+    A gravity or ripple group that fails leave-range-out
+    (:func:`.extrapolation.failing_position_terms`) is dropped and the selection runs again
+    without it (another joint set may carry the load); its info gets ``range_out``.
+    """
+    ff, fit_i = d.prep[i][0], d.prep[i][1]
+    failed: dict[str, dict] = {}
+    while True:
+        groups, chosen, info, cf = select_physical(d, ax, i, groups, forced)
+        bad = failing_position_terms(groups, chosen, ff, fit_i, d.qh, i)
+        if not bad:
+            return groups, chosen, {**failed, **info}, cf
+        failed.update({k: {**info[k], 'range_out': e} for k, e in bad.items()})
+        groups = {k: x for k, x in groups.items() if k not in bad}
+
+
 def rejected_groups(axis: str, chosen: list[str], info: dict[str, dict]
                     ) -> list[dict[str, Any]]:
     """Return the report's ``rejected`` entries of the groups not chosen, with their numbers."""
@@ -333,6 +360,11 @@ def rejected_groups(axis: str, chosen: list[str], info: dict[str, dict]
                     'p_value': float(f'{v.get("p", 1.0):.3g}'),
                     'residual_share': round(float(v.get('share', 0.0)), 4),
                     'held_out_gain': round(float(v.get('held_out_gain', 0.0)), 4)})
+        if 'range_out' in v:
+            out[-1]['reason'] = (
+                f'does not extrapolate: fitted without each end ({100 * RANGE_OUT_SHARE:.0f} % '
+                f'of its configuration range), the residual there is {v["range_out"][0]:.3g} '
+                f'with it and {v["range_out"][1]:.3g} without (leave-range-out)')
         if 'unphysical' in v:
             out[-1].update(fitted_value=round(v['unphysical'], 4), reason=(
                 f'the joint fit gives {k} = {v["unphysical"]:.3g}, outside the '
