@@ -178,6 +178,7 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         res = diagnose_timeseries(rec, robot)
     mode = res.mode
     res = _position_terms_on_others(res, rec, others, robot, progress)
+    res = _standard_errors_across(res, rec, others, robot, progress)
     res = _against_least_squares(res, rec, others, robot, progress)
     if others:
         from frf_ident.core.diagnosis.extrapolation import beyond_fitted_range
@@ -275,6 +276,47 @@ def _position_terms_on_others(res, rec: Recording, others: list, robot, progress
     if verdict:
         res.metrics['position_terms_on_validate'] = verdict
     return res
+
+
+def _standard_errors_across(res, rec: Recording, others: list, robot, progress):
+    """
+    Check the standard errors against the spread between records; widen them if it is larger.
+
+    Time-series route (:mod:`frf_ident.core.diagnosis.spread`): each ``--validate`` record
+    diagnosed on its own against the fit record's parameters, or without such records the
+    two halves of the record against each other. Adds ``metrics['standard_errors_across']``.
+    """
+    from frf_ident.core.diagnosis import diagnose_timeseries
+    from frf_ident.core.diagnosis.spread import estimates, spread_check, widened
+    from frf_ident.errors import EstimationError
+    if res.mode != 'timeseries':
+        return res
+    if others:
+        what, recs = 'the --validate records', [o for _, o in others]
+        runs = [estimates(res.effects)]
+    else:
+        n = rec.t.size // 2
+        what, runs = 'the two halves of the record', []
+        recs = [Recording(rec.t[sl] - rec.t[sl][0], rec.joint_names, rec.position[sl],
+                          rec.velocity[sl], rec.effort[sl], meta=dict(rec.meta))
+                for sl in (slice(0, n), slice(n, None))]
+    try:
+        runs += [estimates(diagnose_timeseries(o, replace(robot, sample_rate=o.fs)).effects)
+                 for o in recs]
+    except EstimationError as err:
+        progress(f'standard errors not checked across records ({what}: {err})')
+        return res
+    check = spread_check(runs)
+    check['compared'] = what
+    res.metrics['standard_errors_across'] = check
+    if check['rms_z'] is None:
+        return res
+    progress(f'standard errors against the spread between {what}: RMS of the differences '
+             f'{check["rms_z"]:.2g} combined standard errors over {len(check["pairs"])} '
+             f'parameter(s) (chi-square p = {check["p_value"]:.2g}): '
+             + (f'standard errors widened x{check["factor"]:.2g}' if check['factor'] > 1
+                else 'they hold'))
+    return replace(res, effects=widened(res.effects, check['factor']))
 
 
 def _against_least_squares(res, rec: Recording, others: list, robot, progress):

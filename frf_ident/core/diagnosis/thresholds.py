@@ -164,3 +164,10 @@ RANGE_TOLERANCE_DEG = 0.5
 #: without), with a fifth it fails (1.9e4 with, 1.1e4 without), the sinusoid's phase and the
 #: axis' constant being nearly one parameter over 40 deg (test/app/test_diagnose_real.py)
 RANGE_OUT_SHARE = 0.1
+
+# --- standard errors across records (spread.py) -----------------------------------------------
+
+#: the standard errors are widened when the differences between records, in units of their
+#: combined standard errors, are this unlikely under chi-square (one false widening in 20
+#: checks of errors that hold)
+SPREAD_ALPHA = 0.05
