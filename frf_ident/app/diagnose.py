@@ -112,8 +112,8 @@ def _match_axes(rec: Recording, robot, model_path: Path, progress) -> Recording:
 
 
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
-             validate: Sequence[Path] = (), progress: Progress | None = None
-             ) -> dict[str, Any]:
+             validate: Sequence[Path] = (), urdf: Path | None = None,
+             progress: Progress | None = None) -> dict[str, Any]:
     """
     Run the diagnosis and write DIR/report.json, extended_model.yaml, report.html.
 
@@ -129,7 +129,11 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     map_path
         Import map for CSV/MAT records (DATA and every OTHER).
     validate
-        Other records of the same robot: baseline and extended metrics on each.
+        Other records of the same robot: baseline and extended metrics on each; a gravity
+        or ripple term that does not generalise to them is dropped.
+    urdf
+        The robot's URDF: the time-series route fits the gravity its kinematics imply
+        (:mod:`frf_ident.core.diagnosis.kinematic_gravity`; pinocchio reads it).
     progress
         Called with one line per step for the lines people read (what was read, the route,
         the effects found with their values, where the files went); None: silent. The
@@ -177,6 +181,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         progress('no identification experiments: time-series (inverse-dynamics) evidence')
         res = diagnose_timeseries(rec, robot)
     mode = res.mode
+    if urdf is not None:
+        res = _kinematic_gravity(res, rec, robot, Path(urdf), progress)
     res = _position_terms_on_others(res, rec, others, robot, progress)
     res = _standard_errors_across(res, rec, others, robot, progress)
     res = _against_least_squares(res, rec, others, robot, progress)
@@ -255,6 +261,34 @@ def diagnose_columns(data: Path, out: Path, progress: Progress | None, *,
             'extended_frf_error_db': m['extended']['frf_error_db'],
             'baseline_time_nrmse': m['baseline']['time_nrmse'],
             'extended_time_nrmse': m['extended']['time_nrmse']}
+
+
+def _kinematic_gravity(res, rec: Recording, robot, urdf: Path, progress):
+    """
+    Replace the diagnosis' free gravity sinusoids with the gravity of the URDF's kinematics.
+
+    pinocchio (:mod:`frf_ident.io.kinematics`) gives the gravity's base regressor at the
+    record's positions and at poses spread over the configuration space; the core fits its
+    base parameters jointly over the axes.
+    """
+    if res.mode != 'timeseries':
+        progress(f'note: --urdf {urdf} is used by the time-series route only')
+        return res
+    import numpy as np
+
+    from frf_ident.core.diagnosis.kinematic_gravity import fit_kinematic_gravity
+    from frf_ident.io.kinematics import load_kinematics
+    kin = load_kinematics(urdf, robot.joint_names)
+    q = 0.5 * (rec.position[1:] + rec.position[:-1])
+    poses = np.random.default_rng(0).uniform(-np.pi, np.pi, (64, robot.n_axes))
+    res = fit_kinematic_gravity(res, rec, robot, kin.gravity_basis(q),
+                                (poses, kin.gravity_basis(poses)), source=str(urdf))
+    k = res.metrics['kinematic_gravity']
+    progress(f'{urdf}: gravity of the kinematics, {len(k["base_parameters"])} base '
+             f'parameters fitted jointly over the axes (held-out time_nrmse '
+             f'{k["free_sinusoids_held_out"]:.3f} with free sinusoids per axis, '
+             f'{res.metrics["extended"]["time_nrmse"]:.3f} with these)')
+    return res
 
 
 def _position_terms_on_others(res, rec: Recording, others: list, robot, progress):
