@@ -103,6 +103,12 @@ EDGE = 0.02
 BLOCK_S = 0.5
 #: every this-many-th block is held out
 HOLD_EVERY = 3
+#: a block of the standard errors (selection.block_standard_errors) is at least this many
+#: integrated correlation times of the fit residual long (BLOCK_S at least): the blocks must
+#: be nearly independent for the sandwich. KUKA A's residual is correlated over 0.39-0.76 s
+#: (axes 1-3), longer than BLOCK_S. Checked by Monte Carlo on noise correlated over 0.6 s
+#: (test/core/diagnosis/test_diagnosis_se_blocks.py)
+SE_BLOCK_TAUS = 2.0
 #: a link's weight dominates what friction and inertia leave of its axis at this share
 #: (the EMPS and KUKA records in test/app/test_diagnose_real.py)
 BEARING_SHARE = 0.5
