@@ -112,8 +112,8 @@ def _match_axes(rec: Recording, robot, model_path: Path, progress) -> Recording:
 
 
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
-             validate: Sequence[Path] = (), progress: Progress | None = None
-             ) -> dict[str, Any]:
+             validate: Sequence[Path] = (), urdf: Path | None = None,
+             progress: Progress | None = None) -> dict[str, Any]:
     """
     Run the diagnosis and write DIR/report.json, extended_model.yaml, report.html.
 
@@ -129,7 +129,11 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     map_path
         Import map for CSV/MAT records (DATA and every OTHER).
     validate
-        Other records of the same robot: baseline and extended metrics on each.
+        Other records of the same robot: baseline and extended metrics on each; a gravity
+        or ripple term that does not generalise to them is dropped.
+    urdf
+        The robot's URDF: the time-series route fits the gravity its kinematics imply
+        (:mod:`frf_ident.core.diagnosis.kinematic_gravity`; pinocchio reads it).
     progress
         Called with one line per step for the lines people read (what was read, the route,
         the effects found with their values, where the files went); None: silent. The
@@ -177,6 +181,10 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         progress('no identification experiments: time-series (inverse-dynamics) evidence')
         res = diagnose_timeseries(rec, robot)
     mode = res.mode
+    if urdf is not None:
+        res = _kinematic_gravity(res, rec, robot, Path(urdf), progress)
+    res = _position_terms_on_others(res, rec, others, robot, progress)
+    res = _standard_errors_across(res, rec, others, robot, progress)
     res = _against_least_squares(res, rec, others, robot, progress)
     if others:
         from frf_ident.core.diagnosis.extrapolation import beyond_fitted_range
@@ -257,6 +265,96 @@ def diagnose_columns(data: Path, out: Path, progress: Progress | None, *,
             'extended_frf_error_db': m['extended']['frf_error_db'],
             'baseline_time_nrmse': m['baseline']['time_nrmse'],
             'extended_time_nrmse': m['extended']['time_nrmse']}
+
+
+def _kinematic_gravity(res, rec: Recording, robot, urdf: Path, progress):
+    """
+    Replace the diagnosis' free gravity sinusoids with the gravity of the URDF's kinematics.
+
+    pinocchio (:mod:`frf_ident.io.kinematics`) gives the gravity's base regressor at the
+    record's positions and at poses spread over the configuration space; the core fits its
+    base parameters jointly over the axes.
+    """
+    if res.mode != 'timeseries':
+        progress(f'note: --urdf {urdf} is used by the time-series route only')
+        return res
+    import numpy as np
+
+    from frf_ident.core.diagnosis.kinematic_gravity import fit_kinematic_gravity
+    from frf_ident.io.kinematics import load_kinematics
+    kin = load_kinematics(urdf, robot.joint_names)
+    q = 0.5 * (rec.position[1:] + rec.position[:-1])
+    poses = np.random.default_rng(0).uniform(-np.pi, np.pi, (64, robot.n_axes))
+    res = fit_kinematic_gravity(res, rec, robot, kin.gravity_basis(q),
+                                (poses, kin.gravity_basis(poses)), source=str(urdf))
+    k = res.metrics['kinematic_gravity']
+    progress(f'{urdf}: gravity of the kinematics, {len(k["base_parameters"])} base '
+             f'parameters fitted jointly over the axes (held-out time_nrmse '
+             f'{k["free_sinusoids_held_out"]:.3f} with free sinusoids per axis, '
+             f'{res.metrics["extended"]["time_nrmse"]:.3f} with these)')
+    return res
+
+
+def _position_terms_on_others(res, rec: Recording, others: list, robot, progress):
+    """
+    Drop the gravity and ripple terms that do not generalise to the ``--validate`` records.
+
+    :func:`frf_ident.core.diagnosis.generalisation.drop_terms_not_generalising`; adds
+    ``metrics['position_terms_on_validate']`` (per axis the time_nrmse on each record with
+    and without its terms, and whether they were dropped) and prints one line per axis.
+    """
+    from frf_ident.core.diagnosis.generalisation import drop_terms_not_generalising
+    res, verdict = drop_terms_not_generalising(res, rec, robot,
+                                               [(str(p), o) for p, o in others])
+    for ax, v in verdict.items():
+        progress(f'{ax}: position-dependent terms on the --validate records, time_nrmse '
+                 f'{" / ".join(f"{x:.3f}" for x in v["with"])} with, '
+                 f'{" / ".join(f"{x:.3f}" for x in v["without"])} without: '
+                 + ('dropped (they do not generalise)' if v['dropped'] else 'kept'))
+    if verdict:
+        res.metrics['position_terms_on_validate'] = verdict
+    return res
+
+
+def _standard_errors_across(res, rec: Recording, others: list, robot, progress):
+    """
+    Check the standard errors against the spread between records; widen them if it is larger.
+
+    Time-series route (:mod:`frf_ident.core.diagnosis.spread`): each ``--validate`` record
+    diagnosed on its own against the fit record's parameters, or without such records the
+    two halves of the record against each other. Adds ``metrics['standard_errors_across']``.
+    """
+    from frf_ident.core.diagnosis import diagnose_timeseries
+    from frf_ident.core.diagnosis.spread import estimates, spread_check, widened
+    from frf_ident.errors import EstimationError
+    if res.mode != 'timeseries':
+        return res
+    if others:
+        what, recs = 'the --validate records', [o for _, o in others]
+        runs = [estimates(res.effects)]
+    else:
+        n = rec.t.size // 2
+        what, runs = 'the two halves of the record', []
+        recs = [Recording(rec.t[sl] - rec.t[sl][0], rec.joint_names, rec.position[sl],
+                          rec.velocity[sl], rec.effort[sl], meta=dict(rec.meta))
+                for sl in (slice(0, n), slice(n, None))]
+    try:
+        runs += [estimates(diagnose_timeseries(o, replace(robot, sample_rate=o.fs)).effects)
+                 for o in recs]
+    except EstimationError as err:
+        progress(f'standard errors not checked across records ({what}: {err})')
+        return res
+    check = spread_check(runs)
+    check['compared'] = what
+    res.metrics['standard_errors_across'] = check
+    if check['rms_z'] is None:
+        return res
+    progress(f'standard errors against the spread between {what}: RMS of the differences '
+             f'{check["rms_z"]:.2g} combined standard errors over {len(check["pairs"])} '
+             f'parameter(s) (chi-square p = {check["p_value"]:.2g}): '
+             + (f'standard errors widened x{check["factor"]:.2g}' if check['factor'] > 1
+                else 'they hold'))
+    return replace(res, effects=widened(res.effects, check['factor']))
 
 
 def _against_least_squares(res, rec: Recording, others: list, robot, progress):

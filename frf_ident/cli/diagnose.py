@@ -51,6 +51,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help='other records of the same robot (any supported format): report '
                         'baseline and extended metrics on each (joints named as in DATA); '
                         'several after one flag, or the flag repeated')
+    p.add_argument('--urdf', type=Path, default=None,
+                   help="the robot's URDF (needs the pin package): gravity with the structure "
+                        'of its kinematics, base parameters fitted jointly over the axes '
+                        '(time-series route; the joints named as the model axes)')
 
 
 def run(args: argparse.Namespace) -> int:
@@ -83,11 +87,11 @@ def run(args: argparse.Namespace) -> int:
     from frf_ident.app.outdir import check_out
     if is_campaign(args.data):
         task = partial(diagnose_columns, model_path=args.model, map_path=args.map,
-                       validate=args.validate)
+                       validate=args.validate, urdf=args.urdf)
         return run_many(args, args.data, task, OUTPUT_FILES, 'diagnose')
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     res = diagnose(Path(args.data[0]), args.model, out, map_path=args.map,
-                   validate=args.validate, progress=say)
+                   validate=args.validate, urdf=args.urdf, progress=say)
     for line in diagnosis_summary(res['report'], out):
         say(line)
     return 0

@@ -21,6 +21,12 @@ holds the pose) and its gradient dg/dq [N m/rad]: the numbers
 :func:`frf_ident.core.model.operating_point.robot_at_pose` linearises the simulated link side
 with. Inertial parameters in the URDF are link-side values (gear ratios already applied), as
 in the model file. :func:`read_poses` reads a poses file for ``frf-ident identify --poses``.
+
+:meth:`Kinematics.gravity_basis` gives the gravity's base regressor for the diagnosis: the
+columns of pinocchio's joint-torque regressor at rest (``computeJointTorqueRegressor`` with
+zero velocity and acceleration) that are linearly independent over the configuration space,
+divided by each joint's gear ratio (the URDF's ``<transmission>`` ``mechanicalReduction``,
+1 without one) when the recorded torque is the motor's.
 """
 from __future__ import annotations
 
@@ -28,6 +34,7 @@ from dataclasses import dataclass
 import os
 from pathlib import Path
 from typing import Any, Sequence
+import xml.etree.ElementTree as ET
 
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.share import share_dir
@@ -77,6 +84,8 @@ class Kinematics:
     joint_names : sequence of str
         The axes in the caller's order; each must be a one-DOF joint of the URDF, and
         together they must be all of its joints.
+    reduction : sequence of float, optional
+        Per axis (``joint_names`` order) the gear ratio motor : joint; default 1.
 
     Raises
     ------
@@ -85,7 +94,8 @@ class Kinematics:
 
     """
 
-    def __init__(self, model: Any, source: str, joint_names: Sequence[str]) -> None:
+    def __init__(self, model: Any, source: str, joint_names: Sequence[str],
+                 reduction: Sequence[float] | None = None) -> None:
         import pinocchio as pin
         self._pin, self.model, self.source = pin, model, source
         self.data = model.createData()
@@ -102,6 +112,62 @@ class Kinematics:
         self.lower = np.asarray(model.lowerPositionLimit)[self.index]
         self.upper = np.asarray(model.upperPositionLimit)[self.index]
         self.effort = np.asarray(model.effortLimit)[self.index]
+        self.reduction = np.ones(len(joint_names)) if reduction is None else \
+            np.asarray(reduction, dtype=float)
+        self._base: np.ndarray | None = None
+
+    def _regressor(self, q: np.ndarray) -> np.ndarray:
+        """Return the full gravity regressor (n, 10 x bodies) at one pose, our joint order."""
+        pin = self._pin
+        full = np.zeros(self.model.nq)
+        full[self.index] = q
+        zero = np.zeros(self.model.nv)
+        y = pin.computeJointTorqueRegressor(self.model, self.data, full, zero, zero)
+        return np.array(y)[self.index]
+
+    def base_columns(self, poses: int = 40, seed: int = 0) -> np.ndarray:
+        """
+        Return the indices of the regressor columns that are the gravity's base parameters.
+
+        The columns of the stacked regressor at ``poses`` random poses (angles uniform over
+        the circle: the structure, not the workspace) kept by QR with column pivoting up to
+        its numerical rank; every other column is a combination of these.
+        """
+        if self._base is None:
+            from scipy.linalg import qr
+            rng = np.random.default_rng(seed)
+            Y = np.vstack([self._regressor(q) for q in
+                           rng.uniform(-np.pi, np.pi, (poses, len(self.joint_names)))])
+            _, r, piv = qr(Y, mode='economic', pivoting=True)
+            d = np.abs(np.diag(r))
+            rank = int(np.sum(d > 1e-9 * max(float(d[0]) if d.size else 0.0, 1e-300)))
+            self._base = np.sort(piv[:rank])
+        return self._base
+
+    def gravity_basis(self, q: np.ndarray, *, motor_side: bool = True) -> np.ndarray:
+        """
+        Return the gravity's base regressor at poses q: g(q) = basis @ base parameters.
+
+        Parameters
+        ----------
+        q : ndarray, shape (N, n)
+            Joint positions [rad] in ``joint_names`` order (NaN rows give NaN).
+        motor_side : bool
+            Divide each joint's row by its gear ratio (the torque its motor sees).
+
+        Returns
+        -------
+        ndarray, shape (N, n, p)
+            Per pose and axis the base columns (p = :meth:`base_columns` count).
+
+        """
+        cols = self.base_columns()
+        q = np.asarray(q, dtype=float)
+        out = np.full((q.shape[0], len(self.joint_names), cols.size), np.nan)
+        for k, qk in enumerate(q):
+            if np.all(np.isfinite(qk)):
+                out[k] = self._regressor(qk)[:, cols]
+        return out / self.reduction[None, :, None] if motor_side else out
 
     def at(self, q: Sequence[float]) -> LinkSide:
         """
@@ -168,7 +234,27 @@ def load_kinematics(path: str | os.PathLike[str] | None,
     except (RuntimeError, ValueError) as err:
         raise FrfIdentInputError(f'{p}: not a URDF pinocchio can read '
                                  f'({" ".join(str(err).split())[:200]})') from err
-    return Kinematics(model, str(p), joint_names)
+    return Kinematics(model, str(p), joint_names, _reductions(p, joint_names))
+
+
+def _reductions(path: Path, joint_names: Sequence[str]) -> list[float]:
+    """Return per joint the ``mechanicalReduction`` of its URDF transmission (1 if none)."""
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as err:
+        raise FrfIdentInputError(f'{path}: not a URDF pinocchio can read ({err})') from err
+    out = {}
+    for tr in root.iter('transmission'):
+        joint, red = tr.find('joint'), tr.find('actuator/mechanicalReduction')
+        if joint is None or red is None:
+            continue
+        try:
+            out[joint.get('name')] = float((red.text or '').strip())
+        except ValueError as err:
+            raise FrfIdentInputError(f'{path}: transmission {tr.get("name")!r}: '
+                                     f'mechanicalReduction {red.text!r}; expected a number'
+                                     ) from err
+    return [out.get(j, 1.0) for j in joint_names]
 
 
 def read_poses(path: str | os.PathLike[str], n_axes: int

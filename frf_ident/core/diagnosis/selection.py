@@ -25,7 +25,7 @@ import math
 import numpy as np
 from scipy import stats
 
-from .thresholds import ALPHA, BLOCK_S, EDGE, HOLD_EVERY
+from .thresholds import ALPHA, BLOCK_S, EDGE, HOLD_EVERY, SE_BLOCK_TAUS
 
 
 def by_group(coef: np.ndarray, groups: dict[str, np.ndarray], chosen: list[str]
@@ -193,6 +193,25 @@ def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
     return ~held & ~near, held & ~near
 
 
+def correlation_time(e: np.ndarray, rows: np.ndarray) -> float:
+    """
+    Return the integrated correlation time [samples] of a residual known on ``rows``.
+
+    1 + 2 sum of its autocorrelation up to the first lag where it is no longer positive; the
+    autocorrelation at lag k averages e_t e_t+k over the pairs of rows both in ``rows``.
+    """
+    x = np.where(rows, e, 0.0)
+    m = rows.astype(float)
+    size = 1 << int(2 * rows.size - 1).bit_length()
+    acf = np.fft.irfft(np.abs(np.fft.rfft(x, size)) ** 2, size)[:rows.size]
+    pairs = np.fft.irfft(np.abs(np.fft.rfft(m, size)) ** 2, size)[:rows.size]
+    r = acf / np.maximum(np.round(pairs), 1.0)
+    r = r / r[0] if r[0] > 0 else r
+    stop = np.flatnonzero(r[1:] <= 0)
+    k = int(stop[0]) + 1 if stop.size else rows.size
+    return float(1.0 + 2.0 * r[1:k].sum())
+
+
 def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: np.ndarray,
                           fit: np.ndarray, fs: float) -> dict[str, np.ndarray]:
     """
@@ -203,10 +222,12 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
     (as long as the held-out blocks of :func:`split_blocks`), e_b the block's residuals and
     A_b = (I - H_bb)^-1/2 with H_bb the block's part of the hat matrix: the bias-reduced
     cluster-robust estimator CR2 (Bell & McCaffrey 2002), unbiased for independent
-    homoscedastic noise however few the blocks. A block is far longer than the low-passed
-    residual's correlation time, so the sandwich takes the residual as it is: coloured, and
-    with whatever misfit the model still has within a block, where a formula for white noise
-    would not (README_diagnosis.md, "Standard errors"). The error of the amplitude
+    homoscedastic noise however few the blocks. A block is BLOCK_S long, or SE_BLOCK_TAUS
+    times the residual's integrated correlation time (:func:`correlation_time`) where that is
+    longer (a misfit that drifts over the motion), but at most a third of the record: so the
+    sandwich takes the residual as it is, coloured, and with whatever misfit the model still
+    has within a block, where a formula for white noise would not (docs/diagnosis.md,
+    "Standard errors"). The error of the amplitude
     hypot(a_sin, a_cos) of a sin / cos pair is its spread under the pair's normal distribution.
 
     Parameters
@@ -230,14 +251,20 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
         hold fit rows.
 
     """
-    ids = (np.arange(y.size) // block_length(fs))[fit]
-    used = np.unique(ids)
-    if used.size < 3 or not chosen:
+    if not chosen or not fit.any():
         return {k: np.full(max(groups[k].shape[1] // 2, 1), math.nan) for k in chosen}
     X = np.column_stack([groups[k][fit] for k in chosen])
     bread = np.linalg.pinv(X.T @ X)
     coef = bread @ (X.T @ y[fit])
     e = y[fit] - X @ coef
+    full = np.zeros(y.size)
+    full[fit] = e
+    blk = max(block_length(fs), min(int(math.ceil(SE_BLOCK_TAUS * correlation_time(full, fit))),
+                                    y.size // 3))
+    ids = (np.arange(y.size) // blk)[fit]
+    used = np.unique(ids)
+    if used.size < 3:
+        return {k: np.full(max(groups[k].shape[1] // 2, 1), math.nan) for k in chosen}
     # H_bb = A A' with A = X_b (X'X)^-1/2: its nonzero eigenvalues are the squared singular
     # values of A (at most one per column), so (I - H_bb)^-1/2 e_b costs O(n_b p^2)
     lam, vec = np.linalg.eigh(bread)

@@ -142,6 +142,12 @@ EDGE = 0.02
 BLOCK_S = 0.5
 #: every this-many-th block is held out
 HOLD_EVERY = 3
+#: a block of the standard errors (selection.block_standard_errors) is at least this many
+#: integrated correlation times of the fit residual long (BLOCK_S at least): the blocks must
+#: be nearly independent for the sandwich. KUKA A's residual is correlated over 0.39-0.76 s
+#: (axes 1-3), longer than BLOCK_S. Checked by Monte Carlo on noise correlated over 0.6 s
+#: (test/core/diagnosis/test_diagnosis_se_blocks.py)
+SE_BLOCK_TAUS = 2.0
 #: a link's weight dominates what friction and inertia leave of its axis at this share
 #: (the EMPS and KUKA records in test/app/test_diagnose_real.py)
 BEARING_SHARE = 0.5
@@ -196,3 +202,17 @@ LS_BASELINE_MARGIN = 0.10
 #: [deg] a validation record that leaves the fitted configuration range of an axis by more
 #: than this is warned about (below it: the same range up to encoder and filter detail)
 RANGE_TOLERANCE_DEG = 0.5
+#: leave-range-out (extrapolation.leave_range_out): each end of a position-dependent term's
+#: fitted range held out is this share of the range (by angle). Calibrated on KUKA A, axis 3,
+#: whose gravity sin(q2 + q3 + phi) the authors' rigid-body gravity confirms (r = 0.977):
+#: with a tenth held out at each end it passes (residual energy there 393 with, 6.8e3
+#: without), with a fifth it fails (1.9e4 with, 1.1e4 without), the sinusoid's phase and the
+#: axis' constant being nearly one parameter over 40 deg (test/app/test_diagnose_real.py)
+RANGE_OUT_SHARE = 0.1
+
+# --- standard errors across records (spread.py) -----------------------------------------------
+
+#: the standard errors are widened when the differences between records, in units of their
+#: combined standard errors, are this unlikely under chi-square (one false widening in 20
+#: checks of errors that hold)
+SPREAD_ALPHA = 0.05

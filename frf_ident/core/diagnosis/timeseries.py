@@ -50,20 +50,21 @@ from typing import Any, Callable
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
-from frf_ident.errors import EstimationError
 import numpy as np
 
 from .band import analysis_band, fixed_band
 from .common import bridge_gaps, Effect
+from .diagnosable import check_diagnosable
+from .extrapolation import failing_position_terms
 from .prediction import noise_floor, noise_level, predict_metrics, signature
 from .regressors import (axis_masks, gravity_bearing, gravity_sets, model_residual, moving,
                          one_way_sets, regressor_groups)
 from .residual import FC_HZ, find_ripple, lowpass
 from .resonance import resonances_above
 from .result import DiagnosisResult, TimeseriesDetail
-from .selection import (block_length, block_standard_errors, by_group, f_test, lstsq,
-                        select_groups, split_blocks)
-from .thresholds import (ALPHA, BLOCK_S, HOLD_EVERY, MIN_SHARE, ONE_WAY, STILL_NOISE,
+from .selection import (block_standard_errors, by_group, f_test, lstsq, select_groups,
+                        split_blocks)
+from .thresholds import (ALPHA, BLOCK_S, HOLD_EVERY, MIN_SHARE, ONE_WAY, RANGE_OUT_SHARE,
                          UNEXPLAINED_RATIO)
 
 __all__ = ['ALPHA', 'FC_HZ', 'block_standard_errors', 'check_diagnosable', 'diagnose_timeseries',
@@ -90,54 +91,6 @@ _ONE_WAY_EVIDENCE = ('constant torque residual {c:+.3g} while the axis moves one
                      'one parameter, always fitted (not tested)')
 
 
-def check_diagnosable(rec: Recording, names: list[str], fit: np.ndarray | None = None,
-                      held: np.ndarray | None = None) -> None:
-    """
-    Refuse a record the time-series diagnosis cannot judge.
-
-    It needs HOLD_EVERY blocks of BLOCK_S (fit and held-out data), an effort that varies on
-    every axis (an all-zero effort is a wrong column, not a robot) and, given ``fit`` and
-    ``held``, an axis that moves in both the fit and the held-out blocks and moves at all:
-    its 95th-percentile low-passed speed above STILL_NOISE velocity-noise levels (the rest
-    masks of :func:`moving` are relative, so a robot at rest shows its noise as motion).
-
-    Parameters
-    ----------
-    rec : Recording
-        The record.
-    names : list of str
-        The model's joint names (recording column order).
-    fit, held : ndarray of bool, shape (N - 1, n), optional
-        Where each axis moves (:func:`moving`) in the fit and in the held-out blocks
-        (:func:`split_blocks`); not checked when omitted.
-
-    Raises
-    ------
-    EstimationError
-        The record is too short, an axis' effort is constant, or no axis moves.
-
-    """
-    need = HOLD_EVERY * block_length(rec.fs)
-    if rec.t.size < need:
-        raise EstimationError(f'the record holds {rec.t.size} samples ({rec.t.size / rec.fs:.3g} '
-                              f's): the diagnosis needs at least {need} ({need / rec.fs:.3g} s: '
-                              f'{HOLD_EVERY} blocks of {BLOCK_S} s, one of them held out)')
-    for i, name in enumerate(names):
-        e = rec.effort[:, i]
-        e = e[np.isfinite(e)]
-        if e.size and np.ptp(e) == 0.0:
-            raise EstimationError(f'the effort of {name} is {e[0]:g} N m at every sample: no '
-                                  "measured torque (check the map's effort column)")
-    if fit is not None and held is not None:
-        v = np.nan_to_num(rec.velocity)
-        vnoise = np.std(np.diff(v, axis=0), axis=0) / math.sqrt(2)
-        speed = np.percentile(np.abs(lowpass(v, rec.fs, FC_HZ)), 95, axis=0)
-        if not np.any(fit.any(axis=0) & held.any(axis=0) & (speed > STILL_NOISE * vnoise)):
-            raise EstimationError('no axis moves in this record (each axis rests or creeps '
-                                  'below its velocity noise): the diagnosis compares torques '
-                                  'along a motion')
-
-
 @dataclass
 class Prepared:
     """The record's residual, masks and gravity structure, shared by the per-axis stages."""
@@ -155,8 +108,8 @@ class Prepared:
     bearing: list           # runs of joints whose angle carries a load
 
 
-def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None = None
-                        ) -> DiagnosisResult:
+def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None = None,
+                        exclude: dict[str, set[str]] | None = None) -> DiagnosisResult:
     """
     Diagnose a time-series recording against the nominal ``robot``.
 
@@ -173,6 +126,9 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
         Low-pass cut-off of residual and regressors [Hz]; by default chosen from the record
         (:func:`.band.analysis_band`). The residual above it is scanned for resonances
         (:func:`.resonance.resonances_above`), reported as ``unexplained``.
+    exclude
+        Per axis name the effects (regressor group names before any ':', e.g. 'gravity')
+        that are no candidates: terms another record showed not to generalise.
 
     Returns
     -------
@@ -194,7 +150,9 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
     ext_axes = list(robot.axes)
     for i, ax in enumerate(robot.axes):
         groups, forced, scan = axis_groups(d, robot, i, rejected)
-        groups, chosen, info, cf = select_physical(d, ax, i, groups, forced)
+        groups = {k: x for k, x in groups.items()
+                  if k.split(':')[0] not in (exclude or {}).get(ax.name, ())}
+        groups, chosen, info, cf = select_extrapolating(d, ax, i, groups, forced)
         log.info('%s: selected %s (ripple scan peak %.1f, threshold %.1f); %s', ax.name, chosen,
                  scan[1], scan[2], ', '.join(f'{k} p={v.get("p", 1):.2g} '
                                              f'share={v.get("share", 0):.3f}'
@@ -331,6 +289,27 @@ def select_physical(d: Prepared, ax, i: int, groups: dict[str, np.ndarray], forc
     return groups, chosen, {**unphysical, **info}, cf
 
 
+def select_extrapolating(d: Prepared, ax, i: int, groups: dict[str, np.ndarray],
+                         forced: list[str]
+                         ) -> tuple[dict[str, np.ndarray], list[str], dict[str, dict], dict]:
+    """
+    Run :func:`select_physical` until every chosen position-dependent group extrapolates.
+
+    A gravity or ripple group that fails leave-range-out
+    (:func:`.extrapolation.failing_position_terms`) is dropped and the selection runs again
+    without it (another joint set may carry the load); its info gets ``range_out``.
+    """
+    ff, fit_i = d.prep[i][0], d.prep[i][1]
+    failed: dict[str, dict] = {}
+    while True:
+        groups, chosen, info, cf = select_physical(d, ax, i, groups, forced)
+        bad = failing_position_terms(groups, chosen, ff, fit_i, d.qh, i)
+        if not bad:
+            return groups, chosen, {**failed, **info}, cf
+        failed.update({k: {**info[k], 'range_out': e} for k, e in bad.items()})
+        groups = {k: x for k, x in groups.items() if k not in bad}
+
+
 def rejected_groups(axis: str, chosen: list[str], info: dict[str, dict]
                     ) -> list[dict[str, Any]]:
     """Return the report's ``rejected`` entries of the groups not chosen, with their numbers."""
@@ -342,6 +321,11 @@ def rejected_groups(axis: str, chosen: list[str], info: dict[str, dict]
                     'p_value': float(f'{v.get("p", 1.0):.3g}'),
                     'residual_share': round(float(v.get('share', 0.0)), 4),
                     'held_out_gain': round(float(v.get('held_out_gain', 0.0)), 4)})
+        if 'range_out' in v:
+            out[-1]['reason'] = (
+                f'does not extrapolate: fitted without each end ({100 * RANGE_OUT_SHARE:.0f} % '
+                f'of its configuration range), the residual there is {v["range_out"][0]:.3g} '
+                f'with it and {v["range_out"][1]:.3g} without (leave-range-out)')
         if 'unphysical' in v:
             out[-1].update(fitted_value=round(v['unphysical'], 4), reason=(
                 f'the joint fit gives {k} = {v["unphysical"]:.3g}, outside the '

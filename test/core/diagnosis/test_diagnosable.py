@@ -25,7 +25,7 @@ from pathlib import Path
 
 from frf_ident.app.diagnose import load_data
 from frf_ident.cli import main
-from frf_ident.core.diagnosis.timeseries import check_diagnosable
+from frf_ident.core.diagnosis.diagnosable import check_diagnosable
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 from frf_ident.io.model_file import load_model

@@ -11,10 +11,11 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Test the warning range of a validation record against ranges drawn here."""
+"""Test leave-range-out and the warning range of a validation record on data drawn here."""
 import math
 
-from frf_ident.core.diagnosis.extrapolation import beyond_fitted_range
+from frf_ident.core.diagnosis.extrapolation import (
+    beyond_fitted_range, failing_position_terms, range_ends)
 from frf_ident.core.recording import Recording
 import numpy as np
 import pytest
@@ -45,3 +46,41 @@ def test_only_the_fit_rows_count_as_fitted():
     far = beyond_fitted_range(fit, rows, fit, ['j1', 'j2'])
     assert set(far) == {'j1', 'j2'}, far
     assert beyond_fitted_range(fit, np.ones(fit.t.size - 1, bool), fit, ['j1', 'j2']) == {}
+
+
+def _travel(n=6000):
+    """Return a position sweeping 0 .. 1 rad three times (N, 1) and all rows as fit rows."""
+    q = 0.5 - 0.5 * np.cos(np.linspace(0, 6 * math.pi, n))
+    return q[:, None], np.ones(n, bool)
+
+
+@pytest.mark.parametrize('seed', [0, 1, 2])
+def test_leave_range_out_keeps_a_ripple_of_the_whole_travel_not_one_of_its_middle(seed):
+    """
+    A ripple along the whole travel predicts the range's ends; one of the middle does not.
+
+    The middle ripple (0.5 N m between 0.2 and 0.8 rad) is fitted wherever it is seen;
+    held out, the ends show that it is absent there.
+    """
+    q, fit = _travel()
+    rng = np.random.default_rng(seed)
+    s = 40.0
+    groups = {'gravity_torque': np.ones((q.shape[0], 1)),
+              'torque_ripple': np.column_stack([np.sin(s * q[:, 0]), np.cos(s * q[:, 0])])}
+    chosen = ['gravity_torque', 'torque_ripple']
+    noise = 0.05 * rng.standard_normal(q.shape[0])
+    everywhere = 0.5 * np.sin(s * q[:, 0] + 1.0) + noise
+    middle = np.where((q[:, 0] > 0.2) & (q[:, 0] < 0.8), everywhere - noise, 0.0) + noise
+    assert failing_position_terms(groups, chosen, everywhere, fit, q, 0) == {}
+    bad = failing_position_terms(groups, chosen, middle, fit, q, 0)
+    assert set(bad) == {'torque_ripple'}
+    assert bad['torque_ripple'][0] >= bad['torque_ripple'][1]
+
+
+def test_range_ends_are_shares_of_the_angle_not_of_the_samples():
+    q, fit = _travel()
+    lo, hi = range_ends(q[:, 0], fit, 0.1)
+    assert q[lo, 0].max() <= 0.1 + 1e-12 and q[hi, 0].min() >= 0.9 - 1e-12
+    # a cosine sweep dwells at its ends: a tenth of the angle is a fifth of the samples
+    assert 0.15 < lo.mean() < 0.25
+    assert range_ends(q[:, 0], np.zeros_like(fit)) == []
