@@ -43,7 +43,8 @@ from frf_ident.io.model_file import load_model, save_model
 from frf_ident.report.fit_figures import fit_figure
 import numpy as np
 
-__all__ = ['FitOutcome', 'MAX_ORDER', 'OUTPUT_FILES', 'cost_dict', 'fit_frf']
+__all__ = ['FitOutcome', 'MAX_ORDER', 'OUTPUT_FILES', 'cost_dict', 'fit_columns', 'fit_frf',
+           'is_fit_input', 'source_pose']
 
 #: the files :func:`fit_frf` may write into its output directory
 OUTPUT_FILES = ('fit.json', 'fit.png', 'model.yaml', 'model.mat')
@@ -74,6 +75,37 @@ class FitOutcome:
     coupled: CoupledFit | None
     rational: OrderSelection | None
     files: list[Path]
+
+
+def is_fit_input(p: Path) -> bool:
+    """Return whether ``p`` is an estimate output folder (one holding frf.json)."""
+    return (Path(p) / 'frf.json').is_file()
+
+
+def source_pose(source: str | Path) -> list[float] | None:
+    """
+    Return the pose [rad] an FRF was measured at, when its estimate folder records one.
+
+    Parameters
+    ----------
+    source : str or Path
+        An estimate output folder (its summary.json, from a bag of ``identify --poses``)
+        or an FRF file (no pose).
+
+    Returns
+    -------
+    list of float or None
+        The joint positions, or None.
+
+    """
+    p = Path(source) / 'summary.json'
+    if not p.is_file():
+        return None
+    try:
+        pose = json.loads(p.read_text()).get('experiment', {}).get('pose_rad')
+    except (OSError, ValueError, AttributeError):
+        return None
+    return [float(v) for v in pose] if isinstance(pose, list) else None
 
 
 def cost_dict(c: CostTest) -> dict[str, Any]:
@@ -246,8 +278,8 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
         v = None if var is None else var.reshape(measured.shape)
         names = [f'{a} -> {b}' for b in frf.outputs for a in frf.inputs]
     files.append(fit_figure(frf.freq_hz, measured, fitted, v, names, out / 'fit.png'))
-    doc = {'source': str(source), 'freq_hz': [float(frf.freq_hz.min()),
-                                              float(frf.freq_hz.max())],
+    doc = {'source': str(source), 'pose_rad': source_pose(source),
+           'freq_hz': [float(frf.freq_hz.min()), float(frf.freq_hz.max())],
            'n_lines': int(frf.freq_hz.size), 'variance': which, 'delay_s': float(delay_s),
            'physical': None if phys is None else [_physical_dict(f) for f in phys],
            'coupled': None if coupled is None else _coupled_dict(coupled),
@@ -257,3 +289,59 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     files.append(out / 'fit.json')
     progress(f'fit: wrote {", ".join(p.name for p in files)} to {out}')
     return FitOutcome(phys, coupled, sel, files)
+
+
+def fit_columns(source: Path, out: Path, progress: Progress, **options: Any) -> dict[str, Any]:
+    """
+    Fit one FRF of a campaign and return its summary columns (the task of ``fit A B ...``).
+
+    Parameters
+    ----------
+    source : Path
+        An estimate output folder or an FRF file.
+    out : Path
+        Its output folder.
+    progress : callable
+        Called with one line per stage (the input's log).
+    **options
+        The keyword arguments of :func:`fit_frf`.
+
+    Returns
+    -------
+    dict
+        ``fit`` (physical, coupled or rational), the cost ratio and p-value; per axis J of
+        a physical fit each parameter ``<key>_J`` (and the coupled fit's
+        ``link_coupling_J_K``), its resonance ``resonance_hz_J``; the rational fit's
+        ``order``; ``pose_rad_J`` when the FRF was measured at a pose.
+
+    """
+    res = fit_frf(source, out, progress=progress, **options)
+    cols: dict[str, Any] = {}
+    if res.coupled is not None:
+        c = res.coupled
+        cost = c.cost
+        cols['fit'] = 'coupled'
+        for i, name in enumerate(c.names):
+            cols.update({f'{k}_{name}': float(f'{v:.6g}')
+                         for k, v in c.axis_parameters(i).items()})
+        coupling = c.link_coupling()[0]
+        for i, j in zip(*np.triu_indices(len(c.names), 1)):
+            cols[f'link_coupling_{c.names[i]}_{c.names[j]}'] = float(f'{coupling[i, j]:.6g}')
+    elif res.physical is not None:
+        cost = max((f.cost for f in res.physical), key=lambda c: c.ratio)   # the worst axis
+        cols['fit'] = 'physical'
+        for f in res.physical:
+            cols.update({f'{k}_{f.name}': float(f'{v:.6g}') for k, v in f.parameters().items()})
+    else:
+        cost = res.rational.best.cost
+        cols.update({'fit': 'rational', 'order': res.rational.best.order})
+    for f in res.physical or []:
+        cols[f'resonance_hz_{f.name}'] = round(f.resonances_hz()[1], 4)
+    cols.update({'cost_ratio': round(float(cost.ratio), 3),
+                 'p_value': None if not np.isfinite(cost.p_value) else
+                 float(f'{cost.p_value:.3g}')})
+    pose = source_pose(source)
+    names = [f.name for f in res.physical or []]
+    if pose is not None and len(pose) == len(names):
+        cols.update({f'pose_rad_{n}': q for n, q in zip(names, pose)})
+    return cols

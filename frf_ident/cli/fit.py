@@ -11,13 +11,18 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""`frf-ident fit DIR_OR_FRF --out DIR [--order N] [--physical]`: a model fitted to an FRF."""
+"""
+`frf-ident fit DIR_OR_FRF [...] --out DIR [--order N] [--physical]`: a model fitted to an FRF.
+
+Several inputs (estimate folders, a campaign folder, a glob or @LIST.txt) are a campaign:
+one fit per FRF, and with ``--physical`` over FRFs measured at poses the global pose model.
+"""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from frf_ident.cli.options import add_output_arguments
+from frf_ident.cli.options import add_campaign_arguments, add_output_arguments, run_many
 
 __all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
@@ -36,10 +41,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The subcommand's parser; the arguments are added to it.
 
     """
-    p.add_argument('source', type=Path, metavar='DIR_OR_FRF',
+    p.add_argument('source', nargs='+', metavar='DIR_OR_FRF',
                    help='output directory of estimate (its frf.json) or an FRF file '
-                        '(.json/.mat/.csv)')
+                        '(.json/.mat/.csv); or several, an estimate campaign folder, a glob or '
+                        '@LIST.txt: a campaign, one folder per FRF under --out plus '
+                        'summary.csv, summary.json, index.html and, with --physical over '
+                        'FRFs measured at >= 3 poses, the global pose model (pose_model.json, '
+                        '.yaml, .urdf, pose_validation.csv)')
     add_output_arguments(p)
+    add_campaign_arguments(p)
     p.add_argument('--order', type=int, default=None,
                    help='order (number of poles) of the rational model (default: the lowest '
                         'the cost test accepts)')
@@ -53,6 +63,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--model', type=Path, default=None,
                    help='model file whose other keys (limits, controller, sample rate) the '
                         'fitted model.yaml keeps')
+    p.add_argument('--urdf', type=Path, default=None,
+                   help='the robot URDF whose inertial parameters the pose model fits '
+                        "(default: the demo robot's)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -67,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        Exit status: 0 (success).
+        Exit status: 0 (success; a campaign: every FRF), 1 (a campaign: some failed).
 
     Raises
     ------
@@ -75,10 +88,22 @@ def run(args: argparse.Namespace) -> int:
         ``--out`` is unusable, or the FRF cannot be read or fitted as asked (one line).
 
     """
-    from frf_ident.app.fit import fit_frf, OUTPUT_FILES
+    from functools import partial
+
+    from frf_ident.app.campaign import is_campaign
     from frf_ident.app.console import say
+    from frf_ident.app.fit import fit_columns, fit_frf, is_fit_input, OUTPUT_FILES
     from frf_ident.app.outdir import check_out
+    kw = {'order': args.order, 'physical': args.physical, 'delay_s': args.delay,
+          'band': tuple(args.band) if args.band else None, 'model': args.model}
+    if is_campaign(args.source, is_fit_input):
+        after, after_outputs = None, ()
+        if args.physical:
+            from frf_ident.app.pose_model import pose_model_after, POSE_MODEL_FILES
+            after = partial(pose_model_after, urdf=args.urdf, model=args.model, progress=say)
+            after_outputs = POSE_MODEL_FILES
+        return run_many(args, args.source, partial(fit_columns, **kw), OUTPUT_FILES, 'fit',
+                        after=after, after_outputs=after_outputs, member=is_fit_input)
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
-    fit_frf(args.source, out, order=args.order, physical=args.physical, delay_s=args.delay,
-            band=tuple(args.band) if args.band else None, model=args.model, progress=say)
+    fit_frf(Path(args.source[0]), out, progress=say, **kw)
     return 0
