@@ -194,7 +194,7 @@ def _physical(frf: FrequencyResponse, var: np.ndarray | None, delay_s: float,
 
 def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical: bool = False,
             delay_s: float = 0.0, band: tuple[float, float] | None = None,
-            model: str | Path | None = None,
+            model: str | Path | None = None, figure: bool = True,
             progress: Progress | None = None) -> FitOutcome:
     """
     Fit a model to a measured FRF and write fit.json, fit.png and the model.
@@ -216,6 +216,9 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
         (low, high) [Hz]: fit only these lines.
     model : str or Path, optional
         Model file whose other keys (limits, controller, sample rate) model.yaml keeps.
+    figure : bool, optional
+        Draw fit.png (default); a campaign of many FRFs may leave it out (it takes about
+        ten times the fit's CPU time on a 3 x 3 FRF).
     progress : callable, optional
         Called with one line of text per stage.
 
@@ -277,7 +280,8 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
         fitted = sel.best.model.reshape(measured.shape)
         v = None if var is None else var.reshape(measured.shape)
         names = [f'{a} -> {b}' for b in frf.outputs for a in frf.inputs]
-    files.append(fit_figure(frf.freq_hz, measured, fitted, v, names, out / 'fit.png'))
+    if figure:
+        files.append(fit_figure(frf.freq_hz, measured, fitted, v, names, out / 'fit.png'))
     doc = {'source': str(source), 'pose_rad': source_pose(source),
            'freq_hz': [float(frf.freq_hz.min()), float(frf.freq_hz.max())],
            'n_lines': int(frf.freq_hz.size), 'variance': which, 'delay_s': float(delay_s),

@@ -63,6 +63,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--model', type=Path, default=None,
                    help='model file whose other keys (limits, controller, sample rate) the '
                         'fitted model.yaml keeps')
+    p.add_argument('--no-figure', action='store_true',
+                   help='leave fit.png out (a campaign of many FRFs: the figure takes about '
+                        'ten times the fit)')
     p.add_argument('--urdf', type=Path, default=None,
                    help='the robot URDF whose inertial parameters the pose model fits '
                         "(default: the demo robot's)")
@@ -95,7 +98,8 @@ def run(args: argparse.Namespace) -> int:
     from frf_ident.app.fit import fit_columns, fit_frf, is_fit_input, OUTPUT_FILES
     from frf_ident.app.outdir import check_out
     kw = {'order': args.order, 'physical': args.physical, 'delay_s': args.delay,
-          'band': tuple(args.band) if args.band else None, 'model': args.model}
+          'band': tuple(args.band) if args.band else None, 'model': args.model,
+          'figure': not args.no_figure}
     if is_campaign(args.source, is_fit_input):
         after, after_outputs = None, ()
         if args.physical:

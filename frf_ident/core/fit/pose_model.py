@@ -49,6 +49,7 @@ IDENTIFIABLE_RCOND = 1e-4
 PRIOR_SCALE_FLOOR = 0.1
 
 #: pinocchio's 10 parameters per link in kinds: mass, first moments m c, inertia entries
+#: (another number of parameters per link is one kind)
 _KINDS = (slice(0, 1), slice(1, 4), slice(4, 10))
 
 
@@ -88,7 +89,7 @@ class InertialFit:
 def _prior_scale(prior: np.ndarray, per_link: int) -> np.ndarray:
     p = np.abs(np.asarray(prior, dtype=float)).reshape(-1, per_link)
     scale = np.empty_like(p)
-    for sl in _KINDS:
+    for sl in (_KINDS if per_link == 10 else (slice(0, per_link),)):
         top = p[:, sl].max(axis=1, keepdims=True)
         floor = np.where(top > 0, PRIOR_SCALE_FLOOR * top, 1.0)
         scale[:, sl] = np.maximum(p[:, sl], floor)
