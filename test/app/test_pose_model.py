@@ -72,7 +72,7 @@ def analytic_frf(robot, urdf, q, freq_hz):
 
 
 def _prior_urdf(path):
-    """The demo URDF with link_3's mass and inertia 15 % low (what the fit starts from)."""
+    """Return the demo URDF with link_3's mass and inertia 15 % low (what the fit starts from)."""
     from frf_ident.io.share import share_dir
     text = (share_dir() / 'urdf' / 'robot_3axis_demo.urdf').read_text()
     head, tail = text.split('<link name="link_3">')
