@@ -72,10 +72,10 @@ def bag_poses(bag: Path) -> list[PoseSpan] | None:
 
     """
     from frf_ident.bag import read_experiment
-    from frf_ident.errors import BagError
+    from frf_ident.errors import FrfIdentInputError
     try:
         meta, segments = read_experiment(bag)
-    except BagError:
+    except FrfIdentInputError:              # not a bag (a CSV ...), or unreadable
         return None
     spans: dict[int, list] = {}
     for s in segments:
