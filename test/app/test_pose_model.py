@@ -21,7 +21,7 @@ not in the fitted two-mass model), plus 2 % complex Gaussian noise with its vari
 each written as an estimate output folder that records its pose. The link inertia the URDF
 gives the fit as prior is off: link_3's mass and inertia are 15 % low in the fit's URDF, so the
 pose model must correct it from the data. Held out one at a time, each pose's own-axis FRFs
-must be predicted within 1 dB median (measured: 0.08-0.09 dB, the noise floor), and near the
+must be predicted within 1 dB median (measured: 0.07-0.10 dB, the noise floor), and near the
 modes (95th percentile of the line errors) the pose model must beat the pose-independent
 model averaged over the other poses (measured under load: 0.25 against 0.43 dB over poses).
 An input that is not an FRF is reported in its row, the others go on. The 9 coupled ML fits
