@@ -431,6 +431,13 @@ def bench_real_data() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('poses')
+def bench_poses() -> list[tuple[str, str, str, str]]:
+    """Run the 9-pose simulated campaign: one bag, estimate, fit, held-out pose model."""
+    from benchmarks.poses import rows
+    return rows()
+
+
 def main(argv: list[str] | None = None) -> int:
     """
     Run the named sections (all without names) and print their rows.

@@ -146,7 +146,8 @@ class CampaignResult:
         return sum(not r.ok for r in self.rows)
 
 
-def is_campaign(specs: Sequence[str | os.PathLike[str]]) -> bool:
+def is_campaign(specs: Sequence[str | os.PathLike[str]],
+                member: Callable[[Path], bool] | None = None) -> bool:
     """
     Return whether the inputs name a campaign rather than one input.
 
@@ -159,6 +160,10 @@ def is_campaign(specs: Sequence[str | os.PathLike[str]]) -> bool:
     ----------
     specs : sequence of str or path-like
         The positional inputs as given.
+    member : callable, optional
+        For inputs that are folders of another kind (``fit``: estimate output folders):
+        whether a path is one input. A folder that is one is one input; a folder holding
+        some is a campaign. Default: bags and data files as above.
 
     Returns
     -------
@@ -172,6 +177,8 @@ def is_campaign(specs: Sequence[str | os.PathLike[str]]) -> bool:
     if text.startswith('@') or glob.has_magic(text):
         return True
     p = Path(text)
+    if member is not None:
+        return p.is_dir() and not member(p) and any(member(q) for q in p.iterdir())
     return p.is_dir() and not is_bag_dir(p) and any(_is_input(q) for q in p.iterdir())
 
 
@@ -190,7 +197,7 @@ def _is_input(p: Path) -> bool:
     return (p / 'metadata.yaml').is_file() or (p.is_file() and p.suffix in FILE_SUFFIXES)
 
 
-def _expand_one(spec: str) -> list[Path]:
+def _expand_one(spec: str, member: Callable[[Path], bool] | None = None) -> list[Path]:
     if spec.startswith('@'):
         lst = Path(spec[1:])
         try:
@@ -200,7 +207,7 @@ def _expand_one(spec: str) -> list[Path]:
                                      f'expected one input path per line') from err
         # relative entries are relative to the list file, so a list travels with its bags
         return [q for s in lines if s.strip() and not s.lstrip().startswith('#')
-                for q in _expand_one(str(lst.parent / s.strip()))]
+                for q in _expand_one(str(lst.parent / s.strip()), member)]
     if glob.has_magic(spec):
         hits = sorted(Path(h) for h in glob.glob(spec))
         if not hits:
@@ -209,6 +216,15 @@ def _expand_one(spec: str) -> list[Path]:
     p = Path(spec)
     if not p.exists():
         raise FrfIdentInputError(f'{spec}: no such bag, file or folder')
+    if member is not None and p.is_dir():
+        if member(p):
+            return [p]
+        found = sorted(q for q in p.iterdir() if member(q))
+        if not found:
+            what = (member.__doc__ or member.__name__).strip().splitlines()[0]
+            raise FrfIdentInputError(f'{spec}: a folder without inputs (none of its entries '
+                                     f'passes {member.__name__}: {what})')
+        return found
     if p.is_dir() and not (p / 'metadata.yaml').is_file():
         found = sorted(q for q in p.iterdir() if _is_input(q))
         if not found:
@@ -218,7 +234,8 @@ def _expand_one(spec: str) -> list[Path]:
     return [p]
 
 
-def expand_inputs(specs: Sequence[str | os.PathLike[str]]) -> list[Path]:
+def expand_inputs(specs: Sequence[str | os.PathLike[str]],
+                  member: Callable[[Path], bool] | None = None) -> list[Path]:
     """
     Expand paths, folders of bags, globs and ``@list.txt`` files into input paths.
 
@@ -229,6 +246,9 @@ def expand_inputs(specs: Sequence[str | os.PathLike[str]]) -> list[Path]:
         sorted by name), a glob pattern (sorted), or ``@FILE``: a text file with one such
         entry per line (blank lines and ``#`` comments skipped; relative entries are taken
         relative to the list file).
+    member : callable, optional
+        Inputs of another kind (see :func:`is_campaign`): a folder is one input when
+        ``member`` says so, else its entries that are; its docstring names them in errors.
 
     Returns
     -------
@@ -244,7 +264,7 @@ def expand_inputs(specs: Sequence[str | os.PathLike[str]]) -> list[Path]:
     """
     seen: dict[Path, None] = {}
     for s in specs:
-        for p in _expand_one(os.fspath(s)):
+        for p in _expand_one(os.fspath(s), member):
             seen.setdefault(p, None)
     return list(seen)
 

@@ -16,7 +16,9 @@ Identification on a plant: load the model and plant, run the experiments, record
 
 :func:`run_identify` runs at the model's one operating point; :func:`run_identify_poses` runs
 the same procedures at each pose of a poses file on the model's simulation linearised there
-(link inertia, coupling and gravity from the robot's URDF), one bag per pose.
+(link inertia, coupling and gravity from the robot's URDF), one bag per pose or all poses in
+one bag (each pose's record after the other on one clock, every segment descriptor carrying
+its ``pose_index`` and ``pose_rad``).
 """
 from __future__ import annotations
 
@@ -27,10 +29,18 @@ from frf_ident.app.outdir import check_out
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['POSE_INDEX', 'run_identify', 'run_identify_poses']
+__all__ = ['ONE_BAG', 'POSE_INDEX', 'concatenate_poses', 'run_identify',
+           'run_identify_poses']
 
 #: the file :func:`run_identify_poses` writes beside its bags: pose, bag and link side of each
 POSE_INDEX = 'poses.json'
+
+#: name of the one bag of ``run_identify_poses(..., one_bag=True)`` in its folder
+ONE_BAG = 'all_poses'
+
+#: pause between two poses' records in the one bag [s]: where the robot would move to the
+#: next pose (no data is recorded then; positions stay relative to each pose)
+POSE_GAP_S = 1.0
 
 #: share of a torque limit the gravity load of a pose may take: the rest is the experiment's
 #: (the plans are checked at 0.95 of the limit with the gravity load included, as identify does)
@@ -108,8 +118,60 @@ def _check_poses(kin, robot, poses, bound_rad: float, path) -> list:
     return sides
 
 
+def concatenate_poses(recs: list, gap_s: float = POSE_GAP_S):
+    """
+    Put the records of several poses after each other on one clock: one recording.
+
+    Each record is shifted by a whole number of samples, so its samples and segment bounds
+    keep their spacing (an estimate over a pose's time range sees that pose's record
+    unchanged). ``gap_s`` [s] lies between two records. The segments keep their
+    ``pose_index`` and ``pose_rad``; the recording meta of the first record is kept, its
+    summary's ``pose_rad`` replaced by ``poses``: per pose its index, pose and time range.
+
+    Parameters
+    ----------
+    recs : list of Recording
+        One per pose, same joints and sample time.
+    gap_s : float, optional
+        Time between two records [s].
+
+    Returns
+    -------
+    Recording
+        The records one after the other.
+
+    """
+    import numpy as np
+
+    from frf_ident.core.recording import Recording, Segment
+    dt = recs[0].dt
+    parts, segs, spans = [], [], []
+    t_next = float(recs[0].t[0])
+    for k, rec in enumerate(recs):
+        shift = round((t_next - float(rec.t[0])) / dt) * dt
+        t = rec.t + shift
+        parts.append((t, rec))
+        segs += [Segment(sg.t_start + shift, sg.t_end + shift, dict(sg.info))
+                 for sg in rec.segments]
+        spans.append({'pose_index': k, 'pose_rad': rec.meta['summary'].get('pose_rad'),
+                      't_start': float(t[0]), 't_end': float(t[-1] + dt)})
+        t_next = float(t[-1]) + dt + gap_s
+
+    def cat(name):
+        vals = [getattr(r, name) for _, r in parts]
+        return None if any(v is None for v in vals) else np.concatenate(vals)
+    meta = dict(recs[0].meta)
+    meta['summary'] = {k: v for k, v in meta['summary'].items() if k != 'pose_rad'}
+    meta['summary']['poses'] = spans
+    meta.pop('pose_rad', None)
+    return Recording(np.concatenate([t for t, _ in parts]), list(recs[0].joint_names),
+                     cat('position'), cat('velocity'), cat('effort'), cat('reference'),
+                     cat('excitation'), segs, meta)
+
+
 def run_identify_poses(model_path: str | Path | None, poses_path: str | Path, config: Any,
                        out: str | Path, *, urdf: str | Path | None = None,
+                       one_bag: bool = False,
                        progress: Progress | None = None) -> list[dict]:
     """
     Run the identification experiments at every pose of a poses file, one bag per pose.
@@ -133,6 +195,9 @@ def run_identify_poses(model_path: str | Path | None, poses_path: str | Path, co
         Folder to create: ``pose_00``, ``pose_01``... bags and :data:`POSE_INDEX`.
     urdf : str or Path, optional
         The robot's URDF; default the poses file's ``urdf``, else the demo robot's.
+    one_bag : bool, optional
+        Write all poses into one bag, :data:`ONE_BAG` (:func:`concatenate_poses`), instead
+        of one per pose; ``frf-ident estimate`` of it gives the per-pose FRFs.
     progress : callable, optional
         Called with one line per pose.
 
@@ -140,7 +205,7 @@ def run_identify_poses(model_path: str | Path | None, poses_path: str | Path, co
     -------
     list of dict
         Per pose: ``bag``, ``pose_rad``, ``inertia`` [kg m^2], ``gravity`` [N m] (as in
-        :data:`POSE_INDEX`).
+        :data:`POSE_INDEX`); with ``one_bag`` also ``t_range`` [s], its span in the bag.
 
     Raises
     ------
@@ -183,16 +248,22 @@ def run_identify_poses(model_path: str | Path | None, poses_path: str | Path, co
                                        'pose_rad': q, 'urdf': kin.source}, model=pose)
         for s in rec.segments:
             s.info['pose_rad'] = q
+            s.info['pose_index'] = k
         rec.meta['summary']['pose_rad'] = q      # estimate's summary.json carries it on
         runs.append((q, side, rec))
     out.mkdir(parents=True)
-    index = []
-    for k, (q, side, rec) in enumerate(runs):
-        name = f'pose_{k:02d}'
-        write_recording(rec, out / name)
-        index.append({'bag': name, 'pose_rad': q, 'inertia': side.inertia.round(6).tolist(),
-                      'gravity': side.gravity.round(6).tolist()})
+    index = [{'bag': f'pose_{k:02d}', 'pose_rad': q, 'inertia': side.inertia.round(6).tolist(),
+              'gravity': side.gravity.round(6).tolist()} for k, (q, side, _) in enumerate(runs)]
+    if one_bag:
+        rec = concatenate_poses([r for _, _, r in runs])
+        write_recording(rec, out / ONE_BAG)
+        for entry, span in zip(index, rec.meta['summary']['poses']):
+            entry.update(bag=ONE_BAG, t_range=[span['t_start'], span['t_end']])
+    else:
+        for entry, (_, _, rec) in zip(index, runs):
+            write_recording(rec, out / entry['bag'])
     (out / POSE_INDEX).write_text(json.dumps({'joints': kin.joint_names, 'urdf': kin.source,
                                               'poses': index}, indent=1))
-    progress(f'{len(index)} bags and {POSE_INDEX} in {out}')
+    progress(f'{len(index)} poses in {"one bag" if one_bag else f"{len(index)} bags"} and '
+             f'{POSE_INDEX} in {out}')
     return index

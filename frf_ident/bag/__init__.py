@@ -13,11 +13,11 @@
 # limitations under the License.
 """rosbag2 MCAP input/output of frf_ident (see README_bag.md)."""
 from .info import bag_info
-from .reader import read_recording
+from .reader import read_experiment, read_recording
 from .repair import reindex
 from .timing import TimingReport, TopicTiming
 from .topics import BagTopics
 from .writer import BagRecorder, write_recording
 
 __all__ = ['BagRecorder', 'BagTopics', 'TimingReport', 'TopicTiming', 'bag_info',
-           'read_recording', 'reindex', 'write_recording']
+           'read_experiment', 'read_recording', 'reindex', 'write_recording']

@@ -104,6 +104,44 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
         raise BagError(f'{bag.name}: unreadable bag ({type(exc).__name__}: {exc})') from None
 
 
+def read_experiment(path: str | Path, *, topics: BagTopics | None = None
+                    ) -> tuple[dict[str, Any], list[Segment]]:
+    """
+    Read only the experiment descriptors of a bag: its recording meta and segments.
+
+    Scans the experiment topic alone (no joint states are decoded), so it costs a fraction
+    of :func:`read_recording`; ``frf-ident estimate`` uses it to find the poses of a bag
+    recorded at several (``identify --poses --one-bag``).
+
+    Parameters
+    ----------
+    path : str or Path
+        rosbag2 directory, directory of .mcap files, or a bare .mcap file.
+    topics : BagTopics, optional
+        Topic names; default: the standard ones.
+
+    Returns
+    -------
+    meta : dict
+        The ``recording_meta`` descriptor (empty when the bag has none).
+    segments : list of Segment
+        The experiment segments, start and end paired, in time order.
+
+    """
+    topics = topics or BagTopics()
+    bag = locate(path)
+    try:
+        col = Collector(bag, topics, None, expected_counts(bag))
+        scan(bag, {topics.experiment}, None, col.feed)
+        meta, segments, _ = read_descriptors(col.events, bag, topics)
+    except BagError:
+        raise
+    except (struct.error, ValueError, KeyError, IndexError, TypeError, UnicodeDecodeError,
+            OverflowError, OSError) as exc:
+        raise BagError(f'{bag.name}: unreadable bag ({type(exc).__name__}: {exc})') from None
+    return meta, segments
+
+
 def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
           t_range: tuple[float, float] | None,
           progress: Progress | None, gaps: str) -> tuple[Recording, tm.TimingReport]:
@@ -188,4 +226,4 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
     return meta, list(segs.values()), warnings
 
 
-__all__ = ['read_descriptors', 'read_recording']
+__all__ = ['read_descriptors', 'read_experiment', 'read_recording']

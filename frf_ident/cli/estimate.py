@@ -170,6 +170,19 @@ def run(args: argparse.Namespace) -> int:
     if is_campaign(args.bag):
         return run_many(args, args.bag, partial(estimate_columns, **kw), outputs,
                         'estimate', after=write_frf_map, after_outputs=MAP_FILES)
+    from frf_ident.app.pose_bag import bag_poses, estimate_pose_columns
+    spans = bag_poses(Path(args.bag[0]))
+    if spans is not None:                   # identify --poses --one-bag: a campaign of poses
+        if args.t_range:
+            raise FrfIdentInputError(f'--t-range with {args.bag[0]}: a bag of several poses is '
+                                     f"estimated over each pose's own time range; leave "
+                                     f'--t-range out')
+        kw.pop('t_range')
+        say(f'{args.bag[0]}: {len(spans)} poses, estimated one by one')
+        return run_many(args, [s.name for s in spans],
+                        partial(estimate_pose_columns, bag=Path(args.bag[0]), spans=spans, **kw),
+                        outputs, 'estimate', after=write_frf_map, after_outputs=MAP_FILES,
+                        member=None, inputs=[Path(s.name) for s in spans])
     out = check_out(args.out, outputs=outputs, overwrite=args.overwrite)
     estimate_bag(Path(args.bag[0]), out, progress=say, **kw)
     return 0

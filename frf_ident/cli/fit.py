@@ -12,8 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-`frf-ident fit DIR_OR_FRF --out DIR [--order N] [--physical]`: a model fitted to an FRF.
+`frf-ident fit DIR_OR_FRF [...] --out DIR [--order N] [--physical]`: a model fitted to an FRF.
 
+Several inputs (estimate folders, a campaign folder, a glob or @LIST.txt) are a campaign:
+one fit per FRF, and with ``--physical`` over FRFs measured at poses the global pose model.
 ``add_arguments`` and ``run`` as every command module (:mod:`frf_ident.cli.main`).
 """
 from __future__ import annotations
@@ -21,7 +23,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from frf_ident.cli.options import add_fit_arguments, add_output_arguments, fit_options
+from frf_ident.cli.options import (add_campaign_arguments, add_fit_arguments,
+                                   add_output_arguments, fit_options, run_many)
 
 __all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
@@ -31,21 +34,44 @@ HELP = 'fit a parametric model (rational or physical two-mass) to a measured FRF
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Add the source, ``--out``, the fit options and ``--band`` to the parser ``p``."""
-    p.add_argument('source', type=Path, metavar='DIR_OR_FRF',
+    """Add the sources, ``--out``, the campaign and fit options and ``--band`` to ``p``."""
+    p.add_argument('source', nargs='+', metavar='DIR_OR_FRF',
                    help='output directory of estimate (its frf.json) or an FRF file '
-                        '(.json/.mat/.csv)')
+                        '(.json/.mat/.csv); or several, an estimate campaign folder, a glob or '
+                        '@LIST.txt: a campaign, one folder per FRF under --out plus '
+                        'summary.csv, summary.json, index.html and, with --physical over '
+                        'FRFs measured at >= 3 poses, the global pose model (pose_model.json, '
+                        '.yaml, .urdf, pose_validation.csv)')
     add_output_arguments(p)
+    add_campaign_arguments(p)
     add_fit_arguments(p)
     p.add_argument('--band', type=float, nargs=2, metavar=('F_LOW', 'F_HIGH'),
                    help='fit only the lines in this band [Hz]')
+    p.add_argument('--no-figure', action='store_true',
+                   help='leave fit.png out (a campaign of many FRFs: the figure takes about '
+                        'ten times the fit)')
+    p.add_argument('--urdf', type=Path, default=None,
+                   help='the robot URDF whose inertial parameters the pose model fits '
+                        "(default: the demo robot's)")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Fit and write the output directory; return 0 (bad input: FrfIdentInputError)."""
+    """Fit and write the output directory (a campaign: 1 where an FRF failed), else 0."""
+    from functools import partial
+
+    from frf_ident.app.campaign import is_campaign
     from frf_ident.app.console import say
-    from frf_ident.app.fit import fit_frf, OUTPUT_FILES
+    from frf_ident.app.fit import fit_columns, fit_frf, is_fit_input, OUTPUT_FILES
     from frf_ident.app.outdir import check_out
+    kw = {**vars(fit_options(args, args.band)), 'figure': not args.no_figure}
+    if is_campaign(args.source, is_fit_input):
+        after, after_outputs = None, ()
+        if args.physical:
+            from frf_ident.app.pose_model import pose_model_after, POSE_MODEL_FILES
+            after = partial(pose_model_after, urdf=args.urdf, model=args.model, progress=say)
+            after_outputs = POSE_MODEL_FILES
+        return run_many(args, args.source, partial(fit_columns, **kw), OUTPUT_FILES, 'fit',
+                        after=after, after_outputs=after_outputs, member=is_fit_input)
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
-    fit_frf(args.source, out, **vars(fit_options(args, args.band)), progress=say)
+    fit_frf(Path(args.source[0]), out, progress=say, **kw)
     return 0

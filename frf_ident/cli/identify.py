@@ -47,6 +47,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         'the procedures at each pose on the simulation linearised there (link '
                         'inertia, coupling, gravity from the URDF; needs the [kinematics] '
                         'extra), one bag per pose plus poses.json')
+    p.add_argument('--one-bag', action='store_true',
+                   help='with --poses: all poses in one bag (--out/all_poses), each segment '
+                        'descriptor carrying its pose_index; estimate of it gives one folder '
+                        'per pose, as for one bag per pose')
     p.add_argument('--urdf', type=Path, default=None,
                    help="with --poses: the robot's URDF (default: the poses file's, else "
                         "the demo robot's urdf/robot_3axis_demo.urdf)")
@@ -128,10 +132,12 @@ def run(args: argparse.Namespace) -> int:
             raise FrfIdentInputError(f'--plant {args.plant} with --poses: poses linearise the '
                                      f"model's own simulation; leave out --plant")
         run_identify_poses(args.model, args.poses, identification_config(args), args.out,
-                           urdf=args.urdf, progress=say)
+                           urdf=args.urdf, one_bag=args.one_bag, progress=say)
         return 0
-    if args.urdf is not None:
-        raise FrfIdentInputError(f'--urdf {args.urdf}: only used with --poses FILE')
+    for given, flag in ((args.urdf is not None, f'--urdf {args.urdf}'),
+                        (args.one_bag, '--one-bag')):
+        if given:
+            raise FrfIdentInputError(f'{flag}: only used with --poses FILE')
     rec = run_identify(args.model, args.plant, identification_config(args), args.out,
                        progress=say)
     s = rec.meta['summary']

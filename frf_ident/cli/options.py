@@ -62,7 +62,8 @@ def add_campaign_arguments(p: argparse.ArgumentParser) -> None:
 
 def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[..., dict],
              outputs: Sequence[str], title: str, *, after: Any = None,
-             after_outputs: Sequence[str] = ()) -> int:
+             after_outputs: Sequence[str] = (), member: Any = None,
+             inputs: Sequence[Any] | None = None) -> int:
     """
     Run a command's task over several inputs (a campaign) and return the exit status.
 
@@ -83,6 +84,11 @@ def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[...,
         it wrote into ``--out`` (the FRF map of an estimate campaign).
     after_outputs : sequence of str
         The files ``after`` may write into ``--out`` (checked before any work).
+    member : callable, optional
+        What an input is when not a bag (:func:`~frf_ident.app.campaign.expand_inputs`).
+    inputs : sequence of Path, optional
+        The inputs already expanded (the poses of a multi-pose bag); ``specs`` is then not
+        expanded.
 
     Returns
     -------
@@ -92,7 +98,8 @@ def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[...,
     """
     from frf_ident.app.campaign import expand_inputs, run_campaign
     from frf_ident.app.console import say
-    res = run_campaign(task, expand_inputs(specs), args.out, outputs=outputs,
+    res = run_campaign(task, list(inputs) if inputs is not None else
+                       expand_inputs(specs, member), args.out, outputs=outputs,
                        root_outputs=after_outputs, overwrite=args.overwrite, jobs=args.jobs,
                        scheduler=args.scheduler, title=title, progress=say)
     for path in (after(res) if after is not None else []):

@@ -27,6 +27,14 @@ columns of pinocchio's joint-torque regressor at rest (``computeJointTorqueRegre
 zero velocity and acceleration) that are linearly independent over the configuration space,
 divided by each joint's gear ratio (the URDF's ``<transmission>`` ``mechanicalReduction``,
 1 without one) when the recorded torque is the motor's.
+
+The inertia matrix is linear in the links' inertial parameters (pinocchio's dynamic
+parameters, 10 per link: m, m c, the inertia about the joint frame's origin):
+:meth:`Kinematics.inertia_regressor` gives that linear map at a pose (from
+``computeJointTorqueRegressor`` with gravity off and unit accelerations),
+:meth:`Kinematics.with_parameters` the kinematics with other inertial parameters and
+:meth:`Kinematics.write_urdf` a URDF that holds them: what the global pose model of
+``frf-ident fit`` fits and writes.
 """
 from __future__ import annotations
 
@@ -41,10 +49,15 @@ from frf_ident.io.share import share_dir
 from frf_ident.io.yamlio import read_yaml_file
 import numpy as np
 
-__all__ = ['DEMO_URDF', 'Kinematics', 'LinkSide', 'load_kinematics', 'read_poses']
+__all__ = ['DEMO_URDF', 'PARAMETERS_PER_LINK', 'Kinematics', 'LinkSide', 'load_kinematics',
+           'read_poses']
 
 #: urdf/ file of the project's 3-axis demo robot (config/model_3axis.yaml at its home pose)
 DEMO_URDF = 'robot_3axis_demo.urdf'
+
+#: pinocchio's dynamic parameters of one link: m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz
+#: (the inertia about the joint frame's origin)
+PARAMETERS_PER_LINK = 10
 
 
 @dataclass(frozen=True)
@@ -195,6 +208,133 @@ class Kinematics:
         ix = np.ix_(self.index, self.index)
         return LinkSide(q=qs, inertia=np.array(m)[ix], gravity=np.array(g)[self.index],
                         gravity_gradient=np.array(dg)[ix])
+
+    def parameters(self) -> np.ndarray:
+        """
+        Return the links' inertial parameters, :data:`PARAMETERS_PER_LINK` per joint.
+
+        Returns
+        -------
+        ndarray, shape (10 n,)
+            pinocchio's dynamic parameters of the link each joint moves, in the model's
+            joint order (``model.names``).
+
+        """
+        return np.concatenate([self.model.inertias[j].toDynamicParameters()
+                               for j in range(1, self.model.njoints)])
+
+    def inertia_regressor(self, q: Sequence[float]) -> np.ndarray:
+        """
+        Return the linear map from the inertial parameters to M(q)'s upper triangle.
+
+        Parameters
+        ----------
+        q : sequence of float
+            Joint positions [rad] in the order of ``joint_names``.
+
+        Returns
+        -------
+        ndarray, shape (n (n + 1) / 2, 10 n)
+            Row r is entry ``np.triu_indices(n)`` r of M(q) (in ``joint_names`` order) as a
+            function of :meth:`parameters`: ``regressor @ parameters()`` is that triangle.
+
+        """
+        pin = self._pin
+        model = self.model.copy()
+        model.gravity.linear[:] = 0.0           # tau(q, v=0, a=e_j) is then column j of M
+        data = model.createData()
+        full = np.zeros(model.nq)
+        full[self.index] = np.asarray(q, dtype=float)
+        nv = model.nv
+        cols = []
+        for j in self.index:
+            acc = np.zeros(nv)
+            acc[j] = 1.0
+            cols.append(np.array(pin.computeJointTorqueRegressor(
+                model, data, full, np.zeros(nv), acc))[self.index])
+        iu = np.triu_indices(len(self.index))
+        return np.stack([cols[c][r] for r, c in zip(*iu)])
+
+    def with_parameters(self, parameters: np.ndarray) -> 'Kinematics':
+        """
+        Return these kinematics with other inertial parameters.
+
+        Parameters
+        ----------
+        parameters : ndarray, shape (10 n,)
+            As :meth:`parameters`; every link's mass must be positive.
+
+        Returns
+        -------
+        Kinematics
+            A copy whose links carry ``parameters``.
+
+        """
+        pin = self._pin
+        model = self.model.copy()
+        p = np.asarray(parameters, dtype=float).reshape(-1, PARAMETERS_PER_LINK)
+        for j, pj in enumerate(p, start=1):
+            model.inertias[j] = pin.Inertia.FromDynamicParameters(pj)
+        return Kinematics(model, self.source, self.joint_names)
+
+    def write_urdf(self, path: str | os.PathLike[str], comment: str = '') -> Path:
+        """
+        Write the source URDF with this model's inertial parameters in its links.
+
+        Each joint's child link gets the ``<inertial>`` of the model's body (centre of mass
+        and inertia about it, in the link frame, which is the joint frame). The source must
+        give every moving link its own body (no fixed joints carrying mass, which pinocchio
+        merges).
+
+        Parameters
+        ----------
+        path : str or path-like
+            The URDF to write.
+        comment : str, optional
+            A comment put at the top (what these parameters are).
+
+        Returns
+        -------
+        Path
+            ``path``.
+
+        Raises
+        ------
+        FrfIdentInputError
+            The source URDF has masses on fixed joints, so its links are not the model's
+            bodies.
+
+        """
+        import xml.etree.ElementTree as ET
+        tree = ET.parse(self.source)
+        root = tree.getroot()
+        fixed = [j.find('child').get('link') for j in root.iter('joint')
+                 if j.get('type') == 'fixed']
+        if any(lk.get('name') in fixed and lk.find('inertial') is not None
+               for lk in root.iter('link')):
+            raise FrfIdentInputError(f'{self.source}: links on fixed joints carry mass; '
+                                     f'cannot write fitted inertial parameters per link')
+        child = {j.get('name'): j.find('child').get('link') for j in root.iter('joint')}
+        links = {lk.get('name'): lk for lk in root.iter('link')}
+        for jid in range(1, self.model.njoints):
+            body = self.model.inertias[jid]
+            link = links[child[self.model.names[jid]]]
+            old = link.find('inertial')
+            if old is not None:
+                link.remove(old)
+            inertial = ET.SubElement(link, 'inertial')
+            c, i = np.asarray(body.lever), np.asarray(body.inertia)
+            ET.SubElement(inertial, 'origin', xyz=' '.join(f'{v:.9g}' for v in c), rpy='0 0 0')
+            ET.SubElement(inertial, 'mass', value=f'{body.mass:.9g}')
+            ET.SubElement(inertial, 'inertia', **{
+                f'i{a}{b}': f'{i[r, s]:.9g}' for (a, r), (b, s) in
+                (((a, r), (b, s)) for r, a in enumerate('xyz') for s, b in enumerate('xyz')
+                 if s >= r)})
+        if comment:
+            root.insert(0, ET.Comment(f' {comment} '))
+        p = Path(path)
+        tree.write(p, xml_declaration=True, encoding='unicode')
+        return p
 
 
 def load_kinematics(path: str | os.PathLike[str] | None,

@@ -61,3 +61,24 @@ def test_poses_file_and_urdf_refused_in_one_line(tmp_path):
     bad.write_text('<robot name="x"><link name="a"/><joint name="j"/></robot>')
     with pytest.raises(FrfIdentInputError, match='bad.urdf'):
         load_kinematics(bad, ['j'])
+
+
+def test_inertia_regressor_and_fitted_urdf_reproduce_crba(tmp_path):
+    """Y(q) pi is pinocchio's CRBA at any pose, for the URDF's pi and for other parameters."""
+    _, robot, _ = load_model(None)
+    kin = load_kinematics(None, robot.joint_names)
+    rng = np.random.default_rng(5)
+    pi = kin.parameters()
+    other = pi * rng.uniform(0.8, 1.2, pi.size)          # masses stay positive
+    changed = kin.with_parameters(other)
+    urdf = changed.write_urdf(tmp_path / 'fitted.urdf', comment='test')
+    reread = load_kinematics(urdf, robot.joint_names)
+    iu = np.triu_indices(3)
+    for q in rng.uniform(-1.0, 1.0, size=(4, 3)):
+        y = kin.inertia_regressor(q)
+        np.testing.assert_allclose(y @ pi, kin.at(q).inertia[iu], rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(y @ other, changed.at(q).inertia[iu], rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(reread.at(q).inertia, changed.at(q).inertia, rtol=1e-7)
+        np.testing.assert_allclose(reread.at(q).gravity, changed.at(q).gravity, rtol=1e-7,
+                                   atol=1e-6)
+    assert not np.allclose(changed.at([0, 0, 0.4]).inertia, kin.at([0, 0, 0.4]).inertia)
