@@ -126,3 +126,30 @@ def test_fit_options_that_do_not_go_together_are_refused_before_the_estimate(
     err = capsys.readouterr().err
     assert err.count('\n') == 1 and says in err, err
     assert not (tmp_path / 'x').exists()
+
+
+def test_physical_fit_of_the_three_axis_robot_with_friction_is_physical(tmp_path):
+    """
+    The package's own 3-axis run (Coulomb friction, ripple): a physical fit, not a crash.
+
+    The delay refined from the start's phase overshot on joint_1 (1.9 ms for the 0.5 ms a
+    zero-order hold shows) where friction bends the FRF; the ML fit from there went to a
+    negative link inertia and the coupled fit failed with 'Initial guess is outside of
+    provided bounds' (exit 1). Now both delay starts are fitted and the physical fit of lower
+    cost is kept. Truth: the model file's drive parameters, within 10 % (the friction the
+    two-mass model lacks biases them, and the cost test says so).
+    """
+    bag = tmp_path / 'bag'
+    assert main(['-q', 'identify', '--out', str(bag), '--realisations', '2', '--periods', '3',
+                 '--resolution', '1', '--procedures', 'multisine']) == 0
+    out = tmp_path / 'est'
+    assert main(['-q', 'estimate', str(bag), '--out', str(out), '--fit', '--physical']) == 0
+    doc = json.loads((out / 'fit.json').read_text())
+    truth = default_model_dict()['axes']
+    for fitted, axis in zip(doc['coupled']['axes'], truth):
+        par = fitted['parameters']
+        assert all(par[k] > 0 for k in ('motor_inertia', 'link_inertia', 'stiffness',
+                                        'damping')), par
+        for k in ('motor_inertia', 'link_inertia', 'stiffness'):
+            assert abs(par[k] / axis[k] - 1) < 0.10, (axis['name'], k, par[k], axis[k])
+    assert doc['coupled']['cost']['structure_missing'] is True

@@ -346,14 +346,44 @@ def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
             raise ValueError('variance must be positive and finite on every line')
     sigma = np.sqrt(variance) if variance is not None else np.abs(p)
     fit_delay = delay_s is None
-    tau = delay_from_phase(f, p) if fit_delay else float(delay_s)
-    # 1. linear start on the delay-free response (a fitted delay: refined once by the phase
-    #    the compensated start leaves)
-    start = _linear_start(f, p, sigma, tau)
+    # 1. linear starts on the delay-free response. A fitted delay starts from the phase
+    #    slope and from that slope refined once by the phase the compensated start leaves;
+    #    where the model misses part of the record (friction, a further mode) the
+    #    refinement can overshoot, so both are tried and the ML fit of lower cost among the
+    #    physical ones (positive inertias, stiffness, damping) is kept.
+    taus = [delay_from_phase(f, p)] if fit_delay else [float(delay_s)]
     if fit_delay:
-        tau = max(tau + _delay_correction(f, p, two_mass_response(start, f, tau), sigma), 0.0)
-        start = _linear_start(f, p, sigma, tau)
+        first = two_mass_response(_linear_start(f, p, sigma, taus[0]), f, taus[0])
+        taus.append(max(taus[0] + _delay_correction(f, p, first, sigma), 0.0))
     # 2. ML in scaled parameters x = theta / scale (and tau / tau_scale)
+    fits = [_ml_fit(f, p, variance, sigma, _linear_start(f, p, sigma, t), t, fit_delay)
+            for t in taus]
+    sol, scale, start, tau0 = min(fits, key=lambda r: (not _physical(r[0].x * r[1]),
+                                                       float(r[0].cost)))
+    # 3. Cramer-Rao bound (unit-variance residual) and cost test
+    jr = sol.jac
+    cov_x = np.linalg.pinv(jr.T @ jr)
+    test = cost_test(sol.fun, sol.x.size, variance is not None)
+    if variance is None:
+        cov_x = cov_x * test.cost / max(test.dof, 1)
+    th = sol.x * scale
+    value, tau = (th[:5], th[5]) if fit_delay else (th, tau0)
+    cov = cov_x * np.outer(scale, scale)
+    tau_std = float(np.sqrt(cov[5, 5])) if fit_delay else float('nan')
+    cov = cov[:5, :5]
+    return PhysicalFit(name, value, np.sqrt(np.diag(cov)), cov, start, test, f,
+                       two_mass_response(value, f, tau), float(tau), int(sol.nfev),
+                       delay_std_s=tau_std)
+
+
+def _physical(theta: np.ndarray) -> bool:
+    """Return whether inertias, stiffness and damping are positive (the viscous may be 0)."""
+    return bool(np.all(theta[:4] > 0))
+
+
+def _ml_fit(f: np.ndarray, p: np.ndarray, variance: np.ndarray | None, sigma: np.ndarray,
+            start: np.ndarray, tau: float, fit_delay: bool) -> tuple:
+    """Return (LM solution, parameter scale, start, tau) of the ML fit from ``start``."""
     scale = np.abs(start)
     scale[4] = max(scale[4], VISCOUS_SCALE_SHARE * (start[0] + start[1]) * 2 * np.pi * f.min())
     if fit_delay:        # a delay that turns the phase at the highest line by 1 rad
@@ -377,20 +407,7 @@ def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
         return np.vstack([j.real, j.imag])
 
     x0 = np.append(start, tau) / scale if fit_delay else start / scale
-    sol = optimize.least_squares(resid, x0, jac=jac, method='lm', x_scale=1.0)
-    # 3. Cramer-Rao bound (unit-variance residual) and cost test
-    jr = sol.jac
-    cov_x = np.linalg.pinv(jr.T @ jr)
-    test = cost_test(sol.fun, sol.x.size, variance is not None)
-    if variance is None:
-        cov_x = cov_x * test.cost / max(test.dof, 1)
-    value, tau = split(sol.x)
-    cov = cov_x * np.outer(scale, scale)
-    tau_std = float(np.sqrt(cov[5, 5])) if fit_delay else float('nan')
-    cov = cov[:5, :5]
-    return PhysicalFit(name, value, np.sqrt(np.diag(cov)), cov, start, test, f,
-                       two_mass_response(value, f, tau), float(tau), int(sol.nfev),
-                       delay_std_s=tau_std)
+    return optimize.least_squares(resid, x0, jac=jac, method='lm', x_scale=1.0), scale, start, tau
 
 
 def _linear_start(f: np.ndarray, p: np.ndarray, sigma: np.ndarray, tau: float) -> np.ndarray:
