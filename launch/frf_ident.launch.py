@@ -94,7 +94,9 @@ def generate_launch_description():
 
     def node(executable, extra=(), condition=None):
         """Launch one node of the package under its own name."""
+        # exec_name: the log label stays 'plant_node-1' (the prefix's 'env' otherwise)
         return Node(package='frf_ident', executable=executable, name=executable,
+                    exec_name=executable,
                     parameters=common + list(extra), output='screen', condition=condition,
                     on_exit=_node_exited, prefix=prefix)
 
