@@ -351,6 +351,7 @@ def test_ctrl_c_at_start_up(ros_env, prefix, tmp_path):
             started += 'process started with pid' in line
             if started == 3:
                 break
+        time.sleep(0.02)    # env itself blocks the signals ~1 ms after launch started it
     finally:
         log = []
         _stop(proc, log)
