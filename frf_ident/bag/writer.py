@@ -48,6 +48,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.rosbag2.storage_mcap import McapWriter
 from rosbags.typesys import get_typestore, Stores
 from rosbags.typesys.store import Typestore
+import yaml
 
 from . import cdr
 from .topics import BagTopics, FLOAT64_ARRAY, JOINT_STATE, STRING
@@ -270,6 +271,9 @@ class _FlushingMcapWriter(_CrcMcapWriter):
 
     def __init__(self, path: Path, compression: Any) -> None:
         super().__init__(path, compression)
+        self.compression_mode = compression
+        #: (connection, None) per add_msgtype, (connection, qos) per add_connection, in order
+        self.registered: list[tuple[Connection, str | None]] = []
         self._last_flush = time.monotonic()
 
     def write(self, connection: Connection, timestamp: int, data: bytes | memoryview) -> None:
@@ -284,8 +288,33 @@ class _FlushingMcapWriter(_CrcMcapWriter):
         self.bio.flush()
         self._last_flush = time.monotonic()
 
+    def add_msgtype(self, connection: Connection) -> None:
+        super().add_msgtype(connection)
+        self.registered.append((connection, None))
+
+    def add_connection(self, connection: Connection, offered_qos_profiles: str) -> None:
+        super().add_connection(connection, offered_qos_profiles)
+        self.registered.append((connection, offered_qos_profiles))
+
     def close(self, version: int, metadata: str) -> None:
         super().close(version, _with_distro(metadata))
+
+    def rename(self, path: Path) -> None:
+        """Give the (open) file another name; the metadata names it so."""
+        os.rename(self.path, path)
+        self.path = path
+
+    def next_part(self, path: Path) -> '_FlushingMcapWriter':
+        """Return the storage of the bag's next file ``path``: same schemas, channels, chunking."""
+        part = type(self)(self.path.parent, self.compression_mode)
+        part.rename(path)
+        part.chunk_bytes, part.flush_period_s = self.chunk_bytes, self.flush_period_s
+        for conn, qos in self.registered:
+            if qos is None:
+                part.add_msgtype(conn)
+            else:
+                part.add_connection(conn, qos)
+        return part
 
 
 def _with_distro(metadata: str) -> str:
@@ -295,11 +324,91 @@ def _with_distro(metadata: str) -> str:
 
 
 class _FlushingWriter(Writer):
+    """
+    rosbags' writer that can split: close the current file and go on in the next one.
+
+    One file ``<name>.mcap`` while never split; after a split the files are named as
+    ``ros2 bag record`` names its splits, ``<name>_0.mcap``, ``<name>_1.mcap`` ..., and
+    metadata.yaml lists every closed file (the open one is added when it closes).
+    """
+
     STORAGE_PLUGINS = {StoragePlugin.MCAP: _FlushingMcapWriter}
 
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        #: metadata (rosbag2_bagfile_information) of each closed file, in order
+        self.parts: list[dict[str, Any]] = []
+        self._last: _FlushingMcapWriter | None = None
+
+    def _part_path(self, k: int) -> Path:
+        return self.path / f'{self.path.name}_{k}.mcap'
+
+    def add_connection(self, *args: Any, **kwargs: Any) -> Connection:
+        self._reopen()
+        return super().add_connection(*args, **kwargs)
+
+    def write(self, connection: Connection, timestamp: int, data: bytes | memoryview) -> None:
+        self._reopen()
+        super().write(connection, timestamp, data)
+
+    def split(self) -> None:
+        """Close the current file (summary, footer) and list it in metadata.yaml."""
+        if self.storage is None or not any(self.counts.values()):
+            return                  # nothing written since the last split: no empty file
+        self._close_part()
+
     def close(self) -> None:
-        super().close()
-        self.metapath.write_text(_with_distro(self.metapath.read_text('utf8')), 'utf8')
+        if self.storage is None:
+            return                  # closed at a split, nothing written since
+        if not self.parts:
+            super().close()
+            self.metapath.write_text(_with_distro(self.metapath.read_text('utf8')), 'utf8')
+            return
+        self._close_part()
+
+    def _close_part(self) -> None:
+        storage = self.storage
+        assert isinstance(storage, _FlushingMcapWriter)
+        if not self.parts:
+            storage.rename(self._part_path(0))   # the first split renames the file
+        self._last = storage
+        super().close()            # this file's metadata.yaml, replaced by all files' below
+        info = yaml.safe_load(self.metapath.read_text('utf8'))['rosbag2_bagfile_information']
+        self.parts.append(info)
+        text = yaml.safe_dump({'rosbag2_bagfile_information': _merged(self.parts)},
+                              sort_keys=False)
+        tmp = self.metapath.with_suffix('.yaml.tmp')
+        tmp.write_text(_with_distro(text), 'utf8')
+        tmp.replace(self.metapath)
+        self.counts = {k: 0 for k in self.counts}
+        self.min_timestamp, self.max_timestamp = 2**63 - 1, 0
+
+    def _reopen(self) -> None:
+        if self.storage is None and self.parts:
+            self.storage = self._last.next_part(self._part_path(len(self.parts)))
+
+
+def _merged(parts: list[dict[str, Any]]) -> dict[str, Any]:
+    """Return the metadata of a bag made of the files whose own metadata are ``parts``."""
+    out = dict(parts[-1])
+    start = min(p['starting_time']['nanoseconds_since_epoch'] for p in parts)
+    end = max(p['starting_time']['nanoseconds_since_epoch'] + p['duration']['nanoseconds']
+              for p in parts)
+    counts: dict[str, dict[str, Any]] = {}
+    for p in parts:
+        for entry in p['topics_with_message_count']:
+            name = entry['topic_metadata']['name']
+            if name in counts:
+                counts[name]['message_count'] += entry['message_count']
+            else:
+                counts[name] = dict(entry)
+    out.update(relative_file_paths=[f for p in parts for f in p['relative_file_paths']],
+               files=[f for p in parts for f in p['files']],
+               starting_time={'nanoseconds_since_epoch': start},
+               duration={'nanoseconds': end - start},
+               message_count=sum(p['message_count'] for p in parts),
+               topics_with_message_count=list(counts.values()))
+    return out
 
 
 class BagRecorder:
@@ -390,6 +499,18 @@ class BagRecorder:
         """Close the open chunk and hand it to the OS (and the disk, if ``fsync``)."""
         with self._locked():
             self._flush()
+
+    def split(self) -> None:
+        """
+        Close the current file now (summary, footer, metadata.yaml) and record on in the next.
+
+        The bag is complete up to here for ``ros2 bag info``, ``ros2 bag play`` and the
+        readers while recording goes on (files named as ``ros2 bag record`` splits them).
+        """
+        with self._locked():
+            if self._writer is not None:
+                self._flush()
+                self._writer.split()
 
     def close(self) -> None:
         """Write summary, footer and metadata.yaml; later calls do nothing."""

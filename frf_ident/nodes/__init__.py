@@ -41,3 +41,6 @@ def is_node_process() -> bool:
 if threading.current_thread() is threading.main_thread() and is_node_process():
     signal.signal(signal.SIGINT, _stop_at_once)
     signal.signal(signal.SIGTERM, _stop_at_once)
+    # started with both blocked (launch/frf_ident.launch.py): a Ctrl-C that came
+    # during the interpreter's own start-up is pending and handled now
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})

@@ -32,8 +32,13 @@ a velocity command at the stamp of the /frf/excitation message the excitation no
 before it (same sample); an effort command (lockstep) at the stamp of the joint state it answers;
 a descriptor at its own t_start / t_end. The bag therefore reads back on the exact sample grid.
 
+The bag is split (as ``ros2 bag record`` splits a bag: the current file is closed with its
+index and listed in metadata.yaml, recording goes on in ``<bag>_<k>.mcap``) when a run is
+aborted and when a procedure has ended, so ``ros2 bag info`` / ``ros2 bag play`` / ``frf-ident
+estimate`` read every finished or aborted run while the nodes run on.
+
 When a ``procedure_end`` descriptor arrives and the joint states up to its end are recorded,
-the bag is flushed and estimated (``read_recording`` + ``estimate_recording``, as
+the bag is split and estimated (``read_recording`` + ``estimate_recording``, as
 ``frf-ident estimate``) into ``output_dir``/frf.json, in a worker thread.
 """
 from __future__ import annotations
@@ -234,13 +239,16 @@ class Estimator:
                     self.rec.write(*item)
             elif event in ('procedure_end', 'aborted'):
                 self.gate.end(stamp)
-        if event == 'procedure_end' and self.estimate:
+        if event == 'procedure_end':
             self.pending_end.append(stamp)
             self._maybe_estimate()
         elif event == 'aborted':
-            self.rec.flush()
+            self.rec.split()        # the bag is complete and readable now, recording goes on
+            self.log.info(f'run aborted: {self.bag} closed up to here (ros2 bag info reads '
+                          f'it); later runs go to its next file')
 
     def _maybe_estimate(self) -> None:
+        """Once the joint states up to a procedure's end are in: split, then estimate."""
         if not self.pending_end or self.last_js < self.pending_end[0]:
             return
         if self.worker is not None and self.worker.is_alive():
@@ -248,7 +256,9 @@ class Estimator:
         t_end = self.pending_end[-1] if self.last_js >= self.pending_end[-1] else \
             self.pending_end[0]
         self.pending_end = [s for s in self.pending_end if s > t_end]
-        self.rec.flush()
+        self.rec.split()            # every finished run is in closed files metadata.yaml lists
+        if not self.estimate:
+            return
         self.worker = threading.Thread(target=self._estimate, args=(t_end,), daemon=True)
         self.worker.start()
 

@@ -170,3 +170,49 @@ def test_a_bag_path_that_cannot_be_created_is_one_line(tmp_path: Path) -> None:
                 BagRecorder().open(ro / 'run1')
     finally:
         ro.chmod(0o700)
+
+
+def test_split_closes_the_file_and_records_on(tmp_path: Path) -> None:
+    """
+    ``split()`` (the estimator's at an abort): the bag is complete up to there, recording goes on.
+
+    After the split metadata.yaml names the closed file, which has its MCAP summary (an
+    independent reader, rosbags, reads it); at close every file is listed, the counts add up
+    and the samples of all files read back in order. No empty file for a split with nothing
+    recorded since the last one; a topic first seen after a split is recorded too.
+    """
+    from mcap.reader import make_reader
+    from rosbags.highlevel import AnyReader
+    path = tmp_path / 'r'
+    rec = BagRecorder()
+    rec.open(path)
+    enc = JointStateEncoder(['j'])
+
+    def run(k0: int, n: int) -> None:
+        for k in range(k0, k0 + n):
+            ns = 10**9 + k * 10**6
+            rec.write('/joint_states', 'sensor_msgs/msg/JointState', ns,
+                      enc.encode(ns, [float(k)], [0.0], [0.0]))
+
+    run(0, 300)
+    rec.split()
+    rec.split()                      # nothing since: no empty file
+    meta = yaml.safe_load((path / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert meta['relative_file_paths'] == ['r_0.mcap'] and meta['message_count'] == 300
+    with open(path / 'r_0.mcap', 'rb') as f:
+        assert make_reader(f).get_summary() is not None       # footer and summary written
+    with AnyReader([path]) as reader:
+        assert sum(1 for _ in reader.messages()) == 300
+    run(300, 200)
+    rec.write('/frf/experiment', 'std_msgs/msg/String', 10**9 + 499 * 10**6,
+              {'data': '{"event": "aborted"}'})
+    rec.close()
+    meta = yaml.safe_load((path / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert meta['relative_file_paths'] == ['r_0.mcap', 'r_1.mcap']
+    assert sorted(p.name for p in path.glob('*.mcap')) == ['r_0.mcap', 'r_1.mcap']
+    counts = {t['topic_metadata']['name']: t['message_count']
+              for t in meta['topics_with_message_count']}
+    assert counts == {'/joint_states': 500, '/frf/experiment': 1}
+    assert meta['duration']['nanoseconds'] == 499 * 10**6
+    got, _ = read_recording(path)
+    assert np.array_equal(got.position[:, 0], np.arange(500.0))

@@ -31,28 +31,22 @@ import subprocess
 import sys
 import time
 
-from frf_ident.app.graph import Graph
-from frf_ident.core.excitation.procedures import MultisineConfig
 from frf_ident.middleware import READY
 import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-MS = MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=2.0, compensate=False,
-                     return_s=2.0, settle_s=0.3)
 
 
-@pytest.fixture(scope='module')
-def package_bag(tmp_path_factory, new_domain):
-    """Record a short lockstep multisine run with the package (its estimator node)."""
-    out = tmp_path_factory.mktemp('graph')
-    g = Graph(out, multisine=MS, domain_id=new_domain(), middleware='rclpy')
-    g.start()
-    try:
-        assert g.drive(multisine=True, iterations=0)['multisine']['success']
-    finally:
-        bag = g.stop()
-    return bag
+# the run is conftest's lockstep_run, shared with test_ros_graph and test_ros_bag_record
+pytestmark = pytest.mark.xdist_group('ros_lockstep_run')
+
+
+@pytest.fixture
+def package_bag(lockstep_run):
+    """Return the package's bag of a short lockstep multisine run (its estimator node)."""
+    assert lockstep_run.result['multisine']['success'], lockstep_run.result
+    return lockstep_run.bag
 
 
 def _estimate(bag):

@@ -15,43 +15,18 @@
 ``ros2 bag record`` of a lockstep run estimates like the package's own bag (issue 44).
 
 The real recorder, with the shipped QoS override file (config/rosbag2_qos.yaml), records the
-topics of a lockstep multisine run beside the estimator node. Issue 44 found three faults on
-this path: the idle plant's re-sent stamp-0 joint states made the reader fall back to log
-time and refuse ("stamp jitter of 18.7 % of dt"); with the default QoS the recorder lost
-31-41 % of /joint_states; and the raw joint states (effort of state k = torque of sample
-k-1) gave phase = true + 360 f dt (21.6 deg at 60 Hz) without a warning. Here: no joint
-state lost, and the multisine FRF of both bags agrees within 0.01 dB and 0.1 deg.
+topics of a lockstep multisine run beside the estimator node (conftest's ``lockstep_run``).
+Issue 44 found three faults on this path: the idle plant's re-sent stamp-0 joint states made
+the reader fall back to log time and refuse ("stamp jitter of 18.7 % of dt"); with the default
+QoS the recorder lost 31-41 % of /joint_states; and the raw joint states (effort of state k =
+torque of sample k-1) gave phase = true + 360 f dt (21.6 deg at 60 Hz) without a warning. Here:
+no joint state lost, and the multisine FRF of both bags agrees within 0.01 dB and 0.1 deg.
 """
-import os
-from pathlib import Path
-import signal
-import subprocess
-import time
-
-from frf_ident.app.graph import Graph
-from frf_ident.core.excitation.procedures import MultisineConfig
 import numpy as np
+import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-TOPICS = ['/joint_states', '/velocity_controller/commands', '/effort_controller/commands',
-          '/frf/excitation', '/frf/experiment']
-MS = MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=2.0, compensate=False,
-                     return_s=2.0, settle_s=0.3)
-
-
-def _wait_subscribed(proc, log, timeout_s=60.0):
-    """Read the recorder's output until it subscribed to every topic."""
-    want = set(TOPICS)
-    deadline = time.monotonic() + timeout_s
-    while want and time.monotonic() < deadline:
-        line = proc.stdout.readline()
-        if not line:
-            break
-        log.append(line)
-        for t in list(want):
-            if f"Subscribed to topic '{t}'" in line:
-                want.discard(t)
-    assert not want, f'ros2 bag record did not subscribe to {sorted(want)}: {"".join(log)}'
+# the run is conftest's lockstep_run, shared with test_ros_graph and test_ros_bag_play
+pytestmark = pytest.mark.xdist_group('ros_lockstep_run')
 
 
 def _estimate(bag):
@@ -61,31 +36,11 @@ def _estimate(bag):
     return rec, timing, estimate_recording(rec)['multisine']
 
 
-def test_ros2_bag_record_of_a_lockstep_run_equals_the_package_bag(tmp_path, ros_env):
-    g = Graph(tmp_path / 'graph', multisine=MS, domain_id=int(ros_env['ROS_DOMAIN_ID']),
-              middleware='rclpy')
-    g.start()
-    rec_bag = tmp_path / 'recorded'
-    log: list[str] = []
-    recorder = subprocess.Popen(
-        ['ros2', 'bag', 'record', '-s', 'mcap', '--qos-profile-overrides-path',
-         str(ROOT / 'config' / 'rosbag2_qos.yaml'), '-o', str(rec_bag), *TOPICS],
-        env=dict(g.env), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        start_new_session=True)
-    try:
-        _wait_subscribed(recorder, log)
-        res = g.drive(multisine=True, iterations=0)
-        assert res['multisine']['success'], res
-        time.sleep(1.0)           # the recorder's queue drains
-    finally:
-        os.killpg(recorder.pid, signal.SIGINT)
-        try:
-            log.append(recorder.communicate(timeout=60)[0])
-        except subprocess.TimeoutExpired:
-            os.killpg(recorder.pid, signal.SIGKILL)
-            recorder.communicate()
-        bag = g.stop()
-    assert recorder.returncode == 0, ''.join(log)[-2000:]
+def test_ros2_bag_record_of_a_lockstep_run_equals_the_package_bag(lockstep_run):
+    run = lockstep_run
+    assert run.result['multisine']['success'], run.result
+    rec_bag, bag = run.recorded, run.bag
+    assert run.recorder_rc == 0, run.recorder_log[-2000:]
     assert (rec_bag / 'metadata.yaml').is_file()
     own, own_timing, est_own = _estimate(bag)
     got, got_timing, est_got = _estimate(rec_bag)

@@ -25,8 +25,9 @@ from frf_ident.core.excitation.procedures import MultisineConfig
 import numpy as np
 import pytest
 
-# module fixtures shared by the tests here: they run on one worker (make test, pytest-xdist)
-pytestmark = pytest.mark.xdist_group('test_ros_graph')
+# module fixtures shared by the tests here, and conftest's lockstep_run (the rclpy graph,
+# shared with test_ros_bag_record and test_ros_bag_play): one worker (make test, xdist)
+pytestmark = pytest.mark.xdist_group('ros_lockstep_run')
 
 SIM = ('plant_node', 'controller_node')
 REST = ('excitation_node', 'estimator_node')
@@ -61,9 +62,11 @@ def dds_run(tmp_path_factory, new_domain):
     return _run(tmp_path_factory.mktemp('dds'), 'dds', new_domain())
 
 
-@pytest.fixture(scope='module')
-def rclpy_run(tmp_path_factory, new_domain):
-    return _run(tmp_path_factory.mktemp('rclpy'), 'rclpy', new_domain())
+@pytest.fixture
+def rclpy_run(lockstep_run):
+    """Return the all-rclpy graph: conftest's shared lockstep run (same multisine, params)."""
+    assert lockstep_run.result['multisine']['success'], lockstep_run.result
+    return lockstep_run.graph, lockstep_run.bag, lockstep_run.result
 
 
 def _same(bag_a, bag_b):
