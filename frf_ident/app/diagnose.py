@@ -112,8 +112,8 @@ def _match_axes(rec: Recording, robot, model_path: Path, progress) -> Recording:
 
 
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
-             validate: Sequence[Path] = (), progress: Progress | None = None
-             ) -> dict[str, Any]:
+             validate: Sequence[Path] = (), progress: Progress | None = None,
+             jobs: int | None = None) -> dict[str, Any]:
     """
     Run the diagnosis and write DIR/report.json, extended_model.yaml, report.html.
 
@@ -130,6 +130,10 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         Import map for CSV/MAT records (DATA and every OTHER).
     validate
         Other records of the same robot: baseline and extended metrics on each.
+    jobs
+        Processes that simulate independent candidate models at once (experiments route);
+        None: :data:`frf_ident.core.diagnosis.thresholds.SIM_JOBS`; 1: one after the other
+        (the same result).
     progress
         Called with one line per step for the lines people read (what was read, the route,
         the effects found with their values, where the files went); None: silent. The
@@ -172,7 +176,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         robot = replace(robot, sample_rate=fs)
     if has_experiments(rec):
         progress('identification experiments found: FRF and closed-loop simulation evidence')
-        res = diagnose_experiments(rec, robot, ctrl)
+        from frf_ident.core.diagnosis.thresholds import SIM_JOBS
+        res = diagnose_experiments(rec, robot, ctrl, jobs=SIM_JOBS if jobs is None else jobs)
     else:
         progress('no identification experiments: time-series (inverse-dynamics) evidence')
         res = diagnose_timeseries(rec, robot)
@@ -233,7 +238,7 @@ def diagnose_columns(data: Path, out: Path, progress: Progress | None, *,
     model_path : Path
         Nominal model file.
     **options
-        Further keyword arguments of :func:`diagnose` (``map_path``, ``validate``).
+        Further keyword arguments of :func:`diagnose` (``map_path``, ``validate``, ``jobs``).
 
     Returns
     -------
