@@ -144,6 +144,8 @@ class Evaluator:
         self.lowest = np.full(n, np.inf)
         self.n_sims = 0
         self._sims: dict[str, Recording] = {}
+        # estimates of a kept simulation on the fit part, where a worker computed them
+        self._est: dict[str, dict] = {}
         self._residual: tuple[Any, Any] = (None, None)
 
     def residual(self, robot: RobotParams) -> tuple[np.ndarray, ...]:
@@ -218,16 +220,21 @@ class Evaluator:
         todo = dict(list(todo.items())[:SIM_CACHE - 4])
         if len(todo) < 2:
             return
-        for key, sim in zip(todo, simulate_many(self.rec, self.ctrl, list(todo.values()),
-                                                self.jobs)):
+        fit = self.fit
+        done = simulate_many(self.rec, self.ctrl, list(todo.values()), self.jobs,
+                             then=lambda sim: estimates(replace_segments(sim, fit)))
+        for key, (sim, est) in zip(todo, done):
             self._keep(key, sim)
+            self._est[key] = est
 
     def _keep(self, key: str, sim: Recording) -> None:
         """Count a new simulation and keep it (the oldest kept one goes beyond SIM_CACHE)."""
         self.n_sims += 1
         self._sims[key] = sim
         while len(self._sims) > SIM_CACHE:
-            self._sims.pop(next(iter(self._sims)))
+            old = next(iter(self._sims))
+            del self._sims[old]
+            self._est.pop(old, None)
 
     def terms(self, robot: RobotParams, sim: Recording | None = None, *, held_out: bool = False
               ) -> dict[str, np.ndarray]:
@@ -237,11 +244,12 @@ class Evaluator:
         Loss terms per axis (arrays of n): mean |ln(P_meas/P_model)|^2 over the lines of the
         diagonal element, torque and velocity NRMSE^2, on the fit (or held-out) part.
         """
+        ready = None if held_out or sim is not None else self._est.get(repr(robot))
         sim = sim if sim is not None else self.simulate(robot)
         part = self.val if held_out and self.val.segments else self.fit
         meas = self.meas_val if held_out and self.meas_val else self.meas_fit
         m = self.val_mask if held_out and self.val_mask.any() else self.fit_mask
-        est = estimates(replace_segments(sim, part))
+        est = ready if ready is not None else estimates(replace_segments(sim, part))
         out = {}
         for k, pm in meas.items():
             r = np.log(diag_ratio(pm, est[k]))

@@ -88,7 +88,8 @@ def fork_map(fn: Callable[[Any], T], items: Sequence[Any], jobs: int) -> list[T]
 
 
 def simulate_many(rec: Recording, ctrl: PIVelocity, robots: Sequence[RobotParams],
-                  jobs: int) -> list[Recording]:
+                  jobs: int, then: Callable[[Recording], Any] | None = None
+                  ) -> list[tuple[Recording, Any]]:
     """
     Return :func:`.common.simulate_like` of every model, ``jobs`` at a time.
 
@@ -102,14 +103,16 @@ def simulate_many(rec: Recording, ctrl: PIVelocity, robots: Sequence[RobotParams
         Independent models.
     jobs : int
         Worker processes (:func:`fork_map`).
+    then : callable, optional
+        Applied to each simulation in its worker (what the caller computes from it next).
 
     Returns
     -------
-    list of Recording
-        The simulations, in the order of ``robots``.
+    list of (Recording, object)
+        The simulations, in the order of ``robots``, each with ``then`` of it (None without).
 
     """
     def run(robot):
         sim = simulate_like(rec, robot, ctrl)
-        return sim.position, sim.velocity, sim.effort
-    return [as_simulation(rec, *a) for a in fork_map(run, robots, jobs)]
+        return sim.position, sim.velocity, sim.effort, then(sim) if then else None
+    return [(as_simulation(rec, *a[:3]), a[3]) for a in fork_map(run, robots, jobs)]

@@ -53,13 +53,14 @@ def test_parallel_simulations_equal_the_serial_ones():
     models = [robot.with_axes(coulomb_friction=x) for x in (0.0, 5.0, 20.0)]
     models.append(replace(robot, axes=[replace(robot.axes[0], stiffness=0.5
                                                * robot.axes[0].stiffness)] + robot.axes[1:]))
-    par = simulate_many(rec, ctrl, models, 2)
-    for m, p in zip(models, par):
+    par = simulate_many(rec, ctrl, models, 2, then=lambda sim: float(sim.effort.sum()))
+    for m, (p, total) in zip(models, par):
         s = simulate_like(rec, m, ctrl)
         for k in ('position', 'velocity', 'effort'):
             assert np.array_equal(getattr(s, k), getattr(p, k)), k
+        assert total == float(s.effort.sum())
     # the models differ, so equal arrays are no accident of one model simulated four times
-    assert not np.array_equal(par[0].effort, par[2].effort)
+    assert not np.array_equal(par[0][0].effort, par[2][0].effort)
 
 
 @pytest.mark.parametrize('delay', [0.0, 0.0013])
