@@ -373,6 +373,13 @@ def bench_diagnosis() -> list[tuple[str, str, str, str]]:
     return bench_rows()
 
 
+@section('diagnosis_demo')
+def bench_diagnosis_demo() -> list[tuple[str, str, str, str]]:
+    """Diagnose the demo bag with its simulations on 1 and on 2 processes: wall time."""
+    from benchmarks.diagnosis_demo import rows
+    return rows()
+
+
 @section('diagnosis_real')
 def bench_diagnosis_real() -> list[tuple[str, str, str, str]]:
     """Compare the KUKA KR300 diagnosis of the halves of trajectory A (and of A, B, C)."""

@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parent.parent
 RUNS_DIR = ROOT / 'docs' / 'benchmarks'
 PAGE = ROOT / 'docs' / 'BENCHMARKS.md'
 #: environment variables that change what a section measures (named in its command)
-SETTINGS = ('FRF_BENCH_SCENES', 'KUKA_BC', 'FRF_IDENT_MIDDLEWARE')
+SETTINGS = ('FRF_BENCH_SCENES', 'KUKA_BC', 'FRF_IDENT_MIDDLEWARE', 'FRF_DEMO_BAG')
 
 
 def _cpu_model() -> str:

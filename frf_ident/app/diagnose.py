@@ -113,7 +113,7 @@ def _match_axes(rec: Recording, robot, model_path: Path, progress) -> Recording:
 
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
              validate: Sequence[Path] = (), urdf: Path | None = None,
-             progress: Progress | None = None) -> dict[str, Any]:
+             progress: Progress | None = None, jobs: int | None = None) -> dict[str, Any]:
     """
     Run the diagnosis and write DIR/report.json, extended_model.yaml, report.html.
 
@@ -134,6 +134,10 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     urdf
         The robot's URDF: the time-series route fits the gravity its kinematics imply
         (:mod:`frf_ident.core.diagnosis.kinematic_gravity`; pinocchio reads it).
+    jobs
+        Processes that simulate independent candidate models at once (experiments route);
+        None: :data:`frf_ident.core.diagnosis.thresholds.SIM_JOBS`; 1: one after the other
+        (the same result).
     progress
         Called with one line per step for the lines people read (what was read, the route,
         the effects found with their values, where the files went); None: silent. The
@@ -176,7 +180,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         robot = replace(robot, sample_rate=fs)
     if has_experiments(rec):
         progress('identification experiments found: FRF and closed-loop simulation evidence')
-        res = diagnose_experiments(rec, robot, ctrl)
+        from frf_ident.core.diagnosis.thresholds import SIM_JOBS
+        res = diagnose_experiments(rec, robot, ctrl, jobs=SIM_JOBS if jobs is None else jobs)
     else:
         progress('no identification experiments: time-series (inverse-dynamics) evidence')
         res = diagnose_timeseries(rec, robot)
@@ -243,7 +248,7 @@ def diagnose_columns(data: Path, out: Path, progress: Progress | None, *,
     model_path : Path
         Nominal model file.
     **options
-        Further keyword arguments of :func:`diagnose` (``map_path``, ``validate``).
+        Further keyword arguments of :func:`diagnose` (``map_path``, ``validate``, ``jobs``).
 
     Returns
     -------

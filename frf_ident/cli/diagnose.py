@@ -43,7 +43,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         'plus summary.csv, summary.json, index.html')
     p.add_argument('--model', type=Path, required=True, help='nominal model file')
     add_output_arguments(p)
-    add_campaign_arguments(p)
+    add_campaign_arguments(p, '; with one input: processes that simulate its candidate '
+                              'models at once (default 2; 1: one after the other, the same '
+                              'result)')
     p.add_argument('--map', type=Path, default=None,
                    help='import map for CSV/MAT data (config/map_*.yaml), used for --validate too')
     p.add_argument('--validate', type=Path, action='extend', nargs='+', default=[],
@@ -86,12 +88,15 @@ def run(args: argparse.Namespace) -> int:
     from frf_ident.app.diagnosis_summary import diagnosis_summary
     from frf_ident.app.outdir import check_out
     if is_campaign(args.data):
+        # the records run in parallel: each one simulates its candidates one after the other
         task = partial(diagnose_columns, model_path=args.model, map_path=args.map,
-                       validate=args.validate, urdf=args.urdf)
+                       validate=args.validate, urdf=args.urdf, jobs=1)
         return run_many(args, args.data, task, OUTPUT_FILES, 'diagnose')
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
+    # one record: --jobs is the processes that simulate its candidate models at once
     res = diagnose(Path(args.data[0]), args.model, out, map_path=args.map,
-                   validate=args.validate, urdf=args.urdf, progress=say)
+                   validate=args.validate, urdf=args.urdf, progress=say,
+                   jobs=args.jobs)
     for line in diagnosis_summary(res['report'], out):
         say(line)
     return 0

@@ -40,7 +40,7 @@ def add_output_arguments(p: argparse.ArgumentParser) -> None:
                         'files only; nothing else is touched)')
 
 
-def add_campaign_arguments(p: argparse.ArgumentParser) -> None:
+def add_campaign_arguments(p: argparse.ArgumentParser, one_input: str = '') -> None:
     """
     Add ``--jobs N`` and ``--scheduler ADDRESS`` (commands that take several inputs).
 
@@ -48,11 +48,13 @@ def add_campaign_arguments(p: argparse.ArgumentParser) -> None:
     ----------
     p : argparse.ArgumentParser
         The command's parser.
+    one_input : str
+        What ``--jobs`` means with one input, appended to its help ('' : nothing).
 
     """
     p.add_argument('--jobs', type=int, default=None, metavar='N',
                    help='with several inputs: worker processes, one input each (default: all '
-                        'cores; 1: one after the other in this process)')
+                        'cores; 1: one after the other in this process)' + one_input)
     p.add_argument('--scheduler', default=None, metavar='ADDRESS',
                    help='with several inputs: run them on a Dask cluster, its scheduler '
                         'address (tcp://HOST:8786; inputs and --out on a file system the '

@@ -61,6 +61,12 @@ def passes(ev: Evaluator, gain: float, share: float) -> bool:
     return share >= MIN_SHARE and gain >= MIN_Z * ev.misfit_sd()
 
 
+def _refit_first(ev: Evaluator, c: Effect, cur: np.ndarray, rnd: int) -> bool:
+    """Return whether a friction candidate is refitted by simulation before it is judged."""
+    return bool(rnd and c.name in FRICTION
+                and cur[c.axis_index] > UNEXPLAINED_RATIO * ev.floor_seen(cur)[c.axis_index])
+
+
 def accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Effect],
            cur: np.ndarray, say: Callable[[str], None],
            rivals: dict[int, list[Effect]] | None = None) -> tuple[RobotParams, np.ndarray]:
@@ -83,10 +89,10 @@ def accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Eff
 
     while pending:
         scored = []
+        ev.prefetch([apply_effect(ext, c) for c in pending if not _refit_first(ev, c, cur, rnd)])
         for c in pending:
             i = c.axis_index
-            refitted = bool(rnd and c.name in FRICTION
-                            and cur[i] > UNEXPLAINED_RATIO * ev.floor_seen(cur)[i])
+            refitted = _refit_first(ev, c, cur, rnd)
             if refitted:
                 # its axis took an effect and is still clearly above its floor: the value the
                 # regression read next to the unmodelled effect is refitted by simulation

@@ -207,7 +207,7 @@ def fit_linear_scales(meas: dict, robot: RobotParams, axis: int, keys=LIN_KEYS,
         rb = scaled_axis(robot, axis, keys, x)
         out = []
         for f, pm in sel:
-            pa = robot_frf_sampled(rb, f)[axis, axis]
+            pa = robot_frf_sampled(rb, f, inputs=[axis])[axis, 0]
             e = np.log(pm / pa)
             out += [e.real, np.angle(pm / pa)]
         return np.concatenate(out)
@@ -301,6 +301,7 @@ def fit_backlash(ev: Evaluator, robot: RobotParams, axis: int, scales_ms, scales
     lo = math.log(1e-3 * tau / a.stiffness)
     hi = math.log(20 * tau / a.stiffness)
     grid = np.linspace(lo, hi, 7)
+    ev.prefetch([with_params(robot, axis, backlash=math.exp(g)) for g in grid])
     losses = [ev.loss(with_params(robot, axis, backlash=math.exp(g)), axis) for g in grid]
     i = int(np.argmin(losses))
     sol = optimize.minimize_scalar(lambda g: ev.loss(
@@ -321,11 +322,13 @@ def with_params(robot: RobotParams, axis: int, **kw) -> RobotParams:
 
 
 def _refine(ev: Evaluator, mk: Callable, x0: np.ndarray, bounds, axis: int) -> np.ndarray:
+    simplex = np.array([x0, x0 + [0.3, 0], x0 + [0, 0.7]])
+    # the starting simplex at once (Nelder-Mead clips it into the bounds first)
+    ev.prefetch([mk(np.clip(x, *np.transpose(bounds))) for x in simplex])
     sol = optimize.minimize(lambda x: ev.loss(mk(x), axis), x0, method='Nelder-Mead',
                             bounds=bounds,
                             options={'xatol': 0.01, 'fatol': 1e-3, 'maxfev': 35,
-                                     'initial_simplex': np.array([x0, x0 + [0.3, 0],
-                                                                  x0 + [0, 0.7]])})
+                                     'initial_simplex': simplex})
     return sol.x
 
 

@@ -149,9 +149,14 @@ def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recor
     # comparison (evaluator.missing_reference) instead of commanding zero velocity
     r = np.where(np.isfinite(rec.reference), rec.reference, rec.velocity)
     res = plant.simulate(reference=r, controller=c)
-    return Recording(rec.t.copy(), list(rec.joint_names), res.position, res.velocity,
-                     res.effort, rec.reference, rec.excitation, list(rec.segments),
-                     {'simulated': True})
+    return as_simulation(rec, res.position, res.velocity, res.effort)
+
+
+def as_simulation(rec: Recording, position: np.ndarray, velocity: np.ndarray,
+                  effort: np.ndarray) -> Recording:
+    """Return simulated signals as a Recording with the segments and reference of ``rec``."""
+    return Recording(rec.t.copy(), list(rec.joint_names), position, velocity, effort,
+                     rec.reference, rec.excitation, list(rec.segments), {'simulated': True})
 
 
 def split_recording(rec: Recording) -> tuple[Recording, Recording, str]:

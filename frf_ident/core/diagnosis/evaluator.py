@@ -20,7 +20,7 @@ and its misfit per axis in units of those floors.
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
 
 from frf_ident.core.estimation.described import chirp_frf, multisine_frf
 from frf_ident.core.model.params import RobotParams
@@ -30,8 +30,9 @@ import numpy as np
 
 from .common import (bridge_gaps, diag_ratio, frf_error_db, nrmse, segment_mask, simulate_like,
                      split_recording)
+from .parallel import simulate_many
 from .residual import inverse_dynamics_residual
-from .thresholds import FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE
+from .thresholds import FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE, SIM_JOBS
 
 
 def estimates(rec: Recording) -> dict[str, Any]:
@@ -104,7 +105,9 @@ class Evaluator:
     noise scores about 1.
     """
 
-    def __init__(self, rec: Recording, ctrl: PIVelocity) -> None:
+    def __init__(self, rec: Recording, ctrl: PIVelocity, *, jobs: int = SIM_JOBS) -> None:
+        #: processes that simulate the models of one :meth:`prefetch` at once
+        self.jobs = jobs
         # rows lost in gaps of the bag are bridged and lose their reference: left out below
         self.rec, self.ctrl = bridge_gaps(rec)[0], ctrl
         rec = self.rec
@@ -141,6 +144,8 @@ class Evaluator:
         self.lowest = np.full(n, np.inf)
         self.n_sims = 0
         self._sims: dict[str, Recording] = {}
+        # estimates of a kept simulation on the fit part, where a worker computed them
+        self._est: dict[str, dict] = {}
         self._residual: tuple[Any, Any] = (None, None)
 
     def residual(self, robot: RobotParams) -> tuple[np.ndarray, ...]:
@@ -190,11 +195,46 @@ class Evaluator:
         """
         key = repr(robot)
         if key not in self._sims:
-            self.n_sims += 1
-            self._sims[key] = simulate_like(self.rec, robot, self.ctrl)
-            while len(self._sims) > SIM_CACHE:
-                self._sims.pop(next(iter(self._sims)))
+            self._keep(key, simulate_like(self.rec, robot, self.ctrl))
         return self._sims[key]
+
+    def prefetch(self, robots: Sequence[RobotParams]) -> None:
+        """
+        Simulate independent models at once (:attr:`jobs` processes) for :meth:`simulate`.
+
+        The models not simulated yet (the first SIM_CACHE - 4 of them) are simulated by
+        :func:`.parallel.simulate_many` and kept, so the next :meth:`simulate` of each finds
+        it: the same simulations and results as one after the other, in less wall time.
+        With ``jobs`` 1 nothing is done here.
+
+        Parameters
+        ----------
+        robots : sequence of RobotParams
+            Models the caller simulates next.
+
+        """
+        if self.jobs < 2:
+            return
+        todo = {repr(r): r for r in robots}
+        todo = {k: r for k, r in todo.items() if k not in self._sims}
+        todo = dict(list(todo.items())[:SIM_CACHE - 4])
+        if len(todo) < 2:
+            return
+        fit = self.fit
+        done = simulate_many(self.rec, self.ctrl, list(todo.values()), self.jobs,
+                             then=lambda sim: estimates(replace_segments(sim, fit)))
+        for key, (sim, est) in zip(todo, done):
+            self._keep(key, sim)
+            self._est[key] = est
+
+    def _keep(self, key: str, sim: Recording) -> None:
+        """Count a new simulation and keep it (the oldest kept one goes beyond SIM_CACHE)."""
+        self.n_sims += 1
+        self._sims[key] = sim
+        while len(self._sims) > SIM_CACHE:
+            old = next(iter(self._sims))
+            del self._sims[old]
+            self._est.pop(old, None)
 
     def terms(self, robot: RobotParams, sim: Recording | None = None, *, held_out: bool = False
               ) -> dict[str, np.ndarray]:
@@ -204,11 +244,12 @@ class Evaluator:
         Loss terms per axis (arrays of n): mean |ln(P_meas/P_model)|^2 over the lines of the
         diagonal element, torque and velocity NRMSE^2, on the fit (or held-out) part.
         """
+        ready = None if held_out or sim is not None else self._est.get(repr(robot))
         sim = sim if sim is not None else self.simulate(robot)
         part = self.val if held_out and self.val.segments else self.fit
         meas = self.meas_val if held_out and self.meas_val else self.meas_fit
         m = self.val_mask if held_out and self.val_mask.any() else self.fit_mask
-        est = estimates(replace_segments(sim, part))
+        est = ready if ready is not None else estimates(replace_segments(sim, part))
         out = {}
         for k, pm in meas.items():
             r = np.log(diag_ratio(pm, est[k]))

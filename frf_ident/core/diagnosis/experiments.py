@@ -41,9 +41,10 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
                          stiffness_seen, with_params)
 from .common import apply_effect, Effect
 from .evaluator import estimates, Evaluator, replace_segments
+from .parallel import fork_map
 from .refit import FRICTION, rebuild, refit_friction, refit_jointly
 from .result import DiagnosisResult, ExperimentsDetail
-from .thresholds import MIN_DELAY_SAMPLES, STAGE2_ROUNDS, UNEXPLAINED_RATIO
+from .thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS, UNEXPLAINED_RATIO
 from .unexplained import (axis_signature, discretisation_check, rival_instead,
                           typical_unscalable_misfit)
 
@@ -71,8 +72,8 @@ class Search:
     again: list[Effect] = field(default_factory=list)  # second-pass candidates
 
 
-def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity
-                         ) -> DiagnosisResult:
+def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
+                         jobs: int = SIM_JOBS) -> DiagnosisResult:
     """
     Diagnose an identification recording against the nominal ``robot``.
 
@@ -91,6 +92,9 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity
         The nominal model.
     ctrl : PIVelocity
         The velocity controller the recording ran through.
+    jobs : int
+        Processes that simulate independent models at once (1: one after the other; the
+        same result either way).
 
     Returns
     -------
@@ -104,7 +108,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity
     DEBUG level.
 
     """
-    s = start(rec, robot, ctrl)
+    s = start(rec, robot, ctrl, jobs)
     torque_residual_effects(s)
     frf_shape_effects(s)
     second_pass(s)
@@ -115,12 +119,13 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity
     return finish(s, val_ext, sim_ext, val_base)
 
 
-def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Search:
+def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_JOBS
+          ) -> Search:
     """Build the evaluator and simulate the nominal model: its misfit per axis."""
     if rec.reference is None:
         raise EstimationError('recording has no velocity reference: use the time-series '
                               'diagnosis')
-    ev = Evaluator(rec, ctrl)
+    ev = Evaluator(rec, ctrl, jobs=jobs)
     if ev.missing.any():
         log.info('%.1f %% of the samples lack a reference (or follow such a stretch): left '
                  'out of the comparison', 100 * ev.missing.mean())
@@ -181,9 +186,7 @@ def frf_shape_effects(s: Search) -> None:
     axes = set(range(robot.n_axes))
     for rnd in range(STAGE2_ROUNDS):
         sim_est = estimates(replace_segments(sim1, ev.fit))
-        stage2: list[Effect] = []
-        for i in sorted(axes):
-            stage2 += frf_shape_candidates(s, i, sim_est)
+        stage2 = [c for found in axis_candidates(s, sorted(axes), sim_est) for c in found]
         n_kept = len(s.kept)
         s.ext, s.cur = accept(ev, robot, s.kept, stage2, s.cur, s.say, s.rivals)
         stage2_all = [c for c in stage2_all if c in s.kept or not any(
@@ -198,6 +201,30 @@ def frf_shape_effects(s: Search) -> None:
     s.stage2 = stage2_all
     s.cands += stage2_all
     log.info('stage 2 (FRF shape): %d candidate(s), %s', len(stage2_all), _named(s.kept))
+
+
+def axis_candidates(s: Search, axes: list[int], sim_est: dict) -> list[list[Effect]]:
+    """
+    Return :func:`frf_shape_candidates` of each axis, the axes on parallel processes.
+
+    The axes' candidates read the search state and never change it, so they are fitted at
+    once (:func:`.parallel.fork_map`, ``ev.jobs`` processes, each simulating its models one
+    after the other); the simulations they ran are added to the count.
+    """
+    ev = s.ev
+    n0, jobs = ev.n_sims, ev.jobs
+    forked = jobs > 1 and len(axes) > 1
+
+    def one(i: int) -> tuple[list[Effect], int]:
+        n = ev.n_sims
+        ev.jobs = 1 if forked else jobs
+        try:
+            return frf_shape_candidates(s, i, sim_est), ev.n_sims - n
+        finally:
+            ev.jobs = jobs
+    found = fork_map(one, axes, jobs)
+    ev.n_sims = n0 + sum(n for _, n in found)
+    return [c for c, _ in found]
 
 
 def frf_shape_candidates(s: Search, i: int, sim_est: dict) -> list[Effect]:

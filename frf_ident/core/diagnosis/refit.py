@@ -181,6 +181,7 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
     n = len(slots)
     x0 = np.zeros(n)
     simplex = np.vstack([x0] + [x0 + 0.2 * np.eye(n)[k] for k in range(n)])
+    ev.prefetch([mk(x) for x in simplex])
     sol = optimize.minimize(lambda x: ev.loss(mk(x), axis), x0, method='Nelder-Mead',
                             options={'xatol': 0.01, 'fatol': 1e-3, 'maxfev': 8 + 6 * n,
                                      'initial_simplex': simplex})

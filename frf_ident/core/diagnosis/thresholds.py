@@ -92,8 +92,15 @@ SETTLE_S = 0.5
 #: misfit's standard deviation under noise, :meth:`Evaluator.misfit_sd`)
 INDEPENDENT_SAMPLE_S = 0.01
 #: simulations the Evaluator keeps (by model): a model checked again within a round is not
-#: simulated twice; does not change any result, only the simulation count
-SIM_CACHE = 4
+#: simulated twice; does not change any result, only the simulation count. Room for a batch
+#: simulated in parallel (at most SIM_CACHE - 4 models, :meth:`Evaluator.prefetch`) beside the
+#: four models a round checks again
+SIM_CACHE = 12
+#: processes that simulate independent models at once (the candidates of one round, the
+#: starting simplex of a joint refit): 2 = the cores of the machine the 30 s goal of the demo
+#: diagnosis was set on; 1 = one after the other in this process (the same results: the
+#: simulation is deterministic)
+SIM_JOBS = 2
 
 # --- experiments route: candidates and refits ---------------------------------------------------
 

@@ -25,6 +25,8 @@ Closed-form frequency responses of the linear flexible-joint robot (analytic tru
 """
 from __future__ import annotations
 
+from typing import Sequence
+
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.simulation.plant import state_space
 import numpy as np
@@ -126,9 +128,9 @@ def _delayed_zoh_input(A: np.ndarray, B: np.ndarray, dt: float, delay: float
     """ZOH with an input delay tau = (n_d + frac) dt: x+ = Ad x + B0 u[k-n_d] + B1 u[k-n_d-1]."""
     nd = int(np.floor(delay / dt + 1e-12))
     frac = delay - nd * dt
-    Ad, _ = _zoh(A, B, dt)
+    Ad, B_dt = _zoh(A, B, dt)
     # over [0, frac) the older command acts, over [frac, dt) the newer one
-    Ad_rest, B_rest = _zoh(A, B, dt - frac)
+    Ad_rest, B_rest = _zoh(A, B, dt - frac) if frac > 0 else (Ad, B_dt)
     Ad_frac, B_frac = _zoh(A, B, frac) if frac > 0 else (np.eye(A.shape[0]), np.zeros_like(B))
     B_new = B_rest
     B_old = Ad_rest @ B_frac
@@ -136,7 +138,8 @@ def _delayed_zoh_input(A: np.ndarray, B: np.ndarray, dt: float, delay: float
 
 
 def robot_frf_sampled(params: RobotParams, freq_hz: np.ndarray, *,
-                      output: str = 'velocity', delays: np.ndarray | None = None) -> np.ndarray:
+                      output: str = 'velocity', delays: np.ndarray | None = None,
+                      inputs: Sequence[int] | None = None) -> np.ndarray:
     """
     Return the exact FRF from sampled torque (zero-order hold) to sampled output.
 
@@ -154,11 +157,13 @@ def robot_frf_sampled(params: RobotParams, freq_hz: np.ndarray, *,
         positions over one sample divided by dt.
     delays : array_like, shape (n,), optional
         Input delay per axis in s; default the axes' ``time_delay``.
+    inputs : sequence of int, optional
+        Only these input axes (columns), in this order; default all.
 
     Returns
     -------
-    ndarray of complex, shape (n, n, n_freq)
-        P[i, j]: output of axis i per torque of axis j.
+    ndarray of complex, shape (n, n_inputs, n_freq)
+        P[i, j]: output of axis i per torque of axis ``inputs[j]`` (n_inputs = n by default).
 
     Raises
     ------
@@ -172,21 +177,22 @@ def robot_frf_sampled(params: RobotParams, freq_hz: np.ndarray, *,
     n = params.n_axes
     if delays is None:
         delays = np.array([a.time_delay for a in params.axes])
+    if output not in ('velocity', 'encoder'):
+        raise ValueError(f"{output=} must be 'velocity' or 'encoder'")
+    inputs = range(n) if inputs is None else inputs
     z = np.exp(2j * np.pi * freq_hz * dt)
-    out = np.empty((n, n, freq_hz.size), dtype=complex)
+    out = np.empty((n, len(inputs), freq_hz.size), dtype=complex)
     nx = A.shape[0]
-    for j in range(n):
+    for col, j in enumerate(inputs):
         Ad, Bs, nd = _delayed_zoh_input(A, B[:, j:j + 1], dt, float(delays[j]))
-        for i, zi in enumerate(z):
-            bz = (Bs[0] + Bs[1] / zi) * zi ** (-nd)
-            x = np.linalg.solve(zi * np.eye(nx) - Ad, bz)
-            if output == 'velocity':
-                y = Cv @ x
-            elif output == 'encoder':
-                y = Cq @ x * (1 - 1 / zi) / dt
-            else:
-                raise ValueError(f"{output=} must be 'velocity' or 'encoder'")
-            out[:, j, i] = y[:, 0]
+        # every line at once: (z I - Ad) x = (B0 + B1 / z) z^-nd
+        bz = (Bs[0][None] + Bs[1][None] / z[:, None, None]) * (z ** (-nd))[:, None, None]
+        x = np.linalg.solve(z[:, None, None] * np.eye(nx) - Ad, bz)[..., 0]
+        if output == 'velocity':
+            y = x @ Cv.T
+        else:
+            y = (x @ Cq.T) * ((1 - 1 / z) / dt)[:, None]
+        out[:, col, :] = y.T
     return out
 
 

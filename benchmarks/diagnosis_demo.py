@@ -1,0 +1,88 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Demo diagnosis wall time (section ``diagnosis_demo``): ``frf-ident diagnose`` of the demo bag.
+
+The bag is `make demo`'s (OUT/demo/graph/bag, OUT from the environment as in the Makefile,
+default out; or the path in FRF_DEMO_BAG). It is diagnosed twice in this run against the
+nominal model config/model_3axis.yaml: one process simulating one model after the other
+(``--jobs 1``, the path before the parallel simulations) and the default (candidates of a
+round, a refit's starting simplex and the axes' FRF-shape candidates on 2 processes). Each row
+gives the wall time beside the simulation count and the CPU time (this process and its
+workers: what a quiet machine's wall time is bounded by), and whether both found the same
+effects (names, axes, values to 4 digits) and metrics. Goal (issue 41): <= 30 s on 2 cores.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+import resource
+import tempfile
+import time
+
+__all__ = ['demo_bag', 'rows']
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def demo_bag() -> Path:
+    """Return where `make demo` wrote its bag (FRF_DEMO_BAG overrides)."""
+    env = os.environ.get('FRF_DEMO_BAG')
+    if env:
+        return Path(env)
+    return ROOT / os.environ.get('OUT', 'out') / 'demo' / 'graph' / 'bag'
+
+
+def _effects(report: dict) -> list[tuple]:
+    """Return the effects as (name, axis, parameters to 4 significant digits)."""
+    def r4(v):
+        if isinstance(v, float):
+            return float(f'{v:.4g}')
+        if isinstance(v, list):
+            return [r4(x) for x in v]
+        if isinstance(v, dict):
+            return {k: r4(x) for k, x in v.items()}
+        return v
+    return sorted((e['name'], e['axis'], repr(r4(e['parameters']))) for e in report['effects'])
+
+
+def _cpu_s() -> float:
+    """Return the CPU seconds of this process and its finished children (user + system)."""
+    return sum(u.ru_utime + u.ru_stime for u in (resource.getrusage(resource.RUSAGE_SELF),
+                                                 resource.getrusage(resource.RUSAGE_CHILDREN)))
+
+
+def rows() -> list[tuple[str, str, str, str]]:
+    from frf_ident.app.diagnose import diagnose
+    bag = demo_bag()
+    if not bag.exists():
+        return [('demo diagnose', f'no demo bag at {bag}', 'run `make demo` first', '-')]
+    model = ROOT / 'config' / 'model_3axis.yaml'
+    runs = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for jobs in (1, 2):
+            t0, c0 = time.perf_counter(), _cpu_s()
+            res = diagnose(bag, model, Path(tmp) / f'jobs{jobs}', jobs=jobs)
+            runs[jobs] = (time.perf_counter() - t0, res['result'].n_sims,
+                          _effects(res['report']), res['report']['metrics'], _cpu_s() - c0)
+    (t1, n1, e1, m1, c1), (t2, n2, e2, m2, c2) = runs[1], runs[2]
+    load = os.getloadavg()[0]
+    same = 'same effects' if e1 == e2 and m1 == m2 else 'EFFECTS OR METRICS DIFFER'
+    return [('demo diagnose, 1 process (the serial path)',
+             f'{t1:.1f} s, {n1} simulations, CPU {c1:.0f} s', f'{len(e1)} effects, held-out FRF '
+             f'{m1["extended"]["frf_error_db"]:.3g} dB', f'load {load:.1f} on '
+             f'{os.cpu_count()} cores'),
+            ('demo diagnose, simulations on 2 processes (goal <= 30 s)',
+             f'{t2:.1f} s, {n2} simulations, CPU {c2:.0f} s', f'1 process {t1:.1f} s; {same}',
+             f'{t1 / t2:.2f}x')]

@@ -1,0 +1,118 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Run independent parts of the diagnosis in parallel processes.
+
+The diagnosis simulates many models on one recording; the candidates of one round, the
+starting simplex of a joint refit and the FRF-shape candidates of different axes do not depend
+on each other. :func:`fork_map` runs such parts on worker processes of the standard library
+(:mod:`concurrent.futures`), forked so they inherit the recording and the search state instead
+of receiving them: only an index goes out and the part's result comes back.
+:func:`simulate_many` simulates models that way. The simulation is deterministic (fixed seed,
+noise-free model), so the results are those of running the parts one after the other.
+"""
+from __future__ import annotations
+
+from concurrent.futures import ProcessPoolExecutor
+import multiprocessing
+from typing import Any, Callable, Sequence, TypeVar
+
+from frf_ident.core.model.params import RobotParams
+from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.controller import PIVelocity
+
+from .common import as_simulation, simulate_like
+
+__all__ = ['can_fork', 'fork_map', 'simulate_many']
+
+T = TypeVar('T')
+
+#: (function, items) the forked workers run; set only while a pool runs
+_JOB: tuple[Callable[[Any], Any], Sequence[Any]] | None = None
+
+
+def can_fork() -> bool:
+    """Return whether worker processes can be forked here (POSIX; not on Windows)."""
+    return 'fork' in multiprocessing.get_all_start_methods()
+
+
+def _run_item(k: int) -> Any:
+    """Run the inherited function on the inherited item k (in a forked worker)."""
+    assert _JOB is not None, 'fork_map sets the job before the workers fork'
+    return _JOB[0](_JOB[1][k])
+
+
+def fork_map(fn: Callable[[Any], T], items: Sequence[Any], jobs: int) -> list[T]:
+    """
+    Return ``[fn(x) for x in items]``, computed on ``jobs`` forked worker processes.
+
+    ``fn`` may be a closure over large state (the workers inherit it); its results travel
+    back pickled, and what it changes in its own process stays there.
+
+    Parameters
+    ----------
+    fn : callable
+        The part, a function of one item.
+    items : sequence
+        The items.
+    jobs : int
+        Worker processes; 1, one item, or no fork here: one after the other in this process.
+
+    Returns
+    -------
+    list
+        The results, in the order of ``items``.
+
+    """
+    global _JOB
+    if jobs < 2 or len(items) < 2 or not can_fork():
+        return [fn(x) for x in items]
+    _JOB = (fn, items)
+    try:
+        with ProcessPoolExecutor(min(jobs, len(items)),
+                                 mp_context=multiprocessing.get_context('fork')) as pool:
+            return list(pool.map(_run_item, range(len(items))))
+    finally:
+        _JOB = None
+
+
+def simulate_many(rec: Recording, ctrl: PIVelocity, robots: Sequence[RobotParams],
+                  jobs: int, then: Callable[[Recording], Any] | None = None
+                  ) -> list[tuple[Recording, Any]]:
+    """
+    Return :func:`.common.simulate_like` of every model, ``jobs`` at a time.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording whose excitation is simulated.
+    ctrl : PIVelocity
+        Its velocity controller.
+    robots : sequence of RobotParams
+        Independent models.
+    jobs : int
+        Worker processes (:func:`fork_map`).
+    then : callable, optional
+        Applied to each simulation in its worker (what the caller computes from it next).
+
+    Returns
+    -------
+    list of (Recording, object)
+        The simulations, in the order of ``robots``, each with ``then`` of it (None without).
+
+    """
+    def run(robot):
+        sim = simulate_like(rec, robot, ctrl)
+        return sim.position, sim.velocity, sim.effort, then(sim) if then else None
+    return [(as_simulation(rec, *a[:3]), a[3]) for a in fork_map(run, robots, jobs)]

@@ -1,0 +1,77 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""The diagnosis' parallel parts give what running them one after the other gives."""
+from dataclasses import replace
+import os
+from pathlib import Path
+
+from frf_ident.core.diagnosis.common import simulate_like
+from frf_ident.core.diagnosis.parallel import can_fork, fork_map, simulate_many
+from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.analytic import robot_frf, robot_frf_sampled
+from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.io.model_file import load_model
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def test_fork_map_keeps_the_order_and_the_workers_changes_stay_there():
+    seen = []
+
+    def part(x):
+        seen.append(x)          # changes the worker's copy only
+        return x * x, os.getpid()
+    out = fork_map(part, [3, 1, 2, 5], 2)
+    assert [v for v, _ in out] == [9, 1, 4, 25]
+    if can_fork():
+        assert seen == [] and os.getpid() not in {p for _, p in out}
+    assert fork_map(part, [4], 2) == [(16, os.getpid())] and seen == [4]
+
+
+def test_parallel_simulations_equal_the_serial_ones():
+    model, robot, ctrl = load_model(ROOT / 'config' / 'model_3axis.yaml')
+    plant = FlexibleJointPlant(robot)
+    c = ctrl.copy()
+    c.reset(plant.equilibrium_torque())
+    n = 1500
+    r = np.tile([0.05, -0.04, 0.08], (n, 1)) * np.sin(np.arange(n) / 200)[:, None]
+    res = plant.simulate(reference=r, controller=c)
+    rec = Recording(res.t, robot.joint_names, res.position, res.velocity, res.effort, r)
+    models = [robot.with_axes(coulomb_friction=x) for x in (0.0, 5.0, 20.0)]
+    models.append(replace(robot, axes=[replace(robot.axes[0], stiffness=0.5
+                                               * robot.axes[0].stiffness)] + robot.axes[1:]))
+    par = simulate_many(rec, ctrl, models, 2, then=lambda sim: float(sim.effort.sum()))
+    for m, (p, total) in zip(models, par):
+        s = simulate_like(rec, m, ctrl)
+        for k in ('position', 'velocity', 'effort'):
+            assert np.array_equal(getattr(s, k), getattr(p, k)), k
+        assert total == float(s.effort.sum())
+    # the models differ, so equal arrays are no accident of one model simulated four times
+    assert not np.array_equal(par[0][0].effort, par[2][0].effort)
+
+
+@pytest.mark.parametrize('delay', [0.0, 0.0013])
+def test_sampled_frf_of_some_inputs_is_their_column_and_near_the_continuous_one(delay):
+    _, robot, _ = load_model(ROOT / 'config' / 'model_3axis.yaml')
+    robot = robot.with_axes(time_delay=delay)
+    f = np.geomspace(0.5, 5.0, 12)              # far below the 1 kHz sampling
+    full = robot_frf_sampled(robot, f)
+    one = robot_frf_sampled(robot, f, inputs=[2, 0])
+    assert np.allclose(one[:, 0], full[:, 2], rtol=1e-12) and \
+        np.allclose(one[:, 1], full[:, 0], rtol=1e-12)
+    # zero-order hold: half a sample of delay besides the input delay, sampled velocity
+    cont = robot_frf(robot, f) * np.exp(-2j * np.pi * f * (delay + 0.5 * robot.dt))
+    assert np.allclose(full, cont, rtol=2e-3, atol=2e-3 * np.abs(cont).max())
