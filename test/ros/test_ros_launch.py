@@ -332,11 +332,6 @@ def test_launch_refuses_sim_time_without_sim(ros_env, prefix, tmp_path):
     assert not (tmp_path / 'never').exists()
 
 
-@pytest.mark.xfail(strict=False, reason='known defect (issue 44), about 1 run in 3: the terminal '
-                   'Ctrl-C reaches the process group; a node that ends on it at once (start-up) '
-                   'is reaped by the SIGINT launch sends after it (Popen.send_signal polls '
-                   'first), so the asyncio child watcher reports returncode 255 and launch '
-                   'exits 1')
 def test_ctrl_c_at_start_up(ros_env, prefix, tmp_path):
     """Ctrl-C in the nodes' start-up ends each with 0: no traceback, no bag without metadata."""
     env = _env(ros_env, prefix, tmp_path)
