@@ -313,10 +313,10 @@ def frf_units(frf) -> str | None:
         inputs') units differ, so no single unit labels the axis.
 
     """
-    from frf_ident.report.figures import FRF_UNIT
+    from frf_ident.core.recording import JOINT_STATE_FRF_UNIT
     u = frf.meta.get('units')
     if not isinstance(u, dict):
-        return FRF_UNIT
+        return JOINT_STATE_FRF_UNIT
     outs = set(u.get('outputs') or [''])
     out, inp = outs.pop(), u.get('input', '')
     return f'({out})/({inp})' if out and inp and not outs else None

@@ -30,7 +30,7 @@ from typing import Any
 from frf_ident.core.jsonable import json_default
 import numpy as np
 
-__all__ = ['JOINT_STATE_UNITS', 'Recording', 'Segment']
+__all__ = ['JOINT_STATE_FRF_UNIT', 'JOINT_STATE_UNITS', 'Recording', 'Segment']
 
 
 @dataclass
@@ -119,6 +119,8 @@ class Segment:
 #: the units of a revolute joint's sensor_msgs/JointState fields (REP 103: SI), which a
 #: recording has where an import map states no others
 JOINT_STATE_UNITS = {'position': 'rad', 'velocity': 'rad/s', 'effort': 'N m'}
+#: the unit of an FRF from motor torque to motor velocity of such a joint
+JOINT_STATE_FRF_UNIT = f"({JOINT_STATE_UNITS['velocity']})/({JOINT_STATE_UNITS['effort']})"
 
 
 @dataclass

@@ -29,6 +29,7 @@ from typing import Any, Mapping, Sequence
 from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
 from frf_ident.core.diagnosis.result import DiagnosisResult
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.recording import JOINT_STATE_FRF_UNIT
 import matplotlib
 
 matplotlib.use('Agg')
@@ -42,8 +43,8 @@ DPI = 100
 REF_STYLE = {'color': 'k', 'lw': 1.3, 'zorder': 2}
 #: measured data on top of every model line
 MEASURED_Z = 3
-#: the unit of an FRF from motor torque to motor velocity
-FRF_UNIT = '(rad/s)/(N m)'
+#: the unit of an FRF from motor torque to motor velocity (sensor_msgs/JointState units)
+FRF_UNIT = JOINT_STATE_FRF_UNIT
 #: a log frequency axis labels 2x and 5x its decades while it spans at most this many decades
 #: (wider, the labels of a 4.6 inch panel touch; the decades alone are labelled then)
 LABELLED_MINORS_DECADES = 2.5

@@ -351,13 +351,14 @@ def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
     #    where the model misses part of the record (friction, a further mode) the
     #    refinement can overshoot, so both are tried and the ML fit of lower cost among the
     #    physical ones (positive inertias, stiffness, damping) is kept.
-    taus = [delay_from_phase(f, p)] if fit_delay else [float(delay_s)]
+    tau = delay_from_phase(f, p) if fit_delay else float(delay_s)
+    starts = [(_linear_start(f, p, sigma, tau), tau)]
     if fit_delay:
-        first = two_mass_response(_linear_start(f, p, sigma, taus[0]), f, taus[0])
-        taus.append(max(taus[0] + _delay_correction(f, p, first, sigma), 0.0))
+        refined = max(tau + _delay_correction(f, p, two_mass_response(starts[0][0], f, tau),
+                                              sigma), 0.0)
+        starts.append((_linear_start(f, p, sigma, refined), refined))
     # 2. ML in scaled parameters x = theta / scale (and tau / tau_scale)
-    fits = [_ml_fit(f, p, variance, sigma, _linear_start(f, p, sigma, t), t, fit_delay)
-            for t in taus]
+    fits = [_ml_fit(f, p, variance, sigma, start, t, fit_delay) for start, t in starts]
     sol, scale, start, tau0 = min(fits, key=lambda r: (not _physical(r[0].x * r[1]),
                                                        float(r[0].cost)))
     # 3. Cramer-Rao bound (unit-variance residual) and cost test
