@@ -389,9 +389,10 @@ def worker_start_method() -> str:
     Return how worker processes start: ``fork`` where it is safe, else ``spawn``.
 
     A forked worker inherits the modules the command already imported (numpy, scipy,
-    matplotlib, frf_ident: about 1.7 s per spawned worker, which took the 8-bag campaign of
-    ``python -m benchmarks campaign`` from 18.3 s serial to 11.3 s on 2 processes, 1.62x,
-    instead of the 1.89x its CPU time allows). It is safe only while this process runs one
+    matplotlib, frf_ident), which a spawned one imports again before its first input: on 2
+    cores that start-up kept ``--jobs 2`` well below twice the serial speed (``python -m
+    benchmarks campaign`` measures it beside the CPU-time bound). It is safe only while this
+    process runs one
     thread (ProcessPoolExecutor forks every worker before it starts its own manager thread,
     and the progress bar starts later): a lock held by another thread would be copied
     locked. Where ``fork`` does not exist (Windows, macOS default) or other threads run, the
