@@ -261,8 +261,17 @@ class Graph:
             error = last['reply']['error']
             raise FrfIdentInputError(f'excitation_node refused the {what}: {error}')
         if rc != 0:
-            raise RuntimeError(f'graph driver failed ({rc}); see {self.out / "driver.log"}')
+            raise RuntimeError(f'graph driver failed ({rc}): {self.failure(last)}; see '
+                               f'{self.out / "driver.log"}')
         return results
+
+    def failure(self, last: Optional[dict]) -> str:
+        """Return why the driver failed: its last run's error, else its log's last line."""
+        if last and last.get('reply', {}).get('error'):
+            return f"{last['kind']} {last['reply']['error']}"
+        log = self.out / 'driver.log'
+        lines = log.read_text(errors='replace').strip().splitlines() if log.exists() else []
+        return lines[-1] if lines else 'no result and an empty driver.log'
 
     def kill(self, name: str, sig: int = signal.SIGKILL) -> None:
         self.procs[name].send_signal(sig)

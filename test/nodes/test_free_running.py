@@ -29,6 +29,9 @@ from frf_ident.core.excitation.procedures import MultisineConfig
 import numpy as np
 import pytest
 
+#: the excitation node's abort reasons when the machine stalled the nodes, not the robot
+STALLED = ('/joint_states stale', 'did not see')
+
 
 def test_free_running_frf_unbiased(tmp_path):
     from frf_ident.bag import read_recording
@@ -37,14 +40,22 @@ def test_free_running_frf_unbiased(tmp_path):
     from frf_ident.core.simulation.analytic import robot_frf_sampled
     ms = MultisineConfig(n_realisations=1, n_periods=3, resolution_hz=2.0, compensate=False,
                          return_s=2.0, settle_s=0.3)
-    g = Graph(tmp_path, multisine=ms, lockstep=False,      # a loaded shared machine:
-              params={'excitation_node': {'stale_samples': 500},
-                      'controller_node': {'reference_timeout_s': 0.5}})
-    g.start()
-    try:
-        res = g.drive(multisine=True, iterations=0)
-    finally:
-        bag = g.stop()
+    for attempt in range(2):
+        g = Graph(tmp_path / f'attempt{attempt}', multisine=ms, lockstep=False,
+                  params={'excitation_node': {'stale_samples': 500},    # a loaded machine
+                          'controller_node': {'reference_timeout_s': 0.5}})
+        g.start()
+        try:
+            res = g.drive(multisine=True, iterations=0)
+            break
+        except RuntimeError as err:
+            # the watchdog stopping a run the machine stalled (on a robot: its job) is tried
+            # once more; any other failure is the test's, named in the message
+            if attempt or not any(s in str(err) for s in STALLED):
+                raise
+            print(f'attempt {attempt}: {err}')
+        finally:
+            bag = g.stop()
     assert res['multisine']['success'], res
     rec, _ = read_recording(bag)
     # a robot's recording keeps the experiments only (record_all false free-running): it
@@ -153,6 +164,12 @@ def test_controller_stops_the_robot_when_its_references_stop(tmp_path):
     assert np.all(np.abs(rest).max(axis=0) < 0.1 * np.abs(held).max())
 
 
+def _aborts(out):
+    """Return the excitation node's abort lines in the graph folder ``out``."""
+    return [ln for ln in (out / 'excitation_node.log').read_text().splitlines()
+            if 'aborted' in ln]
+
+
 def _abort_after_plant_kill(tmp_path):
     """Kill the plant mid-run; return (wall s from kill to the abort line, its text) or None."""
     import re
@@ -165,16 +182,21 @@ def _abort_after_plant_kill(tmp_path):
     drv = g.driver(multisine=True, iterations=0)
     try:
         time.sleep(6.0)
-        assert drv.poll() is None
-        t_kill = time.time()
-        g.kill('plant_node')
-        rc = drv.wait(30)
+        early = drv.poll() is not None
+        if not early:
+            t_kill = time.time()
+            g.kill('plant_node')
+            rc = drv.wait(30)
     finally:
         if drv.poll() is None:
             drv.kill()
         g.stop()
-    lines = [ln for ln in (tmp_path / 'excitation_node.log').read_text().splitlines()
-             if 'aborted' in ln]
+    lines = _aborts(tmp_path)
+    if early:
+        # ended before the kill: the watchdog's stale abort of a stalled machine (tried again
+        # by the caller); any other end is a failure, named with the driver's output
+        assert lines and any(s in lines[0] for s in STALLED), (drv.stdout.read(), lines)
+        return None
     assert rc == 1 and len(lines) == 1, lines
     t_log = float(re.match(r'\[ERROR\] \[([0-9.]+)\]', lines[0]).group(1))
     return (t_log - t_kill, lines[0]) if t_log > t_kill else None
@@ -192,6 +214,8 @@ def test_a_dead_robot_stops_the_free_running_run(tmp_path):
         got = _abort_after_plant_kill(tmp_path / f'attempt{attempt}')
         if got is not None:
             break
+        print(f'attempt {attempt}: the watchdog aborted before the kill: '
+              f'{_aborts(tmp_path / f"attempt{attempt}")}')
     else:
         pytest.fail('the watchdog aborted before the kill twice (machine too loaded)')
     delay, line = got

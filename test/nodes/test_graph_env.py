@@ -55,7 +55,7 @@ def test_free_running_graph_is_wall_time(tmp_path):
       '200 N m", "refused": true}}'], 3, 'excitation_node refused the multisine: joint_2'),
     ([], 3, 'graph driver failed'),          # no result line: a failure, not a refusal
     (['FRF_RESULT {"kind": "iteration", "success": false, "reply": {"error": "aborted: '
-      'stale"}}'], 1, 'graph driver failed'),
+      'stale"}}'], 1, r'graph driver failed \(1\): iteration aborted: stale'),
     ([], 2, 'graph driver failed'),          # argparse's usage error
 ])
 def test_drive_raises_input_error_only_for_a_refusal(tmp_path, monkeypatch, lines, rc, error):
@@ -71,3 +71,14 @@ def test_drive_raises_input_error_only_for_a_refusal(tmp_path, monkeypatch, line
     with pytest.raises(expected, match=error) as exc:
         g.drive()
     assert type(exc.value) is expected
+
+
+def test_a_failed_drive_says_why(tmp_path):
+    """The driver's failure names the run's error, else the last line of driver.log."""
+    g = graph.Graph(tmp_path, domain_id=7)
+    (tmp_path / 'driver.log').write_text('Traceback ...\nTimeoutError: /frf/abort not available\n')
+    assert g.failure(None) == 'TimeoutError: /frf/abort not available'
+    last = {'kind': 'multisine', 'reply': {'error': '/joint_states stale for 512 ms'}}
+    assert g.failure(last) == 'multisine /joint_states stale for 512 ms'
+    (tmp_path / 'driver.log').write_text('')
+    assert g.failure({'kind': 'iteration', 'reply': {}}) == 'no result and an empty driver.log'
