@@ -639,7 +639,18 @@ def _baseline_rows(m: dict[str, Any], others: list[Path], label: str
                      'dropped: does not generalise' if v['dropped'] else 'kept', ''))
     for ax, v in ls['extended_vs_baseline'].items():
         rows.append((f'KUKA A{label}: {ax} extended vs baseline', v.split(';')[0][:26],
-                     'effects rejected' if 'rejected' in v else 'effects kept', ''))
+                     "effects replaced by the baseline's terms" if 'replaced' in v
+                     else 'effects rejected' if 'rejected' in v else 'effects kept', ''))
+    for s in ls['held_out']:
+        name = names.get(s['record'], 'A held out')
+        rows.append((f'KUKA A{label} after the baseline rule, on {name}: LS / extended',
+                     ', '.join(f'{v["least_squares"]:.3f} / {v["extended"]:.3f}'
+                               for v in s['per_axis'].values()),
+                     f'pooled {s["time_nrmse"]["least_squares"]:.3f} / '
+                     f'{s["time_nrmse"]["extended"]:.3f}',
+                     'at or below LS (10 % margin) on every axis' if all(
+                         v['extended'] <= (1 + LS_BASELINE_MARGIN) * v['least_squares']
+                         for v in s['per_axis'].values()) else 'least squares wins on an axis'))
     se = m.get('standard_errors_across') or {}
     if se.get('rms_z') is not None:
         rows.append((f'KUKA A{label}: parameter differences A - B, A - C [combined standard '

@@ -98,14 +98,14 @@ def has_experiments(rec: Recording) -> bool:
         s.info.get('design') in ('multisine', 'chirp') for s in rec.segments)
 
 
-def _match_axes(rec: Recording, robot, model_path: Path, progress) -> Recording:
+def _match_axes(rec: Recording, robot, model_path: Path, progress, data: Path) -> Recording:
     if robot.joint_names == list(rec.joint_names):
         return rec
     if set(robot.joint_names) <= set(rec.joint_names):
         return rec.select_joints(robot.joint_names)
     if robot.n_axes <= len(rec.joint_names):
-        progress(f'note: model axes {robot.joint_names} taken in order for the data joints '
-                 f'{rec.joint_names[:robot.n_axes]}')
+        progress(f'note: {data}: model axes {robot.joint_names} taken in order for the data '
+                 f'joints {rec.joint_names[:robot.n_axes]}')
         return rec.select_joints(rec.joint_names[:robot.n_axes])
     raise FrfIdentInputError(f'--model {model_path}: axes {robot.joint_names} do not match the '
                              f'data joints {rec.joint_names}')
@@ -155,8 +155,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     from frf_ident.io.model_file import load_model, save_model
     from frf_ident.report.html import write_diagnosis_report
     model, robot, ctrl = load_model(model_path)
-    rec = _match_axes(load_data(data, map_path), robot, model_path, progress)
-    others = [(p, _match_axes(load_data(p, map_path), robot, model_path, progress))
+    rec = _match_axes(load_data(data, map_path), robot, model_path, progress, data)
+    others = [(p, _match_axes(load_data(p, map_path), robot, model_path, progress, p))
               for p in validate]
     for p, o in others:
         # another record of the same robot names the same joints; matched in order, a
@@ -368,28 +368,47 @@ def _against_least_squares(res, rec: Recording, others: list, robot, progress):
 
     The baseline (:mod:`frf_ident.core.diagnosis.baseline`) is fitted on the diagnosis' fit
     rows and compared on its held-out rows and on every ``--validate`` record. Time-series
-    route: the effects of an axis whose extended model is not below the baseline on every
-    held-out set are rejected and the axis' held-out metrics taken again. Experiments route:
-    the verdict is reported, nothing dropped (not calibrated against the sweep yet).
+    route: an axis whose extended model is not below the baseline on every held-out set is
+    refitted with the baseline's terms in the model (inertia, viscous and Coulomb friction, a
+    constant load); where that ties or beats the baseline the axis takes it, else its effects
+    are rejected (the nominal axis). The held-out metrics are then taken again. Experiments
+    route: the verdict is reported, nothing dropped (not calibrated against the sweep yet).
     Adds ``metrics['least_squares']``.
     """
-    from frf_ident.core.diagnosis.baseline import (axes_not_beating, fit_least_squares,
-                                                   held_out_comparison, without_axes)
+    from frf_ident.core.diagnosis import diagnose_timeseries
+    from frf_ident.core.diagnosis.baseline import (axes_not_beating, BASELINE_GROUPS,
+                                                   fit_least_squares, held_out_comparison,
+                                                   with_axes_of, without_axes)
     from frf_ident.core.diagnosis.prediction import predict_metrics
     ls = fit_least_squares(rec, res.fit_rows, names=robot.joint_names)
     sets = [('held out', rec, res.held_out_rows)] + [(str(p), o, None) for p, o in others]
     comp = fitted = held_out_comparison(robot, res.extended, ls, sets)
     lost = axes_not_beating(comp)
-    dropped = res.mode == 'timeseries' and any(e.axis in lost for e in res.effects)
-    if dropped:
-        res = without_axes(res, robot, lost, comp)
+    named = {ax: ', '.join(sorted({e.name for e in res.effects if e.axis == ax})) or 'none'
+             for ax in lost}
+    took: dict[str, list[str]] = {}
+    if res.mode == 'timeseries' and lost:
+        alt = diagnose_timeseries(rec, robot, fc=res.band.fc_hz if res.band else None,
+                                  only={ax: BASELINE_GROUPS for ax in lost})
+        still = axes_not_beating(held_out_comparison(robot, alt.extended, ls, sets))
+        took = {ax: v for ax, v in lost.items() if ax not in still}
+        res = with_axes_of(res, alt, took, comp)
+    rest = {ax: v for ax, v in lost.items() if ax not in took}
+    dropped = res.mode == 'timeseries' and any(e.axis in rest for e in res.effects)
+    res = without_axes(res, robot, rest, comp) if dropped else res
+    if took or dropped:
         m = predict_metrics(rec, res.extended, mask=res.held_out_rows)
         res.metrics['extended'] = {k: m[k] for k in ('frf_error_db', 'time_nrmse', 'per_axis')}
         comp = held_out_comparison(robot, res.extended, ls, sets)
-    verdict = {ax: ('beats the baseline (or ties it) on every held-out set' if ax not in lost
-                    else 'does not beat the baseline on ' + ', '.join(lost[ax])
-                    + ('; its effects are rejected' if dropped else ''))
-               for ax in ls.names}
+
+    def verdict(ax: str) -> str:
+        if ax not in lost:
+            return 'beats the baseline (or ties it) on every held-out set'
+        head = f'does not beat the baseline on {", ".join(lost[ax])}'
+        if ax in took:
+            return (f"{head}; its effects ({named[ax]}) are replaced by the baseline's terms "
+                    f'refitted in the model, which tie or beat it')
+        return head + (f'; its effects ({named[ax]}) are rejected' if dropped else '')
     res.metrics['least_squares'] = {
         'model': 'per axis: motor torque ~ inertia*qdd + viscous*qd + coulomb*tanh(qd/0.01) '
                  '+ offset, velocity and acceleration from the motor positions, low-passed '
@@ -398,7 +417,8 @@ def _against_least_squares(res, rec: Recording, others: list, robot, progress):
                   'definition and sample mask)',
         'parameters': ls.parameters(), 'held_out': comp,
         # the extended model as the diagnosis fitted it, before the baseline rule
-        'held_out_as_fitted': fitted, 'extended_vs_baseline': verdict}
+        'held_out_as_fitted': fitted,
+        'extended_vs_baseline': {ax: verdict(ax) for ax in ls.names}}
     return res
 
 

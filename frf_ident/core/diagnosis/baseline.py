@@ -36,11 +36,14 @@ from .residual import FC_HZ, lowpass
 from .result import DiagnosisResult
 from .thresholds import LS_BASELINE_MARGIN, LS_TANH_VELOCITY, ONE_WAY
 
-__all__ = ['axes_not_beating', 'fit_least_squares', 'held_out_comparison', 'LeastSquaresBaseline',
-           'least_squares_metrics', 'without_axes']
+__all__ = ['axes_not_beating', 'BASELINE_GROUPS', 'fit_least_squares', 'held_out_comparison',
+           'LeastSquaresBaseline', 'least_squares_metrics', 'with_axes_of', 'without_axes']
 
 #: the columns of :attr:`LeastSquaresBaseline.coef`
 TERMS = ('inertia', 'viscous', 'coulomb', 'offset')
+#: the time-series route's regressor groups that carry :data:`TERMS` in the model file's terms
+#: (an axis whose selected effects lose to the baseline is refitted with exactly these)
+BASELINE_GROUPS = ('motor_inertia', 'viscous_friction', 'coulomb_friction', 'gravity_torque')
 
 
 @dataclass
@@ -183,18 +186,43 @@ def without_axes(res: DiagnosisResult, robot: RobotParams, lost: dict[str, list[
     if not lost:
         return res
     kept = [e for e in res.effects if e.axis not in lost]
-    rejected = list(res.rejected)
-    for e in res.effects:
-        if e.axis not in lost:
-            continue
-        nums = '; '.join(f'{s["record"]}: extended {s["per_axis"][e.axis]["extended"]:.3f}, '
-                         f'least squares {s["per_axis"][e.axis]["least_squares"]:.3f}'
-                         for s in comparison if s['record'] in lost[e.axis])
-        rejected.append({'name': e.name, 'axis': e.axis, 'parameters': e.to_dict()['parameters'],
-                         'reason': f'the extended model does not beat the 4-parameter least-'
-                                   f'squares baseline on held-out data (more than '
-                                   f'{100 * LS_BASELINE_MARGIN:.0f} % above it: {nums}): '
-                                   f'not taken'})
+    rejected = list(res.rejected) + [lost_to_baseline(e, comparison, lost[e.axis], 'not taken')
+                                     for e in res.effects if e.axis in lost]
     axes = [robot.axes[i] if a.name in lost else a for i, a in enumerate(res.extended.axes)]
     return replace(res, effects=kept, rejected=rejected,
                    extended=replace(res.extended, axes=axes))
+
+
+def with_axes_of(res: DiagnosisResult, alt: DiagnosisResult, lost: dict[str, list[str]],
+                 comparison: list[dict[str, Any]]) -> DiagnosisResult:
+    """
+    Return the result with the axes in ``lost`` as ``alt`` has them.
+
+    ``alt`` is the same record diagnosed with those axes refitted with the baseline's terms
+    (:data:`BASELINE_GROUPS`, ``only=`` of :func:`.timeseries.diagnose_timeseries`). The
+    effects ``res`` selected on them move to ``rejected`` with the held-out numbers that
+    fail them. Metrics are not recomputed here.
+    """
+    if not lost:
+        return res
+    effects = sorted([e for e in res.effects if e.axis not in lost]
+                     + [e for e in alt.effects if e.axis in lost], key=lambda e: -e.score)
+    rejected = list(res.rejected) + [
+        lost_to_baseline(e, comparison, lost[e.axis], "the axis takes the baseline's terms, "
+                                                      'refitted in the model, instead')
+        for e in res.effects if e.axis in lost]
+    axes = [b if a.name in lost else a for a, b in zip(res.extended.axes, alt.extended.axes)]
+    return replace(res, effects=effects, rejected=rejected,
+                   extended=replace(res.extended, axes=axes))
+
+
+def lost_to_baseline(e: Any, comparison: list[dict[str, Any]], records: list[str],
+                     outcome: str) -> dict[str, Any]:
+    """Return the ``rejected`` entry of an effect whose axis lost to the baseline."""
+    nums = '; '.join(f'{s["record"]}: extended {s["per_axis"][e.axis]["extended"]:.3f}, '
+                     f'least squares {s["per_axis"][e.axis]["least_squares"]:.3f}'
+                     for s in comparison if s['record'] in records)
+    return {'name': e.name, 'axis': e.axis, 'parameters': e.to_dict()['parameters'],
+            'reason': f'the extended model does not beat the 4-parameter least-squares '
+                      f'baseline on held-out data (more than {100 * LS_BASELINE_MARGIN:.0f} % '
+                      f'above it: {nums}): {outcome}'}

@@ -85,6 +85,11 @@ _SCALAR_EVIDENCE = {
     'gravity_torque': ('constant torque residual {c:+.3g} (a load or friction asymmetry the model '
                        'lacks; p = {p:.2g})'),
 }
+#: evidence of a term of an axis refitted with the least-squares baseline's terms (``only``)
+_BASELINE_EVIDENCE = ('{c:+.4g} on the model value {old:.4g}, fitted with the least-squares '
+                      "baseline's terms (inertia, viscous and Coulomb friction, a constant) "
+                      'after the effects selected on this axis did not beat that baseline on '
+                      'held-out data')
 #: evidence of the constant fitted without a test on an axis that moves one way only
 _ONE_WAY_EVIDENCE = ('constant torque residual {c:+.3g} while the axis moves one way only: '
                      'Coulomb friction and a constant load (gravity at the operating point) in '
@@ -109,7 +114,8 @@ class Prepared:
 
 
 def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None = None,
-                        exclude: dict[str, set[str]] | None = None) -> DiagnosisResult:
+                        exclude: dict[str, set[str]] | None = None,
+                        only: dict[str, tuple[str, ...]] | None = None) -> DiagnosisResult:
     """
     Diagnose a time-series recording against the nominal ``robot``.
 
@@ -129,6 +135,11 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
     exclude
         Per axis name the effects (regressor group names before any ':', e.g. 'gravity')
         that are no candidates: terms another record showed not to generalise.
+    only
+        Per axis name the regressor groups the axis takes, all of them fitted without a
+        selection (those the record cannot test, as Coulomb friction on an axis moving one
+        way, are left out as always): the least-squares baseline's terms
+        (:data:`.baseline.BASELINE_GROUPS`) for an axis whose selected effects lost to it.
 
     Returns
     -------
@@ -137,13 +148,15 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
 
     Notes
     -----
-    The selection per axis is logged at INFO level, the rest of the trace at DEBUG level.
+    The trace (the band, the selection per axis and the rest) is logged at DEBUG level: the
+    application diagnoses a record several times (its halves, ``--validate`` records) and
+    reports the band and the effects once.
 
     """
     say = log.debug
     band = analysis_band(rec) if fc is None else fixed_band(rec, fc)
     fc = band.fc_hz
-    log.info('%s', band.describe())
+    log.debug('%s', band.describe())
     d = prepare(rec, robot, fc, say)
     effects: list[Effect] = []
     rejected: list[dict[str, Any]] = []
@@ -152,11 +165,16 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
         groups, forced, scan = axis_groups(d, robot, i, rejected)
         groups = {k: x for k, x in groups.items()
                   if k.split(':')[0] not in (exclude or {}).get(ax.name, ())}
+        if ax.name in (only or {}):
+            groups = {k: x for k, x in groups.items() if k in only[ax.name]}
+            forced = list(groups)
         groups, chosen, info, cf = select_extrapolating(d, ax, i, groups, forced)
-        log.info('%s: selected %s (ripple scan peak %.1f, threshold %.1f); %s', ax.name, chosen,
-                 scan[1], scan[2], ', '.join(f'{k} p={v.get("p", 1):.2g} '
-                                             f'share={v.get("share", 0):.3f}'
-                                             for k, v in info.items()))
+        if ax.name in (only or {}):
+            info = {k: {**v, 'baseline': True} for k, v in info.items()}
+        log.debug('%s: selected %s (ripple scan peak %.1f, threshold %.1f); %s', ax.name,
+                  chosen, scan[1], scan[2], ', '.join(f'{k} p={v.get("p", 1):.2g} '
+                                                      f'share={v.get("share", 0):.3f}'
+                                                      for k, v in info.items()))
         rejected += rejected_groups(ax.name, chosen, info)
         ch, found = axis_effects(d, robot, i, groups, chosen, info, cf, scan)
         effects += found
@@ -285,6 +303,7 @@ def select_physical(d: Prepared, ax, i: int, groups: dict[str, np.ndarray], forc
         unphysical.update({k: {**info[k], 'unphysical': getattr(ax, k) + float(cf[k][0])}
                            for k in bad})
         groups = {k: x for k, x in groups.items() if k not in unphysical}
+        forced = [k for k in forced if k in groups]
         chosen, info = select_groups(groups, ff, fit_i, val_i, n_eff, forced=forced)
     return groups, chosen, {**unphysical, **info}, cf
 
@@ -366,7 +385,8 @@ def axis_effects(d: Prepared, robot: RobotParams, i: int, groups: dict[str, np.n
         else:
             c = float(cf[k][0])
             ch[k] = getattr(ax, k) + c
-            form = _ONE_WAY_EVIDENCE if info[k].get('forced') else _SCALAR_EVIDENCE[k]
+            form = (_BASELINE_EVIDENCE if info[k].get('baseline') else _ONE_WAY_EVIDENCE
+                    if info[k].get('forced') else _SCALAR_EVIDENCE[k])
             text = form.format(
                 c=c, step=2 * c, old=getattr(ax, k), new=ch[k], p=info[k]['p'],
                 gain=100 * info[k].get('held_out_gain', 0.0))

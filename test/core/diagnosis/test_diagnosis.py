@@ -732,3 +732,51 @@ def test_rigid_residual_carries_the_link_coupling():
     assert np.max(np.abs(f)) < 1e-9 * np.max(np.abs(u))
     f0, *_ = inverse_dynamics_residual(q, v, u, 1 / fs, replace(coupled, link_coupling=None))
     np.testing.assert_allclose(f0, ah[:, ::-1] * 2.5, atol=1e-9 * np.max(np.abs(u)))
+
+
+def test_axis_refitted_with_the_baseline_terms_takes_exactly_those():
+    """
+    ``only``: an axis refitted with the least-squares baseline's terms and nothing else.
+
+    What the app does with an axis whose selected effects lose to the baseline on held-out
+    data. Axis 1 of the arm here has inertia 6 and Coulomb friction 3 (no viscous friction,
+    no load): the refit finds them (within 2 %, as the selection does), says in its evidence
+    where the terms come from, and leaves axes 2 and 3 as the plain diagnosis has them.
+    """
+    from frf_ident.core.diagnosis.baseline import BASELINE_GROUPS
+    rec, truth = _arm_record(5)
+    robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
+    plain = diagnose_timeseries(rec, robot)
+    res = diagnose_timeseries(rec, robot, only={'joint_1': BASELINE_GROUPS})
+    mine = [e for e in res.effects if e.axis == 'joint_1']
+    assert {k for e in mine for k in e.parameters} <= set(BASELINE_GROUPS)
+    assert all("least-squares baseline's terms" in e.evidence for e in mine), mine
+    a = res.extended.axes[0]
+    assert a.coulomb_friction == pytest.approx(truth['fc'][0], rel=0.02)
+    assert a.motor_inertia == pytest.approx(6.0, rel=0.02)
+    assert abs(a.gravity_torque) < 0.05 * truth['fc'][0] and a.viscous_friction < 0.1
+    assert res.extended.axes[1:] == plain.extended.axes[1:]
+    assert sorted((e.name, e.axis) for e in res.effects if e.axis != 'joint_1') == sorted(
+        (e.name, e.axis) for e in plain.effects if e.axis != 'joint_1')
+
+
+def test_axes_taken_from_the_baseline_refit_move_their_effects_to_rejected():
+    """:func:`.baseline.with_axes_of`: the lost axis as refitted, its old effects rejected."""
+    from frf_ident.core.diagnosis.baseline import BASELINE_GROUPS, with_axes_of
+    rec, _ = _arm_record(6)
+    robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
+    plain = diagnose_timeseries(rec, robot)
+    alt = diagnose_timeseries(rec, robot, only={'joint_2': BASELINE_GROUPS})
+    comp = [{'record': 'B.mat', 'per_axis': {'joint_2': {'extended': 0.5,
+                                                         'least_squares': 0.25}}}]
+    got = with_axes_of(plain, alt, {'joint_2': ['B.mat']}, comp)
+    assert got.extended.axes[1] == alt.extended.axes[1]
+    assert [got.extended.axes[i] for i in (0, 2)] == [plain.extended.axes[i] for i in (0, 2)]
+    assert sorted((e.name, e.axis) for e in got.effects) == sorted(
+        [(e.name, e.axis) for e in plain.effects if e.axis != 'joint_2']
+        + [(e.name, e.axis) for e in alt.effects if e.axis == 'joint_2'])
+    old = [e for e in plain.effects if e.axis == 'joint_2']
+    new = got.rejected[len(plain.rejected):]
+    assert old and [(r['name'], r['axis']) for r in new] == [(e.name, e.axis) for e in old]
+    assert all('B.mat: extended 0.500, least squares 0.250' in r['reason']
+               and "the baseline's terms" in r['reason'] for r in new)
