@@ -124,10 +124,13 @@ def test_controller_stops_the_robot_when_its_references_stop(tmp_path):
     reference. (It used to stop 2.5 s of wall time after the kill: on a loaded PC the plant,
     stepping on a wall timer that skips missed ticks, had then made only 1.4 s of samples,
     and the bag held 448 of the 1000 samples the test reads; the estimator had recorded
-    every sample the plant published.) "At rest" is judged 1.5-2.5 s after the last
-    reference: the velocity loop's step response to the zero reference (which comes 0.1 s
-    after the last one, later when the controller lags) overshoots by ~25 % at +0.6 s and
-    was at 10.2 % of the held reference at +1.0 s, 1.8 % at +1.5 s (a run at load 12).
+    every sample the plant published.) "At rest" is judged 2.0-2.5 s after the last
+    reference, against the larger of the held reference and the velocity the robot had at
+    it: the velocity loop's step response to the zero reference (which comes 0.1 s after the
+    last one, later when the controller lags) overshoots by ~25 % at +0.6 s and was at
+    10.2 % of the held reference at +1.0 s, 1.8 % at +1.5 s (a run at load 12); a kill in a
+    move's slow end held 0.0096 rad/s while the joints still moved faster, and were at 11 %
+    of the held reference at +1.5 s, 0.08 % at +2.5 s (a full suite at load 12).
     """
     import time
 
@@ -157,11 +160,14 @@ def test_controller_stops_the_robot_when_its_references_stop(tmp_path):
     assert np.any(held != 0)
     rec, _ = read_recording(bag)
     t_last = rec.t[np.isfinite(rec.reference).all(axis=1)][-1]    # the last reference sent
-    rest = rec.velocity[(rec.t > t_last + 1.5) & (rec.t < t_last + 2.5)]
-    print(f'held reference {held.tolist()} rad/s; |velocity| 1.5-2.5 s after the last '
+    rest = rec.velocity[(rec.t > t_last + 2.0) & (rec.t < t_last + 2.5)]
+    moving = np.abs(rec.velocity[rec.t <= t_last][-1])
+    scale = max(np.abs(held).max(), moving.max())
+    print(f'held reference {held.tolist()} rad/s, velocity then {moving.tolist()} rad/s; '
+          f'|velocity| 2.0-2.5 s after the last '
           f'reference {np.abs(rest).max(axis=0).tolist()} rad/s')
-    assert rest.shape[0] > 900
-    assert np.all(np.abs(rest).max(axis=0) < 0.1 * np.abs(held).max())
+    assert rest.shape[0] > 450
+    assert np.all(np.abs(rest).max(axis=0) < 0.1 * scale)
 
 
 def _aborts(out):
