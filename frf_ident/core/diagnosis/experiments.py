@@ -82,8 +82,9 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     Every candidate is judged on its own axis' misfit (in units of the noise floor). First
     (stage 0) a linear parameter mismatch the frequency-domain physical fit of the measured
     FRFs shows at both loads (:mod:`.frequency_fit`, seconds, one simulation to judge it),
-    so the later stages start from the model with it; then the torque-residual effects (Coulomb and viscous friction, torque ripple, gravity)
-    from one joint regression per axis; then, against the simulation of that model, the
+    so the later stages start from the model with it; then the torque-residual effects
+    (Coulomb and viscous friction, torque ripple, gravity) from one joint regression per axis;
+    then, against the simulation of that model, the
     FRF-shape effects (time delay, parameter mismatch, stiffening, backlash), so friction does
     not pose as stiffness. A second pass, joint refits and a held-out check follow; kept
     effects whose removal does not worsen the held-out misfit are dropped.
@@ -161,8 +162,8 @@ def frequency_domain_fit(s: Search) -> None:
     shifts = linear_shifts(ev.meas_fit, estimates(replace_segments(s.sim0, ev.fit)), robot)
     for sh in shifts:
         s.say(f'stage 0 {sh.key}: log shift of ' + ', '.join(
-            f'{a.name} ' + '/'.join(f'{d:+.3f}+-{e:.3f}' for d, e in zip(sh.log_scale[i],
-                                                                       sh.std[i]))
+            f'{a.name} ' + '/'.join(f'{d:+.3f}+-{e:.3f}'
+                                    for d, e in zip(sh.log_scale[i], sh.std[i]))
             for i, a in enumerate(robot.axes)) + ' (motor inertia/link inertia/stiffness)')
     s.stage0 = [c for c in (fd_parameter_mismatch(shifts, robot, i)
                             for i in range(robot.n_axes)) if c is not None]
