@@ -41,7 +41,7 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
                          stiffness_seen, with_params)
 from .common import apply_effect, Effect
 from .evaluator import estimates, Evaluator, replace_segments
-from .frequency_fit import fd_parameter_mismatch, linear_shifts
+from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
 from .parallel import fork_map
 from .refit import FRICTION, rebuild, refit_friction, refit_jointly
 from .result import DiagnosisResult, ExperimentsDetail
@@ -154,18 +154,23 @@ def frequency_domain_fit(s: Search) -> None:
 
     The physical fit of the measured multisine and chirp FRFs against the same fit of the
     nominal simulation (:func:`.frequency_fit.linear_shifts`); an axis whose inertias or
-    stiffness differ at both loads gets a ``parameter_mismatch`` candidate
+    stiffness differ at both loads, with a spring stage 2 would call linear
+    (:func:`.frequency_fit.load_dependence`), gets a ``parameter_mismatch`` candidate
     (:func:`.frequency_fit.fd_parameter_mismatch`), judged by simulation like every other; taken,
     it is the model the later stages read against (and the held-out check may still drop it).
     """
     ev, robot = s.ev, s.robot
-    shifts = linear_shifts(ev.meas_fit, estimates(replace_segments(s.sim0, ev.fit)), robot)
+    sim_est = estimates(replace_segments(s.sim0, ev.fit))
+    shifts = linear_shifts(ev.meas_fit, sim_est, robot)
+    load = load_dependence(ev.meas_fit, sim_est, robot)
     for sh in shifts:
         s.say(f'stage 0 {sh.key}: log shift of ' + ', '.join(
             f'{a.name} ' + '/'.join(f'{d:+.3f}+-{e:.3f}'
                                     for d, e in zip(sh.log_scale[i], sh.std[i]))
             for i, a in enumerate(robot.axes)) + ' (motor inertia/link inertia/stiffness)')
-    s.stage0 = [c for c in (fd_parameter_mismatch(shifts, robot, i)
+    s.say('stage 0 load dependence (stiffness scale chirp/multisine): ' + ', '.join(
+        f'{a.name} x{math.exp(x):.3f}' for a, x in zip(robot.axes, load)))
+    s.stage0 = [c for c in (fd_parameter_mismatch(shifts, robot, i, load[i])
                             for i in range(robot.n_axes)) if c is not None]
     if s.stage0:
         s.ext, s.cur = accept(ev, robot, s.kept, s.stage0, s.cur, s.say)

@@ -22,8 +22,13 @@ the log parameters is what the measurement shows beyond the estimator's and the 
 bias (both fits carry it alike); its standard error is the measured fit's Cramer-Rao bound,
 widened by the square root of the cost ratio where the model misses part of the record. A
 motor inertia, link inertia or stiffness is named when it differs from the nominal at both
-loads (MISMATCH_MIN_LOG and FD_MISMATCH_Z) and the two loads agree (a load-dependent
-stiffness is a stiffening spring or a backlash, read later by simulation). Damping and viscous
+loads (MISMATCH_MIN_LOG and FD_MISMATCH_Z) and the two loads agree: by the rule stage 2 splits
+linear from load-dependent springs by (the one-parameter stiffness scales of
+:func:`.candidates.stiffness_seen` within LOAD_DEPENDENCE_MIN_LOG; a stiffening gear
+preloaded by gravity shows nearly the same stiffness at both loads in the five-parameter fit,
+whose link inertia absorbs the chirp's softer average), and within FD_MISMATCH_Z combined
+standard errors for each named parameter. A load-dependent stiffness is a stiffening spring or
+a backlash, read later by simulation. Damping and viscous
 friction are left to the later stages: the closed-loop FRF of a joint with Coulomb friction
 looks like extra damping.
 """
@@ -38,10 +43,11 @@ from frf_ident.core.fit.physical import fit_two_mass, PARAMETERS
 from frf_ident.core.model.params import RobotParams
 import numpy as np
 
+from .candidates import stiffness_seen
 from .common import Effect
 from .thresholds import FD_MISMATCH_Z, LOAD_DEPENDENCE_MIN_LOG, MISMATCH_MIN_LOG
 
-__all__ = ['FD_KEYS', 'LinearShift', 'fd_parameter_mismatch', 'linear_shifts']
+__all__ = ['FD_KEYS', 'LinearShift', 'fd_parameter_mismatch', 'linear_shifts', 'load_dependence']
 
 #: the linear parameters stage 0 may name (damping and viscous friction: friction confounds
 #: them in a closed-loop FRF)
@@ -138,12 +144,39 @@ def linear_shifts(meas: dict, sim_est: dict, robot: RobotParams) -> list[LinearS
     return out
 
 
-def fd_parameter_mismatch(shifts: list[LinearShift], robot: RobotParams, axis: int
-                          ) -> Effect | None:
+def load_dependence(meas: dict, sim_est: dict, robot: RobotParams) -> np.ndarray:
+    """
+    Return each axis' log stiffness scale the chirp sees minus the one the multisine sees.
+
+    One parameter per load against the nominal simulation's estimate
+    (:func:`.candidates.stiffness_seen`, the reading stage 2 splits linear from load-dependent
+    springs by); 0 where an estimate is missing.
+
+    Parameters
+    ----------
+    meas, sim_est : dict
+        The record's estimates and the nominal simulation's (as :func:`linear_shifts`).
+    robot : RobotParams
+        The nominal model.
+
+    Returns
+    -------
+    ndarray, shape (n_axes,)
+        log(k_chirp / k_multisine) per axis.
+
+    """
+    return np.array([stiffness_seen(meas, sim_est, robot, i, 'chirp')
+                     - stiffness_seen(meas, sim_est, robot, i, 'multisine')
+                     for i in range(robot.n_axes)])
+
+
+def fd_parameter_mismatch(shifts: list[LinearShift], robot: RobotParams, axis: int,
+                          load_shift: float = 0.0) -> Effect | None:
     """
     Return the parameter mismatch of one axis the FRF fits show at both loads, or None.
 
-    A parameter of :data:`FD_KEYS` is named when at both loads its log shift exceeds
+    None when the spring is load-dependent (``load_shift`` at least LOAD_DEPENDENCE_MIN_LOG).
+    Else a parameter of :data:`FD_KEYS` is named when at both loads its log shift exceeds
     MISMATCH_MIN_LOG and FD_MISMATCH_Z standard errors, with the same sign, and the two
     loads agree (their difference is below LOAD_DEPENDENCE_MIN_LOG or within FD_MISMATCH_Z
     combined standard errors). Its value is the nominal times the inverse-variance mean of
@@ -157,6 +190,9 @@ def fd_parameter_mismatch(shifts: list[LinearShift], robot: RobotParams, axis: i
         The nominal model.
     axis : int
         The axis.
+    load_shift : float, optional
+        Log stiffness scale the chirp (high load) sees minus the multisine's (low load), one
+        parameter each against the nominal simulation (:func:`.candidates.stiffness_seen`).
 
     Returns
     -------
@@ -166,7 +202,7 @@ def fd_parameter_mismatch(shifts: list[LinearShift], robot: RobotParams, axis: i
 
     """
     by = {s.key: s for s in shifts}
-    if 'multisine' not in by or 'chirp' not in by:
+    if 'multisine' not in by or 'chirp' not in by or abs(load_shift) >= LOAD_DEPENDENCE_MIN_LOG:
         return None
     ms, ch = by['multisine'], by['chirp']
     a = robot.axes[axis]
@@ -194,4 +230,5 @@ def fd_parameter_mismatch(shifts: list[LinearShift], robot: RobotParams, axis: i
     return Effect('parameter_mismatch', a.name, 0.0, changed,
                   f'frequency-domain ML fit of the {what} to the multisine (low load) and chirp '
                   f'(high load) FRFs against the same fit of the nominal simulation: '
-                  + '; '.join(said), axis, standard_error=se)
+                  + '; '.join(said) + f'; stiffness scale chirp/multisine '
+                  f'x{math.exp(load_shift):.3f} (linear spring)', axis, standard_error=se)

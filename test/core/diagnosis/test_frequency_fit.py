@@ -24,7 +24,8 @@ mismatch remains.
 from dataclasses import replace
 from pathlib import Path
 
-from frf_ident.core.diagnosis.frequency_fit import fd_parameter_mismatch, linear_shifts
+from frf_ident.core.diagnosis.frequency_fit import (fd_parameter_mismatch, linear_shifts,
+                                                    load_dependence)
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.simulation.analytic import robot_frf_sampled
 from frf_ident.io.model_file import load_model
@@ -77,7 +78,11 @@ def test_a_stiffness_mismatch_is_named_within_two_standard_errors(coupled, insid
     for seed in range(8):
         meas = _estimates(_with(nominal, 1, stiffness=k), np.random.default_rng(seed))
         shifts = linear_shifts(meas, sim, nominal)
-        found = [fd_parameter_mismatch(shifts, nominal, i) for i in range(nominal.n_axes)]
+        if seed == 0:       # the linear spring's reading, once (0.6 s a record)
+            load = load_dependence(meas, sim, nominal)
+            assert np.all(np.abs(load) < 0.01), load
+        found = [fd_parameter_mismatch(shifts, nominal, i, load[i])
+                 for i in range(nominal.n_axes)]
         assert found[0] is None and found[2] is None, found
         eff = found[1]
         assert eff is not None and eff.name == 'parameter_mismatch'
@@ -93,9 +98,9 @@ def test_a_stiffness_mismatch_is_named_within_two_standard_errors(coupled, insid
 @pytest.mark.parametrize('seed', [4, 5])
 def test_the_nominal_model_names_no_mismatch(seed):
     nominal = _nominal(True)
-    shifts = linear_shifts(_estimates(nominal, np.random.default_rng(seed)),
-                           _estimates(nominal), nominal)
-    assert [fd_parameter_mismatch(shifts, nominal, i) for i in range(3)] == [None] * 3
+    meas, sim = _estimates(nominal, np.random.default_rng(seed)), _estimates(nominal)
+    shifts, load = linear_shifts(meas, sim, nominal), load_dependence(meas, sim, nominal)
+    assert [fd_parameter_mismatch(shifts, nominal, i, load[i]) for i in range(3)] == [None] * 3
 
 
 def test_a_stiffness_seen_at_one_load_only_is_not_a_mismatch():
@@ -105,6 +110,10 @@ def test_a_stiffness_seen_at_one_load_only_is_not_a_mismatch():
     rng = np.random.default_rng(6)
     stiff = _estimates(_with(nominal, 1, stiffness=1.2 * nominal.axes[1].stiffness), rng)
     meas = {'multisine': stiff['multisine'], 'chirp': _estimates(nominal, rng)['chirp']}
-    shifts = linear_shifts(meas, _estimates(nominal), nominal)
+    sim = _estimates(nominal)
+    shifts, load = linear_shifts(meas, sim, nominal), load_dependence(meas, sim, nominal)
     assert shifts[0].log_scale[1, 2] == pytest.approx(np.log(1.2), abs=0.01)
+    assert load[1] == pytest.approx(-np.log(1.2), abs=0.02)
+    assert fd_parameter_mismatch(shifts, nominal, 1, load[1]) is None
+    # without the one-parameter reading the two loads' shifts still disagree: not named
     assert fd_parameter_mismatch(shifts, nominal, 1) is None
