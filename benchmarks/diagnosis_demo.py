@@ -127,7 +127,8 @@ def mismatch_rows() -> list[tuple[str, str, str, str]]:
         return (f'{r["wall_s"]:.1f} s, {r["n_sims"]} simulations, stiffness '
                 + (f'{k:.4g} N m/rad' if k else 'not named')
                 + f', {r["hits"]}/{r["n_hidden"]} hidden found, {r["false_alarms"]} false')
-    return [(f'mismatch scene {MISMATCH_SEED}: stiffness of axis {ax} {truth["stiffness"]:.4g} '
+    return [(f'mismatch scene {MISMATCH_SEED}: stiffness of axis index {ax} '
+             f'{truth["stiffness"]:.4g} '
              f'N m/rad; with stage 0 vs without', told(runs[True]),
              'without: ' + told(runs[False]),
              f'{runs[False]["wall_s"] / max(runs[True]["wall_s"], 1e-9):.2f}x')]
