@@ -84,10 +84,10 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     FRFs shows at both loads (:mod:`.frequency_fit`, seconds, one simulation to judge it),
     so the later stages start from the model with it; then the torque-residual effects
     (Coulomb and viscous friction, torque ripple, gravity) from one joint regression per axis;
-    then, against the simulation of that model, the
-    FRF-shape effects (time delay, parameter mismatch, stiffening, backlash), so friction does
-    not pose as stiffness. A second pass, joint refits and a held-out check follow; kept
-    effects whose removal does not worsen the held-out misfit are dropped.
+    then, against the simulation of that model, the FRF-shape effects (time delay, parameter
+    mismatch, stiffening, backlash), so friction does not pose as stiffness. A second pass,
+    joint refits and a held-out check follow; kept effects whose removal does not worsen the
+    held-out misfit are dropped.
 
     Parameters
     ----------
