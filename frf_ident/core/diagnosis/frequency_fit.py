@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import math
 from typing import Any
 
+from frf_ident.core.fit.cost import normalised_residual
 from frf_ident.core.fit.coupled import fit_coupled
 from frf_ident.core.fit.physical import fit_two_mass, PARAMETERS
 from frf_ident.core.model.params import RobotParams
@@ -45,7 +46,8 @@ import numpy as np
 
 from .candidates import stiffness_seen
 from .common import Effect
-from .thresholds import FD_MISMATCH_Z, LOAD_DEPENDENCE_MIN_LOG, MISMATCH_MIN_LOG
+from .thresholds import (FD_MISMATCH_Z, FD_STRUCTURE_RATIO, LOAD_DEPENDENCE_MIN_LOG,
+                         MISMATCH_MIN_LOG)
 
 __all__ = ['FD_KEYS', 'LinearShift', 'fd_parameter_mismatch', 'linear_shifts', 'load_dependence']
 
@@ -71,6 +73,10 @@ class LinearShift:
         sqrt(cost ratio) when the ratio exceeds 1).
     coupled : bool
         True when the coupled robot was fitted (the model has link coupling).
+    structure_missing : ndarray of bool, shape (n_axes,)
+        The cost per degree of freedom of the axis' own channel exceeds FD_STRUCTURE_RATIO:
+        the fitted model misses structure there (only where the estimate carries its
+        variance).
 
     """
 
@@ -78,6 +84,7 @@ class LinearShift:
     log_scale: np.ndarray
     std: np.ndarray
     coupled: bool
+    structure_missing: np.ndarray
 
 
 def _variance(est: Any) -> np.ndarray | None:
@@ -89,19 +96,26 @@ def _variance(est: Any) -> np.ndarray | None:
 
 
 def _fit_axes(est: Any, var: np.ndarray | None, n: int, coupled: bool
-              ) -> tuple[np.ndarray, np.ndarray]:
-    """Return the five parameters of every axis (5, n) and their widened standard errors."""
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """
+    Return every axis' parameters (5, n), their widened standard errors and the costs.
+
+    The cost (n,) is the sum of squared normalised residuals of each axis' own channel.
+    """
     p = np.asarray(est.response)[:n, :n]
     if coupled:
         fit = fit_coupled(est.freq_hz, p, None if var is None else var[:n, :n], delay_s=None)
         value = fit.value[:5 * n].reshape(5, n)
         std = fit.std[:5 * n].reshape(5, n) * math.sqrt(max(1.0, fit.cost.ratio))
-        return value, std
+        cost = np.array([float(np.sum(normalised_residual(
+            fit.model[i, i], p[i, i], None if var is None else var[i, i]) ** 2))
+            for i in range(n)])
+        return value, std, cost
     fits = [fit_two_mass(est.freq_hz, p[i, i], None if var is None else var[i, i],
                          delay_s=None) for i in range(n)]
     value = np.stack([f.value for f in fits], axis=1)
     std = np.stack([f.std * math.sqrt(max(1.0, f.cost.ratio)) for f in fits], axis=1)
-    return value, std
+    return value, std, np.array([f.cost.cost for f in fits])
 
 
 def linear_shifts(meas: dict, sim_est: dict, robot: RobotParams) -> list[LinearShift]:
@@ -133,14 +147,17 @@ def linear_shifts(meas: dict, sim_est: dict, robot: RobotParams) -> list[LinearS
         if sim is None or min(np.shape(est.response)[:2]) < n:
             continue
         var = _variance(est)
-        v_meas, sd = _fit_axes(est, var, n, coupled)
-        v_sim, _ = _fit_axes(sim, var, n, coupled)      # same weights: the same bias
+        v_meas, sd, c_meas = _fit_axes(est, var, n, coupled)
+        v_sim, _, c_sim = _fit_axes(sim, var, n, coupled)      # same weights: the same bias
+        # the cost per degree of freedom of each axis' own channel (weighted estimates only)
+        dof = max(2 * est.freq_hz.size - len(PARAMETERS), 1)
+        missing = (c_meas / dof > FD_STRUCTURE_RATIO) if var is not None else np.zeros(n, bool)
         rows = np.asarray(_ROWS)
         ratio = v_meas[rows] / v_sim[rows]
         rel = sd[rows] / np.abs(v_meas[rows])
         ok = (ratio > 0) & np.isfinite(ratio) & np.isfinite(rel)
         out.append(LinearShift(key, np.where(ok, np.log(np.where(ok, ratio, 1.0)), 0.0).T,
-                               np.where(ok, rel, np.inf).T, coupled))
+                               np.where(ok, rel, np.inf).T, coupled, missing))
     return out
 
 
@@ -175,7 +192,9 @@ def fd_parameter_mismatch(shifts: list[LinearShift], robot: RobotParams, axis: i
     """
     Return the parameter mismatch of one axis the FRF fits show at both loads, or None.
 
-    None when the spring is load-dependent (``load_shift`` at least LOAD_DEPENDENCE_MIN_LOG).
+    None when the spring is load-dependent (``load_shift`` at least LOAD_DEPENDENCE_MIN_LOG)
+    or an estimate's cost test says the model misses structure on the axis (a resonance the
+    model lacks shifts the fitted parameters without any of them being off).
     Else a parameter of :data:`FD_KEYS` is named when at both loads its log shift exceeds
     MISMATCH_MIN_LOG and FD_MISMATCH_Z standard errors, with the same sign, and the two
     loads agree (their difference is below LOAD_DEPENDENCE_MIN_LOG or within FD_MISMATCH_Z
@@ -202,7 +221,8 @@ def fd_parameter_mismatch(shifts: list[LinearShift], robot: RobotParams, axis: i
 
     """
     by = {s.key: s for s in shifts}
-    if 'multisine' not in by or 'chirp' not in by or abs(load_shift) >= LOAD_DEPENDENCE_MIN_LOG:
+    if ('multisine' not in by or 'chirp' not in by or abs(load_shift) >= LOAD_DEPENDENCE_MIN_LOG
+            or any(s.structure_missing[axis] for s in shifts)):
         return None
     ms, ch = by['multisine'], by['chirp']
     a = robot.axes[axis]
@@ -231,4 +251,5 @@ def fd_parameter_mismatch(shifts: list[LinearShift], robot: RobotParams, axis: i
                   f'frequency-domain ML fit of the {what} to the multisine (low load) and chirp '
                   f'(high load) FRFs against the same fit of the nominal simulation: '
                   + '; '.join(said) + f'; stiffness scale chirp/multisine '
-                  f'x{math.exp(load_shift):.3f} (linear spring)', axis, standard_error=se)
+                  f'x{math.exp(load_shift):.3f} (linear spring); the cost test finds no '
+                  f'structure missing', axis, standard_error=se)
