@@ -28,7 +28,9 @@ linear from load-dependent springs by (the one-parameter stiffness scales of
 preloaded by gravity shows nearly the same stiffness at both loads in the five-parameter fit,
 whose link inertia absorbs the chirp's softer average), and within FD_MISMATCH_Z combined
 standard errors for each named parameter. A load-dependent stiffness is a stiffening spring or
-a backlash, read later by simulation. Damping and viscous
+a backlash, read later by simulation. Nor is an axis named whose own channel the fit of a
+weighted estimate leaves far above its noise (FD_STRUCTURE_RATIO): a resonance the model lacks
+shifts the fitted parameters without any of them being off. Damping and viscous
 friction are left to the later stages: the closed-loop FRF of a joint with Coulomb friction
 looks like extra damping.
 """
