@@ -188,23 +188,31 @@ def _diagnosis_log() -> None:
         lg.setLevel(logging.DEBUG)
 
 
-def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
-    """Identify the scene's plant through ``--plant`` into a bag, diagnose the bag."""
+def identify_scene(scene: dict[str, Any], bag: Path) -> Path:
+    """Identify the scene's plant through ``--plant`` into the bag ``bag``; return it."""
     sys.path.insert(0, str(ROOT / 'test'))
-    from frf_ident.app.diagnose import diagnose
     from frf_ident.app.identify import run_identify
     import plants.reference as ref
     ref.SCENE = scene['scene']
     try:
-        bag = work / 'bag'
         run_identify(MODEL, PLANT, identification_config(), bag, progress=lambda _m: None)
-        t0 = time.perf_counter()
-        _diagnosis_log()
-        res = diagnose(bag, MODEL, work / 'diag', progress=lambda _m: None)
-        wall = time.perf_counter() - t0
     finally:
         ref.SCENE = {}
-    return score_scene(scene, res['report'], wall, res['result'].n_sims)
+    return bag
+
+
+def diagnose_scene(scene: dict[str, Any], bag: Path, out: Path, **kw: Any) -> dict[str, Any]:
+    """Diagnose a scene's bag against MODEL (``kw``: of ``diagnose``) and score it."""
+    from frf_ident.app.diagnose import diagnose
+    t0 = time.perf_counter()
+    _diagnosis_log()
+    res = diagnose(bag, MODEL, out, progress=lambda _m: None, **kw)
+    return score_scene(scene, res['report'], time.perf_counter() - t0, res['result'].n_sims)
+
+
+def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
+    """Identify the scene's plant through ``--plant`` into a bag, diagnose the bag."""
+    return diagnose_scene(scene, identify_scene(scene, work / 'bag'), work / 'diag')
 
 
 def param_error(name: str, truth: dict[str, Any], found: dict[str, Any]) -> float:

@@ -22,6 +22,12 @@ round, a refit's starting simplex and the axes' FRF-shape candidates on 2 proces
 gives the wall time beside the simulation count and the CPU time (this process and its
 workers: what a quiet machine's wall time is bounded by), and whether both found the same
 effects (names, axes, values to 4 digits) and metrics. Goal (issue 41): <= 30 s on 2 cores.
+
+Issue 40 item 5 (stage 0, the frequency-domain physical fit that names a linear parameter
+mismatch before the simulation search): the demo bag diagnosed a third time without it
+(``fd_fit=False``, ``--no-fd-fit``), and a scene of the reference plant with one axis' stiffness
+off (``python -m benchmarks.diagnosis 1 MISMATCH_SEED mismatch --every``) identified once and
+diagnosed with and without it: wall time, simulations, the effects and the stiffness found.
 """
 from __future__ import annotations
 
@@ -31,7 +37,11 @@ import resource
 import tempfile
 import time
 
-__all__ = ['demo_bag', 'rows']
+__all__ = ['MISMATCH_SEED', 'demo_bag', 'rows']
+
+#: the mismatch scene of the before/after rows: joint_3 15 % stiffer than the nominal model,
+#: joint_2 with a Coulomb friction
+MISMATCH_SEED = 2026
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -71,12 +81,14 @@ def rows() -> list[tuple[str, str, str, str]]:
     model = ROOT / 'config' / 'model_3axis.yaml'
     runs = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for jobs in (1, 2):
+        for jobs, fd in ((1, True), (2, True), (2, False)):
             t0, c0 = time.perf_counter(), _cpu_s()
-            res = diagnose(bag, model, Path(tmp) / f'jobs{jobs}', jobs=jobs)
-            runs[jobs] = (time.perf_counter() - t0, res['result'].n_sims,
-                          _effects(res['report']), res['report']['metrics'], _cpu_s() - c0)
+            res = diagnose(bag, model, Path(tmp) / f'jobs{jobs}{fd}', jobs=jobs, fd_fit=fd)
+            runs[jobs if fd else 'no_fd'] = (
+                time.perf_counter() - t0, res['result'].n_sims, _effects(res['report']),
+                res['report']['metrics'], _cpu_s() - c0)
     (t1, n1, e1, m1, c1), (t2, n2, e2, m2, c2) = runs[1], runs[2]
+    t0, n0, e0, m0, _ = runs['no_fd']
     load = os.getloadavg()[0]
     same = 'same effects' if e1 == e2 and m1 == m2 else 'EFFECTS OR METRICS DIFFER'
     return [('demo diagnose, 1 process (the serial path)',
@@ -85,4 +97,38 @@ def rows() -> list[tuple[str, str, str, str]]:
              f'{os.cpu_count()} cores'),
             ('demo diagnose, simulations on 2 processes (goal <= 30 s)',
              f'{t2:.1f} s, {n2} simulations, CPU {c2:.0f} s', f'1 process {t1:.1f} s; {same}',
-             f'{t1 / t2:.2f}x')]
+             f'{t1 / t2:.2f}x'),
+            ('demo diagnose with stage 0 (FD fit) vs without (--no-fd-fit), 2 processes',
+             f'{t2:.1f} s, {n2} simulations: {_names(e2)}',
+             f'without: {t0:.1f} s, {n0} simulations: {_names(e0)}',
+             'same effects' if e0 == e2 and m0 == m2 else (
+                 'same effects, other values' if _names(e0) == _names(e2)
+                 else 'EFFECTS DIFFER'))] + mismatch_rows()
+
+
+def _names(effects: list[tuple]) -> str:
+    """Return 'name@axis, ...' of :func:`_effects` entries."""
+    return ', '.join(f'{n}@{a}' for n, a, _ in effects) or 'none'
+
+
+def mismatch_rows() -> list[tuple[str, str, str, str]]:
+    """Return the before/after of stage 0 on the mismatch scene MISMATCH_SEED."""
+    from benchmarks.diagnosis import diagnose_scene, identify_scene, scene_of
+    scene = scene_of(MISMATCH_SEED, 0, 'mismatch')
+    _, ax, truth = scene['truth'][0]
+    with tempfile.TemporaryDirectory() as tmp:
+        bag = identify_scene(scene, Path(tmp) / 'bag')
+        runs = {fd: diagnose_scene(scene, bag, Path(tmp) / f'diag{fd}', fd_fit=fd)
+                for fd in (True, False)}
+
+    def told(r: dict) -> str:
+        found = {k: v for k, v in r['parameters'].items() if k.startswith('parameter_mismatch')}
+        k = next(iter(found.values()), {}).get('stiffness')
+        return (f'{r["wall_s"]:.1f} s, {r["n_sims"]} simulations, stiffness '
+                + (f'{k:.4g} N m/rad' if k else 'not named')
+                + f', {r["hits"]}/{r["n_hidden"]} hidden found, {r["false_alarms"]} false')
+    return [(f'mismatch scene {MISMATCH_SEED}: stiffness of axis index {ax} '
+             f'{truth["stiffness"]:.4g} '
+             f'N m/rad; with stage 0 vs without', told(runs[True]),
+             'without: ' + told(runs[False]),
+             f'{runs[False]["wall_s"] / max(runs[True]["wall_s"], 1e-9):.2f}x')]

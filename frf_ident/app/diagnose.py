@@ -113,7 +113,8 @@ def _match_axes(rec: Recording, robot, model_path: Path, progress, data: Path) -
 
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
              validate: Sequence[Path] = (), urdf: Path | None = None,
-             progress: Progress | None = None, jobs: int | None = None) -> dict[str, Any]:
+             progress: Progress | None = None, jobs: int | None = None,
+             fd_fit: bool = True) -> dict[str, Any]:
     """
     Run the diagnosis and write DIR/report.json, extended_model.yaml, report.html.
 
@@ -138,6 +139,10 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         Processes that simulate independent candidate models at once (experiments route);
         None: :data:`frf_ident.core.diagnosis.thresholds.SIM_JOBS`; 1: one after the other
         (the same result).
+    fd_fit
+        Experiments route: stage 0, the frequency-domain physical fit that names a linear
+        parameter mismatch before the simulation search (default); False: the path without
+        it (for the before/after benchmark).
     progress
         Called with one line per step for the lines people read (what was read, the route,
         the effects found with their values, where the files went); None: silent. The
@@ -181,7 +186,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     if has_experiments(rec):
         progress('identification experiments found: FRF and closed-loop simulation evidence')
         from frf_ident.core.diagnosis.thresholds import SIM_JOBS
-        res = diagnose_experiments(rec, robot, ctrl, jobs=SIM_JOBS if jobs is None else jobs)
+        res = diagnose_experiments(rec, robot, ctrl, jobs=SIM_JOBS if jobs is None else jobs,
+                                   fd_fit=fd_fit)
     else:
         progress('no identification experiments: time-series (inverse-dynamics) evidence')
         res = diagnose_timeseries(rec, robot)

@@ -57,6 +57,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="the robot's URDF (needs the pin package): gravity with the structure "
                         'of its kinematics, base parameters fitted jointly over the axes '
                         '(time-series route; the joints named as the model axes)')
+    p.add_argument('--no-fd-fit', dest='fd_fit', action='store_false',
+                   help='skip stage 0, the frequency-domain physical fit that names a linear '
+                        'parameter mismatch before any simulation search (experiments route; '
+                        'for comparison: the mismatch is then read in the FRF-shape stage)')
 
 
 def run(args: argparse.Namespace) -> int:
@@ -90,13 +94,13 @@ def run(args: argparse.Namespace) -> int:
     if is_campaign(args.data):
         # the records run in parallel: each one simulates its candidates one after the other
         task = partial(diagnose_columns, model_path=args.model, map_path=args.map,
-                       validate=args.validate, urdf=args.urdf, jobs=1)
+                       validate=args.validate, urdf=args.urdf, jobs=1, fd_fit=args.fd_fit)
         return run_many(args, args.data, task, OUTPUT_FILES, 'diagnose')
     out = check_out(args.out, outputs=OUTPUT_FILES, overwrite=args.overwrite)
     # one record: --jobs is the processes that simulate its candidate models at once
     res = diagnose(Path(args.data[0]), args.model, out, map_path=args.map,
                    validate=args.validate, urdf=args.urdf, progress=say,
-                   jobs=args.jobs)
+                   jobs=args.jobs, fd_fit=args.fd_fit)
     for line in diagnosis_summary(res['report'], out):
         say(line)
     return 0

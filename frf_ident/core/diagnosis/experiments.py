@@ -41,6 +41,7 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
                          stiffness_seen, with_params)
 from .common import apply_effect, Effect
 from .evaluator import estimates, Evaluator, replace_segments
+from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
 from .parallel import fork_map
 from .refit import FRICTION, rebuild, refit_friction, refit_jointly
 from .result import DiagnosisResult, ExperimentsDetail
@@ -65,6 +66,7 @@ class Search:
     cur: np.ndarray                     # its misfit per axis on the fit part
     kept: list[Effect] = field(default_factory=list)
     cands: list[Effect] = field(default_factory=list)      # every candidate offered
+    stage0: list[Effect] = field(default_factory=list)     # frequency-domain fit candidates
     stage1: list[Effect] = field(default_factory=list)     # torque-residual candidates
     stage2: list[Effect] = field(default_factory=list)     # FRF-shape candidates
     rivals: dict[int, list[Effect]] = field(default_factory=dict)
@@ -73,16 +75,19 @@ class Search:
 
 
 def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
-                         jobs: int = SIM_JOBS) -> DiagnosisResult:
+                         jobs: int = SIM_JOBS, fd_fit: bool = True) -> DiagnosisResult:
     """
     Diagnose an identification recording against the nominal ``robot``.
 
-    Two stages, every candidate judged on its own axis' misfit (in units of the noise floor):
-    first the torque-residual effects (Coulomb and viscous friction, torque ripple, gravity)
-    from one joint regression per axis; then, against the simulation of that model, the
-    FRF-shape effects (time delay, parameter mismatch, stiffening, backlash), so friction does
-    not pose as stiffness. A second pass, joint refits and a held-out check follow; kept
-    effects whose removal does not worsen the held-out misfit are dropped.
+    Every candidate is judged on its own axis' misfit (in units of the noise floor). First
+    (stage 0) a linear parameter mismatch the frequency-domain physical fit of the measured
+    FRFs shows at both loads (:mod:`.frequency_fit`, seconds, one simulation to judge it),
+    so the later stages start from the model with it; then the torque-residual effects
+    (Coulomb and viscous friction, torque ripple, gravity) from one joint regression per axis;
+    then, against the simulation of that model, the FRF-shape effects (time delay, parameter
+    mismatch, stiffening, backlash), so friction does not pose as stiffness. A second pass,
+    joint refits and a held-out check follow; kept effects whose removal does not worsen the
+    held-out misfit are dropped.
 
     Parameters
     ----------
@@ -95,6 +100,9 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     jobs : int
         Processes that simulate independent models at once (1: one after the other; the
         same result either way).
+    fd_fit : bool
+        Run stage 0 (default); False: the mismatch is read in stage 2 only (the path before
+        issue 40 item 5, kept for the before/after benchmark).
 
     Returns
     -------
@@ -109,6 +117,8 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
 
     """
     s = start(rec, robot, ctrl, jobs)
+    if fd_fit:
+        frequency_domain_fit(s)
     torque_residual_effects(s)
     frf_shape_effects(s)
     second_pass(s)
@@ -138,26 +148,62 @@ def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_
     return Search(ev, robot, log.debug, sim0, robot, e0)
 
 
+def frequency_domain_fit(s: Search) -> None:
+    """
+    Stage 0: take a linear parameter mismatch the FRF fits show, before simulating a search.
+
+    The physical fit of the measured multisine and chirp FRFs against the same fit of the
+    nominal simulation (:func:`.frequency_fit.linear_shifts`); an axis whose inertias or
+    stiffness differ at both loads, with a spring stage 2 would call linear
+    (:func:`.frequency_fit.load_dependence`), gets a ``parameter_mismatch`` candidate
+    (:func:`.frequency_fit.fd_parameter_mismatch`), judged by simulation like every other; taken,
+    it is the model the later stages read against (and the held-out check may still drop it).
+    """
+    ev, robot = s.ev, s.robot
+    sim_est = estimates(replace_segments(s.sim0, ev.fit))
+    shifts = linear_shifts(ev.meas_fit, sim_est, robot)
+    load = load_dependence(ev.meas_fit, sim_est, robot)
+    for sh in shifts:
+        s.say(f'stage 0 {sh.key}: log shift of ' + ', '.join(
+            f'{a.name} ' + '/'.join(f'{d:+.3f}+-{e:.3f}'
+                                    for d, e in zip(sh.log_scale[i], sh.std[i]))
+            for i, a in enumerate(robot.axes)) + ' (motor inertia/link inertia/stiffness)'
+            + ''.join(f'; {a.name}: structure missing' for a, m in zip(robot.axes,
+                                                                       sh.structure_missing)
+                      if m))
+    s.say('stage 0 load dependence (stiffness scale chirp/multisine): ' + ', '.join(
+        f'{a.name} x{math.exp(x):.3f}' for a, x in zip(robot.axes, load)))
+    s.stage0 = [c for c in (fd_parameter_mismatch(shifts, robot, i, load[i])
+                            for i in range(robot.n_axes)) if c is not None]
+    if s.stage0:
+        s.ext, s.cur = accept(ev, robot, s.kept, s.stage0, s.cur, s.say)
+    s.cands += s.stage0
+    log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0),
+             _named(s.kept))
+
+
 def torque_residual_effects(s: Search) -> None:
     """
     Stage 1: read friction, ripple and gravity from the residual regression and take them.
 
+    Read against the model so far (the nominal one, or the stage-0 mismatch taken).
+
     A ripple candidate that is another axis' ripple carried over by the link coupling
     (:func:`.candidates.coupled_ripples`) is not offered.
     """
-    ev, robot = s.ev, s.robot
+    ev, robot, ext = s.ev, s.robot, s.ext
     resolution = np.full(robot.n_axes, math.inf)
     for i in range(robot.n_axes):
-        reg = friction_regression(ev, robot, i)
+        reg = friction_regression(ev, ext, i)
         resolution[i] = reg.ripple_resolution
         s.say(f'{robot.axes[i].name}: residual regression '
               f'{ {k: round(v, 4) for k, v in reg.coef.items()} }, ripple scan peak '
               f'{reg.ripple_peak_ratio:.1f} (threshold {reg.ripple_threshold:.1f})')
         for fn in (fit_coulomb, fit_viscous, fit_ripple):
-            e = fn(reg, robot, i)
+            e = fn(reg, ext, i)
             if e is not None:
                 s.stage1.append(e)
-        e = fit_gravity(ev, robot, i)
+        e = fit_gravity(ev, ext, i)
         if e is not None:
             s.stage1.append(e)
     for c in coupled_ripples(s.stage1, robot.link_inertia_matrix(), resolution):
@@ -327,12 +373,14 @@ def joint_refits(s: Search) -> None:
     An axis still clearly above its floor, an axis that took a second-pass effect (read against
     a model that lacked the axis' FRF-shape effect), and an axis whose effects were all fitted
     in stage 1 next to another axis' FRF-shape effect the model still lacked (the link coupling
-    carried that misfit into its simulation). Its ripple amplitude is refitted only when the
-    axis is above its floor or took a second-pass effect.
+    carried that misfit into its simulation; a stage-0 mismatch was in the model already). Its
+    ripple amplitude is refitted only when the axis is above its floor or took a second-pass
+    effect.
     """
     ev, robot, kept = s.ev, s.robot, s.kept
     second = {c.axis_index for c in s.again if c in kept}
-    early = ({c.axis_index for c in kept if c not in s.stage2} - s.shaped) if s.shaped else set()
+    early = ({c.axis_index for c in kept if c not in s.stage2 and c not in s.stage0}
+             - s.shaped) if s.shaped else set()
     for i in range(robot.n_axes):
         above = s.cur[i] > UNEXPLAINED_RATIO * ev.floor_seen(s.cur)[i]
         if any(c.axis_index == i for c in kept) and (i in second or i in early or above):
