@@ -19,14 +19,13 @@ candidate model is simulated on the recorded excitation through the same control
 estimated exactly like the measurement (:class:`.evaluator.Evaluator`). Its gain is the share
 of its own axis' misfit above the noise floor that it removes (:mod:`.acceptance`). The
 pipeline, :func:`diagnose_experiments`, is a sequence of named stages acting on one
-:class:`Search`.
+:class:`.search.Search`; the closing ones (held-out check, missing structure, the result) are
+in :mod:`.held_out`.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
 import logging
 import math
-from typing import Any, Callable
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
@@ -34,7 +33,7 @@ from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.errors import EstimationError
 import numpy as np
 
-from .acceptance import accept, gravity_with_shape, left_unexplained
+from .acceptance import accept, gravity_with_shape
 from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity,
                          fit_parameter_mismatch, fit_ripple, fit_stiffness_nonlinearity,
                          fit_time_delay, fit_viscous, friction_regression, ripple_again,
@@ -42,36 +41,16 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
 from .common import apply_effect, Effect
 from .evaluator import estimates, Evaluator, replace_segments
 from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
+from .held_out import finish, held_out_check, structure_missing
 from .parallel import fork_map
-from .refit import FRICTION, rebuild, refit_friction, refit_jointly
-from .result import DiagnosisResult, ExperimentsDetail
+from .refit import FRICTION, refit_friction, refit_jointly
+from .result import DiagnosisResult
+from .search import named, Search
 from .thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS, UNEXPLAINED_RATIO
-from .unexplained import (axis_signature, discretisation_check, rival_instead,
-                          typical_unscalable_misfit)
 
-__all__ = ['diagnose_experiments', 'Search']
+__all__ = ['diagnose_experiments']
 
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class Search:
-    """The state the stages of :func:`diagnose_experiments` share."""
-
-    ev: Evaluator
-    robot: RobotParams                  # the nominal model
-    say: Callable[[str], None]          # the search trace
-    sim0: Recording                     # the nominal model's simulation
-    ext: RobotParams                    # the model so far
-    cur: np.ndarray                     # its misfit per axis on the fit part
-    kept: list[Effect] = field(default_factory=list)
-    cands: list[Effect] = field(default_factory=list)      # every candidate offered
-    stage0: list[Effect] = field(default_factory=list)     # frequency-domain fit candidates
-    stage1: list[Effect] = field(default_factory=list)     # torque-residual candidates
-    stage2: list[Effect] = field(default_factory=list)     # FRF-shape candidates
-    rivals: dict[int, list[Effect]] = field(default_factory=dict)
-    shaped: set[int] = field(default_factory=set)   # axes that took an FRF-shape effect
-    again: list[Effect] = field(default_factory=list)  # second-pass candidates
 
 
 def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
@@ -179,7 +158,7 @@ def frequency_domain_fit(s: Search) -> None:
         s.ext, s.cur = accept(ev, robot, s.kept, s.stage0, s.cur, s.say)
     s.cands += s.stage0
     log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0),
-             _named(s.kept))
+             named(s.kept))
 
 
 def torque_residual_effects(s: Search) -> None:
@@ -215,7 +194,7 @@ def torque_residual_effects(s: Search) -> None:
               f'not taken')
     s.ext, s.cur = accept(s.ev, robot, s.kept, s.stage1, s.cur, s.say)
     s.cands += s.stage1
-    log.info('stage 1 (torque residual): %d candidate(s), %s', len(s.stage1), _named(s.kept))
+    log.info('stage 1 (torque residual): %d candidate(s), %s', len(s.stage1), named(s.kept))
 
 
 def frf_shape_effects(s: Search) -> None:
@@ -246,7 +225,7 @@ def frf_shape_effects(s: Search) -> None:
         sim1 = ev.simulate(s.ext)
     s.stage2 = stage2_all
     s.cands += stage2_all
-    log.info('stage 2 (FRF shape): %d candidate(s), %s', len(stage2_all), _named(s.kept))
+    log.info('stage 2 (FRF shape): %d candidate(s), %s', len(stage2_all), named(s.kept))
 
 
 def axis_candidates(s: Search, axes: list[int], sim_est: dict) -> list[list[Effect]]:
@@ -400,169 +379,3 @@ def late_ripples(s: Search) -> None:
     if late:
         s.ext, s.cur = accept(s.ev, s.robot, s.kept, late, s.cur, s.say)
         s.cands += late
-
-
-def held_out_check(s: Search) -> tuple[np.ndarray, Recording]:
-    """
-    Drop every kept effect whose removal does not worsen its axis' held-out misfit.
-
-    A friction term is checked against the axis' other friction term refitted without it (the
-    two were fitted together, so the partner left at its value cannot show what the data need
-    without it); so is a parameter mismatch of the axis, whose joint damping dissipates like
-    viscous friction: both are refitted jointly by simulation without the term. With its
-    partners refitted, the model without the term may fit even the fit part better: then the
-    data do not ask for it either.
-
-    Returns
-    -------
-    (ndarray, Recording)
-        The held-out misfit per axis of the extended model and its simulation.
-
-    """
-    ev, robot, kept = s.ev, s.robot, s.kept
-    sim_ext = ev.simulate(s.ext)
-    val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
-    for c in list(kept):
-        others = [k for k in kept if k is not c]
-        refit = partners_without(s, c, others)
-        alt = [refit.get(id(k), k) for k in others]
-        i = c.axis_index
-        without = rebuild(robot, alt)
-        v = ev.misfit(ev.terms(without, held_out=True))
-        v_fit = ev.misfit(ev.terms(without))[i] if refit else math.inf
-        if v[i] <= val_ext[i] or v_fit <= s.cur[i]:
-            s.say(f'  dropped {c.axis} {c.name}: misfit without it held out '
-                  f'{v[i]:.4g} (with it {val_ext[i]:.4g}), fitted {v_fit:.4g} (with it '
-                  f'{s.cur[i]:.4g})'
-                  + ''.join(f' ({r.name} refitted without it: ' + ', '.join(
-                      f'{k} {x:.4g}' for k, x in r.parameters.items()
-                      if isinstance(x, (int, float))) + ')' for r in refit.values()))
-            kept.remove(c)
-            c.gain = 0.0
-            for k in others:
-                if id(k) in refit:
-                    k.parameters, k.evidence = refit[id(k)].parameters, refit[id(k)].evidence
-    if len(kept) != len([c for c in s.cands if c.score > 0]):
-        s.ext = rebuild(robot, kept)
-        sim_ext = ev.simulate(s.ext)
-        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
-    log.info('held-out check: %s', _named(kept))
-    return val_ext, sim_ext
-
-
-def _named(kept: list[Effect]) -> str:
-    """Return 'kept: name@axis, ...' for a log line."""
-    return 'kept: ' + (', '.join(f'{c.name}@{c.axis}' for c in kept) or 'none')
-
-
-def partners_without(s: Search, c: Effect, others: list[Effect]) -> dict[int, Effect]:
-    """Return the partners of a friction term refitted without it (by id), else nothing."""
-    ev, robot = s.ev, s.robot
-    refit: dict[int, Effect] = {}
-    if c.name not in FRICTION:
-        return refit
-    for p in others:
-        if p.axis_index == c.axis_index and p.name in FRICTION:
-            refit[id(p)] = refit_friction(
-                ev, rebuild(robot, [k for k in others if k is not p]), p, local=True)
-    if any(p.axis_index == c.axis_index and p.name == 'parameter_mismatch' for p in others):
-        mine = {id(k): replace(refit.get(id(k), k)) for k in others
-                if k.axis_index == c.axis_index}
-        trial = [mine.get(id(k), k) for k in others]
-        refit_jointly(ev, robot, trial, c.axis_index,
-                      ev.misfit(ev.terms(rebuild(robot, trial))), s.say)
-        refit.update(mine)
-    return refit
-
-
-def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
-                      ) -> tuple[np.ndarray, Recording, np.ndarray]:
-    """
-    Withdraw a parameter mismatch that leaves its axis clearly above its floor.
-
-    A mismatch claims the axis' linear parameters are off; if the axis stays clearly above its
-    floor with them refitted, the model lacks structure there (an unmodelled resonance near the
-    first one looks like a softer joint): the axis is reported unexplained, or the spring
-    rival the mismatch won over takes its place where it explains the axis
-    (:func:`.unexplained.rival_instead`). Clearly above: a share of the misfit left, or an FRF
-    no rescale of the axis' linear parameters brings near the measured one.
-
-    Returns
-    -------
-    (ndarray, Recording, ndarray)
-        Held-out misfit per axis of the extended model, its simulation, and the held-out
-        misfit of the nominal model.
-
-    """
-    ev, robot, kept = s.ev, s.robot, s.kept
-    val_base = ev.misfit(ev.terms(robot, s.sim0, held_out=True))
-    lacking = []
-    for c in kept:
-        if c.name != 'parameter_mismatch':
-            continue
-        # the share rule first: the FRF test costs the estimates of the simulation
-        if left_unexplained(val_ext, val_base, c.axis_index):
-            why = 'its share of the nominal misfit'
-        else:
-            off = typical_unscalable_misfit(ev, sim_ext, c.axis_index, s.ext)
-            if off <= UNEXPLAINED_RATIO:
-                continue
-            why = f'its FRF {off:.3g} x on the typical line with the parameters refitted'
-        s.say(f'  {c.axis} parameter_mismatch not named: the axis stays at '
-              f'{val_ext[c.axis_index]:.4g} x its floor with it ({why}): structure missing, '
-              f'not parameters')
-        lacking.append(c)
-    for c in lacking:
-        trial = rival_instead(ev, robot, kept, c, s.rivals, val_base, s.say)
-        new = trial if trial is not None else [k for k in kept if k is not c]
-        for k in kept:
-            if all(k is not x for x in new):
-                k.gain = 0.0
-        kept[:] = new
-    if lacking:
-        s.ext = rebuild(robot, kept)
-        sim_ext = ev.simulate(s.ext)
-        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
-    return val_ext, sim_ext, val_base
-
-
-def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndarray
-           ) -> DiagnosisResult:
-    """Rank the effects, list the unexplained axes, take the metrics and check the step."""
-    ev, robot, kept, ext = s.ev, s.robot, s.kept, s.ext
-    kept.sort(key=lambda c: -c.score)
-    unexplained = []
-    for i, a in enumerate(robot.axes):
-        if left_unexplained(val_ext, val_base, i):
-            share = float(np.clip((val_ext[i] - 1) / max(val_base[i] - 1, 1e-12), 0, 1))
-            unexplained.append({'axis': a.name, 'misfit_share': round(share, 3),
-                                'signature': axis_signature(ev, sim_ext, i, ext)})
-    metrics = {'baseline': ev.metrics(robot, s.sim0), 'extended': ev.metrics(ext, sim_ext),
-               'validation': ev.validation_text}
-    part = ev.val if ev.val.segments else ev.fit
-    plots = {'measured': ev.meas_val or ev.meas_fit,
-             'nominal': estimates(replace_segments(s.sim0, part)),
-             'extended': estimates(replace_segments(sim_ext, part))}
-    step = discretisation_check(ev, ext, val_ext)
-    if step['too_coarse']:
-        log.warning(
-            'simulation.substeps = %d is too coarse for this record: at twice as many the '
-            'held-out misfit moves from %s noise floors: raise simulation.substeps in the '
-            'model file', step['substeps'], ', '.join(
-                f'{a} {x:.4g} to {y:.4g}' for a, x, y in zip(
-                    step['axes'], step['held_out_misfit'],
-                    step['held_out_misfit_double_substeps']) if a in step['too_coarse']))
-    log.info('%d simulations of the recorded excitation', ev.n_sims)
-    rest = [c for c in s.cands if c not in kept]
-    return DiagnosisResult(
-        'experiments', kept, [rejected_entry(c) for c in rest], unexplained, metrics, ext,
-        ExperimentsDetail(ev, plots, {'nominal': s.sim0, 'extended': sim_ext},
-                          {'baseline': val_base.tolist(), 'extended': val_ext.tolist()}),
-        ev.fit_mask[:-1], (ev.val_mask if ev.val_mask.any() else ev.fit_mask)[:-1],
-        discretisation=step, n_sims=ev.n_sims, candidates=rest)
-
-
-def rejected_entry(c: Effect) -> dict[str, Any]:
-    """Return the report.json ``rejected`` entry of a candidate that was not taken."""
-    return {'name': c.name, 'axis': c.axis, 'misfit_share_removed': round(float(c.gain), 4),
-            'parameters': c.to_dict()['parameters']}

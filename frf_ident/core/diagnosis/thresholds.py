@@ -128,8 +128,9 @@ FD_MISMATCH_Z = 3.0
 #: core/fit/cost.py: the continuous model fitted to a sampled, closed-loop estimate with a
 #: small variance leaves 3-14 on the axes of three reference-plant scenes that have the right
 #: structure (mismatched axes 3.4 and 6.7) and up to 1.9 on the nominal simulation; a mode the
-#: model lacks 2,300 (scene 15626261, joint_3; its coupled neighbours 30 and 270). Set by hand
-#: between them; held by test_unmodelled_second_mode_is_unexplained_on_its_axis
+#: model lacks 2,300 (joint_3 of the scene of
+#: test_unmodelled_second_mode_is_unexplained_on_its_axis; its coupled neighbours 30 and 270).
+#: Set by hand between them; held by that test
 FD_STRUCTURE_RATIO = 100.0
 #: log stiffness difference between the multisine (low load) and the chirp (high load) below
 #: which the spring is taken as linear (1 %; stiffening and backlash need more)
