@@ -37,6 +37,7 @@ looks like extra damping.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import logging
 import math
 from typing import Any
 
@@ -52,6 +53,8 @@ from .thresholds import (FD_MISMATCH_Z, FD_STRUCTURE_RATIO, LOAD_DEPENDENCE_MIN_
                          MISMATCH_MIN_LOG)
 
 __all__ = ['FD_KEYS', 'LinearShift', 'fd_parameter_mismatch', 'linear_shifts', 'load_dependence']
+
+log = logging.getLogger(__name__)
 
 #: the linear parameters stage 0 may name (damping and viscous friction: friction confounds
 #: them in a closed-loop FRF)
@@ -149,8 +152,13 @@ def linear_shifts(meas: dict, sim_est: dict, robot: RobotParams) -> list[LinearS
         if sim is None or min(np.shape(est.response)[:2]) < n:
             continue
         var = _variance(est)
-        v_meas, sd, c_meas = _fit_axes(est, var, n, coupled)
-        v_sim, _, c_sim = _fit_axes(sim, var, n, coupled)      # same weights: the same bias
+        try:
+            v_meas, sd, c_meas = _fit_axes(est, var, n, coupled)
+            v_sim, _, c_sim = _fit_axes(sim, var, n, coupled)      # same weights: same bias
+        except (ValueError, np.linalg.LinAlgError) as err:
+            # no reading of this load: stage 0 names nothing, stage 2 reads the axis
+            log.debug('stage 0: the physical fit of the %s estimate failed (%s)', key, err)
+            continue
         # the cost per degree of freedom of each axis' own channel (weighted estimates only)
         dof = max(2 * est.freq_hz.size - len(PARAMETERS), 1)
         missing = (c_meas / dof > FD_STRUCTURE_RATIO) if var is not None else np.zeros(n, bool)

@@ -195,11 +195,13 @@ def fit_coupled(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray 
     names = list(names or [f'axis_{i}' for i in range(n)])
     per_axis = [fit_two_mass(f, p[i, i], None if variance is None else variance[i, i],
                              delay_s=delay_s, name=names[i]) for i in range(n)]
-    start = np.concatenate([np.array([a.value[r] for a in per_axis]) for r in range(5)]
+    # magnitudes: a per-axis fit may be unphysical (a joint with backlash gave a negative
+    # link inertia), and the coupling's scale, sqrt of a product of link inertias, was NaN
+    start = np.concatenate([np.abs([a.value[r] for a in per_axis]) for r in range(5)]
                            + [np.zeros(n * (n - 1) // 2)])
-    jo = np.array([a.value[1] for a in per_axis])
+    jo = start[n:2 * n]
     iu = np.triu_indices(n, 1)
-    scale = np.concatenate([np.maximum(np.abs(start[:5 * n]), 1e-9 * np.abs(start).max()),
+    scale = np.concatenate([np.maximum(start[:5 * n], 1e-9 * start.max()),
                             COUPLING_SCALE_SHARE * np.sqrt(jo[iu[0]] * jo[iu[1]])])
     var = None if variance is None else np.asarray(variance, dtype=float).reshape(-1)
     fit_delay = delay_s is None
