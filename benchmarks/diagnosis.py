@@ -537,7 +537,7 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
 
 #: directory with the authors' other trajectories, B.mat and C.mat (not in ../shared/data:
 #: JonasWeigand/Robot_Identification, commit 9e403c07, data/recorded_trajectories/
-#: "2020-10-21 10s FF {B,C} 08ms"/data.mat, MIT), e.g. KUKA_BC=/tmp/kuka
+#: "2020-10-21 10s FF {B,C} 08ms"/data.mat, MIT), e.g. KUKA_BC=<dir with B.mat and C.mat>
 KUKA_BC_ENV = 'KUKA_BC'
 
 

@@ -92,8 +92,23 @@ def command(names: Sequence[str]) -> str:
         E.g. ``FRF_BENCH_SCENES=4 python -m benchmarks --markdown diagnosis``.
 
     """
-    env = [f'{k}={os.environ[k]}' for k in SETTINGS if os.environ.get(k)]
+    env = [f'{k}={portable(os.environ[k])}' for k in SETTINGS if os.environ.get(k)]
     return ' '.join(env + ['python -m benchmarks --markdown', *names])
+
+
+def portable(value: str) -> str:
+    """
+    Return a setting as the page may show it: no path of the machine that measured.
+
+    A path inside the repository becomes relative to it; any other absolute path becomes
+    ``<path>`` (a data folder or a bag of that machine, which the reader substitutes).
+    """
+    if not os.path.isabs(value):
+        return value
+    try:
+        return Path(value).resolve().relative_to(ROOT).as_posix()
+    except ValueError:
+        return '<path>'
 
 
 def store(name: str, rows: Iterable[Sequence[str]], *, wall_s: float, cmd: str,

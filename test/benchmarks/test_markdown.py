@@ -61,3 +61,14 @@ def test_a_sections_figures_are_shown_under_its_table(tmp_path):
     assert block.index('| row | 1 | 2 |') < block.index('![a_first](benchmarks/img/a_first.png)')
     assert '![a_second](benchmarks/img/a_second.png)' in block
     assert 'b_other' not in text                       # section b was not measured
+
+
+def test_the_command_names_no_path_of_the_machine(monkeypatch, tmp_path):
+    """A bag in the repository is named relative to it, a folder elsewhere as <path>."""
+    monkeypatch.setenv('FRF_DEMO_BAG', str(md.ROOT / 'out' / 'demo' / 'graph' / 'bag'))
+    monkeypatch.setenv('KUKA_BC', str(tmp_path))
+    monkeypatch.setenv('FRF_BENCH_SCENES', '4')
+    cmd = md.command(['diagnosis_demo'])
+    assert cmd == ('FRF_BENCH_SCENES=4 KUKA_BC=<path> FRF_DEMO_BAG=out/demo/graph/bag '
+                   'python -m benchmarks --markdown diagnosis_demo'), cmd
+    assert str(tmp_path) not in cmd and str(md.ROOT) not in cmd
