@@ -390,19 +390,15 @@ def _against_least_squares(res, rec: Recording, others: list, robot, progress):
     sets = [('held out', rec, res.held_out_rows)] + [(str(p), o, None) for p, o in others]
     comp = fitted = held_out_comparison(robot, res.extended, ls, sets)
     lost = axes_not_beating(comp)
-    named = {ax: ', '.join(sorted({e.name for e in res.effects if e.axis == ax})) or 'none'
-             for ax in lost}
+    named = {ax: ', '.join(sorted({e.name for e in res.effects if e.axis == ax})) for ax in lost}
     took: dict[str, list[str]] = {}
     if res.mode == 'timeseries' and lost:
         alt = diagnose_timeseries(rec, robot, fc=res.band.fc_hz if res.band else None,
                                   only={ax: BASELINE_GROUPS for ax in lost})
         still = axes_not_beating(held_out_comparison(robot, alt.extended, ls, sets))
         took = {ax: v for ax, v in lost.items() if ax not in still}
-        res = with_axes_of(res, alt, took, comp)
-    rest = {ax: v for ax, v in lost.items() if ax not in took}
-    dropped = res.mode == 'timeseries' and any(e.axis in rest for e in res.effects)
-    res = without_axes(res, robot, rest, comp) if dropped else res
-    if took or dropped:
+        res = without_axes(with_axes_of(res, alt, took, comp), robot,
+                           {ax: v for ax, v in lost.items() if ax not in took}, comp)
         m = predict_metrics(rec, res.extended, mask=res.held_out_rows)
         res.metrics['extended'] = {k: m[k] for k in ('frf_error_db', 'time_nrmse', 'per_axis')}
         comp = held_out_comparison(robot, res.extended, ls, sets)
@@ -412,9 +408,11 @@ def _against_least_squares(res, rec: Recording, others: list, robot, progress):
             return 'beats the baseline (or ties it) on every held-out set'
         head = f'does not beat the baseline on {", ".join(lost[ax])}'
         if ax in took:
-            return (f"{head}; its effects ({named[ax]}) are replaced by the baseline's terms "
-                    f'refitted in the model, which tie or beat it')
-        return head + (f'; its effects ({named[ax]}) are rejected' if dropped else '')
+            return (f"{head}; its effects ({named[ax] or 'none'}) are replaced by the "
+                    f"baseline's terms refitted in the model, which tie or beat it")
+        if res.mode == 'timeseries' and named[ax]:
+            return f'{head}; its effects ({named[ax]}) are rejected'
+        return head
     res.metrics['least_squares'] = {
         'model': 'per axis: motor torque ~ inertia*qdd + viscous*qd + coulomb*tanh(qd/0.01) '
                  '+ offset, velocity and acceleration from the motor positions, low-passed '

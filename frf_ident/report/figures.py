@@ -43,8 +43,6 @@ DPI = 100
 REF_STYLE = {'color': 'k', 'lw': 1.3, 'zorder': 2}
 #: measured data on top of every model line
 MEASURED_Z = 3
-#: the unit of an FRF from motor torque to motor velocity (sensor_msgs/JointState units)
-FRF_UNIT = JOINT_STATE_FRF_UNIT
 #: a log frequency axis labels 2x and 5x its decades while it spans at most this many decades
 #: (wider, the labels of a 4.6 inch panel touch; the decades alone are labelled then)
 LABELLED_MINORS_DECADES = 2.5
@@ -156,7 +154,7 @@ def _channel_title(frf: FrequencyResponse, o: int, i: int) -> str:
 
 def bode_figure(frfs: Mapping[str, FrequencyResponse], path: Path, *,
                 reference: FrequencyResponse | None = None, title: str = '',
-                units: str | None = FRF_UNIT) -> Path:
+                units: str | None = JOINT_STATE_FRF_UNIT) -> Path:
     """
     Bode diagram of every channel: magnitude [dB] above phase [deg], one column per input.
 
@@ -441,7 +439,7 @@ def paper_figure(results: dict[str, Any], case: str, path: Path) -> Path:
             ax_m.semilogx(f, _db(p), style, ms=3.5, label=lab, zorder=MEASURED_Z)
             ax_p.semilogx(f, _deg(p), style, ms=3.5, zorder=MEASURED_Z)
         ax_m.set_title(f'{design} excitation')
-        ax_m.set_ylabel(f'|P| [dB re 1 {FRF_UNIT}]')
+        ax_m.set_ylabel(f'|P| [dB re 1 {JOINT_STATE_FRF_UNIT}]')
         ax_p.set_ylabel('phase [deg]')
         for ax in (ax_m, ax_p):
             ax.grid(True, which='both', alpha=0.3)
@@ -490,7 +488,7 @@ def diagnosis_figures(out: Path, res: DiagnosisResult, rec: Any, mode: str
                     ax[2, i].axvspan(*u['signature']['band_hz'], color='tab:orange', alpha=0.2,
                                      label='unexplained band')
             ax[0, i].set_title(f'{rec.joint_names[i]}: dq_m/tau_m (held-out data)')
-            ax[0, i].set_ylabel(f'|P| [dB re 1 {FRF_UNIT}]' if i == 0 else '')
+            ax[0, i].set_ylabel(f'|P| [dB re 1 {JOINT_STATE_FRF_UNIT}]' if i == 0 else '')
             ax[1, i].set_ylabel('phase [deg]' if i == 0 else '')
             ax[2, i].set_ylabel('|P_measured / P_model| [dB]' if i == 0 else '')
             for a in ax[:, i]:

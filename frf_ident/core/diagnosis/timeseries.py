@@ -165,11 +165,12 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
         groups, forced, scan = axis_groups(d, robot, i, rejected)
         groups = {k: x for k, x in groups.items()
                   if k.split(':')[0] not in (exclude or {}).get(ax.name, ())}
-        if ax.name in (only or {}):
-            groups = {k: x for k, x in groups.items() if k in only[ax.name]}
+        mine = (only or {}).get(ax.name)
+        if mine is not None:
+            groups = {k: x for k, x in groups.items() if k in mine}
             forced = list(groups)
         groups, chosen, info, cf = select_extrapolating(d, ax, i, groups, forced)
-        if ax.name in (only or {}):
+        if mine is not None:
             info = {k: {**v, 'baseline': True} for k, v in info.items()}
         log.debug('%s: selected %s (ripple scan peak %.1f, threshold %.1f); %s', ax.name,
                   chosen, scan[1], scan[2], ', '.join(f'{k} p={v.get("p", 1):.2g} '
