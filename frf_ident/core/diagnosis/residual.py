@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import math
 
 from frf_ident.core.model.params import RobotParams
+import numba
 import numpy as np
 from scipy import signal
 from scipy.ndimage import median_filter
@@ -143,6 +144,37 @@ def delayed_effort(u: np.ndarray, delay: np.ndarray, dt: float) -> np.ndarray:
     return out
 
 
+@numba.njit(cache=True)
+def _discrete_response(ad, bd, cd, dd, u, x0):
+    """
+    Return the output of x[k+1] = ad x[k] + bd u[k], y[k] = cd x[k] + dd u[k] from x[0] = x0.
+
+    What ``scipy.signal.dlsim`` computes, compiled: its loop over the samples in Python
+    took 2.4 s for the 354,000 samples of the demo bag, three times per diagnosis.
+    """
+    nx, nu, ny = ad.shape[0], bd.shape[1], cd.shape[0]
+    x = x0.copy()
+    xn = np.empty(nx)
+    y = np.empty((u.shape[0], ny))
+    for k in range(u.shape[0]):
+        for r in range(ny):
+            acc = 0.0
+            for c in range(nx):
+                acc += cd[r, c] * x[c]
+            for c in range(nu):
+                acc += dd[r, c] * u[k, c]
+            y[k, r] = acc
+        for r in range(nx):
+            acc = 0.0
+            for c in range(nx):
+                acc += ad[r, c] * x[c]
+            for c in range(nu):
+                acc += bd[r, c] * u[k, c]
+            xn[r] = acc
+        x[:] = xn
+    return y
+
+
 def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: float,
                               robot: RobotParams, link_position: np.ndarray | None = None
                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -186,7 +218,8 @@ def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: f
                                     method='foh')
         w = np.hstack([qh, vh, g])
         x0 = np.concatenate([qh[0] - g[0] / k, vh[0]])
-        _, xs = signal.dlsim(sysd, w, x0=x0)[:2]
+        xs = _discrete_response(*(np.ascontiguousarray(m) for m in sysd[:4]),
+                                np.ascontiguousarray(w), x0)
         qo, vo = xs[:, :n], xs[:, n:]
         f = u[:-1] - (jm * ah + bv * vh + k * (qh - qo) + d * (vh - vo))
     return f, qh, vh, ah
