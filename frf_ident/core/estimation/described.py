@@ -142,32 +142,53 @@ def _segment_arrays(rec: Recording, seg: Segment) -> dict[str, np.ndarray]:
     return {'u': rec.effort[sl], 'y': rec.velocity[sl], 'r': exc[sl], 'q': rec.position[sl]}
 
 
+def _position_table(cv: dict[str, np.ndarray], key: str, i: int
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool] | None:
+    """
+    Return the constant-velocity run's series of axis i in increasing position, or None.
+
+    (positions, values, sample indices, whether the run has a gap) over the finite samples;
+    None where the run does not move monotonically (no position maps to one time).
+    """
+    ok = np.flatnonzero(np.isfinite(cv['q'][:, i]) & np.isfinite(cv[key][:, i]))
+    qc, vc = cv['q'][ok, i], cv[key][ok, i]
+    if qc.size < 2 or not (np.all(np.diff(qc) > 0) or np.all(np.diff(qc) < 0)):
+        return None
+    rev = qc[0] > qc[-1]
+    qs, vs, idx = (qc[::-1], vc[::-1], ok[::-1]) if rev else (qc, vc, ok)
+    return qs, vs, idx, bool(np.any(np.abs(np.diff(idx)) > 1))
+
+
 def _disturbance_at(cv: dict[str, np.ndarray], key: str, q: np.ndarray,
-                    align: str) -> np.ndarray:
+                    align: str, tables: dict[tuple[str, int], Any] | None = None
+                    ) -> np.ndarray:
     """
     Return the constant-velocity run's series to subtract (Sec. 4.4 E).
 
     align 'time': sample by sample, as the paper does. 'position': per axis, the run's series
     read at the excited run's positions (the run moves monotonically, so position maps to
     time): position-periodic disturbances such as torque ripple then cancel even when the
-    excited run starts a little elsewhere or the multisine displaces it.
+    excited run starts a little elsewhere or the multisine displaces it. ``tables`` keeps
+    each axis' :func:`_position_table` for the next segment compensated by the same run.
     """
     x = cv[key][:q.shape[0]]
     if align == 'time':
         return x
+    tables = {} if tables is None else tables
     out = np.empty_like(x)
     for i in range(q.shape[1]):
-        ok = np.flatnonzero(np.isfinite(cv['q'][:, i]) & np.isfinite(cv[key][:, i]))
-        qc, vc = cv['q'][ok, i], cv[key][ok, i]
-        if qc.size >= 2 and (np.all(np.diff(qc) > 0) or np.all(np.diff(qc) < 0)):
-            rev = qc[0] > qc[-1]
-            qs, vs, idx = (qc[::-1], vc[::-1], ok[::-1]) if rev else (qc, vc, ok)
-            out[:, i] = np.interp(q[:, i], qs, vs)
+        if (key, i) not in tables:
+            tables[(key, i)] = _position_table(cv, key, i)
+        tab = tables[(key, i)]
+        if tab is None:
+            out[:, i] = x[:, i]          # not monotonic: fall back to time alignment
+            continue
+        qs, vs, idx, gaps = tab
+        out[:, i] = np.interp(q[:, i], qs, vs)
+        if gaps:
             # a position the run passed during a gap has no value to subtract
             k = np.clip(np.searchsorted(qs, q[:, i]), 1, qs.size - 1)
             out[np.abs(idx[k] - idx[k - 1]) > 1, i] = np.nan
-        else:
-            out[:, i] = x[:, i]          # not monotonic: fall back to time alignment
     return out
 
 
@@ -189,6 +210,7 @@ class MultisineSpectra:
         self.n_per, self.n_q = int(info['period_samples']), int(info['periods'])
         self.n_tr = int(info['transient_periods'])
         self.cv: dict[str, np.ndarray] | None = None
+        self._tables: dict[tuple[str, int], Any] = {}    # _position_table of the run per axis
         self.spec: dict[tuple[int, int], dict[str, np.ndarray]] = {}
         self.joint_names: list[str] = []
 
@@ -198,6 +220,7 @@ class MultisineSpectra:
             raise EstimationError('the constant-velocity run must come before the multisine '
                                   'segments it compensates')
         self.cv = _segment_arrays(rec, seg)
+        self._tables = {}
 
     def add(self, rec: Recording, seg: Segment) -> None:
         """One multisine segment of ``rec``."""
@@ -218,7 +241,8 @@ class MultisineSpectra:
         det = {'y': a['y'][:need]}
         if self.cv is not None:
             for k in ('u', 'y'):
-                series['d' + k] = _disturbance_at(self.cv, k, a['q'][:need], self.align)
+                series['d' + k] = _disturbance_at(self.cv, k, a['q'][:need], self.align,
+                                                  self._tables)
                 if k == 'y':
                     det['dy'] = series['dy']
         # a period with a missing sample in any series is dropped (NaN rows: gaps); the
