@@ -148,7 +148,7 @@ def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recor
     # the measured velocity there, and the diagnosis leaves these stretches out of every
     # comparison (evaluator.missing_reference) instead of commanding zero velocity
     r = np.where(np.isfinite(rec.reference), rec.reference, rec.velocity)
-    res = plant.simulate(reference=r, controller=c)
+    res = plant.simulate(reference=r, controller=c, keep_states=False)
     return as_simulation(rec, res.position, res.velocity, res.effort)
 
 

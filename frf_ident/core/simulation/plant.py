@@ -227,7 +227,7 @@ def _substep_matrices(params: RobotParams, h: float):
 
 # --- compiled kernels -------------------------------------------------------------------------
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, error_model="numpy")
 def _spring(e, k1, k2, bs):
     """Deflection-dependent spring torque (eq. 2)."""
     if bs > 0.0 and abs(e) > bs:
@@ -235,7 +235,7 @@ def _spring(e, k1, k2, bs):
     return k1 * e
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, error_model="numpy")
 def _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, row):
     """
     Nonlinear residual torques beyond the linear model (k1, d) at flat state x.
@@ -286,7 +286,7 @@ def _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, row):
 _UO, _UN, _FA, _FM, _FB, _LIN, _XP, _W1, _W2, _NSCRATCH = range(10)
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, error_model="numpy")
 def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp,
                  gamp, gph, gsel, nonlinear, h):
     """
@@ -339,7 +339,7 @@ def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, 
             x[n + i] = vnew
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, error_model="numpy")
 def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
              cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc):
     """
@@ -368,7 +368,7 @@ def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, 
                      gamp, gph, gsel, nonlinear, h)
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, error_model="numpy")
 def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
     """Encode position (quantised) and velocity (true or by differentiation) plus noise vn[k]."""
     n = qout.shape[0]
@@ -383,11 +383,11 @@ def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
             vout[i] = x[n + i] + vn[k, i]
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, error_model="numpy")
 def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, m, dt,
               offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph, gsel,
               nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v,
-              out_u, out_x, out_r):
+              out_u, out_x, keep_x, out_r):
     """
     Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
 
@@ -397,7 +397,8 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
 
     ``uff`` adds a torque on the integrator's stage grid (continuous excitations). Fills
     out_q, out_v, out_u (measured effort = commanded torque at the sample + torque noise) and
-    out_x (true states, N x 4 x n). State arrays are updated in place so runs can be chained.
+    out_x (true states, N x 4 x n) where ``keep_x``. State arrays are updated in place so runs
+    can be chained.
     """
     n = r.shape[1]
     N = r.shape[0]
@@ -430,13 +431,14 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
             out_q[k, i] = qm[i]
             out_v[k, i] = vm[i]
             out_u[k, i] = applied + tnoise[k, i]
-            for s in range(4):
-                out_x[k, s, i] = x[s * n + i]
+            if keep_x:
+                for s in range(4):
+                    out_x[k, s, i] = x[s * n + i]
         _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb,
                  gw, cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc)
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, error_model="numpy")
 def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw, cg,
               ra, rs, rp, gamp, gph, gsel, nonlinear, enc, from_encoder, vnoise, sc, q, v):
     """
@@ -468,14 +470,14 @@ class SimResult:
     Sampled signals of a simulation run.
 
     Sampled signals of a simulation run, each (N, n): t (N,), q/v measured, u applied torque,
-    states (N, 4, n) true [q_m, v_m, q_o, v_o].
+    states (N, 4, n) true [q_m, v_m, q_o, v_o] (None where the run was asked not to keep them).
     """
 
     t: np.ndarray
     position: np.ndarray
     velocity: np.ndarray
     effort: np.ndarray
-    states: np.ndarray
+    states: np.ndarray | None
     reference: np.ndarray | None = None
 
 
@@ -593,7 +595,8 @@ class FlexibleJointPlant:
     def simulate(self, *, reference: np.ndarray | None = None, torque: np.ndarray | None = None,
                  torque_fine: np.ndarray | None = None, controller: Any = None,
                  n_samples: int | None = None, position_plan: np.ndarray | None = None,
-                 position_gain: float | np.ndarray = 0.0) -> SimResult:
+                 position_gain: float | np.ndarray = 0.0, keep_states: bool = True
+                 ) -> SimResult:
         """
         Run samples from the current state.
 
@@ -604,7 +607,9 @@ class FlexibleJointPlant:
         m = substeps, used for continuous-time excitations (e.g. the paper's open-loop example).
         ``position_plan`` (N, n): absolute measured positions to hold with ``position_gain``
         [1/s] of position feedback on the reference (closed loop only); the reference used is
-        returned in ``SimResult.reference``.
+        returned in ``SimResult.reference``. ``keep_states=False`` leaves the true states out
+        (``SimResult.states`` None): the batch runs that read only the measurement skip
+        writing N x 4 x n values.
         """
         n = self.n_axes
         lengths = [a.shape[0] for a in (reference, torque) if a is not None]
@@ -620,7 +625,7 @@ class FlexibleJointPlant:
         p = self._packed
         vn, tn = self._noise(N)
         out_q, out_v, out_u = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
-        out_x = np.empty((N, 4, n))
+        out_x = np.empty((N if keep_states else 1, 4, n))
         out_r = r.copy()
         has_plan = position_plan is not None
         qplan = np.ascontiguousarray(position_plan, float) if has_plan else np.zeros((1, n))
@@ -638,11 +643,11 @@ class FlexibleJointPlant:
                   p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.gamp, p.gph,
                   p.gsel, p.nonlinear,
                   p.enc, bool(self.params.velocity_from_encoder), vn, tn, qplan, kpos, has_plan,
-                  out_q, out_v, out_u, out_x, out_r)
+                  out_q, out_v, out_u, out_x, keep_states, out_r)
         t = (self.k + np.arange(N)) * self.dt
         self.k += N
         self._rebase_buffer(N)
-        return SimResult(t, out_q, out_v, out_u, out_x, out_r)
+        return SimResult(t, out_q, out_v, out_u, out_x if keep_states else None, out_r)
 
     def _rebase_buffer(self, n_done: int) -> None:
         """Keep the ring buffer indexed from sample 0 of the next run."""
