@@ -33,6 +33,9 @@ import struct
 from typing import BinaryIO, Callable, Iterator
 import zlib
 
+import numba
+import numpy as np
+
 MAGIC = b'\x89MCAP0\r\n'
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 1, 2, 3, 4, 5, 6
 OP_CHUNK_INDEX, OP_STATISTICS, OP_METADATA, OP_DATA_END = 0x08, 0x0B, 0x0C, 0x0F
@@ -142,6 +145,57 @@ def _decompress(compression: str, data: bytes, size: int) -> bytes:
     return out
 
 
+@numba.njit(cache=True)
+def _scan_records(b):
+    """
+    Walk the records of a chunk body: opcode, body start and end; channel, log time of messages.
+
+    Returns (ops, body, ends, channel ids, log times, bad): ``bad`` 0 when the body ends on a
+    record boundary; 1 when a record header is cut (its start is the last ``ends``), 2 when
+    a record overruns the body or a message record is shorter than its header (the last
+    entry is that record).
+    """
+    end = b.size
+    cap = end // 9 + 1
+    ops = np.empty(cap, np.uint8)
+    body = np.empty(cap, np.int64)
+    ends = np.empty(cap, np.int64)
+    cids = np.zeros(cap, np.int64)
+    logs = np.zeros(cap, np.int64)
+    off = 0
+    n = 0
+    bad = 0
+    while off < end:
+        if off + 9 > end:
+            ops[n] = 0
+            body[n] = off
+            ends[n] = off
+            n += 1
+            bad = 1
+            break
+        op = b[off]
+        length = 0
+        for j in range(8):
+            length |= np.int64(b[off + 1 + j]) << (8 * j)
+        start = off + 9
+        stop = start + length
+        ops[n] = op
+        body[n] = start
+        ends[n] = stop
+        n += 1
+        if length < 0 or stop > end or (length < 22 and op == 5):
+            bad = 2
+            break
+        if op == 5:
+            cids[n - 1] = np.int64(b[start]) | (np.int64(b[start + 1]) << 8)
+            t = np.int64(0)
+            for j in range(8):
+                t |= np.int64(b[start + 6 + j]) << (8 * j)
+            logs[n - 1] = t
+        off = stop
+    return ops[:n], body[:n], ends[:n], cids[:n], logs[:n], bad
+
+
 class McapScanner:
     """
     Stream the messages of one MCAP file in file order, recovering what is readable.
@@ -190,43 +244,65 @@ class McapScanner:
         Batches (one per wanted channel) of a chunk body; also parses schemas/channels.
 
         Messages before a damaged record are still yielded; the error is raised afterwards.
+        The record headers are walked by :func:`_scan_records` (compiled); schema and
+        channel records are parsed here in file order, and each stretch of messages between
+        them is sorted to its channels at once.
         """
         batches: dict[int, Batch] = {}
-        error: Exception | None = None
         mv = memoryview(buf)
-        off, end = 0, len(mv)
-        wanted = self._wanted
+        ops, body, ends, cids, logs, bad = _scan_records(np.frombuffer(buf, np.uint8))
+        error: Exception | None = None
+        if bad == 1:
+            error = McapFormatError(f'record header cut at chunk byte {ends[-1]}')
+        elif bad == 2:
+            error = McapFormatError(f'record of {ends[-1] - body[-1]} bytes overruns its '
+                                    f'chunk')
+        n = ops.size - (1 if bad else 0)
+        others = np.flatnonzero(ops[:n] != OP_MESSAGE).tolist() + [n]
+        start = 0
         try:
-            while off < end:
-                if off + 9 > end:
-                    raise McapFormatError(f'record header cut at chunk byte {off}')
-                op, length = _REC.unpack_from(mv, off)
-                body = off + 9
-                off = body + length
-                if off > end or length < 22 and op == OP_MESSAGE:
-                    raise McapFormatError(f'record of {length} bytes overruns its chunk')
-                if op == OP_MESSAGE:
-                    cid, _, log_time, _ = _MSG.unpack_from(mv, body)
-                    self.stats.messages += 1
-                    info = wanted.get(cid)
-                    if info is not None:
-                        batch = batches.get(cid)
-                        if batch is None:
-                            batch = batches[cid] = Batch(info, buf, [], [], [])
-                        batch.logs.append(log_time)
-                        batch.starts.append(body + 22)
-                        batch.ends.append(off)
-                    elif cid not in wanted:
-                        raise McapFormatError(f'message on unknown channel {cid}')
-                elif op == OP_SCHEMA:
-                    self._on_schema(mv[body:off])
-                elif op == OP_CHANNEL:
-                    self._on_channel(mv[body:off])
+            for k in others:
+                msg = np.flatnonzero(ops[start:k] == OP_MESSAGE) + start
+                self._sort_messages(buf, batches, msg, body, ends, cids, logs)
+                if k < n:
+                    if ops[k] == OP_SCHEMA:
+                        self._on_schema(mv[body[k]:ends[k]])
+                    elif ops[k] == OP_CHANNEL:
+                        self._on_channel(mv[body[k]:ends[k]])
+                start = k + 1
         except (McapFormatError, struct.error, UnicodeDecodeError) as exc:
             error = exc
         yield from batches.values()
         if error is not None:
             raise error
+
+    def _sort_messages(self, buf: bytes, batches: dict[int, Batch], msg: np.ndarray,
+                       body: np.ndarray, ends: np.ndarray, cids: np.ndarray,
+                       logs: np.ndarray) -> None:
+        """Add message records ``msg`` (indices into the scan) to their channels' batches."""
+        if not msg.size:
+            return
+        wanted = self._wanted
+        ch = cids[msg]
+        unknown = [c for c in np.unique(ch).tolist() if c not in wanted]
+        if unknown:
+            first = int(np.flatnonzero(np.isin(ch, unknown))[0])
+            self._sort_messages(buf, batches, msg[:first], body, ends, cids, logs)
+            self.stats.messages += 1
+            raise McapFormatError(f'message on unknown channel {int(ch[first])}')
+        self.stats.messages += int(msg.size)
+        u, first = np.unique(ch, return_index=True)
+        for c in u[np.argsort(first)].tolist():       # channels in the order they appear
+            info = wanted[c]
+            if info is None:
+                continue
+            sel = msg[ch == c]
+            batch = batches.get(c)
+            if batch is None:
+                batch = batches[c] = Batch(info, buf, [], [], [])
+            batch.logs.extend(logs[sel].tolist())
+            batch.starts.extend((body[sel] + 22).tolist())
+            batch.ends.extend(ends[sel].tolist())
 
     def _chunk(self, buf: bytes) -> Iterator[Batch]:
         _, _, size, crc = _CHUNK.unpack_from(buf, 0)
