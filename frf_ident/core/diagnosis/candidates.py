@@ -32,6 +32,7 @@ from scipy import optimize
 from .common import diag_ratio, Effect, segment_mask
 from .evaluator import Evaluator
 from .residual import coulomb_and_ripple, regress_axis
+from .simplex import nelder_mead
 from .thresholds import GRAVITY_MIN_T, LOAD_DEPENDENCE_MIN_LOG, MISMATCH_MIN_LOG
 
 
@@ -325,11 +326,8 @@ def _refine(ev: Evaluator, mk: Callable, x0: np.ndarray, bounds, axis: int) -> n
     simplex = np.array([x0, x0 + [0.3, 0], x0 + [0, 0.7]])
     # the starting simplex at once (Nelder-Mead clips it into the bounds first)
     ev.prefetch([mk(np.clip(x, *np.transpose(bounds))) for x in simplex])
-    sol = optimize.minimize(lambda x: ev.loss(mk(x), axis), x0, method='Nelder-Mead',
-                            bounds=bounds,
-                            options={'xatol': 0.01, 'fatol': 1e-3, 'maxfev': 35,
-                                     'initial_simplex': simplex})
-    return sol.x
+    return nelder_mead(lambda x: ev.loss(mk(x), axis), simplex, bounds=bounds, xatol=0.01,
+                       fatol=1e-3, maxfev=35, prefetch=lambda xs: ev.prefetch([mk(x) for x in xs]))
 
 
 def ripple_again(ev: Evaluator, robot: RobotParams, axis: int, stage1: list[Effect],

@@ -30,6 +30,7 @@ from scipy import optimize
 from .candidates import LIN_KEYS, with_params
 from .common import apply_effect, Effect
 from .evaluator import Evaluator
+from .simplex import nelder_mead
 from .thresholds import FRICTION_RANGE_SHARE
 
 
@@ -182,17 +183,16 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
     x0 = np.zeros(n)
     simplex = np.vstack([x0] + [x0 + 0.2 * np.eye(n)[k] for k in range(n)])
     ev.prefetch([mk(x) for x in simplex])
-    sol = optimize.minimize(lambda x: ev.loss(mk(x), axis), x0, method='Nelder-Mead',
-                            options={'xatol': 0.01, 'fatol': 1e-3, 'maxfev': 8 + 6 * n,
-                                     'initial_simplex': simplex})
-    ext = mk(sol.x)
+    best = nelder_mead(lambda x: ev.loss(mk(x), axis), simplex, xatol=0.01, fatol=1e-3,
+                       maxfev=8 + 6 * n, prefetch=lambda xs: ev.prefetch([mk(x) for x in xs]))
+    ext = mk(best)
     new = ev.misfit(ev.terms(ext))
     if new[axis] >= cur[axis]:
         return rebuild(base, kept), cur
-    p = params(sol.x)
+    p = params(best)
     say(f'  {mine[0].axis}: effects refitted jointly, misfit {cur[axis]:.4g} -> '
         f'{new[axis]:.4g}: ' + ', '.join(f'{k} {_slot_value(k, v, d):.4g}'
-                                         for (c, k), v, d in zip(slots, start, sol.x)))
+                                         for (c, k), v, d in zip(slots, start, best)))
     for c in mine:
         if id(c) in p:
             c.parameters = p[id(c)]
