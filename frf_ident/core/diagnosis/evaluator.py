@@ -21,6 +21,7 @@ and its misfit per axis in units of those floors.
 from __future__ import annotations
 
 from typing import Any, Sequence
+import weakref
 
 from frf_ident.core.estimation.described import chirp_frf, multisine_frf
 from frf_ident.core.model.params import RobotParams
@@ -28,9 +29,9 @@ from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np
 
-from .common import (bridge_gaps, diag_ratio, frf_error_db, nrmse, segment_mask, simulate_like,
-                     split_recording)
-from .parallel import simulate_many
+from .common import (as_simulation, bridge_gaps, diag_ratio, frf_error_db, nrmse, segment_mask,
+                     simulate_like, split_recording)
+from .parallel import WorkerPool
 from .residual import inverse_dynamics_residual
 from .thresholds import FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE, SIM_JOBS
 
@@ -147,6 +148,7 @@ class Evaluator:
         # estimates of a kept simulation on the fit part, where a worker computed them
         self._est: dict[str, dict] = {}
         self._residual: tuple[Any, Any] = (None, None)
+        self._workers: WorkerPool | None = None
 
     def residual(self, robot: RobotParams) -> tuple[np.ndarray, ...]:
         """
@@ -203,8 +205,9 @@ class Evaluator:
         Simulate independent models at once (:attr:`jobs` processes) for :meth:`simulate`.
 
         The models not simulated yet (the first SIM_CACHE - 4 of them) are simulated by
-        :func:`.parallel.simulate_many` and kept, so the next :meth:`simulate` of each finds
-        it: the same simulations and results as one after the other, in less wall time.
+        the evaluator's :class:`.parallel.WorkerPool` (forked at the first prefetch, kept
+        until :meth:`close`) and kept, so the next :meth:`simulate` of each finds it: the same
+        simulations and results as one after the other, in less wall time.
         With ``jobs`` 1 nothing is done here.
 
         Parameters
@@ -220,12 +223,27 @@ class Evaluator:
         todo = dict(list(todo.items())[:SIM_CACHE - 4])
         if len(todo) < 2:
             return
-        fit = self.fit
-        done = simulate_many(self.rec, self.ctrl, list(todo.values()), self.jobs,
-                             then=lambda sim: estimates(replace_segments(sim, fit)))
-        for key, (sim, est) in zip(todo, done):
-            self._keep(key, sim)
+        for key, (q, v, u, est) in zip(todo, self._pool().run(list(todo.values()))):
+            self._keep(key, as_simulation(self.rec, q, v, u))
             self._est[key] = est
+
+    def _pool(self) -> WorkerPool:
+        """Return the workers that simulate a model and estimate its fit part (forked once)."""
+        if self._workers is None:
+            rec, ctrl, fit = self.rec, self.ctrl, self.fit
+
+            def run(robot: RobotParams) -> tuple:
+                sim = simulate_like(rec, robot, ctrl)
+                return (sim.position, sim.velocity, sim.effort,
+                        estimates(replace_segments(sim, fit)))
+            self._workers = WorkerPool(run, self.jobs)
+            weakref.finalize(self, self._workers.close)
+        return self._workers
+
+    def close(self) -> None:
+        """Stop the simulation workers (:meth:`prefetch` starts them again when asked)."""
+        if self._workers is not None:
+            self._workers.close()
 
     def _keep(self, key: str, sim: Recording) -> None:
         """Count a new simulation and keep it (the oldest kept one goes beyond SIM_CACHE)."""

@@ -96,16 +96,19 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
 
     """
     s = start(rec, robot, ctrl, jobs)
-    if fd_fit:
-        frequency_domain_fit(s)
-    torque_residual_effects(s)
-    frf_shape_effects(s)
-    second_pass(s)
-    joint_refits(s)
-    late_ripples(s)
-    val_ext, sim_ext = held_out_check(s)
-    val_ext, sim_ext, val_base = structure_missing(s, val_ext, sim_ext)
-    return finish(s, val_ext, sim_ext, val_base)
+    try:
+        if fd_fit:
+            frequency_domain_fit(s)
+        torque_residual_effects(s)
+        frf_shape_effects(s)
+        second_pass(s)
+        joint_refits(s)
+        late_ripples(s)
+        val_ext, sim_ext = held_out_check(s)
+        val_ext, sim_ext, val_base = structure_missing(s, val_ext, sim_ext)
+        return finish(s, val_ext, sim_ext, val_base)
+    finally:
+        s.ev.close()
 
 
 def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_JOBS

@@ -17,7 +17,7 @@ import os
 from pathlib import Path
 
 from frf_ident.core.diagnosis.common import simulate_like
-from frf_ident.core.diagnosis.parallel import can_fork, fork_map, simulate_many
+from frf_ident.core.diagnosis.parallel import can_fork, fork_map, simulate_many, WorkerPool
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.analytic import robot_frf, robot_frf_sampled
 from frf_ident.core.simulation.plant import FlexibleJointPlant
@@ -39,6 +39,23 @@ def test_fork_map_keeps_the_order_and_the_workers_changes_stay_there():
     if can_fork():
         assert seen == [] and os.getpid() not in {p for _, p in out}
     assert fork_map(part, [4], 2) == [(16, os.getpid())] and seen == [4]
+
+
+def test_worker_pool_forks_once_and_keeps_the_order():
+    seen = []
+
+    def part(x):
+        seen.append(x)          # the worker's copy only
+        return x + 1, os.getpid()
+    with WorkerPool(part, 2) as pool:
+        first = pool.run([1, 2, 3])
+        second = pool.run([10, 20])
+    assert [v for v, _ in first] == [2, 3, 4] and [v for v, _ in second] == [11, 21]
+    if can_fork():
+        pids = {p for _, p in first + second}
+        # the same workers served both batches: no fork per batch
+        assert seen == [] and os.getpid() not in pids and len(pids) <= 2
+    assert WorkerPool(part, 1).run([5, 6]) == [(6, os.getpid()), (7, os.getpid())]
 
 
 def test_parallel_simulations_equal_the_serial_ones():
