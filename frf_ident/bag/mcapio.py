@@ -396,6 +396,18 @@ class McapScanner:
         later = [c for c in self._chunk_starts if c > pos]
         return min(later) if later else None
 
+    def _message(self, buf: bytes) -> Iterator[Batch]:
+        """Yield the batch of one message record outside a chunk (if its channel is wanted)."""
+        if len(buf) < 22:
+            raise McapFormatError(f'record of {len(buf)} bytes overruns its chunk')
+        cid, _, log_time, _ = _MSG.unpack_from(buf, 0)
+        self.stats.messages += 1
+        if cid not in self._wanted:
+            raise McapFormatError(f'message on unknown channel {cid}')
+        info = self._wanted[cid]
+        if info is not None:
+            yield Batch(info, buf, [log_time], [22], [len(buf)])
+
     def _top_record(self, op: int, buf: bytes, pos: int) -> Iterator[Batch]:
         """Process one top-level record; a damaged one is counted as lost (returns False)."""
         try:
@@ -403,7 +415,7 @@ class McapScanner:
                 yield from self._chunk(buf)
                 self.stats.chunks_ok += 1
             elif op == OP_MESSAGE:
-                yield from self._records(_REC.pack(op, len(buf)) + buf)
+                yield from self._message(buf)
             elif op == OP_SCHEMA:
                 self._on_schema(buf)
             elif op == OP_CHANNEL:

@@ -128,3 +128,23 @@ def chunk_bodies(draw):
 def test_compiled_record_walk_reads_like_the_spec(body: bytes, wanted: set[str]) -> None:
     """Same messages per wanted channel, same count, same error as record-by-record."""
     assert _compiled(body, wanted) == _reference(body, wanted)
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(body=chunk_bodies(), wanted=st.sets(st.sampled_from(['/topic_1', '/topic_2'])))
+def test_messages_outside_chunks_read_like_the_spec(tmp_path_factory, body: bytes,
+                                                    wanted: set[str]) -> None:
+    """The same records as top-level records of a file (no chunks): the same messages."""
+    expected, count, error = _reference(body, wanted)
+    if error is not None:
+        return                   # a damaged top-level record is counted lost, not raised
+    path = tmp_path_factory.mktemp('mcap') / 'plain.mcap'
+    path.write_bytes(b'\x89MCAP0\r\n' + _rec(1, _s('') + _s('')) + body + _rec(0x0F, b'\0' * 4)
+                     + _rec(2, b'\0' * 20) + b'\x89MCAP0\r\n')
+    scan = McapScanner(path, topics=wanted)
+    got: dict[str, list[tuple[int, bytes]]] = {}
+    for batch in scan.batches():
+        pairs = zip(batch.logs, batch.starts, batch.ends)
+        got.setdefault(batch.channel.topic, []).extend(
+            (log, bytes(batch.buf[a:b])) for log, a, b in pairs)
+    assert got == expected and scan.stats.messages == count and not scan.stats.problems
