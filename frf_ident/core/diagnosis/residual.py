@@ -144,6 +144,18 @@ def delayed_effort(u: np.ndarray, delay: np.ndarray, dt: float) -> np.ndarray:
     return out
 
 
+@numba.njit(cache=True, inline='always')
+def _affine(m, n, x, u, out):
+    """Write ``m x + n u`` into ``out``."""
+    for r in range(m.shape[0]):
+        acc = 0.0
+        for c in range(x.shape[0]):
+            acc += m[r, c] * x[c]
+        for c in range(u.shape[0]):
+            acc += n[r, c] * u[c]
+        out[r] = acc
+
+
 @numba.njit(cache=True)
 def _discrete_response(ad, bd, cd, dd, u, x0):
     """
@@ -152,25 +164,12 @@ def _discrete_response(ad, bd, cd, dd, u, x0):
     What ``scipy.signal.dlsim`` computes, compiled: its loop over the samples in Python
     took 2.4 s for the 354,000 samples of the demo bag, three times per diagnosis.
     """
-    nx, nu, ny = ad.shape[0], bd.shape[1], cd.shape[0]
     x = x0.copy()
-    xn = np.empty(nx)
-    y = np.empty((u.shape[0], ny))
+    xn = np.empty(ad.shape[0])
+    y = np.empty((u.shape[0], cd.shape[0]))
     for k in range(u.shape[0]):
-        for r in range(ny):
-            acc = 0.0
-            for c in range(nx):
-                acc += cd[r, c] * x[c]
-            for c in range(nu):
-                acc += dd[r, c] * u[k, c]
-            y[k, r] = acc
-        for r in range(nx):
-            acc = 0.0
-            for c in range(nx):
-                acc += ad[r, c] * x[c]
-            for c in range(nu):
-                acc += bd[r, c] * u[k, c]
-            xn[r] = acc
+        _affine(cd, dd, x, u[k], y[k])
+        _affine(ad, bd, x, u[k], xn)
         x[:] = xn
     return y
 
