@@ -27,7 +27,7 @@ import numpy as np
 __all__ = ['PIVelocity', 'pi_step']
 
 
-@numba.njit(cache=True, fastmath=True, inline="always")
+@numba.njit(cache=True, fastmath=True, inline='always')
 def pi_step(e, integ, kp, ki, ff, k, ulim, dt, u):
     """
     Compute one velocity PI step with torque limit and back-calculation anti-windup.

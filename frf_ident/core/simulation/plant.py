@@ -227,7 +227,7 @@ def _substep_matrices(params: RobotParams, h: float):
 
 # --- compiled kernels -------------------------------------------------------------------------
 
-@numba.njit(cache=True, fastmath=True, error_model="numpy", inline="always")
+@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
 def _spring(e, k1, k2, bs):
     """Deflection-dependent spring torque (eq. 2)."""
     if bs > 0.0 and abs(e) > bs:
@@ -235,7 +235,7 @@ def _spring(e, k1, k2, bs):
     return k1 * e
 
 
-@numba.njit(cache=True, fastmath=True, error_model="numpy", inline="always")
+@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
 def _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, row):
     """
     Nonlinear residual torques beyond the linear model (k1, d) at flat state x.
@@ -286,7 +286,7 @@ def _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, row):
 _UO, _UN, _FA, _FM, _FB, _LIN, _XP, _W1, _W2, _NSCRATCH = range(10)
 
 
-@numba.njit(cache=True, fastmath=True, error_model="numpy", inline="always")
+@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
 def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp,
                  gamp, gph, gsel, nonlinear, h):
     """
@@ -339,7 +339,7 @@ def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, 
             x[n + i] = vnew
 
 
-@numba.njit(cache=True, fastmath=True, error_model="numpy", inline="always")
+@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
 def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
              cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc):
     """
@@ -368,7 +368,7 @@ def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, 
                      gamp, gph, gsel, nonlinear, h)
 
 
-@numba.njit(cache=True, fastmath=True, error_model="numpy", inline="always")
+@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
 def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
     """Encode position (quantised) and velocity (true or by differentiation) plus noise vn[k]."""
     n = qout.shape[0]
@@ -383,7 +383,7 @@ def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
             vout[i] = x[n + i] + vn[k, i]
 
 
-@numba.njit(cache=True, fastmath=True, error_model="numpy")
+@numba.njit(cache=True, fastmath=True, error_model='numpy')
 def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, m, dt,
               offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph, gsel,
               nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v,
@@ -438,7 +438,7 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
                  gw, cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc)
 
 
-@numba.njit(cache=True, fastmath=True, error_model="numpy")
+@numba.njit(cache=True, fastmath=True, error_model='numpy')
 def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw, cg,
               ra, rs, rp, gamp, gph, gsel, nonlinear, enc, from_encoder, vnoise, sc, q, v):
     """
