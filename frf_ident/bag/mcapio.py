@@ -145,31 +145,35 @@ def _decompress(compression: str, data: bytes, size: int) -> bytes:
     return out
 
 
-@numba.njit(cache=True)
-def _scan_records(b):
+def _scan_records(b: np.ndarray) -> tuple[np.ndarray, ...]:
     """
     Walk the records of a chunk body: opcode, body start and end; channel, log time of messages.
 
     Returns (ops, body, ends, channel ids, log times, bad): ``bad`` 0 when the body ends on a
     record boundary; 1 when a record header is cut (its start is the last ``ends``), 2 when
     a record overruns the body or a message record is shorter than its header (the last
-    entry is that record).
+    entry is that record). The records are counted first, so the arrays hold them exactly
+    (a bound from the body's size would take four times the chunk).
     """
+    none, none8 = np.empty(0, np.int64), np.empty(0, np.uint8)
+    n, _ = _walk_records(b, False, none8, none, none, none, none)
+    ops = np.empty(n, np.uint8)
+    body, ends, cids, logs = (np.zeros(n, np.int64) for _ in range(4))
+    _, bad = _walk_records(b, True, ops, body, ends, cids, logs)
+    return ops, body, ends, cids, logs, bad
+
+
+@numba.njit(cache=True)
+def _walk_records(b, fill, ops, body, ends, cids, logs):
+    """Count the records of a chunk body (and with ``fill`` write them); return (n, bad)."""
     end = b.size
-    cap = end // 9 + 1
-    ops = np.empty(cap, np.uint8)
-    body = np.empty(cap, np.int64)
-    ends = np.empty(cap, np.int64)
-    cids = np.zeros(cap, np.int64)
-    logs = np.zeros(cap, np.int64)
     off = 0
     n = 0
     bad = 0
     while off < end:
         if off + 9 > end:
-            ops[n] = 0
-            body[n] = off
-            ends[n] = off
+            if fill:
+                ops[n], body[n], ends[n] = 0, off, off
             n += 1
             bad = 1
             break
@@ -179,21 +183,20 @@ def _scan_records(b):
             length |= np.int64(b[off + 1 + j]) << (8 * j)
         start = off + 9
         stop = start + length
-        ops[n] = op
-        body[n] = start
-        ends[n] = stop
+        if fill:
+            ops[n], body[n], ends[n] = op, start, stop
         n += 1
         if length < 0 or stop > end or (length < 22 and op == 5):
             bad = 2
             break
-        if op == 5:
+        if fill and op == 5:
             cids[n - 1] = np.int64(b[start]) | (np.int64(b[start + 1]) << 8)
             t = np.int64(0)
             for j in range(8):
                 t |= np.int64(b[start + 6 + j]) << (8 * j)
             logs[n - 1] = t
         off = stop
-    return ops[:n], body[:n], ends[:n], cids[:n], logs[:n], bad
+    return n, bad
 
 
 class McapScanner:
