@@ -30,7 +30,7 @@ import json
 from pathlib import Path
 from typing import Any, Callable
 
-from frf_ident.app.frf_source import axis_channels, frf_variance, read_source
+from frf_ident.app.frf_source import axis_channels, read_source
 from frf_ident.app.loop import LoopOutcome, run_loop
 from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.estimation.frd import FrequencyResponse
@@ -295,7 +295,7 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     if frf.freq_hz.size < 4:
         raise FrfIdentInputError(f'--band {band}: keeps {frf.freq_hz.size} lines of '
                                  f'{source}; a fit needs at least 4')
-    var = frf_variance(frf)
+    var = frf.variance()
     which = ('total' if frf.total_variance is not None else
              'noise' if frf.noise_variance is not None else None)
     progress = sink(progress)

@@ -19,9 +19,8 @@ from pathlib import Path
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.export import read_frf
-import numpy as np
 
-__all__ = ['axis_channels', 'frf_variance', 'read_source']
+__all__ = ['axis_channels', 'read_source']
 
 
 def read_source(source: str | Path) -> FrequencyResponse:
@@ -51,11 +50,6 @@ def read_source(source: str | Path) -> FrequencyResponse:
                                      f'directory of frf-ident estimate, or an FRF file)')
         p = p / 'frf.json'
     return read_frf(p)
-
-
-def frf_variance(frf: FrequencyResponse) -> np.ndarray | None:
-    """Return the total variance of ``frf`` if present, else its noise variance, else None."""
-    return frf.total_variance if frf.total_variance is not None else frf.noise_variance
 
 
 def axis_channels(frf: FrequencyResponse) -> list[tuple[str, int, int]]:

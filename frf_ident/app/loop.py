@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 import warnings
 
-from frf_ident.app.frf_source import axis_channels, frf_variance, read_source
+from frf_ident.app.frf_source import axis_channels, read_source
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.jsonable import jsonable
 from frf_ident.core.loop.check import (AxisMargins, draw_responses, DRAWS, loop_response,
@@ -145,7 +145,7 @@ def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         raise FrfIdentInputError(f'controller gains: expected {len(chans)} kp and ki values '
                                  f'(one per FRF input {frf.inputs}), got {kp.size} and '
                                  f'{ki.size}')
-    var = frf_variance(frf)
+    var = frf.variance()
     sample = None
     if var is not None and draws > 0:
         sample = draw_responses(frf.response, var, draws, np.random.default_rng(seed))

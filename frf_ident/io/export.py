@@ -213,7 +213,7 @@ def write_mat(frf: FrequencyResponse, path: PathLike) -> Path:
     for attr, var in _MAT_VARIANCES.items():
         if getattr(frf, attr) is not None:
             data[var] = getattr(frf, attr)
-    var = frf.total_variance if frf.total_variance is not None else frf.noise_variance
+    var = frf.variance()
     if var is not None:
         cov = np.zeros(var.shape + (2, 2))
         cov[..., 0, 0] = cov[..., 1, 1] = 0.5 * var

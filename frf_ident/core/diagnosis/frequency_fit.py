@@ -93,8 +93,8 @@ class LinearShift:
 
 
 def _variance(est: Any) -> np.ndarray | None:
-    """Return the estimate's total variance, else its noise variance; None if unusable."""
-    var = est.total_variance if est.total_variance is not None else est.noise_variance
+    """Return the estimate's variance (total, else noise) where usable, else None."""
+    var = est.variance()
     if var is None or not np.all(np.isfinite(var) & (var > 0)):
         return None
     return np.asarray(var, dtype=float)

@@ -208,6 +208,19 @@ class FrequencyResponse:
                                  pick(self.noise_variance), pick(self.total_variance),
                                  dict(self.meta))
 
+    def variance(self) -> np.ndarray | None:
+        """
+        Return the variance a fit weights this FRF by.
+
+        Returns
+        -------
+        ndarray, shape (n_out, n_in, n_freq), or None
+            ``total_variance`` where the estimate has it (noise and nonlinear distortion),
+            else ``noise_variance``, else None.
+
+        """
+        return self.total_variance if self.total_variance is not None else self.noise_variance
+
     def std_db(self, which: str = 'total') -> np.ndarray | None:
         """
         Return the 1-sigma magnitude uncertainty in dB.
