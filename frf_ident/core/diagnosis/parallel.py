@@ -19,11 +19,11 @@ starting simplex of a joint refit and the FRF-shape candidates of different axes
 on each other. :func:`fork_map` runs such parts on worker processes of the standard library
 (:mod:`concurrent.futures`), forked so they inherit the recording and the search state instead
 of receiving them: only an index goes out and the part's result comes back.
-:func:`simulate_many` simulates models that way. :class:`WorkerPool` keeps its workers for
-the many small batches of one search (a Nelder-Mead step's reflection and guess): forked once,
-so each batch costs the models sent and the results returned, not a fork of the whole process
-(about 0.15 s of system time per batch on the demo bag). The simulation is deterministic (fixed
-seed, noise-free model), so the results are those of running the parts one after the other.
+:class:`WorkerPool` keeps its workers for the many small batches of one search (the
+evaluator's models of a round, a Nelder-Mead step's reflection and guess): forked once, so a
+batch costs the models sent and the results returned, not a fork of the whole diagnosing
+process. The simulation is deterministic (fixed seed, noise-free model), so the results are
+those of running the parts one after the other.
 """
 from __future__ import annotations
 
@@ -31,13 +31,7 @@ from concurrent.futures import ProcessPoolExecutor
 import multiprocessing
 from typing import Any, Callable, Sequence, TypeVar
 
-from frf_ident.core.model.params import RobotParams
-from frf_ident.core.recording import Recording
-from frf_ident.core.simulation.controller import PIVelocity
-
-from .common import as_simulation, simulate_like
-
-__all__ = ['can_fork', 'fork_map', 'simulate_many', 'WorkerPool']
+__all__ = ['can_fork', 'fork_map', 'WorkerPool']
 
 T = TypeVar('T')
 
@@ -90,37 +84,6 @@ def fork_map(fn: Callable[[Any], T], items: Sequence[Any], jobs: int) -> list[T]
             return list(pool.map(_run_item, range(len(items))))
     finally:
         _JOB = None
-
-
-def simulate_many(rec: Recording, ctrl: PIVelocity, robots: Sequence[RobotParams],
-                  jobs: int, then: Callable[[Recording], Any] | None = None
-                  ) -> list[tuple[Recording, Any]]:
-    """
-    Return :func:`.common.simulate_like` of every model, ``jobs`` at a time.
-
-    Parameters
-    ----------
-    rec : Recording
-        The recording whose excitation is simulated.
-    ctrl : PIVelocity
-        Its velocity controller.
-    robots : sequence of RobotParams
-        Independent models.
-    jobs : int
-        Worker processes (:func:`fork_map`).
-    then : callable, optional
-        Applied to each simulation in its worker (what the caller computes from it next).
-
-    Returns
-    -------
-    list of (Recording, object)
-        The simulations, in the order of ``robots``, each with ``then`` of it (None without).
-
-    """
-    def run(robot):
-        sim = simulate_like(rec, robot, ctrl)
-        return sim.position, sim.velocity, sim.effort, then(sim) if then else None
-    return [(as_simulation(rec, *a[:3]), a[3]) for a in fork_map(run, robots, jobs)]
 
 
 def _set_pool_fn(fn: Callable[[Any], Any]) -> None:

@@ -17,7 +17,8 @@ import os
 from pathlib import Path
 
 from frf_ident.core.diagnosis.common import simulate_like
-from frf_ident.core.diagnosis.parallel import can_fork, fork_map, simulate_many, WorkerPool
+from frf_ident.core.diagnosis.evaluator import Evaluator
+from frf_ident.core.diagnosis.parallel import can_fork, fork_map, WorkerPool
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.analytic import robot_frf, robot_frf_sampled
 from frf_ident.core.simulation.plant import FlexibleJointPlant
@@ -70,11 +71,23 @@ def test_parallel_simulations_equal_the_serial_ones():
     models = [robot.with_axes(coulomb_friction=x) for x in (0.0, 5.0, 20.0)]
     models.append(replace(robot, axes=[replace(robot.axes[0], stiffness=0.5
                                                * robot.axes[0].stiffness)] + robot.axes[1:]))
-    par = simulate_many(rec, ctrl, models, 2, then=lambda sim: float(sim.effort.sum()))
-    for m, (p, total) in zip(models, par):
+
+    def run(m):
+        sim = simulate_like(rec, m, ctrl)
+        return sim, float(sim.effort.sum())
+    with WorkerPool(run, 2) as pool:
+        par = pool.run(models)
+    # the evaluator's own path: a batch simulated ahead, then each model taken from it
+    ev = Evaluator(rec, ctrl, jobs=2)
+    ev.prefetch(models)
+    ahead = [ev.simulate(m) for m in models]
+    ev.close()
+    assert ev.n_sims == len(models)
+    for m, (p, total), e in zip(models, par, ahead):
         s = simulate_like(rec, m, ctrl)
         for k in ('position', 'velocity', 'effort'):
             assert np.array_equal(getattr(s, k), getattr(p, k)), k
+            assert np.array_equal(getattr(s, k), getattr(e, k)), k
         assert total == float(s.effort.sum())
     # the models differ, so equal arrays are no accident of one model simulated four times
     assert not np.array_equal(par[0][0].effort, par[2][0].effort)
