@@ -262,12 +262,11 @@ class Evaluator:
         Loss terms per axis (arrays of n): mean |ln(P_meas/P_model)|^2 over the lines of the
         diagonal element, torque and velocity NRMSE^2, on the fit (or held-out) part.
         """
-        ready = None if held_out or sim is not None else self._est.get(repr(robot))
         sim = sim if sim is not None else self.simulate(robot)
-        part = self.val if held_out and self.val.segments else self.fit
         meas = self.meas_val if held_out and self.meas_val else self.meas_fit
         m = self.val_mask if held_out and self.val_mask.any() else self.fit_mask
-        est = ready if ready is not None else estimates(replace_segments(sim, part))
+        est = (estimates(replace_segments(sim, self.val)) if held_out and self.val.segments
+               else self.fit_estimates(robot, sim))
         out = {}
         for k, pm in meas.items():
             r = np.log(diag_ratio(pm, est[k]))
@@ -277,6 +276,26 @@ class Evaluator:
         out['velocity'] = np.array([nrmse(self.rec.velocity[:, i], sim.velocity[:, i], m) ** 2
                                     for i in range(self.n)])
         return out
+
+    def fit_estimates(self, robot: RobotParams, sim: Recording | None = None) -> dict:
+        """
+        Return :func:`estimates` of a model's simulation on the fit part.
+
+        Kept with the simulation (a worker computed them beside it, or the first caller
+        here), so the nominal model's are computed once for its misfit, stage 0 and stage 2.
+        ``sim`` is the model's simulation where the caller has it.
+        """
+        key = repr(robot)
+        own = self._sims.get(key)
+        if sim is not None and own is not None and sim is not own:
+            return estimates(replace_segments(sim, self.fit))      # not the kept simulation
+        if key not in self._est:
+            sim = sim if sim is not None else self.simulate(robot)
+            est = estimates(replace_segments(sim, self.fit))
+            if self._sims.get(key) is not sim:
+                return est
+            self._est[key] = est
+        return self._est[key]
 
     def loss(self, robot: RobotParams, axis: int) -> float:
         """Return the misfit of one axis (units of its noise floor) of a model, on the fit part."""

@@ -39,7 +39,7 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
                          fit_time_delay, fit_viscous, friction_regression, ripple_again,
                          stiffness_seen, with_params)
 from .common import apply_effect, Effect
-from .evaluator import estimates, Evaluator, replace_segments
+from .evaluator import Evaluator
 from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
 from .held_out import finish, held_out_check, structure_missing
 from .parallel import fork_map
@@ -142,7 +142,7 @@ def frequency_domain_fit(s: Search) -> None:
     it is the model the later stages read against (and the held-out check may still drop it).
     """
     ev, robot = s.ev, s.robot
-    sim_est = estimates(replace_segments(s.sim0, ev.fit))
+    sim_est = ev.fit_estimates(robot, s.sim0)
     shifts = linear_shifts(ev.meas_fit, sim_est, robot)
     load = load_dependence(ev.meas_fit, sim_est, robot)
     for sh in shifts:
@@ -213,7 +213,7 @@ def frf_shape_effects(s: Search) -> None:
     stage2_all: list[Effect] = []
     axes = set(range(robot.n_axes))
     for rnd in range(STAGE2_ROUNDS):
-        sim_est = estimates(replace_segments(sim1, ev.fit))
+        sim_est = ev.fit_estimates(s.ext, sim1)
         stage2 = [c for found in axis_candidates(s, sorted(axes), sim_est) for c in found]
         n_kept = len(s.kept)
         s.ext, s.cur = accept(ev, robot, s.kept, stage2, s.cur, s.say, s.rivals)
@@ -273,16 +273,14 @@ def frf_shape_candidates(s: Search, i: int, sim_est: dict) -> list[Effect]:
     s.say(f'{s.robot.axes[i].name}: stiffness seen by multisine x{math.exp(s_ms):.3f}, '
           f'chirp x{math.exp(s_ch):.3f} (against the model so far)')
     taken = {k.name for k in kept if k.axis_index == i}
-    # a kind the axis took already is not offered again (below), so its simulation fit is not
-    # run (a stiffening refined by Nelder-Mead in round 2 cost 35 simulations for nothing);
-    # the delay and the mismatch are FRF fits whose values serve the re-reads below
-    found = [fn() if name not in taken or name in ('time_delay', 'parameter_mismatch') else None
-             for name, fn in (('time_delay', lambda: fit_time_delay(ev, sim_est, ext, i)),
-                              ('parameter_mismatch',
-                               lambda: fit_parameter_mismatch(ev, ext, i, s_ms, s_ch)),
-                              ('stiffness_nonlinearity',
-                               lambda: fit_stiffness_nonlinearity(ev, ext, i, s_ms, s_ch)),
-                              ('backlash', lambda: fit_backlash(ev, ext, i, s_ms, s_ch)))]
+    # the delay and the mismatch are FRF fits whose values serve the re-reads below; the
+    # simulation fits of a stiffening or a backlash are not run for an axis that took one (it
+    # is not offered again below)
+    found = [fit_time_delay(ev, sim_est, ext, i),
+             fit_parameter_mismatch(ev, ext, i, s_ms, s_ch),
+             None if 'stiffness_nonlinearity' in taken
+             else fit_stiffness_nonlinearity(ev, ext, i, s_ms, s_ch),
+             None if 'backlash' in taken else fit_backlash(ev, ext, i, s_ms, s_ch)]
     out: list[Effect] = []
     td = found[0]
     if (td is not None and td.parameters['time_delay'] - ext.axes[i].time_delay
