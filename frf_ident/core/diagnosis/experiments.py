@@ -150,9 +150,10 @@ def frequency_domain_fit(s: Search) -> None:
             f'{a.name} ' + '/'.join(f'{d:+.3f}+-{e:.3f}'
                                     for d, e in zip(sh.log_scale[i], sh.std[i]))
             for i, a in enumerate(robot.axes)) + ' (motor inertia/link inertia/stiffness)'
-            + ''.join(f'; {a.name}: structure missing' for a, m in zip(robot.axes,
-                                                                       sh.structure_missing)
-                      if m))
+            + ''.join(f'; {a.name}: own channel {c:.3g} x its noise per dof'
+                      + (' (structure missing)' if m else '')
+                      for a, c, m in zip(robot.axes, sh.channel_cost, sh.structure_missing)
+                      if np.isfinite(c)))
     s.say('stage 0 load dependence (stiffness scale chirp/multisine): ' + ', '.join(
         f'{a.name} x{math.exp(x):.3f}' for a, x in zip(robot.axes, load)))
     s.stage0 = [c for c in (fd_parameter_mismatch(shifts, robot, i, load[i])

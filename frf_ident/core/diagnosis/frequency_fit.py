@@ -78,10 +78,9 @@ class LinearShift:
         sqrt(cost ratio) when the ratio exceeds 1).
     coupled : bool
         True when the coupled robot was fitted (the model has link coupling).
-    structure_missing : ndarray of bool, shape (n_axes,)
-        The cost per degree of freedom of the axis' own channel exceeds FD_STRUCTURE_RATIO:
-        the fitted model misses structure there (only where the estimate carries its
-        variance).
+    channel_cost : ndarray, shape (n_axes,)
+        The ML cost per degree of freedom the fit leaves on each axis' own channel (NaN where
+        the estimate carries no variance).
 
     """
 
@@ -89,7 +88,12 @@ class LinearShift:
     log_scale: np.ndarray
     std: np.ndarray
     coupled: bool
-    structure_missing: np.ndarray
+    channel_cost: np.ndarray
+
+    @property
+    def structure_missing(self) -> np.ndarray:
+        """Return per axis whether the channel cost exceeds FD_STRUCTURE_RATIO (NaN: no)."""
+        return np.nan_to_num(self.channel_cost, nan=0.0) > FD_STRUCTURE_RATIO
 
 
 def _variance(est: Any) -> np.ndarray | None:
@@ -161,13 +165,13 @@ def linear_shifts(meas: dict, sim_est: dict, robot: RobotParams) -> list[LinearS
             continue
         # the cost per degree of freedom of each axis' own channel (weighted estimates only)
         dof = max(2 * est.freq_hz.size - len(PARAMETERS), 1)
-        missing = (c_meas / dof > FD_STRUCTURE_RATIO) if var is not None else np.zeros(n, bool)
+        cost = c_meas / dof if var is not None else np.full(n, np.nan)
         rows = np.asarray(_ROWS)
         ratio = v_meas[rows] / v_sim[rows]
         rel = sd[rows] / np.abs(v_meas[rows])
         ok = (ratio > 0) & np.isfinite(ratio) & np.isfinite(rel)
         out.append(LinearShift(key, np.where(ok, np.log(np.where(ok, ratio, 1.0)), 0.0).T,
-                               np.where(ok, rel, np.inf).T, coupled, missing))
+                               np.where(ok, rel, np.inf).T, coupled, cost))
     return out
 
 
