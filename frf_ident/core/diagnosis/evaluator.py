@@ -236,7 +236,9 @@ class Evaluator:
                 sim = simulate_like(rec, robot, ctrl)
                 return (sim.position, sim.velocity, sim.effort,
                         estimates(replace_segments(sim, fit)))
-            self._workers = WorkerPool(run, self.jobs)
+            # the three signals of a simulation come back through shared memory
+            self._workers = WorkerPool(run, self.jobs, shared_bytes=3 * rec.velocity.nbytes + 256,
+                                       max_items=SIM_CACHE - 4)
             weakref.finalize(self, self._workers.close)
         return self._workers
 

@@ -59,6 +59,31 @@ def test_worker_pool_forks_once_and_keeps_the_order():
     assert WorkerPool(part, 1).run([5, 6]) == [(6, os.getpid()), (7, os.getpid())]
 
 
+def test_worker_pool_returns_large_arrays_through_shared_memory_as_copies():
+    def part(x):
+        rng = np.random.default_rng(x)
+        # two arrays past the pickling size, a small one and a scalar
+        return rng.standard_normal((x * 1000, 3)), rng.integers(0, 9, 20_000), np.ones(3), x
+    items = [20, 30, 40, 5]
+    want = [part(x) for x in items]
+    # room for the first item's arrays only in each slot, and slots for two items
+    with WorkerPool(part, 2, shared_bytes=700_000, max_items=2) as pool:
+        got = pool.run(items)
+        again = pool.run(items[::-1])
+    for w, g in zip(want + want[::-1], got + again):
+        assert len(g) == 4 and g[3] == w[3]
+        for a, b in zip(w[:3], g[:3]):
+            assert a.dtype == b.dtype and np.array_equal(a, b)
+    if can_fork():
+        # copied out of the shared memory (own data) or unpickled (a view of the bytes): the
+        # first two items' large arrays that fit their slot, the rest pickled
+        shared = [[b.flags.owndata for b in g[:2]] for g in got + again]
+        assert shared == [[True, True], [False, True], [False] * 2, [False] * 2,
+                          [True, True], [False, True], [False] * 2, [False] * 2]
+    # the copies are the caller's: a later batch writing the same slots leaves them alone
+    assert np.array_equal(got[0][0], want[0][0])
+
+
 def test_parallel_simulations_equal_the_serial_ones():
     model, robot, ctrl = load_model(ROOT / 'config' / 'model_3axis.yaml')
     plant = FlexibleJointPlant(robot)
