@@ -352,11 +352,19 @@ def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, 
     """
     n = prm.shape[0]
     h = dt / m
+    # ring-buffer rows without an integer division per read: offsets lie in (-nbuf, 0]
+    kb = k % nbuf
     for s in range(m):
         for i in range(n):
             lim = prm[i, ULIM]
-            a = min(max(buf[(k + nbuf + offsets[s, 0, i]) % nbuf, i], -lim), lim)
-            b = min(max(buf[(k + nbuf + offsets[s, 1, i]) % nbuf, i], -lim), lim)
+            ra_ = kb + offsets[s, 0, i]
+            rb_ = kb + offsets[s, 1, i]
+            if ra_ < 0:
+                ra_ += nbuf
+            if rb_ < 0:
+                rb_ += nbuf
+            a = min(max(buf[ra_, i], -lim), lim)
+            b = min(max(buf[rb_, i], -lim), lim)
             sc[_UO, i] = a
             sc[_UN, i] = b
             if has_ff:
@@ -422,8 +430,9 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
         else:
             for i in range(n):
                 u[i] = min(max(u_ext[k, i], -ulim_ctrl[i]), ulim_ctrl[i])
+        kb = k % nbuf
         for i in range(n):
-            buf[k % nbuf, i] = u[i]
+            buf[kb, i] = u[i]
             applied = u[i]
             if has_ff:
                 applied += uff[2 * m * k, i]
