@@ -45,6 +45,7 @@ setup(
         'mcap-ros2-support>=0.5',
         'cyclonedds>=0.10.5',
         'control>=0.10',     # fit export and the loop check (stability_margins on FRD)
+        'threadpoolctl>=3.1',   # one BLAS thread per process where the diagnosis forks workers
     ],
     extras_require={
         'test': ['pytest>=7.4', 'pytest-xdist>=3.5', 'hypothesis>=6.80', 'control>=0.10',
