@@ -36,6 +36,7 @@ from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
+from threadpoolctl import threadpool_limits
 
 __all__ = ['OUTPUT_FILES', 'diagnose', 'diagnose_columns', 'has_experiments', 'load_data']
 
@@ -111,6 +112,10 @@ def _match_axes(rec: Recording, robot, model_path: Path, progress, data: Path) -
                              f'data joints {rec.joint_names}')
 
 
+# one BLAS thread in this process and the simulation workers it forks: the matrices are
+# small, and a multi-threaded OpenBLAS per process spins on the cores the other processes
+# simulate on (demo bag, 2 cores: 48.3 s and 71.5 s of CPU, against 40.1 s and 44.1 s)
+@threadpool_limits.wrap(limits=1, user_api='blas')
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
              validate: Sequence[Path] = (), urdf: Path | None = None,
              progress: Progress | None = None, jobs: int | None = None,
@@ -186,13 +191,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     if has_experiments(rec):
         progress('identification experiments found: FRF and closed-loop simulation evidence')
         from frf_ident.core.diagnosis.thresholds import SIM_JOBS
-        from threadpoolctl import threadpool_limits
-        # one BLAS thread in this process and the simulation workers it forks: the matrices
-        # are small, and a multi-threaded OpenBLAS per process spins on the cores the other
-        # processes simulate on (demo bag, 2 cores: 48.3 s and 71.5 s of CPU, against 38 s)
-        with threadpool_limits(limits=1, user_api='blas'):
-            res = diagnose_experiments(rec, robot, ctrl, jobs=SIM_JOBS if jobs is None else jobs,
-                                       fd_fit=fd_fit)
+        res = diagnose_experiments(rec, robot, ctrl, jobs=SIM_JOBS if jobs is None else jobs,
+                                   fd_fit=fd_fit)
     else:
         progress('no identification experiments: time-series (inverse-dynamics) evidence')
         res = diagnose_timeseries(rec, robot)
