@@ -375,6 +375,8 @@ def missing_rows(*series: np.ndarray) -> np.ndarray:
     out = np.zeros(np.asarray(series[0]).shape[0], dtype=bool)
     for x in series:
         bad = ~np.isfinite(np.asarray(x, dtype=float))
+        if not bad.any():
+            continue        # the usual case, at a quarter of the cost of the row reductions
         if bad.ndim == 1:
             bad = bad[:, None]
         present = ~np.all(bad, axis=0)
