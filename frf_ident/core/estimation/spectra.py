@@ -347,32 +347,34 @@ def _filter_bank(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @numba.njit(cache=True)
-def _excerpt_dfts(x, i0, i1, q, f_x, t_center, t_first, fs, bank, start, out):
+def _excerpt_weights(i0, i1, q, f_x, t_center, t_first, fs, bank, start):
     """
-    Fill out[k] with the Sec. 5.1 DFT of the excerpt x[i0[k]:i1[k]] at f_x[k] (all channels).
+    Return the Sec. 5.1 DFT weights of the excerpts x[i0[k]:i1[k]] at f_x[k], all k at once.
 
     The excerpt's mean removed, the zero-phase FIR of ``bank[start[k]:]`` (2 L + 1 taps,
     L = 10 q) applied with zeros outside the excerpt and every q-th sample kept, as
     ``scipy.signal.resample_poly(seg, 1, q, window=h)`` does (output m at input m q), then a
     periodic Hann window and the DFT at exactly f_x, over the sum of the window. All of it is
     linear in the excerpt, so it is one weight per input sample, c_j = sum_m w_m
-    exp(-i 2 pi f_x t_m) h(m q - j), formed once and applied to every channel. NaN for a
-    channel whose excerpt holds a non-finite sample.
+    exp(-i 2 pi f_x t_m) h(m q - j): ``c[at[k]:at[k + 1]]`` for excerpt k, with the sum of its
+    weights and of its window (:func:`_apply_weights` applies them to every channel).
     """
-    n_ch = x.shape[1]
-    c = np.zeros(max(1, int(np.max(i1 - i0))), dtype=np.complex128)
-    for k in range(f_x.size):
+    n = f_x.size
+    at = np.zeros(n + 1, dtype=np.int64)
+    for k in range(n):
+        at[k + 1] = at[k] + max(i1[k] - i0[k], 0)
+    c = np.zeros(at[n], dtype=np.complex128)
+    c_sum = np.zeros(n, dtype=np.complex128)
+    w_sums = np.zeros(n)
+    for k in range(n):
         a, qq = i0[k], q[k]
         n_in = i1[k] - a
         if n_in <= 0:
-            for ch in range(n_ch):
-                out[k, ch] = np.nan + 0j
             continue
+        b = at[k]
         n_out = (n_in + qq - 1) // qq
         half = 10 * qq if qq > 1 else 0
         h0 = start[k] + half
-        for j in range(n_in):
-            c[j] = 0.0
         w_sum = 0.0
         for m in range(n_out):
             w = 1.0 if n_out == 1 else 0.5 - 0.5 * math.cos(2.0 * math.pi * m / n_out)
@@ -381,21 +383,59 @@ def _excerpt_dfts(x, i0, i1, q, f_x, t_center, t_first, fs, bank, start, out):
             kern = w * np.exp(-2j * np.pi * f_x[k] * (t - t_center[k]))
             centre = m * qq
             if qq == 1:
-                c[centre] += kern
+                c[b + centre] += kern
                 continue
             for d in range(max(-half, centre - n_in + 1), min(half, centre) + 1):
-                c[centre - d] += kern * bank[h0 + d]
-        c_sum = 0j
+                c[b + centre - d] += kern * bank[h0 + d]
+        acc = 0j
         for j in range(n_in):
-            c_sum += c[j]
+            acc += c[b + j]
+        c_sum[k] = acc
+        w_sums[k] = w_sum
+    return c, at, c_sum, w_sums
+
+
+@numba.njit(cache=True)
+def _apply_weights(x, i0, c, at, c_sum, w_sums, out):
+    """
+    Fill out[k] with the DFT of the excerpt x[i0[k]:...] by :func:`_excerpt_weights`' weights.
+
+    NaN for a channel whose excerpt holds a non-finite sample, and for an empty excerpt.
+    """
+    n_ch = x.shape[1]
+    for k in range(at.size - 1):
+        a, b = i0[k], at[k]
+        n_in = at[k + 1] - b
+        if n_in <= 0:
+            for ch in range(n_ch):
+                out[k, ch] = np.nan + 0j
+            continue
         for ch in range(n_ch):
             mean = 0.0
             acc = 0j
             for j in range(n_in):
                 mean += x[a + j, ch]
-                acc += c[j] * x[a + j, ch]
+                acc += c[b + j] * x[a + j, ch]
             # a missing sample makes both sums NaN: the channel loses this frequency only
-            out[k, ch] = (acc - mean / n_in * c_sum) / w_sum
+            out[k, ch] = (acc - mean / n_in * c_sum[k]) / w_sums[k]
+
+
+#: weights of recent chirp analyses, by their excerpts (:func:`chirp_spectra`): the diagnosis
+#: analyses the same chirp segments of every simulated model, and forming the weights was
+#: half of the analysis
+_WEIGHTS: dict[tuple, tuple] = {}
+_WEIGHTS_KEPT = 16
+
+
+def _weights(i0, i1, q, f, tc, t_first: float, fs: float) -> tuple:
+    """Return :func:`_excerpt_weights` of these excerpts, kept for the next call alike."""
+    key = (i0.tobytes(), i1.tobytes(), q.tobytes(), f.tobytes(), tc.tobytes(), t_first, fs)
+    if key not in _WEIGHTS:
+        bank, start = _filter_bank(q)
+        while len(_WEIGHTS) >= _WEIGHTS_KEPT:
+            del _WEIGHTS[next(iter(_WEIGHTS))]
+        _WEIGHTS[key] = _excerpt_weights(i0, i1, q, f, tc, t_first, fs, bank, start)
+    return _WEIGHTS[key]
 
 
 def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
@@ -480,8 +520,8 @@ def chirp_spectra(x: np.ndarray, fs: float, freqs: np.ndarray, t_centers: np.nda
         raise EstimationError(f'excerpt for f_x={f[k]:g} Hz around t={tc[k]:g} s is outside '
                               f'the record [{t_first:g}, {t_first + x.shape[0] / fs:g}] s')
     q = np.maximum(1, np.floor(fs / (samples_per_period * f))).astype(np.int64)
-    bank, start = _filter_bank(q)
+    c, at, c_sum, w_sums = _weights(i0, i1, q, f, tc, float(t_first), float(fs))
     flat = np.ascontiguousarray(x.reshape(x.shape[0], -1))
     out = np.empty((f.size, flat.shape[1]), dtype=complex)
-    _excerpt_dfts(flat, i0, i1, q, f, tc, float(t_first), float(fs), bank, start, out)
+    _apply_weights(flat, i0, c, at, c_sum, w_sums, out)
     return out.reshape((f.size,) + x.shape[1:])
