@@ -42,7 +42,6 @@ from .common import apply_effect, Effect
 from .evaluator import Evaluator
 from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
 from .held_out import finish, held_out_check, structure_missing
-from .parallel import fork_map
 from .refit import FRICTION, refit_friction, refit_jointly
 from .result import DiagnosisResult
 from .search import named, Search
@@ -234,26 +233,16 @@ def frf_shape_effects(s: Search) -> None:
 
 def axis_candidates(s: Search, axes: list[int], sim_est: dict) -> list[list[Effect]]:
     """
-    Return :func:`frf_shape_candidates` of each axis, the axes on parallel processes.
+    Return :func:`frf_shape_candidates` of each axis, one axis after the other.
 
-    The axes' candidates read the search state and never change it, so they are fitted at
-    once (:func:`.parallel.fork_map`, ``ev.jobs`` processes, each simulating its models one
-    after the other); the simulations they ran are added to the count.
+    The searches inside an axis (the Nelder-Mead refinement of a stiffening, the grid of a
+    backlash) hand their independent models to the evaluator's workers. One axis usually
+    holds all of a round's searches (on the demo bag, joint_2's stiffening: 35 of the round's
+    37 simulations), so the axes are not spread over processes: forked one per axis, the axis
+    with the search ran alone on one core while the other idled (demo diagnose, three runs
+    each, alternating: 30.6 / 32.1 / 32.2 s forked per axis, 29.1 / 29.5 / 31.4 s this way).
     """
-    ev = s.ev
-    n0, jobs = ev.n_sims, ev.jobs
-    forked = jobs > 1 and len(axes) > 1
-
-    def one(i: int) -> tuple[list[Effect], int]:
-        n = ev.n_sims
-        ev.jobs = 1 if forked else jobs
-        try:
-            return frf_shape_candidates(s, i, sim_est), ev.n_sims - n
-        finally:
-            ev.jobs = jobs
-    found = fork_map(one, axes, jobs)
-    ev.n_sims = n0 + sum(n for _, n in found)
-    return [c for c, _ in found]
+    return [frf_shape_candidates(s, i, sim_est) for i in axes]
 
 
 def frf_shape_candidates(s: Search, i: int, sim_est: dict) -> list[Effect]:

@@ -15,8 +15,8 @@
 Run independent parts of the diagnosis in parallel processes.
 
 The diagnosis simulates many models on one recording; the candidates of one round, the
-starting simplex of a joint refit and the FRF-shape candidates of different axes do not depend
-on each other. :func:`fork_map` runs such parts on worker processes of the standard library
+starting simplex of a joint refit and a Nelder-Mead step's trial points do not depend on each
+other. :func:`fork_map` runs such parts on worker processes of the standard library
 (:mod:`concurrent.futures`), forked so they inherit the recording and the search state instead
 of receiving them: only an index goes out and the part's result comes back.
 :class:`WorkerPool` keeps its workers for the many small batches of one search (the
