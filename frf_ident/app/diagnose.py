@@ -33,10 +33,10 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from frf_ident.app.outdir import clear_outputs
+from frf_ident.app.threads import one_blas_thread
 from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
-from threadpoolctl import threadpool_limits
 
 __all__ = ['OUTPUT_FILES', 'diagnose', 'diagnose_columns', 'has_experiments', 'load_data']
 
@@ -112,10 +112,7 @@ def _match_axes(rec: Recording, robot, model_path: Path, progress, data: Path) -
                              f'data joints {rec.joint_names}')
 
 
-# one BLAS thread in this process and the simulation workers it forks: the matrices are
-# small, and a multi-threaded OpenBLAS per process spins on the cores the other processes
-# simulate on (demo bag, 2 cores: 48.3 s and 71.5 s of CPU, against 40.1 s and 44.1 s)
-@threadpool_limits.wrap(limits=1, user_api='blas')
+@one_blas_thread()
 def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None = None,
              validate: Sequence[Path] = (), urdf: Path | None = None,
              progress: Progress | None = None, jobs: int | None = None,
