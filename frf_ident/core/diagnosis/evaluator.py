@@ -150,6 +150,8 @@ class Evaluator:
         self._residual: tuple[Any, Any] = (None, None)
         # loss terms of every model judged, by (repr, held out): a few numbers each
         self._terms: dict[tuple[str, bool], dict[str, np.ndarray]] = {}
+        # measured signals on the fit / held-out mask and their RMS, by (signal, held out)
+        self._measured: dict[tuple[str, bool], list[tuple[np.ndarray, Any]]] = {}
         self._workers: WorkerPool | None = None
 
     def residual(self, robot: RobotParams) -> tuple[np.ndarray, ...]:
@@ -281,12 +283,27 @@ class Evaluator:
         for k, pm in meas.items():
             r = np.log(diag_ratio(pm, est[k]))
             out[k] = np.mean(np.abs(r) ** 2, axis=-1)
-        out['effort'] = np.array([nrmse(self.rec.effort[:, i], sim.effort[:, i], m) ** 2
-                                  for i in range(self.n)])
-        out['velocity'] = np.array([nrmse(self.rec.velocity[:, i], sim.velocity[:, i], m) ** 2
-                                    for i in range(self.n)])
+        for k in ('effort', 'velocity'):
+            out[k] = self._output_error(k, getattr(sim, k), m, held_out)
         self._terms[key] = {k: v.copy() for k, v in out.items()}
         return out
+
+    def _output_error(self, key: str, x: np.ndarray, m: np.ndarray, held_out: bool
+                      ) -> np.ndarray:
+        """
+        Return :func:`.common.nrmse` ^ 2 per axis of a simulated signal on the mask ``m``.
+
+        The measured side (its masked samples and their RMS about the mean) is formed once
+        per signal and part; the arithmetic is nrmse's.
+        """
+        ref = self._measured.get((key, held_out))
+        if ref is None:
+            meas = getattr(self.rec, key)
+            ref = [(a, np.sqrt(np.mean((a - np.mean(a, 0)) ** 2)))
+                   for a in (meas[:, i][m] for i in range(self.n))]
+            self._measured[(key, held_out)] = ref
+        return np.array([float(np.sqrt(np.mean((a - x[:, i][m]) ** 2)) / max(den, 1e-300)) ** 2
+                         for i, (a, den) in enumerate(ref)])
 
     def fit_estimates(self, robot: RobotParams, sim: Recording | None = None) -> dict:
         """
