@@ -226,6 +226,11 @@ def encode_string(text: str) -> bytes:
 
 # --------------------------------------------------------------------------- batch decoders
 
+def _all_of_length(starts: Sequence[int], ends: Sequence[int], length: int) -> bool:
+    """Whether every message ``buf[starts[i]:ends[i]]`` is ``length`` bytes long."""
+    return bool(np.all(np.subtract(ends, starts) == length))
+
+
 def _gather(buf: bytes, starts: Sequence[int], length: int) -> np.ndarray:
     """(m, length) uint8 matrix of the equally long messages starting at ``starts``."""
     raw = np.frombuffer(buf, dtype=np.uint8)
@@ -265,7 +270,7 @@ def decode_joint_state_batch(buf: bytes, starts: Sequence[int], ends: Sequence[i
     None when the messages differ in structure (the caller then decodes one by one).
     """
     length = ends[0] - starts[0]
-    if any(b - a != length for a, b in zip(starts, ends)):
+    if not _all_of_length(starts, ends, length):
         return None
     first_mv = memoryview(buf)[starts[0]:ends[0]]
     try:
@@ -290,7 +295,7 @@ def decode_float64_array_batch(buf: bytes, starts: Sequence[int],
                                ends: Sequence[int]) -> np.ndarray | None:
     """Vectorised ``data`` of equally shaped Float64MultiArrays, (m, n); None if they differ."""
     length = ends[0] - starts[0]
-    if any(b - a != length for a, b in zip(starts, ends)):
+    if not _all_of_length(starts, ends, length):
         return None
     start, n = _float64_array_layout(memoryview(buf)[starts[0]:ends[0]])
     rows = _gather(buf, starts, length)
