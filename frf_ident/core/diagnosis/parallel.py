@@ -16,12 +16,10 @@ Run independent parts of the diagnosis in parallel processes.
 
 The diagnosis simulates many models on one recording; the candidates of one round, the
 starting simplex of a joint refit and a Nelder-Mead step's trial points do not depend on each
-other. :func:`fork_map` runs such parts on worker processes of the standard library
-(:mod:`concurrent.futures`), forked so they inherit the recording and the search state instead
-of receiving them: only an index goes out and the part's result comes back.
-:class:`WorkerPool` keeps its workers for the many small batches of one search (the
-evaluator's models of a round, a Nelder-Mead step's reflection and guess): forked once, so a
-batch costs the models sent and the results returned, not a fork of the whole diagnosing
+other. :class:`WorkerPool` runs such models on worker processes of the standard library
+(:mod:`concurrent.futures`), forked once per diagnosis so they inherit the recording instead of
+receiving it: a batch (the evaluator's models of a round, a Nelder-Mead step's reflection and
+guess) costs the models sent and the results returned, not a fork of the whole diagnosing
 process. Its results' large arrays (a simulation's signals, 25 MB on the demo bag) come back
 through memory the workers share with the caller instead of a pipe: pickled, a batch of two
 took 0.27 s against 0.15 s (each simulation 0.11 s alone). The simulation is deterministic
@@ -38,12 +36,10 @@ from typing import Any, Callable, Sequence, TypeVar
 
 import numpy as np
 
-__all__ = ['can_fork', 'fork_map', 'WorkerPool']
+__all__ = ['can_fork', 'WorkerPool']
 
 T = TypeVar('T')
 
-#: (function, items) the forked workers run; set only while a pool runs
-_JOB: tuple[Callable[[Any], Any], Sequence[Any]] | None = None
 #: the function a :class:`WorkerPool`'s worker runs and the memory it shares with the caller
 #: (set in the worker when it starts)
 _POOL_FN: Callable[[Any], Any] | None = None
@@ -55,46 +51,6 @@ _SHARED_MIN_BYTES = 1 << 16
 def can_fork() -> bool:
     """Return whether worker processes can be forked here (POSIX; not on Windows)."""
     return 'fork' in multiprocessing.get_all_start_methods()
-
-
-def _run_item(k: int) -> Any:
-    """Run the inherited function on the inherited item k (in a forked worker)."""
-    assert _JOB is not None, 'fork_map sets the job before the workers fork'
-    return _JOB[0](_JOB[1][k])
-
-
-def fork_map(fn: Callable[[Any], T], items: Sequence[Any], jobs: int) -> list[T]:
-    """
-    Return ``[fn(x) for x in items]``, computed on ``jobs`` forked worker processes.
-
-    ``fn`` may be a closure over large state (the workers inherit it); its results travel
-    back pickled, and what it changes in its own process stays there.
-
-    Parameters
-    ----------
-    fn : callable
-        The part, a function of one item.
-    items : sequence
-        The items.
-    jobs : int
-        Worker processes; 1, one item, or no fork here: one after the other in this process.
-
-    Returns
-    -------
-    list
-        The results, in the order of ``items``.
-
-    """
-    global _JOB
-    if jobs < 2 or len(items) < 2 or not can_fork():
-        return [fn(x) for x in items]
-    _JOB = (fn, items)
-    try:
-        with ProcessPoolExecutor(min(jobs, len(items)),
-                                 mp_context=multiprocessing.get_context('fork')) as pool:
-            return list(pool.map(_run_item, range(len(items))))
-    finally:
-        _JOB = None
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from frf_ident.core.diagnosis.common import simulate_like
 from frf_ident.core.diagnosis.evaluator import Evaluator
-from frf_ident.core.diagnosis.parallel import can_fork, fork_map, WorkerPool
+from frf_ident.core.diagnosis.parallel import can_fork, WorkerPool
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.analytic import robot_frf, robot_frf_sampled
 from frf_ident.core.simulation.plant import FlexibleJointPlant
@@ -27,19 +27,6 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[3]
-
-
-def test_fork_map_keeps_the_order_and_the_workers_changes_stay_there():
-    seen = []
-
-    def part(x):
-        seen.append(x)          # changes the worker's copy only
-        return x * x, os.getpid()
-    out = fork_map(part, [3, 1, 2, 5], 2)
-    assert [v for v, _ in out] == [9, 1, 4, 25]
-    if can_fork():
-        assert seen == [] and os.getpid() not in {p for _, p in out}
-    assert fork_map(part, [4], 2) == [(16, os.getpid())] and seen == [4]
 
 
 def test_worker_pool_forks_once_and_keeps_the_order():
