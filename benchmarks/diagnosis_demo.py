@@ -23,6 +23,11 @@ gives the wall time beside the simulation count and the CPU time (this process a
 workers: what a quiet machine's wall time is bounded by), and whether both found the same
 effects (names, axes, values to 4 digits) and metrics. Goal (issue 41): <= 30 s on 2 cores.
 
+The machine's speed moves while it runs (a virtual machine: the same code took 27.0 s and
+32.7 s within the hour, a single simulation 46 and 63 ms), so one row measures it in the same
+run: one closed-loop simulation of the nominal model on the demo bag, best of 3, before and
+after the diagnoses, and the 2-process wall time in units of it.
+
 Issue 40 item 5 (stage 0, the frequency-domain physical fit that names a linear parameter
 mismatch before the simulation search): the demo bag diagnosed a third time without it
 (``fd_fit=False``, ``--no-fd-fit``), and a scene of the reference plant with one axis' stiffness
@@ -80,6 +85,7 @@ def rows() -> list[tuple[str, str, str, str]]:
         return [('demo diagnose', f'no demo bag at {bag}', 'run `make demo` first', '-')]
     model = ROOT / 'config' / 'model_3axis.yaml'
     runs = {}
+    speed = [_simulation_ms(bag, model)]
     with tempfile.TemporaryDirectory() as tmp:
         for jobs, fd in ((1, True), (2, True), (2, False)):
             t0, c0 = time.perf_counter(), _cpu_s()
@@ -87,6 +93,7 @@ def rows() -> list[tuple[str, str, str, str]]:
             runs[jobs if fd else 'no_fd'] = (
                 time.perf_counter() - t0, res['result'].n_sims, _effects(res['report']),
                 res['report']['metrics'], _cpu_s() - c0)
+    speed.append(_simulation_ms(bag, model))
     (t1, n1, e1, m1, c1), (t2, n2, e2, m2, c2) = runs[1], runs[2]
     t0, n0, e0, m0, _ = runs['no_fd']
     load = os.getloadavg()[0]
@@ -103,7 +110,26 @@ def rows() -> list[tuple[str, str, str, str]]:
              f'without: {t0:.1f} s, {n0} simulations: {_names(e0)}',
              'same effects' if e0 == e2 and m0 == m2 else (
                  'same effects, other values' if _names(e0) == _names(e2)
-                 else 'EFFECTS DIFFER'))] + mismatch_rows()
+                 else 'EFFECTS DIFFER')),
+            ('machine speed: one simulation of the nominal model on the demo bag, best of 3, '
+             'before / after the diagnoses', f'{speed[0]:.0f} / {speed[1]:.0f} ms',
+             f'2 processes: {1e3 * t2 / max(speed):.0f} to {1e3 * t2 / min(speed):.0f} '
+             f'simulation times', '-')] + mismatch_rows()
+
+
+def _simulation_ms(bag: Path, model: Path) -> float:
+    """Return the best of 3 closed-loop simulations of the nominal model on the bag [ms]."""
+    from frf_ident.app.diagnose import load_data
+    from frf_ident.core.diagnosis.common import bridge_gaps, simulate_like
+    from frf_ident.io.model_file import load_model
+    rec = bridge_gaps(load_data(bag))[0]
+    _, robot, ctrl = load_model(model)
+    best = float('inf')
+    for _ in range(3):
+        t0 = time.perf_counter()
+        simulate_like(rec, robot, ctrl)
+        best = min(best, time.perf_counter() - t0)
+    return 1e3 * best
 
 
 def _names(effects: list[tuple]) -> str:
