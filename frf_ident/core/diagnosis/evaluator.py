@@ -33,7 +33,8 @@ from .common import (as_simulation, bridge_gaps, diag_ratio, frf_error_db, nrmse
                      simulate_like, split_recording)
 from .parallel import WorkerPool
 from .residual import inverse_dynamics_residual
-from .thresholds import FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE, SIM_JOBS
+from .thresholds import (EST_CACHE, FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE,
+                         SIM_JOBS)
 
 
 def estimates(rec: Recording) -> dict[str, Any]:
@@ -256,9 +257,9 @@ class Evaluator:
         self.n_sims += 1
         self._sims[key] = sim
         while len(self._sims) > SIM_CACHE:
-            old = next(iter(self._sims))
-            del self._sims[old]
-            self._est.pop(old, None)
+            del self._sims[next(iter(self._sims))]
+        while len(self._est) > EST_CACHE:
+            del self._est[next(iter(self._est))]
 
     def terms(self, robot: RobotParams, sim: Recording | None = None, *, held_out: bool = False
               ) -> dict[str, np.ndarray]:
@@ -309,9 +310,10 @@ class Evaluator:
         """
         Return :func:`estimates` of a model's simulation on the fit part.
 
-        Kept with the simulation (a worker computed them beside it, or the first caller
-        here), so the nominal model's are computed once for its misfit, stage 0 and stage 2.
-        ``sim`` is the model's simulation where the caller has it.
+        Kept (a worker computed them beside the simulation, or the first caller here; the
+        last EST_CACHE, longer than the simulations), so the nominal model's are computed
+        once for its misfit, stage 0 and stage 2, and a model's are at hand after its
+        simulation was dropped. ``sim`` is the model's simulation where the caller has it.
         """
         key = repr(robot)
         own = self._sims.get(key)

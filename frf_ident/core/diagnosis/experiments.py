@@ -209,11 +209,10 @@ def frf_shape_effects(s: Search) -> None:
     the axis took before is refitted jointly with it before the axis is read again.
     """
     ev, robot = s.ev, s.robot
-    sim1 = ev.simulate(s.ext) if s.kept else s.sim0
     stage2_all: list[Effect] = []
     axes = set(range(robot.n_axes))
     for rnd in range(STAGE2_ROUNDS):
-        sim_est = ev.fit_estimates(s.ext, sim1)
+        sim_est = ev.fit_estimates(s.ext)
         stage2 = [c for found in axis_candidates(s, sorted(axes), sim_est) for c in found]
         n_kept = len(s.kept)
         s.ext, s.cur = accept(ev, robot, s.kept, stage2, s.cur, s.say, s.rivals)
@@ -225,7 +224,6 @@ def frf_shape_effects(s: Search) -> None:
                 s.ext, s.cur = refit_jointly(ev, robot, s.kept, i, s.cur, s.say)
         if not axes or rnd == STAGE2_ROUNDS - 1:
             break
-        sim1 = ev.simulate(s.ext)
     s.stage2 = stage2_all
     s.cands += stage2_all
     log.info('stage 2 (FRF shape): %d candidate(s), %s', len(stage2_all), named(s.kept))

@@ -96,6 +96,10 @@ INDEPENDENT_SAMPLE_S = 0.01
 #: simulated in parallel (at most SIM_CACHE - 4 models, :meth:`Evaluator.prefetch`) beside the
 #: four models a round checks again
 SIM_CACHE = 12
+#: fit-part estimates the Evaluator keeps after their simulation left the SIM_CACHE kept ones
+#: (a few hundred kB each on the demo bag): stage 2 reads each round against the model so far,
+#: whose estimates are then at hand without simulating it again; no result changes
+EST_CACHE = 64
 #: processes that simulate independent models at once (the candidates of one round, the
 #: starting simplex of a joint refit): 2 = the cores of the machine the 30 s goal of the demo
 #: diagnosis was set on; 1 = one after the other in this process (the same results: the
