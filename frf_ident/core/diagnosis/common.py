@@ -129,25 +129,35 @@ def bridge_gaps(rec: Recording) -> tuple[Recording, np.ndarray]:
     return out, wide
 
 
-def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity) -> Recording:
+def drive_reference(rec: Recording) -> np.ndarray:
+    """
+    Return the velocity reference :func:`simulate_like` drives the model with.
+
+    Where the reference is missing the controller's input is unknown: the simulation follows
+    the measured velocity there, and the diagnosis leaves these stretches out of every
+    comparison (evaluator.missing_reference) instead of commanding zero velocity.
+    """
+    if rec.reference is None:
+        raise ValueError('recording has no reference; closed-loop simulation impossible')
+    return np.where(np.isfinite(rec.reference), rec.reference, rec.velocity)
+
+
+def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
+                  reference: np.ndarray | None = None) -> Recording:
     """
     Simulate ``robot`` in closed loop on the recording's reference and return the result.
 
     Run ``robot`` in closed loop with ``ctrl`` on the recording's velocity reference (the
     same excitation through the same controller) and return a Recording with the same
-    segments, so that it can be estimated exactly like the measurement.
+    segments, so that it can be estimated exactly like the measurement. ``reference`` is
+    :func:`drive_reference` of ``rec`` where the caller keeps it (it simulates many models).
     """
-    if rec.reference is None:
-        raise ValueError('recording has no reference; closed-loop simulation impossible')
+    r = drive_reference(rec) if reference is None else reference
     plant = FlexibleJointPlant(replace(quiet(robot), sample_rate=rec.fs))
     plant.reset(seed=0)
     c = ctrl.copy()
     c.dt = rec.dt
     c.reset(plant.equilibrium_torque())
-    # where the reference is missing the controller's input is unknown: the simulation follows
-    # the measured velocity there, and the diagnosis leaves these stretches out of every
-    # comparison (evaluator.missing_reference) instead of commanding zero velocity
-    r = np.where(np.isfinite(rec.reference), rec.reference, rec.velocity)
     res = plant.simulate(reference=r, controller=c, keep_states=False)
     return as_simulation(rec, res.position, res.velocity, res.effort)
 

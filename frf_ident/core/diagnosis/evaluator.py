@@ -29,8 +29,8 @@ from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np
 
-from .common import (as_simulation, bridge_gaps, diag_ratio, frf_error_db, nrmse, segment_mask,
-                     simulate_like, split_recording)
+from .common import (as_simulation, bridge_gaps, diag_ratio, drive_reference, frf_error_db, nrmse,
+                     segment_mask, simulate_like, split_recording)
 from .parallel import WorkerPool
 from .residual import inverse_dynamics_residual
 from .thresholds import (EST_CACHE, FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE,
@@ -114,6 +114,8 @@ class Evaluator:
         self.rec, self.ctrl = bridge_gaps(rec)[0], ctrl
         rec = self.rec
         self.missing = missing_reference(rec)
+        # the reference every model is driven with (simulate_like forms it per call otherwise)
+        self._drive = drive_reference(rec)
         fit, val, self.validation_text = split_recording(rec)
         self.fit, self.val = (drop_segments(fit, self.missing), drop_segments(val, self.missing))
         self.meas_fit = estimates(self.fit)
@@ -202,7 +204,7 @@ class Evaluator:
         """
         key = repr(robot)
         if key not in self._sims:
-            self._keep(key, simulate_like(self.rec, robot, self.ctrl))
+            self._keep(key, simulate_like(self.rec, robot, self.ctrl, reference=self._drive))
         return self._sims[key]
 
     def prefetch(self, robots: Sequence[RobotParams]) -> None:
@@ -235,10 +237,10 @@ class Evaluator:
     def _pool(self) -> WorkerPool:
         """Return the workers that simulate a model and estimate its fit part (forked once)."""
         if self._workers is None:
-            rec, ctrl, fit = self.rec, self.ctrl, self.fit
+            rec, ctrl, fit, drive = self.rec, self.ctrl, self.fit, self._drive
 
             def run(robot: RobotParams) -> tuple:
-                sim = simulate_like(rec, robot, ctrl)
+                sim = simulate_like(rec, robot, ctrl, reference=drive)
                 return (sim.position, sim.velocity, sim.effort,
                         estimates(replace_segments(sim, fit)))
             # the three signals of a simulation come back through shared memory
