@@ -29,6 +29,7 @@ from frf_ident.core.simulation.analytic import robot_frf_sampled
 import numpy as np
 from scipy import optimize
 
+from .brent import bounded_minimum
 from .common import diag_ratio, Effect, segment_mask
 from .evaluator import Evaluator
 from .residual import coulomb_and_ripple, regress_axis
@@ -305,11 +306,11 @@ def fit_backlash(ev: Evaluator, robot: RobotParams, axis: int, scales_ms, scales
     ev.prefetch([with_params(robot, axis, backlash=math.exp(g)) for g in grid])
     losses = [ev.loss(with_params(robot, axis, backlash=math.exp(g)), axis) for g in grid]
     i = int(np.argmin(losses))
-    sol = optimize.minimize_scalar(lambda g: ev.loss(
-                                       with_params(robot, axis, backlash=math.exp(g)), axis),
-                                   bounds=(grid[max(i - 1, 0)], grid[min(i + 1, 6)]),
-                                   method='bounded', options={'xatol': 0.03, 'maxiter': 8})
-    gap = math.exp(sol.x)
+    gap = math.exp(bounded_minimum(
+        lambda g: ev.loss(with_params(robot, axis, backlash=math.exp(g)), axis),
+        grid[max(i - 1, 0)], grid[min(i + 1, 6)], xatol=0.03, maxiter=8,
+        prefetch=lambda gs: ev.prefetch([with_params(robot, axis, backlash=math.exp(g))
+                                         for g in gs])))
     return Effect('backlash', a.name, 0.0, {'backlash': gap},
                   f'joint softer at low load: stiffness fitted to the multisine is '
                   f'x{math.exp(scales_ms):.3f} nominal, to the chirp x{math.exp(scales_ch):.3f}; '

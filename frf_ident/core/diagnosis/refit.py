@@ -25,8 +25,8 @@ from typing import Any, Callable
 
 from frf_ident.core.model.params import RobotParams
 import numpy as np
-from scipy import optimize
 
+from .brent import bounded_minimum
 from .candidates import LIN_KEYS, with_params
 from .common import apply_effect, Effect
 from .evaluator import Evaluator
@@ -85,12 +85,13 @@ def refit_friction(ev: Evaluator, robot: RobotParams, cand: Effect, *, local: bo
         lo, hi = 0.3 * v, 2.0 * v
     else:
         lo, hi = 0.0, getattr(robot.axes[i], key) + _friction_scale(ev, i, key)
-    sol = optimize.minimize_scalar(lambda x: ev.loss(with_params(robot, i, **{key: x}), i),
-                                   bounds=(lo, hi), method='bounded',
-                                   options={'xatol': 0.002 * hi, 'maxiter': 12})
-    return replace(cand, parameters={key: float(sol.x)},
+    x = bounded_minimum(lambda x: ev.loss(with_params(robot, i, **{key: x}), i), lo, hi,
+                        xatol=0.002 * hi, maxiter=12,
+                        prefetch=lambda xs: ev.prefetch([with_params(robot, i, **{key: x})
+                                                         for x in xs]))
+    return replace(cand, parameters={key: x},
                    evidence=cand.evidence + f'; refitted by simulation on top of the other '
-                                            f'effects: {float(sol.x):.4g}')
+                                            f'effects: {x:.4g}')
 
 
 #: refit slots inside the last term of a list-valued parameter: slot -> (parameter, field)
