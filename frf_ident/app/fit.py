@@ -296,8 +296,7 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
         raise FrfIdentInputError(f'--band {band}: keeps {frf.freq_hz.size} lines of '
                                  f'{source}; a fit needs at least 4')
     var = frf.variance()
-    which = ('total' if frf.total_variance is not None else
-             'noise' if frf.noise_variance is not None else None)
+    which = frf.variance_kind()
     progress = sink(progress)
     progress(f'fit: {frf.noutputs}x{frf.ninputs} FRF, {frf.freq_hz.size} lines '
              f'{frf.freq_hz.min():.3g}-{frf.freq_hz.max():.3g} Hz, weights: '

@@ -15,9 +15,9 @@
 One BLAS thread per process, for commands that fork simulation workers.
 
 The diagnosis' matrices are small; a multi-threaded OpenBLAS in the diagnosing process and in
-each worker it forks spins on the cores the others simulate on. On the demo bag (2 cores,
-no OPENBLAS_NUM_THREADS in the environment) one process took 38.1 s and 59.1 s of CPU,
-against 32.5 s and 32.4 s with one thread.
+each worker it forks spins on the cores the others simulate on, and even a single process
+then burns a second core: `python -m benchmarks diagnosis_demo` prints the CPU time beside the
+wall time of a one-process diagnosis, equal with one thread.
 """
 from __future__ import annotations
 

@@ -126,12 +126,8 @@ def legend_below(fig: plt.Figure, axes: Sequence[plt.Axes], ncol: int = 3) -> fl
 
 
 def variance_of(frf: FrequencyResponse) -> tuple[np.ndarray | None, str]:
-    """(variance, which): total variance if present, else noise variance, else None."""
-    if frf.total_variance is not None:
-        return frf.total_variance, 'total'
-    if frf.noise_variance is not None:
-        return frf.noise_variance, 'noise'
-    return None, ''
+    """(variance, which): :meth:`FrequencyResponse.variance` and its kind ('' for none)."""
+    return frf.variance(), frf.variance_kind() or ''
 
 
 def _db(x: np.ndarray) -> np.ndarray:

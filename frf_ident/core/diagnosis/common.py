@@ -215,11 +215,21 @@ def segment_mask(rec: Recording, designs=('multisine', 'chirp')) -> np.ndarray:
     return m
 
 
-def nrmse(meas: np.ndarray, model: np.ndarray, mask: np.ndarray | None = None) -> float:
-    """Return the RMS of the output error over RMS of the measured output (both mean-free)."""
+def rms_about_mean(x: np.ndarray) -> Any:
+    """Return the RMS of ``x`` about its mean (over the first axis), the scale of :func:`nrmse`."""
+    return np.sqrt(np.mean((x - np.mean(x, 0)) ** 2))
+
+
+def nrmse(meas: np.ndarray, model: np.ndarray, mask: np.ndarray | None = None, *,
+          scale: Any = None) -> float:
+    """
+    Return the RMS of the output error over RMS of the measured output (both mean-free).
+
+    ``scale`` is :func:`rms_about_mean` of the (masked) measurement where the caller keeps it.
+    """
     if mask is not None:
         meas, model = meas[mask], model[mask]
-    den = np.sqrt(np.mean((meas - np.mean(meas, 0)) ** 2))
+    den = rms_about_mean(meas) if scale is None else scale
     return float(np.sqrt(np.mean((meas - model) ** 2)) / max(den, 1e-300))
 
 

@@ -30,7 +30,7 @@ from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np
 
 from .common import (as_simulation, bridge_gaps, diag_ratio, drive_reference, frf_error_db, nrmse,
-                     segment_mask, simulate_like, split_recording)
+                     rms_about_mean, segment_mask, simulate_like, split_recording)
 from .parallel import WorkerPool
 from .residual import inverse_dynamics_residual
 from .thresholds import (EST_CACHE, FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE,
@@ -232,7 +232,7 @@ class Evaluator:
             return
         for key, (q, v, u, est) in zip(todo, self._pool().run(list(todo.values()))):
             self._keep(key, as_simulation(self.rec, q, v, u))
-            self._est[key] = est
+            self._keep_estimates(key, est)
 
     def _pool(self) -> WorkerPool:
         """Return the workers that simulate a model and estimate its fit part (forked once)."""
@@ -260,6 +260,10 @@ class Evaluator:
         self._sims[key] = sim
         while len(self._sims) > SIM_CACHE:
             del self._sims[next(iter(self._sims))]
+
+    def _keep_estimates(self, key: str, est: dict) -> None:
+        """Keep a model's fit-part estimates (the oldest kept ones go beyond EST_CACHE)."""
+        self._est[key] = est
         while len(self._est) > EST_CACHE:
             del self._est[next(iter(self._est))]
 
@@ -271,12 +275,17 @@ class Evaluator:
         Loss terms per axis (arrays of n): mean |ln(P_meas/P_model)|^2 over the lines of the
         diagonal element, torque and velocity NRMSE^2, on the fit (or held-out) part. Kept
         by model (``sim``, where given, is the model's simulation): a model judged again
-        after its simulation left the SIM_CACHE kept ones (a candidate taken a round later,
-        on the demo bag 8 of 218 simulations) is not simulated again.
+        after its simulation left the SIM_CACHE kept ones (a candidate taken a round later) is
+        not simulated again.
         """
         key = (repr(robot), held_out)
-        if key in self._terms:
-            return {k: v.copy() for k, v in self._terms[key].items()}
+        if key not in self._terms:
+            self._terms[key] = self._new_terms(robot, sim, held_out)
+        return {k: v.copy() for k, v in self._terms[key].items()}
+
+    def _new_terms(self, robot: RobotParams, sim: Recording | None, held_out: bool
+                   ) -> dict[str, np.ndarray]:
+        """Return :meth:`terms` of a model not judged before."""
         sim = sim if sim is not None else self.simulate(robot)
         meas = self.meas_val if held_out and self.meas_val else self.meas_fit
         m = self.val_mask if held_out and self.val_mask.any() else self.fit_mask
@@ -288,7 +297,6 @@ class Evaluator:
             out[k] = np.mean(np.abs(r) ** 2, axis=-1)
         for k in ('effort', 'velocity'):
             out[k] = self._output_error(k, getattr(sim, k), m, held_out)
-        self._terms[key] = {k: v.copy() for k, v in out.items()}
         return out
 
     def _output_error(self, key: str, x: np.ndarray, m: np.ndarray, held_out: bool
@@ -297,16 +305,14 @@ class Evaluator:
         Return :func:`.common.nrmse` ^ 2 per axis of a simulated signal on the mask ``m``.
 
         The measured side (its masked samples and their RMS about the mean) is formed once
-        per signal and part; the arithmetic is nrmse's.
+        per signal and part.
         """
         ref = self._measured.get((key, held_out))
         if ref is None:
             meas = getattr(self.rec, key)
-            ref = [(a, np.sqrt(np.mean((a - np.mean(a, 0)) ** 2)))
-                   for a in (meas[:, i][m] for i in range(self.n))]
+            ref = [(a, rms_about_mean(a)) for a in (meas[:, i][m] for i in range(self.n))]
             self._measured[(key, held_out)] = ref
-        return np.array([float(np.sqrt(np.mean((a - x[:, i][m]) ** 2)) / max(den, 1e-300)) ** 2
-                         for i, (a, den) in enumerate(ref)])
+        return np.array([nrmse(a, x[:, i][m], scale=den) ** 2 for i, (a, den) in enumerate(ref)])
 
     def fit_estimates(self, robot: RobotParams, sim: Recording | None = None) -> dict:
         """
@@ -318,15 +324,9 @@ class Evaluator:
         simulation was dropped. ``sim`` is the model's simulation where the caller has it.
         """
         key = repr(robot)
-        own = self._sims.get(key)
-        if sim is not None and own is not None and sim is not own:
-            return estimates(replace_segments(sim, self.fit))      # not the kept simulation
         if key not in self._est:
             sim = sim if sim is not None else self.simulate(robot)
-            est = estimates(replace_segments(sim, self.fit))
-            if self._sims.get(key) is not sim:
-                return est
-            self._est[key] = est
+            self._keep_estimates(key, estimates(replace_segments(sim, self.fit)))
         return self._est[key]
 
     def loss(self, robot: RobotParams, axis: int) -> float:

@@ -237,8 +237,7 @@ def axis_candidates(s: Search, axes: list[int], sim_est: dict) -> list[list[Effe
     backlash) hand their independent models to the evaluator's workers. One axis usually
     holds all of a round's searches (on the demo bag, joint_2's stiffening: 35 of the round's
     37 simulations), so the axes are not spread over processes: forked one per axis, the axis
-    with the search ran alone on one core while the other idled (demo diagnose, three runs
-    each, alternating: 30.6 / 32.1 / 32.2 s forked per axis, 29.1 / 29.5 / 31.4 s this way).
+    with the search ran alone on one core while the other idled.
     """
     return [frf_shape_candidates(s, i, sim_est) for i in axes]
 

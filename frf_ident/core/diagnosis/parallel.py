@@ -21,8 +21,8 @@ other. :class:`WorkerPool` runs such models on worker processes of the standard 
 receiving it: a batch (the evaluator's models of a round, a Nelder-Mead step's reflection and
 guess) costs the models sent and the results returned, not a fork of the whole diagnosing
 process. Its results' large arrays (a simulation's signals, 25 MB on the demo bag) come back
-through memory the workers share with the caller instead of a pipe: pickled, a batch of two
-took 0.27 s against 0.15 s (each simulation 0.11 s alone). The simulation is deterministic
+through memory the workers share with the caller instead of a pipe, where pickling and
+copying them cost about as much as simulating. The simulation is deterministic
 (fixed seed, noise-free model), so the results are those of running the parts one after the
 other.
 """

@@ -114,7 +114,6 @@ def nelder_mead(fn: Callable[[np.ndarray], float], simplex: np.ndarray, *,
                      _INSIDE: lambda: clip(0.5 * xbar + 0.5 * sim[-1])}
             if prefetch is not None:
                 # after a reflection the guess is the inside contraction, the commonest step
-                # (on the demo bag 4 of the 7 steps that followed one)
                 prefetch([xr, trial[_INSIDE if last == _REFLECT else last]()])
             last = _step(f, sim, fsim, xr, trial, clip)
         except _Budget:

@@ -221,6 +221,11 @@ class FrequencyResponse:
         """
         return self.total_variance if self.total_variance is not None else self.noise_variance
 
+    def variance_kind(self) -> str | None:
+        """Return which variance :meth:`variance` gives: 'total', 'noise' or None."""
+        return ('total' if self.total_variance is not None else
+                'noise' if self.noise_variance is not None else None)
+
     def std_db(self, which: str = 'total') -> np.ndarray | None:
         """
         Return the 1-sigma magnitude uncertainty in dB.

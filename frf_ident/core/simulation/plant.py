@@ -393,8 +393,8 @@ def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
 
 # Without numba's reference counting (_nrt=False; the scratch arrays come from the caller):
 # the helpers inlined into the sample loop took and released a reference to each of their
-# ~20 array arguments per sample, atomic operations that were 41 % of the run in `perf`.
-# The demo bag's simulation 82 -> 46 ms, the signals bit-identical.
+# ~20 array arguments per sample, atomic operations that dominated the run in `perf`. The
+# signals are bit-identical; the speed is `python -m benchmarks --markdown simulation`.
 @numba.njit(cache=True, fastmath=True, error_model='numpy', _nrt=False)
 def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, m, dt,
               offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph, gsel,
