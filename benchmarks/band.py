@@ -49,7 +49,7 @@ def rows() -> list[tuple[str, str, str, str]]:
     """Diagnose each record present; return the band, the scan and the effects per record."""
     from frf_ident.app.diagnose import diagnose
     from frf_ident.core.diagnosis.regressors import model_residual
-    from frf_ident.core.diagnosis.resonance import resonances_above
+    from frf_ident.core.diagnosis.timeseries.resonance import resonances_above
     from frf_ident.report.residual_spectrum import residual_spectrum_figure
     out: list[tuple[str, str, str, str]] = []
     for name, data, mp, model, fig in RECORDS:

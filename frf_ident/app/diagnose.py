@@ -67,6 +67,7 @@ def load_data(path: Path, map_path: Path | None = None) -> Recording:
         raise FrfIdentInputError(f'{path}: no such bag or file')
     if path.is_dir() or path.suffix == '.mcap':
         from frf_ident.bag import read_recording
+
         # gaps a recorder lost are kept as missing rows (the reader's default, gaps='mark'):
         # the diagnosis leaves them out
         rec, _ = read_recording(path)
@@ -136,7 +137,7 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         or ripple term that does not generalise to them is dropped.
     urdf
         The robot's URDF: the time-series route fits the gravity its kinematics imply
-        (:mod:`frf_ident.core.diagnosis.kinematic_gravity`; pinocchio reads it).
+        (:mod:`frf_ident.core.diagnosis.crosscheck.kinematic_gravity`; pinocchio reads it).
     jobs
         Processes that simulate independent candidate models at once (experiments route);
         None: :data:`frf_ident.core.diagnosis.thresholds.SIM_JOBS`; 1: one after the other
@@ -200,7 +201,7 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     res = _standard_errors_across(res, rec, others, robot, progress)
     res = _against_least_squares(res, rec, others, robot, progress)
     if others:
-        from frf_ident.core.diagnosis.extrapolation import beyond_fitted_range
+        from frf_ident.core.diagnosis.timeseries.extrapolation import beyond_fitted_range
         res.metrics['validation_records'] = [
             validate_on(str(p), o, robot, res.extended, ctrl) for p, o in others]
         for (p, o), v in zip(others, res.metrics['validation_records']):
@@ -291,10 +292,9 @@ def _kinematic_gravity(res, rec: Recording, robot, urdf: Path, progress):
     if res.mode != 'timeseries':
         progress(f'note: --urdf {urdf} is used by the time-series route only')
         return res
-    import numpy as np
-
-    from frf_ident.core.diagnosis.kinematic_gravity import fit_kinematic_gravity
+    from frf_ident.core.diagnosis.crosscheck.kinematic_gravity import fit_kinematic_gravity
     from frf_ident.io.kinematics import load_kinematics
+    import numpy as np
     kin = load_kinematics(urdf, robot.joint_names)
     q = 0.5 * (rec.position[1:] + rec.position[:-1])
     poses = np.random.default_rng(0).uniform(-np.pi, np.pi, (64, robot.n_axes))
@@ -312,11 +312,11 @@ def _position_terms_on_others(res, rec: Recording, others: list, robot, progress
     """
     Drop the gravity and ripple terms that do not generalise to the ``--validate`` records.
 
-    :func:`frf_ident.core.diagnosis.generalisation.drop_terms_not_generalising`; adds
+    :func:`frf_ident.core.diagnosis.crosscheck.generalisation.drop_terms_not_generalising`; adds
     ``metrics['position_terms_on_validate']`` (per axis the time_nrmse on each record with
     and without its terms, and whether they were dropped) and prints one line per axis.
     """
-    from frf_ident.core.diagnosis.generalisation import drop_terms_not_generalising
+    from frf_ident.core.diagnosis.crosscheck.generalisation import drop_terms_not_generalising
     res, verdict = drop_terms_not_generalising(res, rec, robot,
                                                [(str(p), o) for p, o in others])
     for ax, v in verdict.items():
@@ -333,12 +333,12 @@ def _standard_errors_across(res, rec: Recording, others: list, robot, progress):
     """
     Check the standard errors against the spread between records; widen them if it is larger.
 
-    Time-series route (:mod:`frf_ident.core.diagnosis.spread`): each ``--validate`` record
+    Time-series route (:mod:`frf_ident.core.diagnosis.crosscheck.spread`): each ``--validate`` record
     diagnosed on its own against the fit record's parameters, or without such records the
     two halves of the record against each other. Adds ``metrics['standard_errors_across']``.
     """
     from frf_ident.core.diagnosis import diagnose_timeseries
-    from frf_ident.core.diagnosis.spread import estimates, spread_check, widened
+    from frf_ident.core.diagnosis.crosscheck.spread import estimates, spread_check, widened
     from frf_ident.errors import EstimationError
     if res.mode != 'timeseries':
         return res
@@ -374,7 +374,7 @@ def _against_least_squares(res, rec: Recording, others: list, robot, progress):
     """
     Judge the extended model against the 4-parameter least-squares baseline.
 
-    The baseline (:mod:`frf_ident.core.diagnosis.baseline`) is fitted on the diagnosis' fit
+    The baseline (:mod:`frf_ident.core.diagnosis.crosscheck.baseline`) is fitted on the diagnosis' fit
     rows and compared on its held-out rows and on every ``--validate`` record. Time-series
     route: an axis whose extended model is not below the baseline on every held-out set is
     refitted with the baseline's terms in the model (inertia, viscous and Coulomb friction, a
@@ -384,9 +384,10 @@ def _against_least_squares(res, rec: Recording, others: list, robot, progress):
     Adds ``metrics['least_squares']``.
     """
     from frf_ident.core.diagnosis import diagnose_timeseries
-    from frf_ident.core.diagnosis.baseline import (axes_not_beating, BASELINE_GROUPS,
-                                                   fit_least_squares, held_out_comparison,
-                                                   with_axes_of, without_axes)
+    from frf_ident.core.diagnosis.crosscheck.baseline import (axes_not_beating, BASELINE_GROUPS,
+                                                              fit_least_squares,
+                                                              held_out_comparison, with_axes_of,
+                                                              without_axes)
     from frf_ident.core.diagnosis.prediction import predict_metrics
     ls = fit_least_squares(rec, res.fit_rows, names=robot.joint_names)
     sets = [('held out', rec, res.held_out_rows)] + [(str(p), o, None) for p, o in others]

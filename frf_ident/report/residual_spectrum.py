@@ -16,7 +16,7 @@ Figure of the time-series residual's spectrum: the analysis band and what stands
 
 Per axis the Welch PSD of the extended model's inverse-dynamics residual (not low-passed),
 its local noise floor and the scan's threshold above the analysis band, the band shaded grey
-and each ``unexplained`` peak's band orange (:mod:`frf_ident.core.diagnosis.resonance`).
+and each ``unexplained`` peak's band orange (:mod:`frf_ident.core.diagnosis.timeseries.resonance`).
 """
 from __future__ import annotations
 
@@ -24,9 +24,9 @@ from pathlib import Path
 
 from frf_ident.core.diagnosis.regressors import model_residual
 from frf_ident.core.diagnosis.residual import FC_HZ
-from frf_ident.core.diagnosis.resonance import scan_spectrum
 from frf_ident.core.diagnosis.result import DiagnosisResult
 from frf_ident.core.diagnosis.thresholds import RESONANCE_FALSE_ALARM
+from frf_ident.core.diagnosis.timeseries.resonance import scan_spectrum
 from frf_ident.core.recording import Recording
 
 from .figures import legend_below, plt, under_title

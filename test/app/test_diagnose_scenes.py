@@ -33,9 +33,10 @@ from benchmarks.diagnosis import (draw_scene, identification_config, KINDS, MODE
                                   run_scene, scene_of)
 from frf_ident.app.diagnose import load_data
 from frf_ident.app.identify import run_identify
-from frf_ident.core.diagnosis.candidates import coupled_ripples, fit_ripple, friction_regression
-from frf_ident.core.diagnosis.evaluator import Evaluator
-from frf_ident.core.diagnosis.unexplained import discretisation_check
+from frf_ident.core.diagnosis.experiments.candidates import (coupled_ripples, fit_ripple,
+                                                             friction_regression)
+from frf_ident.core.diagnosis.experiments.evaluator import Evaluator
+from frf_ident.core.diagnosis.experiments.unexplained import discretisation_check
 from frf_ident.io.model_file import load_model
 import numpy as np
 import pytest
@@ -212,8 +213,8 @@ def test_a_ripple_seen_through_the_link_coupling_is_not_the_axis_own(own, tmp_pa
     joint_1's own ripple of ``own`` N m (the low end of the bench's range) at 1060 /rad, inside
     the scan's resolution of joint_3's: that one is joint_1's.
 
-    The same scene shaped two more stages (core/diagnosis/experiments.py): joint_3's ripple,
-    left out of stage 1 because the stiffening gear dominated the axis' misfit, is offered
+    The same scene shaped two more stages (core/diagnosis/experiments/pipeline.py): joint_3's
+    ripple, left out of stage 1 because the stiffening gear dominated the axis' misfit, is offered
     with the FRF-shape candidates (``frf_shape_candidates``); offered after them, a backlash
     and a viscous term took its torque and it then worsened the axis (3.22 -> 3.47 floors),
     while its coupling torque was named as joint_1's own ripple (0.15 N m at 1026 /rad). And a

@@ -20,7 +20,7 @@ the regressor the code uses; the record is an arm written here whose torques fol
 from pathlib import Path
 
 from frf_ident.core.diagnosis import diagnose_timeseries
-from frf_ident.core.diagnosis.kinematic_gravity import fit_kinematic_gravity
+from frf_ident.core.diagnosis.crosscheck.kinematic_gravity import fit_kinematic_gravity
 from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.io.kinematics import load_kinematics

@@ -18,7 +18,7 @@ Diagnosis: what the nominal simulation gets wrong, which effect causes it, and t
 model (docs/CONTRACT.md §7). Pure numpy/scipy; no middleware imports.
 """
 from .common import apply_effect, Effect, EFFECTS, frf_error_db, nrmse, simulate_like  # noqa: F401
-from .evaluator import Evaluator  # noqa: F401
-from .experiments import diagnose_experiments  # noqa: F401
+from .experiments.evaluator import Evaluator  # noqa: F401
+from .experiments.pipeline import diagnose_experiments  # noqa: F401
 from .result import DiagnosisResult, ExperimentsDetail, TimeseriesDetail  # noqa: F401
-from .timeseries import diagnose_timeseries  # noqa: F401
+from .timeseries.pipeline import diagnose_timeseries  # noqa: F401

@@ -178,8 +178,8 @@ def torque_metrics(rec: Recording, lost: np.ndarray, ff: np.ndarray, names: list
 
     The one definition of ``time_nrmse`` and ``frf_error_db`` of the time-series route, for
     any predictor (a model file through :func:`predict_metrics`, the least-squares baseline
-    of :mod:`.baseline`): on ``mask`` minus the bridged rows, per axis only where it moves
-    (at rest static friction holds any torque).
+    of :mod:`.crosscheck.baseline`): on ``mask`` minus the bridged rows, per axis only where it
+    moves (at rest static friction holds any torque).
 
     Parameters
     ----------

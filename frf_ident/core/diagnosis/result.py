@@ -14,8 +14,8 @@
 """
 Hold the one result type of both diagnosis routes.
 
-:class:`DiagnosisResult` is what :func:`.experiments.diagnose_experiments` and
-:func:`.timeseries.diagnose_timeseries` return, what ``frf-ident diagnose`` writes into
+:class:`DiagnosisResult` is what :func:`.experiments.pipeline.diagnose_experiments` and
+:func:`.timeseries.pipeline.diagnose_timeseries` return, what ``frf-ident diagnose`` writes into
 report.json (docs/CONTRACT.md §7) and what the HTML report draws. The route's own data for the
 figures sit in ``detail`` (:class:`ExperimentsDetail` or :class:`TimeseriesDetail`).
 """
@@ -36,7 +36,8 @@ from .common import Effect
 class ExperimentsDetail:
     """What the experiments route keeps for the figures and the benchmarks."""
 
-    #: the recording's evaluator (:class:`.evaluator.Evaluator`; simulations, noise floors)
+    #: the recording's evaluator (:class:`.experiments.evaluator.Evaluator`; simulations,
+    #: noise floors)
     evaluator: Any
     #: FRF estimates of the held-out part: 'measured', 'nominal', 'extended' -> {design: FRD}
     estimates: dict[str, dict[str, Any]]
@@ -73,7 +74,7 @@ class DiagnosisResult:
         Axes whose held-out misfit stays clearly above noise, with their signature; and
         (time-series route) resonances in the residual above the analysis band, ``kind``
         'resonance above the analysis band' with the ``band_hz`` of each
-        (:mod:`.resonance`).
+        (:mod:`.timeseries.resonance`).
     metrics : dict
         ``baseline`` (nominal model), ``extended``, ``validation`` text; the app adds
         ``validation_records`` and ``least_squares``.
@@ -87,7 +88,7 @@ class DiagnosisResult:
         The route's data for the figures.
     fit_rows, held_out_rows : ndarray of bool, shape (N-1,)
         The rows (between samples) the route fitted on and held out; the least-squares
-        baseline (:mod:`.baseline`) is fitted and judged on the same.
+        baseline (:mod:`.crosscheck.baseline`) is fitted and judged on the same.
 
     """
 

@@ -22,9 +22,9 @@ spectrum for the false-alarm rate; the real EMPS and KUKA records for the band r
 from pathlib import Path
 
 from frf_ident.core.diagnosis.band import analysis_band
-from frf_ident.core.diagnosis.resonance import resonances_above, scan_spectrum
 from frf_ident.core.diagnosis.thresholds import FC_HZ, RESONANCE_FALSE_ALARM
-from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
+from frf_ident.core.diagnosis.timeseries.pipeline import diagnose_timeseries
+from frf_ident.core.diagnosis.timeseries.resonance import resonances_above, scan_spectrum
 from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
 import numpy as np

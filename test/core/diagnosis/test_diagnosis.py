@@ -26,18 +26,20 @@ from pathlib import Path
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
 from frf_ident.core.diagnosis.common import bridge_gaps, GAP_GUARD_S, simulate_like
-from frf_ident.core.diagnosis.evaluator import missing_reference
-from frf_ident.core.diagnosis.residual import (
-    delayed_effort, effective_samples, find_ripple, lowpass, regress_axis, ripple_range)
-from frf_ident.core.diagnosis.timeseries import (
-    block_standard_errors, diagnose_timeseries, f_test, FC_HZ, noise_level, select_groups,
-    split_blocks)
-from frf_ident.core.diagnosis.unexplained import residual_bands
+from frf_ident.core.diagnosis.experiments.evaluator import missing_reference
+from frf_ident.core.diagnosis.experiments.unexplained import residual_bands
+from frf_ident.core.diagnosis.prediction import noise_level
+from frf_ident.core.diagnosis.residual import (delayed_effort, effective_samples, FC_HZ,
+                                               find_ripple, lowpass, regress_axis, ripple_range)
+from frf_ident.core.diagnosis.selection import (block_standard_errors, f_test, select_groups,
+                                                split_blocks)
+from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
 from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 import numpy as np
 import pytest
 import scipy.io as sio
@@ -743,7 +745,7 @@ def test_axis_refitted_with_the_baseline_terms_takes_exactly_those():
     no load): the refit finds them (within 2 %, as the selection does), says in its evidence
     where the terms come from, and leaves axes 2 and 3 as the plain diagnosis has them.
     """
-    from frf_ident.core.diagnosis.baseline import BASELINE_GROUPS
+    from frf_ident.core.diagnosis.crosscheck.baseline import BASELINE_GROUPS
     rec, truth = _arm_record(5)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     plain = diagnose_timeseries(rec, robot)
@@ -762,7 +764,7 @@ def test_axis_refitted_with_the_baseline_terms_takes_exactly_those():
 
 def test_axes_taken_from_the_baseline_refit_move_their_effects_to_rejected():
     """:func:`.baseline.with_axes_of`: the lost axis as refitted, its old effects rejected."""
-    from frf_ident.core.diagnosis.baseline import BASELINE_GROUPS, with_axes_of
+    from frf_ident.core.diagnosis.crosscheck.baseline import BASELINE_GROUPS, with_axes_of
     rec, _ = _arm_record(6)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     plain = diagnose_timeseries(rec, robot)

@@ -20,8 +20,8 @@ code under test.
 """
 import math
 
-from frf_ident.core.diagnosis.baseline import (axes_not_beating, fit_least_squares,
-                                               least_squares_metrics, TERMS)
+from frf_ident.core.diagnosis.crosscheck.baseline import (axes_not_beating, fit_least_squares,
+                                                          least_squares_metrics, TERMS)
 from frf_ident.core.recording import Recording
 import numpy as np
 import pytest

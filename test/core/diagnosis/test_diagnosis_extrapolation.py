@@ -14,8 +14,8 @@
 """Test leave-range-out and the warning range of a validation record on data drawn here."""
 import math
 
-from frf_ident.core.diagnosis.extrapolation import (
-    beyond_fitted_range, failing_position_terms, range_ends)
+from frf_ident.core.diagnosis.timeseries.extrapolation import (beyond_fitted_range,
+                                                               failing_position_terms, range_ends)
 from frf_ident.core.recording import Recording
 import numpy as np
 import pytest

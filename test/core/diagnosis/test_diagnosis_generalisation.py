@@ -21,7 +21,7 @@ the other record around 0.6 rad, mostly beyond the fitted range.
 from dataclasses import replace
 
 from frf_ident.core.diagnosis import diagnose_timeseries
-from frf_ident.core.diagnosis.generalisation import drop_terms_not_generalising
+from frf_ident.core.diagnosis.crosscheck.generalisation import drop_terms_not_generalising
 from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
 import numpy as np

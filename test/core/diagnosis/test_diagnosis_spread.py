@@ -13,7 +13,7 @@
 # limitations under the License.
 """Test the check of standard errors across records on draws of known spread."""
 from frf_ident.core.diagnosis.common import Effect
-from frf_ident.core.diagnosis.spread import estimates, spread_check, widened
+from frf_ident.core.diagnosis.crosscheck.spread import estimates, spread_check, widened
 from frf_ident.core.diagnosis.thresholds import SPREAD_ALPHA
 import numpy as np
 import pytest

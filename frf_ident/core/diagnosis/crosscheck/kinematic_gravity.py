@@ -35,12 +35,12 @@ from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 import numpy as np
 
-from .common import bridge_gaps, Effect
-from .prediction import predict_metrics
-from .regressors import gravity_sets, model_residual, moving, regressor_groups
-from .residual import FC_HZ, lowpass
-from .result import DiagnosisResult
-from .selection import block_standard_errors
+from ..common import bridge_gaps, Effect
+from ..prediction import predict_metrics
+from ..regressors import gravity_sets, model_residual, moving, regressor_groups
+from ..residual import FC_HZ, lowpass
+from ..result import DiagnosisResult
+from ..selection import block_standard_errors
 
 __all__ = ['fit_kinematic_gravity', 'sinusoid_terms']
 

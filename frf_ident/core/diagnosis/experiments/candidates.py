@@ -30,11 +30,11 @@ import numpy as np
 from scipy import optimize
 
 from .brent import bounded_minimum
-from .common import diag_ratio, Effect, segment_mask
 from .evaluator import Evaluator
-from .residual import coulomb_and_ripple, regress_axis
 from .simplex import nelder_mead
-from .thresholds import GRAVITY_MIN_T, LOAD_DEPENDENCE_MIN_LOG, MISMATCH_MIN_LOG
+from ..common import diag_ratio, Effect, segment_mask
+from ..residual import coulomb_and_ripple, regress_axis
+from ..thresholds import GRAVITY_MIN_T, LOAD_DEPENDENCE_MIN_LOG, MISMATCH_MIN_LOG
 
 
 def friction_regression(ev: Evaluator, robot: RobotParams, axis: int, *,

@@ -25,10 +25,10 @@ from typing import Callable
 from frf_ident.core.model.params import RobotParams
 import numpy as np
 
-from .common import apply_effect, Effect
 from .evaluator import Evaluator
 from .refit import FRICTION, rebuild, refit_friction, refit_jointly
-from .thresholds import DOMINANT_SHARE, MIN_SHARE, MIN_Z, REFIT_T, UNEXPLAINED_RATIO
+from ..common import apply_effect, Effect
+from ..thresholds import DOMINANT_SHARE, MIN_SHARE, MIN_Z, REFIT_T, UNEXPLAINED_RATIO
 
 
 def share_of_misfit(ev: Evaluator, cur: np.ndarray, new: np.ndarray, i: int

@@ -29,14 +29,14 @@ from frf_ident.core.recording import Recording
 import numpy as np
 
 from .acceptance import left_unexplained
-from .common import Effect
 from .evaluator import estimates, replace_segments
 from .refit import FRICTION, rebuild, refit_friction, refit_jointly
-from .result import DiagnosisResult, ExperimentsDetail
 from .search import named, Search
-from .thresholds import UNEXPLAINED_RATIO
 from .unexplained import (axis_signature, discretisation_check, rival_instead,
                           typical_unscalable_misfit)
+from ..common import Effect
+from ..result import DiagnosisResult, ExperimentsDetail
+from ..thresholds import UNEXPLAINED_RATIO
 
 __all__ = ['finish', 'held_out_check', 'partners_without', 'rejected_entry',
            'structure_missing']

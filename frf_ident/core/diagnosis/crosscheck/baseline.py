@@ -18,7 +18,7 @@ Per axis, independently: motor torque ~ J qdd + b qd + Fc tanh(qd / LS_TANH_VELO
 offset, with velocity and acceleration taken from the motor positions, torque and regressors
 low-passed zero-phase at the analysis band. Four parameters per axis, no model file: what a
 diagnosis must beat on held-out data before its effects are believed. Evaluated with the
-time-series route's own ``time_nrmse`` and sample mask (:func:`.prediction.torque_metrics`).
+time-series route's own ``time_nrmse`` and sample mask (:func:`..prediction.torque_metrics`).
 """
 from __future__ import annotations
 
@@ -29,12 +29,12 @@ from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 import numpy as np
 
-from .common import bridge_gaps
-from .prediction import predict_metrics, torque_metrics
-from .regressors import moving
-from .residual import FC_HZ, lowpass
-from .result import DiagnosisResult
-from .thresholds import LS_BASELINE_MARGIN, LS_TANH_VELOCITY, ONE_WAY
+from ..common import bridge_gaps
+from ..prediction import predict_metrics, torque_metrics
+from ..regressors import moving
+from ..residual import FC_HZ, lowpass
+from ..result import DiagnosisResult
+from ..thresholds import LS_BASELINE_MARGIN, LS_TANH_VELOCITY, ONE_WAY
 
 __all__ = ['axes_not_beating', 'BASELINE_GROUPS', 'fit_least_squares', 'held_out_comparison',
            'LeastSquaresBaseline', 'least_squares_metrics', 'with_axes_of', 'without_axes']
@@ -199,7 +199,7 @@ def with_axes_of(res: DiagnosisResult, alt: DiagnosisResult, lost: dict[str, lis
     Return the result with the axes in ``lost`` as ``alt`` has them.
 
     ``alt`` is the same record diagnosed with those axes refitted with the baseline's terms
-    (:data:`BASELINE_GROUPS`, ``only=`` of :func:`.timeseries.diagnose_timeseries`). The
+    (:data:`BASELINE_GROUPS`, ``only=`` of :func:`..timeseries.pipeline.diagnose_timeseries`). The
     effects ``res`` selected on them move to ``rejected`` with the held-out numbers that
     fail them. Metrics are not recomputed here.
     """

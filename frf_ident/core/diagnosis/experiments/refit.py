@@ -28,11 +28,10 @@ import numpy as np
 
 from .brent import bounded_minimum
 from .candidates import LIN_KEYS, with_params
-from .common import apply_effect, Effect
 from .evaluator import Evaluator
 from .simplex import nelder_mead
-from .thresholds import FRICTION_RANGE_SHARE
-
+from ..common import apply_effect, Effect
+from ..thresholds import FRICTION_RANGE_SHARE
 
 FRICTION = ('coulomb_friction', 'viscous_friction')
 

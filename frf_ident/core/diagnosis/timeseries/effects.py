@@ -12,66 +12,32 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-Diagnose plain time series by regression of the inverse-dynamics residual.
+Per-axis stages of the time-series route: regressor groups, their selection, the effects.
 
-Diagnosis of plain time series (recorded trajectories, imported CSV/MAT): no identification
-experiments, so the evidence is the motor-side inverse-dynamics residual of the nominal model
-(:mod:`.residual`), regressed per axis on the signatures of the candidate effects:
-
-=====================  =====================================================================
-group                  regressors (low-passed like the residual)
-=====================  =====================================================================
-coulomb_friction       sgn(dq)                                           (eq. 1)
-viscous_friction       dq
-parameter_mismatch     ddq (inertia)
-torque_ripple          sin / cos (s q) at the spatial frequency of the position scan
-gravity                1 (constant load) and sin / cos (sum of q over a contiguous set of
-                       joints containing the axis): G sin(q_i + phi) of a link about its own
-                       joint, or sums over the joints it depends on for a coupled arm
-=====================  =====================================================================
-
-Groups enter by forward selection with an F test at the data's own noise (residual variance,
-effective sample count of the filtered signals, false-alarm probability ``ALPHA``), all selected
-groups are refitted jointly, and a group is dropped when removing it does not worsen the
-held-out error. Held out: every third block of 0.5 s (:func:`split_blocks`).
-
-``time_nrmse`` is the error of the torque the model predicts from the measured motion
-(inverse dynamics) over the RMS of the measured torque, both low-pass filtered; the model is
-the model file itself (nominal or extended), so the same number can be computed on any other
-record (``--validate``). ``frf_error_db`` compares the measured u -> dq FRF (Welch H1) with the
-one of the predicted torque, on the lines with coherence > 0.5.
+For one axis of a :class:`.prepared.Prepared` record: the candidate regressor groups and the
+ripple scan (:func:`axis_groups`), forward selection that keeps physical values and
+position-dependent terms that extrapolate (:func:`select_extrapolating`), the report's
+``rejected`` entries of the groups not chosen (:func:`rejected_groups`) and the effects written
+from the chosen ones, with their standard errors (:func:`axis_effects`).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-import logging
 import math
-from typing import Any, Callable
+from typing import Any
 
 from frf_ident.core.model.params import RobotParams
-from frf_ident.core.recording import Recording
 import numpy as np
 
-from .band import analysis_band, fixed_band
-from .common import bridge_gaps, Effect
-from .diagnosable import check_diagnosable
 from .extrapolation import failing_position_terms
-from .prediction import noise_floor, noise_level, predict_metrics, signature
-from .regressors import (axis_masks, gravity_bearing, gravity_sets, model_residual, moving,
-                         one_way_sets, regressor_groups)
-from .residual import FC_HZ, find_ripple, lowpass
-from .resonance import resonances_above
-from .result import DiagnosisResult, TimeseriesDetail
-from .selection import (block_standard_errors, by_group, f_test, lstsq, select_groups,
-                        split_blocks)
-from .thresholds import (ALPHA, BLOCK_S, HOLD_EVERY, MIN_SHARE, ONE_WAY, RANGE_OUT_SHARE,
-                         UNEXPLAINED_RATIO)
+from .prepared import Prepared
+from ..common import Effect
+from ..regressors import regressor_groups
+from ..residual import find_ripple, lowpass
+from ..selection import block_standard_errors, by_group, lstsq, select_groups
+from ..thresholds import ONE_WAY, RANGE_OUT_SHARE
 
-__all__ = ['ALPHA', 'FC_HZ', 'block_standard_errors', 'check_diagnosable', 'diagnose_timeseries',
-           'f_test', 'model_residual', 'moving', 'noise_level', 'predict_metrics',
-           'select_groups', 'split_blocks']
-
-log = logging.getLogger(__name__)
+__all__ = ['axis_effects', 'axis_groups', 'rejected_groups', 'select_extrapolating',
+           'select_physical']
 
 #: evidence sentence of each one-coefficient regressor group (c: fitted coefficient)
 _SCALAR_EVIDENCE = {
@@ -94,130 +60,6 @@ _BASELINE_EVIDENCE = ('{c:+.4g} on the model value {old:.4g}, fitted with the le
 _ONE_WAY_EVIDENCE = ('constant torque residual {c:+.3g} while the axis moves one way only: '
                      'Coulomb friction and a constant load (gravity at the operating point) in '
                      'one parameter, always fitted (not tested)')
-
-
-@dataclass
-class Prepared:
-    """The record's residual, masks and gravity structure, shared by the per-axis stages."""
-
-    rec: Recording          # gap-bridged
-    fc: float
-    f: np.ndarray           # residual of the nominal model, (N-1, n)
-    qh: np.ndarray
-    vh: np.ndarray
-    ah: np.ndarray
-    fit_m: np.ndarray       # fit rows (blocks), (N-1,)
-    val_m: np.ndarray       # held-out rows
-    prep: list              # per axis :func:`.regressors.axis_masks`
-    skips: list             # per axis the joint sets that move one way only
-    bearing: list           # runs of joints whose angle carries a load
-
-
-def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None = None,
-                        exclude: dict[str, set[str]] | None = None,
-                        only: dict[str, tuple[str, ...]] | None = None) -> DiagnosisResult:
-    """
-    Diagnose a time-series recording against the nominal ``robot``.
-
-    Per axis: residual regression on the fit blocks of :func:`split_blocks`, effects
-    selected by F test and held-out error, the extended model, metrics on the held-out blocks.
-
-    Parameters
-    ----------
-    rec
-        The recording (positions, velocities, efforts of the model's axes).
-    robot
-        The nominal model.
-    fc
-        Low-pass cut-off of residual and regressors [Hz]; by default chosen from the record
-        (:func:`.band.analysis_band`). The residual above it is scanned for resonances
-        (:func:`.resonance.resonances_above`), reported as ``unexplained``.
-    exclude
-        Per axis name the effects (regressor group names before any ':', e.g. 'gravity')
-        that are no candidates: terms another record showed not to generalise.
-    only
-        Per axis name the regressor groups the axis takes, all of them fitted without a
-        selection (those the record cannot test, as Coulomb friction on an axis moving one
-        way, are left out as always): the least-squares baseline's terms
-        (:data:`.baseline.BASELINE_GROUPS`) for an axis whose selected effects lost to it.
-
-    Returns
-    -------
-    DiagnosisResult
-        Mode 'timeseries', with :class:`.result.TimeseriesDetail` (the residual for the plots).
-
-    Notes
-    -----
-    The trace (the band, the selection per axis and the rest) is logged at DEBUG level: the
-    application diagnoses a record several times (its halves, ``--validate`` records) and
-    reports the band and the effects once.
-
-    """
-    say = log.debug
-    band = analysis_band(rec) if fc is None else fixed_band(rec, fc)
-    fc = band.fc_hz
-    log.debug('%s', band.describe())
-    d = prepare(rec, robot, fc, say)
-    effects: list[Effect] = []
-    rejected: list[dict[str, Any]] = []
-    ext_axes = list(robot.axes)
-    for i, ax in enumerate(robot.axes):
-        groups, forced, scan = axis_groups(d, robot, i, rejected)
-        groups = {k: x for k, x in groups.items()
-                  if k.split(':')[0] not in (exclude or {}).get(ax.name, ())}
-        mine = (only or {}).get(ax.name)
-        if mine is not None:
-            groups = {k: x for k, x in groups.items() if k in mine}
-            forced = list(groups)
-        groups, chosen, info, cf = select_extrapolating(d, ax, i, groups, forced)
-        if mine is not None:
-            info = {k: {**v, 'baseline': True} for k, v in info.items()}
-        log.debug('%s: selected %s (ripple scan peak %.1f, threshold %.1f); %s', ax.name,
-                  chosen, scan[1], scan[2], ', '.join(f'{k} p={v.get("p", 1):.2g} '
-                                                      f'share={v.get("share", 0):.3f}'
-                                                      for k, v in info.items()))
-        rejected += rejected_groups(ax.name, chosen, info)
-        ch, found = axis_effects(d, robot, i, groups, chosen, info, cf, scan)
-        effects += found
-        ext_axes[i] = replace(ax, **ch)
-    effects.sort(key=lambda x: -x.score)
-    ext = replace(robot, axes=ext_axes)
-    metrics, val = held_out_metrics(d, robot, ext)
-    floor = noise_floor(d.rec, d.f, fc, val['extended']['rows'])
-    unexplained = unexplained_axes(d, robot, val, floor) + resonances_above(
-        model_residual(d.rec, ext)[0], d.rec.fs, fc, robot.joint_names)
-    fs = d.rec.fs
-    residual = {'t': d.rec.t[:-1], 'f': d.f, 'q': d.qh, 'v': d.vh,
-                'pred_baseline': lowpass(d.f, fs, fc) - val['baseline']['residual'],
-                'pred_extended': lowpass(d.f, fs, fc) - val['extended']['residual'],
-                'val_mask': d.val_m}
-    return DiagnosisResult('timeseries', effects, rejected, unexplained, metrics, ext,
-                           TimeseriesDetail(residual, floor.tolist()), d.fit_m, d.val_m,
-                           band=band)
-
-
-def prepare(rec: Recording, robot: RobotParams, fc: float, say: Callable[[str], None]
-            ) -> Prepared:
-    """Check the record, bridge its gaps, take the residual, the blocks and the load runs."""
-    check_diagnosable(rec, robot.joint_names)
-    rec, lost = bridge_gaps(rec)
-    fs = rec.fs
-    N = rec.t.size
-    f, qh, vh, ah = model_residual(rec, robot)
-    fit_m, val_m = split_blocks(N - 1, fs, fc)
-    # rows bridged over gaps of the record take part in neither fit nor validation
-    kept = ~(lost[1:] | lost[:-1])
-    fit_m, val_m = fit_m & kept, val_m & kept
-    names = robot.joint_names
-    move = moving(vh, rec.velocity, fs, fc)
-    check_diagnosable(rec, names, move & fit_m[:, None], move & val_m[:, None])
-    prep = [axis_masks(rec, f, move, i, fit_m, val_m, fc) for i in range(robot.n_axes)]
-    skips = [one_way_sets(qh, vh, gravity_sets(robot.n_axes, i), prep[i][1], fs, fc)
-             for i in range(robot.n_axes)]
-    bearing = gravity_bearing(qh, vh, ah, fs, fc, prep, skips)
-    say(f'axes whose own angle carries a configuration-dependent load (runs of parallel '
-        f'joints): {[[names[i] for i in run] for run in bearing] or "none"}')
-    return Prepared(rec, fc, f, qh, vh, ah, fit_m, val_m, prep, skips, bearing)
 
 
 def axis_groups(d: Prepared, robot: RobotParams, i: int, rejected: list[dict[str, Any]]
@@ -426,47 +268,6 @@ def gravity_effect(robot: RobotParams, i: int, gk: list[str], cf: dict, se: dict
         'gravity', ax.name, score, {'gravity': terms},
         f'residual follows the configuration: {", ".join(parts)} (torque units; '
         f'held-out gain {100 * score:.0f} %)', i, standard_error={'gravity': errs})
-
-
-def held_out_metrics(d: Prepared, robot: RobotParams, ext: RobotParams
-                     ) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
-    """Return the §7 metrics of the nominal and extended model on the held-out blocks."""
-    rec, fc, val_m = d.rec, d.fc, d.val_m
-    fs, N = rec.fs, rec.t.size
-    metrics: dict[str, Any] = {}
-    val = {}
-    for key, model in (('baseline', robot), ('extended', ext)):
-        val[key] = predict_metrics(rec, model, fc=fc, mask=val_m)
-        metrics[key] = {k: val[key][k] for k in ('frf_error_db', 'time_nrmse', 'per_axis')}
-    metrics['validation'] = (f'held out (not used for fitting): every {HOLD_EVERY}rd block of '
-                             f'{BLOCK_S:g} s ({val_m.sum() / fs:.2f} s of {N / fs:.2f} s); '
-                             f'time_nrmse = error of the '
-                             f'inverse-dynamics torque of the model file over the RMS of the '
-                             f'measured torque ({fc:g} Hz low-pass)')
-    return metrics, val
-
-
-def unexplained_axes(d: Prepared, robot: RobotParams, val: dict[str, dict[str, Any]],
-                     floor: np.ndarray) -> list[dict[str, Any]]:
-    """
-    Return the axes whose held-out NRMSE^2 stays clearly above the noise floor.
-
-    Above UNEXPLAINED_RATIO floors and at least MIN_SHARE of the nominal misfit above the floor
-    (the floor over the rows the held-out NRMSE is taken over: a long rest lowers the torque
-    variance), with the signature of the extended model's residual.
-    """
-    rec = d.rec
-    out = []
-    for i, ax in enumerate(robot.axes):
-        b = val['baseline']['per_axis'][ax.name]['time_nrmse'] ** 2
-        x = val['extended']['per_axis'][ax.name]['time_nrmse'] ** 2
-        share = float(np.clip((x - floor[i]) / max(b - floor[i], 1e-300), 0, 1))
-        if x > UNEXPLAINED_RATIO * floor[i] and share >= MIN_SHARE:
-            out.append({'axis': ax.name, 'misfit_share': round(share, 3),
-                        'signature': signature(val['extended']['residual'][:, i],
-                                               d.qh[:, i], d.vh[:, i], d.ah[:, i],
-                                               rec.t[:-1], d.val_m, rec.fs, d.fc)})
-    return out
 
 
 def _se(x: float) -> float | None:

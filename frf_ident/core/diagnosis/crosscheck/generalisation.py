@@ -30,10 +30,10 @@ from typing import Any
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 
-from .prediction import predict_metrics
-from .residual import FC_HZ
-from .result import DiagnosisResult
-from .timeseries import diagnose_timeseries
+from ..prediction import predict_metrics
+from ..residual import FC_HZ
+from ..result import DiagnosisResult
+from ..timeseries.pipeline import diagnose_timeseries
 
 __all__ = ['POSITION_TERMS', 'drop_terms_not_generalising']
 

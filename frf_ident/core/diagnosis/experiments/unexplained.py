@@ -31,10 +31,10 @@ import numpy as np
 
 from .acceptance import left_unexplained
 from .candidates import fit_linear_scales, LIN_KEYS, scaled_axis
-from .common import diag_ratio, Effect
 from .evaluator import estimates, Evaluator, replace_segments
 from .refit import rebuild, refit_jointly
-from .thresholds import BAND_SHARE, CORRELATES_MIN, MAX_BANDS, MIN_Z, SHOWN
+from ..common import diag_ratio, Effect
+from ..thresholds import BAND_SHARE, CORRELATES_MIN, MAX_BANDS, MIN_Z, SHOWN
 
 
 def residual_bands(lines: list[tuple[np.ndarray, np.ndarray]]) -> list[list[float]]:

@@ -14,7 +14,7 @@
 """
 Check the reported standard errors against the spread of the same parameter between records.
 
-The block-robust standard errors (:func:`.selection.block_standard_errors`) describe one
+The block-robust standard errors (:func:`..selection.block_standard_errors`) describe one
 record: the noise and misfit within its blocks. Another record of the same robot (a
 ``--validate`` record, or the other half of the same one) moves through other configurations,
 so whatever the model lacks there moves the parameters too. :func:`spread_check` compares
@@ -31,8 +31,8 @@ from typing import Any
 
 from scipy import stats
 
-from .common import Effect
-from .thresholds import SPREAD_ALPHA
+from ..common import Effect
+from ..thresholds import SPREAD_ALPHA
 
 __all__ = ['SCALAR_PARAMETERS', 'estimates', 'spread_check', 'widened']
 

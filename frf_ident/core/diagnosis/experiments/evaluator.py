@@ -29,12 +29,11 @@ from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np
 
-from .common import (as_simulation, bridge_gaps, diag_ratio, drive_reference, frf_error_db, nrmse,
-                     rms_about_mean, segment_mask, simulate_like, split_recording)
 from .parallel import WorkerPool
-from .residual import inverse_dynamics_residual
-from .thresholds import (EST_CACHE, FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE,
-                         SIM_JOBS)
+from ..common import (as_simulation, bridge_gaps, diag_ratio, drive_reference, frf_error_db, nrmse,
+                      rms_about_mean, segment_mask, simulate_like, split_recording)
+from ..residual import inverse_dynamics_residual
+from ..thresholds import EST_CACHE, FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE, SIM_JOBS
 
 
 def estimates(rec: Recording) -> dict[str, Any]:
@@ -161,7 +160,7 @@ class Evaluator:
         """
         Return the inverse-dynamics residual of a model on the recording.
 
-        :func:`.residual.inverse_dynamics_residual` of ``robot``; the last model's is kept
+        :func:`..residual.inverse_dynamics_residual` of ``robot``; the last model's is kept
         (every axis' friction and gravity readings of one model share it; models are replaced,
         never edited in place, so identity is the key).
 
@@ -186,7 +185,7 @@ class Evaluator:
         """
         Return the closed-loop simulation of a model on the recorded excitation.
 
-        :func:`.common.simulate_like` of ``robot`` on the (gap-bridged) recording, counted in
+        :func:`..common.simulate_like` of ``robot`` on the (gap-bridged) recording, counted in
         :attr:`n_sims`. The same model is simulated again where a candidate is checked before
         its round (a damping mismatch before its viscous rival is refitted): the last
         SIM_CACHE simulations are kept, keyed by the model's repr.
@@ -302,7 +301,7 @@ class Evaluator:
     def _output_error(self, key: str, x: np.ndarray, m: np.ndarray, held_out: bool
                       ) -> np.ndarray:
         """
-        Return :func:`.common.nrmse` ^ 2 per axis of a simulated signal on the mask ``m``.
+        Return :func:`..common.nrmse` ^ 2 per axis of a simulated signal on the mask ``m``.
 
         The measured side (its masked samples and their RMS about the mean) is formed once
         per signal and part.

@@ -48,9 +48,9 @@ from frf_ident.core.model.params import RobotParams
 import numpy as np
 
 from .candidates import stiffness_seen
-from .common import Effect
-from .thresholds import (FD_MISMATCH_Z, FD_STRUCTURE_RATIO, LOAD_DEPENDENCE_MIN_LOG,
-                         MISMATCH_MIN_LOG)
+from ..common import Effect
+from ..thresholds import (FD_MISMATCH_Z, FD_STRUCTURE_RATIO, LOAD_DEPENDENCE_MIN_LOG,
+                          MISMATCH_MIN_LOG)
 
 __all__ = ['FD_KEYS', 'LinearShift', 'fd_parameter_mismatch', 'linear_shifts', 'load_dependence']
 

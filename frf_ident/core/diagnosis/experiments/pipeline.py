@@ -38,14 +38,14 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
                          fit_parameter_mismatch, fit_ripple, fit_stiffness_nonlinearity,
                          fit_time_delay, fit_viscous, friction_regression, ripple_again,
                          stiffness_seen, with_params)
-from .common import apply_effect, Effect
 from .evaluator import Evaluator
 from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
 from .held_out import finish, held_out_check, structure_missing
 from .refit import FRICTION, refit_friction, refit_jointly
-from .result import DiagnosisResult
 from .search import named, Search
-from .thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS, UNEXPLAINED_RATIO
+from ..common import apply_effect, Effect
+from ..result import DiagnosisResult
+from ..thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS, UNEXPLAINED_RATIO
 
 __all__ = ['diagnose_experiments']
 
@@ -85,7 +85,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     Returns
     -------
     DiagnosisResult
-        Mode 'experiments', with :class:`.result.ExperimentsDetail`.
+        Mode 'experiments', with :class:`..result.ExperimentsDetail`.
 
     Notes
     -----

@@ -14,7 +14,7 @@
 """
 Scan the residual spectrum above the analysis band for resonances the model lacks.
 
-Above the analysis band (:mod:`.band`) the extended model's inverse-dynamics residual should
+Above the analysis band (:mod:`..band`) the extended model's inverse-dynamics residual should
 be noise: its Welch PSD (segments of RESONANCE_SEGMENT_S, Hann, half overlap) smooth. A
 resonance the model lacks (the drive's flexibility, a second link mode) stands there as a
 peak over the residual's local noise floor, the running median over RESONANCE_FLOOR_LINES
@@ -38,8 +38,8 @@ import numpy as np
 from scipy import signal, stats
 from scipy.ndimage import median_filter
 
-from .thresholds import (RESONANCE_FALSE_ALARM, RESONANCE_FLOOR_LINES, RESONANCE_MAX,
-                         RESONANCE_MIN_WIDTH_LINES, RESONANCE_SEGMENT_S, RESONANCE_TOP)
+from ..thresholds import (RESONANCE_FALSE_ALARM, RESONANCE_FLOOR_LINES, RESONANCE_MAX,
+                          RESONANCE_MIN_WIDTH_LINES, RESONANCE_SEGMENT_S, RESONANCE_TOP)
 
 __all__ = ['peak_threshold', 'resonances_above', 'scan_spectrum']
 

@@ -32,8 +32,8 @@ import math
 from frf_ident.core.recording import Recording
 import numpy as np
 
-from .selection import lstsq
-from .thresholds import RANGE_OUT_SHARE, RANGE_TOLERANCE_DEG
+from ..selection import lstsq
+from ..thresholds import RANGE_OUT_SHARE, RANGE_TOLERANCE_DEG
 
 __all__ = ['beyond_fitted_range', 'failing_position_terms', 'leave_range_out', 'range_ends']
 

@@ -11,7 +11,7 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""The state the stages of the experiments route share (:mod:`.experiments`)."""
+"""The state the stages of the experiments route share (:mod:`.pipeline`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -21,8 +21,8 @@ from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 import numpy as np
 
-from .common import Effect
 from .evaluator import Evaluator
+from ..common import Effect
 
 __all__ = ['named', 'Search']
 
