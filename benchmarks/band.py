@@ -36,12 +36,12 @@ RECORDS = [
      'map_kuka_kr300.yaml', 'model_kuka_kr300_axes123.yaml', None)]
 
 
-def _peaks(unexplained: list[dict]) -> str:
-    """Return the scan's entries as one short text."""
-    found = [f"{u['axis']}: {u['kind'].split()[0]} {u['signature']['peak_hz']:.0f} Hz "
-             f"({u['signature']['band_hz'][0]:.0f}-{u['signature']['band_hz'][1]:.0f} Hz, "
-             f"{u['signature']['peak_over_floor']:.0f}x floor)"
-             for u in unexplained if 'peak_hz' in u['signature']]
+def _peaks(unexplained: list) -> str:
+    """Return the scan's entries (:class:`Unexplained` records) as one short text."""
+    found = [f'{u.axis}: {u.kind.split()[0]} {u.signature.peak_hz:.0f} Hz '
+             f'({u.signature.band_hz[0]:.0f}-{u.signature.band_hz[1]:.0f} Hz, '
+             f'{u.signature.peak_over_floor:.0f}x floor)'
+             for u in unexplained if u.signature.peak_hz is not None]
     return '; '.join(found) or 'none'
 
 
@@ -61,7 +61,7 @@ def rows() -> list[tuple[str, str, str, str]]:
             r = diagnose(data, ROOT / 'config' / model, Path(tmp), map_path=ROOT / 'config' / mp,
                          progress=lambda _line: None)
             wall = time.perf_counter() - t0
-        res, rec = r['result'], r['recording']
+        res, rec = r.result, r.recording
         t0 = time.perf_counter()
         resonances_above(model_residual(rec, res.extended)[0], rec.fs, res.band.fc_hz,
                          res.extended.joint_names)

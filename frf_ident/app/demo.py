@@ -86,6 +86,6 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
     estimate_bag(bag, out / 'estimate', progress=progress)
     progress('demo: diagnosis against the nominal model (its search trace: -v, or demo.log)')
     res = diagnose(Path(bag), Path(model), out / 'diagnosis', progress=_log.debug)
-    for line in diagnosis_summary(res['report'], out / 'diagnosis'):
+    for line in diagnosis_summary(res, out / 'diagnosis'):
         progress(line)
     return 0

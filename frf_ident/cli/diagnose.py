@@ -101,6 +101,6 @@ def run(args: argparse.Namespace) -> int:
     res = diagnose(Path(args.data[0]), args.model, out, map_path=args.map,
                    validate=args.validate, urdf=args.urdf, progress=say,
                    jobs=args.jobs, fd_fit=args.fd_fit)
-    for line in diagnosis_summary(res['report'], out):
+    for line in diagnosis_summary(res, out):
         say(line)
     return 0

@@ -52,7 +52,9 @@ _API = {
     'frf_ident.core.estimation.described': ['chirp_frf', 'estimate_recording', 'multisine_frf'],
     'frf_ident.core.estimation.detected': ['ExcitationOptions'],
     'frf_ident.core.recording': ['Recording', 'Segment'],
-    'frf_ident.core.diagnosis': ['diagnose_experiments', 'diagnose_timeseries'],
+    'frf_ident.core.diagnosis.pipeline': ['diagnose', 'Diagnosis'],
+    'frf_ident.core.diagnosis.experiments.pipeline': ['diagnose_experiments'],
+    'frf_ident.core.diagnosis.timeseries.pipeline': ['diagnose_timeseries'],
 }
 _WHERE = {name: module for module, names in _API.items() for name in names}
 

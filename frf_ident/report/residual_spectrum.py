@@ -71,12 +71,12 @@ def residual_spectrum_figure(res: DiagnosisResult, rec: Recording, path: Path, *
                     label=f'threshold (false alarm {RESONANCE_FALSE_ALARM:g} per axis)')
         ax.axvspan(0.0, fc, color='0.85', label=f'analysis band 0-{fc:.3g} Hz')
         for u in res.unexplained:
-            s = u['signature']
-            if u['axis'] == name and 'peak_hz' in s:
-                ax.axvspan(*s['band_hz'], color='tab:orange', alpha=0.35,
+            s = u.signature
+            if u.axis == name and s.peak_hz is not None:
+                ax.axvspan(*s.band_hz, color='tab:orange', alpha=0.35,
                            label='unexplained: resonance or line')
-                ax.annotate(f"{u['kind'].split()[0]} {s['peak_hz']:.0f} Hz",
-                            (s['band_hz'][1], p.max()), fontsize=8, ha='left', va='top',
+                ax.annotate(f'{u.kind.split()[0]} {s.peak_hz:.0f} Hz',
+                            (s.band_hz[1], p.max()), fontsize=8, ha='left', va='top',
                             rotation=90)
         ax.set_xlim(0.0, f[-1])
         ax.set_ylabel(f'{name}: PSD [torque^2/Hz]')

@@ -319,11 +319,11 @@ def test_a_simulation_too_coarse_for_the_record_is_reported(tmp_path):
     coarse, fine = (replace(truth, substeps=m) for m in (1, 8))
     step = discretisation_check(ev, coarse, ev.misfit(ev.terms(coarse, held_out=True)))
     print(step)    # the figures README_diagnosis quotes (pytest -s)
-    assert step['axes'] == robot.joint_names, step
-    assert step['substeps'] == 1 and 'joint_1' in step['too_coarse'], step
+    assert step.axes == robot.joint_names, step
+    assert step.substeps == 1 and 'joint_1' in step.too_coarse, step
     # the finer simulation is the closer one to the record
-    j = step['axes'].index('joint_1')
-    assert step['held_out_misfit_double_substeps'][j] < step['held_out_misfit'][j], step
+    j = step.axes.index('joint_1')
+    assert step.held_out_misfit_double_substeps[j] < step.held_out_misfit[j], step
     step = discretisation_check(ev, fine, ev.misfit(ev.terms(fine, held_out=True)))
     print(step)
-    assert step['too_coarse'] == [], step
+    assert step.too_coarse == [], step

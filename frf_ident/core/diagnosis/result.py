@@ -30,6 +30,7 @@ import numpy as np
 
 from .band import AnalysisBand
 from .common import Effect
+from .records import IntegratorCheck, Rejected, RouteMetrics, Unexplained
 
 
 @dataclass
@@ -48,11 +49,28 @@ class ExperimentsDetail:
 
 
 @dataclass
+class ResidualTrace:
+    """The time-series route's residuals between samples, for the figures."""
+
+    #: [s] time of the rows, shape (N-1,)
+    t: np.ndarray
+    #: inverse-dynamics residual of the nominal model, shape (N-1, n)
+    f: np.ndarray
+    #: positions, velocities between samples, shape (N-1, n)
+    q: np.ndarray
+    v: np.ndarray
+    #: the torque the nominal and the extended model predict (low-passed residual removed)
+    pred_baseline: np.ndarray
+    pred_extended: np.ndarray
+    #: the held-out rows, shape (N-1,)
+    val_mask: np.ndarray
+
+
+@dataclass
 class TimeseriesDetail:
     """What the time-series route keeps for the figures."""
 
-    #: 't', 'f' (residual), 'q', 'v', 'pred_baseline', 'pred_extended', 'val_mask' arrays
-    residual: dict[str, np.ndarray]
+    residual: ResidualTrace
     #: per axis the NRMSE^2 torque noise alone leaves on the held-out rows
     noise_floor_nrmse2: list[float]
 
@@ -94,14 +112,14 @@ class DiagnosisResult:
 
     mode: str
     effects: list[Effect]
-    rejected: list[dict[str, Any]]
-    unexplained: list[dict[str, Any]]
-    metrics: dict[str, Any]
+    rejected: list[Rejected]
+    unexplained: list[Unexplained]
+    metrics: RouteMetrics
     extended: RobotParams
     detail: ExperimentsDetail | TimeseriesDetail
     fit_rows: np.ndarray
     held_out_rows: np.ndarray
-    discretisation: dict[str, Any] | None = None
+    discretisation: IntegratorCheck | None = None
     n_sims: int = 0
     #: the candidates that were not taken (experiments route; their rejected entries)
     candidates: list[Effect] = field(default_factory=list)

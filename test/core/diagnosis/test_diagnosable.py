@@ -66,7 +66,7 @@ def test_a_record_that_can_be_diagnosed_passes(emps):
 ])
 def test_a_record_that_cannot_be_diagnosed_is_refused(emps, tmp_path, kind, match, capsys):
     from frf_ident.bag import write_recording
-    from frf_ident.core.diagnosis import diagnose_timeseries
+    from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
     rec = {'short': lambda: _variant(emps, n=1499), 'tiny': lambda: _variant(emps, n=3),
            'zero effort': lambda: _variant(emps, effort=np.zeros_like(emps.effort)),
            'still': lambda: _variant(emps, position=0.1 + np.random.default_rng(1).normal(

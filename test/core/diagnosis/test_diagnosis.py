@@ -221,7 +221,7 @@ def test_timeseries_names_gravity_of_a_coupled_arm_and_friction():
         assert found[('coulomb_friction', name)]['coulomb_friction'] == \
             pytest.approx(truth['fc'][i], rel=0.02)
     m = res.metrics
-    assert m['extended']['time_nrmse'] < 0.3 < m['baseline']['time_nrmse']
+    assert m.extended.time_nrmse < 0.3 < m.baseline.time_nrmse
     assert res.unexplained == []
 
 
@@ -253,9 +253,9 @@ def test_unexplained_disturbance_gets_its_band_and_axis():
     rec, _ = _arm_record(6, disturbance_hz=7.0)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     res = diagnose_timeseries(rec, robot)
-    un = {u['axis']: u for u in res.unexplained}
+    un = {u.axis: u for u in res.unexplained}
     assert 'joint_1' in un, res.unexplained
-    f1, f2 = un['joint_1']['signature']['band_hz']
+    f1, f2 = un['joint_1'].signature.band_hz
     assert f1 <= 7.0 <= f2 and f2 - f1 < 3.0
     assert 'joint_2' not in un and 'joint_3' not in un
 
@@ -443,10 +443,10 @@ def test_torque_held_at_rest_is_neither_fitted_nor_scored():
             pytest.approx(truth['fc'][i], rel=0.03)
     grav3 = found[('gravity', 'joint_3')]['gravity']
     assert grav3[0]['amplitude'] == pytest.approx(truth['g3'], rel=0.03)
-    ext = res.metrics['extended']
-    assert ext['time_nrmse'] < 0.15
+    ext = res.metrics.extended
+    assert ext.time_nrmse < 0.15
     for name in rec.joint_names:
-        assert 0.4 < ext['per_axis'][name]['moving_share'] < 0.95
+        assert 0.4 < ext.per_axis[name].moving_share < 0.95
 
 
 def _sweep_arm(rng, fs, T, two_way, f_hi, sweep):
@@ -496,8 +496,8 @@ def test_axis_moving_one_way_keeps_friction_out_of_the_gravity_shape():
     J, fc, g3, p3 = np.array([6.0, 4.0, 1.5]), np.array([3.0, 4.0, 6.0]), 25.0, -1.9
     res, found = _diagnose_arm(rng, t, q, v, J * a + fc * np.sign(v), 60.0, g3, p3)
     assert ('coulomb_friction', 'joint_3') not in found
-    assert any(r['name'] == 'coulomb_friction' and r['axis'] == 'joint_3' and 'one way' in
-               r.get('reason', '') for r in res.rejected)
+    assert any(r.name == 'coulomb_friction' and r.axis == 'joint_3' and 'one way' in
+               (r.reason or '') for r in res.rejected)
     grav3 = found[('gravity', 'joint_3')]['gravity']
     assert grav3[0]['amplitude'] == pytest.approx(g3, rel=0.03)
     # the constant carries the friction: -Fc plus no load
@@ -533,8 +533,8 @@ def test_sinusoid_of_a_one_way_angle_is_not_taken_for_gravity(seed):
     assert ('gravity', 'joint_1') not in found, found
     assert all('joint_1' not in g['joints'] for ax in ('joint_2', 'joint_3')
                for g in found[('gravity', ax)]['gravity'])
-    assert any(r['name'] == 'gravity' and r['axis'] == 'joint_1'
-               and 'q_joint_1 moves one way only' in r.get('reason', '')
+    assert any(r.name == 'gravity' and r.axis == 'joint_1'
+               and 'q_joint_1 moves one way only' in (r.reason or '')
                for r in res.rejected)
     assert found[('gravity', 'joint_3')]['gravity'][0]['amplitude'] == \
         pytest.approx(g3, rel=0.03)
@@ -764,13 +764,14 @@ def test_axis_refitted_with_the_baseline_terms_takes_exactly_those():
 
 def test_axes_taken_from_the_baseline_refit_move_their_effects_to_rejected():
     """:func:`.baseline.with_axes_of`: the lost axis as refitted, its old effects rejected."""
-    from frf_ident.core.diagnosis.crosscheck.baseline import BASELINE_GROUPS, with_axes_of
+    from frf_ident.core.diagnosis.crosscheck.baseline import (BASELINE_GROUPS, HeldOutSet,
+                                                              ThreeModels, with_axes_of)
     rec, _ = _arm_record(6)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     plain = diagnose_timeseries(rec, robot)
     alt = diagnose_timeseries(rec, robot, only={'joint_2': BASELINE_GROUPS})
-    comp = [{'record': 'B.mat', 'per_axis': {'joint_2': {'extended': 0.5,
-                                                         'least_squares': 0.25}}}]
+    comp = [HeldOutSet('B.mat', ThreeModels(0.4, 0.25, 0.5),
+                       {'joint_2': ThreeModels(0.4, 0.25, 0.5)})]
     got = with_axes_of(plain, alt, {'joint_2': ['B.mat']}, comp)
     assert got.extended.axes[1] == alt.extended.axes[1]
     assert [got.extended.axes[i] for i in (0, 2)] == [plain.extended.axes[i] for i in (0, 2)]
@@ -779,6 +780,6 @@ def test_axes_taken_from_the_baseline_refit_move_their_effects_to_rejected():
         + [(e.name, e.axis) for e in alt.effects if e.axis == 'joint_2'])
     old = [e for e in plain.effects if e.axis == 'joint_2']
     new = got.rejected[len(plain.rejected):]
-    assert old and [(r['name'], r['axis']) for r in new] == [(e.name, e.axis) for e in old]
-    assert all('B.mat: extended 0.500, least squares 0.250' in r['reason']
-               and "the baseline's terms" in r['reason'] for r in new)
+    assert old and [(r.name, r.axis) for r in new] == [(e.name, e.axis) for e in old]
+    assert all('B.mat: extended 0.500, least squares 0.250' in r.reason
+               and "the baseline's terms" in r.reason for r in new)

@@ -29,15 +29,17 @@ from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 import numpy as np
 
-from ..common import bridge_gaps
-from ..prediction import predict_metrics, torque_metrics
+from ..common import bridge_gaps, Effect
+from ..prediction import predict_metrics, Prediction, torque_metrics
+from ..records import Rejected
 from ..regressors import moving
 from ..residual import FC_HZ, lowpass
 from ..result import DiagnosisResult
 from ..thresholds import LS_BASELINE_MARGIN, LS_TANH_VELOCITY, ONE_WAY
 
 __all__ = ['axes_not_beating', 'BASELINE_GROUPS', 'fit_least_squares', 'held_out_comparison',
-           'LeastSquaresBaseline', 'least_squares_metrics', 'with_axes_of', 'without_axes']
+           'HeldOutSet', 'LeastSquaresBaseline', 'least_squares_metrics', 'ThreeModels',
+           'with_axes_of', 'without_axes']
 
 #: the columns of :attr:`LeastSquaresBaseline.coef`
 TERMS = ('inertia', 'viscous', 'coulomb', 'offset')
@@ -59,6 +61,35 @@ class LeastSquaresBaseline:
         """Return {axis: {term: value}} for the report."""
         return {n: {t: float(f'{c:.6g}') for t, c in zip(TERMS, row)}
                 for n, row in zip(self.names, self.coef)}
+
+
+@dataclass(frozen=True)
+class ThreeModels:
+    """One held-out ``time_nrmse`` of the nominal model, the baseline and the extended model."""
+
+    nominal: float
+    least_squares: float
+    extended: float
+
+    def to_dict(self) -> dict[str, float]:
+        """Return the report's entry."""
+        return {'nominal': self.nominal, 'least_squares': self.least_squares,
+                'extended': self.extended}
+
+
+@dataclass(frozen=True)
+class HeldOutSet:
+    """The three models on one held-out set: pooled over the axes and per axis."""
+
+    #: the diagnosis' own held-out rows ('held out') or the path of a ``--validate`` record
+    record: str
+    time_nrmse: ThreeModels
+    per_axis: dict[str, ThreeModels]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's entry."""
+        return {'record': self.record, 'time_nrmse': self.time_nrmse.to_dict(),
+                'per_axis': {ax: v.to_dict() for ax, v in self.per_axis.items()}}
 
 
 def regressors(rec: Recording, fc: float) -> np.ndarray:
@@ -114,7 +145,7 @@ def fit_least_squares(rec: Recording, fit_rows: np.ndarray, *, fc: float = FC_HZ
 
 
 def least_squares_metrics(rec: Recording, model: LeastSquaresBaseline,
-                          mask: np.ndarray | None = None) -> dict[str, Any]:
+                          mask: np.ndarray | None = None) -> Prediction:
     """Return the baseline's ``time_nrmse`` (pooled, per axis) on ``rec`` (mask as the tool's)."""
     rec, lost = bridge_gaps(rec)
     X = regressors(rec, model.fc)
@@ -125,7 +156,7 @@ def least_squares_metrics(rec: Recording, model: LeastSquaresBaseline,
 
 def held_out_comparison(robot: RobotParams, ext: RobotParams, ls: LeastSquaresBaseline,
                         sets: list[tuple[str, Recording, np.ndarray | None]]
-                        ) -> list[dict[str, Any]]:
+                        ) -> list[HeldOutSet]:
     """
     Return nominal, least-squares and extended ``time_nrmse`` on every held-out set.
 
@@ -141,26 +172,24 @@ def held_out_comparison(robot: RobotParams, ext: RobotParams, ls: LeastSquaresBa
 
     Returns
     -------
-    list of dict
-        Per set ``record``, ``time_nrmse`` {'nominal', 'least_squares', 'extended'} (pooled
-        over the axes) and ``per_axis`` {axis: the same three}.
+    list of HeldOutSet
+        Per set the three models' ``time_nrmse``, pooled over the axes and per axis.
 
     """
     out = []
     for name, rec, mask in sets:
-        m = {'nominal': predict_metrics(rec, replace(robot, sample_rate=rec.fs), fc=ls.fc,
-                                        mask=mask),
-             'least_squares': least_squares_metrics(rec, ls, mask),
-             'extended': predict_metrics(rec, replace(ext, sample_rate=rec.fs), fc=ls.fc,
-                                         mask=mask)}
-        out.append({'record': name,
-                    'time_nrmse': {k: v['time_nrmse'] for k, v in m.items()},
-                    'per_axis': {ax: {k: v['per_axis'][ax]['time_nrmse'] for k, v in m.items()}
-                                 for ax in ls.names}})
+        m = [predict_metrics(rec, replace(robot, sample_rate=rec.fs), fc=ls.fc,
+                             mask=mask).scores,
+             least_squares_metrics(rec, ls, mask).scores,
+             predict_metrics(rec, replace(ext, sample_rate=rec.fs), fc=ls.fc,
+                             mask=mask).scores]
+        out.append(HeldOutSet(name, ThreeModels(*(s.time_nrmse for s in m)),
+                              {ax: ThreeModels(*(s.per_axis[ax].time_nrmse for s in m))
+                               for ax in ls.names}))
     return out
 
 
-def axes_not_beating(comparison: list[dict[str, Any]]) -> dict[str, list[str]]:
+def axes_not_beating(comparison: list[HeldOutSet]) -> dict[str, list[str]]:
     """
     Return {axis: the held-out sets on which the extended model loses to the baseline}.
 
@@ -169,14 +198,14 @@ def axes_not_beating(comparison: list[dict[str, Any]]) -> dict[str, list[str]]:
     """
     out: dict[str, list[str]] = {}
     for s in comparison:
-        for ax, v in s['per_axis'].items():
-            if not v['extended'] <= (1.0 + LS_BASELINE_MARGIN) * v['least_squares']:
-                out.setdefault(ax, []).append(s['record'])
+        for ax, v in s.per_axis.items():
+            if not v.extended <= (1.0 + LS_BASELINE_MARGIN) * v.least_squares:
+                out.setdefault(ax, []).append(s.record)
     return out
 
 
 def without_axes(res: DiagnosisResult, robot: RobotParams, lost: dict[str, list[str]],
-                 comparison: list[dict[str, Any]]) -> DiagnosisResult:
+                 comparison: list[HeldOutSet]) -> DiagnosisResult:
     """
     Return the result with the effects of the axes that do not beat the baseline rejected.
 
@@ -194,7 +223,7 @@ def without_axes(res: DiagnosisResult, robot: RobotParams, lost: dict[str, list[
 
 
 def with_axes_of(res: DiagnosisResult, alt: DiagnosisResult, lost: dict[str, list[str]],
-                 comparison: list[dict[str, Any]]) -> DiagnosisResult:
+                 comparison: list[HeldOutSet]) -> DiagnosisResult:
     """
     Return the result with the axes in ``lost`` as ``alt`` has them.
 
@@ -216,13 +245,13 @@ def with_axes_of(res: DiagnosisResult, alt: DiagnosisResult, lost: dict[str, lis
                    extended=replace(res.extended, axes=axes))
 
 
-def lost_to_baseline(e: Any, comparison: list[dict[str, Any]], records: list[str],
-                     outcome: str) -> dict[str, Any]:
+def lost_to_baseline(e: Effect, comparison: list[HeldOutSet], records: list[str],
+                     outcome: str) -> Rejected:
     """Return the ``rejected`` entry of an effect whose axis lost to the baseline."""
-    nums = '; '.join(f'{s["record"]}: extended {s["per_axis"][e.axis]["extended"]:.3f}, '
-                     f'least squares {s["per_axis"][e.axis]["least_squares"]:.3f}'
-                     for s in comparison if s['record'] in records)
-    return {'name': e.name, 'axis': e.axis, 'parameters': e.to_dict()['parameters'],
-            'reason': f'the extended model does not beat the 4-parameter least-squares '
-                      f'baseline on held-out data (more than {100 * LS_BASELINE_MARGIN:.0f} % '
-                      f'above it: {nums}): {outcome}'}
+    nums = '; '.join(f'{s.record}: extended {s.per_axis[e.axis].extended:.3f}, '
+                     f'least squares {s.per_axis[e.axis].least_squares:.3f}'
+                     for s in comparison if s.record in records)
+    return Rejected(e.name, e.axis, e.to_dict()['parameters'],
+                    reason=f'the extended model does not beat the 4-parameter least-squares '
+                           f'baseline on held-out data (more than '
+                           f'{100 * LS_BASELINE_MARGIN:.0f} % above it: {nums}): {outcome}')

@@ -24,34 +24,70 @@ independently: the report says they decided.
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 from frf_ident.core.model.params import RobotParams
+from frf_ident.core.progress import Progress
 from frf_ident.core.recording import Recording
 
 from ..prediction import predict_metrics
+from ..records import Rejected
 from ..residual import FC_HZ
 from ..result import DiagnosisResult
 from ..timeseries.pipeline import diagnose_timeseries
 
-__all__ = ['POSITION_TERMS', 'drop_terms_not_generalising']
+__all__ = ['POSITION_TERMS', 'drop_terms_not_generalising', 'position_terms_on_others',
+           'TermsOnOthers']
 
 #: the effects whose torque depends on the configuration
 POSITION_TERMS = ('gravity', 'torque_ripple')
 
 
+@dataclass(frozen=True)
+class TermsOnOthers:
+    """An axis' position-dependent terms judged on the other records."""
+
+    #: time_nrmse on each other record with the terms and without them (the rest refitted)
+    with_terms: list[float]
+    without_terms: list[float]
+    #: whether they were dropped (the other records are predicted better without)
+    dropped: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's ``position_terms_on_validate`` entry of the axis."""
+        return {'with': list(self.with_terms), 'without': list(self.without_terms),
+                'dropped': self.dropped}
+
+
 def _errors(robot: RobotParams, others: list[tuple[str, Recording]], fc: float
             ) -> dict[str, list[float]]:
     """Return per axis the time_nrmse of ``robot`` on each other record."""
-    per = [predict_metrics(o, replace(robot, sample_rate=o.fs), fc=fc)['per_axis']
+    per = [predict_metrics(o, replace(robot, sample_rate=o.fs), fc=fc).scores.per_axis
            for _, o in others]
-    return {ax: [p[ax]['time_nrmse'] for p in per] for ax in robot.joint_names}
+    return {ax: [p[ax].time_nrmse for p in per] for ax in robot.joint_names}
+
+
+def position_terms_on_others(res: DiagnosisResult, rec: Recording, robot: RobotParams,
+                             others: list[tuple[str, Recording]], progress: Progress
+                             ) -> tuple[DiagnosisResult, dict[str, TermsOnOthers]]:
+    """
+    Run :func:`drop_terms_not_generalising` and print one line per axis it judged.
+
+    Returns the result and per axis the verdict (empty when no axis was judged).
+    """
+    res, verdict = drop_terms_not_generalising(res, rec, robot, others)
+    for ax, v in verdict.items():
+        progress(f'{ax}: position-dependent terms on the --validate records, time_nrmse '
+                 f'{" / ".join(f"{x:.3f}" for x in v.with_terms)} with, '
+                 f'{" / ".join(f"{x:.3f}" for x in v.without_terms)} without: '
+                 + ('dropped (they do not generalise)' if v.dropped else 'kept'))
+    return res, verdict
 
 
 def drop_terms_not_generalising(res: DiagnosisResult, rec: Recording, robot: RobotParams,
                                 others: list[tuple[str, Recording]], *, fc: float = FC_HZ
-                                ) -> tuple[DiagnosisResult, dict[str, Any]]:
+                                ) -> tuple[DiagnosisResult, dict[str, TermsOnOthers]]:
     """
     Return the result without the position-dependent terms that fail on the other records.
 
@@ -71,9 +107,8 @@ def drop_terms_not_generalising(res: DiagnosisResult, rec: Recording, robot: Rob
     Returns
     -------
     (DiagnosisResult, dict)
-        The result (unchanged when no term fails; its ``metrics['extended']`` taken again
-        otherwise) and per axis with a position-dependent term {'with': [...], 'without':
-        [...], 'dropped': bool}: its time_nrmse on each other record with and without it.
+        The result (unchanged when no term fails; its extended model's metrics taken again
+        otherwise) and per axis with a position-dependent term its :class:`TermsOnOthers`.
 
     """
     axes = {e.axis for e in res.effects if e.name in POSITION_TERMS}
@@ -84,32 +119,30 @@ def drop_terms_not_generalising(res: DiagnosisResult, rec: Recording, robot: Rob
     verdict = {}
     for ax in sorted(axes):
         a, b = e_with[ax], e_without[ax]
-        verdict[ax] = {'with': a, 'without': b,
-                       'dropped': sum(x * x for x in b) < sum(x * x for x in a)}
-    lost = {ax for ax, v in verdict.items() if v['dropped']}
+        verdict[ax] = TermsOnOthers(a, b, sum(x * x for x in b) < sum(x * x for x in a))
+    lost = {ax for ax, v in verdict.items() if v.dropped}
     if not lost:
         return res, verdict
     names = ', '.join(n for n, _ in others)
-    rejected = [r for r in res.rejected if r.get('axis') not in lost]
-    rejected += [r for r in alt.rejected if r.get('axis') in lost]
+    rejected = [r for r in res.rejected if r.axis not in lost]
+    rejected += [r for r in alt.rejected if r.axis in lost]
     for e in res.effects:
         if e.axis in lost and e.name in POSITION_TERMS:
             v = verdict[e.axis]
-            rejected.append({
-                'name': e.name, 'axis': e.axis, 'parameters': e.to_dict()['parameters'],
-                'reason': f'does not generalise to {names}: time_nrmse '
-                          f'{" / ".join(f"{x:.3f}" for x in v["with"])} with it, '
-                          f'{" / ".join(f"{x:.3f}" for x in v["without"])} without it (the '
-                          f'rest refitted); dropped, so these records decided and no '
-                          f'longer judge it independently'})
+            rejected.append(Rejected(
+                e.name, e.axis, e.to_dict()['parameters'],
+                reason=f'does not generalise to {names}: time_nrmse '
+                       f'{" / ".join(f"{x:.3f}" for x in v.with_terms)} with it, '
+                       f'{" / ".join(f"{x:.3f}" for x in v.without_terms)} without it (the '
+                       f'rest refitted); dropped, so these records decided and no '
+                       f'longer judge it independently'))
     effects = sorted([e for e in res.effects if e.axis not in lost]
                      + [e for e in alt.effects if e.axis in lost], key=lambda e: -e.score)
     ext = replace(res.extended, axes=[b if b.name in lost else a for a, b in
                                       zip(res.extended.axes, alt.extended.axes)])
-    unexplained = ([u for u in res.unexplained if u['axis'] not in lost]
-                   + [u for u in alt.unexplained if u['axis'] in lost])
+    unexplained = ([u for u in res.unexplained if u.axis not in lost]
+                   + [u for u in alt.unexplained if u.axis in lost])
     m = predict_metrics(rec, ext, fc=fc, mask=res.held_out_rows)
-    metrics = {**res.metrics,
-               'extended': {k: m[k] for k in ('frf_error_db', 'time_nrmse', 'per_axis')}}
+    metrics = replace(res.metrics, extended=m.scores)
     return replace(res, effects=effects, rejected=rejected, unexplained=unexplained,
                    metrics=metrics, extended=ext), verdict

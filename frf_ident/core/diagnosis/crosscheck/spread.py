@@ -25,20 +25,61 @@ scaled by their RMS (:func:`widened`), so that they hold across records.
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import asdict, dataclass, field, replace
 import math
 from typing import Any
 
+from frf_ident.core.model.params import RobotParams
+from frf_ident.core.progress import Progress
+from frf_ident.core.recording import Recording
+from frf_ident.errors import EstimationError
 from scipy import stats
 
 from ..common import Effect
+from ..result import DiagnosisResult
 from ..thresholds import SPREAD_ALPHA
+from ..timeseries.pipeline import diagnose_timeseries
 
-__all__ = ['SCALAR_PARAMETERS', 'estimates', 'spread_check', 'widened']
+__all__ = ['SCALAR_PARAMETERS', 'estimates', 'SpreadCheck', 'SpreadPair', 'spread_check',
+           'standard_errors_across', 'widened']
 
 #: the parameters compared between records: a constant load (``gravity_torque``) and the
 #: gravity terms are the configuration's, which differs between records by design
 SCALAR_PARAMETERS = ('coulomb_friction', 'viscous_friction', 'motor_inertia')
+
+
+@dataclass(frozen=True)
+class SpreadPair:
+    """One parameter of the report against the same parameter of another record."""
+
+    axis: str
+    parameter: str
+    #: the other record's index (1: the first other record)
+    record: int
+    #: the report's value and the other record's
+    values: list[float]
+    combined_se: float
+    #: the difference over the combined standard error
+    z: float
+
+
+@dataclass
+class SpreadCheck:
+    """The standard errors against the spread between records (``standard_errors_across``)."""
+
+    pairs: list[SpreadPair] = field(default_factory=list)
+    #: RMS of the z values (None without a pair) and the chi-square p value of their sum
+    rms_z: float | None = None
+    p_value: float | None = None
+    #: what every standard error of the report was multiplied by (1: they hold)
+    factor: float = 1.0
+    #: what was compared: 'the --validate records' or 'the two halves of the record'
+    compared: str = ''
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's entry."""
+        return {'pairs': [asdict(p) for p in self.pairs], 'rms_z': self.rms_z,
+                'p_value': self.p_value, 'factor': self.factor, 'compared': self.compared}
 
 
 def estimates(effects: list[Effect]) -> dict[tuple[str, str], tuple[float, float]]:
@@ -52,7 +93,8 @@ def estimates(effects: list[Effect]) -> dict[tuple[str, str], tuple[float, float
     return out
 
 
-def spread_check(runs: list[dict[tuple[str, str], tuple[float, float]]]) -> dict[str, Any]:
+def spread_check(runs: list[dict[tuple[str, str], tuple[float, float]]], compared: str = ''
+                 ) -> SpreadCheck:
     """
     Compare the parameters of several records by their combined standard errors.
 
@@ -60,10 +102,12 @@ def spread_check(runs: list[dict[tuple[str, str], tuple[float, float]]]) -> dict
     ----------
     runs : list of dict
         Per record :func:`estimates`; the first is the record the diagnosis reports.
+    compared : str
+        What the records are (for the report).
 
     Returns
     -------
-    dict
+    SpreadCheck
         ``pairs``: per parameter named in the first and another record its two values, the
         combined standard error and z; ``rms_z`` (None without a pair); ``p_value`` of
         sum z^2 under chi-square(n pairs) (standard errors that hold give z ~ N(0, 1));
@@ -76,15 +120,52 @@ def spread_check(runs: list[dict[tuple[str, str], tuple[float, float]]]) -> dict
             if key in other:
                 b, sb = other[key]
                 s = math.hypot(sa, sb)
-                pairs.append({'axis': key[0], 'parameter': key[1], 'record': j,
-                              'values': [a, b], 'combined_se': s, 'z': (a - b) / s})
+                pairs.append(SpreadPair(key[0], key[1], j, [a, b], s, (a - b) / s))
     if not pairs:
-        return {'pairs': [], 'rms_z': None, 'p_value': None, 'factor': 1.0}
-    chi2 = sum(p['z'] ** 2 for p in pairs)
+        return SpreadCheck(compared=compared)
+    chi2 = sum(p.z ** 2 for p in pairs)
     rms = math.sqrt(chi2 / len(pairs))
     p = float(stats.chi2.sf(chi2, len(pairs)))
-    return {'pairs': pairs, 'rms_z': rms, 'p_value': p,
-            'factor': rms if p < SPREAD_ALPHA and rms > 1.0 else 1.0}
+    return SpreadCheck(pairs, rms, p, rms if p < SPREAD_ALPHA and rms > 1.0 else 1.0, compared)
+
+
+def standard_errors_across(res: DiagnosisResult, rec: Recording,
+                           others: list[tuple[str, Recording]], robot: RobotParams,
+                           progress: Progress) -> tuple[DiagnosisResult, SpreadCheck | None]:
+    """
+    Check the standard errors against the spread between records; widen them if it is larger.
+
+    Time-series route: each ``--validate`` record diagnosed on its own against the fit
+    record's parameters, or without such records the two halves of the record against each
+    other. Returns the result (its standard errors widened where they do not hold) and the
+    check (None on the experiments route, or where a record could not be diagnosed).
+    """
+    if res.mode != 'timeseries':
+        return res, None
+    if others:
+        what, recs = 'the --validate records', [o for _, o in others]
+        runs = [estimates(res.effects)]
+    else:
+        n = rec.t.size // 2
+        what, runs = 'the two halves of the record', []
+        recs = [Recording(rec.t[sl] - rec.t[sl][0], rec.joint_names, rec.position[sl],
+                          rec.velocity[sl], rec.effort[sl], meta=dict(rec.meta))
+                for sl in (slice(0, n), slice(n, None))]
+    try:
+        runs += [estimates(diagnose_timeseries(o, replace(robot, sample_rate=o.fs)).effects)
+                 for o in recs]
+    except EstimationError as err:
+        progress(f'standard errors not checked across records ({what}: {err})')
+        return res, None
+    check = spread_check(runs, what)
+    if check.rms_z is None:
+        return res, check
+    progress(f'standard errors against the spread between {what}: RMS of the differences '
+             f'{check.rms_z:.2g} combined standard errors over {len(check.pairs)} '
+             f'parameter(s) (chi-square p = {check.p_value:.2g}): '
+             + (f'standard errors widened x{check.factor:.2g}' if check.factor > 1
+                else 'they hold'))
+    return replace(res, effects=widened(res.effects, check.factor)), check
 
 
 def widened(effects: list[Effect], factor: float) -> list[Effect]:

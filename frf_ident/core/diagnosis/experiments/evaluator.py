@@ -32,6 +32,7 @@ import numpy as np
 from .parallel import WorkerPool
 from ..common import (as_simulation, bridge_gaps, diag_ratio, drive_reference, frf_error_db, nrmse,
                       rms_about_mean, segment_mask, simulate_like, split_recording)
+from ..records import AxisScore, Scores
 from ..residual import inverse_dynamics_residual
 from ..thresholds import EST_CACHE, FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE, SIM_JOBS
 
@@ -370,22 +371,18 @@ class Evaluator:
         return float(np.sqrt(np.mean([1.0 / self.counts[k] for k in self.floors])
                              / len(self.floors)))
 
-    def metrics(self, robot: RobotParams, sim: Recording | None = None) -> dict[str, Any]:
+    def metrics(self, robot: RobotParams, sim: Recording | None = None) -> Scores:
         """Return the docs/CONTRACT.md §7 metrics on the held-out part, plus per axis."""
         sim = sim if sim is not None else self.simulate(robot)
         sv = replace_segments(sim, self.val if self.val.segments else self.fit)
         mv = self.meas_val if self.meas_val else self.meas_fit
         est = estimates(sv)
         mask = self.val_mask if self.val_mask.any() else self.fit_mask
-        per = {}
-        for i, name in enumerate(self.rec.joint_names):
-            per[name] = {'frf_error_db': round(frf_error_db([(mv[k], est[k]) for k in mv],
-                                                            axis=i), 4),
-                         'time_nrmse': round(nrmse(self.rec.velocity[:, i],
-                                                   sim.velocity[:, i], mask), 5)}
-        return {'frf_error_db': round(frf_error_db([(mv[k], est[k]) for k in mv]), 4),
-                'time_nrmse': round(nrmse(self.rec.velocity, sim.velocity, mask), 5),
-                'per_axis': per}
+        per = {name: AxisScore(round(frf_error_db([(mv[k], est[k]) for k in mv], axis=i), 4),
+                               round(nrmse(self.rec.velocity[:, i], sim.velocity[:, i], mask), 5))
+               for i, name in enumerate(self.rec.joint_names)}
+        return Scores(round(frf_error_db([(mv[k], est[k]) for k in mv]), 4),
+                      round(nrmse(self.rec.velocity, sim.velocity, mask), 5), per)
 
 
 def drop_segments(rec: Recording, missing: np.ndarray) -> Recording:

@@ -23,7 +23,6 @@ from __future__ import annotations
 from dataclasses import replace
 import logging
 import math
-from typing import Any
 
 from frf_ident.core.recording import Recording
 import numpy as np
@@ -35,6 +34,7 @@ from .search import named, Search
 from .unexplained import (axis_signature, discretisation_check, rival_instead,
                           typical_unscalable_misfit)
 from ..common import Effect
+from ..records import Rejected, RouteMetrics, Unexplained
 from ..result import DiagnosisResult, ExperimentsDetail
 from ..thresholds import UNEXPLAINED_RATIO
 
@@ -165,30 +165,38 @@ def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
 
 def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndarray
            ) -> DiagnosisResult:
-    """Rank the effects, list the unexplained axes, take the metrics and check the step."""
-    ev, robot, kept, ext = s.ev, s.robot, s.kept, s.ext
+    """
+    Check the step, rank the effects, list the unexplained axes and take the metrics.
+
+    The integrator check (:func:`.unexplained.discretisation_check`) may raise the extended
+    model's substeps; the model is then simulated and judged at the step it is written with.
+    """
+    ev, robot, kept = s.ev, s.robot, s.kept
+    step = discretisation_check(ev, s.ext, val_ext)
+    if step.written_substeps != step.substeps:
+        log.info('simulation.substeps = %d is too coarse for this record (at twice as many the '
+                 'held-out misfit moves from %s noise floors): the extended model is written '
+                 'with %d', step.substeps, ', '.join(
+                     f'{a} {x:.4g} to {y:.4g}' for a, x, y in zip(
+                         step.axes, step.held_out_misfit, step.held_out_misfit_double_substeps)
+                     if a in step.too_coarse), step.written_substeps)
+        s.ext = replace(s.ext, substeps=step.written_substeps)
+        sim_ext = ev.simulate(s.ext)
+        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+    ext = s.ext
     kept.sort(key=lambda c: -c.score)
     unexplained = []
     for i, a in enumerate(robot.axes):
         if left_unexplained(val_ext, val_base, i):
             share = float(np.clip((val_ext[i] - 1) / max(val_base[i] - 1, 1e-12), 0, 1))
-            unexplained.append({'axis': a.name, 'misfit_share': round(share, 3),
-                                'signature': axis_signature(ev, sim_ext, i, ext)})
-    metrics = {'baseline': ev.metrics(robot, s.sim0), 'extended': ev.metrics(ext, sim_ext),
-               'validation': ev.validation_text}
+            unexplained.append(Unexplained(a.name, axis_signature(ev, sim_ext, i, ext),
+                                           misfit_share=round(share, 3)))
+    metrics = RouteMetrics(ev.metrics(robot, s.sim0), ev.metrics(ext, sim_ext),
+                           ev.validation_text)
     part = ev.val if ev.val.segments else ev.fit
     plots = {'measured': ev.meas_val or ev.meas_fit,
              'nominal': estimates(replace_segments(s.sim0, part)),
              'extended': estimates(replace_segments(sim_ext, part))}
-    step = discretisation_check(ev, ext, val_ext)
-    if step['too_coarse']:
-        log.warning(
-            'simulation.substeps = %d is too coarse for this record: at twice as many the '
-            'held-out misfit moves from %s noise floors: raise simulation.substeps in the '
-            'model file', step['substeps'], ', '.join(
-                f'{a} {x:.4g} to {y:.4g}' for a, x, y in zip(
-                    step['axes'], step['held_out_misfit'],
-                    step['held_out_misfit_double_substeps']) if a in step['too_coarse']))
     log.info('%d simulations of the recorded excitation', ev.n_sims)
     rest = [c for c in s.cands if c not in kept]
     return DiagnosisResult(
@@ -199,7 +207,7 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
         discretisation=step, n_sims=ev.n_sims, candidates=rest)
 
 
-def rejected_entry(c: Effect) -> dict[str, Any]:
+def rejected_entry(c: Effect) -> Rejected:
     """Return the report.json ``rejected`` entry of a candidate that was not taken."""
-    return {'name': c.name, 'axis': c.axis, 'misfit_share_removed': round(float(c.gain), 4),
-            'parameters': c.to_dict()['parameters']}
+    return Rejected(c.name, c.axis, c.to_dict()['parameters'],
+                    misfit_share_removed=round(float(c.gain), 4))

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 import math
-from typing import Any, Callable
+from typing import Callable
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
@@ -34,7 +34,8 @@ from .candidates import fit_linear_scales, LIN_KEYS, scaled_axis
 from .evaluator import estimates, Evaluator, replace_segments
 from .refit import rebuild, refit_jointly
 from ..common import diag_ratio, Effect
-from ..thresholds import BAND_SHARE, CORRELATES_MIN, MAX_BANDS, MIN_Z, SHOWN
+from ..records import IntegratorCheck, Signature
+from ..thresholds import BAND_SHARE, CORRELATES_MIN, MAX_BANDS, MAX_SUBSTEPS, MIN_Z, SHOWN
 
 
 def residual_bands(lines: list[tuple[np.ndarray, np.ndarray]]) -> list[list[float]]:
@@ -170,7 +171,7 @@ def typical_unscalable_misfit(ev: Evaluator, sim: Recording, axis: int, ext: Rob
     return float(np.mean([np.median(r) for _, r in unscalable_misfit(ev, sim, axis, ext)]))
 
 
-def axis_signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> dict[str, Any]:
+def axis_signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -> Signature:
     """
     Return where the held-out residual of one axis lives.
 
@@ -184,11 +185,7 @@ def axis_signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -
     for f_, r in unscalable_misfit(ev, sim, axis, ext):
         fr.append(f_)
         w.append(np.maximum(r - 1.0, 0.0))
-    out: dict[str, Any] = {}
     bands = residual_bands(list(zip(fr, w)))
-    if bands:
-        out['band_hz'] = bands[0]
-        out['bands_hz'] = bands
     m = ev.val_mask if ev.val_mask.any() else ev.fit_mask
     res = (ev.rec.effort[:, axis] - sim.effort[:, axis])[m]
     sigs = {'position': ev.rec.position[:, axis], 'velocity': ev.rec.velocity[:, axis],
@@ -201,13 +198,12 @@ def axis_signature(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams) -
         r = abs(float(xm @ (res - res.mean())) / den) if den > 0 else 0.0
         if r >= rbest:
             best, rbest = name, r
-    if best:
-        out['correlates_with'] = best
-    return out
+    return Signature(band_hz=bands[0] if bands else None, bands_hz=bands or None,
+                     correlates_with=best)
 
 
 def discretisation_check(ev: Evaluator, robot: RobotParams, val: np.ndarray
-                         ) -> dict[str, Any]:
+                         ) -> IntegratorCheck:
     """
     Return how much the model's held-out misfit owes to the integrator's step.
 
@@ -215,7 +211,9 @@ def discretisation_check(ev: Evaluator, robot: RobotParams, val: np.ndarray
     (benchmarks/discretisation.py): part of every misfit the diagnosis computes is the
     integrator's. The model is simulated once more at twice ``simulation.substeps``; an axis
     whose held-out misfit moves by more than MIN_Z standard deviations of the misfit under
-    noise is simulated too coarsely for this record.
+    noise is simulated too coarsely for this record. Then the substeps are doubled until
+    doubling them moves no axis any more (at most MAX_SUBSTEPS): the extended model is written
+    with that step, so a user never has to raise it by hand.
 
     Parameters
     ----------
@@ -228,18 +226,28 @@ def discretisation_check(ev: Evaluator, robot: RobotParams, val: np.ndarray
 
     Returns
     -------
-    dict
-        ``axes`` (the model's axis names), ``substeps``, ``held_out_misfit`` and
-        ``held_out_misfit_double_substeps`` per axis in that order, ``too_coarse``: the names
-        of the axes whose misfit moved.
+    IntegratorCheck
+        The model's axis names, its substeps, the held-out misfit per axis at both steps, the
+        axes whose misfit moved and the substeps the extended model is written with.
 
     """
-    fine = ev.misfit(ev.terms(replace(robot, substeps=2 * int(robot.substeps)), held_out=True))
+    def misfit_at(n: int) -> np.ndarray:
+        return ev.misfit(ev.terms(replace(robot, substeps=n), held_out=True))
+    n = int(robot.substeps)
+    fine = misfit_at(2 * n)
     moved = np.abs(fine - val) > MIN_Z * ev.misfit_sd()
-    return {'axes': robot.joint_names, 'substeps': int(robot.substeps),
-            'held_out_misfit': [round(float(x), 4) for x in val],
-            'held_out_misfit_double_substeps': [round(float(x), 4) for x in fine],
-            'too_coarse': [a.name for a, m in zip(robot.axes, moved) if m]}
+    written, last, still = n, fine, bool(moved.any())
+    while still and 2 * written < MAX_SUBSTEPS:
+        written *= 2
+        finer = misfit_at(2 * written)
+        still = bool((np.abs(finer - last) > MIN_Z * ev.misfit_sd()).any())
+        last = finer
+    if still:
+        written = 2 * written
+    return IntegratorCheck(robot.joint_names, n, [round(float(x), 4) for x in val],
+                           [round(float(x), 4) for x in fine],
+                           [a.name for a, m in zip(robot.axes, moved) if m], written,
+                           settled=not still)
 
 
 #: effects that bend the joint's spring: rivals of a mismatched linear stiffness

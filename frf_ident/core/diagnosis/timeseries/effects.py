@@ -31,6 +31,7 @@ import numpy as np
 from .extrapolation import failing_position_terms
 from .prepared import Prepared
 from ..common import Effect
+from ..records import Rejected
 from ..regressors import regressor_groups
 from ..residual import find_ripple, lowpass
 from ..selection import block_standard_errors, by_group, lstsq, select_groups
@@ -62,7 +63,7 @@ _ONE_WAY_EVIDENCE = ('constant torque residual {c:+.3g} while the axis moves one
                      'one parameter, always fitted (not tested)')
 
 
-def axis_groups(d: Prepared, robot: RobotParams, i: int, rejected: list[dict[str, Any]]
+def axis_groups(d: Prepared, robot: RobotParams, i: int, rejected: list[Rejected]
                 ) -> tuple[dict[str, np.ndarray], list[str], tuple[float, float, float]]:
     """
     Return axis i's regressor groups, the groups always fitted, and the ripple scan.
@@ -87,11 +88,11 @@ def axis_groups(d: Prepared, robot: RobotParams, i: int, rejected: list[dict[str
     skip = d.skips[i]
     g0 = regressor_groups(qh, vh, ah, fs, fc, i, 0.0, d.bearing, skip)
     if skip:
-        rejected.append({'name': 'gravity', 'axis': ax.name, 'reason': (
+        rejected.append(Rejected('gravity', ax.name, reason=(
             'not testable in this record: ' + ', '.join(
                 ' + '.join('q_' + names[j] for j in js) for js in skip)
             + ' moves one way only where the axis moves, so a sinusoid of it fits any '
-              'torque that changes along the path (friction, inertia)')})
+              'torque that changes along the path (friction, inertia)')))
     qc = qh[:, i] - qh[fit_i, i].mean() if fit_i.any() else qh[:, i]
     trend = np.column_stack([qc, qc ** 2])
     X0 = np.column_stack(list(g0.values()) + [lowpass(trend, fs, fc)])
@@ -106,12 +107,11 @@ def axis_groups(d: Prepared, robot: RobotParams, i: int, rejected: list[dict[str
     if min(up, 1.0 - up) < ONE_WAY:
         del groups['coulomb_friction']
         forced = ['gravity_torque']
-        rejected.append({'name': 'coulomb_friction', 'axis': ax.name,
-                         'forward_share': round(up, 3),
-                         'reason': f'the axis moves one way only in this record '
-                                   f'({100 * up:.0f} % of its moving samples forward): '
-                                   f'Coulomb friction and a constant load are one '
-                                   f'parameter here'})
+        rejected.append(Rejected('coulomb_friction', ax.name, forward_share=round(up, 3),
+                                 reason=f'the axis moves one way only in this record '
+                                        f'({100 * up:.0f} % of its moving samples forward): '
+                                        f'Coulomb friction and a constant load are one '
+                                        f'parameter here'))
     return groups, forced, (s, peak, thr)
 
 
@@ -173,25 +173,27 @@ def select_extrapolating(d: Prepared, ax, i: int, groups: dict[str, np.ndarray],
 
 
 def rejected_groups(axis: str, chosen: list[str], info: dict[str, dict]
-                    ) -> list[dict[str, Any]]:
+                    ) -> list[Rejected]:
     """Return the report's ``rejected`` entries of the groups not chosen, with their numbers."""
     out = []
     for k, v in info.items():
         if k in chosen:
             continue
-        out.append({'name': k.split(':')[0], 'axis': axis,
-                    'p_value': float(f'{v.get("p", 1.0):.3g}'),
-                    'residual_share': round(float(v.get('share', 0.0)), 4),
-                    'held_out_gain': round(float(v.get('held_out_gain', 0.0)), 4)})
+        reason, fitted = None, None
         if 'range_out' in v:
-            out[-1]['reason'] = (
+            reason = (
                 f'does not extrapolate: fitted without each end ({100 * RANGE_OUT_SHARE:.0f} % '
                 f'of its configuration range), the residual there is {v["range_out"][0]:.3g} '
                 f'with it and {v["range_out"][1]:.3g} without (leave-range-out)')
         if 'unphysical' in v:
-            out[-1].update(fitted_value=round(v['unphysical'], 4), reason=(
-                f'the joint fit gives {k} = {v["unphysical"]:.3g}, outside the '
-                f'physical range: another term the model lacks'))
+            fitted = round(v['unphysical'], 4)
+            reason = (f'the joint fit gives {k} = {v["unphysical"]:.3g}, outside the '
+                      f'physical range: another term the model lacks')
+        out.append(Rejected(k.split(':')[0], axis, reason=reason,
+                            p_value=float(f'{v.get("p", 1.0):.3g}'),
+                            residual_share=round(float(v.get('share', 0.0)), 4),
+                            held_out_gain=round(float(v.get('held_out_gain', 0.0)), 4),
+                            fitted_value=fitted))
     return out
 
 

@@ -12,30 +12,22 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-Test whether a position-dependent term extrapolates, and how far other records leave the range.
+Test whether a position-dependent term extrapolates.
 
 Interleaved held-out blocks cover the configurations the fit saw, so a term that only
 interpolates (two large sinusoids cancelling over a short travel) passes them.
 :func:`leave_range_out` holds out the ends of the term's configuration range instead: fitted
 without the rows at the low end of its argument, is the error there smaller with the term
 than without it? And the same at the high end. A term kept by the diagnosis must pass this.
-
-A model fitted on one record is checked on others (``--validate``); where another record
-drives an axis beyond the positions the fit saw, a position-dependent term (gravity, ripple)
-is extrapolated there (:func:`beyond_fitted_range`, per axis in degrees beyond the fitted
-range).
 """
 from __future__ import annotations
 
-import math
-
-from frf_ident.core.recording import Recording
 import numpy as np
 
 from ..selection import lstsq
-from ..thresholds import RANGE_OUT_SHARE, RANGE_TOLERANCE_DEG
+from ..thresholds import RANGE_OUT_SHARE
 
-__all__ = ['beyond_fitted_range', 'failing_position_terms', 'leave_range_out', 'range_ends']
+__all__ = ['failing_position_terms', 'leave_range_out', 'range_ends']
 
 
 def range_ends(arg: np.ndarray, rows: np.ndarray, share: float = RANGE_OUT_SHARE
@@ -156,45 +148,4 @@ def failing_position_terms(groups: dict[str, np.ndarray], chosen: list[str], y: 
         e = leave_range_out(groups, chosen, k, y, fit, args)
         if e[0] >= e[1]:
             out[k] = e
-    return out
-
-
-def beyond_fitted_range(fit: Recording, fit_rows: np.ndarray, other: Recording,
-                        names: list[str]) -> dict[str, dict[str, float]]:
-    """
-    Return per axis how far ``other`` leaves the position range of the fit rows [deg].
-
-    Parameters
-    ----------
-    fit : Recording
-        The record the diagnosis fitted on.
-    fit_rows : ndarray of bool, shape (N-1,)
-        Its fit rows (between samples).
-    other : Recording
-        Another record of the same robot.
-    names : list of str
-        The axes' names in the report.
-
-    Returns
-    -------
-    dict
-        ``{axis: {"fitted_deg": [lo, hi], "reached_deg": [lo, hi], "beyond_deg": d}}`` for
-        every axis that ``other`` leaves by more than RANGE_TOLERANCE_DEG (``d`` the larger
-        excursion below or above); empty when it stays inside.
-
-    """
-    q = 0.5 * (fit.position[1:] + fit.position[:-1])[fit_rows]
-    out = {}
-    if not q.size:
-        return out
-    lo, hi = np.nanmin(q, axis=0), np.nanmax(q, axis=0)
-    olo, ohi = np.nanmin(other.position, axis=0), np.nanmax(other.position, axis=0)
-    for i, name in enumerate(names):
-        d = math.degrees(max(lo[i] - olo[i], ohi[i] - hi[i], 0.0))
-        if d > RANGE_TOLERANCE_DEG:
-            out[name] = {'fitted_deg': [round(math.degrees(lo[i]), 2),
-                                        round(math.degrees(hi[i]), 2)],
-                         'reached_deg': [round(math.degrees(olo[i]), 2),
-                                         round(math.degrees(ohi[i]), 2)],
-                         'beyond_deg': round(d, 2)}
     return out

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 import logging
-from typing import Any
+from typing import Any, Collection
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
@@ -56,10 +56,11 @@ from .prepared import prepare, Prepared
 from .resonance import resonances_above
 from ..band import analysis_band, fixed_band
 from ..common import Effect
-from ..prediction import noise_floor, predict_metrics, signature
+from ..prediction import noise_floor, predict_metrics, Prediction, signature
+from ..records import Rejected, RouteMetrics, Unexplained
 from ..regressors import model_residual
 from ..residual import lowpass
-from ..result import DiagnosisResult, TimeseriesDetail
+from ..result import DiagnosisResult, ResidualTrace, TimeseriesDetail
 from ..thresholds import BLOCK_S, HOLD_EVERY, MIN_SHARE, UNEXPLAINED_RATIO
 
 __all__ = ['diagnose_timeseries']
@@ -108,69 +109,74 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
     reports the band and the effects once.
 
     """
-    say = log.debug
     band = analysis_band(rec) if fc is None else fixed_band(rec, fc)
     fc = band.fc_hz
     log.debug('%s', band.describe())
-    d = prepare(rec, robot, fc, say)
+    d = prepare(rec, robot, fc, log.debug)
     effects: list[Effect] = []
-    rejected: list[dict[str, Any]] = []
+    rejected: list[Rejected] = []
     ext_axes = list(robot.axes)
     for i, ax in enumerate(robot.axes):
-        groups, forced, scan = axis_groups(d, robot, i, rejected)
-        groups = {k: x for k, x in groups.items()
-                  if k.split(':')[0] not in (exclude or {}).get(ax.name, ())}
-        mine = (only or {}).get(ax.name)
-        if mine is not None:
-            groups = {k: x for k, x in groups.items() if k in mine}
-            forced = list(groups)
-        groups, chosen, info, cf = select_extrapolating(d, ax, i, groups, forced)
-        if mine is not None:
-            info = {k: {**v, 'baseline': True} for k, v in info.items()}
-        log.debug('%s: selected %s (ripple scan peak %.1f, threshold %.1f); %s', ax.name,
-                  chosen, scan[1], scan[2], ', '.join(f'{k} p={v.get("p", 1):.2g} '
-                                                      f'share={v.get("share", 0):.3f}'
-                                                      for k, v in info.items()))
-        rejected += rejected_groups(ax.name, chosen, info)
-        ch, found = axis_effects(d, robot, i, groups, chosen, info, cf, scan)
+        ch, found = axis_stage(d, robot, i, rejected, (exclude or {}).get(ax.name, ()),
+                               (only or {}).get(ax.name))
         effects += found
         ext_axes[i] = replace(ax, **ch)
     effects.sort(key=lambda x: -x.score)
     ext = replace(robot, axes=ext_axes)
     metrics, val = held_out_metrics(d, robot, ext)
-    floor = noise_floor(d.rec, d.f, fc, val['extended']['rows'])
+    floor = noise_floor(d.rec, d.f, fc, val['extended'].rows)
     unexplained = unexplained_axes(d, robot, val, floor) + resonances_above(
         model_residual(d.rec, ext)[0], d.rec.fs, fc, robot.joint_names)
-    fs = d.rec.fs
-    residual = {'t': d.rec.t[:-1], 'f': d.f, 'q': d.qh, 'v': d.vh,
-                'pred_baseline': lowpass(d.f, fs, fc) - val['baseline']['residual'],
-                'pred_extended': lowpass(d.f, fs, fc) - val['extended']['residual'],
-                'val_mask': d.val_m}
+    low = lowpass(d.f, d.rec.fs, fc)
+    residual = ResidualTrace(d.rec.t[:-1], d.f, d.qh, d.vh, low - val['baseline'].residual,
+                             low - val['extended'].residual, d.val_m)
     return DiagnosisResult('timeseries', effects, rejected, unexplained, metrics, ext,
                            TimeseriesDetail(residual, floor.tolist()), d.fit_m, d.val_m,
                            band=band)
 
 
+def axis_stage(d: Prepared, robot: RobotParams, i: int, rejected: list[Rejected],
+               exclude: Collection[str], only: tuple[str, ...] | None
+               ) -> tuple[dict[str, Any], list[Effect]]:
+    """
+    Diagnose axis i: its groups, their selection, its effects; add what is rejected.
+
+    ``exclude``: effects that are no candidates; ``only``: the groups the axis takes, all
+    fitted without a selection (see :func:`diagnose_timeseries`).
+    """
+    ax = robot.axes[i]
+    groups, forced, scan = axis_groups(d, robot, i, rejected)
+    groups = {k: x for k, x in groups.items() if k.split(':')[0] not in exclude}
+    if only is not None:
+        groups = {k: x for k, x in groups.items() if k in only}
+        forced = list(groups)
+    groups, chosen, info, cf = select_extrapolating(d, ax, i, groups, forced)
+    if only is not None:
+        info = {k: {**v, 'baseline': True} for k, v in info.items()}
+    log.debug('%s: selected %s (ripple scan peak %.1f, threshold %.1f); %s', ax.name,
+              chosen, scan[1], scan[2], ', '.join(f'{k} p={v.get("p", 1):.2g} '
+                                                  f'share={v.get("share", 0):.3f}'
+                                                  for k, v in info.items()))
+    rejected += rejected_groups(ax.name, chosen, info)
+    return axis_effects(d, robot, i, groups, chosen, info, cf, scan)
+
+
 def held_out_metrics(d: Prepared, robot: RobotParams, ext: RobotParams
-                     ) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
+                     ) -> tuple[RouteMetrics, dict[str, Prediction]]:
     """Return the §7 metrics of the nominal and extended model on the held-out blocks."""
     rec, fc, val_m = d.rec, d.fc, d.val_m
     fs, N = rec.fs, rec.t.size
-    metrics: dict[str, Any] = {}
-    val = {}
-    for key, model in (('baseline', robot), ('extended', ext)):
-        val[key] = predict_metrics(rec, model, fc=fc, mask=val_m)
-        metrics[key] = {k: val[key][k] for k in ('frf_error_db', 'time_nrmse', 'per_axis')}
-    metrics['validation'] = (f'held out (not used for fitting): every {HOLD_EVERY}rd block of '
-                             f'{BLOCK_S:g} s ({val_m.sum() / fs:.2f} s of {N / fs:.2f} s); '
-                             f'time_nrmse = error of the '
-                             f'inverse-dynamics torque of the model file over the RMS of the '
-                             f'measured torque ({fc:g} Hz low-pass)')
-    return metrics, val
+    val = {key: predict_metrics(rec, model, fc=fc, mask=val_m)
+           for key, model in (('baseline', robot), ('extended', ext))}
+    text = (f'held out (not used for fitting): every {HOLD_EVERY}rd block of {BLOCK_S:g} s '
+            f'({val_m.sum() / fs:.2f} s of {N / fs:.2f} s); time_nrmse = error of the '
+            f'inverse-dynamics torque of the model file over the RMS of the measured torque '
+            f'({fc:g} Hz low-pass)')
+    return RouteMetrics(val['baseline'].scores, val['extended'].scores, text), val
 
 
-def unexplained_axes(d: Prepared, robot: RobotParams, val: dict[str, dict[str, Any]],
-                     floor: np.ndarray) -> list[dict[str, Any]]:
+def unexplained_axes(d: Prepared, robot: RobotParams, val: dict[str, Prediction],
+                     floor: np.ndarray) -> list[Unexplained]:
     """
     Return the axes whose held-out NRMSE^2 stays clearly above the noise floor.
 
@@ -181,12 +187,11 @@ def unexplained_axes(d: Prepared, robot: RobotParams, val: dict[str, dict[str, A
     rec = d.rec
     out = []
     for i, ax in enumerate(robot.axes):
-        b = val['baseline']['per_axis'][ax.name]['time_nrmse'] ** 2
-        x = val['extended']['per_axis'][ax.name]['time_nrmse'] ** 2
+        b = val['baseline'].scores.per_axis[ax.name].time_nrmse ** 2
+        x = val['extended'].scores.per_axis[ax.name].time_nrmse ** 2
         share = float(np.clip((x - floor[i]) / max(b - floor[i], 1e-300), 0, 1))
         if x > UNEXPLAINED_RATIO * floor[i] and share >= MIN_SHARE:
-            out.append({'axis': ax.name, 'misfit_share': round(share, 3),
-                        'signature': signature(val['extended']['residual'][:, i],
-                                               d.qh[:, i], d.vh[:, i], d.ah[:, i],
-                                               rec.t[:-1], d.val_m, rec.fs, d.fc)})
+            sig = signature(val['extended'].residual[:, i], d.qh[:, i], d.vh[:, i],
+                            d.ah[:, i], rec.t[:-1], d.val_m, rec.fs, d.fc)
+            out.append(Unexplained(ax.name, sig, misfit_share=round(share, 3)))
     return out

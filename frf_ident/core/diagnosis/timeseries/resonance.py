@@ -32,12 +32,12 @@ of damping ratio zeta is 2 zeta f wide).
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 from scipy import signal, stats
 from scipy.ndimage import median_filter
 
+from ..records import Signature, Unexplained
 from ..thresholds import (RESONANCE_FALSE_ALARM, RESONANCE_FLOOR_LINES, RESONANCE_MAX,
                           RESONANCE_MIN_WIDTH_LINES, RESONANCE_SEGMENT_S, RESONANCE_TOP)
 
@@ -125,7 +125,7 @@ def half_power_width(f: np.ndarray, excess: np.ndarray, k: int) -> float:
 
 
 def resonances_above(f_res: np.ndarray, fs: float, fc: float, names: list[str]
-                     ) -> list[dict[str, Any]]:
+                     ) -> list[Unexplained]:
     """
     Return the ``unexplained`` entries of resonances in the residual above the analysis band.
 
@@ -142,7 +142,7 @@ def resonances_above(f_res: np.ndarray, fs: float, fc: float, names: list[str]
 
     Returns
     -------
-    list of dict
+    list of Unexplained
         Per peak above the threshold (at most RESONANCE_MAX per axis, strongest first):
         ``axis``, ``kind`` 'resonance above the analysis band' or 'line above the analysis
         band', ``signature`` with ``band_hz`` [f1, f2], ``peak_hz``,
@@ -169,12 +169,10 @@ def resonances_above(f_res: np.ndarray, fs: float, fc: float, names: list[str]
             width = half_power_width(f, p - floor, k)
             kind = ('resonance' if width > RESONANCE_MIN_WIDTH_LINES * (f[1] - f[0])
                     else 'line')
-            out.append({'axis': name, 'kind': f'{kind} above the analysis band',
-                        'signature': {'band_hz': [round(float(f[lo]), 2),
-                                                  round(float(f[hi]), 2)],
-                                      'peak_hz': round(float(f[k]), 2),
-                                      'half_power_width_hz': round(width, 2),
-                                      'peak_over_floor': round(float(ratio[k]), 1),
-                                      'threshold': round(thr, 1),
-                                      'false_alarm': RESONANCE_FALSE_ALARM}})
+            sig = Signature(band_hz=[round(float(f[lo]), 2), round(float(f[hi]), 2)],
+                            peak_hz=round(float(f[k]), 2),
+                            half_power_width_hz=round(width, 2),
+                            peak_over_floor=round(float(ratio[k]), 1), threshold=round(thr, 1),
+                            false_alarm=RESONANCE_FALSE_ALARM)
+            out.append(Unexplained(name, sig, kind=f'{kind} above the analysis band'))
     return out
