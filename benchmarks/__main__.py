@@ -64,7 +64,8 @@ def bench_robot():
 @section('simulation')
 def bench_simulation() -> list[tuple[str, str, str, str]]:
     """Simulate the 3-axis closed loop at 1 kHz (PI, friction, ripple) against real time."""
-    from frf_ident.core.model.schema import controller_from_dict, default_model_dict
+    from frf_ident.core.model.schema import default_model_dict
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     rows = []
     for substeps in (1, 2):
@@ -192,9 +193,9 @@ def bench_experiment_time() -> list[tuple[str, str, str, str]]:
     """
     from frf_ident.core.estimation.described import chirp_frf, multisine_frf
     from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
-    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
-                                             robot_from_dict)
+    from frf_ident.core.model.schema import default_model_dict, robot_from_dict
     from frf_ident.core.simulation.analytic import robot_frf_sampled
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
     d = default_model_dict()
@@ -250,8 +251,8 @@ def bench_chirp_iteration() -> list[tuple[str, str, str, str]]:
     robot's), 20 s chirps; the error is the worst channel's RMS dB error to U_des.
     """
     from frf_ident.core.excitation.procedures import ChirpConfig
-    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
-                                             robot_from_dict)
+    from frf_ident.core.model.schema import default_model_dict, robot_from_dict
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
     rows = []
@@ -307,9 +308,9 @@ def periodic_multisine_run(duration_s: float, seed: int = 0, fs: float = 1000.0)
     (2-60 Hz, 0.5 Hz resolution), 1e-3 rad/s noise on the measured velocity.
     """
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
-    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
-                                             robot_from_dict)
+    from frf_ident.core.model.schema import default_model_dict, robot_from_dict
     from frf_ident.core.recording import Recording
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     d = default_model_dict()
     rob = robot_from_dict(d)

@@ -24,9 +24,8 @@ from pathlib import Path
 from typing import Any
 
 from frf_ident.core.model.params import RobotParams
-from frf_ident.core.model.schema import (controller_from_dict, default_model_dict, robot_from_dict,
-                                         robot_to_dict)
-from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.model.schema import default_model_dict, robot_from_dict, robot_to_dict
+from frf_ident.core.simulation.controller import controller_from_dict, PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import FrfIdentInputError, ModelFileError
 from frf_ident.io.yamlio import read_yaml_file

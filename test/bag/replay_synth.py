@@ -49,8 +49,8 @@ def multisine_run(n_periods: int = 6, f_high: float = 80.0, bound: float = 0.01,
     stretches the multisine's period in time (1.0002: 8193.6 samples, not a whole number).
     """
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
-    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
-                                             robot_from_dict)
+    from frf_ident.core.model.schema import default_model_dict, robot_from_dict
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     d = default_model_dict()
     rob = robot_from_dict(d)

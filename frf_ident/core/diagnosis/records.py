@@ -179,9 +179,9 @@ class IntegratorCheck:
     #: the axes whose misfit moved by more than the noise allows: simulated too coarsely
     too_coarse: list[str] = field(default_factory=list)
     #: the substeps the extended model is written (and scored) with: ``substeps``, doubled
-    #: until doubling moves no axis any more (at most MAX_SUBSTEPS)
+    #: while doubling lowers the held-out misfit of every axis it moves (at most MAX_SUBSTEPS)
     written_substeps: int = 0
-    #: whether doubling settled before MAX_SUBSTEPS
+    #: whether doubling ``written_substeps`` once more moves no axis beyond the noise
     settled: bool = True
 
     def to_dict(self) -> dict[str, Any]:
@@ -198,7 +198,8 @@ class IntegratorCheck:
         if not self.too_coarse:
             return 'within the noise on every axis.'
         return (f'{", ".join(self.too_coarse)} simulated too coarsely for this record at '
-                f'{self.substeps}: extended_model.yaml is written, and its held-out metrics '
-                f'taken, with simulation.substeps = {self.written_substeps}'
+                f'{self.substeps} substeps: extended_model.yaml is written, and its held-out '
+                f'metrics taken, with simulation.substeps = {self.written_substeps}'
                 + (' (doubling it again moves no axis beyond the noise).' if self.settled else
-                   ' (the cap of this check; doubling it still moves an axis).'))
+                   ' (doubling it again no longer lowers the misfit of every axis it moves: '
+                   "the rest of the misfit is not the integrator's alone)."))

@@ -32,10 +32,11 @@ from frf_ident.core.estimation.distortion import distortion_lines
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.spectra import (best_linear_approximation,
                                                best_linear_approximation_reference, BLAResult,
-                                               chirp_spectra, detection_levels_from_spectra,
+                                               detection_levels_from_spectra,
                                                detection_line_spectra, frf_from_reference,
                                                frf_from_spectra, periodic_spectra)
 from frf_ident.core.excitation.chirp import ChirpDesign
+from frf_ident.core.excitation.chirp_dft import chirp_spectra
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError, FrfIdentInputError
 import numpy as np

@@ -48,13 +48,13 @@ from frf_ident.core.estimation.distortion import distortion_lines
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.lpm import default_half_width, DEFAULT_ORDER, robust_lpm_periods
 from frf_ident.core.estimation.nonperiodic import LpmBlocks
-from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_spectra,
-                                               periodic_spectra)
+from frf_ident.core.estimation.spectra import periodic_spectra
 from frf_ident.core.estimation.transient import steady_periods, SteadyState
 from frf_ident.core.excitation.chirp import ChirpDesign
-from frf_ident.core.excitation.detect import (ChirpDetection, detect_excitation,
-                                              detect_multisine, excitation_source,
-                                              multisine_at_period, MultisineDetection)
+from frf_ident.core.excitation.chirp_dft import chirp_analysis_frequencies, chirp_spectra
+from frf_ident.core.excitation.detect import (ChirpDetection, detect_excitation, detect_multisine,
+                                              excitation_source, multisine_at_period,
+                                              MultisineDetection)
 from frf_ident.core.excitation.multisine import reference_frequency_set
 from frf_ident.core.excitation.sweep_law import MAX_MISMATCH, sweep_mismatch
 from frf_ident.core.recording import Recording, Segment

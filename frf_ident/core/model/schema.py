@@ -33,7 +33,6 @@ from typing import Any
 
 from frf_ident.core.model.fields import expect_bool, expect_int
 from frf_ident.core.model.params import AxisParams, RobotParams
-from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.errors import ModelFileError
 import numpy as np
 
@@ -162,8 +161,12 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
                         ModelFileError))
 
 
-def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
-    """Convert the ``controller`` section to a PIVelocity (torque limits from the axes)."""
+def controller_gains(d: dict[str, Any], robot: RobotParams) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the ``controller`` section's velocity-PI gains (kp, ki), one per axis, checked.
+
+    :func:`frf_ident.core.simulation.controller.controller_from_dict` builds the controller.
+    """
     c = d.get('controller')
     if not isinstance(c, dict):
         raise ModelFileError(f'controller: expected a mapping with kind, kp, ki, got {c!r}')
@@ -182,13 +185,16 @@ def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
         if np.any(gains[key] < 0):
             raise ModelFileError(f'controller.{key}: gains must be >= 0, got '
                                  f'{gains[key].tolist()}')
-    ctrl = PIVelocity(gains['kp'], gains['ki'], robot.torque_limits(), robot.dt)
-    ctrl.reset(robot.gravity_load(np.zeros(robot.n_axes)))
-    return ctrl
+    return gains['kp'], gains['ki']
 
 
-def robot_to_dict(robot: RobotParams, controller: PIVelocity | None = None) -> dict[str, Any]:
-    """Convert RobotParams (+ controller) to a model-file mapping (inverse of robot_from_dict)."""
+def robot_to_dict(robot: RobotParams, controller: Any = None) -> dict[str, Any]:
+    """
+    Convert RobotParams (+ controller) to a model-file mapping (inverse of robot_from_dict).
+
+    ``controller``: a velocity PI with ``kp`` and ``ki`` arrays (a
+    :class:`frf_ident.core.simulation.controller.PIVelocity`), or None.
+    """
     axes = []
     for a in robot.axes:
         ad = asdict(a)

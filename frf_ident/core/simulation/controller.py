@@ -20,11 +20,14 @@ node graph and the offline runner compute identical torques.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
+from frf_ident.core.model.params import RobotParams
+from frf_ident.core.model.schema import controller_gains
 import numba
 import numpy as np
 
-__all__ = ['PIVelocity', 'pi_step']
+__all__ = ['controller_from_dict', 'PIVelocity', 'pi_step']
 
 
 @numba.njit(cache=True, fastmath=True, inline='always')
@@ -186,3 +189,17 @@ class PIVelocity:
         """
         return PIVelocity(self.kp.copy(), self.ki.copy(), self.torque_limit.copy(), self.dt,
                           self.integral.copy())
+
+
+def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
+    """
+    Return the model file's velocity controller (torque limits from the axes).
+
+    The ``controller`` section of a loaded model file (docs/CONTRACT.md §5), its gains checked
+    by :func:`frf_ident.core.model.schema.controller_gains`; the integral starts at the
+    gravity load of the zero pose.
+    """
+    kp, ki = controller_gains(d, robot)
+    ctrl = PIVelocity(kp, ki, robot.torque_limits(), robot.dt)
+    ctrl.reset(robot.gravity_load(np.zeros(robot.n_axes)))
+    return ctrl

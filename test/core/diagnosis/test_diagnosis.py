@@ -34,8 +34,9 @@ from frf_ident.core.diagnosis.residual import (delayed_effort, effective_samples
 from frf_ident.core.diagnosis.selection import (block_standard_errors, f_test, select_groups,
                                                 split_blocks)
 from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
-from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
+from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.controller import controller_from_dict
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
 from hypothesis import given, settings

@@ -211,9 +211,11 @@ def discretisation_check(ev: Evaluator, robot: RobotParams, val: np.ndarray
     (benchmarks/discretisation.py): part of every misfit the diagnosis computes is the
     integrator's. The model is simulated once more at twice ``simulation.substeps``; an axis
     whose held-out misfit moves by more than MIN_Z standard deviations of the misfit under
-    noise is simulated too coarsely for this record. Then the substeps are doubled until
-    doubling them moves no axis any more (at most MAX_SUBSTEPS): the extended model is written
-    with that step, so a user never has to raise it by hand.
+    noise is simulated too coarsely for this record. The substeps are then doubled for as long
+    as doubling moves some axis and lowers the held-out misfit of every axis it moves (at most
+    MAX_SUBSTEPS): the extended model is written with that step, so a user never has to raise
+    it by hand. Where doubling still moves an axis but not every moved axis down, the rest of
+    the misfit is not the integrator's alone (``settled`` False).
 
     Parameters
     ----------
@@ -236,18 +238,18 @@ def discretisation_check(ev: Evaluator, robot: RobotParams, val: np.ndarray
     n = int(robot.substeps)
     fine = misfit_at(2 * n)
     moved = np.abs(fine - val) > MIN_Z * ev.misfit_sd()
-    written, last, still = n, fine, bool(moved.any())
-    while still and 2 * written < MAX_SUBSTEPS:
-        written *= 2
+    written, now, finer, move = n, val, fine, moved
+    # halve the step while that moves some axis and lowers the misfit of every axis it moves
+    while move.any() and np.all(finer[move] < now[move]) and 2 * written <= MAX_SUBSTEPS:
+        written, now = 2 * written, finer
+        if 2 * written > MAX_SUBSTEPS:
+            break
         finer = misfit_at(2 * written)
-        still = bool((np.abs(finer - last) > MIN_Z * ev.misfit_sd()).any())
-        last = finer
-    if still:
-        written = 2 * written
+        move = np.abs(finer - now) > MIN_Z * ev.misfit_sd()
     return IntegratorCheck(robot.joint_names, n, [round(float(x), 4) for x in val],
                            [round(float(x), 4) for x in fine],
                            [a.name for a, m in zip(robot.axes, moved) if m], written,
-                           settled=not still)
+                           settled=not move.any())
 
 
 #: effects that bend the joint's spring: rivals of a mismatched linear stiffness
