@@ -679,9 +679,10 @@ def _slopes_by_direction(rec: Recording, robot: RobotParams
     slope b + c_v + c_|v|, backward b + c_v - c_|v| (b the model's viscous friction), and the
     block-robust standard error of c_|v|, half their difference.
     """
-    from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
     from frf_ident.core.diagnosis.regressors import model_residual, moving
+    from frf_ident.core.diagnosis.residual import lowpass
     from frf_ident.core.diagnosis.selection import block_standard_errors
+    from frf_ident.core.diagnosis.thresholds import FC_HZ
     f, _, v, _ = model_residual(rec, robot)
     rows = moving(v, rec.velocity, rec.fs, FC_HZ)
     out = {}
@@ -755,9 +756,9 @@ def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
     within 20 %}). Needs the KUKA data (:data:`KUKA`).
     """
     from frf_ident.app.diagnose import load_data
-    from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
     from frf_ident.core.diagnosis.prediction import noise_level
     from frf_ident.core.diagnosis.regressors import model_residual
+    from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
     from frf_ident.core.recording import Recording
     from frf_ident.io.model_file import load_model
     robot = load_model(ROOT / 'config' / 'model_kuka_kr300_axes123.yaml')[1]

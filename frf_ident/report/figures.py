@@ -26,8 +26,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
+from frf_ident.core.diagnosis.residual import lowpass
 from frf_ident.core.diagnosis.result import DiagnosisResult
+from frf_ident.core.diagnosis.thresholds import FC_HZ
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import JOINT_STATE_FRF_UNIT
 import matplotlib

@@ -23,9 +23,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from frf_ident.core.diagnosis.regressors import model_residual
-from frf_ident.core.diagnosis.residual import FC_HZ
 from frf_ident.core.diagnosis.result import DiagnosisResult
-from frf_ident.core.diagnosis.thresholds import RESONANCE_FALSE_ALARM
+from frf_ident.core.diagnosis.thresholds import FC_HZ, RESONANCE_FALSE_ALARM
 from frf_ident.core.diagnosis.timeseries.resonance import scan_spectrum
 from frf_ident.core.recording import Recording
 

@@ -30,8 +30,8 @@ from scipy import signal
 from .common import bridge_gaps
 from .records import AxisScore, Scores, Signature
 from .regressors import model_residual, moving
-from .residual import FC_HZ, lowpass
-from .thresholds import EDGE
+from .residual import lowpass
+from .thresholds import EDGE, FC_HZ
 
 __all__ = ['default_mask', 'noise_floor', 'noise_level', 'predict_metrics', 'Prediction',
            'signature', 'torque_metrics']

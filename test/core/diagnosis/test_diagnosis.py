@@ -29,10 +29,11 @@ from frf_ident.core.diagnosis.common import bridge_gaps, GAP_GUARD_S, simulate_l
 from frf_ident.core.diagnosis.experiments.evaluator import missing_reference
 from frf_ident.core.diagnosis.experiments.unexplained import residual_bands
 from frf_ident.core.diagnosis.prediction import noise_level
-from frf_ident.core.diagnosis.residual import (delayed_effort, effective_samples, FC_HZ,
-                                               find_ripple, lowpass, regress_axis, ripple_range)
+from frf_ident.core.diagnosis.regression import find_ripple, regress_axis, ripple_range
+from frf_ident.core.diagnosis.residual import delayed_effort, effective_samples, lowpass
 from frf_ident.core.diagnosis.selection import (block_standard_errors, f_test, select_groups,
                                                 split_blocks)
+from frf_ident.core.diagnosis.thresholds import FC_HZ
 from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
 from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording

@@ -33,9 +33,9 @@ from ..common import bridge_gaps, Effect
 from ..prediction import predict_metrics, Prediction, torque_metrics
 from ..records import Rejected
 from ..regressors import moving
-from ..residual import FC_HZ, lowpass
+from ..residual import lowpass
 from ..result import DiagnosisResult
-from ..thresholds import LS_BASELINE_MARGIN, LS_TANH_VELOCITY, ONE_WAY
+from ..thresholds import FC_HZ, LS_BASELINE_MARGIN, LS_TANH_VELOCITY, ONE_WAY
 
 __all__ = ['axes_not_beating', 'BASELINE_GROUPS', 'fit_least_squares', 'held_out_comparison',
            'HeldOutSet', 'LeastSquaresBaseline', 'least_squares_metrics', 'ThreeModels',

@@ -33,8 +33,8 @@ from frf_ident.core.recording import Recording
 
 from ..prediction import predict_metrics
 from ..records import Rejected
-from ..residual import FC_HZ
 from ..result import DiagnosisResult
+from ..thresholds import FC_HZ
 from ..timeseries.pipeline import diagnose_timeseries
 
 __all__ = ['POSITION_TERMS', 'drop_terms_not_generalising', 'position_terms_on_others',

@@ -39,9 +39,10 @@ import numpy as np
 from ..common import bridge_gaps, Effect
 from ..prediction import predict_metrics
 from ..regressors import gravity_sets, model_residual, moving, regressor_groups
-from ..residual import FC_HZ, lowpass
+from ..residual import lowpass
 from ..result import DiagnosisResult
 from ..selection import block_standard_errors
+from ..thresholds import FC_HZ
 
 __all__ = ['fit_kinematic_gravity', 'GravityBasis', 'KinematicGravityFit', 'kinematic_gravity',
            'sinusoid_terms']

@@ -86,93 +86,126 @@ def accept(ev: Evaluator, base: RobotParams, kept: list[Effect], cands: list[Eff
     pending = list(cands)
     taken: set[tuple[str, str]] = set()
     rnd = 0
-
     while pending:
-        scored = []
         ev.prefetch([apply_effect(ext, c) for c in pending if not _refit_first(ev, c, cur, rnd)])
-        for c in pending:
-            i = c.axis_index
-            refitted = _refit_first(ev, c, cur, rnd)
-            if refitted:
-                # its axis took an effect and is still clearly above its floor: the value the
-                # regression read next to the unmodelled effect is refitted by simulation
-                r = refit_friction(ev, ext, c, local=True)
-                c.parameters, c.evidence = r.parameters, r.evidence
-            e_c = ev.misfit(ev.terms(apply_effect(ext, c)))
-            gain, share = share_of_misfit(ev, cur, e_c, i)
-            if (not refitted and share < MIN_SHARE and c.name in FRICTION
-                    and c.support >= REFIT_T):
-                # the regression clearly sees the friction term but its value makes the
-                # simulation worse: a sticking joint's breakaway transients bias the
-                # inverse-dynamics residual at small speeds (a Coulomb level read twice too
-                # high with a negative viscous term); the closed-loop simulation sticks
-                # like the robot, so the level is refitted by it around the reading (over the
-                # whole range when the reading left the physical range and was floored at 0)
-                r = refit_friction(ev, ext, c, local=True)
-                e_r = ev.misfit(ev.terms(apply_effect(ext, r)))
-                say(f'  {c.axis} {c.name} {c.parameters[c.name]:.4g} (t = {c.support:.1f}) '
-                    f'refitted by simulation: {r.parameters[c.name]:.4g}, misfit '
-                    f'{e_c[i]:.4g} -> {e_r[i]:.4g}')
-                if e_r[i] < e_c[i]:
-                    c.parameters, c.evidence, e_c = r.parameters, r.evidence, e_r
-                    gain, share = share_of_misfit(ev, cur, e_c, i)
-            c.gain = float(share)
-            say(f'  {c.axis} {c.name}: misfit {cur[i]:.4g} -> {e_c[i]:.4g} '
-                f'(share {share:.3f}) {c.parameters}')
-            if passes(ev, gain, share):
-                scored.append((share, c))
-        best: dict[int, Effect] = {}
-        by_axis: dict[int, list[Effect]] = {}
-        for share, c in sorted(scored, key=lambda x: -x[0]):
-            by_axis.setdefault(c.axis_index, []).append(c)
-        for i, cs in by_axis.items():
-            if len(cs) == 1:
-                best[i] = cs[0]
-                continue
-            # rivals on one axis (a stiffening spring and a mismatched linear stiffness both
-            # explain a stiffer joint): the held-out data decide between the two best
-            held = [float(ev.misfit(ev.terms(apply_effect(ext, c), held_out=True))[i])
-                    for c in cs[:2]]
-            best[i] = cs[int(np.argmin(held))]
-            if rivals is not None:
-                rivals.setdefault(i, []).append(cs[1 - int(np.argmin(held))])
-            say(f'  {cs[0].axis}: {cs[0].name} vs {cs[1].name} on held-out data: '
-                f'{held[0]:.4g} vs {held[1]:.4g}')
+        scored = [(c.gain, c) for c in pending if judge(ev, ext, c, cur, rnd, say)]
+        best = pick_per_axis(ev, ext, scored, rivals, say)
         if not best:
             break
-        for c in best.values():
-            c.score = float(np.clip(c.gain, 0.0, 1.0))
-            for k in [k for k in kept if k.name == c.name and k.axis == c.axis]:
-                say(f'  {k.axis} {k.name} {k.parameters} replaced by {c.parameters}')
-                k.score, k.gain = 0.0, 0.0
-                kept.remove(k)
-            kept.append(c)
-            taken.add((c.name, c.axis))
+        take(best, kept, taken, say)
         ext = rebuild(base, kept)
         cur = ev.misfit(ev.terms(ext))
-        # a friction coefficient read from the regression that explains most of its axis'
-        # misfit but leaves it clearly above the floor is refitted by simulation before
-        # anything else may explain the rest (a Coulomb level 4 % off otherwise lets a
-        # spurious viscous term in); where another effect dominates, the joint refit at the
-        # end does it
-        fl = ev.floor_seen(cur)
-        for c in best.values():
-            i = c.axis_index
-            if (c.name not in FRICTION or c.gain < DOMINANT_SHARE
-                    or cur[i] <= UNEXPLAINED_RATIO * fl[i]):
-                continue
-            r = refit_friction(ev, rebuild(base, [k for k in kept if k is not c]), c,
-                               local=True)
-            trial = rebuild(base, [r if k is c else k for k in kept])
-            new = ev.misfit(ev.terms(trial))
-            if new[i] < cur[i]:
-                say(f'  {c.axis} {c.name} refitted by simulation: {c.parameters[c.name]:.4g} -> '
-                    f'{r.parameters[c.name]:.4g}, misfit {cur[i]:.4g} -> {new[i]:.4g}')
-                c.parameters, c.evidence = r.parameters, r.evidence
-                ext, cur = trial, new
+        ext, cur = refit_dominant_friction(ev, base, kept, best, ext, cur, say)
         pending = [c for c in pending if c.axis_index in best and c not in best.values()
                    and (c.name, c.axis) not in taken]
         rnd += 1
+    return ext, cur
+
+
+def judge(ev: Evaluator, ext: RobotParams, c: Effect, cur: np.ndarray, rnd: int,
+          say: Callable[[str], None]) -> bool:
+    """
+    Simulate candidate ``c`` on top of ``ext``; set its gain and return whether it passes.
+
+    A friction candidate of an axis still clearly above its floor after a round is refitted
+    by simulation first (:func:`_refit_first`); one the regression clearly sees whose value
+    makes the simulation worse is refitted around its reading.
+    """
+    i = c.axis_index
+    refitted = _refit_first(ev, c, cur, rnd)
+    if refitted:
+        # its axis took an effect and is still clearly above its floor: the value the
+        # regression read next to the unmodelled effect is refitted by simulation
+        r = refit_friction(ev, ext, c, local=True)
+        c.parameters, c.evidence = r.parameters, r.evidence
+    e_c = ev.misfit(ev.terms(apply_effect(ext, c)))
+    gain, share = share_of_misfit(ev, cur, e_c, i)
+    if not refitted and share < MIN_SHARE and c.name in FRICTION and c.support >= REFIT_T:
+        # the regression clearly sees the friction term but its value makes the
+        # simulation worse: a sticking joint's breakaway transients bias the
+        # inverse-dynamics residual at small speeds (a Coulomb level read twice too
+        # high with a negative viscous term); the closed-loop simulation sticks
+        # like the robot, so the level is refitted by it around the reading (over the
+        # whole range when the reading left the physical range and was floored at 0)
+        r = refit_friction(ev, ext, c, local=True)
+        e_r = ev.misfit(ev.terms(apply_effect(ext, r)))
+        say(f'  {c.axis} {c.name} {c.parameters[c.name]:.4g} (t = {c.support:.1f}) '
+            f'refitted by simulation: {r.parameters[c.name]:.4g}, misfit '
+            f'{e_c[i]:.4g} -> {e_r[i]:.4g}')
+        if e_r[i] < e_c[i]:
+            c.parameters, c.evidence, e_c = r.parameters, r.evidence, e_r
+            gain, share = share_of_misfit(ev, cur, e_c, i)
+    c.gain = float(share)
+    say(f'  {c.axis} {c.name}: misfit {cur[i]:.4g} -> {e_c[i]:.4g} '
+        f'(share {share:.3f}) {c.parameters}')
+    return passes(ev, gain, share)
+
+
+def pick_per_axis(ev: Evaluator, ext: RobotParams, scored: list[tuple[float, Effect]],
+                  rivals: dict[int, list[Effect]] | None, say: Callable[[str], None]
+                  ) -> dict[int, Effect]:
+    """
+    Return per axis the passing candidate with the largest share; rivals go to ``rivals``.
+
+    Rivals on one axis (a stiffening spring and a mismatched linear stiffness both explain a
+    stiffer joint): the held-out data decide between the two best.
+    """
+    best: dict[int, Effect] = {}
+    by_axis: dict[int, list[Effect]] = {}
+    for share, c in sorted(scored, key=lambda x: -x[0]):
+        by_axis.setdefault(c.axis_index, []).append(c)
+    for i, cs in by_axis.items():
+        if len(cs) == 1:
+            best[i] = cs[0]
+            continue
+        held = [float(ev.misfit(ev.terms(apply_effect(ext, c), held_out=True))[i])
+                for c in cs[:2]]
+        best[i] = cs[int(np.argmin(held))]
+        if rivals is not None:
+            rivals.setdefault(i, []).append(cs[1 - int(np.argmin(held))])
+        say(f'  {cs[0].axis}: {cs[0].name} vs {cs[1].name} on held-out data: '
+            f'{held[0]:.4g} vs {held[1]:.4g}')
+    return best
+
+
+def take(best: dict[int, Effect], kept: list[Effect], taken: set[tuple[str, str]],
+         say: Callable[[str], None]) -> None:
+    """Add the round's best candidates to ``kept``; one of an effect kept already replaces it."""
+    for c in best.values():
+        c.score = float(np.clip(c.gain, 0.0, 1.0))
+        for k in [k for k in kept if k.name == c.name and k.axis == c.axis]:
+            say(f'  {k.axis} {k.name} {k.parameters} replaced by {c.parameters}')
+            k.score, k.gain = 0.0, 0.0
+            kept.remove(k)
+        kept.append(c)
+        taken.add((c.name, c.axis))
+
+
+def refit_dominant_friction(ev: Evaluator, base: RobotParams, kept: list[Effect],
+                            best: dict[int, Effect], ext: RobotParams, cur: np.ndarray,
+                            say: Callable[[str], None]) -> tuple[RobotParams, np.ndarray]:
+    """
+    Refit by simulation a friction just taken that explains most of its axis but not all.
+
+    A friction coefficient read from the regression that explains most of its axis' misfit
+    but leaves it clearly above the floor is refitted by simulation before anything else may
+    explain the rest (a Coulomb level 4 % off otherwise lets a spurious viscous term in);
+    where another effect dominates, the joint refit at the end does it.
+    """
+    fl = ev.floor_seen(cur)
+    for c in best.values():
+        i = c.axis_index
+        if (c.name not in FRICTION or c.gain < DOMINANT_SHARE
+                or cur[i] <= UNEXPLAINED_RATIO * fl[i]):
+            continue
+        r = refit_friction(ev, rebuild(base, [k for k in kept if k is not c]), c, local=True)
+        trial = rebuild(base, [r if k is c else k for k in kept])
+        new = ev.misfit(ev.terms(trial))
+        if new[i] < cur[i]:
+            say(f'  {c.axis} {c.name} refitted by simulation: {c.parameters[c.name]:.4g} -> '
+                f'{r.parameters[c.name]:.4g}, misfit {cur[i]:.4g} -> {new[i]:.4g}')
+            c.parameters, c.evidence = r.parameters, r.evidence
+            ext, cur = trial, new
     return ext, cur
 
 

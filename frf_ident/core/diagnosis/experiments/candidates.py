@@ -33,7 +33,8 @@ from .brent import bounded_minimum
 from .evaluator import Evaluator
 from .simplex import nelder_mead
 from ..common import diag_ratio, Effect, segment_mask
-from ..residual import coulomb_and_ripple, regress_axis
+from ..regression import regress_axis
+from ..residual import coulomb_and_ripple
 from ..thresholds import GRAVITY_MIN_T, LOAD_DEPENDENCE_MIN_LOG, MISMATCH_MIN_LOG
 
 

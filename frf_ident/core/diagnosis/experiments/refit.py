@@ -108,6 +108,38 @@ _REFIT_KEYS = ('coulomb_friction', 'viscous_friction', 'time_delay', 'stiffness_
                'stiffness_breakpoint', 'backlash') + LIN_KEYS
 
 
+def refit_slots(mine: list[Effect], ripple: bool, gravity: bool) -> list[tuple[Effect, str]]:
+    """
+    Return the (effect, key) slots a joint refit of one axis' effects varies.
+
+    Every positive scalar parameter of the axis' effects; the added ripple's amplitude (the
+    entry the diagnosis added: the last one) with ``ripple``; the added gravity term's
+    amplitude and phase with ``gravity``.
+    """
+    slots = [(c, k) for c in mine for k, v in c.parameters.items()
+             if k in _REFIT_KEYS and isinstance(v, (int, float)) and v > 0]
+    slots += [(c, 'torque_ripple') for c in mine if ripple and c.name == 'torque_ripple']
+    slots += [(c, k) for c in mine if gravity and c.name == 'gravity'
+              for k, (par, _) in _TERM_SLOTS.items() if par == 'gravity']
+    return slots
+
+
+def slot_parameters(slots: list[tuple[Effect, str]], start: list[float], x: np.ndarray
+                    ) -> dict[int, dict[str, Any]]:
+    """Return per effect (by id) its parameters with the slots at ``start`` moved by ``x``."""
+    out: dict[int, dict[str, Any]] = {}
+    for (c, k), v, d in zip(slots, start, x):
+        p = out.setdefault(id(c), dict(c.parameters))
+        if k in _TERM_SLOTS:
+            key, field = _TERM_SLOTS[k]
+            if p[key] is c.parameters[key]:     # the terms are copied, never edited
+                p[key] = [dict(t) for t in p[key]]
+            p[key][-1][field] = _slot_value(k, v, d)
+        else:
+            p[k] = _slot_value(k, v, d)
+    return out
+
+
 def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: int,
                   cur: np.ndarray, say: Callable[[str], None], *, ripple: bool = True,
                   gravity: bool = False) -> tuple[RobotParams, np.ndarray]:
@@ -150,30 +182,14 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
 
     """
     mine = [c for c in kept if c.axis_index == axis]
-    slots = [(c, k) for c in mine for k, v in c.parameters.items()
-             if k in _REFIT_KEYS and isinstance(v, (int, float)) and v > 0]
-    # a ripple's amplitude (the entry the diagnosis added: the last one)
-    slots += [(c, 'torque_ripple') for c in mine if ripple and c.name == 'torque_ripple']
-    # the added gravity term (the last one): amplitude and phase
-    slots += [(c, k) for c in mine if gravity and c.name == 'gravity'
-              for k, (par, _) in _TERM_SLOTS.items() if par == 'gravity']
+    slots = refit_slots(mine, ripple, gravity)
     if not slots:
         return rebuild(base, kept), cur
     start = [float(c.parameters[_TERM_SLOTS[k][0]][-1][_TERM_SLOTS[k][1]] if k in _TERM_SLOTS
                    else c.parameters[k]) for c, k in slots]
 
     def params(x):
-        out: dict[int, dict[str, Any]] = {}
-        for (c, k), v, d in zip(slots, start, x):
-            p = out.setdefault(id(c), dict(c.parameters))
-            if k in _TERM_SLOTS:
-                key, field = _TERM_SLOTS[k]
-                if p[key] is c.parameters[key]:     # the terms are copied, never edited
-                    p[key] = [dict(t) for t in p[key]]
-                p[key][-1][field] = _slot_value(k, v, d)
-            else:
-                p[k] = _slot_value(k, v, d)
-        return out
+        return slot_parameters(slots, start, x)
 
     def mk(x):
         p = params(x)

@@ -26,9 +26,9 @@ from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 import numpy as np
 
-from ..residual import FC_HZ, lowpass
+from ..residual import lowpass
 from ..selection import block_length
-from ..thresholds import BLOCK_S, HOLD_EVERY, STILL_NOISE
+from ..thresholds import BLOCK_S, FC_HZ, HOLD_EVERY, STILL_NOISE
 
 __all__ = ['check_diagnosable']
 

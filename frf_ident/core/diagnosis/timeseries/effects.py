@@ -32,8 +32,9 @@ from .extrapolation import failing_position_terms
 from .prepared import Prepared
 from ..common import Effect
 from ..records import Rejected
+from ..regression import find_ripple
 from ..regressors import regressor_groups
-from ..residual import find_ripple, lowpass
+from ..residual import lowpass
 from ..selection import block_standard_errors, by_group, lstsq, select_groups
 from ..thresholds import ONE_WAY, RANGE_OUT_SHARE
 
