@@ -285,15 +285,43 @@ def report_distortion(estimates: dict, out: Path, *, title: str,
     progress = sink(progress)
     found = [(k, DistortionLines.from_dict(v.meta['distortion'])) for k, v in estimates.items()
              if isinstance(v.meta.get('distortion'), dict)]
-    for k, levels in found:
-        for line in levels.summary():
-            progress(f'{k} distortion: {line}')
+    for line in distortion_table(found):
+        progress(line)
     if not found:
         return None
     k, levels = found[0]
     path = distortion_figure(levels, out / 'distortion.png', title=f'{title}: {k}')
     progress(f'wrote {path} (output levels at excited, odd and even lines of {k})')
     return path
+
+
+def distortion_table(found: list) -> list[str]:
+    """
+    Return the distortion levels of several estimates as one small table for the console.
+
+    One row per estimate and output: the median level of the odd and even detection lines
+    and of the excited lines over the noise [dB]; estimates without a noise level (one
+    period) get their summary sentence instead.
+    """
+    rows, one_period = [], []
+    for k, levels in found:
+        if levels.noise is None:
+            one_period += [f'{k} distortion: {line}' for line in levels.summary()]
+            continue
+        lv = [levels.above_noise_db(x) for x in ('odd', 'even', 'excited')]
+        rows += [(k, name, *(f'{x[i]:+.1f}' for x in lv))
+                 for i, name in enumerate(levels.outputs)]
+    if not rows:
+        return one_period
+    levels = next(v for _, v in found if v.noise is not None)
+    n_odd, n_even = (int(np.sum(levels.kind == x)) for x in ('odd', 'even'))
+    head = ('estimate', 'output', 'odd', 'even', 'excited')
+    w = [max(len(r[c]) for r in rows + [head]) for c in range(len(head))]
+    table = ['  ' + '  '.join(v.ljust(w[c]) if c < 2 else v.rjust(w[c]) for c, v in enumerate(r))
+             for r in [head] + rows]
+    return [f'distortion above the noise [dB], median over {n_odd} odd and {n_even} even '
+            f'lines ({levels.freq_hz[0]:.3g}-{levels.freq_hz[-1]:.3g} Hz) and the excited lines:'
+            ] + table + one_period
 
 
 def frf_units(frf) -> str | None:
