@@ -84,6 +84,13 @@ def bench_simulation() -> list[tuple[str, str, str, str]]:
     return rows
 
 
+@section('layout')
+def bench_layout() -> list[tuple[str, str, str, str]]:
+    """Count cycles, upward arrows, long modules and functions, dicts and meta keys; before."""
+    from benchmarks.layout import rows
+    return rows()
+
+
 @section('discretisation')
 def bench_discretisation() -> list[tuple[str, str, str, str]]:
     """

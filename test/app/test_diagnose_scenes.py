@@ -126,7 +126,7 @@ def test_mismatched_axis_keeps_its_nominal_friction(tmp_path):
     Bench kind ``mismatch``, seed 9109: joint_1 9 % stiffer than nominal, Coulomb friction
     11 N m on joint_2. The joint refit of joint_1 settled on stiffness and damping next to a
     viscous friction of 1.02 (nominal 20), which the held-out check kept until the mismatch
-    became the viscous term's partner, refitted without it (README_diagnosis, acceptance):
+    became the viscous term's partner, refitted without it (docs/diagnosis/experiments.md, acceptance):
     with its partners refitted the model without the viscous term fits even the fit part
     better (11.7 floors against 13.8 with it), while held out two misfits this far above the
     floor differ by chance (11.9 against 10.3), so both are asked (``held_out_check``).
@@ -318,7 +318,7 @@ def test_a_simulation_too_coarse_for_the_record_is_reported(tmp_path):
     ev = _evaluator(scene['scene'], tmp_path)
     coarse, fine = (replace(truth, substeps=m) for m in (1, 8))
     step = discretisation_check(ev, coarse, ev.misfit(ev.terms(coarse, held_out=True)))
-    print(step)    # the figures README_diagnosis quotes (pytest -s)
+    print(step)    # the figures docs/diagnosis/experiments.md quotes (pytest -s)
     assert step.axes == robot.joint_names, step
     assert step.substeps == 1 and 'joint_1' in step.too_coarse, step
     # the finer simulation is the closer one to the record

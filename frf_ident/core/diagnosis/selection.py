@@ -226,8 +226,8 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
     times the residual's integrated correlation time (:func:`correlation_time`) where that is
     longer (a misfit that drifts over the motion), but at most a third of the record: so the
     sandwich takes the residual as it is, coloured, and with whatever misfit the model still
-    has within a block, where a formula for white noise would not (docs/diagnosis.md,
-    "Standard errors"). The error of the amplitude
+    has within a block, where a formula for white noise would not
+    (docs/diagnosis/crosschecks.md, "Standard errors"). The error of the amplitude
     hypot(a_sin, a_cos) of a sin / cos pair is its spread under the pair's normal distribution.
 
     Parameters

@@ -181,7 +181,7 @@ def _arm_record(seed: int, *, disturbance_hz: float = 0.0, cable: float = 0.0):
             q[:, i] += rng.uniform(0.1, 0.35) * np.sin(2 * np.pi * f * t + rng.uniform(0, 6))
     v = np.gradient(q, 1 / fs, axis=0)
     # the torque u[k] holds over the sample interval (zero-order hold, as a drive applies a
-    # command; README_diagnosis.md): the equations of motion at the interval's middle
+    # command; docs/diagnosis/timeseries.md): the equations of motion at the interval's middle
     qh, vh, th = 0.5 * (q[1:] + q[:-1]), 0.5 * (v[1:] + v[:-1]), t[:-1] + 0.5 / fs
     a = np.diff(v, axis=0) * fs
     J = np.array([6.0, 4.0, 1.5])
