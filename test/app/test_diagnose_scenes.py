@@ -126,9 +126,9 @@ def test_mismatched_axis_keeps_its_nominal_friction(tmp_path):
     Bench kind ``mismatch``, seed 9109: joint_1 9 % stiffer than nominal, Coulomb friction
     11 N m on joint_2. The joint refit of joint_1 settled on stiffness and damping next to a
     viscous friction of 1.02 (nominal 20), which the held-out check kept until the mismatch
-    became the viscous term's partner, refitted without it (docs/diagnosis/experiments.md, acceptance):
-    with its partners refitted the model without the viscous term fits even the fit part
-    better (11.7 floors against 13.8 with it), while held out two misfits this far above the
+    became the viscous term's partner, refitted without it (docs/diagnosis/experiments.md,
+    acceptance): with its partners refitted the model without the viscous term fits even the fit
+    part better (11.7 floors against 13.8 with it), while held out two misfits this far above the
     floor differ by chance (11.9 against 10.3), so both are asked (``held_out_check``).
     """
     scene = draw_scene(np.random.default_rng(9109), 'mismatch')

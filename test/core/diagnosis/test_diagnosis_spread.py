@@ -13,7 +13,7 @@
 # limitations under the License.
 """Test the check of standard errors across records on draws of known spread."""
 from frf_ident.core.diagnosis.common import Effect
-from frf_ident.core.diagnosis.crosscheck.spread import estimates, spread_check, widened
+from frf_ident.core.diagnosis.crosscheck.spread import scalar_estimates, spread_check, widened
 from frf_ident.core.diagnosis.thresholds import SPREAD_ALPHA
 import numpy as np
 import pytest
@@ -49,8 +49,8 @@ def test_only_friction_and_inertia_with_an_error_are_compared_and_all_errors_sca
                    standard_error={'gravity_torque': 0.2}),
             Effect('gravity', 'b', 1.0, {'gravity': [{'amplitude': 3.0}]}, '',
                    standard_error={'gravity': [None, {'amplitude': 0.5}]})]
-    assert estimates(effs) == {('a', 'coulomb_friction'): (2.0, 0.1)}
+    assert scalar_estimates(effs) == {('a', 'coulomb_friction'): (2.0, 0.1)}
     out = widened(effs, 2.0)
     assert out[0].standard_error == {'coulomb_friction': 0.2}
     assert out[2].standard_error == {'gravity': [None, {'amplitude': 1.0}]}
-    assert spread_check([estimates(effs)]).factor == 1.0
+    assert spread_check([scalar_estimates(effs)]).factor == 1.0

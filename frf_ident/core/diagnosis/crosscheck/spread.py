@@ -40,7 +40,7 @@ from ..result import DiagnosisResult
 from ..thresholds import SPREAD_ALPHA
 from ..timeseries.pipeline import diagnose_timeseries
 
-__all__ = ['SCALAR_PARAMETERS', 'estimates', 'SpreadCheck', 'SpreadPair', 'spread_check',
+__all__ = ['SCALAR_PARAMETERS', 'scalar_estimates', 'SpreadCheck', 'SpreadPair', 'spread_check',
            'standard_errors_across', 'widened']
 
 #: the parameters compared between records: a constant load (``gravity_torque``) and the
@@ -82,7 +82,7 @@ class SpreadCheck:
                 'p_value': self.p_value, 'factor': self.factor, 'compared': self.compared}
 
 
-def estimates(effects: list[Effect]) -> dict[tuple[str, str], tuple[float, float]]:
+def scalar_estimates(effects: list[Effect]) -> dict[tuple[str, str], tuple[float, float]]:
     """Return {(axis, parameter): (value, standard error)} of the scalar parameters."""
     out = {}
     for e in effects:
@@ -144,7 +144,7 @@ def standard_errors_across(res: DiagnosisResult, rec: Recording,
         return res, None
     if others:
         what, recs = 'the --validate records', [o for _, o in others]
-        runs = [estimates(res.effects)]
+        runs = [scalar_estimates(res.effects)]
     else:
         n = rec.t.size // 2
         what, runs = 'the two halves of the record', []
@@ -152,7 +152,7 @@ def standard_errors_across(res: DiagnosisResult, rec: Recording,
                           rec.velocity[sl], rec.effort[sl], meta=dict(rec.meta))
                 for sl in (slice(0, n), slice(n, None))]
     try:
-        runs += [estimates(diagnose_timeseries(o, replace(robot, sample_rate=o.fs)).effects)
+        runs += [scalar_estimates(diagnose_timeseries(o, replace(robot, sample_rate=o.fs)).effects)
                  for o in recs]
     except EstimationError as err:
         progress(f'standard errors not checked across records ({what}: {err})')

@@ -37,7 +37,7 @@ from ..residual import inverse_dynamics_residual
 from ..thresholds import EST_CACHE, FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE, SIM_JOBS
 
 
-def estimates(rec: Recording) -> dict[str, Any]:
+def frf_estimates(rec: Recording) -> dict[str, Any]:
     """Return the two estimates the diagnosis compares: compensated multisine BLA and the chirp."""
     out: dict[str, Any] = {}
     if any(s.info.get('design') == 'multisine' for s in rec.segments):
@@ -118,8 +118,8 @@ class Evaluator:
         self._drive = drive_reference(rec)
         fit, val, self.validation_text = split_recording(rec)
         self.fit, self.val = (drop_segments(fit, self.missing), drop_segments(val, self.missing))
-        self.meas_fit = estimates(self.fit)
-        self.meas_val = estimates(self.val) if self.val.segments else {}
+        self.meas_fit = frf_estimates(self.fit)
+        self.meas_val = frf_estimates(self.val) if self.val.segments else {}
         self.fit_mask = segment_mask(self.fit) & ~self.missing
         self.val_mask = segment_mask(self.val) & ~self.missing
         n = rec.velocity.shape[1]
@@ -242,7 +242,7 @@ class Evaluator:
             def run(robot: RobotParams) -> tuple:
                 sim = simulate_like(rec, robot, ctrl, reference=drive)
                 return (sim.position, sim.velocity, sim.effort,
-                        estimates(replace_segments(sim, fit)))
+                        frf_estimates(replace_segments(sim, fit)))
             # the three signals of a simulation come back through shared memory
             self._workers = WorkerPool(run, self.jobs, shared_bytes=3 * rec.velocity.nbytes + 256,
                                        max_items=SIM_CACHE - 4)
@@ -289,7 +289,7 @@ class Evaluator:
         sim = sim if sim is not None else self.simulate(robot)
         meas = self.meas_val if held_out and self.meas_val else self.meas_fit
         m = self.val_mask if held_out and self.val_mask.any() else self.fit_mask
-        est = (estimates(replace_segments(sim, self.val)) if held_out and self.val.segments
+        est = (frf_estimates(replace_segments(sim, self.val)) if held_out and self.val.segments
                else self.fit_estimates(robot, sim))
         out = {}
         for k, pm in meas.items():
@@ -326,7 +326,7 @@ class Evaluator:
         key = repr(robot)
         if key not in self._est:
             sim = sim if sim is not None else self.simulate(robot)
-            self._keep_estimates(key, estimates(replace_segments(sim, self.fit)))
+            self._keep_estimates(key, frf_estimates(replace_segments(sim, self.fit)))
         return self._est[key]
 
     def loss(self, robot: RobotParams, axis: int) -> float:
@@ -376,7 +376,7 @@ class Evaluator:
         sim = sim if sim is not None else self.simulate(robot)
         sv = replace_segments(sim, self.val if self.val.segments else self.fit)
         mv = self.meas_val if self.meas_val else self.meas_fit
-        est = estimates(sv)
+        est = frf_estimates(sv)
         mask = self.val_mask if self.val_mask.any() else self.fit_mask
         per = {name: AxisScore(round(frf_error_db([(mv[k], est[k]) for k in mv], axis=i), 4),
                                round(nrmse(self.rec.velocity[:, i], sim.velocity[:, i], mask), 5))

@@ -28,7 +28,7 @@ from frf_ident.core.recording import Recording
 import numpy as np
 
 from .acceptance import left_unexplained
-from .evaluator import estimates, replace_segments
+from .evaluator import frf_estimates, replace_segments
 from .refit import FRICTION, rebuild, refit_friction, refit_jointly
 from .search import named, Search
 from .unexplained import (axis_signature, discretisation_check, rival_instead,
@@ -195,8 +195,8 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
                            ev.validation_text)
     part = ev.val if ev.val.segments else ev.fit
     plots = {'measured': ev.meas_val or ev.meas_fit,
-             'nominal': estimates(replace_segments(s.sim0, part)),
-             'extended': estimates(replace_segments(sim_ext, part))}
+             'nominal': frf_estimates(replace_segments(s.sim0, part)),
+             'extended': frf_estimates(replace_segments(sim_ext, part))}
     log.info('%d simulations of the recorded excitation', ev.n_sims)
     rest = [c for c in s.cands if c not in kept]
     return DiagnosisResult(

@@ -31,7 +31,7 @@ import numpy as np
 
 from .acceptance import left_unexplained
 from .candidates import fit_linear_scales, LIN_KEYS, scaled_axis
-from .evaluator import estimates, Evaluator, replace_segments
+from .evaluator import Evaluator, frf_estimates, replace_segments
 from .refit import rebuild, refit_jointly
 from ..common import diag_ratio, Effect
 from ..records import IntegratorCheck, Signature
@@ -142,7 +142,7 @@ def unscalable_misfit(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams
     """
     meas = ev.meas_val if ev.meas_val else ev.meas_fit
     part = ev.val if ev.val.segments else ev.fit
-    est = estimates(replace_segments(sim, part))
+    est = frf_estimates(replace_segments(sim, part))
     ratio = {k: diag_ratio(pm, est[k])[axis] for k, pm in meas.items()}
     scaled = {k: replace(pm, response=pm.response * 0 + 0j) for k, pm in meas.items()}
     for k, pm in meas.items():

@@ -27,7 +27,7 @@ from frf_ident.errors import EstimationError
 import numpy as np
 
 from ..residual import lowpass
-from ..selection import block_length
+from ..selection import block_samples
 from ..thresholds import BLOCK_S, FC_HZ, HOLD_EVERY, STILL_NOISE
 
 __all__ = ['check_diagnosable']
@@ -60,7 +60,7 @@ def check_diagnosable(rec: Recording, names: list[str], fit: np.ndarray | None =
         The record is too short, an axis' effort is constant, or no axis moves.
 
     """
-    need = HOLD_EVERY * block_length(rec.fs)
+    need = HOLD_EVERY * block_samples(rec.fs)
     if rec.t.size < need:
         raise EstimationError(f'the record holds {rec.t.size} samples ({rec.t.size / rec.fs:.3g} '
                               f's): the diagnosis needs at least {need} ({need / rec.fs:.3g} s: '
