@@ -32,7 +32,21 @@ from frf_ident.errors import FrfIdentInputError, ModelFileError
 from frf_ident.io.yamlio import read_yaml_file
 import yaml
 
-__all__ = ['load_model', 'load_plant', 'read_model_dict', 'save_model']
+__all__ = ['MUJOCO', 'load_model', 'load_plant', 'read_model_dict', 'save_model']
+
+#: the plant spec that simulates an MJCF in MuJoCo (``mujoco`` or ``mujoco:FILE.xml``)
+MUJOCO = 'mujoco'
+
+
+def _mujoco_plant(spec: str, model: dict[str, Any]) -> Any:
+    """``--plant mujoco[:FILE.xml]``: MuJoCo's plant, or one line saying what to install."""
+    try:
+        from frf_ident.io.mjcf.plant import MujocoPlant
+    except ImportError as err:
+        raise FrfIdentInputError(f"--plant {spec}: needs the mujoco package ({err}); "
+                                 f"pip install 'frf_ident[mujoco]'") from err
+    _, _, file = spec.partition(':')
+    return MujocoPlant(model, mjcf=file or None)
 
 
 def read_model_dict(path: str | Path) -> dict[str, Any]:
@@ -133,13 +147,14 @@ def load_plant(spec: str | None, model: dict[str, Any]) -> Any:
     Instantiate the plant: the model's own simulation or a plug-in.
 
     A plug-in ``'package.module:Class'`` is constructed with the model mapping as its config
-    (docs/CONTRACT.md §4).
+    (docs/CONTRACT.md §4); ``'mujoco'`` simulates the model's MJCF in MuJoCo,
+    ``'mujoco:FILE.xml'`` another MJCF (:class:`~frf_ident.io.mjcf.plant.MujocoPlant`).
 
     Parameters
     ----------
     spec : str or None
-        ``'package.module:Class'``, or None / empty for the model's
-        :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant`.
+        ``'package.module:Class'``, ``'mujoco'``, ``'mujoco:FILE.xml'``, or None / empty for
+        the model's :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant`.
     model : dict
         The model mapping (from :func:`load_model`).
 
@@ -157,6 +172,8 @@ def load_plant(spec: str | None, model: dict[str, Any]) -> Any:
     """
     if not spec:
         return FlexibleJointPlant(robot_from_dict(model))
+    if spec == MUJOCO or spec.startswith(MUJOCO + ':'):
+        return _mujoco_plant(spec, model)
     mod_name, sep, cls_name = spec.partition(':')
     if not sep or not mod_name or not cls_name:
         raise FrfIdentInputError(f"--plant {spec!r}: expected 'package.module:Class'")

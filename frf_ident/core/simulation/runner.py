@@ -14,8 +14,9 @@
 """
 Offline runner: executes procedure phases in closed loop on a simulated or plug-in plant.
 
-The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` (run at compiled
-speed, the PI inside the kernel) or any docs/CONTRACT.md §4 plug-in with ``dt``,
+The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` or another plant
+with its batch ``simulate`` (run at compiled speed, the PI inside the kernel; MuJoCo's plant in
+:mod:`frf_ident.io.mjcf.plant`) or any docs/CONTRACT.md §4 plug-in with ``dt``,
 ``joint_names``, ``reset()`` and ``step(torque) -> (position, velocity, effort)``, driven sample
 by sample through the same
 PI. Everything lands in one :class:`~frf_ident.core.recording.Recording` on a single timeline.
@@ -59,10 +60,13 @@ class ClosedLoop:
         if controller.n_axes != self.n:
             raise FrfIdentInputError(f'controller has {controller.n_axes} axes, plant '
                                      f'{self.n} joints {plant.joint_names}')
-        self.fast = isinstance(plant, FlexibleJointPlant)
+        # a plant with the batch interface (our own, MuJoCo's) runs whole phases compiled
+        self.fast = isinstance(plant, FlexibleJointPlant) or callable(
+            getattr(plant, 'simulate', None))
         if position is not None and not self.fast:
-            raise FrfIdentInputError('a start position needs a FlexibleJointPlant: the plug-in '
-                                     'interface resets to its own rest state')
+            raise FrfIdentInputError('a start position needs a plant with simulate() and '
+                                     'reset(position=): the plug-in interface resets to its '
+                                     'own rest state')
         if self.fast:
             plant.reset(position=position)
         else:
