@@ -83,6 +83,9 @@ def load_model(path: str | Path | None) -> tuple[dict[str, Any], RobotParams, PI
     """
     Load and validate a model file (docs/CONTRACT.md §5).
 
+    A model naming an MJCF (``mjcf``) is returned with its axes filled from the MJCF at the
+    pose (:func:`frf_ident.io.mjcf.nominal.view_dict`; the mapping's ``mjcf`` made absolute).
+
     Parameters
     ----------
     path : str or Path or None
@@ -104,12 +107,27 @@ def load_model(path: str | Path | None) -> tuple[dict[str, Any], RobotParams, PI
 
     """
     d = default_model_dict() if path is None else read_model_dict(path)
+    if path is not None and 'mjcf' in d:
+        d = _mjcf_view(d, Path(path))
     try:
         robot = robot_from_dict(d)
         ctrl = controller_from_dict(d, robot)
     except ModelFileError as exc:
         raise ModelFileError(f'{path or "default model"}: {exc}') from None
     return d, robot, ctrl
+
+
+def _mjcf_view(d: dict[str, Any], path: Path) -> dict[str, Any]:
+    """A model naming an MJCF: the mapping with the MJCF's values (docs/model_file.md)."""
+    try:
+        from frf_ident.io.mjcf.nominal import view_dict
+    except ImportError as err:
+        raise ModelFileError(f"{path}: mjcf: needs the mujoco package ({err}); pip install "
+                             f"'frf_ident[mujoco]'") from err
+    try:
+        return view_dict(d, path.parent)
+    except ModelFileError as exc:
+        raise ModelFileError(f'{path}: {exc}') from None
 
 
 def save_model(path: str | Path, robot: RobotParams, controller: PIVelocity | None = None,
