@@ -112,6 +112,8 @@ def load_model(path: str | Path | None) -> tuple[dict[str, Any], RobotParams, PI
     try:
         robot = robot_from_dict(d)
         ctrl = controller_from_dict(d, robot)
+        if robot.mjcf is not None:      # an MJCF starts at its pose, not at q = 0
+            ctrl.reset(robot.gravity_load([robot.mjcf.pose[a] for a in robot.joint_names]))
     except ModelFileError as exc:
         raise ModelFileError(f'{path or "default model"}: {exc}') from None
     return d, robot, ctrl

@@ -139,9 +139,10 @@ def axis_values(robot: MjcfRobot, fs: float) -> tuple[list[dict], np.ndarray]:
     Per axis the docs/CONTRACT.md §5 keys: ``motor_inertia`` (armature), ``link_inertia``
     (M(q) in link coordinates), ``stiffness`` and ``damping`` (link-side hinge),
     ``viscous_friction`` (motor-side damping), ``coulomb_friction`` (frictionloss),
-    ``torque_limit`` (gear x ctrlrange), ``gravity_torque`` and ``gravity`` (g(q) and dg/dq at
-    the pose, as :func:`~frf_ident.core.model.operating_point.robot_at_pose` writes them); a
-    rigid joint by :func:`~frf_ident.io.mjcf.drive_map.rigid_split` (approximate).
+    ``torque_limit`` (gear x ctrlrange), ``gravity_torque`` and ``gravity`` (g(q0) and
+    dg/dq at the pose q0 as terms dg/dq sin(q - q0), in the MJCF's own joint coordinates, so
+    positions are the plant's); a rigid joint by
+    :func:`~frf_ident.io.mjcf.drive_map.rigid_split` (approximate).
 
     Returns
     -------
@@ -190,7 +191,9 @@ def axis_values(robot: MjcfRobot, fs: float) -> tuple[list[dict], np.ndarray]:
             inertia[i, i] = jo
             entry.update(motor_inertia=jm, link_inertia=jo, stiffness=k, damping=0.0)
         entry['gravity_torque'] = float(g0[i])
-        entry['gravity'] = [{'amplitude': float(grad[i, j]), 'phase': 0.0,
+        # in the MJCF's joint coordinates: G sin(q_j - q0_j) = dg/dq (q_j - q0_j) near q0
+        entry['gravity'] = [{'amplitude': float(grad[i, j]),
+                             'phase': -float(robot.pose[robot.axes[j]]),
                              'joints': [robot.axes[j]]}
                             for j in range(robot.n_axes)
                             if abs(grad[i, j]) > 1e-9 * max(np.abs(grad).max(), 1e-300)]

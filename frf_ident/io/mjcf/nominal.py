@@ -102,4 +102,10 @@ def view_dict(d: dict[str, Any], base: Path) -> dict[str, Any]:
         merged.append(entry)
     out['axes'] = merged
     out['link_coupling'] = inertia.tolist()
+    # the axes' start positions written out: the controller starts with their holding torque
+    src = mjcf_source_from_dict(out)
+    pose = {'keyframe': src.keyframe} if src.keyframe else {}
+    pose.update(src.pose)
+    pose.update({a: robot.pose[a] for a in robot.axes})
+    out['pose'] = pose
     return out
