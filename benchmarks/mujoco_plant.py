@@ -105,7 +105,7 @@ def _python_loop(plant) -> tuple[float, np.ndarray]:
 
 def _affine_rollout(plant, integrator) -> tuple[float, np.ndarray]:
     """
-    The PI as general actuators run open loop in ctrl by mujoco.rollout.
+    Run the PI as general actuators, open loop in ctrl, by mujoco.rollout.
 
     force = ctrl - ki q - kp v with ctrl_k = kp r_k + ki (q_0 + dt sum_{j<=k} r_j) + I_0: equal
     to PIVelocity's kp e_k + I_0 + ki dt sum_{j<=k} e_j where q_k - q_0 = dt sum_{j<=k} v_j,
@@ -144,7 +144,7 @@ def _affine_rollout(plant, integrator) -> tuple[float, np.ndarray]:
 
 
 def _elastic(tmp: Path) -> Path:
-    """The iiwa with series elasticity on joints 2 and 4 (test/plants/mujoco_iiwa.py)."""
+    """Write the iiwa with series elasticity on joints 2 and 4 (test/plants/mujoco_iiwa.py)."""
     import sys
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'test'))
     from plants.mujoco_iiwa import elastic_xml
@@ -173,7 +173,8 @@ def rows() -> list[tuple[str, str, str, str]]:
         step = N * DT / (time.perf_counter() - t0)
         out.append(('  MuJoCo mj_step alone (its C loop, no control)', f'{step:,.0f}x real time',
                     f'compiled loop {mj:,.0f}x', f'{mj / step:.2f}'))
-        for name, integ in (('implicitfast (the file\'s)', mujoco.mjtIntegrator.mjINT_IMPLICITFAST),
+        for name, integ in (("implicitfast (the file's)",
+                             mujoco.mjtIntegrator.mjINT_IMPLICITFAST),
                             ('Euler', mujoco.mjtIntegrator.mjINT_EULER)):
             speed, v = _affine_rollout(plant, integ)
             dv = np.abs(v - v_py).max() / np.abs(v_py).max()

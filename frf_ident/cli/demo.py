@@ -45,9 +45,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--robot', type=Path,
                    help=f'the simulated "real" robot (default config/{DEMO_ROBOT})')
     p.add_argument('--plant', default=None,
-                   help='the plant node\'s plant: "mujoco" (the --robot model\'s MJCF), '
-                        '"mujoco:FILE.xml" or "package.module:Class" (default: the --robot '
-                        'model\'s own simulation)')
+                   help="the plant node's plant: 'mujoco' (the --robot model's MJCF), "
+                        "'mujoco:FILE.xml' or 'package.module:Class' (default: the --robot "
+                        "model's own simulation)")
     add_design_arguments(p, ms, ch)
 
 

@@ -39,12 +39,12 @@ MUJOCO = 'mujoco'
 
 
 def _mujoco_plant(spec: str, model: dict[str, Any]) -> Any:
-    """``--plant mujoco[:FILE.xml]``: MuJoCo's plant, or one line saying what to install."""
+    """Return MuJoCo's plant for ``--plant mujoco[:FILE.xml]``, or say what to install."""
     try:
         from frf_ident.io.mjcf.plant import MujocoPlant
     except ImportError as err:
-        raise FrfIdentInputError(f"--plant {spec}: needs the mujoco package ({err}); "
-                                 f"pip install 'frf_ident[mujoco]'") from err
+        raise FrfIdentInputError(f'--plant {spec}: needs the mujoco package ({err}); pip '
+                                 "install 'frf_ident[mujoco]'") from err
     _, _, file = spec.partition(':')
     return MujocoPlant(model, mjcf=file or None)
 
@@ -120,12 +120,12 @@ def load_model(path: str | Path | None) -> tuple[dict[str, Any], RobotParams, PI
 
 
 def _mjcf_view(d: dict[str, Any], path: Path) -> dict[str, Any]:
-    """A model naming an MJCF: the mapping with the MJCF's values (docs/model_file.md)."""
+    """Return a model naming an MJCF with the MJCF's values filled in (docs/model_file.md)."""
     try:
         from frf_ident.io.mjcf.nominal import view_dict
     except ImportError as err:
-        raise ModelFileError(f"{path}: mjcf: needs the mujoco package ({err}); pip install "
-                             f"'frf_ident[mujoco]'") from err
+        raise ModelFileError(f'{path}: mjcf: needs the mujoco package ({err}); pip install '
+                             "'frf_ident[mujoco]'") from err
     try:
         return view_dict(d, path.parent)
     except ModelFileError as exc:

@@ -12,8 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-Our drive terms as URDF: ``<dynamics damping friction>``, ``<limit effort>``, and a
-``<transmission>`` for what URDF has no field for (docs/mujoco.md, "URDF").
+Our drive terms as URDF.
+
+``<dynamics damping friction>``, ``<limit effort>``, and a ``<transmission>`` for what URDF has
+no field for (docs/mujoco.md, "URDF").
 
 URDF's joint holds viscous friction (``damping`` [N m s/rad]) and dry friction (``friction``
 [N m]) only; the rotor inertia, the series spring and its damping have no URDF field, so each
@@ -21,7 +23,7 @@ joint's ``<transmission>`` (ros2_control's ``transmission_interface/SimpleTransm
 reduction 1: our torques are the joint's) carries them in a comment and as ``<frf_ident>``
 attributes that URDF parsers ignore. :func:`write_drive_urdf` writes a standalone URDF, a star
 of one link per axis about z (``link_inertia`` as its inertia), as the standalone MJCF of
-:func:`frf_ident.io.mjcf.export.write_mjcf` does; 
+:func:`frf_ident.io.mjcf.export.write_mjcf` does;
 """
 from __future__ import annotations
 

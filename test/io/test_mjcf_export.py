@@ -22,18 +22,17 @@ model.xml linearised by MuJoCo at the pose against the fitted model's own FRF an
 from dataclasses import replace
 import json
 
+from frf_ident.core.model.params import MjcfSource
+from frf_ident.core.model.schema import default_robot
+from frf_ident.core.simulation.analytic import robot_frf_sampled
 import numpy as np
+from plants.mujoco_iiwa import elastic_xml, HELD, home, SHARED_IIWA, truth_frf
 import pytest
 
 mujoco = pytest.importorskip('mujoco')
-
-from frf_ident.core.model.params import MjcfSource  # noqa: E402
-from frf_ident.core.model.schema import default_robot  # noqa: E402
-from frf_ident.core.simulation.analytic import robot_frf_sampled  # noqa: E402
-from frf_ident.io.mjcf.export import write_mjcf  # noqa: E402
-from frf_ident.io.mjcf.linear import transition  # noqa: E402
-from frf_ident.io.mjcf.robot import load_robot  # noqa: E402
-from plants.mujoco_iiwa import elastic_xml, HELD, home, SHARED_IIWA, truth_frf  # noqa: E402
+write_mjcf = pytest.importorskip('frf_ident.io.mjcf.export').write_mjcf
+transition = pytest.importorskip('frf_ident.io.mjcf.linear').transition
+load_robot = pytest.importorskip('frf_ident.io.mjcf.robot').load_robot
 
 pytestmark = pytest.mark.xdist_group('mujoco_iiwa')
 
@@ -91,7 +90,7 @@ def test_drive_urdf_is_read_by_pinocchio(tmp_path):
 
 @pytest.fixture(scope='module')
 def fitted(tmp_path_factory):
-    """identify (MuJoCo, joints 2 and 4) -> estimate -> fit --physical on the plain iiwa."""
+    """Identify (MuJoCo, joints 2 and 4), estimate, fit --physical on the plain iiwa."""
     from frf_ident.app.estimate import estimate_bag
     from frf_ident.app.fit import fit_frf
     from frf_ident.app.identify import run_identify

@@ -23,15 +23,14 @@ The mapping MJCF <-> our parameters checked by simulation, not assumed (docs/muj
 """
 from pathlib import Path
 
+from frf_ident.core.model.params import MjcfSource
+from frf_ident.io.mjcf.drive_map import RIGID_MOTOR_SHARE
 import numpy as np
 import pytest
 
 mujoco = pytest.importorskip('mujoco')
-
-from frf_ident.core.model.params import MjcfSource  # noqa: E402
-from frf_ident.io.mjcf.drive_map import RIGID_MOTOR_SHARE  # noqa: E402
-from frf_ident.io.mjcf.linear import axis_values  # noqa: E402
-from frf_ident.io.mjcf.robot import load_robot  # noqa: E402
+axis_values = pytest.importorskip('frf_ident.io.mjcf.linear').axis_values
+load_robot = pytest.importorskip('frf_ident.io.mjcf.robot').load_robot
 
 ROOT = Path(__file__).resolve().parents[2]
 

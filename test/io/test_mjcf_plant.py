@@ -19,17 +19,16 @@ written there without frf_ident.io.mjcf), identified on joints 1, 2 and 4, the o
 at the home pose; the truth is the discrete FRF of mjd_transitionFD's A, B at rest, computed in
 test/plants/mujoco_iiwa.py.
 """
+from frf_ident.core.estimation.described import multisine_frf
+from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
+from frf_ident.io.model_file import load_plant
 import numpy as np
+from plants.mujoco_iiwa import AXES, elastic_xml, HELD, home, KI, KP, truth_frf
 import pytest
 
 mujoco = pytest.importorskip('mujoco')
-
-from frf_ident.core.estimation.described import multisine_frf  # noqa: E402
-from frf_ident.core.excitation.procedures import MultisineConfig  # noqa: E402
-from frf_ident.core.simulation.controller import PIVelocity  # noqa: E402
-from frf_ident.core.simulation.runner import IdentificationConfig, run_identification  # noqa
-from frf_ident.io.model_file import load_plant  # noqa: E402
-from plants.mujoco_iiwa import AXES, elastic_xml, HELD, home, KI, KP, truth_frf  # noqa: E402
 
 pytestmark = pytest.mark.xdist_group('mujoco_iiwa')
 
@@ -52,17 +51,17 @@ def _identify(model, ms):
 
 @pytest.fixture(scope='module')
 def iiwa_record(tmp_path_factory):
-    """The multisine run at 40 dB SNR: velocity noise 1 % of the excited velocity rms."""
+    """Run the multisine at 40 dB SNR: velocity noise 1 % of the excited velocity rms."""
     path = tmp_path_factory.mktemp('iiwa') / 'iiwa_elastic.xml'
     path.write_text(elastic_xml())
-    cfg = dict(position_bound_deg=1.0, f_low=1.0, f_high=60.0)
+    cfg = {'position_bound_deg': 1.0, 'f_low': 1.0, 'f_high': 60.0}
     quiet = _identify(_model(path), MultisineConfig(n_realisations=1, n_periods=2, **cfg))
     segs = [s for s in quiet.segments if s.info['design'] == 'multisine']
     y = np.concatenate([quiet.velocity[quiet.slice(s.t_start, s.t_end)]
                         - s.info['constant_velocity'] for s in segs])
     rms = np.sqrt(np.mean((y - y.mean(axis=0)) ** 2, axis=0))
-    rec = _identify(_model(path, rms / 100.0), MultisineConfig(n_realisations=4, n_periods=4,
-                                                                **cfg))
+    ms = MultisineConfig(n_realisations=4, n_periods=4, **cfg)
+    rec = _identify(_model(path, rms / 100.0), ms)
     return rec, rms
 
 

@@ -94,7 +94,7 @@ def home() -> dict[str, float]:
 def truth_frf(xml: str, freq_hz: np.ndarray, pose: dict[str, float], axes=AXES,
               dt: float = 1e-3) -> np.ndarray:
     """
-    MuJoCo's linearisation at rest at ``pose`` as a discrete FRF, torque -> motor velocity.
+    Return MuJoCo's linearisation at rest at ``pose`` as a discrete FRF (torque -> velocity).
 
     The rest: the link angle at the pose, each series spring deflected so that the link-side
     hinge needs no force (scipy root of mj_inverse's force there); then mjd_transitionFD with

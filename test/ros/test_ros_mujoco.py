@@ -19,16 +19,14 @@ model file names the MJCF; joints 1, 2, 4 identified, the rest welded at home), 
 multisine through plant node (hosting the PI), excitation node and estimator node; the FRF of
 the recorded bag against MuJoCo's own linearisation (computed in the test's helper).
 """
+from frf_ident.app.graph import Graph
+from frf_ident.core.excitation.procedures import MultisineConfig
 import numpy as np
+from plants.mujoco_iiwa import AXES, elastic_xml, HELD, home, KI, KP, truth_frf
 import pytest
 import yaml
 
 pytest.importorskip('mujoco')
-
-from frf_ident.app.graph import Graph  # noqa: E402
-from frf_ident.core.excitation.procedures import MultisineConfig  # noqa: E402
-
-from plants.mujoco_iiwa import AXES, elastic_xml, HELD, home, KI, KP, truth_frf  # noqa: E402
 
 
 def test_plant_node_runs_mujoco_in_the_lockstep_graph(tmp_path, new_domain):

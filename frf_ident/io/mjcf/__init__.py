@@ -12,8 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-MuJoCo adapter (optional extra ``pip install 'frf_ident[mujoco]'``): MJCF robots as the plant,
-as the nominal model, and our drive parameters written as MJCF (docs/mujoco.md).
+MuJoCo adapter (the optional extra ``pip install 'frf_ident[mujoco]'``).
+
+MJCF robots as the plant, as the nominal model, and our drive parameters written as MJCF
+(docs/mujoco.md).
 
 - :mod:`~frf_ident.io.mjcf.drive_map`: the one mapping our parameters <-> MJCF attributes
   (no mujoco import)

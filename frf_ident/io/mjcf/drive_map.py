@@ -12,16 +12,19 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-The one mapping between our drive parameters (:class:`~frf_ident.core.model.params.AxisParams`)
-and MJCF attributes, both directions; docs/mujoco.md prints :data:`MAPPING` as its table.
+The one mapping between our drive parameters and MJCF attributes, both directions.
+
+Our parameters are :class:`~frf_ident.core.model.params.AxisParams`; docs/mujoco.md prints
+:data:`MAPPING` as its table.
 
 A flexible joint is two hinges in series on the same axis: the actuated motor-side hinge keeps
-the joint's name and carries the rotor (``armature``), its viscous friction (``damping``) and dry
-friction (``frictionloss``); a child body holds the link-side hinge ``<joint>`` + :data:`LINK_SUFFIX`
-with ``stiffness`` and ``damping`` on the relative angle (the spring of eqs. 1-2). A joint without
-that child hinge is rigid. The actuator is a torque motor on the motor-side hinge: our command u
-[N m] is ``gear * ctrl``, the torque MuJoCo applies ``gainprm[0] * u`` (1 for a ``motor``: the
-torque constant's ratio to its nominal value), the limit ``gear * ctrlrange``.
+the joint's name and carries the rotor (``armature``), its viscous friction (``damping``) and
+dry friction (``frictionloss``); a child body holds the link-side hinge ``<joint>`` +
+:data:`LINK_SUFFIX` with ``stiffness`` and ``damping`` on the relative angle (the spring of
+eqs. 1-2). A joint without that child hinge is rigid. The actuator is a torque motor on the
+motor-side hinge: our command u [N m] is ``gear * ctrl``, the torque MuJoCo applies
+``gainprm[0] * u`` (1 for a ``motor``: the torque constant's ratio to its nominal value), the
+limit ``gear * ctrlrange``.
 
 Nothing here imports mujoco: these are names, numbers and the limits of the mapping.
 """
@@ -67,8 +70,9 @@ class Row:
 #: our parameter -> MJCF attribute (docs/mujoco.md prints this table)
 MAPPING: tuple[Row, ...] = (
     Row('motor_inertia', 'motor-side `joint@armature`', 'kg m^2',
-        'exact (rotor inertia through the gear; MuJoCo ignores its gyroscopic coupling, so do we)'),
-    Row('link_inertia, link_coupling', 'the bodies\' `inertial` (M(q) of the link side)',
+        'exact (rotor inertia through the gear; MuJoCo ignores its gyroscopic coupling, as '
+        'we do)'),
+    Row('link_inertia, link_coupling', "the bodies' `inertial` (M(q) of the link side)",
         'kg m^2', 'MJCF -> ours: M(q) at the pose; ours -> MJCF: kept from the MJCF '
         '(a standalone export puts link_inertia on one body per axis, no coupling)'),
     Row('stiffness', f'link-side `joint@stiffness` (hinge `<joint>{LINK_SUFFIX}`)', 'N m/rad',
@@ -84,9 +88,9 @@ MAPPING: tuple[Row, ...] = (
         'exact: applied torque = gainprm[0] x command'),
     Row('time_delay', '`actuator@delay` (ctrl history, `nsample` >= delay / timestep + 1)',
         's', 'whole time steps exact; MuJoCo interpolates between samples of its history'),
-    Row('gravity_torque, gravity', 'the bodies\' masses and `option@gravity`', 'N m',
+    Row('gravity_torque, gravity', "the bodies' masses and `option@gravity`", 'N m',
         'MJCF -> ours: g(q) at the pose and its gradient; ours -> MJCF: not written (the '
-        'MJCF\'s rigid body holds it)'),
+        "MJCF's rigid body holds it)"),
     Row('stiffness_k2, stiffness_breakpoint', '-', 'N m/rad, rad',
         'not representable (a joint spring is linear); closest: stiffness k1'),
     Row('backlash', '-', 'rad', 'not representable (no dead zone on a joint spring)'),

@@ -29,8 +29,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from frf_ident.core.model.params import RobotParams
-from frf_ident.io.mjcf.drive_map import (drive_from_axis, JointDrive, LINK_SUFFIX, Limitation,
-                                         limitations, MOTOR_BODY_INERTIA, MOTOR_BODY_MASS)
+from frf_ident.io.mjcf.drive_map import (drive_from_axis, JointDrive, Limitation, limitations,
+                                         LINK_SUFFIX, MOTOR_BODY_INERTIA, MOTOR_BODY_MASS)
 from frf_ident.io.mjcf.robot import load_spec
 from frf_ident.io.mjcf.spec_edit import set_drive, split_elastic
 import mujoco
@@ -77,7 +77,8 @@ def _standalone(robot: RobotParams) -> tuple[mujoco.MjSpec, list[str]]:
              for a in robot.axes if a.gravity_torque or a.gravity]
     if robot.link_coupling is not None and np.any(robot.link_coupling):
         notes.append('link_coupling: not representable in a standalone MJCF (independent '
-                     'axes); give the model an mjcf base to keep the rigid body\'s coupling')
+                     'axes); give the model an mjcf base to keep the coupling of its rigid '
+                     'body')
     tiny = ' '.join([repr(MOTOR_BODY_INERTIA)] * 3)
     for i, a in enumerate(robot.axes):
         motor = ET.SubElement(world, 'body', name=f'{a.name}_motor',
@@ -105,9 +106,9 @@ def _inertia_notes(robot: RobotParams, path: Path) -> list[str]:
     out = []
     for a, v in zip(robot.axes, values):
         rel = a.link_inertia / v['link_inertia'] - 1.0
-        out.append(f'{a.name}: link inertia {a.link_inertia:.4g} kg m^2 here, the MJCF\'s '
-                   f'{v["link_inertia"]:.4g} at the pose ({100 * rel:+.1f} %): the MJCF\'s '
-                   f'rigid body is kept')
+        out.append(f'{a.name}: link inertia {a.link_inertia:.4g} kg m^2 here, the MJCF has '
+                   f'{v["link_inertia"]:.4g} at the pose ({100 * rel:+.1f} %): its rigid body '
+                   f'is kept')
     return out
 
 

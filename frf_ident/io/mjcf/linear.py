@@ -38,8 +38,12 @@ FD_EPS = 1e-6
 
 @dataclass
 class Linearisation:
-    """x_{k+1} = A x_k + B u_k, y_k = C x_k over one sample: u [N m] the axes' torques, y their
-    motor-side velocities [rad/s]; x MuJoCo's (dq, qvel, act)."""
+    """
+    One sample of the MJCF linearised: x_{k+1} = A x_k + B u_k, y_k = C x_k.
+
+    u [N m] the axes' torques, y their motor-side velocities [rad/s], x MuJoCo's
+    (dq, qvel, act); ``dt`` the sample period [s].
+    """
 
     A: np.ndarray
     B: np.ndarray

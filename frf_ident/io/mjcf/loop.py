@@ -43,7 +43,7 @@ __all__ = ['COMPILED', 'run_loop']
 
 
 def _library():
-    """MuJoCo's C library inside the mujoco package (the one its bindings loaded)."""
+    """Load MuJoCo's C library from the mujoco package (the one its bindings loaded)."""
     here = os.path.dirname(mujoco.__file__)
     for pattern in ('libmujoco.so*', 'libmujoco*.dylib', 'mujoco.dll'):
         found = sorted(glob.glob(os.path.join(here, pattern)))
@@ -121,5 +121,5 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, **kw) -> None:
         _kernel(model._address, data._address, data.qpos, data.qvel, data.ctrl, step=_c_step,
                 **args)
     else:
-        _body(0, 0, data.qpos, data.qvel, data.ctrl, step=lambda _m, _d: mujoco.mj_step(model, data),
-              **args)
+        _body(0, 0, data.qpos, data.qvel, data.ctrl,
+              step=lambda _m, _d: mujoco.mj_step(model, data), **args)

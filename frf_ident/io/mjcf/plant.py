@@ -195,6 +195,6 @@ class MujocoPlant:
         d, r = self.data, self.robot
         q = d.qpos[r.qadr].copy()
         if self.enc.any():
-            q = np.where(self.enc > 0, self.enc * np.floor(q / np.where(self.enc > 0, self.enc,
-                                                                          1.0) + 0.5), q)
+            enc = np.where(self.enc > 0, self.enc, 1.0)
+            q = np.where(self.enc > 0, enc * np.floor(q / enc + 0.5), q)
         return q, d.qvel[r.vadr] + vn[0], res.effort[0]

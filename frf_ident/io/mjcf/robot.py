@@ -208,7 +208,8 @@ def start_pose(spec: mujoco.MjSpec, model: mujoco.MjModel, source: MjcfSource) -
     if source.keyframe is not None:
         k = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, source.keyframe)
         if k < 0:
-            names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_KEY, i) for i in range(model.nkey)]
+            names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_KEY, i)
+                     for i in range(model.nkey)]
             raise MjcfError(f'{source.file}: no keyframe {source.keyframe!r} (has {names})')
         qpos = model.key_qpos[k].copy()
     elif model.nkey:

@@ -12,11 +12,12 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-Edits of an MJCF through MuJoCo's model editor (``mujoco.MjSpec``): lock a joint at a pose,
-insert the series-elastic hinge pair, set a joint's drive terms.
+Edits of an MJCF through MuJoCo's model editor (``mujoco.MjSpec``).
 
-Each function changes the spec in place; the caller compiles it (``spec.compile()``) or writes
-it (``spec.to_xml()``). The attribute names are those of :data:`~frf_ident.io.mjcf.drive_map.MAPPING`.
+Lock a joint at a pose, insert the series-elastic hinge pair, set a joint's drive terms. Each
+function changes the spec in place (:func:`split_elastic` returns a new one); the caller
+compiles it (``spec.compile()``) or writes it (``spec.to_xml()``). The attribute names are
+those of :data:`~frf_ident.io.mjcf.drive_map.MAPPING`.
 """
 from __future__ import annotations
 
@@ -98,8 +99,9 @@ def link_joint(spec: mujoco.MjSpec, joint: str):
     if other is None or j is None:
         return None
     if other.parent.parent.name != j.parent.name:
-        raise MjcfError(f'joint {other.name!r} is not in a child body of {joint!r}\'s body '
-                        f'{j.parent.name!r} (the series-elastic pair, docs/mujoco.md)')
+        raise MjcfError(f'joint {other.name!r} is not in a child body of the body '
+                        f'{j.parent.name!r} of {joint!r} (the series-elastic pair, '
+                        f'docs/mujoco.md)')
     if not np.allclose(np.cross(np.array(other.axis), np.array(j.axis)), 0.0, atol=1e-9):
         raise MjcfError(f'joint {other.name!r}: axis {list(other.axis)} is not the axis '
                         f'{list(j.axis)} of {joint!r} (the series-elastic pair)')
