@@ -32,7 +32,8 @@ from frf_ident.errors import FrfIdentInputError, ModelFileError
 from frf_ident.io.yamlio import read_yaml_file
 import yaml
 
-__all__ = ['MUJOCO', 'load_model', 'load_plant', 'read_model_dict', 'save_model']
+__all__ = ['MUJOCO', 'dry_run_plant', 'load_model', 'load_plant', 'read_model_dict',
+           'save_model']
 
 #: the plant spec that simulates an MJCF in MuJoCo (``mujoco`` or ``mujoco:FILE.xml``)
 MUJOCO = 'mujoco'
@@ -130,6 +131,21 @@ def _mjcf_view(d: dict[str, Any], path: Path) -> dict[str, Any]:
         return view_dict(d, path.parent)
     except ModelFileError as exc:
         raise ModelFileError(f'{path}: {exc}') from None
+
+
+def dry_run_plant(model: dict[str, Any], robot: RobotParams) -> Any:
+    """
+    Return the plant a plan's torque is predicted on: MuJoCo's for a model naming an MJCF.
+
+    A model with ``mjcf`` is predicted on its MJCF (noiseless), not on our parameters of it
+    (a rigid joint's spring there is an approximation, docs/mujoco.md); None for any other
+    model (the prediction then runs our plant of ``robot``).
+    """
+    if robot.mjcf is None:
+        return None
+    quiet = dict(model, axes=[{k: v for k, v in a.items() if not k.endswith('_noise')}
+                              for a in model['axes']])
+    return _mujoco_plant(MUJOCO, quiet)
 
 
 def save_model(path: str | Path, robot: RobotParams, controller: PIVelocity | None = None,

@@ -140,7 +140,7 @@ class ClosedLoop:
 
 def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIVelocity,
                         position: np.ndarray | None = None,
-                        origin: np.ndarray | None = None) -> np.ndarray:
+                        origin: np.ndarray | None = None, plant: Any = None) -> np.ndarray:
     """
     Dry-run a plan on the nominal model and return the peak torque of every axis.
 
@@ -163,6 +163,10 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
     origin : array_like, shape (n,), optional
         The operating point [rad] the plan's move targets are relative to; default
         ``position``.
+    plant : object, optional
+        A noiseless plant with ``simulate`` and ``reset(position=)`` to run the plan on instead
+        (the MJCF of a model that names one, simulated by MuJoCo); default our plant of
+        ``robot``.
 
     Returns
     -------
@@ -170,8 +174,9 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
         Peak absolute motor torque [N m] of every axis over the whole plan.
 
     """
-    quiet = [replace(a, velocity_noise=0.0, torque_noise=0.0) for a in robot.axes]
-    plant = FlexibleJointPlant(replace(robot, axes=quiet))
+    if plant is None:
+        quiet = [replace(a, velocity_noise=0.0, torque_noise=0.0) for a in robot.axes]
+        plant = FlexibleJointPlant(replace(robot, axes=quiet))
     ctrl = controller.copy()
     q0 = np.zeros(robot.n_axes) if position is None else np.asarray(position, dtype=float)
     ctrl.reset(plant.equilibrium_torque(q0))
@@ -187,7 +192,7 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
 def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVelocity,
                       torque_limit: np.ndarray, name: str, remedy: str,
                       position: np.ndarray | None = None,
-                      origin: np.ndarray | None = None) -> np.ndarray:
+                      origin: np.ndarray | None = None, plant: Any = None) -> np.ndarray:
     """
     Predict a plan's peak torque and refuse the plan when it reaches 0.95 of a limit.
 
@@ -197,7 +202,7 @@ def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVel
 
     Parameters
     ----------
-    phases, robot, controller, position, origin
+    phases, robot, controller, position, origin, plant
         As for :func:`predict_peak_torque`.
     torque_limit : array_like, shape (n,)
         Torque limit [N m] of every axis.
@@ -217,7 +222,7 @@ def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVel
         An axis' predicted peak reaches 0.95 of its limit.
 
     """
-    peak = predict_peak_torque(phases, robot, controller, position, origin)
+    peak = predict_peak_torque(phases, robot, controller, position, origin, plant)
     check_torque_bound(peak, torque_limit, robot.joint_names, name, remedy)
     return peak
 
@@ -232,7 +237,7 @@ def run_identification(plant: Any, controller: PIVelocity,
                        config: IdentificationConfig | None = None, *,
                        progress: Progress | None = None,
                        meta: dict[str, Any] | None = None,
-                       model: RobotParams | None = None) -> Recording:
+                       model: RobotParams | None = None, dry_run: Any = None) -> Recording:
     """
     Run the Section 7 procedures (multisine with compensation run, iterated chirps).
 
@@ -252,6 +257,9 @@ def run_identification(plant: Any, controller: PIVelocity,
         The nominal model: the multisine plan and the first chirp step are refused when their
         peak torque predicted on it (:func:`predict_peak_torque`) reaches 0.95 of a limit,
         as the excitation node refuses them on a robot. None: no prediction.
+    dry_run : object, optional
+        The noiseless plant the prediction runs on instead of our plant of ``model``
+        (:func:`predict_peak_torque`'s ``plant``).
 
     Returns
     -------
@@ -281,7 +289,7 @@ def run_identification(plant: Any, controller: PIVelocity,
                                    ('chirp_iteration_1', it and it.phases(), cfg.chirp)):
             if plan is not None:
                 peak = check_plan_torque(plan, model, controller, controller.torque_limit,
-                                         name, remedy.remedy(), loop.q0)
+                                         name, remedy.remedy(), loop.q0, plant=dry_run)
                 say(f"{name}: predicted peak torque {' / '.join(f'{p:.1f}' for p in peak)} N m "
                     'on the model (limits '
                     f"{' / '.join(f'{u:.0f}' for u in controller.torque_limit)} N m)")

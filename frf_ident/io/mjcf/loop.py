@@ -21,9 +21,10 @@ the sample loop of :func:`frf_ident.core.simulation.plant._simulate` for MuJoCo:
 (:func:`~frf_ident.core.simulation.controller.pi_step`, the same function
 :class:`~frf_ident.core.simulation.controller.PIVelocity` runs), the torque limit, ``ctrl``, then
 ``substeps`` MuJoCo steps, all without Python per sample: MuJoCo's arrays are numpy views into
-its mjData, and ``mj_step`` is called through ctypes on the model's and data's addresses
-(``MjModel._address``). MuJoCo's own integrator, time step and everything else are untouched.
-``python -m benchmarks --markdown mujoco`` measures it against the Python loop.
+its mjData, and ``mj_step`` is called as a numba first-class function on the model's and
+data's addresses (``MjModel._address``), so the kernel is cached on disk. MuJoCo's own
+integrator, time step and everything else are untouched. ``python -m benchmarks --markdown
+mujoco`` measures it against the Python loop.
 
 Why not ``mujoco.rollout`` with the PI as an affine actuator (force = kp (r - v) + ki (q_ref - q)
 with q_ref the integral of r, ctrl = kp r + ki q_ref precomputed): docs/mujoco.md, "Speed".
@@ -37,6 +38,7 @@ import os
 from frf_ident.core.simulation.controller import pi_step
 import mujoco
 import numba
+from numba.experimental.function_type import WrapperAddressProtocol
 import numpy as np
 
 __all__ = ['COMPILED', 'run_loop']
@@ -58,12 +60,22 @@ def _library():
 _LIB = _library()
 #: whether the sample loop runs compiled (MuJoCo's C library found); else a Python loop
 COMPILED = _LIB is not None
-if COMPILED:
-    _MJ_STEP = _LIB.mj_step
-    # pointers passed as integers: the addresses of MjModel / MjData (x86-64 and arm64 pass a
-    # pointer and a size_t alike)
-    _MJ_STEP.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
-    _MJ_STEP.restype = None
+
+
+class _MjStep(WrapperAddressProtocol):
+    """MuJoCo's C ``mj_step(const mjModel*, mjData*)`` as a numba first-class function.
+
+    Passed to the kernel as an argument (not a global), so the kernel is cached on disk like
+    the project's other kernels: the address is looked up in each process.
+    """
+
+    def __wrapper_address__(self) -> int:
+        return ctypes.cast(_LIB.mj_step, ctypes.c_void_p).value
+
+    def signature(self):
+        # the two pointers as integers (MjModel._address, MjData._address): on x86-64 and
+        # arm64 a pointer and an intp are passed alike
+        return numba.types.void(numba.types.intp, numba.types.intp)
 
 
 def _body(maddr, daddr, qpos, qvel, ctrl, qadr, vadr, act, gear, substeps, r, u_ext, closed,
@@ -101,12 +113,7 @@ def _body(maddr, daddr, qpos, qvel, ctrl, qadr, vadr, act, gear, substeps, r, u_
             step(maddr, daddr)
 
 
-if COMPILED:
-    @numba.njit(fastmath=False, error_model='numpy')
-    def _c_step(maddr, daddr):
-        _MJ_STEP(maddr, daddr)
-
-    _kernel = numba.njit(fastmath=False, error_model='numpy')(_body)
+_kernel = numba.njit(cache=True, error_model='numpy')(_body)
 
 
 def run_loop(model: mujoco.MjModel, data: mujoco.MjData, **kw) -> None:
@@ -118,7 +125,7 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, **kw) -> None:
     """
     args = dict(kw)
     if COMPILED:
-        _kernel(model._address, data._address, data.qpos, data.qvel, data.ctrl, step=_c_step,
+        _kernel(model._address, data._address, data.qpos, data.qvel, data.ctrl, step=_MjStep(),
                 **args)
     else:
         _body(0, 0, data.qpos, data.qvel, data.ctrl,

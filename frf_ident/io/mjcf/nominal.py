@@ -102,10 +102,7 @@ def view_dict(d: dict[str, Any], base: Path) -> dict[str, Any]:
         merged.append(entry)
     out['axes'] = merged
     out['link_coupling'] = inertia.tolist()
-    # the axes' start positions written out: the controller starts with their holding torque
-    src = mjcf_source_from_dict(out)
-    pose = {'keyframe': src.keyframe} if src.keyframe else {}
-    pose.update(src.pose)
-    pose.update({a: robot.pose[a] for a in robot.axes})
-    out['pose'] = pose
+    # the start pose written out joint by joint: the controller starts with the axes' holding
+    # torque, and another MJCF of the same robot (--plant mujoco:FILE.xml) starts there too
+    out['pose'] = dict(robot.pose)
     return out

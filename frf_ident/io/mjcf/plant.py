@@ -52,8 +52,9 @@ class MujocoPlant:
         noise, seed, and ``mjcf``/``pose`` unless ``mjcf`` is given. Default: the embedded
         model (whose axes are not an MJCF's: give ``mjcf`` and a model naming its joints).
     mjcf : str or Path, optional
-        The MJCF to simulate instead of the model's (``--plant mujoco:FILE.xml``); the model's
-        ``pose`` applies to it.
+        The MJCF to simulate instead of the model's (``--plant mujoco:FILE.xml``); it starts at
+        the model's pose (every joint the model's MJCF poses must be in it), else at its first
+        keyframe or ``qpos0``.
 
     Raises
     ------
@@ -66,8 +67,8 @@ class MujocoPlant:
                  mjcf: str | Path | None = None) -> None:
         d = config if config is not None else default_model_dict()
         src = mjcf_source_from_dict(d) if 'mjcf' in d else None
-        if mjcf is not None:
-            src = MjcfSource(str(mjcf), src.keyframe if src else None, src.pose if src else {})
+        if mjcf is not None:      # the model's pose, joint by joint (not its keyframe's name)
+            src = MjcfSource(str(mjcf), None, src.pose if src else {})
         if src is None:
             raise MjcfError('--plant mujoco: the model file names no mjcf; give one in the '
                             'model (mjcf: robot.xml) or as --plant mujoco:FILE.xml')
