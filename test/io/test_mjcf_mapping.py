@@ -92,3 +92,9 @@ def test_second_robot_kr300_from_urdf_matches_pinocchio(tmp_path):
         np.testing.assert_allclose(grad, side.gravity_gradient, rtol=1e-6, atol=1e-3)
     m = mujoco.MjModel.from_xml_path(str(xml))
     assert m.nu == 3 and list(m.actuator_ctrlrange[:, 1]) == [2e4, 4e4, 1.5e4]
+
+
+def test_docs_show_the_mapping_table():
+    """docs/mujoco.md holds MAPPING as mapping_table() renders it (one table, one place)."""
+    from frf_ident.io.mjcf.drive_map import mapping_table
+    assert mapping_table() in (ROOT / 'docs' / 'mujoco.md').read_text()

@@ -37,7 +37,7 @@ from frf_ident.core.model.params import AxisParams
 
 __all__ = ['JointDrive', 'LINK_SUFFIX', 'Limitation', 'MAPPING', 'MOTOR_BODY_INERTIA',
            'MOTOR_BODY_MASS', 'RIGID_ANTIRESONANCE_NYQUIST', 'RIGID_MOTOR_SHARE',
-           'drive_from_axis', 'limitations']
+           'drive_from_axis', 'limitations', 'mapping_table', 'rigid_split']
 
 #: name of the link-side hinge of a series-elastic joint: ``<joint name>`` + this
 LINK_SUFFIX = '_link'
@@ -87,17 +87,38 @@ MAPPING: tuple[Row, ...] = (
     Row('(torque constant)', '`general` actuator `gainprm[0]` (1 for `motor`)', '1',
         'exact: applied torque = gainprm[0] x command'),
     Row('time_delay', '`actuator@delay` (ctrl history, `nsample` >= delay / timestep + 1)',
-        's', 'whole time steps exact; MuJoCo interpolates between samples of its history'),
+        's', 'whole time steps exact; a fraction of a step interpolated (`interp` linear)'),
     Row('gravity_torque, gravity', "the bodies' masses and `option@gravity`", 'N m',
         'MJCF -> ours: g(q) at the pose and its gradient; ours -> MJCF: not written (the '
         "MJCF's rigid body holds it)"),
-    Row('stiffness_k2, stiffness_breakpoint', '-', 'N m/rad, rad',
-        'not representable (a joint spring is linear); closest: stiffness k1'),
+    Row('stiffness_k2, stiffness_breakpoint', '(link-side `joint@stiffness` polynomial)',
+        'N m/rad, rad', 'not representable as a breakpoint; MuJoCo 4 takes stiffness="k1 c2 c3" '
+        '(torque k1 d + c2 d^2 + c3 d^3), the closest is a cubic; written: the linear k1'),
     Row('backlash', '-', 'rad', 'not representable (no dead zone on a joint spring)'),
     Row('torque_ripple', '-', 'N m', 'not representable (no position-periodic joint torque)'),
     Row('encoder_resolution, velocity_noise, torque_noise', '-', '',
         'measurement, not the MJCF: the model file keeps them, the plant applies them'),
 )
+
+
+def mapping_table() -> str:
+    """
+    Return :data:`MAPPING` as the Markdown table docs/mujoco.md shows.
+
+    Returns
+    -------
+    str
+        Header and one row per entry.
+
+    Examples
+    --------
+    >>> print(mapping_table().splitlines()[0])
+    | ours | MJCF | unit | how exact |
+
+    """
+    lines = ['| ours | MJCF | unit | how exact |', '|---|---|---|---|']
+    lines += [f'| `{r.ours}` | {r.mjcf} | {r.unit} | {r.note} |' for r in MAPPING]
+    return '\n'.join(lines)
 
 
 @dataclass(frozen=True)
