@@ -18,7 +18,8 @@ An MJCF robot prepared for identification: the axes, the pose, the held joints, 
 start pose (a keyframe, else the file's ``qpos0``, with the model file's joint positions over
 it) and locks every other hinge or slide joint at that pose: its joint is removed and its body
 welded where the pose puts it (:func:`~frf_ident.io.mjcf.spec_edit.lock_joint`), which is exact
-for the rigid body and costs no constraint. MuJoCo's own options stay (integrator, time step,
+for the rigid body and costs no constraint; MuJoCo then fuses the welded bodies into their
+parents (``compiler fusestatic``). MuJoCo's own options stay (integrator, time step,
 gravity). :class:`MjcfRobot` holds the compiled model and finds the state of rest at the pose
 (:meth:`MjcfRobot.rest`: the series springs deflected under gravity, the holding torques).
 """
@@ -275,6 +276,9 @@ def load_robot(source: MjcfSource, axes: list[str]) -> MjcfRobot:
     for act in list(spec.actuators):
         if not (act.trntype == mujoco.mjtTrn.mjTRN_JOINT and act.target in axes):
             spec.delete(act)
+    # the welded bodies fused into their parents: the same rigid body (M and gravity to
+    # rounding, test_mjcf_plant.py), fewer bodies per step (the iiwa on 3 axes: 9 -> 4)
+    spec.compiler.fusestatic = True
     return MjcfRobot(spec, source.file, axes, pose)
 
 
