@@ -98,3 +98,32 @@ def test_docs_show_the_mapping_table():
     """docs/mujoco.md holds MAPPING as mapping_table() renders it (one table, one place)."""
     from frf_ident.io.mjcf.drive_map import mapping_table
     assert mapping_table() in (ROOT / 'docs' / 'mujoco.md').read_text()
+
+
+def test_series_pair_on_the_kr300_reads_back_its_drive_and_pinocchios_link_side(tmp_path):
+    """Split joint_2 of the KR 300 into the hinge pair: our parameters of it read back."""
+    pytest.importorskip('pinocchio')
+    from frf_ident.io.kinematics import load_kinematics
+    from frf_ident.io.mjcf.drive_map import JointDrive
+    from frf_ident.io.mjcf.from_urdf import mjcf_from_urdf
+    from frf_ident.io.mjcf.spec_edit import set_drive, split_elastic
+    urdf = ROOT / 'urdf' / 'kuka_kr300_axes123.urdf'
+    xml = mjcf_from_urdf(urdf, tmp_path / 'kr300.xml', torque_limits=[2e4, 4e4, 1.5e4])
+    spec = split_elastic(mujoco.MjSpec.from_file(str(xml)), ['joint_2'])
+    drive = JointDrive('joint_2', armature=30.0, damping=200.0, frictionloss=0.0,
+                       stiffness=4e6, link_damping=3e3, torque_limit=4e4)
+    set_drive(spec, drive)
+    (tmp_path / 'kr300_flex.xml').write_text(spec.to_xml())
+    names = ['joint_1', 'joint_2', 'joint_3']
+    q = [0.3, -0.8, 0.5]
+    robot = load_robot(MjcfSource(str(tmp_path / 'kr300_flex.xml'), None, dict(zip(names, q))),
+                       names)
+    assert list(robot.elastic) == [False, True, False]
+    axes, link = axis_values(robot, 1000.0)
+    a2 = axes[1]
+    assert a2['motor_inertia'] == pytest.approx(30.0, rel=1e-6)
+    assert (a2['stiffness'], a2['damping'], a2['viscous_friction']) == (4e6, 3e3, 200.0)
+    side = load_kinematics(urdf, names).at(np.array(q))
+    rigid = np.diag([a['motor_inertia'] if i != 1 else 0.0 for i, a in enumerate(axes)])
+    np.testing.assert_allclose(link + rigid, side.inertia, rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose([a['gravity_torque'] for a in axes], side.gravity, rtol=1e-6)

@@ -63,7 +63,8 @@ COMPILED = _LIB is not None
 
 
 class _MjStep(WrapperAddressProtocol):
-    """MuJoCo's C ``mj_step(const mjModel*, mjData*)`` as a numba first-class function.
+    """
+    MuJoCo's C ``mj_step(const mjModel*, mjData*)`` as a numba first-class function.
 
     Passed to the kernel as an argument (not a global), so the kernel is cached on disk like
     the project's other kernels: the address is looked up in each process.
