@@ -453,6 +453,13 @@ def bench_poses() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('mujoco')
+def bench_mujoco() -> list[tuple[str, str, str, str]]:
+    """Run the iiwa 14 closed loop (3 axes, 1 kHz) in MuJoCo beside our own plant."""
+    from benchmarks.mujoco_plant import rows
+    return rows()
+
+
 def main(argv: list[str] | None = None) -> int:
     """
     Run the named sections (all without names) and print their rows.

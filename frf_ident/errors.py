@@ -21,7 +21,7 @@ stale sensor), so it is an input error: one line, exit 2, never a traceback.
 """
 
 __all__ = ['BagError', 'DesignError', 'EstimationError', 'FrfIdentError', 'FrfIdentInputError',
-           'ModelFileError', 'SafetyError']
+           'MjcfError', 'ModelFileError', 'SafetyError']
 
 
 class FrfIdentError(Exception):
@@ -38,6 +38,10 @@ class DesignError(FrfIdentInputError):
 
 class ModelFileError(FrfIdentInputError):
     """A model file (docs/CONTRACT.md §5) is malformed."""
+
+
+class MjcfError(ModelFileError):
+    """An MJCF (MuJoCo model) cannot be used as the plant or model: file, element and value."""
 
 
 class BagError(FrfIdentInputError):

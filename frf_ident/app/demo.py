@@ -43,7 +43,7 @@ DEMO_ROBOT = 'robot_3axis_demo.yaml'
 
 def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
              multisine: MultisineConfig = DEMO_MULTISINE, chirp: ChirpConfig = DEMO_CHIRP,
-             progress: Progress | None = None) -> int:
+             plant: str | None = None, progress: Progress | None = None) -> int:
     """
     Run the node graph, estimate from its bag and diagnose against the nominal model.
 
@@ -57,6 +57,9 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
         The simulated robot (default config/robot_3axis_demo.yaml).
     multisine, chirp
         The experiments.
+    plant
+        The plant node's ``plant`` (``mujoco``, ``mujoco:FILE.xml``, a plug-in); None: the
+        robot model's own simulation.
     progress
         Called with one line per step; None: silent.
 
@@ -79,9 +82,10 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
     out = Path(out)
     if (out / 'graph' / 'bag').exists():
         raise FrfIdentInputError(f'{out / "graph" / "bag"}: exists; choose a new --out')
-    progress(f'demo: robot {robot}, nominal model {model}')
+    progress(f'demo: robot {robot}' + (f' simulated by {plant}' if plant else '')
+             + f', nominal model {model}')
     bag, _ = run_graph(out / 'graph', robot=robot, multisine=multisine, chirp=chirp,
-                       log=progress)
+                       log=progress, params={'plant_node': {'plant': plant}} if plant else None)
     progress(f'demo: bag {bag}')
     estimate_bag(bag, out / 'estimate', progress=progress)
     progress('demo: diagnosis against the nominal model (its search trace: -v, or demo.log)')

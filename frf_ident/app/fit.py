@@ -39,6 +39,7 @@ from frf_ident.core.fit.coupled import CoupledFit, fit_coupled
 from frf_ident.core.fit.physical import fit_two_mass, PhysicalFit
 from frf_ident.core.fit.rational import OrderSelection, select_order
 from frf_ident.core.jsonable import jsonable
+from frf_ident.core.model.params import RobotParams
 from frf_ident.core.progress import Progress, sink
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.errors import FrfIdentInputError
@@ -52,7 +53,8 @@ __all__ = ['FitOptions', 'FitOutcome', 'MAX_ORDER', 'OUTPUT_FILES', 'cost_dict',
            'fit_frf', 'is_fit_input', 'source_pose']
 
 #: the files :func:`fit_frf` may write into its output directory (loop.*: with a model file)
-OUTPUT_FILES = ('fit.json', 'fit.png', 'fit.html', 'model.yaml', 'model.mat', 'loop.json',
+OUTPUT_FILES = ('fit.json', 'fit.png', 'fit.html', 'model.yaml', 'model.xml', 'model.urdf',
+                'model.mat', 'loop.json',
                 'loop.png')
 #: highest order tried when no --order is given: 9 states (3 twists, 6 velocities) describe the
 #: 3-axis robot's velocity FRF; 12 leaves room for a second mode per axis
@@ -189,7 +191,8 @@ def _coupled_dict(fit: CoupledFit) -> dict[str, Any]:
 
 
 def _fitted_model(values: dict[str, dict[str, float]], coupling: np.ndarray | None,
-                  delays: dict[str, float] | None, model: str | Path | None, out: Path) -> Path:
+                  delays: dict[str, float] | None, model: str | Path | None, out: Path
+                  ) -> tuple[Path, RobotParams]:
     """
     Write model.yaml: the base model (``model``, else the embedded default) with fitted axes.
 
@@ -213,7 +216,28 @@ def _fitted_model(values: dict[str, dict[str, float]], coupling: np.ndarray | No
         'fitted per axis (link_coupling not fitted: left out)'
     return save_model(out / 'model.yaml', robot, pi,
                       extra={'description': f'two-mass parameters {how} by frf-ident fit; '
-                                            f'other keys from {model or "the default model"}'})
+                                            f'other keys from {model or "the default model"}'}
+                      ), robot
+
+
+def _export_drive(robot, out: Path, progress: Callable[[str], None]) -> list[Path]:
+    """
+    Write the fitted drive terms as model.urdf and (with mujoco) model.xml, docs/mujoco.md.
+
+    model.xml keeps the model file's MJCF rigid body when it names one (else one standalone
+    two-mass chain per axis); every term it cannot hold is said in one line.
+    """
+    from frf_ident.io.urdf_drive import write_drive_urdf
+    files = [write_drive_urdf(robot, out / 'model.urdf')]
+    try:
+        from frf_ident.io.mjcf.export import write_mjcf
+    except ImportError:
+        progress("fit: model.xml (MJCF) left out: pip install 'frf_ident[mujoco]'")
+        return files
+    exp = write_mjcf(robot, out / 'model.xml')
+    for line in exp.lines():
+        progress(f'  model.xml: {line}')
+    return [exp.path] + files
 
 
 def _physical(frf: FrequencyResponse, var: np.ndarray | None, delay_s: float | None,
@@ -311,8 +335,9 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
         if delay_s is None:
             delays = {f.name: (f.delay_s if coupled is None else coupled.delay_s)
                       for f in phys}
-        files.append(_fitted_model(values, None if coupled is None else
-                                   coupled.link_coupling()[0], delays, model, out))
+        yaml_path, fitted_robot = _fitted_model(values, None if coupled is None else
+                                                coupled.link_coupling()[0], delays, model, out)
+        files += [yaml_path] + _export_drive(fitted_robot, out, progress)
         chans = axis_channels(frf)
         if coupled is not None:
             v = None if var is None else var[np.ix_([o for _, o, _ in chans],

@@ -44,6 +44,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f'nominal model for diagnosis (default config/{DEMO_MODEL})')
     p.add_argument('--robot', type=Path,
                    help=f'the simulated "real" robot (default config/{DEMO_ROBOT})')
+    p.add_argument('--plant', default=None,
+                   help="the plant node's plant: 'mujoco' (the --robot model's MJCF), "
+                        "'mujoco:FILE.xml' or 'package.module:Class' (default: the --robot "
+                        "model's own simulation)")
     add_design_arguments(p, ms, ch)
 
 
@@ -77,4 +81,4 @@ def run(args: argparse.Namespace) -> int:
                  resolution_hz=args.resolution)
     ch = replace(DEMO_CHIRP, duration=args.chirp_duration, max_iterations=args.max_iterations)
     return run_demo(out, model=args.model, robot=args.robot, multisine=ms, chirp=ch,
-                    progress=say)
+                    plant=args.plant, progress=say)

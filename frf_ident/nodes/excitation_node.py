@@ -109,14 +109,14 @@ class ExcitationNode:
     """
 
     def __init__(self, node: Any) -> None:
-        from frf_ident.io.model_file import load_model
+        from frf_ident.io.model_file import dry_run_plant, load_model
         self.node = node
         settings = settings_from_parameters(node)
         c.refuse_lockstep_without_sim(node, settings.lockstep)
         t = c.topics(node, ('joint_states_topic', 'velocity_topic', 'excitation_topic',
                             'experiment_topic', 'progress_topic'))
         self.velocity_topic = t['velocity_topic']
-        _model, robot, ctrl = load_model(c.param(node, 'model', '') or None)
+        model, robot, ctrl = load_model(c.param(node, 'model', '') or None)
         self.joints = list(robot.joint_names)
         torque_limit = np.minimum(ctrl.torque_limit, robot.torque_limits())
         JointState = mw.msg('sensor_msgs/msg/JointState')
@@ -135,7 +135,8 @@ class ExcitationNode:
         # lockstep: staleness in simulation time (the plant's /clock); a robot: wall time
         sim_now = (lambda: clock.now().nanoseconds) if settings.lockstep else None
         self.session = ExcitationSession(settings, self.joints, robot.dt, torque_limit, self,
-                                         model=(robot, ctrl), sim_now_ns=sim_now)
+                                         model=(robot, ctrl, dry_run_plant(model, robot)),
+                                         sim_now_ns=sim_now)
         self.dt_ns = self.session.dt_ns
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None

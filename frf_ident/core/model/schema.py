@@ -32,14 +32,14 @@ import math
 from typing import Any
 
 from frf_ident.core.model.fields import expect_bool, expect_int
-from frf_ident.core.model.params import AxisParams, RobotParams
+from frf_ident.core.model.params import AxisParams, MjcfSource, RobotParams
 from frf_ident.errors import ModelFileError
 import numpy as np
 
 MODEL_VERSION = 1
 _AXIS_KEYS = {f.name for f in fields(AxisParams)}
 _TOP_KEYS = {'frf_ident_model', 'sample_rate', 'axes', 'controller', 'link_coupling',
-             'simulation', 'description'}
+             'simulation', 'description', 'mjcf', 'pose'}
 _SIM_KEYS = {'substeps', 'velocity_from_encoder', 'seed'}
 
 
@@ -149,7 +149,7 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
             raise ModelFileError(f'link_coupling: expected an {len(axes)}x{len(axes)} matrix '
                                  f'of numbers, got {coupling!r}') from None
     return RobotParams(
-        axes=axes, link_coupling=coupling,
+        axes=axes, link_coupling=coupling, mjcf=mjcf_source_from_dict(d),
         sample_rate=_number('sample_rate', d.get('sample_rate', RobotParams.sample_rate)),
         substeps=expect_int('simulation.substeps', sim.get('substeps', RobotParams.substeps),
                             1, ModelFileError),
@@ -159,6 +159,32 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
                                           ModelFileError),
         seed=expect_int('simulation.seed', sim.get('seed', RobotParams.seed), 0,
                         ModelFileError))
+
+
+def mjcf_source_from_dict(d: dict[str, Any]) -> MjcfSource | None:
+    """
+    Return the model file's ``mjcf`` and ``pose`` as an MjcfSource (None without ``mjcf``).
+
+    ``mjcf``: the MJCF file; ``pose``: a keyframe name, or a mapping joint name -> position
+    [rad] (with an optional ``keyframe`` entry it is applied over).
+    """
+    path, pose = d.get('mjcf'), d.get('pose')
+    if path is None:
+        if pose is not None:
+            raise ModelFileError('pose: only a model with mjcf (an MJCF file) takes a pose')
+        return None
+    if not isinstance(path, str) or not path:
+        raise ModelFileError(f'mjcf: expected the path of an MJCF file, got {path!r}')
+    if pose is None or isinstance(pose, str):
+        return MjcfSource(path, pose or None, {})
+    if not isinstance(pose, dict):
+        raise ModelFileError(f'pose: expected a keyframe name or a mapping joint name -> '
+                             f'position [rad], got {pose!r}')
+    key = pose.get('keyframe')
+    if key is not None and not isinstance(key, str):
+        raise ModelFileError(f'pose.keyframe: expected a keyframe name, got {key!r}')
+    joints = {str(k): _number(f'pose.{k}', v) for k, v in pose.items() if k != 'keyframe'}
+    return MjcfSource(path, key, joints)
 
 
 def controller_gains(d: dict[str, Any], robot: RobotParams) -> tuple[np.ndarray, np.ndarray]:
@@ -210,6 +236,8 @@ def robot_to_dict(robot: RobotParams, controller: Any = None) -> dict[str, Any]:
     d['simulation'] = {'substeps': int(robot.substeps),
                        'velocity_from_encoder': bool(robot.velocity_from_encoder),
                        'seed': int(robot.seed)}
+    if robot.mjcf is not None:
+        d['description'] = f'{robot.mjcf.file} linearised at its pose, in our parameters'
     if controller is not None:
         d['controller'] = {'kind': 'pi_velocity', 'kp': controller.kp.tolist(),
                            'ki': controller.ki.tolist()}
