@@ -76,6 +76,7 @@ setup(
             'controller_node = frf_ident.nodes.controller_node:main',
             'excitation_node = frf_ident.nodes.excitation_node:main',
             'estimator_node = frf_ident.nodes.estimator_node:main',
+            'operator = frf_ident.nodes.operator_node:main',
         ],
     },
 )

@@ -21,7 +21,7 @@ stale sensor), so it is an input error: one line, exit 2, never a traceback.
 """
 
 __all__ = ['BagError', 'DesignError', 'EstimationError', 'FrfIdentError', 'FrfIdentInputError',
-           'ModelFileError', 'SafetyError']
+           'ModelFileError', 'NotArmed', 'SafetyError']
 
 
 class FrfIdentError(Exception):
@@ -50,3 +50,7 @@ class EstimationError(FrfIdentInputError):
 
 class SafetyError(FrfIdentInputError):
     """A torque or position bound would be violated; the excitation was refused or stopped."""
+
+
+class NotArmed(SafetyError):
+    """A run was refused because no operator armed the excitation node (docs/ros2.md)."""

@@ -23,8 +23,10 @@ clock and timers, logging) is rclpy's own. This module is imported only when rcl
 
 import importlib
 import threading
+import time
 from typing import Any, Callable, Optional, Sequence
 
+from frf_ident.middleware.caller import Caller
 from frf_ident.middleware.qos import as_qos_spec, QosSpec
 from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
@@ -32,9 +34,13 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
                               ParameterException)
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy_impl
 from rclpy.node import Node as RclpyNode
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, qos_profile_services_default,
+                       QoSProfile, ReliabilityPolicy)
+from rclpy.service import Service
+from rclpy.type_support import check_is_valid_srv_type
 
 BACKEND_NAME = 'rclpy'
 #: a draining subscription takes at most this many more messages per wake
@@ -103,6 +109,23 @@ class Client:
 
     def destroy(self) -> None:
         self._node.destroy_client(self._client)
+
+
+class HeaderKeepingService(_rclpy_impl.Service):
+    """
+    Keep the rmw service info of the request taken last (an rclpy service handle).
+
+    rclpy's executor takes a request (with its header) and calls the callback with the
+    request alone; the executor of a node runs take and callback one after the other in its
+    one thread, so the callback reads the header of its own request here.
+    """
+
+    last_info: Any = None
+
+    def service_take_request(self, request_cls: Any) -> Any:
+        taken = super().service_take_request(request_cls)
+        self.last_info = taken[1]
+        return taken
 
 
 class Node(RclpyNode):
@@ -182,6 +205,43 @@ class Node(RclpyNode):
         holder.append(super().create_subscription(msg_type, topic, draining,
                                                   to_qos_profile(qos), **kwargs))
         return holder[0]
+
+    def create_service(self, srv_type: Any, srv_name: str, callback: Callable[..., Any], *,
+                       caller: bool = False, **kwargs: Any) -> Any:
+        """
+        As rclpy; ``caller``: ``callback(request, response, Caller)`` (middleware/caller.py).
+
+        rclpy passes no request header to a callback, so a caller-aware service is built
+        from a :class:`HeaderKeepingService` as ``rclpy.node.Node.create_service`` builds
+        one (test/ros/test_ros_arming.py fails if rclpy changes this).
+        """
+        if not caller:
+            return super().create_service(srv_type, srv_name, callback, **kwargs)
+        group = kwargs.get('callback_group') or self.default_callback_group
+        qos = kwargs.get('qos_profile', qos_profile_services_default)
+        check_is_valid_srv_type(srv_type)
+        with self.handle:
+            impl = HeaderKeepingService(self.handle, srv_type, srv_name,
+                                        qos.get_c_qos_profile())
+
+        def with_caller(request: Any, response: Any) -> Any:
+            return callback(request, response, self.caller_of(service, impl.last_info))
+        service = Service(impl, srv_type, srv_name, with_caller, group, qos)
+        group.add_entity(service)
+        self._services.append(service)
+        self._wake_executor()
+        return service
+
+    def caller_of(self, service: Any, info: Any) -> Caller:
+        """Return what rclpy tells of a request: sequence, send time, the client nodes."""
+        name = service.service_name
+        clients = self.get_publishers_info_by_topic(f'rq{name}Request', no_mangle=True)
+        nodes = sorted({f"{c.node_namespace.rstrip('/')}/{c.node_name}" for c in clients})
+        seq, sent = -1, None
+        if info is not None:
+            seq, sent = int(info.request_id.sequence_number), int(info.source_timestamp) or None
+        return Caller('rclpy', name, seq, time.time_ns(), sent_ns=sent,
+                      node=nodes[0] if len(nodes) == 1 else None, candidates=tuple(nodes))
 
     def create_client(self, srv_type: Any, srv_name: str, **kwargs: Any) -> Client:
         kwargs.setdefault('callback_group', self._client_group)
