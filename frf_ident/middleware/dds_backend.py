@@ -644,14 +644,17 @@ class Node:
 
     def __init__(self, name: str, *, namespace: str = '/',
                  parameter_overrides: Optional[dict[str, Any]] = None,
-                 use_sim_time: Optional[bool] = None) -> None:
+                 use_sim_time: Optional[bool] = None, global_arguments: bool = True) -> None:
         if not name or '/' in name:
             raise ValueError(f'invalid node name {name=}')
         self._ctx = _get_context()
         self._name = name
         self._namespace = '/' + namespace.strip('/')
         self._logger = Logger(name)
-        file_values, cli_overrides = parse_ros_args(self._ctx.args, name, self._namespace)
+        # global_arguments False: the command line's --ros-args are not this node's (rclpy's
+        # use_global_arguments): a helper node of a process takes no parameters from them
+        file_values, cli_overrides = (parse_ros_args(self._ctx.args, name, self._namespace)
+                                      if global_arguments else ({}, {}))
         self._overrides = {**file_values, **cli_overrides, **(parameter_overrides or {})}
         if use_sim_time is not None:
             self._overrides['use_sim_time'] = bool(use_sim_time)
@@ -811,9 +814,9 @@ class Node:
 
 def create_node(name: str, *, namespace: str = '/',
                 parameter_overrides: Optional[dict[str, Any]] = None,
-                use_sim_time: Optional[bool] = None) -> Node:
+                use_sim_time: Optional[bool] = None, global_arguments: bool = True) -> Node:
     return Node(name, namespace=namespace, parameter_overrides=parameter_overrides,
-                use_sim_time=use_sim_time)
+                use_sim_time=use_sim_time, global_arguments=global_arguments)
 
 
 def spin_once(node: Node, timeout_sec: Optional[float] = None) -> None:

@@ -133,12 +133,13 @@ class Node(RclpyNode):
 
     def __init__(self, name: str, *, namespace: str = '/',
                  parameter_overrides: Optional[dict[str, Any]] = None,
-                 use_sim_time: Optional[bool] = None) -> None:
+                 use_sim_time: Optional[bool] = None, global_arguments: bool = True) -> None:
         overrides = dict(parameter_overrides or {})
         if use_sim_time is not None:
             overrides['use_sim_time'] = bool(use_sim_time)
         super().__init__(name, namespace=namespace, parameter_overrides=[
-            Parameter(key, value=value) for key, value in overrides.items()])
+            Parameter(key, value=value) for key, value in overrides.items()],
+            use_global_arguments=global_arguments)
         self._client_group = ReentrantCallbackGroup()
         self._spinners = 0
         self._spinners_lock = threading.Lock()
@@ -268,10 +269,10 @@ def shutdown() -> None:
 
 def create_node(name: str, *, namespace: str = '/',
                 parameter_overrides: Optional[dict[str, Any]] = None,
-                use_sim_time: Optional[bool] = None) -> Node:
+                use_sim_time: Optional[bool] = None, global_arguments: bool = True) -> Node:
     init()
     return Node(name, namespace=namespace, parameter_overrides=parameter_overrides,
-                use_sim_time=use_sim_time)
+                use_sim_time=use_sim_time, global_arguments=global_arguments)
 
 
 def spin_once(node: Node, timeout_sec: Optional[float] = None) -> None:

@@ -319,6 +319,7 @@ class ExcitationNode:
     def close(self) -> None:
         self._stop.set()
         self.session.close()
+        self.gate.close()
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -28,7 +28,6 @@ import getpass
 import socket
 import sys
 import threading
-import time
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
@@ -39,8 +38,6 @@ from frf_ident.nodes import common as c
 
 __all__ = ['main', 'OperatorNode']
 
-#: the timer that sends the heartbeats when due [s] (the period comes from the node)
-TICK_S = 0.01
 #: how long a command waits for the excitation node's reply [s] (planning takes seconds)
 CALL_TIMEOUT_S = 120.0
 
@@ -72,12 +69,11 @@ class OperatorNode:
                                  mw.qos_transient_local(1))
         node.create_subscription(self.String, t['progress_topic'], self._on_progress,
                                  mw.qos_transient_local(10))
-        Trigger = mw.srv('std_srvs/srv/Trigger')
-        self.Request = Trigger.Request
-        self.clients = {k: node.create_client(Trigger, name) for k, name in COMMANDS.items()}
-        self.due = 0.0
-        node.create_timer(TICK_S, self._tick)
-        self.stop: Optional[threading.Event] = None
+        self.Trigger = mw.srv('std_srvs/srv/Trigger')
+        #: created at a command's first use: until then this console is no client of the run
+        #: services, so rclpy can name another caller (middleware/caller.py)
+        self.clients: dict[str, Any] = {}
+        self.stop = threading.Event()
         say('waiting for excitation_node on /frf/arming; ' + HELP)
 
     def _on_announcement(self, msg: Any) -> None:
@@ -88,26 +84,26 @@ class OperatorNode:
         if line is not None:
             say(line)
 
-    def _tick(self) -> None:
-        now = time.monotonic()
-        if now < self.due:
-            return
-        self.due = now + self.sender.period_s
-        text = self.sender.next_heartbeat()
-        if text is not None:
-            self.pub.publish(self.String(data=text))
+    def _beat(self) -> None:
+        """Send the heartbeats, in a thread of their own (no executor between them)."""
+        while not self.stop.wait(self.sender.period_s):
+            text = self.sender.next_heartbeat()
+            if text is not None:
+                self.pub.publish(self.String(data=text))
 
     def _commands(self) -> None:
         for line in sys.stdin:
             key = line.strip().lower()[:1]
             if key == 'q':
                 break
-            if key not in self.clients:
+            if key not in COMMANDS:
                 if key:
                     say(HELP)
                 continue
+            if key not in self.clients:
+                self.clients[key] = self.node.create_client(self.Trigger, COMMANDS[key])
             try:
-                reply = self.clients[key].call(self.Request(), CALL_TIMEOUT_S)
+                reply = self.clients[key].call(self.Trigger.Request(), CALL_TIMEOUT_S)
                 say(reply_line(COMMANDS[key], reply.message))
             except TimeoutError as exc:
                 say(f'{COMMANDS[key]}: no answer ({exc})')
@@ -123,6 +119,7 @@ class OperatorNode:
         """Spin until Ctrl-C or ``q``; commands are read in a thread of their own."""
         self.stop = stop
         threading.Thread(target=self._commands, daemon=True).start()
+        threading.Thread(target=self._beat, daemon=True).start()
         mw.spin(self.node, stop)
 
 
