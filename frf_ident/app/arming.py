@@ -131,6 +131,7 @@ class ArmingGate:
         self._operator = ''
         self._seq: dict[str, int] = {}             # console id -> newest sequence number
         self._rejected = ''                        # why the newest refused heartbeat was
+        self._rejected_kind = ''                   # logged once per kind (a replay: 20/s)
         self._armed = settings.mode == 'off'       # as last announced
         self._watched: Optional[int] = None        # id of the run the heartbeat keeps alive
         self._since = 0.0
@@ -154,43 +155,46 @@ class ArmingGate:
         Returns
         -------
         str or None
-            Why it was refused, when the reason differs from the previous refusal's (to log
-            once); None when it was taken (or refused again for the same reason).
+            Why it was refused, when its kind (format, session, MAC, sequence) differs from
+            the previous refusal's (to log once); None when it was taken (or refused again
+            for the same kind of reason).
 
         """
         if not self.required:
             return None
         now = self.clock()
-        reason = self._verify(text)
+        refused = self._verify(text)
         with self._lock:
-            if reason is None:
+            if refused is None:
                 if self._valid_t is not None and self._watched is not None:
                     self._max_gap = max(self._max_gap, now - max(self._valid_t, self._since))
                 self._valid_t = now
                 return None
-            new = reason != self._rejected
-            self._rejected = reason
+            kind, reason = refused
+            new = kind != self._rejected_kind
+            self._rejected, self._rejected_kind = reason, kind
         return reason if new else None
 
-    def _verify(self, text: str) -> Optional[str]:
+    def _verify(self, text: str) -> Optional[tuple[str, str]]:
+        """Return None for a valid heartbeat, else (kind, reason)."""
         try:
             hb = json.loads(text)
             session, console = str(hb['session']), str(hb['console'])
             seq, operator, mac = int(hb['seq']), str(hb['operator']), str(hb['mac'])
         except (ValueError, KeyError, TypeError) as exc:
-            return f'heartbeat refused: not a heartbeat ({type(exc).__name__}: {exc})'
+            return 'format', f'heartbeat refused: not a heartbeat ({type(exc).__name__}: {exc})'
         if session != self.session:
-            return ('heartbeat refused: it belongs to another session (a replayed bag, or a '
-                    'console of an earlier start of the node)')
+            return 'session', ('heartbeat refused: it belongs to another session (a replayed '
+                               'bag, or a console of an earlier start of the node)')
         if not hmac.compare_digest(mac, heartbeat_mac(self.token, session, console, seq,
                                                       operator)):
-            return (f'heartbeat refused: its MAC does not verify (console of {operator!r} was '
-                    'given a wrong token)')
+            return 'mac', (f'heartbeat refused: its MAC does not verify (console of '
+                           f'{operator!r} was given a wrong token)')
         with self._lock:
             last = self._seq.get(console, 0)
             if seq <= last:
-                return (f'heartbeat refused: #{seq} of console {console} came after #{last} '
-                        '(replayed or duplicated)')
+                return 'seq', (f'heartbeat refused: #{seq} of console {console} came after '
+                               f'#{last} (replayed or duplicated)')
             self._seq[console] = seq
             self._operator = operator
         return None

@@ -36,6 +36,9 @@ __all__ = ['CallerLookup']
 #: samples of ros_discovery_info kept between two requests (each participant re-sends its
 #: whole table at every change; the newest per participant is what counts)
 GRAPH_DEPTH = 1000
+#: how long [s] a request waits for the caller's ros_discovery_info (it can follow the
+#: request); a participant without rmw (a plain DDS tool) never sends one
+GRAPH_WAIT_S = 0.5
 
 
 def _properties(qos: Any) -> dict[str, str]:
@@ -115,9 +118,14 @@ class CallerLookup:
         if endpoint is None:
             return Caller('dds', service, int(wire.sequence_number), received,
                           sent_ns=int(info.source_timestamp) or None)
-        with self._lock:
-            self._update_graph()
-            node = self._nodes.get(endpoint.key.bytes)
+        deadline = time.monotonic() + GRAPH_WAIT_S
+        while True:       # the caller's ros_discovery_info can come after its request
+            with self._lock:
+                self._update_graph()
+                node = self._nodes.get(endpoint.key.bytes)
+            if node is not None or time.monotonic() > deadline:
+                break
+            time.sleep(0.01)
         props = self._participant(endpoint.participant_key)
         pid = props.get('__Pid')
         name = props.get('__ProcessName')

@@ -45,6 +45,10 @@ from rclpy.type_support import check_is_valid_srv_type
 BACKEND_NAME = 'rclpy'
 #: a draining subscription takes at most this many more messages per wake
 DRAIN_BATCH = 64
+#: how long [s] a caller-aware service waits for the ROS graph to list the caller's node
+#: (its ros_discovery_info can come after its request: a first call of `ros2 service call`
+#: found no client listed)
+CALLER_GRAPH_WAIT_S = 0.5
 #: what rclpy raises for a parameter value of the wrong type or an invalid one
 PARAMETER_ERRORS: tuple = (ParameterException, InvalidParameterTypeException,
                            InvalidParameterValueException)
@@ -236,8 +240,13 @@ class Node(RclpyNode):
     def caller_of(self, service: Any, info: Any) -> Caller:
         """Return what rclpy tells of a request: sequence, send time, the client nodes."""
         name = service.service_name
-        clients = self.get_publishers_info_by_topic(f'rq{name}Request', no_mangle=True)
-        nodes = sorted({f"{c.node_namespace.rstrip('/')}/{c.node_name}" for c in clients})
+        deadline = time.monotonic() + CALLER_GRAPH_WAIT_S
+        while True:       # the caller's node info may come a moment after its request
+            clients = self.get_publishers_info_by_topic(f'rq{name}Request', no_mangle=True)
+            nodes = sorted({f"{c.node_namespace.rstrip('/')}/{c.node_name}" for c in clients})
+            if nodes or time.monotonic() > deadline:
+                break
+            time.sleep(0.01)
         seq, sent = -1, None
         if info is not None:
             seq, sent = int(info.request_id.sequence_number), int(info.source_timestamp) or None
