@@ -29,6 +29,8 @@ setup(
          glob(os.path.join('launch', '*launch.[pxy][yma]*'))),
         (os.path.join('share', package_name, 'config'),
          glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))),
+        (os.path.join('share', package_name, 'config', 'sros2'),
+         glob(os.path.join('config', 'sros2', '*.xml'))),
         (os.path.join('share', package_name, 'urdf'), glob(os.path.join('urdf', '*.urdf'))),
     ],
     python_requires='>=3.10',
