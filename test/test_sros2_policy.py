@@ -31,6 +31,8 @@ POLICY = Path(__file__).resolve().parents[1] / 'config' / 'sros2' / 'frf_ident_p
 RULES = {'topics': ({'publish', 'subscribe'}, 'topic'),
          'services': ({'request', 'reply'}, 'service')}
 RUN_SERVICES = {'frf/run_multisine', 'frf/run_iteration'}
+#: the node ``ros2 service call SERVICE std_srvs/srv/Trigger`` creates (ros2cli)
+ROS2CLI_TRIGGER = '_ros2cli_requester_std_srvs_Trigger'
 
 
 def _grants():
@@ -85,4 +87,19 @@ def test_policy_names_are_the_nodes_names():
             continue
         assert name in (topics if kind == 'topics' else services), name
         assert node in {'excitation_node', 'excitation_node_arming', 'operator',
-                        'estimator_node'}, node
+                        'estimator_node', ROS2CLI_TRIGGER}, node
+
+
+def test_ros2_service_call_has_a_profile_in_the_operator_enclave_only():
+    """
+    The documented ``ros2 service call`` under the operator enclave needs its node's profile.
+
+    Under Enforce every entity a node creates needs a grant: without a profile for the node
+    ros2cli makes (its parameter services) the call fails before sending anything ("failed
+    to create topic [rr/_ros2cli_requester_std_srvs_Trigger/describe_parametersReply]",
+    seen live, test/ros/test_ros_sros2.py).
+    """
+    g = _grants()
+    assert {e for e, n, *_ in g if n == ROS2CLI_TRIGGER} == {'/frf_ident/operator'}
+    own = {o for e, n, k, p, o in g if n == ROS2CLI_TRIGGER and (k, p) == ('services', 'reply')}
+    assert '~/describe_parameters' in own and '~/get_type_description' in own
