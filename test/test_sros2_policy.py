@@ -14,12 +14,13 @@
 """
 The shipped SROS2 policy (config/sros2/frf_ident_policy.xml) against the code and its purpose.
 
-This machine has no sros2 (`ros2 security` is missing from /opt/ros/jazzy) and no copy of its
-policy schema, so secure mode is not run here (docs/ros2.md, "SROS2"). What is checked: the
-policy's structure as the ROS 2 access-control design defines it (policy version 0.2.0,
-enclaves > enclave[path] > profiles > profile[ns, node] > topics|services with
-publish/subscribe or request/reply = ALLOW|DENY), that its names are the ones the nodes use,
-and the property issue 56 asks for: only the operator's enclave may call the run services.
+Without ROS 2: this machine has no sros2 and no copy of its policy schema; secure mode runs
+in test/ros/test_ros_sros2.py (a keystore made by frf_ident/io/sros2_keystore.py, Cyclone
+DDS's security plugins, Enforce). What is checked here: the policy's structure as the ROS 2
+access-control design defines it (policy version 0.2.0, enclaves > enclave[path] > profiles >
+profile[ns, node] > topics|services with publish/subscribe or request/reply = ALLOW|DENY),
+that its names are the ones the nodes use, and the property issue 56 asks for: only the
+operator's enclave may call the run services.
 """
 from pathlib import Path
 import xml.etree.ElementTree as ET
