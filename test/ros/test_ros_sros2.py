@@ -27,6 +27,7 @@ plant: every answer is a refusal for arming reasons, which is an answer). Partic
   (signed by the permissions CA): it may read /frf/arming.
 - ``forger``: the intruder's valid identity with permissions that grant the call, signed by
   a permissions CA of its own (a tampered local keystore).
+- ``stranger``: a keystore of its own (identity and permissions CA), granting the call.
 - ``plain``: no security at all.
 - ``control``: the forger's very permissions signed by the real permissions CA: answered,
   so the forger's failure is the signature's, not a mistake in its permissions.
@@ -98,7 +99,7 @@ def _policy(path, node, grant_call):
 
 
 def _keystores(out, domain):
-    """Make the real keystore, the control's copy and the forger's: {name: path}."""
+    """Make the real keystore, the control's copy, the forger's, the stranger's: {name: path}."""
     real = out / 'keystore'
     ks.make_keystore(real, POLICY, ['/frf_ident/excitation', '/frf_ident/operator'], domain)
     ks.create_enclave(real, '/frf_ident/intruder')
@@ -119,7 +120,12 @@ def _keystores(out, domain):
     (mine / 'permissions_ca.cert.pem').symlink_to(forged / 'public' / 'permissions_ca.cert.pem')
     (mine / 'governance.p7s').symlink_to(forged / 'enclaves' / 'governance.p7s')
     ks.create_permission(forged, '/frf_ident/intruder', granted)
-    return {'real': real, 'control': control, 'forged': forged}
+    stranger = out / 'keystore_stranger'        # everything of its own
+    ks.create_keystore(stranger, domain)
+    ks.create_enclave(stranger, '/frf_ident/intruder')
+    ks.create_permission(stranger, '/frf_ident/intruder',
+                         _policy(out / 'stranger.xml', 'stranger', True))
+    return {'real': real, 'control': control, 'forged': forged, 'stranger': stranger}
 
 
 def _env(domain, keystore=None, override=None):
@@ -234,9 +240,10 @@ def observed(tmp_path_factory, new_domain):
         res['operator'] = _client(secure_out, _env(domain, keys['real']), 'operator',
                                   '/frf_ident/operator')
         res['ros2cli'] = _cli_call(_env(domain, keys['real'], '/frf_ident/operator'))
-        res['intruder'], res['forger'], res['plain'] = _parallel(
+        res['intruder'], res['forger'], res['stranger'], res['plain'] = _parallel(
             (secure_out, _env(domain, keys['real']), 'intruder', '/frf_ident/intruder'),
             (secure_out, _env(domain, keys['forged']), 'forger', '/frf_ident/intruder'),
+            (secure_out, _env(domain, keys['stranger']), 'stranger', '/frf_ident/intruder'),
             (secure_out, _env(domain), 'plain'))
         res['control'] = _client(secure_out, _env(domain, keys['control']), 'forger',
                                  '/frf_ident/intruder')
@@ -335,6 +342,25 @@ def test_forged_permissions_are_refused_by_the_excitation_node(observed):
                      observed['secure_log']), observed['secure_log'][-3000:]
     assert c['created'] and c['discovered'] and c['answered'] and c['arming_seen'], c
     assert json.loads(c['answer'])['caller'].startswith('node /forger'), c
+
+
+def test_a_keystore_of_its_own_is_not_authenticated(observed):
+    """
+    Identity and permissions from another CA, granting the call: never discovered.
+
+    The handshake fails on the stranger's side: it cannot verify the excitation node's
+    certificate (another identity CA), so the node's check of the stranger's certificate is
+    not reached (a stranger with a patched plugin would meet it; not tested).
+    """
+    r = observed['stranger']
+    _show('stranger', r)
+    assert r['created'] and not r['discovered'] and not r['answered'], r
+    assert not r['arming_seen'], r
+    assert r['wall_s'] >= 2 * WAIT_S, r
+    refusal = re.search(r'fsm: (Begin handshake reply failed: Certificate not valid: .*?);',
+                        r['log'])
+    assert refusal, r['log'][-2000:]
+    print('stranger logged:', refusal.group(1))
 
 
 def test_participant_without_security_never_discovers_the_service(observed):
