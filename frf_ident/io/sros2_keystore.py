@@ -83,9 +83,10 @@ DEFAULT_POLICY = Path('config') / 'sros2' / 'frf_ident_policy.xml'
 VALID_DAYS = 3650
 _SCHEMA = 'http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_{}.xsd'
 _XSI = 'http://www.w3.org/2001/XMLSchema-instance'
-#: (policy element, permission) -> [(DDS rule, topic prefix, topic suffix)]
+#: an action's services and topics under ``<action>/_action/``
 _ACTION_SERVICES = ('cancel_goal', 'get_result', 'send_goal')
 _ACTION_TOPICS = ('feedback', 'status')
+#: policy element -> (its child element, the permissions it takes)
 _KINDS = {'topics': ('topic', ('publish', 'subscribe')),
           'services': ('service', ('request', 'reply')),
           'actions': ('action', ('call', 'execute'))}
