@@ -29,6 +29,8 @@ setup(
          glob(os.path.join('launch', '*launch.[pxy][yma]*'))),
         (os.path.join('share', package_name, 'config'),
          glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))),
+        (os.path.join('share', package_name, 'config', 'sros2'),
+         glob(os.path.join('config', 'sros2', '*.xml'))),
         (os.path.join('share', package_name, 'urdf'), glob(os.path.join('urdf', '*.urdf'))),
     ],
     python_requires='>=3.10',
@@ -82,6 +84,7 @@ setup(
             'controller_node = frf_ident.nodes.controller_node:main',
             'excitation_node = frf_ident.nodes.excitation_node:main',
             'estimator_node = frf_ident.nodes.estimator_node:main',
+            'operator = frf_ident.nodes.operator_node:main',
         ],
     },
 )

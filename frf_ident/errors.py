@@ -21,7 +21,7 @@ stale sensor), so it is an input error: one line, exit 2, never a traceback.
 """
 
 __all__ = ['BagError', 'DesignError', 'EstimationError', 'FrfIdentError', 'FrfIdentInputError',
-           'MjcfError', 'ModelFileError', 'SafetyError']
+           'MjcfError', 'ModelFileError', 'NotArmed', 'SafetyError']
 
 
 class FrfIdentError(Exception):
@@ -54,3 +54,7 @@ class EstimationError(FrfIdentInputError):
 
 class SafetyError(FrfIdentInputError):
     """A torque or position bound would be violated; the excitation was refused or stopped."""
+
+
+class NotArmed(SafetyError):
+    """A run was refused because no operator armed the excitation node (docs/ros2.md)."""
