@@ -140,7 +140,10 @@ def _checks(checks: CrossChecks) -> str:
                           for s in ls.held_out_as_fitted for ax, v in s.per_axis.items()])
                  + '<ul>' + ''.join(f'<li>{html.escape(ax)}: the extended model '
                                     f'{html.escape(v)}</li>'
-                                    for ax, v in ls.extended_vs_baseline.items()) + '</ul>')
+                                    for ax, v in ls.extended_vs_baseline.items()) + '</ul>'
+                 + '<p>After the rule (time_nrmse, extended against least squares):</p>'
+                 + '<ul>' + ''.join(f'<li>{html.escape(v.sentence())}</li>'
+                                    for v in ls.verdicts) + '</ul>')
     return text
 
 
