@@ -80,8 +80,10 @@ def _unexplained(u: Unexplained) -> str:
     """Write an unexplained entry: an axis above its floor, or a peak above the band."""
     s = u.signature
     if u.misfit_share is None:
+        cause = f'; {u.cause.describe()}' if u.cause is not None else ''
         return (f'unexplained on {u.axis}: {u.kind}, {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz '
-                f'(peak {s.peak_hz:.3g} Hz, {s.peak_over_floor:.3g}x the local noise floor)')
+                f'(peak {s.peak_hz:.3g} Hz, {s.peak_over_floor:.3g}x the local noise floor)'
+                f'{cause}')
     band = f', strongest misfit {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz' if s.band_hz else ''
     return (f'unexplained on {u.axis}: {100 * u.misfit_share:.0f} % of the nominal misfit '
             f'left{band}')

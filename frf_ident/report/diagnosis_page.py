@@ -96,6 +96,12 @@ def _unexplained(res: DiagnosisResult) -> str:
                               u.signature.bands_hz or ([u.signature.band_hz]
                                                        if u.signature.band_hz else []))) or '-',
                           u.signature.correlates_with or '-'] for u in une]))
+        causes = [u for u in une if u.cause is not None]
+        if causes:
+            text += ('<p>What locks each peak (its frequency at the steady speeds of the '
+                     'record):</p><ul>' + ''.join(
+                         f'<li>{html.escape(u.axis)}, {u.cause.frequency_hz:g} Hz: '
+                         f'{html.escape(u.cause.describe())}</li>' for u in causes) + '</ul>')
     else:
         text = '<p>nothing: every axis is explained to within its noise floor.</p>'
     if res.band is not None:

@@ -67,6 +67,24 @@ RESONANCE_MAX = 5
 #: the two (test/core/diagnosis/test_band.py)
 RESONANCE_MIN_WIDTH_LINES = 2.0
 
+# --- what locks a line above the analysis band (timeseries/line_lock.py) ---------------------
+
+#: a steady stretch of the motion: the speed (low-passed at LINE_SPEED_HZ) stays within this
+#: share of the stretch's first speed ...
+LINE_STEADY_SHARE = 0.05
+#: ... for at least this long [s]; stretches whose speeds agree within LINE_STEADY_SHARE form
+#: one steady speed (EMPS: 0.083 m/s eight times 0.64 s, 0.125 m/s eight times 1.01 s)
+LINE_MIN_RUN_S = 0.4
+#: [Hz] low-pass of the speed that finds the steady stretches
+LINE_SPEED_HZ = 5.0
+#: probability that noise alone puts a PSD line (of the three around a predicted frequency)
+#: above the threshold at one steady speed: a line "is there" above it. The chi-square
+#: threshold of resonance.peak_threshold with the speed's own Welch windows, 3 lines tested
+LINE_LOCK_FALSE_ALARM = 1e-3
+#: a steady speed tells the hypotheses apart only where a position-locked line would lie at
+#: least this many lines away from the line's own frequency
+LINE_LOCK_MIN_SHIFT_LINES = 2.0
+
 # --- acceptance of an effect (both routes) ----------------------------------------------------
 
 #: an effect must remove this share of its axis' misfit above the noise floor; and an axis whose
