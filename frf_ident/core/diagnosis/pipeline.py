@@ -43,6 +43,7 @@ from .crosscheck.spread import standard_errors_across
 from .crosscheck.validation import on_other_records
 from .experiments.pipeline import diagnose_experiments
 from .result import DiagnosisResult
+from .sensor import name_sensor
 from .thresholds import SIM_JOBS
 from .timeseries.pipeline import diagnose_timeseries
 
@@ -142,7 +143,7 @@ def diagnose(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
     res, checks.least_squares = against_least_squares(res, rec, others, robot, progress)
     checks.validation_records = on_other_records(res, rec, others, robot, ctrl, progress,
                                                  name=name)
-    return Diagnosis(res, checks, rec, others)
+    return Diagnosis(name_sensor(res, rec, robot), checks, rec, others)
 
 
 def route(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *, jobs: int, fd_fit: bool,
