@@ -25,12 +25,14 @@ recall and what the other axes borrowed.
 
 ``python -m benchmarks.diagnosis_sensor N [SEED]`` runs N scenes of each kind from SEED
 (default 55000), one JSON line per scene, then the aggregate;
-``FRF_SENSOR_SCENES`` sets N for the section (default 20).
+``FRF_SENSOR_SCENES`` sets N for the section (default 20); ``FRF_SENSOR_RUNS=FILE`` writes
+every scene's score there as JSON.
 """
 from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 import sys
 from typing import Any
 
@@ -84,6 +86,9 @@ def rows() -> list[tuple[str, str, str, str]]:
     """Return the section's rows."""
     n = int(os.environ.get('FRF_SENSOR_SCENES', '20'))
     a = sensor_sweep(n, verbose=False)
+    runs = os.environ.get('FRF_SENSOR_RUNS', '')
+    if runs:
+        Path(runs).write_text(json.dumps(a['runs'], default=float, indent=1))
     return [
         (f'sensor scenes ({a["nominal_scenes"]} nominal): no plant effect named',
          f'{a["nominal_without_plant_effect"]}/{a["nominal_scenes"]}', 'goal all', ''),

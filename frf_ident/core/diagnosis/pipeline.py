@@ -19,7 +19,8 @@ record's evidence calls for (identification experiments: :mod:`.experiments`, an
 :mod:`.timeseries`), then the checks against what the route did not fit on
 (:mod:`.crosscheck`): the gravity of the robot's kinematics, position-dependent terms on the
 other records, standard errors across records, the least-squares baseline and both model
-files on every other record. Its :class:`Diagnosis` is what ``frf-ident diagnose`` writes
+files on every other record; last the sensor the record shows is named (:mod:`.sensor`; the
+experiments route already read its effects against it). Its :class:`Diagnosis` is what ``frf-ident diagnose`` writes
 (report.json from :meth:`Diagnosis.report`, docs/CONTRACT.md §7) and what the console and
 the HTML report read.
 """

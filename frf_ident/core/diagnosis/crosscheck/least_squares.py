@@ -191,6 +191,7 @@ def apply_rule(res: DiagnosisResult, rec: Recording, robot: RobotParams,
     -------
     (DiagnosisResult, dict of str to str)
         The result after the rule and per losing axis its outcome.
+
     """
     alt = diagnose_timeseries(rec, robot, fc=res.band.fc_hz if res.band else None,
                               only={ax: BASELINE_GROUPS for ax in lost})
