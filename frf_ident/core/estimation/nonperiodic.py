@@ -16,9 +16,9 @@ Recordings without periodic excitation (PRBS, noise, normal motion): the LPM, bl
 
 :class:`LpmBlocks` takes the blocks of a recording (in memory or a streamed bag's windows,
 :func:`frf_ident.core.estimation.detected.estimate_in_blocks`), cuts them into frames of one
-length (:data:`~frf_ident.core.estimation.lpm.DEFAULT_FRAME_SAMPLES`, or the first block when
-it is shorter) and adds every frame without missing samples to an
-:class:`~frf_ident.core.estimation.lpm.LpmAccumulator`. The inputs are the torques of the
+length (:data:`~frf_ident.core.estimation.lpm_frames.DEFAULT_FRAME_SAMPLES`, or the first block
+when it is shorter) and adds every frame without missing samples to an
+:class:`~frf_ident.core.estimation.lpm_frames.LpmAccumulator`. The inputs are the torques of the
 joints whose excitation source moves (the velocity reference when the bag has one, else the
 torque, as detection chooses), the outputs the velocities of every joint. With the reference
 the estimate is the indirect one, P = G_yr G_ur^-1; without it the direct one, with a
@@ -29,8 +29,8 @@ from __future__ import annotations
 from typing import Any
 
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.estimation.lpm import (DEFAULT_FRAME_SAMPLES, DIRECT_WARNING,
-                                           EXCITED_FRACTION, LpmAccumulator)
+from frf_ident.core.estimation.lpm_frames import (DEFAULT_FRAME_SAMPLES, DIRECT_WARNING,
+                                                  EXCITED_FRACTION, LpmAccumulator)
 from frf_ident.core.excitation.detect import excitation_source
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
