@@ -19,28 +19,34 @@ Vandersteen, IEEE TIM 2015; Pintelon and Schoukens 2012, ch. 7) for P steady-sta
 of a periodic excitation: in the DFT of the whole record (P periods, N = P n samples) the
 lines k = P h carry the periodic response, each with its own free value (the BLA is
 nonparametric: no polynomial ties neighbouring harmonics), and every other line carries
-noise only (no transient: the periods are steady, as the BLA assumes). The missing samples
-x are extra real unknowns: with Z0 the DFT of the record with zeros at them and E the DFT of
-unit samples at their instants, they minimise the energy at the non-harmonic lines,
+what is not periodic. The missing samples x are extra real unknowns: with Z0 the DFT of the
+record with zeros at them and E the DFT of unit samples at their instants, for white noise
+they minimise the energy at the non-harmonic lines,
 
     min_x || P_nh (Z0 + E x) ||^2,
 
 whose solution in the time domain is the mean over the periods in which that sample of the
 period is present (the projection onto the periodic signals is the mean over periods, phase
-by phase). :func:`fill_periods` computes it in that form, with
+by phase). What is not periodic is not always white: a drift, an imperfect compensation or
+the tail of a transient changes slowly, and the other periods' mean misses it. Like the
+LPM's transient term in frequency, a local polynomial in time models it: a straight line
+through the residual (record minus period mean) on both sides of each gap, its value in the
+gap added (:data:`TREND_SIDE_SAMPLES`). :func:`fill_periods` computes this, with
 
-- the noise variance from the spread over the present samples about that mean, with its
-  degrees of freedom sum_phi (n_phi - 1) (the dof correction: each estimated sample uses one);
-- the standard deviation of an estimate minus the true sample, sigma sqrt(1 + 1/n_phi) (its
-  own noise is unobserved; the diagonal of sigma^2 (E^H P_nh E)^-1, restricted to one phase);
+- the noise variance from the spread over the present samples about the period mean, with
+  its degrees of freedom sum_phi (n_phi - 1) (the dof correction: each estimated sample uses
+  one);
+- the standard deviation of an estimate minus the true sample, sigma sqrt(1 + 1/n_phi + h)
+  (its own noise is unobserved; 1/n_phi is the diagonal of sigma^2 (E^H P_nh E)^-1 - 1 at
+  that phase, h the leverage of the line's prediction);
 - what the BLA's spread over periods needs to stay unbiased: each period's share of estimated
   samples (:attr:`PeriodicFill.lost`, the dof it loses) and the variance of the period mean
   over that of a record without gaps (:attr:`PeriodicFill.factor`, mean over phases of
   P / n_phi).
 
-``test/core/estimation/test_missing_periodic.py`` checks the solution against the general
-missing-data LPM (:mod:`frf_ident.core.estimation.missing_lpm`) on the same lines, and the
-standard deviations against Monte-Carlo runs.
+``test/core/estimation/test_missing_periodic.py`` checks the period mean against the least-
+squares solution written with explicit DFT matrices, and the standard deviations and the
+BLA's variance against Monte-Carlo runs.
 """
 from __future__ import annotations
 
@@ -51,6 +57,11 @@ from frf_ident.core.estimation.missing import MissingSamples
 import numpy as np
 
 __all__ = ['FilledPeriods', 'GAP_HINT', 'PeriodicFill', 'fill_periods', 'fill_steady_periods']
+
+#: the residual's straight line across a gap is fitted to the present samples within the
+#: gap's length on each side, at least this many (a line through 16 white samples on each side
+#: predicts the middle of a short gap with about 1/32 of the residual's variance)
+TREND_SIDE_SAMPLES = 16
 
 #: what a refusal says when the periods a gap touched had to be dropped after all
 GAP_HINT = ('a missing sample is estimated from the other periods, so each sample of the period '
@@ -115,6 +126,9 @@ class PeriodicFill:
         Sum of squares of the present samples about the period mean (averaged periods).
     noise_dof : int
         Its degrees of freedom, sum over phases of (n_phi - 1).
+    leverage : ndarray, shape (n_q, n_per)
+        At each missing sample, the variance of the predicted non-periodic part over the
+        residual's (0 elsewhere).
 
     """
 
@@ -124,6 +138,7 @@ class PeriodicFill:
     average: np.ndarray
     noise_ss: np.ndarray
     noise_dof: int
+    leverage: np.ndarray
 
     @property
     def complete(self) -> bool:
@@ -180,7 +195,7 @@ class PeriodicFill:
         q, phi = np.nonzero(self.missing)
         n = self.count[phi].astype(float)
         with np.errstate(divide='ignore'):
-            k = np.where(n > 0, np.sqrt(1.0 + 1.0 / n), np.nan)
+            k = np.where(n > 0, np.sqrt(1.0 + 1.0 / n + self.leverage[q, phi]), np.nan)
         return k[:, None] * self.noise_sd[None, :]
 
     def account(self, channels: list[str], *, keep: np.ndarray | None = None,
@@ -215,8 +230,8 @@ class PeriodicFill:
             np.full(int(keep.sum()), float(self.noise_dof)), 'periodic')
 
 
-def fill_periods(x: np.ndarray, missing: np.ndarray, *, average: np.ndarray | None = None
-                 ) -> PeriodicFill:
+def fill_periods(x: np.ndarray, missing: np.ndarray, *, average: np.ndarray | None = None,
+                 trend: bool = True) -> PeriodicFill:
     """
     Estimate the missing samples of consecutive periods from the other periods.
 
@@ -230,6 +245,9 @@ def fill_periods(x: np.ndarray, missing: np.ndarray, *, average: np.ndarray | No
     average : array_like of bool, shape (n_q,), optional
         The periods to average over (the steady ones); default all. Periods left out are
         filled too (from the averaged ones) but not used for the estimate.
+    trend : bool
+        Add the non-periodic part predicted by a straight line across each gap (False: the
+        period mean alone, the solution for white noise).
 
     Returns
     -------
@@ -239,7 +257,7 @@ def fill_periods(x: np.ndarray, missing: np.ndarray, *, average: np.ndarray | No
     Examples
     --------
     >>> x = np.array([[1.0, 2.0], [np.nan, 2.2], [1.2, 1.8]])[:, :, None]   # 3 periods of 2
-    >>> f = fill_periods(x, np.isnan(x[:, :, 0]))
+    >>> f = fill_periods(x, np.isnan(x[:, :, 0]), trend=False)
     >>> float(f.values[1, 0, 0]), f.count.tolist(), f.noise_dof
     (1.1, [2, 3], 3)
 
@@ -253,12 +271,54 @@ def fill_periods(x: np.ndarray, missing: np.ndarray, *, average: np.ndarray | No
     with np.errstate(invalid='ignore'):
         xs = np.where(present[:, :, None], x, 0.0)
         mean = xs.sum(axis=0) / np.maximum(count, 1)[:, None]         # (n_per, n_ch)
-    values = np.where(missing[:, :, None], np.where(count[None, :, None] > 0, mean[None],
-                                                    np.nan), x)
     dev = np.where(present[:, :, None], x - mean[None], 0.0)
     noise_ss = np.sum(dev ** 2, axis=(0, 1))
     dof = int(np.sum(np.maximum(count - 1, 0)))
-    return PeriodicFill(values, missing, count, average, noise_ss, dof)
+    line, leverage = _residual_trend(np.where(missing[:, :, None], np.nan, x - mean[None]),
+                                     missing) if trend else (0.0, np.zeros(missing.shape))
+    values = np.where(missing[:, :, None], np.where(count[None, :, None] > 0,
+                                                    mean[None] + line, np.nan), x)
+    return PeriodicFill(values, missing, count, average, noise_ss, dof, leverage)
+
+
+def _residual_trend(res: np.ndarray, missing: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the non-periodic part predicted in each gap, and its leverage.
+
+    ``res`` (n_q, n_per, n_ch) is the record minus the period mean (NaN at the missing
+    samples). Per gap (a run of missing samples in time order) a straight line is fitted to
+    the residual on :func:`_sides` of it (a constant where one side is outside the record)
+    and its value taken in the gap; the leverage h is x0 (X^T X)^-1 x0^T of each predicted
+    sample (the variance of the prediction over the residual's, white residual).
+    """
+    shape = missing.shape
+    r = res.reshape(-1, res.shape[2])
+    gone = missing.ravel()
+    trend = np.zeros_like(r)
+    lev = np.zeros(gone.size)
+    cols = np.isfinite(r[~gone]).all(axis=0) if np.any(~gone) else np.zeros(r.shape[1], bool)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], gone.astype(np.int8), [0]])))
+    for a, b in zip(edges[::2], edges[1::2]):
+        fit = _sides(gone, a, b)
+        if fit.size == 0:
+            continue
+        gap = np.arange(a, b)
+        c = 0.5 * (a + b - 1)
+        both = fit.min() < a < b <= fit.max()
+        X = np.stack([np.ones(fit.size), fit - c], axis=1) if both else np.ones((fit.size, 1))
+        X0 = np.stack([np.ones(gap.size), gap - c], axis=1) if both else np.ones((gap.size, 1))
+        inv = np.linalg.inv(X.T @ X)
+        coef = inv @ X.T @ r[fit][:, cols]
+        trend[a:b, cols] = X0 @ coef
+        lev[a:b] = np.einsum('ij,jk,ik->i', X0, inv, X0)
+    return trend.reshape(res.shape), lev.reshape(shape)
+
+
+def _sides(gone: np.ndarray, a: int, b: int) -> np.ndarray:
+    """Present samples within max(gap, TREND_SIDE_SAMPLES) before a and after b."""
+    n = max(b - a, TREND_SIDE_SAMPLES)
+    idx = np.concatenate([np.arange(max(0, a - n), a), np.arange(b, min(gone.size, b + n))])
+    return idx[~gone[idx]]
 
 
 def fill_steady_periods(x: np.ndarray, missing: np.ndarray,
