@@ -201,3 +201,71 @@ def test_own_bag_with_descriptors(own_bags, tmp_path, capsys, monkeypatch):
 def test_the_bag_clock_of_the_bursts():
     """BURSTS_* count from the first sample; write_robot_bag's clock starts at T0."""
     assert T0 == 100.0 and all(0 <= a < 6 * PERIOD for a, _ in BURSTS_5 + BURSTS_1)
+
+
+@pytest.fixture(scope='module')
+def prbs_bags(tmp_path_factory):
+    """
+    Return a PRBS on r of three axes in closed loop, 40 dB SNR (test/cli/test_estimate_lpm.py).
+
+    Bursts of lost joint states (0.15 s, 5 % in all) with the velocity commands recorded,
+    and the same bursts on every topic.
+    """
+    from frf_ident.core.recording import Recording
+    from scipy import signal
+    n = 12000
+    d = default_model_dict()
+    rob = robot_from_dict(d)
+    ctrl = controller_from_dict(d, rob)
+    rng = np.random.default_rng(7)
+    bits = [signal.max_len_seq(16, state=rng.integers(0, 2, 16))[0][:n // 4] for _ in range(3)]
+    r = np.repeat(2.0 * np.array(bits, dtype=float).T - 1.0, 4, axis=0) * 0.01
+    quiet = FlexibleJointPlant(rob).simulate(reference=r, controller=ctrl.copy())
+    for axis, rms in zip(rob.axes, np.std(quiet.velocity, axis=0) / 100.0):
+        axis.velocity_noise = float(rms)
+    res = FlexibleJointPlant(rob).simulate(reference=r, controller=ctrl.copy())
+    rec = Recording(res.t, rob.joint_names, res.position, res.velocity, res.effort,
+                    res.reference, None, [], {})
+    root = tmp_path_factory.mktemp('prbs')
+    write_recording(rec, root / 'clean')
+    bursts = [(a, 0.15) for a in (2.1, 4.7, 7.3, 9.6)]
+    drop_bursts(root / 'clean', root / 'states', bursts,
+                keep=('/frf/experiment', '/velocity_controller/commands'))
+    drop_bursts(root / 'clean', root / 'all', bursts)
+    return rob, root
+
+
+def test_lpm_route_estimates_missing_joint_states(prbs_bags, tmp_path, capsys):
+    """Joint states lost, r recorded: the frame is kept, its missing samples estimated."""
+    rob, root = prbs_bags
+    f0, P0, v0, m0 = _estimate(root / 'clean', tmp_path / 'clean')
+    f1, P1, v1, m1 = _estimate(root / 'states', tmp_path / 'states')
+    said = capsys.readouterr().out
+    band = (f0 > 2) & (f0 < 70)
+    truth = robot_frf_sampled(rob, f0[band])
+    d = np.arange(3)
+    e0, e1 = (np.median(np.abs(P[d, d][:, band] / truth[d, d] - 1)) for P in (P0, P1))
+    db, deg, sd, sd_max = _compare(P1[..., band], v1[..., band], P0[..., band], v0[..., band])
+    ddb, ddeg, dsd, _ = _compare(P1[d, d][:, band], v1[d, d][:, band], P0[d, d][:, band],
+                                 v0[d, d][:, band])
+    miss = m1['missing']
+    print(f'LPM, {miss["samples"]} of {miss["analysed"]} joint states lost '
+          f'({100 * miss["fraction"]:.1f} %), r recorded: to the gap-free bag median {db:.4f} '
+          f'dB, {deg:.3f} deg (2-70 Hz; driven channels {ddb:.4f} dB, {ddeg:.3f} deg); sd / '
+          f'gap-free median {sd:.3f} (driven {dsd:.3f}), max {sd_max:.3f}; driven channels to '
+          f'the analytic FRF median {100 * e1:.2f} % (gap-free {100 * e0:.2f} %)')
+    assert miss['fraction'] >= 0.05 and m1['frames'] == m0['frames'] == 1
+    assert db < 1.0 and deg < 5.0 and ddb < 0.1 and ddeg < 0.5 and e1 < 2 * e0
+    # the reported variance is conservative here (test_missing_lpm.py: closed loop)
+    assert 1.0 <= sd < 2.0
+    assert 'estimated with the local polynomial model and kept' in said
+
+
+def test_lpm_route_drops_a_frame_whose_reference_is_missing(prbs_bags, tmp_path, capsys):
+    """The reference lost too: outside the missing-output model; the frame dropped, said why."""
+    _, root = prbs_bags
+    assert main(['estimate', str(root / 'all'), '--out', str(tmp_path / 'o')]) == 2
+    err = capsys.readouterr().err
+    print(err.strip())
+    assert err.count('\n') == 1 and 'their reference r (the regressor) is missing' in err
+    assert 'no whole LPM frame of 12000 samples left to estimate' in err

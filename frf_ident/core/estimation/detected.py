@@ -1100,9 +1100,9 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
         raise UnusableExcitationError(f'an excitation was found but refused ({unusable}); '
                                       f'{n} blocks of at most {block_length(block_s):g} s, '
                                       f'none estimated')
-    if not det.entries and (lpm.frames or opts.method in LPM_METHODS):
-        if not lpm.frames and first is not None:
-            raise first
+    if not det.entries and (lpm.frames or lpm.dropped or opts.method in LPM_METHODS):
+        if not lpm.frames and not lpm.dropped and first is not None:
+            raise first                     # (frames only gaps dropped: the LPM says why)
         why = ([] if opts.method in LPM_METHODS else
                [f'no multisine or chirp found in {n} block(s) of at most '
                 f'{block_length(block_s):g} s'])

@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.lpm import DEFAULT_ORDER, lpm_lines, LpmLines
+from frf_ident.core.estimation.missing import MissingSamples
+from frf_ident.core.estimation.missing_lpm import lpm_missing
 from frf_ident.errors import EstimationError
 import numpy as np
 from scipy import signal
@@ -183,7 +185,10 @@ class LpmAccumulator:
     Every frame of ``frame_samples`` samples is estimated alone (its own transient) and the
     per-line sums of P, of its variance and of the noise covariance are kept; the result is
     their mean (the variance of a mean of independent frames: sum / frames^2). The Welch H1
-    baseline sums the cross spectra of the same frames.
+    baseline sums the cross spectra of the same frames. A frame whose outputs (y, and u for
+    the indirect estimate) miss samples (NaN rows) is estimated with them as unknowns
+    (:func:`~frf_ident.core.estimation.missing_lpm.lpm_missing`; :attr:`missing` accounts for
+    them); its regressor (u, or r) must be complete.
 
     Parameters
     ----------
@@ -209,6 +214,8 @@ class LpmAccumulator:
         self.method: str | None = None
         self._sum: dict[str, np.ndarray | float] = {}
         self.dof = 0
+        #: the account of the frames' estimated missing output samples (None: none)
+        self.missing: MissingSamples | None = None
 
     def add(self, y: np.ndarray, u: np.ndarray, r: np.ndarray | None = None) -> int:
         """
@@ -254,15 +261,23 @@ class LpmAccumulator:
         return n_frames * self.n
 
     def _add_frame(self, y, u, r) -> None:
-        Yf, Uf = _frame_spectra(y)[:, 1:], _frame_spectra(u)[:, 1:]   # lines 1..N/2
         n_out = y.shape[1]
+        z = y if r is None else np.concatenate([y, u], axis=1)     # the LPM's outputs
+        gone = ~np.all(np.isfinite(z), axis=1)
+        if np.any(gone):
+            fit, y, u = self._missing(z, u if r is None else r, gone, n_out)
+            Uf = _frame_spectra(u)[:, 1:]
+        else:
+            Yf, Uf = _frame_spectra(y)[:, 1:], _frame_spectra(u)[:, 1:]   # lines 1..N/2
         if r is None:
-            fit = lpm_lines(Yf, Uf, order=self.order, half_width=self.half_width)
+            if not np.any(gone):
+                fit = lpm_lines(Yf, Uf, order=self.order, half_width=self.half_width)
             P, var = fit.G, fit.variance()
         else:
             Rf = _frame_spectra(r)[:, 1:]
-            fit = lpm_lines(np.concatenate([Yf, Uf]), Rf, order=self.order,
-                            half_width=self.half_width)
+            if not np.any(gone):
+                fit = lpm_lines(np.concatenate([Yf, Uf]), Rf, order=self.order,
+                                half_width=self.half_width)
             P, var = _indirect(fit, n_out)
         self.dof = fit.dof
         h1 = _welch_spectra(y, u, min(welch_nperseg(self.n), self.n))
@@ -271,6 +286,24 @@ class LpmAccumulator:
                          ('syu', h1[1]), ('syy', h1[2]), ('xx', xx)):
             self._sum[key] = self._sum.get(key, 0.0) + val
         self.frames += 1
+
+    def _missing(self, z, x, gone, n_out) -> tuple[LpmLines, np.ndarray, np.ndarray]:
+        """
+        LPM of a frame whose outputs z miss samples: them as unknowns (missing_lpm.py).
+
+        z holds y (and u for the indirect estimate, x = r); returns the LPM per line and y,
+        u with the estimates in place (for the H1 baseline). The account of the estimates
+        joins :attr:`missing`.
+        """
+        m = lpm_missing(z, x, gone, order=self.order, half_width=self.half_width)
+        zf = np.where(gone[:, None], 0.0, z)
+        zf[m.index] = m.values
+        indirect = z.shape[1] > n_out
+        names = list(self.outputs or [f'y{i}' for i in range(n_out)])
+        if indirect:
+            names += list(self.inputs or [f'u{i}' for i in range(z.shape[1] - n_out)])
+        self.missing = m.account(names, z.shape[0]).merged(self.missing)
+        return m.lines, zf[:, :n_out], (zf[:, n_out:] if indirect else x)
 
     def result(self) -> LpmResult:
         """
