@@ -73,6 +73,8 @@ def test_the_fill_is_the_least_squares_solution_of_the_missing_data_model():
     ls = np.linalg.lstsq(A, b, rcond=None)[0]
     fill = fill_periods(x, miss, trend=False)
     np.testing.assert_allclose(fill.values.reshape(n, 2)[t], ls, atol=1e-12)
+    print(f'period mean against the explicit least squares: largest difference '
+          f'{np.max(np.abs(fill.values.reshape(n, 2)[t] - ls)):.1e}')
     cov = np.linalg.inv(np.real(np.conj(E).T @ E))
     k = fill.sd() / fill.noise_sd[None, :]
     np.testing.assert_allclose(k[:, 0] ** 2, np.diag(cov), rtol=1e-12)
