@@ -22,6 +22,7 @@ from frf_ident.core.estimation.missing_periodic import (fill_periods, fill_stead
                                                         FilledPeriods)
 from frf_ident.core.estimation.spectra import best_linear_approximation, periodic_spectra
 import numpy as np
+import pytest
 from scipy import signal
 
 N_PER = 256
@@ -199,3 +200,51 @@ def test_a_drift_is_followed_across_the_gap():
     print(f'rms error of the estimates under a drift: {e_plain:.4f} (period mean), {e_line:.4f} '
           f'(with the line across the gap); noise sd 0.014')
     assert e_line < 0.3 * e_plain and e_line < 0.03
+
+
+@pytest.mark.slow
+def test_closed_loop_robot_over_noise_seeds():
+    """
+    The simulated 3-axis robot in closed loop (test/bag/replay_synth.py), 20 noise seeds.
+
+    6 periods of a multisine on joint_2, white measurement noise (the velocity's fed back),
+    a 0.45 s gap in every period (5.5 %). The estimates of the missing torque and velocity
+    samples from the steady periods against the simulated truth, and the detected estimate's
+    FRF variance against its spread over the seeds, with and without the gaps.
+    """
+    import copy
+    from pathlib import Path
+    import sys
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / 'bag'))
+    from replay_synth import multisine_run
+    from frf_ident.core.estimation.described import estimate_recording
+    n_per, n_q = 8192, 6
+    miss = np.zeros((n_q, n_per), bool)
+    for q, a in enumerate([1300, 5100, 2700, 6900, 600, 4000]):
+        miss[q, a:a + 450] = True
+    err, sd, est = [], [], {False: [], True: []}
+    for seed in range(20):
+        rec = multisine_run(n_q, velocity_noise=2e-5, torque_noise=0.05, noise_seed=seed)
+        x = np.concatenate([rec.effort, rec.velocity], axis=1).reshape(n_q, n_per, -1)
+        fill = fill_periods(np.where(miss[:, :, None], np.nan, x), miss,
+                            average=np.arange(n_q) >= 1)          # period 0: the transient
+        err.append(fill.values[miss] - x[miss])
+        sd.append(fill.sd())
+        gap = copy.deepcopy(rec)
+        for s in (gap.velocity, gap.effort, gap.position, gap.reference):
+            s[miss.ravel()] = np.nan
+        for k, r in ((False, rec), (True, gap)):
+            e = estimate_recording(r)['detected/joint_2']
+            est[k].append((e.response, e.noise_variance))
+    ratio = np.std(err, axis=0) / np.sqrt(np.mean(np.square(sd), axis=0))
+    ch = [1, 3, 4, 5]                                       # torque of joint_2, velocities
+    q = {k: np.mean([v for _, v in runs], axis=0) / np.var([p for p, _ in runs], axis=0)
+         for k, runs in est.items()}
+    grow = np.median(np.sqrt(np.var([p for p, _ in est[True]], axis=0)
+                             / np.var([p for p, _ in est[False]], axis=0)))
+    print(f'robot, 20 seeds: sd of the estimated samples (Monte-Carlo / reported) median per '
+          f'channel {", ".join(f"{np.median(ratio[:, c]):.3f}" for c in ch)}; FRF variance / '
+          f'Monte-Carlo median {np.median(q[True]):.3f} (without gaps {np.median(q[False]):.3f})'
+          f'; spread with gaps / without {grow:.3f}')
+    assert np.all(np.abs(np.median(ratio[:, ch], axis=0) - 1) < 0.3)
+    assert abs(np.median(q[True]) - 1) < 0.3 and grow < 1.2
