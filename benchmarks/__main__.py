@@ -374,6 +374,13 @@ def bench_lpm() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('missing')
+def bench_missing() -> list[tuple[str, str, str, str]]:
+    """Time the LPM and the multisine with missing samples beside the records without gaps."""
+    from benchmarks.missing import rows
+    return rows()
+
+
 @section('diagnosis')
 def bench_diagnosis() -> list[tuple[str, str, str, str]]:
     """Run the diagnosis sweep over random 3-axis scenes of the independent plant."""

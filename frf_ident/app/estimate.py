@@ -29,6 +29,7 @@ from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
 __all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'estimate_columns', 'frf_units',
+           'missing_lines',
            'read_estimates', 'report_distortion', 'report_robust_lpm']
 
 #: the files :func:`estimate_bag` writes into its output directory
@@ -195,9 +196,12 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         line = dropped_text(d)
         if line:
             progress(f'{k}: {line}')
+    missing = {k: v.meta['missing'] for k, v in estimates.items() if v.meta.get('missing')}
+    for line in missing_lines(estimates):
+        progress(line)
     summary = {'bag': str(bag), 'primary': key, 'estimates': sorted(estimates),
                'timing': timing.to_dict(), 'experiment': experiment, 'streaming': streamed,
-               'gaps': timing.missing, 'dropped': dropped}
+               'gaps': timing.missing, 'dropped': dropped, 'missing': missing}
     (out / 'summary.json').write_text(json.dumps(summary, indent=1, default=str))
     shown = ('multisine', 'chirp', 'lpm', 'lpm_h1')
     pairs = [(k, v) for k, v in estimates.items() if k in shown]
@@ -402,6 +406,40 @@ def estimate_columns(bag: Path, out: Path, progress: Progress | None, **options
             cols[f'resonance_hz_{j}'] = round(float(r), 4)
             cols[f'antiresonance_hz_{j}'] = round(float(a), 4)
     return cols
+
+
+def missing_lines(estimates: dict) -> list[str]:
+    """
+    One line per estimate whose record's missing samples were estimated (each text once).
+
+    Parameters
+    ----------
+    estimates : dict
+        Estimate name -> FrequencyResponse; meta['missing'] is a
+        :class:`~frf_ident.core.estimation.missing.MissingSamples` dict.
+
+    Returns
+    -------
+    list of str
+        e.g. 'detected/joint_2: 2700 missing samples (5.5 %) in 6 of 6 periods estimated
+        from the other periods and kept; sd of the estimates: tau_m/joint_2 0.064 N m ...';
+        an estimate whose line equals the one before it is named there.
+
+    """
+    from frf_ident.core.estimation.missing import MissingSamples
+    from frf_ident.core.recording import JOINT_STATE_UNITS
+    texts: dict[str, list[str]] = {}
+    for k, v in estimates.items():
+        if not v.meta.get('missing'):
+            continue
+        acc = MissingSamples.from_dict(v.meta['missing'])
+        u = v.meta.get('units') if isinstance(v.meta.get('units'), dict) else {}
+        units = {c: (u.get('input') or JOINT_STATE_UNITS['effort']) if c.startswith('tau_m/')
+                 else JOINT_STATE_UNITS['velocity'] for c in acc.channels}
+        for c, unit in zip(v.outputs, u.get('outputs') or []):
+            units[c] = unit or units.get(c, '')
+        texts.setdefault(acc.text(units), []).append(k)
+    return [f'{", ".join(names)}: {text}' for text, names in texts.items()]
 
 
 def dropped_text(d: dict) -> str:

@@ -25,8 +25,9 @@ core's segment-wise estimators.
   (:func:`~frf_ident.core.estimation.detected.estimate_in_blocks`, which the in-memory
   estimate runs on the same blocks, so both take the same decisions).
 
-Gaps longer than the resampling limit are kept as missing data (``gaps='mark'``): they cost
-only the periods and chirp excerpts they touch.
+Gaps longer than the resampling limit are kept as missing data (``gaps='mark'``): their
+samples are estimated with the FRF (multisine periods, LPM frames; docs/bags.md), a chirp
+excerpt they touch is dropped.
 
 Memory is bounded by the longest window, not by the bag.
 """
