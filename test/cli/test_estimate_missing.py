@@ -35,8 +35,8 @@ from frf_ident.core.estimation import described, detected
 from frf_ident.core.estimation.missing_periodic import fill_periods
 from frf_ident.core.excitation.procedures import MultisineConfig
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict
-from frf_ident.core.simulation.controller import controller_from_dict
 from frf_ident.core.simulation.analytic import robot_frf_sampled
+from frf_ident.core.simulation.controller import controller_from_dict
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
 import numpy as np
