@@ -35,7 +35,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('file', type=Path, help='measured data: .csv or .mat')
     p.add_argument('--map', type=Path, required=True,
                    help='YAML map: time, joints and their columns/variables, unit scales '
-                        '(see README, "Files"; examples in config/map_*.yaml)')
+                        '(see docs/import_maps.md; examples in config/map_*.yaml)')
     p.add_argument('--out', required=True, help='bag directory to create (must not exist)')
 
 
