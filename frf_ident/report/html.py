@@ -550,26 +550,31 @@ def _pm(value: float, std: float, scale: float = 1.0) -> str:
 
 def _verdict(cost) -> str:
     cls = 'warn' if cost.structure_missing else 'ok' if cost.weighted else 'muted'
-    return f'<p class="{cls}">{html.escape(cost.summary())}</p>'
+    return (f'<p class="{cls}">{html.escape(cost.summary())}: '
+            f'<b>{html.escape(cost.verdict)}</b></p>')
 
 
-def _delay_row(name: str, delay_s: float, std_s: float) -> list[Any]:
+def _delay_row(name: str, delay_s: float, std_s: float, hold_s: float = 0.0) -> list[Any]:
     how = 'fitted' if math.isfinite(std_s) else 'given (--delay)'
-    return [name, f'delay ({how})', _pm(delay_s, std_s, 1e3), 'ms',
-            _relative(delay_s, std_s)]
+    if not hold_s:
+        return [name, f'delay ({how})', _pm(delay_s, std_s, 1e3), 'ms',
+                _relative(delay_s, std_s)]
+    return [name, f'time_delay ({how}; the whole delay {1e3 * delay_s:.4g} ms less the '
+                  f"zero-order hold's {1e3 * hold_s:.4g} ms, as model.yaml)",
+            _pm(max(delay_s - hold_s, 0.0), std_s, 1e3), 'ms', '\u2014']
 
 
 def _relative(value: float, std: float) -> str:
     return f'{100 * abs(std / value):.2g}' if value and math.isfinite(std) else '\u2014'
 
 
-def _physical_html(fits: Sequence[PhysicalFit]) -> str:
+def _physical_html(fits: Sequence[PhysicalFit], hold_s: float = 0.0) -> str:
     rows = []
     for f in fits:
         fa, fr = f.resonances_hz()
         rows += [[f.name, k, _pm(v, sd), UNITS[k], _relative(v, sd)]
-                 for k, v, sd in zip(f.names, f.value, f.std)]
-        rows.append(_delay_row(f.name, f.delay_s, f.delay_std_s))
+                 for k, v, sd in zip(f.names, f.value, f.reported_std)]
+        rows.append(_delay_row(f.name, f.delay_s, f.delay_reported_std_s, hold_s))
         rows.append([f.name, 'antiresonance / resonance', f'{fa:.4g} / {fr:.4g}', 'Hz', ''])
     verdicts = ''.join(f'<li>{html.escape(f.name)}: {_verdict(f.cost)}</li>' for f in fits)
     return (_table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
@@ -577,29 +582,35 @@ def _physical_html(fits: Sequence[PhysicalFit]) -> str:
             + f'<p>Cost test per axis:</p><ul>{verdicts}</ul>')
 
 
-def _coupled_html(fit: CoupledFit) -> str:
+def _coupled_html(fit: CoupledFit, hold_s: float = 0.0) -> str:
     rows = []
     for i, name in enumerate(fit.names):
-        sd = fit.axis_std(i)
+        sd = fit.axis_std(i, reported=True)
         rows += [[name, k, _pm(v, sd[k]), UNITS[k], _relative(v, sd[k])]
                  for k, v in fit.axis_parameters(i).items()]
-    c, csd = fit.link_coupling()
+    c, csd = fit.link_coupling(reported=True)
     for i, j in zip(*np.triu_indices(len(fit.names), 1)):
         rows.append([f'{fit.names[i]} \u2013 {fit.names[j]}', 'link coupling',
                      _pm(c[i, j], csd[i, j]), 'kg m^2', _relative(c[i, j], csd[i, j])])
-    rows.append(_delay_row('all axes', fit.delay_s, fit.delay_std_s))
+    rows.append(_delay_row('all axes', fit.delay_s, fit.delay_reported_std_s, hold_s))
+    apart = ''.join(f'<li>{html.escape(line)}</li>' for line in fit.disagreements())
     return (_table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
                     'standard error [%]'], rows)
-            + '<p>Cost test of the coupled fit:</p>' + _verdict(fit.cost))
+            + '<p>Cost test of the coupled fit:</p>' + _verdict(fit.cost)
+            + (f'<p>Per-axis fits (no coupling) against the coupled fit, beyond their '
+               f'errors:</p><ul>{apart}</ul>' if apart else ''))
 
 
 def _rational_html(fit: RationalFit) -> str:
-    rows = [[_pm(m.frequency_hz, m.frequency_std_hz), _pm(m.damping, m.damping_std)]
-            for m in fit.modes()]
+    rows = [[_pm(m.frequency_hz, math.hypot(m.frequency_std_hz, m.frequency_bound_hz)),
+             _pm(m.damping, math.hypot(m.damping_std, m.damping_bound)),
+             'yes' if m.in_band else 'NO: not supported by the data'] for m in fit.modes()]
+    stab = (f' The free ML fit had {fit.reflected} unstable pole(s); the model is the ML fit '
+            f'over stable denominators.' if fit.reflected else '')
     return (f'<p>Order {fit.order} (poles), {fit.n_params} real parameters, '
-            f'{fit.freq_hz.size} lines; the model is in model.mat (A, B, C, D).</p>'
-            + _table(['natural frequency \u00b1 SE [Hz]', 'damping ratio \u00b1 SE [-]'],
-                     rows)
+            f'{fit.freq_hz.size} lines; the model is in model.mat (A, B, C, D).{stab}</p>'
+            + _table(['natural frequency \u00b1 SE [Hz]', 'damping ratio \u00b1 SE [-]',
+                      'in the fitted band'], rows)
             + '<p>Cost test:</p>' + _verdict(fit.cost))
 
 
@@ -623,8 +634,8 @@ def _margins_html(check: LoopCheck) -> str:
 
 def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | None = None,
                  rational: RationalFit | None = None, check: LoopCheck | None = None,
-                 fit_png: str | None = None, loop_png: str | None = None
-                 ) -> list[tuple[str, str, str]]:
+                 fit_png: str | None = None, loop_png: str | None = None,
+                 hold_s: float = 0.0) -> list[tuple[str, str, str]]:
     """
     Return the report sections of a fit and a controller check as (anchor, heading, html).
 
@@ -640,6 +651,9 @@ def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | 
         Margins of the velocity PI on the measured FRF.
     fit_png, loop_png : str, optional
         File names (next to the page) of the fit figure and the loop figure.
+    hold_s : float, optional
+        The zero-order hold's half sample [s] of the model file: a fitted delay is shown as
+        model.yaml's ``time_delay`` (the delay less it); 0: the whole delay.
 
     Returns
     -------
@@ -658,13 +672,14 @@ def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | 
             'fitted model over the measured FRF')))
     params = ''
     if coupled is not None:
-        params = _coupled_html(coupled)
+        params = _coupled_html(coupled, hold_s)
     elif physical:
-        params = _physical_html(physical)
+        params = _physical_html(physical, hold_s)
     if rational is not None:
         params += _rational_html(rational)
     if params:
-        out.append(('parameters', 'Fitted parameters (Cram\u00e9r-Rao standard errors)',
+        out.append(('parameters', 'Fitted parameters (Cram\u00e9r-Rao standard errors, '
+                                  'widened by the model-error bound where the cost test fails)',
                     params))
     if check is not None:
         body = _margins_html(check)
