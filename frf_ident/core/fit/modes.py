@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from frf_ident.core.fit.model_error import bound
+from frf_ident.core.fit.stable import MIN_DAMPING
 import numpy as np
 
 __all__ = ['Mode', 'modes_of']
@@ -43,6 +44,10 @@ class Mode:
     in_band : bool
         False for a complex pair whose frequency lies outside the fitted lines: not
         supported by the data.
+    at_limit : bool
+        True for a pair whose damping ratio ended at the stability limit of the refit
+        (below twice :data:`~frf_ident.core.fit.stable.MIN_DAMPING`): the data would put it
+        in the right half-plane.
     frequency_bound_hz, damping_bound : float
         Bound of the bias a missing structure can leave (0 where the cost test passes).
 
@@ -55,10 +60,18 @@ class Mode:
     in_band: bool = True
     frequency_bound_hz: float = 0.0
     damping_bound: float = 0.0
+    at_limit: bool = False
+
+    @property
+    def supported(self) -> bool:
+        """Return whether the data support the mode: in the band, not at the stability limit."""
+        return self.in_band and not self.at_limit
 
     def summary(self) -> str:
-        """Return one line: frequency and damping with their reported errors, and the flag."""
-        flag = '' if self.in_band else ': OUTSIDE the fitted band, not supported by the data'
+        """Return one line: frequency and damping with their reported errors, and the flags."""
+        flag = ('' if self.in_band else ': OUTSIDE the fitted band, not supported by the data')
+        flag += ('' if not self.at_limit else ': at the stability limit (the data would put '
+                 'it in the right half-plane)')
         return (f'{self.frequency_hz:.4g} +- '
                 f'{np.hypot(self.frequency_std_hz, self.frequency_bound_hz):.2g} Hz, damping '
                 f'ratio {self.damping:.4f} +- {np.hypot(self.damping_std, self.damping_bound):.2g}'
@@ -107,5 +120,6 @@ def modes_of(den_scaled: np.ndarray, omega0: float, cov_den: np.ndarray,
                         float(-p.real / r), float(np.sqrt(max(dz @ cov_den @ dz, 0.0))),
                         in_band=not complex_pair or band_hz[0] <= f_hz <= band_hz[1],
                         frequency_bound_hz=float(b_r * omega0 / (2 * np.pi)),
-                        damping_bound=float(b_z)))
+                        damping_bound=float(b_z),
+                        at_limit=bool(complex_pair and -p.real / r < 2 * MIN_DAMPING)))
     return sorted(out, key=lambda m: m.frequency_hz)

@@ -33,8 +33,9 @@ data do not show it, the fit used it to shape the response at the band's edge.
 Coefficients are kept in the scaled variable s / omega_0 (omega_0 the highest measured
 angular frequency), which keeps the problem well conditioned; :attr:`RationalFit.num` /
 ``den`` and :meth:`RationalFit.state_space` give the unscaled model.
-:func:`select_order` fits several orders and picks, among the admissible ones (no mode outside
-the band), the lowest that passes the cost test, else the lowest AIC.
+:func:`select_order` fits several orders and picks, among the admissible ones (every mode in
+the band and off the stability limit), the lowest that passes the cost test, else the lowest
+AIC.
 """
 from __future__ import annotations
 
@@ -150,8 +151,8 @@ class RationalFit:
 
     @property
     def admissible(self) -> bool:
-        """Return whether every mode lies in the fitted band (the poles are stable always)."""
-        return all(m.in_band for m in self.modes())
+        """Return whether the data support every mode (:attr:`Mode.supported`)."""
+        return all(m.supported for m in self.modes())
 
     def response(self, freq_hz: np.ndarray) -> np.ndarray:
         """Return the model's FRF at ``freq_hz``, shape (n_out, n_in, n_freq)."""
@@ -347,21 +348,24 @@ class OrderSelection:
 
     def lines(self) -> list[str]:
         """Return the choice, every tried order's cost, and the runner-up, for people."""
-        def cost(f):
-            flag = '' if f.admissible else ', mode outside the band'
-            return f'{f.order}: cost {f.cost.cost:.4g} (ratio {f.cost.ratio:.3g}{flag})'
         best = self.best
         why = ('the lowest admissible order the noise explains' if self.reason == 'cost test'
-               else 'the lowest AIC = cost + 2 parameters'
-               + ('' if any(f.admissible for f in self.fits)
-                  else '; every order has a mode outside the band'))
-        lines = [f'order {best.order} chosen by the {self.reason} ({why}); tried '
-                 + '; '.join(cost(f) for f in self.fits)]
+               else 'the lowest AIC = cost + 2 parameters among the admissible orders'
+               if any(f.admissible for f in self.fits)
+               else 'the lowest AIC; no order is admissible')
+        lines = [f'order {best.order} chosen by the {self.reason} ({why})',
+                 'tried (order: cost, cost/dof): ' + '; '.join(
+                     f'{f.order}: {f.cost.cost:.4g}, {f.cost.ratio:.3g}' for f in self.fits)]
+        bad = [str(f.order) for f in self.fits if not f.admissible]
+        if bad:
+            lines.append(f'not admissible (a mode outside the band or at the stability limit): '
+                         f'order {", ".join(bad)}')
         if self.runner_up is not None:
             r = self.fits[self.runner_up]
-            lines.append(f'runner-up: order {r.order}, cost {r.cost.cost:.4g} '
-                         f'({100 * (r.cost.cost / best.cost.cost - 1):+.2g} %), AIC '
-                         f'{r.aic - best.aic:+.4g} against the chosen; {r.cost.verdict}')
+            q = r.cost.cost / best.cost.cost
+            rel = f'{100 * (q - 1):+.2g} %' if q < 2 else f'{q:.3g} times'
+            lines.append(f'runner-up: order {r.order}, cost {r.cost.cost:.4g} ({rel} the '
+                         f"chosen's), AIC {r.aic - best.aic:+.4g}; {r.cost.verdict}")
         return lines
 
 
@@ -370,9 +374,10 @@ def select_order(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
     """
     Fit the orders from the lowest up; stop at the first admissible one the cost test accepts.
 
-    Admissible: no mode outside the fitted band (:attr:`RationalFit.admissible`; every fit is
-    stable, :func:`fit_rational`). A model with a mode the data do not show is kept only when
-    no order gives one without.
+    Admissible: every mode supported by the data, none outside the fitted band and none at
+    the stability limit of the refit (:attr:`RationalFit.admissible`; every fit is stable,
+    :func:`fit_rational`). A model with a mode the data do not support is kept only when no
+    order gives one without.
 
     Parameters
     ----------

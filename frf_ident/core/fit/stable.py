@@ -22,10 +22,12 @@ poles, then constrain):
 
 1. the unstable poles are reflected into the left half-plane (p -> -conj(p)), which keeps
    |D(j omega)| and so the magnitude of the start;
-2. the denominator is written as a product of factors ``s^2 + exp(alpha) s + exp(beta)`` (a
-   complex pair, or two real poles) and at most one ``s + exp(gamma)``: every such product is
-   Hurwitz, so Levenberg-Marquardt over (numerators, alpha, beta, gamma) cannot leave the
-   stable models; numerators stay free.
+2. the denominator is written as a product of factors ``s^2 + 2 zeta omega s + omega^2``
+   with ``omega = exp(a)`` and ``zeta = MIN_DAMPING + exp(b)`` (a complex pair, or two real
+   poles where zeta > 1) and at most one ``s + exp(c)``: every such product is Hurwitz, so
+   Levenberg-Marquardt over (numerators, a, b, c) cannot leave the stable models; numerators
+   stay free. Where the data pull a pair towards instability it stops just above
+   :data:`MIN_DAMPING` (then the summary's damping ratio says so).
 
 All in the scaled variable s / omega_0 of :mod:`frf_ident.core.fit.rational`.
 """
@@ -34,11 +36,13 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize
 
-__all__ = ['MIN_DAMPING_SHARE', 'factor_parameters', 'reflect_unstable', 'stable_refit']
+__all__ = ['MIN_DAMPING', 'factor_parameters', 'reflect_unstable', 'stable_refit']
 
-#: a pole on (or, reflected, at) the imaginary axis starts at this share of its magnitude left
-#: of it: log(0) has no start, and a damping ratio of 1e-6 is below anything measurable
-MIN_DAMPING_SHARE = 1e-6
+#: the smallest damping ratio a refitted pole pair can have: asymptotically stable, and below
+#: anything a measured FRF resolves (the lightest measured damping of the tests, the DaISy
+#: arm's first mode, is 0.002); a pair that ends there is a pair the data would push
+#: unstable: the fit is then at the edge of the stable models
+MIN_DAMPING = 1e-4
 
 
 def reflect_unstable(den: np.ndarray) -> tuple[np.ndarray, int]:
@@ -53,14 +57,15 @@ def reflect_unstable(den: np.ndarray) -> tuple[np.ndarray, int]:
     Returns
     -------
     roots : ndarray of complex, shape (n,)
-        The roots, every one with a negative real part (at least MIN_DAMPING_SHARE |p|).
+        The roots, every one with a negative real part (a damping ratio of at least twice
+        :data:`MIN_DAMPING`).
     n_reflected : int
         How many roots had a non-negative real part.
 
     """
     roots = np.roots(np.asarray(den, dtype=float)[::-1]).astype(complex)
     bad = roots.real >= 0
-    floor = MIN_DAMPING_SHARE * np.maximum(np.abs(roots), 1e-12)
+    floor = 2 * MIN_DAMPING * np.maximum(np.abs(roots), 1e-12)
     roots = np.where(bad, -np.abs(roots.real) + 1j * roots.imag, roots)
     roots = np.where(roots.real > -floor, -floor + 1j * roots.imag, roots)
     return roots, int(np.sum(bad))
@@ -78,7 +83,8 @@ def factor_parameters(roots: np.ndarray) -> tuple[np.ndarray, int]:
     Returns
     -------
     theta : ndarray, shape (n,)
-        (alpha, beta) per quadratic factor, then gamma of the linear one if n is odd.
+        (log omega, log(zeta - MIN_DAMPING)) per quadratic factor, then log c of the linear
+        one if n is odd.
     n_quad : int
         Number of quadratic factors (n // 2).
 
@@ -86,32 +92,40 @@ def factor_parameters(roots: np.ndarray) -> tuple[np.ndarray, int]:
     cplx = roots[roots.imag > 1e-12 * np.abs(roots)]
     real = np.sort(roots[np.abs(roots.imag) <= 1e-12 * np.abs(roots)].real)
     theta = []
-    for p in cplx:                                    # s^2 - 2 Re p s + |p|^2
-        theta += [np.log(-2 * p.real), np.log(abs(p) ** 2)]
+    for p in cplx:                                    # omega = |p|, zeta = -Re p / |p|
+        theta += [np.log(abs(p)), np.log(max(-p.real / abs(p) - MIN_DAMPING, MIN_DAMPING))]
     c = -real                                         # (s + c1)(s + c2)
     for k in range(0, c.size - 1, 2):
-        theta += [np.log(c[k] + c[k + 1]), np.log(c[k] * c[k + 1])]
+        w = np.sqrt(c[k] * c[k + 1])
+        theta += [np.log(w), np.log((c[k] + c[k + 1]) / (2 * w) - MIN_DAMPING)]
     if c.size % 2:
         theta.append(np.log(c[-1]))
     return np.asarray(theta, dtype=float), len(roots) // 2
 
 
+def _coefficients(theta: np.ndarray, n_quad: int) -> list[tuple[float, float]]:
+    """Return (2 zeta omega, omega^2) of every quadratic factor."""
+    out = []
+    for q in range(n_quad):
+        w, z = np.exp(theta[2 * q]), MIN_DAMPING + np.exp(theta[2 * q + 1])
+        out.append((2 * z * w, w * w))
+    return out
+
+
 def _factors(theta: np.ndarray, n_quad: int, s: np.ndarray) -> np.ndarray:
     """Return every factor at s, shape (n_factors, n_freq)."""
-    e = np.exp(theta)
-    quad = [s ** 2 + e[2 * q] * s + e[2 * q + 1] for q in range(n_quad)]
-    lin = [s + e[-1]] if theta.size > 2 * n_quad else []
+    quad = [s ** 2 + a1 * s + a0 for a1, a0 in _coefficients(theta, n_quad)]
+    lin = [s + np.exp(theta[-1])] if theta.size > 2 * n_quad else []
     return np.array(quad + lin)
 
 
 def _polynomial(theta: np.ndarray, n_quad: int) -> np.ndarray:
     """Return the monic denominator in ascending powers of the scaled s."""
-    e = np.exp(theta)
     poly = np.ones(1)
-    for q in range(n_quad):
-        poly = np.polymul(poly, [1.0, e[2 * q], e[2 * q + 1]])
+    for a1, a0 in _coefficients(theta, n_quad):
+        poly = np.polymul(poly, [1.0, a1, a0])
     if theta.size > 2 * n_quad:
-        poly = np.polymul(poly, [1.0, e[-1]])
+        poly = np.polymul(poly, [1.0, np.exp(theta[-1])])
     return poly[::-1]
 
 
@@ -160,13 +174,14 @@ def stable_refit(s: np.ndarray, response: np.ndarray, weight: np.ndarray, num: n
 
     def jac(x):
         b, fac, d, mod = model(x)
-        e = np.exp(x[m * nb:])
+        th = x[m * nb:]
         dd = []                                      # dD / dtheta, each (n_freq,)
-        for q in range(n_quad):
-            rest = d / fac[q]
-            dd += [e[2 * q] * s * rest, e[2 * q + 1] * rest]
-        if x.size - m * nb > 2 * n_quad:
-            dd.append(e[-1] * d / fac[-1])
+        for q, (a1, a0) in enumerate(_coefficients(th, n_quad)):
+            rest = d / fac[q]                        # d a1 / d log w = a1, d a0 = 2 a0
+            dd += [(a1 * s + 2 * a0) * rest,
+                   2 * np.exp(th[2 * q + 1]) * np.exp(th[2 * q]) * s * rest]
+        if th.size > 2 * n_quad:
+            dd.append(np.exp(th[-1]) * d / fac[-1])
         j = np.zeros((m, s.size, x.size), dtype=complex)
         for i in range(m):
             j[i, :, i * nb:(i + 1) * nb] = vn / d[:, None]
