@@ -59,7 +59,8 @@ from frf_ident.report.distortion import distortion_figure, robust_lpm_figure
 from frf_ident.report.text import plain
 import numpy as np
 
-__all__ = ['fit_sections', 'write_diagnosis_report', 'write_fit_report', 'write_report']
+__all__ = ['fit_sections', 'proposal_section', 'write_diagnosis_report', 'write_fit_report',
+           'write_report']
 
 REPORT_NAME = 'report.html'
 
@@ -615,10 +616,16 @@ def _rational_html(fit: RationalFit) -> str:
 
 
 def _margins_html(check: LoopCheck) -> str:
-    def m(v: Margin) -> str:
-        return _pm(v.value, v.std)
-    rows = [[a.axis, a.kp, a.ki, m(a.gain_margin_db), m(a.phase_margin_deg),
-             m(a.modulus_margin), m(a.crossover_hz)] for a in check.axes]
+    def m(v: Margin, note: str | None = None) -> str:
+        return _pm(v.value, v.std) if math.isfinite(v.value) or note is None else note
+    rows, edges = [], []
+    for a in check.axes:
+        notes = a.notes()
+        rows.append([a.axis, a.kp, a.ki, m(a.gain_margin_db, notes.get('gain_margin_db')),
+                     m(a.phase_margin_deg, notes.get('phase_margin_deg')),
+                     m(a.modulus_margin), m(a.crossover_hz, notes.get('crossover_hz'))])
+        if 'band_edge' in notes:
+            edges.append(f'<li>{html.escape(a.axis)}: {html.escape(notes["band_edge"])}</li>')
     pi = (f'discrete at dt = {check.discrete_dt:g} s' if check.discrete_dt
           else 'continuous')
     text = (f'<p>L = C P-hat per axis on the measured FRF, velocity PI {pi}. Standard '
@@ -626,10 +633,42 @@ def _margins_html(check: LoopCheck) -> str:
             + (' (none: the FRF has no variance).' if not check.draws else '.') + '</p>')
     text += _table(['axis', 'kp [N m s/rad]', 'ki [N m/rad]', 'gain margin [dB]',
                     'phase margin [deg]', 'modulus margin [-]', 'crossover [Hz]'], rows)
+    if edges:
+        text += f'<ul class="warn">{"".join(edges)}</ul>'
     if check.peak_sensitivity is not None:
         text += (f'<p>MIMO: peak of the largest singular value of S = (I + P C)^-1: '
                  f'{_pm(check.peak_sensitivity.value, check.peak_sensitivity.std)}</p>')
     return text
+
+
+def proposal_section(check: LoopCheck | None, target: tuple[float, float],
+                     verdicts: Sequence[tuple[str, str, bool]]) -> tuple[str, str, str]:
+    """
+    Return the report section of proposed PI gains: their margins and the targets' verdicts.
+
+    Parameters
+    ----------
+    check : LoopCheck or None
+        The proposed gains checked on the measured FRF; None when the page's margins section
+        already shows them (only ``--propose`` given).
+    target : tuple of float
+        (bandwidth [Hz], phase margin [deg]) asked for.
+    verdicts : sequence of tuple
+        (axis, 'targets met' or what is missed, met) per axis.
+
+    Returns
+    -------
+    tuple of str
+        (anchor, heading, html) as :func:`fit_sections` gives them.
+
+    """
+    items = ''.join(f'<li class="{"ok" if met else "warn"}">{html.escape(axis)}: '
+                    f'{html.escape(text)}</li>' for axis, text, met in verdicts)
+    body = (f'<p>PI gains read off the measured FRF for {target[1]:g} deg at {target[0]:g} '
+            f'Hz, checked on the measured loop:</p><ul>{items}</ul>')
+    if check is not None:
+        body += _margins_html(check)
+    return ('proposal', f'PI proposed for {target[1]:g} deg at {target[0]:g} Hz', body)
 
 
 def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | None = None,
