@@ -37,7 +37,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The subcommand's parser; the arguments are added to it.
 
     """
-    from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, LPM_METHODS
+    from frf_ident.core.estimation.detected import (DEFAULT_BLOCK_S, DEFAULT_BLOCK_SAMPLES,
+                                                    LPM_METHODS)
     p.add_argument('bag', nargs='+',
                    help='a bag; or several, a folder of bags, a glob or @LIST.txt (one per '
                         'line): a campaign, one folder per bag under --out plus summary.csv, '
@@ -61,9 +62,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help='memory the in-memory reader may use before streaming (default: a '
                         'quarter of RAM, at most 4096)')
     p.add_argument('--window', type=float, default=None, metavar='S',
-                   help=f'streaming block length for bags without experiment descriptors '
-                        f'[s] (default {DEFAULT_BLOCK_S:g}; must hold a few multisine periods '
-                        f'or a whole chirp)')
+                   help=f'block length [s] in which a bag without experiment descriptors is '
+                        f'detected and estimated, in memory and streamed (default '
+                        f'{DEFAULT_BLOCK_S:g} s, or {DEFAULT_BLOCK_SAMPLES:,} samples where the '
+                        f'record is sampled slower; must hold a few multisine periods or a '
+                        f'whole chirp)')
     f = p.add_argument_group('a model fitted to the estimate (what `frf-ident fit` does, into '
                              'the same folder)')
     f.add_argument('--fit', action='store_true',
