@@ -20,11 +20,23 @@ from pathlib import Path
 from frf_ident.cli.options import (add_campaign_arguments, add_fit_arguments,
                                    add_output_arguments, fit_options, run_many)
 
-__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'excitation_options', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'LOG_TO_OUT', 'add_arguments', 'excitation_options',
+           'run']
 
 #: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
 LOG_TO_OUT = True
 HELP = 'estimate FRFs offline from a bag'
+DESCRIPTION = """\
+Offline estimation: DIR/frf.json = {inputs, outputs, freq_hz, re, im, noise_variance,
+total_variance} with re/im shaped (n_out, n_in, n_freq); DIR/estimates.json (every estimate
+the bag supports: multisine reference-based / plain / uncompensated, chirp, or the LPM and its
+Welch H1); DIR/summary.json (timing findings, experiment summary); DIR/bode.png; with a
+multisine DIR/distortion.png, and DIR/robust_lpm.png where one realisation of a detected
+multisine has two or more steady periods. A bag without descriptors is detected block by block
+(--window; its excitation given by --input, --multisine-period, --chirp, --band, --method):
+docs/bags.md, docs/LPM.md. A segment that started but never ended is left out with a warning; a
+bag of several poses (identify --poses --one-bag) is estimated pose by pose into DIR/pose_NN/
+(docs/CAMPAIGNS.md). --fit fits a model to the estimate as `fit` does."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
