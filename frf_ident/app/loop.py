@@ -62,7 +62,9 @@ def margins(loop: np.ndarray, omega: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (..., 4)
         Gain margin [dB], phase margin [deg], gain crossover [Hz], modulus margin; NaN where
-        python-control finds no crossover.
+        python-control finds no crossover. The modulus margin is the least |1 + L| over the
+        measured band: python-control's interior minima, or a measured line where |1 + L| is
+        least at the band's edge (python-control reports none there: an infinite margin).
 
     """
     import control
@@ -74,7 +76,7 @@ def margins(loop: np.ndarray, omega: np.ndarray) -> np.ndarray:
             gm, pm, sm, _, wgc, _ = control.stability_margins(
                 control.frd(lk, omega, smooth=True), method='frd')
         res[k] = [20 * np.log10(gm) if gm and np.isfinite(gm) else np.inf, pm,
-                  wgc / (2 * np.pi), sm]
+                  wgc / (2 * np.pi), min(sm, float(np.min(np.abs(1 + lk))))]
     return res.reshape(loop.shape[:-1] + (4,))
 
 
