@@ -26,10 +26,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import json
 from pathlib import Path
-from typing import Any
 import warnings
 
 from frf_ident.app.frf_source import axis_channels, read_source
+from frf_ident.app.loop_document import check_dict
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.jsonable import jsonable
 from frf_ident.core.loop.check import (AxisMargins, draw_responses, DRAWS, edge_gain_db,
@@ -294,29 +294,6 @@ class LoopOutcome:
     proposal_check: LoopCheck | None
     files: list[Path]
     targets: list[TargetCheck] = field(default_factory=list)
-
-
-def _finite(x: float) -> float | None:
-    return float(x) if np.isfinite(x) else None
-
-
-def check_dict(check: LoopCheck) -> dict[str, Any]:
-    """Return a LoopCheck as the JSON mapping of loop.json (non-finite values as null)."""
-    def m(v: Margin, note: str | None = None) -> dict[str, float | str | None]:
-        return {'value': _finite(v.value), 'std': _finite(v.std), 'note': note}
-    axes = []
-    for a in check.axes:
-        notes = a.notes()
-        axes.append({'axis': a.axis, 'kp': a.kp, 'ki': a.ki,
-                     'gain_margin_db': m(a.gain_margin_db, notes.get('gain_margin_db')),
-                     'phase_margin_deg': m(a.phase_margin_deg, notes.get('phase_margin_deg')),
-                     'crossover_hz': m(a.crossover_hz, notes.get('crossover_hz')),
-                     'modulus_margin': m(a.modulus_margin),
-                     'band_edge_gain_db': _finite(a.edge_gain_db),
-                     'crossover_above_band': a.crossover_above_band})
-    return {'draws': check.draws, 'discrete_dt': check.discrete_dt, 'axes': axes,
-            'peak_sensitivity': None if check.peak_sensitivity is None
-            else m(check.peak_sensitivity)}
 
 
 def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
