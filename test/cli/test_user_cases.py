@@ -15,8 +15,8 @@
 The five user cases of issue 54: each gives a working result or a refusal naming the fix.
 
 1. `fit` of the Silverbox BLA on 1-150 Hz: a stable model, every mode inside the band, the
-   orders tried with their costs and the runner-up printed (it chose order 12 with three
-   unstable pole pairs, and said nothing).
+   orders tried with their costs and the runner-up printed (it chose order 12 with unstable
+   pole pairs, and said nothing).
 2. `fit --physical` of the demo robot's FRF with a vanishing variance (the cost test fails by
    orders of magnitude): errors that cover the true parameters, the coupled lines labelled
    with units, the delay printed as model.yaml's time_delay, the base model named.
