@@ -146,10 +146,10 @@ def test_silverbox_order_selection_keeps_stable_modes_inside_the_band():
     The Silverbox BLA on 1-150 Hz, orders 1-12 chosen from (issue 54, user case 1).
 
     The free ML fit puts poles in the right half-plane at orders 5-10 and 12 (the cubic
-    spring's distortions and the noise at 1000 lines); by the lowest AIC it chose order 12, with
-    an unstable pair here (three in the issue's run). Every fit is now stable, a pair that ends at the stability limit or outside the
-    band makes an order inadmissible, and the choice is order 2 beside the BLA peak: every
-    mode stable and inside 1-150 Hz.
+    spring's distortions and the noise at 1000 lines); by the lowest AIC it chose order 12,
+    with an unstable pair here (three in the issue's run). Every fit is now stable, a pair that
+    ends at the stability limit or outside the band makes an order inadmissible, and the
+    choice is order 2 beside the BLA peak: every mode stable and inside 1-150 Hz.
     """
     f, g, var = silverbox_bla()
     k = (f >= 1.0) & (f <= 150.0)
