@@ -446,6 +446,13 @@ def bench_fit() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('fit_trust')
+def bench_fit_trust() -> list[tuple[str, str, str, str]]:
+    """Errors under a missing mode and the stable order choice, beside the old fits."""
+    from benchmarks.fit_trust import rows
+    return rows()
+
+
 @section('real_data')
 def bench_real_data() -> list[tuple[str, str, str, str]]:
     """Estimate the real data sets of ../shared/data through their maps, with figures."""

@@ -842,6 +842,8 @@ def estimate_detected(rec: Recording, options=None, *, block_s: float | None = N
     detection where given) and checked; one entry 'detected/<joint>' per excited input, the
     detection sentences in each estimate's meta['detected'].
     """
-    from frf_ident.core.estimation.detected import estimate_in_blocks, RecordingBlocks
+    from frf_ident.core.estimation.detected import (block_length, estimate_in_blocks,
+                                                    RecordingBlocks)
+    block_s = block_length(block_s, rec.fs)
     blocks = RecordingBlocks(rec, block_s)
     return estimate_in_blocks(blocks, options, resume=blocks.continue_from, block_s=block_s)

@@ -63,8 +63,8 @@ from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
 import numpy as np
 
-__all__ = ['DEFAULT_BLOCK_S', 'LPM_METHODS', 'MIN_ADVANCE_S', 'DetectedEstimator',
-           'ExcitationOptions', 'NoExcitationError', 'RecordingBlocks',
+__all__ = ['DEFAULT_BLOCK_S', 'DEFAULT_BLOCK_SAMPLES', 'LPM_METHODS', 'MIN_ADVANCE_S',
+           'DetectedEstimator', 'ExcitationOptions', 'NoExcitationError', 'RecordingBlocks',
            'UnusableExcitationError', 'block_length', 'check_detected_segment',
            'check_not_periodic', 'detect_segments', 'detected_frf', 'estimate_in_blocks']
 
@@ -73,6 +73,11 @@ __all__ = ['DEFAULT_BLOCK_S', 'LPM_METHODS', 'MIN_ADVANCE_S', 'DetectedEstimator
 #: Defined here only: every signature above (app, cli) takes ``block_s=None`` and
 #: :func:`block_length` resolves it.
 DEFAULT_BLOCK_S = 300.0
+#: ... and a block holds at least this many samples: 300 s at the 1 kHz the default was set
+#: for (a block's memory and a period's length in samples scale with the samples, not the
+#: seconds). A record sampled slower gets a longer block: the DaISy arm at 1 s per sample is
+#: one block of its 1024 samples, where 300 s cut it into four that each held a wrong period
+DEFAULT_BLOCK_SAMPLES = 300_000
 
 #: a block that used data up to t starts the next block there (no period lost at the
 #: boundary), unless t is less than this far [s] into the block (the scan must move on)
@@ -857,14 +862,17 @@ def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
     return frf
 
 
-def block_length(block_s: float | None = None) -> float:
+def block_length(block_s: float | None = None, fs: float | None = None) -> float:
     """
-    Return the detection block length [s]: ``block_s``, or :data:`DEFAULT_BLOCK_S` for None.
+    Return the detection block length [s]: ``block_s``, or the default for the sample rate.
 
     Parameters
     ----------
     block_s : float, optional
-        Block length [s] (> 0); None: the default.
+        Block length [s] (> 0); None: :data:`DEFAULT_BLOCK_S`, or
+        :data:`DEFAULT_BLOCK_SAMPLES` samples at ``fs`` where that is longer.
+    fs : float, optional
+        The record's sample rate [Hz] (None: not known, the default in seconds).
 
     Returns
     -------
@@ -878,11 +886,13 @@ def block_length(block_s: float | None = None) -> float:
 
     Examples
     --------
-    >>> block_length(), block_length(60.0)
-    (300.0, 60.0)
+    >>> block_length(), block_length(60.0), block_length(fs=1000.0), block_length(fs=1.0)
+    (300.0, 60.0, 300.0, 300000.0)
 
     """
     if block_s is None:
+        if fs is not None and fs > 0:
+            return max(DEFAULT_BLOCK_S, DEFAULT_BLOCK_SAMPLES / float(fs))
         return DEFAULT_BLOCK_S
     if not block_s > 0:
         raise EstimationError(f'{block_s=}: expected a block length > 0 s')
@@ -903,13 +913,13 @@ class RecordingBlocks:
     rec
         The recording.
     block_s
-        Block length [s]; None: :data:`DEFAULT_BLOCK_S`.
+        Block length [s]; None: the default for the recording's rate (:func:`block_length`).
 
     """
 
     def __init__(self, rec: Recording, block_s: float | None = None) -> None:
         self.rec = rec
-        self.block_ns = int(round(block_length(block_s) * 1e9))
+        self.block_ns = int(round(block_length(block_s, rec.fs) * 1e9))
         self._lo: int | None = None
         self._resume: int | None = None
 
@@ -1000,11 +1010,13 @@ def check_not_periodic(rec: Recording, input: str | None = None) -> None:  # noq
             det = detect_multisine(x[:, j], rec.fs)
         except EstimationError:
             continue                        # not periodic: the LPM's to estimate
+        what = (f'input {rec.joint_names[j]}' if rec.is_layout
+                else f'the {source} of {rec.joint_names[j]}')
         raise UnusableExcitationError(
-            f"method='lpm': the {source} of {rec.joint_names[j]} is periodic ({det.describe()}); "
+            f"method='lpm': {what} is periodic ({det.describe()}); "
             f'between its lines the LPM has no excitation and its FRF there would be wrong; '
-            f"expected non-periodic excitation — estimate without method='lpm' (the multisine "
-            f'estimator)')
+            f'expected non-periodic excitation — leave out --method lpm (the multisine '
+            f'estimator takes a periodic record)')
 
 
 def _add_lpm(lpm: LpmBlocks, rec: Recording, resume: Callable[[float], None] | None
@@ -1045,7 +1057,8 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     resume
         E.g. ``RecordingBlocks.continue_from``.
     block_s
-        Block length [s], for messages; None: :data:`DEFAULT_BLOCK_S`.
+        Block length [s], for messages; None: the default for the blocks' sample rate
+        (:func:`block_length`).
 
     Returns
     -------
@@ -1067,8 +1080,10 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     first: EstimationError | None = None
     unusable: str | None = None                 # the first block whose excitation was refused
     n = 0
+    span = [np.inf, -np.inf, None]              # first and last time [s], sample rate
     for rec in blocks:
         n += 1
+        span = [min(span[0], rec.t[0]), max(span[1], rec.t[-1]), rec.fs]
         try:
             if opts.method in LPM_METHODS:
                 opts.check(rec)
@@ -1093,24 +1108,27 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
             continue
         if det.used_until is not None and resume is not None:
             resume(det.used_until)
+    length = block_length(block_s, span[2])
     if not det.entries and unusable is not None:
         # an excitation was found and refused: no other block's LPM stands in for it
         if n == 1:
             raise first
-        raise UnusableExcitationError(f'an excitation was found but refused ({unusable}); '
-                                      f'{n} blocks of at most {block_length(block_s):g} s, '
-                                      f'none estimated')
+        whole = span[1] - span[0] + (1.0 / span[2] if span[2] else 0.0)
+        raise UnusableExcitationError(
+            f'an excitation was found but refused ({unusable}); {n} blocks of at most '
+            f'{length:g} s, none estimated; a block that holds more of the record may show '
+            f'the excitation whole: --window {np.ceil(whole):g} (the whole record, '
+            f'{whole:.4g} s)')
     if not det.entries and (lpm.frames or lpm.dropped or opts.method in LPM_METHODS):
         if not lpm.frames and not lpm.dropped and first is not None:
             raise first                     # (frames only gaps dropped: the LPM says why)
         why = ([] if opts.method in LPM_METHODS else
-               [f'no multisine or chirp found in {n} block(s) of at most '
-                f'{block_length(block_s):g} s'])
+               [f'no multisine or chirp found in {n} block(s) of at most {length:g} s'])
         return lpm.results(why)
     if not det.entries:
         if n == 1 and first is not None:
             raise first
-        raise EstimationError(f'no multisine or chirp found in any {block_length(block_s):g} s '
+        raise EstimationError(f'no multisine or chirp found in any {length:g} s '
                               f'block ({n} blocks; first: '
                               f'{notes[0] if notes else "no joint states"})')
     estimates = det.results()

@@ -70,6 +70,7 @@ class LpmBlocks:
         self.inputs: list[int] = []
         self.units: dict[str, Any] = {}
         self.source = ''
+        self.layout = False                 # an import layout: inputs and sensors, no robot
         self.dropped = 0
         self.why: dict[str, int] = {}
         self.used_until: float | None = None
@@ -98,6 +99,7 @@ class LpmBlocks:
         """Choose inputs and frame length from the first block."""
         x = rec.reference if self.source == 'velocity reference' else rec.effort
         source = self.source
+        self.layout = rec.is_layout
         names = rec.joint_names
         if self.input is not None:
             if self.input not in names:
@@ -219,7 +221,8 @@ class LpmBlocks:
         band, singular = frf.meta['excitation_band_hz'], frf.meta['singular_lines']
         unexcited = frf.meta['unexcited_lines']
         how = (f'indirect through the velocity reference r of {ins} (P = G_yr G_ur^-1)'
-               if res.method == 'indirect' else f'direct, torque of {ins} as input')
+               if res.method == 'indirect' else f'direct, input {ins}' if self.layout
+               else f'direct, torque of {ins} as input')
         line = (f'Local Polynomial Method, {how}: '
                 f'{frf.noutputs}x{frf.ninputs} channels, {frf.freq_hz.size} lines '
                 f'{frf.freq_hz[0]:.4g}-{frf.freq_hz[-1]:.4g} Hz, {res.frames} frame(s) of '
