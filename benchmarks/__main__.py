@@ -349,7 +349,7 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
     from frf_ident.app.stream_estimate import stream_estimate
     from frf_ident.bag import read_recording, write_recording
     from frf_ident.core.estimation.described import estimate_recording
-    from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S
+    from frf_ident.core.estimation.detected import DEFAULT_WINDOW_S
     rows = []
     mb = 1024 ** 2
     with tempfile.TemporaryDirectory() as tmp:
@@ -357,10 +357,10 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
             path = write_recording(periodic_multisine_run(60.0 * minutes),
                                    Path(tmp) / f'long_{minutes}')
             size = sum(f.stat().st_size for f in path.glob('*.mcap'))
-            s_sec, s_peak = measure(lambda: stream_estimate(path, block_s=DEFAULT_BLOCK_S))
+            s_sec, s_peak = measure(lambda: stream_estimate(path, window_s=DEFAULT_WINDOW_S))
             m_sec, m_peak = measure(lambda: estimate_recording(read_recording(path)[0]))
             rows.append((f'{minutes} min bag ({size / mb:.0f} MB): streamed '
-                         f'({DEFAULT_BLOCK_S:.0f} s blocks, the CLI default) peak / time',
+                         f'({DEFAULT_WINDOW_S:.0f} s blocks, the CLI default) peak / time',
                          f'{s_peak / mb:.0f} MB / {s_sec:.1f} s',
                          f'in memory {m_peak / mb:.0f} MB / {m_sec:.1f} s',
                          f'{m_peak / max(s_peak, 1):.1f}x less'))

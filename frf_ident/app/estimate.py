@@ -61,7 +61,7 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
         memory, at most 4 GiB (:func:`~frf_ident.app.stream_estimate.default_memory_budget`).
     window_s : float or None
         Block length in s (> 0) for bags without experiment descriptors; None: the
-        default :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
+        default :data:`~frf_ident.core.estimation.detected.DEFAULT_WINDOW_S`.
     progress : callable
         Called with one line of text per step.
 
@@ -79,7 +79,7 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
         int(max_memory_mb * (1 << 20))
     if stream or stream_estimate.needs_streaming(bag, budget):
         res = stream_estimate.stream_estimate(bag, joints=joints, t_range=t_range,
-                                              block_s=window_s, options=options,
+                                              window_s=window_s, options=options,
                                               progress=progress)
         st = res.stats
         progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
@@ -103,12 +103,12 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     for line in timing.summary():
         progress(line)
     if joints is None:
-        return (estimate_recording(rec, options=options, block_s=window_s), timing,
+        return (estimate_recording(rec, options=options, window_s=window_s), timing,
                 rec.meta.get('summary', {}), None)
     check_joints(joints, rec.joint_names)
     # every joint the experiments excited takes part; the wanted channels are picked
     part = rec.select_joints(experiment_joints(rec, joints))
-    est = estimate_recording(part, options=options, block_s=window_s)
+    est = estimate_recording(part, options=options, window_s=window_s)
     return ({k: joint_channels(v, joints) for k, v in est.items()}, timing,
             rec.meta.get('summary', {}), None)
 
@@ -144,7 +144,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         Memory budget of the in-memory reader (default: a quarter of RAM).
     window_s
         Block length for bags without experiment descriptors [s]; None: the default
-        :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
+        :data:`~frf_ident.core.estimation.detected.DEFAULT_WINDOW_S`.
     fit : :class:`~frf_ident.app.fit.FitOptions`, optional
         Fit a model to frf.json with these options (``estimate --fit``); None: no fit.
     progress

@@ -20,7 +20,7 @@ core's segment-wise estimators.
 - bags with /frf/experiment descriptors: one window per experiment segment, the spectra of
   each segment kept (:class:`~frf_ident.core.estimation.described.SegmentEstimator`); the estimates
   equal the in-memory ones;
-- bags without descriptors: blocks of ``block_s`` seconds; each block's excitation is
+- bags without descriptors: blocks of ``window_s`` seconds; each block's excitation is
   detected and its periods added to the H1 sums of that excitation
   (:func:`~frf_ident.core.estimation.detected.estimate_in_blocks`, which the in-memory
   estimate runs on the same blocks, so both take the same decisions).
@@ -46,7 +46,7 @@ from frf_ident.core.estimation.described import (check_joints, check_recording,
                                                  complete_chirp_iterations, cut_short_error,
                                                  experiment_joints, joint_channels,
                                                  SegmentEstimator)
-from frf_ident.core.estimation.detected import block_length, estimate_in_blocks
+from frf_ident.core.estimation.detected import estimate_in_blocks, window_length
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import BagError, EstimationError
@@ -135,7 +135,7 @@ def _in_range(windows: list[tuple[int, int]], t_range: tuple[float, float] | Non
 
 
 def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
-                    t_range: tuple[float, float] | None = None, block_s: float | None = None,
+                    t_range: tuple[float, float] | None = None, window_s: float | None = None,
                     options: Any = None, progress: Progress | None = None
                     ) -> StreamedEstimate:
     """
@@ -157,9 +157,9 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     t_range : tuple of float, optional
         (t_start, t_end) in s of the bag clock, t_start < t_end: analyse only the segments
         or blocks inside this range; default: the whole bag.
-    block_s : float, optional
+    window_s : float, optional
         Block length in s for bags without experiment descriptors; default
-        :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
+        :data:`~frf_ident.core.estimation.detected.DEFAULT_WINDOW_S`.
     options : ExcitationOptions, optional
         Excitation options replacing detection; default None: detect the excitation.
     progress : callable, optional
@@ -181,7 +181,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
 
     """
     say = sink(progress)
-    block_s = block_length(block_s, None if block_s is not None else _joint_state_rate(bag))
+    window_s = window_length(window_s, None if window_s is not None else _joint_state_rate(bag))
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
         raise EstimationError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
     if joints is not None:
@@ -234,9 +234,9 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         raise cut_short_error(len(exp.meta['segments_left_out']))
     else:
         say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '
-            f'{block_s:g} s')
+            f'{window_s:g} s')
         span = None if t_range is None else tuple(int(round(x * 1e9)) for x in t_range)
-        reader = bs.WindowReader(bag, block_s=block_s, joints=joints, experiment=exp,
+        reader = bs.WindowReader(bag, window_s=window_s, joints=joints, experiment=exp,
                                  span=span, progress=progress)
 
         def blocks():
@@ -244,7 +244,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                 reports.append(report)
                 yield rec
         estimates = estimate_in_blocks(blocks(), options, resume=reader.continue_from,
-                                       block_s=block_s)
+                                       window_s=window_s)
         notes = [n for n in next(iter(estimates.values())).meta['detected']
                  if n.startswith('block ')]
     if not reports:

@@ -49,7 +49,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The subcommand's parser; the arguments are added to it.
 
     """
-    from frf_ident.core.estimation.detected import (DEFAULT_BLOCK_S, DEFAULT_BLOCK_SAMPLES,
+    from frf_ident.core.estimation.detected import (DEFAULT_WINDOW_S, DEFAULT_WINDOW_SAMPLES,
                                                     LPM_METHODS)
     p.add_argument('bag', nargs='+',
                    help='a bag; or several, a folder of bags, a glob or @LIST.txt (one per '
@@ -76,7 +76,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--window', type=float, default=None, metavar='S',
                    help=f'block length [s] in which a bag without experiment descriptors is '
                         f'detected and estimated, in memory and streamed (default '
-                        f'{DEFAULT_BLOCK_S:g} s, or {DEFAULT_BLOCK_SAMPLES:,} samples where the '
+                        f'{DEFAULT_WINDOW_S:g} s, or {DEFAULT_WINDOW_SAMPLES:,} samples where the '
                         f'record is sampled slower; must hold a few multisine periods or a '
                         f'whole chirp)')
     f = p.add_argument_group('a model fitted to the estimate (what `frf-ident fit` does, into '

@@ -753,7 +753,7 @@ class SegmentEstimator:
         return out
 
 
-def estimate_recording(rec: Recording, *, options=None, block_s: float | None = None
+def estimate_recording(rec: Recording, *, options=None, window_s: float | None = None
                        ) -> dict[str, FrequencyResponse]:
     """
     Compute every estimate the recording supports.
@@ -765,8 +765,8 @@ def estimate_recording(rec: Recording, *, options=None, block_s: float | None = 
     (:func:`frf_ident.core.estimation.checks.check_descriptor_recording`: band, periods,
     clipping). ``options`` (:class:`frf_ident.core.estimation.detected.ExcitationOptions`)
     replace detection in a recording without descriptors; a recording with descriptors
-    refuses them. ``block_s``: block length of detection (default
-    :data:`frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`).
+    refuses them. ``window_s``: block length of detection (default
+    :data:`frf_ident.core.estimation.detected.DEFAULT_WINDOW_S`).
     """
     check_recording(rec, options)
     est = SegmentEstimator(rec.segments)
@@ -777,7 +777,7 @@ def estimate_recording(rec: Recording, *, options=None, block_s: float | None = 
             s.info.get('design') in ('multisine', 'chirp') for s in rec.segments):
         raise cut_short_error(left_out)
     if not out:
-        out = estimate_detected(rec, options, block_s=block_s)
+        out = estimate_detected(rec, options, window_s=window_s)
     return out
 
 
@@ -831,19 +831,19 @@ def check_recording(rec: Recording, options=None) -> None:
         check_descriptor_recording(rec)
 
 
-def estimate_detected(rec: Recording, options=None, *, block_s: float | None = None
+def estimate_detected(rec: Recording, options=None, *, window_s: float | None = None
                       ) -> dict[str, FrequencyResponse]:
     """
     Estimate a recording without descriptors from the detected excitation.
 
     Estimates of a recording without descriptors: the excitation is detected per joint
-    in blocks of ``block_s`` seconds, as a streamed bag is
+    in blocks of ``window_s`` seconds, as a streamed bag is
     (:func:`frf_ident.core.estimation.detected.estimate_in_blocks`; ``options`` replace
     detection where given) and checked; one entry 'detected/<joint>' per excited input, the
     detection sentences in each estimate's meta['detected'].
     """
-    from frf_ident.core.estimation.detected import (block_length, estimate_in_blocks,
+    from frf_ident.core.estimation.detected import (window_length, estimate_in_blocks,
                                                     RecordingBlocks)
-    block_s = block_length(block_s, rec.fs)
-    blocks = RecordingBlocks(rec, block_s)
-    return estimate_in_blocks(blocks, options, resume=blocks.continue_from, block_s=block_s)
+    window_s = window_length(window_s, rec.fs)
+    blocks = RecordingBlocks(rec, window_s)
+    return estimate_in_blocks(blocks, options, resume=blocks.continue_from, window_s=window_s)

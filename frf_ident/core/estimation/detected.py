@@ -33,7 +33,7 @@ excerpt holds one; the estimate's meta lists what was dropped, and the estimate 
 only when fewer than two periods (or no line) remain.
 
 A recording is estimated block by block (:func:`estimate_in_blocks`, blocks of
-``DEFAULT_BLOCK_S``), in memory (:class:`RecordingBlocks`) and when a bag is streamed alike,
+``DEFAULT_WINDOW_S``), in memory (:class:`RecordingBlocks`) and when a bag is streamed alike,
 so both take the same decisions whatever the size of the bag.
 """
 from __future__ import annotations
@@ -63,21 +63,21 @@ from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
 import numpy as np
 
-__all__ = ['DEFAULT_BLOCK_S', 'DEFAULT_BLOCK_SAMPLES', 'LPM_METHODS', 'MIN_ADVANCE_S',
+__all__ = ['DEFAULT_WINDOW_S', 'DEFAULT_WINDOW_SAMPLES', 'LPM_METHODS', 'MIN_ADVANCE_S',
            'DetectedEstimator', 'ExcitationOptions', 'NoExcitationError', 'RecordingBlocks',
-           'UnusableExcitationError', 'block_length', 'check_detected_segment',
+           'UnusableExcitationError', 'window_length', 'check_detected_segment',
            'check_not_periodic', 'detect_segments', 'detected_frf', 'estimate_in_blocks']
 
 #: block length [s] in which recordings without descriptors are detected and estimated (in
 #: memory and streamed alike): a few multisine periods or a whole chirp must fit in one block.
-#: Defined here only: every signature above (app, cli) takes ``block_s=None`` and
-#: :func:`block_length` resolves it.
-DEFAULT_BLOCK_S = 300.0
+#: Defined here only: every signature above (app, cli) takes ``window_s=None`` and
+#: :func:`window_length` resolves it.
+DEFAULT_WINDOW_S = 300.0
 #: ... and a block holds at least this many samples: 300 s at the 1 kHz the default was set
 #: for (a block's memory and a period's length in samples scale with the samples, not the
 #: seconds). A record sampled slower gets a longer block: the DaISy arm at 1 s per sample is
 #: one block of its 1024 samples, where 300 s cut it into four that each held a wrong period
-DEFAULT_BLOCK_SAMPLES = 300_000
+DEFAULT_WINDOW_SAMPLES = 300_000
 
 #: a block that used data up to t starts the next block there (no period lost at the
 #: boundary), unless t is less than this far [s] into the block (the scan must move on)
@@ -862,15 +862,15 @@ def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
     return frf
 
 
-def block_length(block_s: float | None = None, fs: float | None = None) -> float:
+def window_length(window_s: float | None = None, fs: float | None = None) -> float:
     """
-    Return the detection block length [s]: ``block_s``, or the default for the sample rate.
+    Return the detection block length [s]: ``window_s``, or the default for the sample rate.
 
     Parameters
     ----------
-    block_s : float, optional
-        Block length [s] (> 0); None: :data:`DEFAULT_BLOCK_S`, or
-        :data:`DEFAULT_BLOCK_SAMPLES` samples at ``fs`` where that is longer.
+    window_s : float, optional
+        Block length [s] (> 0); None: :data:`DEFAULT_WINDOW_S`, or
+        :data:`DEFAULT_WINDOW_SAMPLES` samples at ``fs`` where that is longer.
     fs : float, optional
         The record's sample rate [Hz] (None: not known, the default in seconds).
 
@@ -882,21 +882,21 @@ def block_length(block_s: float | None = None, fs: float | None = None) -> float
     Raises
     ------
     EstimationError
-        ``block_s`` is not > 0.
+        ``window_s`` is not > 0.
 
     Examples
     --------
-    >>> block_length(), block_length(60.0), block_length(fs=1000.0), block_length(fs=1.0)
+    >>> window_length(), window_length(60.0), window_length(fs=1000.0), window_length(fs=1.0)
     (300.0, 60.0, 300.0, 300000.0)
 
     """
-    if block_s is None:
+    if window_s is None:
         if fs is not None and fs > 0:
-            return max(DEFAULT_BLOCK_S, DEFAULT_BLOCK_SAMPLES / float(fs))
-        return DEFAULT_BLOCK_S
-    if not block_s > 0:
-        raise EstimationError(f'{block_s=}: expected a block length > 0 s')
-    return float(block_s)
+            return max(DEFAULT_WINDOW_S, DEFAULT_WINDOW_SAMPLES / float(fs))
+        return DEFAULT_WINDOW_S
+    if not window_s > 0:
+        raise EstimationError(f'{window_s=}: expected a block length > 0 s')
+    return float(window_s)
 
 
 class RecordingBlocks:
@@ -904,22 +904,22 @@ class RecordingBlocks:
     Cut an in-memory recording into blocks as a streamed bag is cut.
 
     The blocks of an in-memory recording, cut as a streamed bag is cut
-    (:class:`frf_ident.bag.windows.WindowReader` with ``block_s``): from the first sample,
-    ``block_s`` long, the next one from where the last used data ended
+    (:class:`frf_ident.bag.windows.WindowReader` with ``window_s``): from the first sample,
+    ``window_s`` long, the next one from where the last used data ended
     (:meth:`continue_from`) or else right after the block.
 
     Parameters
     ----------
     rec
         The recording.
-    block_s
-        Block length [s]; None: the default for the recording's rate (:func:`block_length`).
+    window_s
+        Block length [s]; None: the default for the recording's rate (:func:`window_length`).
 
     """
 
-    def __init__(self, rec: Recording, block_s: float | None = None) -> None:
+    def __init__(self, rec: Recording, window_s: float | None = None) -> None:
         self.rec = rec
-        self.block_ns = int(round(block_length(block_s, rec.fs) * 1e9))
+        self.block_ns = int(round(window_length(window_s, rec.fs) * 1e9))
         self._lo: int | None = None
         self._resume: int | None = None
 
@@ -1029,14 +1029,14 @@ def _add_lpm(lpm: LpmBlocks, rec: Recording, resume: Callable[[float], None] | N
 
 def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions | None = None,
                        *, resume: Callable[[float], None] | None = None,
-                       block_s: float | None = None) -> dict[str, FrequencyResponse]:
+                       window_s: float | None = None) -> dict[str, FrequencyResponse]:
     """
     Detect and estimate block by block (:class:`DetectedEstimator`).
 
     A block whose detection or checks fail is left out with a note (in each estimate's
     meta['detected']); when no block contributes, the reason is raised (the only block's,
     or the first of several). ``resume`` is told where the data used by a block end (the
-    next block starts there); ``block_s`` only names the block length in messages.
+    next block starts there); ``window_s`` only names the block length in messages.
 
     Where no block holds a multisine or chirp (or ``options.method == 'lpm'``), the blocks'
     frames are estimated by the Local Polynomial Method instead
@@ -1056,9 +1056,9 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
         :class:`ExcitationOptions` replacing detection.
     resume
         E.g. ``RecordingBlocks.continue_from``.
-    block_s
+    window_s
         Block length [s], for messages; None: the default for the blocks' sample rate
-        (:func:`block_length`).
+        (:func:`window_length`).
 
     Returns
     -------
@@ -1108,7 +1108,7 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
             continue
         if det.used_until is not None and resume is not None:
             resume(det.used_until)
-    length = block_length(block_s, span[2])
+    length = window_length(window_s, span[2])
     if not det.entries and unusable is not None:
         # an excitation was found and refused: no other block's LPM stands in for it
         if n == 1:
