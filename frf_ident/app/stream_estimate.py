@@ -187,11 +187,45 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     if joints is not None:
         check_joints(joints)
     exp = bs.read_experiment(bag)
+    segments, cut = estimated_segments(exp, t_range, say)
+    reports: list[tm.TimingReport] = []
+    notes: list[str] = []
+    if segments:
+        reader = bs.WindowReader(bag, windows=_in_range(bs.segment_windows(segments), t_range),
+                                 experiment=exp, progress=progress)
+        say(f'streaming: {len(segments)} experiment segments in {len(reader.windows)} windows')
+        estimates = segment_estimates(reader, segments, exp, joints, options, reports)
+    elif exp.meta.get('segments_left_out') and (t_range is None or cut):
+        raise cut_short_error(len(exp.meta['segments_left_out']))
+    else:
+        say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '
+            f'{window_s:g} s')
+        span = None if t_range is None else tuple(int(round(x * 1e9)) for x in t_range)
+        reader = bs.WindowReader(bag, window_s=window_s, joints=joints, experiment=exp,
+                                 span=span, progress=progress)
+        estimates = block_estimates(reader, options, window_s, reports)
+        notes = [n for n in next(iter(estimates.values())).meta['detected']
+                 if n.startswith('block ')]
+    if not reports:
+        raise EstimationError(f'{bag}: no joint states inside the analysed windows')
+    timing = tm.merge_reports(reports, reader.stats.recovery)
+    meta = dict(exp.meta)
+    meta.pop('_frf_bag', None)
+    return StreamedEstimate(estimates, timing, reader.stats, meta, notes)
+
+
+def estimated_segments(exp: Any, t_range: tuple[float, float] | None, say: Progress
+                       ) -> tuple[list, list]:
+    """
+    Return the segments to estimate and those ``t_range`` cuts (named, left out).
+
+    Only the last chirp iteration is read (the estimate), or the last complete one when it
+    was cut short.
+    """
     segments = [s for s in exp.segments
                 if s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
     chirps = [s.info.get('iteration', 0) for s in segments if s.info.get('design') == 'chirp']
     if chirps:
-        # the last iteration is the estimate, or the last complete one when it was cut short
         keep = {max(chirps)} | set(complete_chirp_iterations(segments)[-1:])
         segments = [s for s in segments if s.info.get('design') != 'chirp'
                     or s.info.get('iteration', 0) in keep]
@@ -202,57 +236,48 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         for s in cut:
             say(f'warning: {cut_warning(s, *t_range)}')
         exp.meta.setdefault('segments_left_out', []).extend([s.t_start, s.t_end] for s in cut)
-    reports: list[tm.TimingReport] = []
-    notes: list[str] = []
-    if segments:
-        windows = _in_range(bs.segment_windows(segments), t_range)
-        say(f'streaming: {len(segments)} experiment segments in {len(windows)} windows')
-        # every joint the experiments excited takes part; the wanted channels are picked
-        reader = bs.WindowReader(bag, windows=windows, experiment=exp, progress=progress)
-        est = SegmentEstimator(segments)
-        for rec, report in reader:
-            if joints is not None:
-                check_joints(joints, rec.joint_names)
-                rec = rec.select_joints(experiment_joints(rec, joints))
-            check_recording(rec, options)
-            est.add_window(rec)
-            reports.append(report)
-        missing = est.missing()
-        if missing:
-            s = missing[0]
-            raise EstimationError(f'{len(missing)} experiment segment(s) have no joint states '
-                                  f'in the bag, first {s.info.get("design")} at '
-                                  f'{s.t_start:.3f}..{s.t_end:.3f} s')
-        estimates = est.results()
-        if not estimates:
-            left_out = len(exp.meta.get('segments_left_out', []))
-            raise (cut_short_error(left_out) if left_out else
-                   EstimationError('the experiment segments give no estimate'))
-        if joints is not None:
-            estimates = {k: joint_channels(v, joints) for k, v in estimates.items()}
-    elif exp.meta.get('segments_left_out') and (t_range is None or cut):
-        raise cut_short_error(len(exp.meta['segments_left_out']))
-    else:
-        say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '
-            f'{window_s:g} s')
-        span = None if t_range is None else tuple(int(round(x * 1e9)) for x in t_range)
-        reader = bs.WindowReader(bag, window_s=window_s, joints=joints, experiment=exp,
-                                 span=span, progress=progress)
+    return segments, cut
 
-        def blocks():
-            for rec, report in reader:
-                reports.append(report)
-                yield rec
-        estimates = estimate_in_blocks(blocks(), options, resume=reader.continue_from,
-                                       window_s=window_s)
-        notes = [n for n in next(iter(estimates.values())).meta['detected']
-                 if n.startswith('block ')]
-    if not reports:
-        raise EstimationError(f'{bag}: no joint states inside the analysed windows')
-    timing = tm.merge_reports(reports, reader.stats.recovery)
-    meta = dict(exp.meta)
-    meta.pop('_frf_bag', None)
-    return StreamedEstimate(estimates, timing, reader.stats, meta, notes)
+
+def segment_estimates(reader: Any, segments: list, exp: Any, joints: list[str] | None,
+                      options: Any, reports: list) -> dict[str, FrequencyResponse]:
+    """
+    Estimate the described segments window by window; add each window's timing to ``reports``.
+
+    Every joint the experiments excited takes part; the wanted channels are picked after.
+    """
+    est = SegmentEstimator(segments)
+    for rec, report in reader:
+        if joints is not None:
+            check_joints(joints, rec.joint_names)
+            rec = rec.select_joints(experiment_joints(rec, joints))
+        check_recording(rec, options)
+        est.add_window(rec)
+        reports.append(report)
+    missing = est.missing()
+    if missing:
+        s = missing[0]
+        raise EstimationError(f'{len(missing)} experiment segment(s) have no joint states '
+                              f'in the bag, first {s.info.get("design")} at '
+                              f'{s.t_start:.3f}..{s.t_end:.3f} s')
+    estimates = est.results()
+    if not estimates:
+        left_out = len(exp.meta.get('segments_left_out', []))
+        raise (cut_short_error(left_out) if left_out else
+               EstimationError('the experiment segments give no estimate'))
+    if joints is not None:
+        estimates = {k: joint_channels(v, joints) for k, v in estimates.items()}
+    return estimates
+
+
+def block_estimates(reader: Any, options: Any, window_s: float, reports: list
+                    ) -> dict[str, FrequencyResponse]:
+    """Detect and estimate block by block (no descriptors); add the timings to ``reports``."""
+    def blocks():
+        for rec, report in reader:
+            reports.append(report)
+            yield rec
+    return estimate_in_blocks(blocks(), options, resume=reader.continue_from, window_s=window_s)
 
 
 def _joint_state_rate(bag: Path) -> float | None:
