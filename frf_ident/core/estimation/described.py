@@ -406,6 +406,24 @@ class MultisineSpectra:
         return min((self.spec[(p, m)]['run'] if (p, m) in self.spec else self.n_q)
                    for m in range(n_ex))
 
+    def period_spectra(self, key: str, compensate: bool) -> list[np.ndarray]:
+        """
+        Return the spectra of every used period, one (n_q_p, F, n, n_ex) array per realisation.
+
+        Parameters
+        ----------
+        key : {'u', 'y', 'r'}
+            The series.
+        compensate : bool
+            Subtract the constant-velocity run's (not for 'r').
+
+        Returns
+        -------
+        list of ndarray
+
+        """
+        return self._stack(key, compensate)
+
     def _stack(self, key: str, compensate: bool) -> list[np.ndarray]:
         """One (n_q_p, F, n, n_ex) array per realisation that kept periods."""
         _, n_ex = self._check_complete()

@@ -31,11 +31,13 @@ from frf_ident.core.excitation.engine import PhaseEngine
 from frf_ident.core.excitation.procedures import (check_torque_bound, ChirpConfig, ChirpIteration,
                                                   multisine_procedure, MultisineConfig, Phase,
                                                   POSITION_GAIN)
+from frf_ident.core.estimation.target import UncertaintyTarget
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.core.simulation.stop_at_target import run_multisine_to_target
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
@@ -222,6 +224,8 @@ def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVel
 class IdentificationConfig:
     multisine: MultisineConfig | None = field(default_factory=MultisineConfig)
     chirp: ChirpConfig | None = field(default_factory=ChirpConfig)
+    #: the multisine ends at its first whole period meeting it (None or 0 dB: no target)
+    target: UncertaintyTarget | None = None
 
 
 def run_identification(plant: Any, controller: PIVelocity,
@@ -284,15 +288,22 @@ def run_identification(plant: Any, controller: PIVelocity,
     if phases is not None:
         t_start = loop.t
         n_exc = sum(1 for p in phases if p.segment)
-        done = 0
-        for ph in phases:
-            loop.run_phase(ph)
-            if ph.segment:
-                done += 1
-                _log.debug(f'multisine: segment {done}/{n_exc} '
-                           f'({ph.segment["design"]}, realisation {ph.segment["realisation"]}, '
-                           f'experiment {ph.segment["experiment"]})')
-        summary['multisine'] = {'experiment_time_s': loop.t - t_start,
+        stop = None
+        if cfg.target is not None and cfg.target.enabled:
+            stop = run_multisine_to_target(loop, phases, cfg.target)
+            say(f"multisine: {'stopped at' if stop['stopped'] else 'did not reach'} the "
+                f'target {cfg.target.sd_db:g} dB after {stop["periods"]} periods (worst sd '
+                f'{stop["worst_sd_db"]:.2f} dB)')
+        else:
+            done = 0
+            for ph in phases:
+                loop.run_phase(ph)
+                if ph.segment:
+                    done += 1
+                    _log.debug(f'multisine: segment {done}/{n_exc} ({ph.segment["design"]}, '
+                               f'realisation {ph.segment["realisation"]}, '
+                               f'experiment {ph.segment["experiment"]})')
+        summary['multisine'] = {'experiment_time_s': loop.t - t_start, 'target': stop,
                                 'segments': n_exc, 'lines': int(design.harmonics.size),
                                 'period_s': design.period,
                                 'constant_velocity':
