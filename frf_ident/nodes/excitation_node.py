@@ -139,6 +139,7 @@ class ExcitationNode:
         self.dt_ns = self.session.dt_ns
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None
+        self.live = self._wire_live(node, torque_limit, robot.dt)
         self.refuse_second_publisher(float(c.param(node, 'discovery_wait_s', 0.5)))
         # every joint state, in order (also free-running): the torque of each sample is in its
         # own joint state, and a busy node works through a backlog instead of losing samples
@@ -153,6 +154,58 @@ class ExcitationNode:
         self._signalled = threading.Event()      # SIGINT/SIGTERM (spin's stop event)
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
+
+    def _wire_live(self, node: Any, torque_limit: np.ndarray, dt: float) -> Any:
+        """The live estimate, its publishers and the uncertainty target (docs/live.md)."""
+        from frf_ident.app.live import LiveMonitor
+        from frf_ident.core.estimation.target import UncertaintyTarget
+        target = UncertaintyTarget(float(c.param(node, 'target_sd_db', 0.0)),
+                                   str(c.param(node, 'target_channels', 'diagonal')))
+        if not c.param(node, 'live', True):
+            if target.enabled:
+                raise c.Refused('target_sd_db needs the live estimate (live: true)')
+            return None
+        t = c.topics(node, ('live_topic', 'warnings_topic'))
+        F64 = mw.msg('std_msgs/msg/Float64MultiArray')
+        self.Layout = mw.msg('std_msgs/msg/MultiArrayLayout')
+        self.Dim = mw.msg('std_msgs/msg/MultiArrayDimension')
+        self.F64 = F64
+        # transient-local: a viewer that joins late gets the newest estimate at once
+        self.live_pubs = {k: node.create_publisher(F64, f'{t["live_topic"]}/{k}',
+                                                   mw.qos_transient_local(1))
+                          for k in c.LIVE_FRAMES}
+        self.warn_pub = node.create_publisher(self.String, t['warnings_topic'],
+                                              mw.qos_transient_local(50))
+        return LiveMonitor(self.joints, dt, self.session.offset, torque_limit, target, self,
+                           stop=self.session.stop_at_target if target.enabled else None)
+
+    def live_frame(self, topic: str, frame: Any) -> None:
+        """
+        Publish a live frame as a Float64MultiArray on /frf/live/<topic>.
+
+        Parameters
+        ----------
+        topic : str
+            'frf', 'distortion' or 'summary'.
+        frame : ArrayFrame
+            Its dims and data (frf_ident/io/live_frame.py).
+
+        """
+        layout = self.Layout(dim=[self.Dim(label=lab, size=n, stride=st)
+                                  for lab, n, st in frame.dims], data_offset=0)
+        self.live_pubs[topic].publish(self.F64(layout=layout, data=frame.data.tolist()))
+
+    def warning(self, event: dict) -> None:
+        """
+        Publish an early warning as JSON on the warnings topic.
+
+        Parameters
+        ----------
+        event : dict
+            ``EarlyWarning.to_dict()``.
+
+        """
+        self.warn_pub.publish(self.String(data=json.dumps(event, sort_keys=True)))
 
     def _watch(self) -> None:
         while not self._stop.wait(0.002):
@@ -183,6 +236,8 @@ class ExcitationNode:
             Excitation part of ``r`` [rad/s], published on the excitation topic.
 
         """
+        if self.live is not None:
+            self.live.reference(k, x)
         c.set_stamp(self.exc_msg, k * self.dt_ns)
         self.exc_msg.velocity = x.tolist()
         self.exc_pub.publish(self.exc_msg)   # first: recorders pair the command with this stamp
@@ -200,6 +255,8 @@ class ExcitationNode:
 
         """
         self.exp_pub.publish(self.String(data=text))
+        if self.live is not None:
+            self.live.experiment(text)
 
     def progress(self, event: dict) -> None:
         """
@@ -269,8 +326,10 @@ class ExcitationNode:
             self.order = [pos[j] for j in self.joints]
         p, e, cols = msg.position, msg.effort, self.order
         effort = np.array([e[i] for i in cols]) if len(e) else None
-        self.session.on_state(int(round(c.stamp_ns(msg) / self.dt_ns)),
-                              np.array([p[i] for i in cols]), effort)
+        k, q = int(round(c.stamp_ns(msg) / self.dt_ns)), np.array([p[i] for i in cols])
+        if self.live is not None and len(msg.velocity):
+            self.live.state(k, q, np.array([msg.velocity[i] for i in cols]), effort)
+        self.session.on_state(k, q, effort)
 
     def _start(self, starter: Any, response: Any) -> Any:
         try:
@@ -308,6 +367,8 @@ class ExcitationNode:
     def close(self) -> None:
         self._stop.set()
         self.session.close()
+        if self.live is not None:
+            self.live.close()
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

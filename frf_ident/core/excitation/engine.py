@@ -243,6 +243,25 @@ class PhaseStream:
             return self._cur.held
         return self.phases[self._i_phase].kind in ('move', 'settle')
 
+    @property
+    def phase_index(self) -> int:
+        """Return the index in :attr:`phases` of the phase the next sample belongs to."""
+        return self._i_phase
+
+    def replace_after_current(self, then: list[Phase]) -> None:
+        """
+        Run ``then`` after the current phase instead of the rest of the procedure.
+
+        Parameters
+        ----------
+        then : list of Phase
+            The phases that follow the current one.
+
+        """
+        keep = self._i_phase + (1 if self._cur is not None else 0)
+        self.phases = self.phases[:keep] + list(then)
+        self.total = (self.sent - self._i + sum(p.n_samples for p in self.phases[self._i_phase:]))
+
     def stop_segment(self, n_fade: int, then: list[Phase]) -> bool:
         """
         End the running excite segment from the next sample: fade out, then run ``then``.
