@@ -28,7 +28,8 @@ setup(
         (os.path.join('share', package_name, 'launch'),
          glob(os.path.join('launch', '*launch.[pxy][yma]*'))),
         (os.path.join('share', package_name, 'config'),
-         glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))),
+         glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))
+         + glob(os.path.join('config', '*.json'))),
         (os.path.join('share', package_name, 'urdf'), glob(os.path.join('urdf', '*.urdf'))),
     ],
     python_requires='>=3.10',

@@ -47,10 +47,10 @@ class LiveOutputs(Protocol):
     """Where the live stream goes (the node implements it with publishers)."""
 
     def live_frame(self, topic: str, frame: ArrayFrame) -> None:
-        """Publish a frame on 'frf', 'distortion' or 'summary' (/frf/live/<topic>)."""
+        """Publish a frame (topic: frf, distortion or summary under /frf/live)."""
 
     def warning(self, event: dict[str, Any]) -> None:
-        """Publish an early warning (JSON-ready dict) on /frf/warnings."""
+        """Publish an early warning (a JSON-ready dict) on the warnings topic."""
 
     def progress(self, event: dict[str, Any]) -> None:
         """Publish a progress event (the session's /frf/progress)."""
@@ -82,8 +82,8 @@ def status_line(est: LiveEstimate, target: UncertaintyTarget) -> str:
             + (f'{worst:.2f} dB' if math.isfinite(worst) else 'undefined'))
     if target.enabled:
         left = target.periods_left(sd, est.periods)
-        text += f' (target {target.sd_db:g} dB)' + ('' if left is None else
-                                                     f', ~{left} periods left')
+        more = '' if left is None else f', ~{left} periods left'
+        text += f' (target {target.sd_db:g} dB){more}'
     return text
 
 

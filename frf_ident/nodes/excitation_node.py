@@ -156,7 +156,7 @@ class ExcitationNode:
         self._watchdog.start()
 
     def _wire_live(self, node: Any, torque_limit: np.ndarray, dt: float) -> Any:
-        """The live estimate, its publishers and the uncertainty target (docs/live.md)."""
+        """Wire the live estimate, its publishers and the uncertainty target (docs/live.md)."""
         from frf_ident.app.live import LiveMonitor
         from frf_ident.core.estimation.target import UncertaintyTarget
         target = UncertaintyTarget(float(c.param(node, 'target_sd_db', 0.0)),

@@ -196,8 +196,9 @@ class WarningMonitor:
             name = d['outputs'][o]
             out += self._new(EarlyWarning(
                 'rising_distortion', name,
-                f'{name}: {kind[line]} line {freq[line]:.2f} Hz rose {h[-1, o, line] - h[0, o, line]:.1f} '
-                f'dB over the last {RISE_UPDATES} estimates, {above[o, line]:.0f} dB above the '
-                f'noise: the plant drifts (heat, wear) or a resonance builds up',
+                f'{name}: {kind[line]} line {freq[line]:.2f} Hz rose '
+                f'{h[-1, o, line] - h[0, o, line]:.1f} dB over the last {RISE_UPDATES} '
+                f'estimates, {above[o, line]:.0f} dB above the noise: the plant drifts '
+                f'(heat, wear) or a resonance builds up',
                 float(h[-1, o, line] - h[0, o, line]), RISE_DB, est.t))
         return out

@@ -228,7 +228,7 @@ class LiveMultisine:
     # -- the streamed side (cheap: called for every sample) ----------------------------------
     def start(self, info: dict[str, Any], k0: int, k1: int) -> None:
         """
-        A multisine or constant-velocity segment starts at sample ``k0`` (ends before ``k1``).
+        Start following a multisine or constant-velocity segment from sample ``k0``.
 
         Parameters
         ----------
@@ -246,7 +246,7 @@ class LiveMultisine:
 
     def excitation(self, k: int, x: np.ndarray) -> None:
         """
-        The excitation part of sample ``k`` (what /frf/excitation carries).
+        Take the excitation part of sample ``k`` (what /frf/excitation carries).
 
         Parameters
         ----------
@@ -400,7 +400,9 @@ class LiveMultisine:
         need = (seg.n_tr + done.periods) * seg.n_per
         ms.add_arrays({k: v[:need] for k, v in seg.a.items()}, info, seg.k0 / self.fs,
                       self.fs, self.joints)
-        if not final_of_realisation or not ms.any_complete() or sum(v.size for v in ms.used_periods().values()) < 2:
+        if not final_of_realisation or not ms.any_complete():
+            return None
+        if sum(v.size for v in ms.used_periods().values()) < 2:
             return None          # the estimator's own minimum: two periods to average
         return self.estimate(t=done.k_end / self.fs)
 

@@ -291,8 +291,8 @@ class PhaseStream:
         n = max(1, min(int(n_fade), ph.n_samples - i))
         w = 0.5 + 0.5 * np.cos(np.pi * (np.arange(n) + 1) / n)
         exc = ph.excitation[i:i + n] * w[:, None]
-        fade = Phase('excite', n, reference=ph.reference[i:i + n] - ph.excitation[i:i + n] + exc,
-                     excitation=exc)
+        base = ph.reference[i:i + n] - ph.excitation[i:i + n]
+        fade = Phase('excite', n, reference=base + exc, excitation=exc)
         self.phases = self.phases[:self._i_phase] + [fade] + list(then)
         self._i, self._cur = 0, None
         self.total = self.sent + sum(p.n_samples for p in self.phases[self._i_phase:])

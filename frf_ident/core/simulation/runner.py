@@ -27,11 +27,11 @@ import logging
 import time
 from typing import Any
 
+from frf_ident.core.estimation.target import UncertaintyTarget
 from frf_ident.core.excitation.engine import PhaseEngine
 from frf_ident.core.excitation.procedures import (check_torque_bound, ChirpConfig, ChirpIteration,
                                                   multisine_procedure, MultisineConfig, Phase,
                                                   POSITION_GAIN)
-from frf_ident.core.estimation.target import UncertaintyTarget
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording, Segment
