@@ -50,7 +50,7 @@ class LiveOutputs(Protocol):
         """Publish a frame (topic: frf, distortion or summary under /frf/live)."""
 
     def warning(self, event: dict[str, Any]) -> None:
-        """Publish an early warning (a JSON-ready dict) on the warnings topic."""
+        """Publish an early warning, a JSON-ready dict, on the warnings topic."""
 
     def progress(self, event: dict[str, Any]) -> None:
         """Publish a progress event (the session's /frf/progress)."""
