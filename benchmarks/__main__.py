@@ -265,7 +265,7 @@ def _target_rows(rob, ctrl) -> list[tuple[str, str, str, str]]:
         s = rec.meta['summary']['multisine']
         periods = (s['target'] or {}).get('periods') or 50
         out[name] = (s['experiment_time_s'], err, periods)
-    (t1, e1, n1), (t0, e0, n0) = out['with'], out['without']
+    (t1, e1, n1), (t0, e0, _) = out['with'], out['without']
     return [(f'multisine 0.25 Hz, target sd 1 dB (stopped after {n1} periods, {e1:.2f} dB)',
              f'{t1:.0f} s', f'no target: 10 x 5 periods {t0:.0f} s ({e0:.2f} dB)',
              f'{t0 / t1:.1f}x shorter')]
