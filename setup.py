@@ -57,12 +57,16 @@ setup(
                  'flake8-quotes==3.3.2', 'pydocstyle==6.3.0',
                  'wheel',    # test/ros installs the package into a prefix as colcon would
                  # the campaign (Dask LocalCluster) and pose (pinocchio) tests run in CI too
-                 'dask>=2023.1', 'distributed>=2023.1', 'pin>=2.7'],
+                 'dask>=2023.1', 'distributed>=2023.1', 'pin>=2.7',
+                 # the live stream's Foxglove WebSocket and a protocol client for its test
+                 'foxglove-sdk>=0.30', 'websockets>=12'],
         'control': ['control>=0.10'],
         # campaigns on a Dask distributed cluster (`--scheduler`); the default needs neither
         'cluster': ['dask>=2023.1', 'distributed>=2023.1'],
         # pose-dependent link side of the simulated robot from its URDF (frf_ident.io.kinematics)
         'kinematics': ['pin>=2.7'],
+        # the live stream on a Foxglove WebSocket without ROS (frf_ident.io.foxglove_server)
+        'foxglove': ['foxglove-sdk>=0.30'],
     },
     zip_safe=True,
     maintainer='frf_ident developers',
