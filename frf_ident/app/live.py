@@ -40,7 +40,7 @@ from frf_ident.io.live_frame import (ArrayFrame, distortion_frame, frf_frame, LI
                                      summary_frame)
 import numpy as np
 
-__all__ = ['LiveMonitor', 'LiveOutputs', 'status_line']
+__all__ = ['EstimateOut', 'LiveMonitor', 'LiveOutputs', 'periods_left', 'status_line']
 
 
 class LiveOutputs(Protocol):
@@ -59,6 +59,32 @@ class LiveOutputs(Protocol):
         """Write a log line."""
 
 
+def periods_left(est: LiveEstimate, target: UncertaintyTarget) -> Optional[int]:
+    """
+    Return the MIMO periods the run is predicted to take still.
+
+    With a target: its prediction (sd ~ 1/sqrt(periods)), at most the design's periods left;
+    without one: the design's periods left (the run goes to its cap).
+
+    Parameters
+    ----------
+    est : LiveEstimate
+    target : UncertaintyTarget
+
+    Returns
+    -------
+    int or None
+        None when neither is known.
+
+    """
+    cap = (None if est.planned_periods is None
+           else max(0, est.planned_periods - est.periods))
+    left = target.periods_left(est.magnitude_sd_db, est.periods)
+    if left is None:
+        return cap if not target.enabled else None
+    return left if cap is None else min(left, cap)
+
+
 def status_line(est: LiveEstimate, target: UncertaintyTarget) -> str:
     """
     Return the one line a person follows: periods, worst sd, target and periods left.
@@ -75,16 +101,65 @@ def status_line(est: LiveEstimate, target: UncertaintyTarget) -> str:
         ~5 periods left'.
 
     """
-    sd = est.magnitude_sd_db
-    worst = target.worst_db(sd)
+    worst = target.worst_db(est.magnitude_sd_db)
     text = (f'multisine: {est.periods} periods ({est.realisations} realisation'
             f'{"s" if est.realisations != 1 else ""}), worst sd '
             + (f'{worst:.2f} dB' if math.isfinite(worst) else 'undefined'))
     if target.enabled:
-        left = target.periods_left(sd, est.periods)
-        more = '' if left is None else f', ~{left} periods left'
-        text += f' (target {target.sd_db:g} dB){more}'
+        text += f' (target {target.sd_db:g} dB)'
+    left = periods_left(est, target)
+    if left is not None:
+        text += f', ~{left} periods left'
     return text
+
+
+class EstimateOut:
+    """
+    Publish each live estimate: the three frames, the progress event and its status line.
+
+    Parameters
+    ----------
+    target : UncertaintyTarget
+    out : LiveOutputs
+
+    """
+
+    def __init__(self, target: UncertaintyTarget, out: LiveOutputs) -> None:
+        self.target, self.out = target, out
+        self.wide = False
+
+    def publish(self, est: LiveEstimate) -> None:
+        """
+        Publish one estimate.
+
+        Parameters
+        ----------
+        est : LiveEstimate
+
+        """
+        f = est.frf
+        if f.freq_hz.size > LINE_SLOTS and not self.wide:
+            self.wide = True
+            self.out.log('warn', f'live view: {f.freq_hz.size} lines, the first {LINE_SLOTS} '
+                                 f'are published (the estimate at the end has all)')
+        sd = est.magnitude_sd_db
+        self.out.live_frame('frf', frf_frame(f.freq_hz, f.response, sd, est.phase_sd_deg,
+                                             est.coherence, f.outputs, f.inputs))
+        if f.meta.get('distortion'):
+            self.out.live_frame('distortion', distortion_frame(f.meta['distortion']))
+        worst = self.target.worst_db(sd)
+        left = periods_left(est, self.target)
+        self.out.live_frame('summary', summary_frame({
+            't_s': est.t, 'periods': est.periods, 'realisations': est.realisations,
+            'worst_sd_db': worst, 'target_sd_db': self.target.sd_db, 'periods_left': left,
+            'final': float(est.final), 'min_coherence': float(np.nanmin(est.coherence))
+            if np.any(np.isfinite(est.coherence)) else None}))
+        line = status_line(est, self.target)
+        self.out.progress({'event': 'estimate', 'periods': est.periods,
+                           'worst_sd_db': round(worst, 4) if math.isfinite(worst) else None,
+                           'target_sd_db': self.target.sd_db, 'periods_left': left,
+                           't': round(est.t, 3), 'line': line})
+        self.out.log('info', line)
 
 
 class LiveMonitor:
@@ -129,7 +204,7 @@ class LiveMonitor:
         self.warnings = WarningMonitor(self.joints, self.limit)
         self.peak = np.zeros(len(self.joints))
         self.stopped = False
-        self.wide = False
+        self.publisher = EstimateOut(self.target, self.out)
 
     # -- the executor thread (per message) -----------------------------------------------------
     def experiment(self, text: str) -> None:
@@ -213,7 +288,7 @@ class LiveMonitor:
         if est is None:
             return
         self.estimates += 1
-        self._publish(est)
+        self.publisher.publish(est)
         for w in self.warnings.estimate(est):
             self._warn(w)
         sd = est.magnitude_sd_db
@@ -223,31 +298,6 @@ class LiveMonitor:
             with self.lock:
                 if done.key in self.live.segments and not done.last:
                     self.live.stop(done.key, done.k_end)
-
-    def _publish(self, est: LiveEstimate) -> None:
-        f = est.frf
-        if f.freq_hz.size > LINE_SLOTS and not self.wide:
-            self.wide = True
-            self.out.log('warn', f'live view: {f.freq_hz.size} lines, the first {LINE_SLOTS} '
-                                 f'are published (the estimate at the end has all)')
-        sd = est.magnitude_sd_db
-        self.out.live_frame('frf', frf_frame(f.freq_hz, f.response, sd, est.phase_sd_deg,
-                                             est.coherence, f.outputs, f.inputs))
-        if f.meta.get('distortion'):
-            self.out.live_frame('distortion', distortion_frame(f.meta['distortion']))
-        worst = self.target.worst_db(sd)
-        left = self.target.periods_left(sd, est.periods)
-        self.out.live_frame('summary', summary_frame({
-            't_s': est.t, 'periods': est.periods, 'realisations': est.realisations,
-            'worst_sd_db': worst, 'target_sd_db': self.target.sd_db, 'periods_left': left,
-            'final': 0.0, 'min_coherence': float(np.nanmin(est.coherence))
-            if np.any(np.isfinite(est.coherence)) else None}))
-        line = status_line(est, self.target)
-        self.out.progress({'event': 'estimate', 'periods': est.periods,
-                           'worst_sd_db': round(worst, 4) if math.isfinite(worst) else None,
-                           'target_sd_db': self.target.sd_db, 'periods_left': left,
-                           't': round(est.t, 3), 'line': line})
-        self.out.log('info', line)
 
     def _warn(self, w: EarlyWarning) -> None:
         self.out.warning(w.to_dict())

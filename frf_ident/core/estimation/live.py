@@ -101,6 +101,8 @@ class LiveEstimate:
         End [s] of the period that completed this estimate.
     final : bool
         True for the estimate of the whole run (the procedure ended).
+    planned_periods : int or None
+        MIMO periods the design holds (realisations x periods; None: not known).
 
     """
 
@@ -111,6 +113,7 @@ class LiveEstimate:
     realisations: int
     t: float
     final: bool = False
+    planned_periods: int | None = None
 
     def variance_kind(self) -> str | None:
         """
@@ -429,8 +432,10 @@ class LiveMultisine:
         coh = multiple_coherence(ms.period_spectra('y', cv), R)
         coh_u = multiple_coherence(ms.period_spectra('u', cv), R)
         used = ms.used_periods()
+        planned = [int(g.info.get('n_realisations', 1)) * g.n_q
+                   for g in self.segments.values() if not g.cv]
         return LiveEstimate(frf, coh, coh_u, int(sum(v.size for v in used.values())),
-                            len(used), float(t), final)
+                            len(used), float(t), final, max(planned) if planned else None)
 
     def _spectra(self, info: dict[str, Any]) -> MultisineSpectra:
         if self.spectra is None:

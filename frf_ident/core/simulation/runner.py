@@ -25,8 +25,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 import logging
 import time
-from typing import Any
+from typing import Any, Callable
 
+from frf_ident.core.estimation.live import LiveEstimate
 from frf_ident.core.estimation.target import UncertaintyTarget
 from frf_ident.core.excitation.engine import PhaseEngine
 from frf_ident.core.excitation.procedures import (check_torque_bound, ChirpConfig, ChirpIteration,
@@ -232,7 +233,9 @@ def run_identification(plant: Any, controller: PIVelocity,
                        config: IdentificationConfig | None = None, *,
                        progress: Progress | None = None,
                        meta: dict[str, Any] | None = None,
-                       model: RobotParams | None = None) -> Recording:
+                       model: RobotParams | None = None,
+                       on_estimate: Callable[[LiveEstimate], None] | None = None
+                       ) -> Recording:
     """
     Run the Section 7 procedures (multisine with compensation run, iterated chirps).
 
@@ -252,6 +255,9 @@ def run_identification(plant: Any, controller: PIVelocity,
         The nominal model: the multisine plan and the first chirp step are refused when their
         peak torque predicted on it (:func:`predict_peak_torque`) reaches 0.95 of a limit,
         as the excitation node refuses them on a robot. None: no prediction.
+    on_estimate : callable, optional
+        Called with the multisine's live estimate after every whole MIMO period (as the
+        excitation node publishes it); the run is the same with and without it.
 
     Returns
     -------
@@ -289,12 +295,17 @@ def run_identification(plant: Any, controller: PIVelocity,
         t_start = loop.t
         n_exc = sum(1 for p in phases if p.segment)
         stop = None
-        if cfg.target is not None and cfg.target.enabled:
-            stop = run_multisine_to_target(loop, phases, cfg.target)
+        targeted = cfg.target is not None and cfg.target.enabled
+        live = None
+        if targeted or on_estimate is not None:
+            live = run_multisine_to_target(loop, phases, cfg.target or UncertaintyTarget(),
+                                           on_estimate)
+        if targeted:
+            stop = live
             say(f"multisine: {'stopped at' if stop['stopped'] else 'did not reach'} the "
                 f'target {cfg.target.sd_db:g} dB after {stop["periods"]} periods (worst sd '
                 f'{stop["worst_sd_db"]:.2f} dB)')
-        else:
+        if live is None:
             done = 0
             for ph in phases:
                 loop.run_phase(ph)

@@ -20,7 +20,10 @@ The live multisine estimate, the uncertainty target and the early warnings.
 - on the 3-axis robot with noise a 0.5 dB target ends the multisine before its configured
   periods, and the FRF is within 0.5 dB of the analytic one on >= 95 % of the lines;
 - the predicted periods left follow sd ~ 1/sqrt(periods);
-- a dead output channel raises ``low_coherence``, a normal run none; the torque warning.
+- a dead output channel raises ``low_coherence``, a normal run none; the torque warning;
+- a vibration growing on one output at a non-excited line raises ``rising_distortion`` for
+  that output and line, the same run without it none;
+- the offline runner's live estimates (``on_estimate``) leave the run as it was.
 """
 from __future__ import annotations
 
@@ -48,8 +51,12 @@ def _robot(noise: float):
     return rob, controller_from_dict(d, rob)
 
 
-def _feed(rec, live: LiveMultisine, dead: int | None = None):
-    """Stream a recording into ``live`` sample by sample; return every estimate."""
+def _feed(rec, live: LiveMultisine, dead: int | None = None, add=None):
+    """
+    Stream a recording into ``live`` sample by sample; return every estimate.
+
+    ``dead``: that output is replaced by noise; ``add(t)``: added to the measured outputs.
+    """
     k_of = lambda t: int(round(t * rec.fs))     # noqa: E731
     starts = {}
     for s in rec.segments:
@@ -63,6 +70,8 @@ def _feed(rec, live: LiveMultisine, dead: int | None = None):
         y = rec.velocity[k].copy()
         if dead is not None:
             y[dead] = 1e-3 * rng.standard_normal()
+        if add is not None:
+            y += add(rec.t[k])
         for done in live.sample(k, rec.position[k], y, rec.effort[k]):
             est = live.update(done)
             if est is not None:
@@ -161,3 +170,48 @@ def test_torque_warning_once_per_axis():
     got = mon.torque(np.array([-NEAR_LIMIT * 100.0, 10.0]), 2.0)
     assert [(w.kind, w.channel) for w in got] == [('near_torque_limit', 'a')]
     assert mon.torque(np.array([95.0, 10.0]), 3.0) == []
+
+
+def test_growing_vibration_on_a_detection_line_warns_rising_distortion(run):
+    from frf_ident.core.estimation.early_warnings import RISE_DB
+    clean = _feed(run, LiveMultisine(run.joint_names, run.fs, 0))
+    d = clean[-1].frf.meta['distortion']
+    freq, kind = np.asarray(d['freq_hz']), np.asarray(d['kind'])
+    f0 = freq[0]                      # the detection grid: every multiple of 1 / period
+    assert np.allclose(freq, f0 * np.arange(1, freq.size + 1))
+    line = 15                         # 16 f0 = 10.4 Hz: an even line, never excited
+    assert kind[line] == 'even'
+    fd = freq[line]
+
+    def vibration(t):                 # on joint_2's velocity, growing e-fold every 10 s
+        return np.array([0.0, 1e-6 * np.exp(t / 10.0) * np.sin(2 * np.pi * fd * t), 0.0])
+
+    found = {}
+    for name, ests in (('clean', clean),
+                       ('growing', _feed(run, LiveMultisine(run.joint_names, run.fs, 0),
+                                         add=vibration))):
+        monitor = WarningMonitor(run.joint_names, np.full(3, 1e9))
+        found[name] = [w for e in ests for w in monitor.estimate(e)
+                       if w.kind == 'rising_distortion']
+    assert found['clean'] == []
+    assert len(found['growing']) == 1
+    w = found['growing'][0]
+    assert w.channel == d['outputs'][1] and f'{fd:.2f} Hz' in w.message
+    assert w.value >= RISE_DB
+
+
+def test_live_estimates_of_the_offline_runner_leave_the_run_as_it_was(run):
+    rob, ctrl = _robot(4.5e-6)
+    ms = MultisineConfig(n_realisations=2, n_periods=3, resolution_hz=1.0, settle_s=0.3,
+                         return_s=1.0)
+    seen = []
+    rec = run_identification(FlexibleJointPlant(rob), ctrl, IdentificationConfig(ms, None),
+                             on_estimate=seen.append)
+    for k in ('position', 'velocity', 'effort', 'reference', 'excitation'):
+        assert np.array_equal(getattr(rec, k), getattr(run, k)), k
+    assert [(s.t_start, s.t_end, s.info) for s in rec.segments] == \
+        [(s.t_start, s.t_end, s.info) for s in run.segments]
+    # one estimate per MIMO period from the second on, the design's 2 x 3 periods
+    assert [(e.periods, e.planned_periods) for e in seen] == [(p, 6) for p in range(2, 7)]
+    off = estimate_recording(run)['multisine']
+    assert np.allclose(seen[-1].frf.response, off.response, rtol=1e-9, atol=0)
