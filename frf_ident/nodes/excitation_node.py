@@ -25,6 +25,9 @@ Services (std_srvs/Trigger), answering once the plan is made and checked (second
 during a run is refused at once) with ``{"accepted": true, "run": id, ...}``:
 ``/frf/run_multisine`` starts the multisine procedure, ``/frf/run_iteration`` one step of the
 chirp iteration (its ``finished`` event carries ``iteration``, ``error_db``, ``converged``).
+``foxglove_port`` (default 0: none) serves the live stream, progress, warnings and joint
+states on a Foxglove WebSocket at ws://127.0.0.1:PORT (frf_ident/io/foxglove_server.py; the
+``[foxglove]`` extra), for the DDS backend where no foxglove_bridge runs.
 ``/frf/abort`` stops the running procedure (reference ramped to zero within ``abort_ramp_s``,
 an ``aborted`` event on /frf/experiment, a ``finished`` event with ``"aborted": true`` on
 /frf/progress); it answers ``{"aborted": false, ...}`` (success false) when nothing runs.
@@ -111,6 +114,7 @@ class ExcitationNode:
     def __init__(self, node: Any) -> None:
         from frf_ident.io.model_file import load_model
         self.node = node
+        self.foxglove: Any = None          # the session may report before it is wired
         settings = settings_from_parameters(node)
         c.refuse_lockstep_without_sim(node, settings.lockstep)
         t = c.topics(node, ('joint_states_topic', 'velocity_topic', 'excitation_topic',
@@ -140,6 +144,7 @@ class ExcitationNode:
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None
         self.live = self._wire_live(node, torque_limit, robot.dt)
+        self.foxglove = self._wire_foxglove(int(c.param(node, 'foxglove_port', 0)))
         self.refuse_second_publisher(float(c.param(node, 'discovery_wait_s', 0.5)))
         # every joint state, in order (also free-running): the torque of each sample is in its
         # own joint state, and a busy node works through a backlog instead of losing samples
@@ -179,6 +184,21 @@ class ExcitationNode:
         return LiveMonitor(self.joints, dt, self.session.offset, torque_limit, target, self,
                            stop=self.session.stop_at_target if target.enabled else None)
 
+    def _wire_foxglove(self, port: int) -> Any:
+        """Serve the live stream on a Foxglove WebSocket at ``port`` (0: none; docs/live.md)."""
+        if not port:
+            return None
+        from frf_ident.io.foxglove_server import FoxgloveLive
+        try:
+            fox = FoxgloveLive(port, name='frf_ident excitation_node')
+        except FrfIdentInputError as exc:
+            raise c.Refused(str(exc)) from None
+        self.log('info', f'Foxglove WebSocket on {fox.url} (the app: Open connection)')
+        return fox
+
+    def _now_ns(self) -> int:
+        return int(self.node.get_clock().now().nanoseconds)
+
     def live_frame(self, topic: str, frame: Any) -> None:
         """
         Publish a live frame as a Float64MultiArray on /frf/live/<topic>.
@@ -194,6 +214,8 @@ class ExcitationNode:
         layout = self.Layout(dim=[self.Dim(label=lab, size=n, stride=st)
                                   for lab, n, st in frame.dims], data_offset=0)
         self.live_pubs[topic].publish(self.F64(layout=layout, data=frame.data.tolist()))
+        if self.foxglove is not None:
+            self.foxglove.frame(topic, frame, self._now_ns())
 
     def warning(self, event: dict) -> None:
         """
@@ -206,6 +228,8 @@ class ExcitationNode:
 
         """
         self.warn_pub.publish(self.String(data=json.dumps(event, sort_keys=True)))
+        if self.foxglove is not None:
+            self.foxglove.text('/frf/warnings', event, self._now_ns())
 
     def _watch(self) -> None:
         while not self._stop.wait(0.002):
@@ -271,6 +295,8 @@ class ExcitationNode:
         # compact: `ros2 topic echo` shows 128 characters unless --full-length
         self.progress_pub.publish(self.String(data=json.dumps(event, sort_keys=True,
                                                               separators=(',', ':'))))
+        if self.foxglove is not None:
+            self.foxglove.text('/frf/progress', event, self._now_ns())
 
     def log(self, level: str, text: str) -> None:
         """
@@ -327,8 +353,12 @@ class ExcitationNode:
         p, e, cols = msg.position, msg.effort, self.order
         effort = np.array([e[i] for i in cols]) if len(e) else None
         k, q = int(round(c.stamp_ns(msg) / self.dt_ns)), np.array([p[i] for i in cols])
-        if self.live is not None and len(msg.velocity):
-            self.live.state(k, q, np.array([msg.velocity[i] for i in cols]), effort)
+        if len(msg.velocity) and (self.live is not None or self.foxglove is not None):
+            v = np.array([msg.velocity[i] for i in cols])
+            if self.live is not None:
+                self.live.state(k, q, v, effort)
+            if self.foxglove is not None:
+                self.foxglove.joint_state(k * self.dt_ns, self.joints, q, v, effort)
         self.session.on_state(k, q, effort)
 
     def _start(self, starter: Any, response: Any) -> Any:
@@ -369,6 +399,8 @@ class ExcitationNode:
         self.session.close()
         if self.live is not None:
             self.live.close()
+        if self.foxglove is not None:
+            self.foxglove.close()
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
