@@ -433,6 +433,13 @@ def bench_nodes() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('live_graph')
+def bench_live_graph() -> list[tuple[str, str, str, str]]:
+    """Run the lockstep graph with the live estimate on and off, alternating, same run."""
+    from benchmarks.live_graph import rows
+    return rows()
+
+
 @section('campaign')
 def bench_campaign() -> list[tuple[str, str, str, str]]:
     """Estimate 8 demo bags serially and with --jobs 2: speed-up, identity, peak memory."""
