@@ -109,7 +109,7 @@ def status_line(est: LiveEstimate, target: UncertaintyTarget) -> str:
         text += f' (target {target.sd_db:g} dB)'
     left = periods_left(est, target)
     if left is not None:
-        text += f', ~{left} periods left'
+        text += f', ~{left} period{"" if left == 1 else "s"} left'
     return text
 
 

@@ -16,8 +16,9 @@ The live estimate as fixed-layout float64 arrays: what /frf/live/* carry (docs/l
 
 Each frame becomes one ``std_msgs/msg/Float64MultiArray``: ``layout.dim`` names the axes
 (labels below), ``data`` holds the values row-major, float64 (the exact estimate: a replayed
-bag gives it to 1e-12). Every channel's quantity occupies :data:`LINE_SLOTS` slots, the lines
-first and NaN after them, so a viewer addresses a series by a fixed slice whatever the design:
+bag gives it to 1e-12). Every channel's quantity occupies :data:`LINE_SLOTS` slots
+(:data:`DETECTION_SLOTS` in the distortion frame), the lines first and NaN after them, so a
+viewer addresses a series by a fixed slice whatever the design:
 channel c, quantity q is ``data[(c * n_q + q) * LINE_SLOTS : ... + LINE_SLOTS]`` (Foxglove:
 ``/frf/live/frf.data[a:b]`` with b = a + LINE_SLOTS - 1, its slices include the end).
 
@@ -34,13 +35,20 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ['ArrayFrame', 'decode_frf', 'DISTORTION_QUANTITIES', 'distortion_frame',
-           'FRF_QUANTITIES', 'frf_frame', 'LINE_SLOTS', 'SUMMARY_FIELDS', 'summary_frame']
+__all__ = ['ArrayFrame', 'decode_frf', 'DETECTION_SLOTS', 'DISTORTION_QUANTITIES',
+           'distortion_frame', 'FRF_QUANTITIES', 'frf_frame', 'LINE_SLOTS', 'SUMMARY_FIELDS',
+           'summary_frame']
 
-#: slots per channel and quantity: a design's lines beyond them are left out of the live view
-#: (logged once); 2-60 Hz at the paper's 0.1 Hz resolution has 193 lines, its detection lines
-#: (every DFT line up to the band's top) 600
-LINE_SLOTS = 1024
+#: slots per channel and quantity of /frf/live/frf: a design's lines beyond them are left out
+#: of the live view (logged once; the estimate at the end has all). The 2-60 Hz designs have
+#: 39 (1 Hz resolution) to 76 (the paper's 0.1 Hz) excited lines. Every slot is sent with each
+#: estimate: 1024 slots made a 3-axis frame 590 kB (2.4 MB for 6 axes), 93 % NaN, and the graph
+#: lost 13 % of its steps/s with the live stream on (docs/BENCHMARKS.md, live_graph); 128 make
+#: it 74 kB
+LINE_SLOTS = 128
+#: slots per output and quantity of /frf/live/distortion: its detection lines are every DFT
+#: line up to the band's top (737 at 0.1 Hz)
+DETECTION_SLOTS = 1024
 #: per channel and line; the band is magnitude -/+ 2 sd, for a viewer that cannot add arrays
 FRF_QUANTITIES = ('freq_hz', 'magnitude_db', 'phase_deg', 'magnitude_sd_db', 'phase_sd_deg',
                   'coherence', 'band_low_db', 'band_high_db')
@@ -68,9 +76,9 @@ class ArrayFrame:
     data: np.ndarray
 
 
-def _slots(rows: np.ndarray) -> np.ndarray:
-    out = np.full(rows.shape[:-1] + (LINE_SLOTS,), np.nan)
-    n = min(rows.shape[-1], LINE_SLOTS)
+def _slots(rows: np.ndarray, slots: int) -> np.ndarray:
+    out = np.full(rows.shape[:-1] + (slots,), np.nan)
+    n = min(rows.shape[-1], slots)
     out[..., :n] = rows[..., :n]
     return out
 
@@ -108,7 +116,7 @@ def frf_frame(freq_hz: np.ndarray, response: np.ndarray, sd_db: np.ndarray,
     q = np.stack([np.broadcast_to(freq_hz, response.shape), mag, phase, sd_db, phase_sd_deg,
                   np.broadcast_to(coherence[:, None, :], response.shape),
                   mag - 2 * sd_db, mag + 2 * sd_db], axis=2)       # (n_out, n_in, Q, F)
-    data = _slots(q.reshape(n_out * n_in, len(FRF_QUANTITIES), F))
+    data = _slots(q.reshape(n_out * n_in, len(FRF_QUANTITIES), F), LINE_SLOTS)
     names = ' '.join(f'{o}<-{i}' for o in outputs for i in inputs)
     return ArrayFrame(_dims([f'channel {names}', 'quantity ' + ' '.join(FRF_QUANTITIES),
                              'line'], data.shape), data.ravel())
@@ -164,7 +172,7 @@ def distortion_frame(d: dict[str, Any]) -> ArrayFrame:
                   10 * np.log10(np.maximum(power, 1e-300)),
                   10 * np.log10(np.maximum(noise, 1e-300)),
                   np.broadcast_to(kind, power.shape)], axis=1)
-    data = _slots(q)
+    data = _slots(q, DETECTION_SLOTS)
     return ArrayFrame(_dims(['output ' + ' '.join(d['outputs']),
                              'quantity ' + ' '.join(DISTORTION_QUANTITIES), 'line'],
                             data.shape), data.ravel())

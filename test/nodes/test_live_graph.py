@@ -20,6 +20,7 @@ realisation's third period (the target is loose), the bag holds the live stream,
 """
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from frf_ident.app.graph import Graph
@@ -43,6 +44,14 @@ def _frames(bag: Path, topic: str) -> list:
             dims = [(d.label, d.size, d.stride) for d in m.layout.dim]
             out.append((t, dims, np.asarray(m.data, float)))
     return out
+
+
+def _texts(bag: Path, topic: str) -> list:
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import get_typestore, Stores
+    with AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_JAZZY)) as r:
+        conns = [c for c in r.connections if c.topic == topic]
+        return [r.deserialize(raw, c.msgtype).data for c, _t, raw in r.messages(connections=conns)]
 
 
 def test_live_stream_stops_at_target_and_equals_offline(tmp_path, new_domain):
@@ -76,3 +85,8 @@ def test_live_stream_stops_at_target_and_equals_offline(tmp_path, new_domain):
     assert np.max(np.abs(last['phase_deg'] - ph)) < 1e-9 * 180
     summary = _frames(bag, '/frf/live/summary')
     assert len(summary) == 2 and summary[-1][2][1] == 3      # periods
+    # the progress events with their status line are in the bag too (the layout shows them)
+    estimates = [e for e in map(json.loads, _texts(bag, '/frf/progress'))
+                 if e['event'] == 'estimate']
+    assert [e['periods'] for e in estimates] == [2, 3]
+    assert estimates[-1]['line'].startswith('multisine: 3 periods (1 realisation), worst sd ')
