@@ -69,7 +69,9 @@ def periods_left(est: LiveEstimate, target: UncertaintyTarget) -> Optional[int]:
     Parameters
     ----------
     est : LiveEstimate
+        The newest estimate.
     target : UncertaintyTarget
+        The run's stop rule (``sd_db`` 0: none).
 
     Returns
     -------
@@ -92,7 +94,9 @@ def status_line(est: LiveEstimate, target: UncertaintyTarget) -> str:
     Parameters
     ----------
     est : LiveEstimate
+        The newest estimate.
     target : UncertaintyTarget
+        The run's stop rule (``sd_db`` 0: none).
 
     Returns
     -------
@@ -135,6 +139,7 @@ class EstimateOut:
         Parameters
         ----------
         est : LiveEstimate
+            The newest estimate.
 
         """
         f = est.frf
@@ -233,7 +238,9 @@ class LiveMonitor:
         Parameters
         ----------
         k : int
+            Sample index.
         x : ndarray, shape (n,)
+            The excitation part of the velocity reference [rad/s].
 
         """
         if self.live.open:
@@ -247,6 +254,7 @@ class LiveMonitor:
         Parameters
         ----------
         k : int
+            Sample index (the joint state's stamp / dt).
         q, y : ndarray, shape (n,)
             Position [rad], velocity [rad/s].
         effort : ndarray, shape (n,) or None

@@ -45,6 +45,7 @@ class LiveView:
     Parameters
     ----------
     joints : list of str
+        The robot's joints, in model order.
     torque_limit : ndarray, shape (n,)
         Per axis [N m] (the early warnings).
     target : UncertaintyTarget, optional

@@ -80,6 +80,7 @@ def layout(joints: list[str]) -> dict[str, Any]:
     Parameters
     ----------
     joints : list of str
+        The robot's joints, in model order.
 
     Returns
     -------

@@ -177,8 +177,11 @@ class FoxgloveLive:
         t_ns : int
             Its stamp [ns].
         names : sequence of str
+            Joint names, in the order of the arrays.
         position, velocity : ndarray, shape (n,)
+            Position [rad] and velocity [rad/s].
         effort : ndarray, shape (n,) or None
+            Torque [N m] (None: not measured).
 
         """
         ch = self.channels['/joint_states']

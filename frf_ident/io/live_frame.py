@@ -97,7 +97,9 @@ def frf_frame(freq_hz: np.ndarray, response: np.ndarray, sd_db: np.ndarray,
     Parameters
     ----------
     freq_hz : ndarray, shape (F,)
+        Frequency of each line [Hz].
     response : ndarray, shape (n_out, n_in, F)
+        The complex FRF.
     sd_db, phase_sd_deg : ndarray, shape (n_out, n_in, F)
         1-sigma magnitude [dB] and phase [deg] uncertainty (nan where undefined).
     coherence : ndarray, shape (n_out, F)
@@ -185,6 +187,7 @@ def summary_frame(values: dict[str, float]) -> ArrayFrame:
     Parameters
     ----------
     values : dict of str to float
+        Field name -> value (None or missing: NaN).
 
     Returns
     -------

@@ -153,6 +153,7 @@ class WarningMonitor:
         Parameters
         ----------
         est : LiveEstimate
+            The newest estimate.
 
         Returns
         -------
