@@ -101,8 +101,13 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
         if view.server is not None:
             sink(progress)(f'live estimate on the Foxglove WebSocket {view.server.url} '
                            f'(the app: Open connection; config/foxglove_layout.json)')
+    say = sink(progress)
+    if view is not None:
+        def say(line: str, _say=say) -> None:     # a stage line closes the status line first
+            view.end()
+            _say(line)
     try:
-        rec = run_identification(plant, ctrl, config, progress=progress, on_estimate=view,
+        rec = run_identification(plant, ctrl, config, progress=say, on_estimate=view,
                                  meta={'model': model, 'plant': plant_spec or 'model'},
                                  model=robot)
     finally:
