@@ -233,6 +233,7 @@ def bench_experiment_time() -> list[tuple[str, str, str, str]]:
         else:
             rows.append((f'multisine to 1 dB at {resolution:g} Hz', 'not reached',
                          'paper 1845 s at 0.1 Hz', '-'))
+    rows += _target_rows(rob, ctrl)
     for duration in (5.0, 10.0, 20.0):
         rec = run_identification(FlexibleJointPlant(rob), ctrl.copy(), IdentificationConfig(
             None, ChirpConfig(duration=duration)))
@@ -247,6 +248,35 @@ def bench_experiment_time() -> list[tuple[str, str, str, str]]:
     else:
         rows.append(('chirp to 1 dB', 'not reached', 'paper 720 s', '-'))
     return rows
+
+
+def _target_rows(rob, ctrl) -> list[tuple[str, str, str, str]]:
+    """
+    Experiment time of the default multisine design with and without a 1 dB sd target.
+
+    The same model and noise as the rows above; without the target the design runs its 10 x 5
+    periods; with it the run ends at the first period whose worst diagonal sd is <= 1 dB
+    (docs/live.md). Both FRFs are judged against the exact sampled one (_db_error).
+    """
+    from frf_ident.core.estimation.described import multisine_frf
+    from frf_ident.core.estimation.target import UncertaintyTarget
+    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.simulation.analytic import robot_frf_sampled
+    from frf_ident.core.simulation.plant import FlexibleJointPlant
+    from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
+    out = {}
+    for name, target in (('without', None), ('with', UncertaintyTarget(1.0))):
+        rec = run_identification(FlexibleJointPlant(rob), ctrl.copy(), IdentificationConfig(
+            MultisineConfig(), None, target))
+        frf, _ = multisine_frf(rec)
+        err = _db_error(frf.response, robot_frf_sampled(rob, frf.freq_hz))
+        s = rec.meta['summary']['multisine']
+        periods = (s['target'] or {}).get('periods') or 50
+        out[name] = (s['experiment_time_s'], err, periods)
+    (t1, e1, n1), (t0, e0, _) = out['with'], out['without']
+    return [(f'multisine 0.25 Hz, target sd 1 dB (stopped after {n1} periods, {e1:.2f} dB)',
+             f'{t1:.0f} s', f'no target: 10 x 5 periods {t0:.0f} s ({e0:.2f} dB)',
+             f'{t0 / t1:.1f}x shorter')]
 
 
 @section('chirp_iteration')
@@ -415,6 +445,13 @@ def bench_band() -> list[tuple[str, str, str, str]]:
 def bench_nodes() -> list[tuple[str, str, str, str]]:
     """Measure the node graph's lockstep steps/s beside the same backend's ping-pong."""
     from benchmarks.graph import rows
+    return rows()
+
+
+@section('live_graph')
+def bench_live_graph() -> list[tuple[str, str, str, str]]:
+    """Run the lockstep graph with the live estimate on and off, alternating, same run."""
+    from benchmarks.live_graph import rows
     return rows()
 
 

@@ -240,7 +240,9 @@ class MultisineSpectra:
         self.info = info
         self.align = align
         self.bins = np.asarray(info['design_params']['harmonics'])
-        self.n_per, self.n_q = int(info['period_samples']), int(info['periods'])
+        # the design's periods per segment; a segment stopped at its uncertainty target holds
+        # fewer (:func:`segment_periods`), the rest count as never run, not as dropped
+        self.n_per, self.n_q = int(info['period_samples']), planned_periods(info)
         self.n_tr = int(info['transient_periods'])
         self.cv: dict[str, np.ndarray] | None = None
         self._tables: dict[tuple[str, int], Any] = {}    # _position_table of the run per axis
@@ -249,24 +251,69 @@ class MultisineSpectra:
 
     def add_constant_velocity(self, rec: Recording, seg: Segment) -> None:
         """Return the constant-velocity run (Sec. 4.4 E); add it before the multisine segments."""
+        self.set_constant_velocity(_segment_arrays(rec, seg))
+
+    def set_constant_velocity(self, arrays: dict[str, np.ndarray]) -> None:
+        """
+        Take the constant-velocity run's series (u, y, r, q; Sec. 4.4 E).
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray, shape (N, n)
+            Its effort, velocity, excitation and position from its first sample.
+
+        Raises
+        ------
+        EstimationError
+            Multisine segments were added before it.
+
+        """
         if self.spec:
             raise EstimationError('the constant-velocity run must come before the multisine '
                                   'segments it compensates')
-        self.cv = _segment_arrays(rec, seg)
+        self.cv = arrays
         self._tables = {}
 
     def add(self, rec: Recording, seg: Segment) -> None:
         """One multisine segment of ``rec``."""
-        a = _segment_arrays(rec, seg)
-        need = (self.n_tr + self.n_q) * self.n_per
+        self.add_arrays(_segment_arrays(rec, seg), seg.info, seg.t_start, rec.fs,
+                        rec.joint_names)
+
+    def add_arrays(self, a: dict[str, np.ndarray], info: dict[str, Any], t_start: float,
+                   fs: float, joint_names: list[str]) -> None:
+        """
+        Add one multisine segment (or the whole periods of one so far) from its series.
+
+        Parameters
+        ----------
+        a : dict of str to ndarray, shape (N, n)
+            The segment's effort ``u``, velocity ``y``, excitation ``r`` and position ``q``
+            from its first sample.
+        info : dict
+            Its descriptor; ``periods`` the steady periods it holds (:func:`segment_periods`).
+        t_start : float
+            Its start [s].
+        fs : float
+            Sample rate [Hz].
+        joint_names : list of str
+            The joints of the columns.
+
+        Raises
+        ------
+        EstimationError
+            Fewer samples than its transient and steady periods.
+
+        """
+        n_q = segment_periods(info)
+        need = (self.n_tr + n_q) * self.n_per
         if a['u'].shape[0] < need:
-            raise EstimationError(f'multisine segment at t={seg.t_start:.3f} s has '
+            raise EstimationError(f'multisine segment at t={t_start:.3f} s has '
                                   f'{a["u"].shape[0]} samples, expected {need} '
-                                  f'({self.n_tr} transient + {self.n_q} periods of '
+                                  f'({self.n_tr} transient + {n_q} periods of '
                                   f'{self.n_per})')
-        self.joint_names = list(rec.joint_names)
+        self.joint_names = list(joint_names)
         steady = slice(self.n_tr * self.n_per, need)
-        shape = (self.n_q, self.n_per, len(rec.joint_names))
+        shape = (n_q, self.n_per, len(joint_names))
 
         def lines(x: np.ndarray) -> np.ndarray:          # (n_q, F, n)
             # zeroing costs a copy and three passes: only where a gap left NaN
@@ -281,21 +328,24 @@ class MultisineSpectra:
         # a sample missing in any series (NaN rows: gaps) is estimated from the other periods
         # (missing_periodic.py) and the period kept; only where a sample is missing in every
         # period is the period dropped, as are the periods a gap touches then
-        gone = missing_rows(*(x[steady] for x in series.values())).reshape(self.n_q, self.n_per)
+        gone = missing_rows(*(x[steady] for x in series.values())).reshape(n_q, self.n_per)
         filled = _filled_series(steady_x, gone, _names(self.joint_names)) if gone.any() \
             else None
         out = {k: lines(x) for k, x in (filled[0] if filled else steady_x).items()}
-        out['valid'] = np.ones(self.n_q, bool) if filled else ~gone.any(axis=1)
+        out['valid'] = np.ones(n_q, bool) if filled else ~gone.any(axis=1)
         if filled:
             out['filled'], out['missing'] = filled[1], filled[2]
-        t_first = seg.t_start + self.n_tr * self.n_per / rec.fs
-        out['t'] = t_first + np.arange(self.n_q + 1) * self.n_per / rec.fs
-        if seg.info['experiment'] == 0:                 # detection lines (Sec. 4.3 remark)
+        if info['experiment'] == 0:                     # detection lines (Sec. 4.3 remark)
             src = filled[0] if filled else steady_x
             for k in ('y', 'dy') if 'dy' in src else ('y',):
                 _, out['det_' + k] = detection_line_spectra(
                     np.nan_to_num(src[k]), int(self.bins[-1]), axis=1)
-        self.spec[(seg.info['realisation'], seg.info['experiment'])] = out
+        # a run stopped at its uncertainty target holds fewer periods: padded, not valid
+        out = {k: _pad_periods(v, self.n_q) for k, v in out.items()}
+        out['run'] = n_q
+        t_first = t_start + self.n_tr * self.n_per / fs
+        out['t'] = t_first + np.arange(self.n_q + 1) * self.n_per / fs
+        self.spec[(info['realisation'], info['experiment'])] = out
 
     def _shape(self) -> tuple[int, int]:
         """n_p realisations and n_ex experiments the design has (one per axis, eq. 9)."""
@@ -373,13 +423,43 @@ class MultisineSpectra:
                     continue
                 for m in range(n_ex):
                     s = self.spec.get((p, m))
-                    if s is not None and not s['valid'][q]:
+                    if s is not None and q < s['run'] and not s['valid'][q]:
                         items.append({'realisation': p, 'experiment': m, 'period': q,
                                       't_start': float(s['t'][q]),
                                       't_end': float(s['t'][q + 1])})
-        return {'periods': n_p * self.n_q - sum(v.size for v in used.values()),
+        return {'periods': sum(self.periods_run(p, n_ex) for p in range(n_p))
+                - sum(v.size for v in used.values()),
                 'realisations': [p for p in range(n_p) if p not in used], 'items': items,
                 'incomplete': [p for p in range(n_p) if not self._complete(p, n_ex)]}
+
+    def periods_run(self, p: int, n_ex: int) -> int:
+        """
+        Return the MIMO periods realisation ``p`` ran: the fewest of its experiments.
+
+        A realisation missing an experiment's segment (cut short) ran the design's periods
+        (they count as dropped); one stopped at the uncertainty target ran fewer in its last
+        experiment, and its other experiments' later periods make no MIMO period.
+        """
+        return min((self.spec[(p, m)]['run'] if (p, m) in self.spec else self.n_q)
+                   for m in range(n_ex))
+
+    def period_spectra(self, key: str, compensate: bool) -> list[np.ndarray]:
+        """
+        Return the spectra of every used period, one (n_q_p, F, n, n_ex) array per realisation.
+
+        Parameters
+        ----------
+        key : {'u', 'y', 'r'}
+            The series.
+        compensate : bool
+            Subtract the constant-velocity run's (not for 'r').
+
+        Returns
+        -------
+        list of ndarray
+
+        """
+        return self._stack(key, compensate)
 
     def _stack(self, key: str, compensate: bool) -> list[np.ndarray]:
         """One (n_q_p, F, n, n_ex) array per realisation that kept periods."""
@@ -479,6 +559,49 @@ class MultisineSpectra:
                                     'detection_lines': det.to_dict(),
                                     'distortion': dist.to_dict()})
         return frf, bla
+
+
+def planned_periods(info: dict[str, Any]) -> int:
+    """
+    Return the steady periods a multisine segment was designed with.
+
+    Parameters
+    ----------
+    info : dict
+        The segment's descriptor.
+
+    Returns
+    -------
+    int
+        ``periods_planned`` of a segment stopped at its uncertainty target, else ``periods``.
+
+    """
+    return int(info.get('periods_planned', info['periods']))
+
+
+def segment_periods(info: dict[str, Any]) -> int:
+    """
+    Return the steady periods a multisine segment holds (fewer when stopped at a target).
+
+    Parameters
+    ----------
+    info : dict
+        The segment's descriptor.
+
+    Returns
+    -------
+    int
+
+    """
+    return int(info['periods'])
+
+
+def _pad_periods(x: Any, n_q: int) -> Any:
+    """Pad a per-period array (axis 0) to ``n_q`` periods: zeros, ``False`` validity."""
+    if not isinstance(x, np.ndarray) or x.shape[0] >= n_q:
+        return x
+    pad = np.zeros((n_q - x.shape[0],) + x.shape[1:], dtype=x.dtype)
+    return np.concatenate([x, pad])
 
 
 def multisine_frf(rec: Recording, *, compensate: bool = True, method: str = 'reference',
