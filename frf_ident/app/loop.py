@@ -35,6 +35,7 @@ from frf_ident.core.jsonable import jsonable
 from frf_ident.core.loop.check import (AxisMargins, draw_responses, DRAWS, loop_response,
                                        LoopCheck, Margin, pi_response, sensitivity_peak)
 from frf_ident.core.loop.design import PIProposal, propose_pi
+from frf_ident.core.loop.notch import sections_response
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.model_file import load_model
@@ -111,7 +112,8 @@ class LoopData:
 
 
 def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
-              dt: float | None = None, draws: int = DRAWS, seed: int = 0) -> LoopData:
+              dt: float | None = None, draws: int = DRAWS, seed: int = 0,
+              filters: np.ndarray | None = None) -> LoopData:
     """
     Return the controller responses and the FRF's draws for a check (args of loop_check).
 
@@ -127,6 +129,9 @@ def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         Monte-Carlo draws of the FRF.
     seed : int, optional
         Seed of the draws.
+    filters : ndarray of complex, shape (n_axes, n_freq), optional
+        Response of each axis' filters on the measured velocity (issue #51; the model
+        file's ``controller.filters``): C_i = PI_i F_i.
 
     Returns
     -------
@@ -150,11 +155,14 @@ def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
     if var is not None and draws > 0:
         sample = draw_responses(frf.response, var, draws, np.random.default_rng(seed))
     c = np.stack([pi_response(frf.freq_hz, kp[j], ki[j], dt) for j in range(len(chans))])
+    if filters is not None:
+        c = c * np.asarray(filters).reshape(c.shape)
     return LoopData(chans, c, sample)
 
 
 def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
-               dt: float | None = None, draws: int = DRAWS, seed: int = 0) -> LoopCheck:
+               dt: float | None = None, draws: int = DRAWS, seed: int = 0,
+               filters: np.ndarray | None = None) -> LoopCheck:
     """
     Check the velocity PI on the measured loop: margins with their uncertainty.
 
@@ -171,6 +179,8 @@ def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         Monte-Carlo draws of the FRF for the standard deviations.
     seed : int, optional
         Seed of the draws.
+    filters : ndarray of complex, shape (n_axes, n_freq), optional
+        Response of each axis' filters (:func:`loop_data`).
 
     Returns
     -------
@@ -183,7 +193,7 @@ def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         The number of gains is not the number of axes.
 
     """
-    data = loop_data(frf, kp, ki, dt=dt, draws=draws, seed=seed)
+    data = loop_data(frf, kp, ki, dt=dt, draws=draws, seed=seed, filters=filters)
     nominal = margins(data.axis_loops(frf.response), frf.omega)
     drawn = None if data.draws is None else margins(data.axis_loops(data.draws), frf.omega)
     axes = []
@@ -327,9 +337,13 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
 
     """
     frf = read_source(source)
+    filters = None
     if kp is None and model is not None:
         _, robot, ctrl = load_model(model)
         kp, ki, dt = ctrl.kp.tolist(), ctrl.ki.tolist(), robot.dt
+        if ctrl.n_sections:          # the model's filters on the measured velocity (#51)
+            filters = np.stack([sections_response(frf.freq_hz, ctrl.sos[j], robot.sample_rate)
+                                for j in range(ctrl.n_axes)])
     if (kp is None) != (ki is None):
         raise FrfIdentInputError('--kp and --ki: give both (one value per axis)')
     if kp is None and propose is None:
@@ -342,7 +356,7 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
     check = None
     figure_gains = None
     if kp is not None:
-        check = loop_check(frf, kp, ki, dt=dt, draws=draws)
+        check = loop_check(frf, kp, ki, dt=dt, draws=draws, filters=filters)
         figure_gains = (kp, ki, dt, check)
         for line in check.summary():
             progress(f'  {line}')
@@ -356,9 +370,9 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
         for p, line in zip(proposals, pcheck.summary()):
             progress(f'    {line}' + ('' if p.feasible else ' (target not reachable by a PI)'))
         if figure_gains is None:
-            figure_gains = (pkp, pki, None, pcheck)
+            figure_gains, filters = (pkp, pki, None, pcheck), None
     gkp, gki, gdt, gcheck = figure_gains
-    data = loop_data(frf, gkp, gki, dt=gdt, draws=draws)
+    data = loop_data(frf, gkp, gki, dt=gdt, draws=draws, filters=filters)
     files = [loop_figure(frf.freq_hz, data.axis_loops(frf.response),
                          None if data.draws is None else data.axis_loops(data.draws),
                          [c[0] for c in data.channels],

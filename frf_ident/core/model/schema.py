@@ -23,6 +23,8 @@ Extensions beyond the contract (all optional, documented in docs/model_file.md):
 - top level ``simulation``: {substeps, velocity_from_encoder, seed}
 - per axis ``gravity_torque``, ``gravity`` (configuration-dependent load, list of
   {amplitude, phase, joints}), ``encoder_resolution``, ``velocity_noise``, ``torque_noise``
+- ``controller.filters``: {axis name: list of second-order sections [b0, b1, b2, 1, a1, a2]}
+  on the measured velocity, discrete at ``sample_rate`` (what ``frf-ident tune`` writes)
 """
 from __future__ import annotations
 
@@ -33,7 +35,7 @@ from typing import Any
 
 from frf_ident.core.model.fields import expect_bool, expect_int
 from frf_ident.core.model.params import AxisParams, RobotParams
-from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.simulation.controller import check_sections, PIVelocity
 from frf_ident.errors import ModelFileError
 import numpy as np
 
@@ -42,6 +44,9 @@ _AXIS_KEYS = {f.name for f in fields(AxisParams)}
 _TOP_KEYS = {'frf_ident_model', 'sample_rate', 'axes', 'controller', 'link_coupling',
              'simulation', 'description'}
 _SIM_KEYS = {'substeps', 'velocity_from_encoder', 'seed'}
+_CONTROLLER_KEYS = {'kind', 'kp', 'ki', 'filters'}
+#: a pass-through section: pads an axis with fewer sections than another
+PASS_SECTION = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
 
 
 def _number(where: str, value: Any, *, allow_none: bool = False) -> float | None:
@@ -169,6 +174,10 @@ def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
         raise ModelFileError(f'controller: expected a mapping with kind, kp, ki, got {c!r}')
     if c.get('kind', 'pi_velocity') != 'pi_velocity':
         raise ModelFileError(f"controller.kind: expected 'pi_velocity', got {c.get('kind')!r}")
+    unknown = set(c) - _CONTROLLER_KEYS
+    if unknown:
+        raise ModelFileError(f'controller: unknown key(s) {sorted(unknown)}; expected some of '
+                             f'{sorted(_CONTROLLER_KEYS)}')
     n = robot.n_axes
     gains = {}
     for key in ('kp', 'ki'):
@@ -182,9 +191,38 @@ def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
         if np.any(gains[key] < 0):
             raise ModelFileError(f'controller.{key}: gains must be >= 0, got '
                                  f'{gains[key].tolist()}')
-    ctrl = PIVelocity(gains['kp'], gains['ki'], robot.torque_limits(), robot.dt)
+    ctrl = PIVelocity(gains['kp'], gains['ki'], robot.torque_limits(), robot.dt,
+                      sos=_filters(c.get('filters'), robot))
     ctrl.reset(robot.gravity_load(np.zeros(robot.n_axes)))
     return ctrl
+
+
+def _filters(spec: Any, robot: RobotParams) -> np.ndarray:
+    """``controller.filters`` -> sos (n, n_sections, 6), pass-through sections as padding."""
+    n = robot.n_axes
+    if spec is None:
+        return np.zeros((n, 0, 6))
+    if not isinstance(spec, dict):
+        raise ModelFileError(f'controller.filters: expected a mapping {{axis name: list of '
+                             f'[b0, b1, b2, 1, a1, a2]}}, got {spec!r}')
+    names = robot.joint_names
+    chains = [np.zeros((0, 6))] * n
+    for name, sections in spec.items():
+        where = f'controller.filters.{name}'
+        if name not in names:
+            raise ModelFileError(f'{where}: no axis of that name (axes {names})')
+        try:
+            sec = np.asarray(sections if sections else np.zeros((0, 6)), dtype=float)
+        except (TypeError, ValueError):
+            raise ModelFileError(f'{where}: expected a list of [b0, b1, b2, 1, a1, a2], got '
+                                 f'{sections!r}') from None
+        problem = check_sections(sec)
+        if problem is not None:
+            raise ModelFileError(f'{where}: {problem}')
+        chains[names.index(name)] = sec
+    m = max(len(x) for x in chains)
+    return np.array([np.vstack([x, np.tile(PASS_SECTION, (m - len(x), 1))]) for x in chains]
+                    ).reshape(n, m, 6)
 
 
 def robot_to_dict(robot: RobotParams, controller: PIVelocity | None = None) -> dict[str, Any]:
@@ -207,6 +245,12 @@ def robot_to_dict(robot: RobotParams, controller: PIVelocity | None = None) -> d
     if controller is not None:
         d['controller'] = {'kind': 'pi_velocity', 'kp': controller.kp.tolist(),
                            'ki': controller.ki.tolist()}
+        chains = {a.name: [row.tolist() for row in controller.sos[i]
+                           if not np.array_equal(row, PASS_SECTION)]
+                  for i, a in enumerate(robot.axes)}
+        chains = {k: v for k, v in chains.items() if v}
+        if chains:
+            d['controller']['filters'] = chains
     return d
 
 

@@ -16,15 +16,121 @@ Closed-loop velocity controller: PI with torque limit and anti-windup (Fig. 2 of
 
 The same compiled PI step runs inside the batch simulation and in the controller node, so the
 node graph and the offline runner compute identical torques.
+
+Optional filters (issue #51, ``frf-ident tune``): per axis a chain of second-order sections
+[b0, b1, b2, 1, a1, a2] (scipy's ``sos`` layout, transposed direct form II) on the measured
+velocity in front of the PI: u = PI(r - F y). The loop gain is C P with C = PI F, as for a
+filter on the torque setpoint, while the PI's anti-windup stays exact and the reference is not
+filtered; it is where a ros2_control chain puts it (chained_filter_controller on the state
+interface in front of pid_controller). Without filters (the default, zero sections) the
+torques are bit for bit those of the PI alone.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import math
 
 import numba
 import numpy as np
 
-__all__ = ['PIVelocity', 'pi_step']
+__all__ = ['DC_GAIN_TOLERANCE', 'PIVelocity', 'check_sections', 'filter_measurement', 'pi_step',
+           'sos_step']
+
+#: a filter chain must pass DC within this share: a velocity feedback that does not (a
+#: high-pass, a gain) leaves the PI's integral without its measurement and is refused
+DC_GAIN_TOLERANCE = 0.01
+
+
+@numba.njit(cache=True, fastmath=True, inline='always')
+def sos_step(x, sos, zf, i):
+    """
+    Filter one sample of axis ``i`` through its second-order sections.
+
+    Transposed direct form II per section s: y = b0 x + z0, z0 = b1 x - a1 y + z1,
+    z1 = b2 x - a2 y, then x = y for the next section. Compiled with numba.
+
+    Parameters
+    ----------
+    x : float
+        Input sample.
+    sos : ndarray, shape (n, n_sections, 6)
+        [b0, b1, b2, 1, a1, a2] per axis and section.
+    zf : ndarray, shape (n, n_sections, 2)
+        Filter states; updated in place.
+    i : int
+        The axis.
+
+    Returns
+    -------
+    float
+        The filtered sample (``x`` itself without sections).
+
+    """
+    for s in range(sos.shape[1]):
+        y = sos[i, s, 0] * x + zf[i, s, 0]
+        zf[i, s, 0] = sos[i, s, 1] * x - sos[i, s, 4] * y + zf[i, s, 1]
+        zf[i, s, 1] = sos[i, s, 2] * x - sos[i, s, 5] * y
+        x = y
+    return x
+
+
+@numba.njit(cache=True, fastmath=True)
+def filter_measurement(y, sos, zf, out):
+    """
+    Filter a measured velocity sample of every axis; a non-finite entry passes unfiltered.
+
+    Parameters
+    ----------
+    y : ndarray, shape (n,)
+        Measured velocities.
+    sos, zf : ndarray
+        As :func:`sos_step`.
+    out : ndarray, shape (n,)
+        Output, written in place (a non-finite y leaves that axis' filter state untouched).
+
+    Returns
+    -------
+    None
+        The result is ``out``.
+
+    """
+    for i in range(y.shape[0]):
+        out[i] = sos_step(y[i], sos, zf, i) if math.isfinite(y[i]) else y[i]
+
+
+def check_sections(sections: np.ndarray) -> str | None:
+    """
+    Return what is wrong with one axis' chain of sections, or None when it is usable.
+
+    A usable chain has rows [b0, b1, b2, 1, a1, a2] of finite numbers, every section stable
+    (its poles inside the unit circle) and a DC gain within DC_GAIN_TOLERANCE of 1.
+
+    Parameters
+    ----------
+    sections : ndarray, shape (n_sections, 6)
+        The chain.
+
+    Returns
+    -------
+    str or None
+        One sentence naming the section and the problem.
+
+    """
+    sec = np.asarray(sections, dtype=float)
+    if sec.ndim != 2 or sec.shape[1] != 6:
+        return f'expected rows of 6 numbers [b0, b1, b2, 1, a1, a2], got shape {sec.shape}'
+    for k, row in enumerate(sec):
+        if not np.all(np.isfinite(row)):
+            return f'section {k}: not all numbers are finite'
+        if row[3] != 1.0:
+            return f'section {k}: a0 must be 1 (normalised), got {row[3]:g}'
+        if np.any(np.abs(np.roots(row[3:])) >= 1.0):
+            return f'section {k}: unstable (a pole on or outside the unit circle)'
+    dc = float(np.prod(sec[:, :3].sum(axis=1) / sec[:, 3:].sum(axis=1))) if len(sec) else 1.0
+    if abs(dc - 1.0) > DC_GAIN_TOLERANCE:
+        return (f'DC gain {dc:.4g}: a filter on the measured velocity must pass DC (1 within '
+                f'{DC_GAIN_TOLERANCE:g}), or the integral loses its measurement')
+    return None
 
 
 @numba.njit(cache=True, fastmath=True, inline='always')
@@ -78,7 +184,8 @@ class PIVelocity:
     Velocity PI u = kp (r - y) + ki int (r - y) dt + ff, limited to +-torque_limit.
 
     The controller K of the closed loop (Fig. 2). Anti-windup by back-calculation: while
-    saturated the integral is held so that u sits exactly at the limit.
+    saturated the integral is held so that u sits exactly at the limit. With filters, y is
+    the filtered measurement F y (module doc).
 
     Parameters
     ----------
@@ -93,11 +200,18 @@ class PIVelocity:
     integral : array_like, shape (n,), optional
         Controller state [N m], e.g. the holding (gravity) torque so the loop starts at rest;
         default zero.
+    sos : array_like, shape (n, n_sections, 6), optional
+        Filters on the measured velocity (module doc), discrete at ``dt``; an axis with fewer
+        sections than another is padded with pass-through sections [1, 0, 0, 1, 0, 0].
+        Default none.
+    filter_state : array_like, shape (n, n_sections, 2), optional
+        The filters' states; default zero (the robot at rest).
 
     Raises
     ------
     ValueError
-        A gain is negative or a torque limit not positive.
+        A gain is negative, a torque limit not positive, or a filter not usable
+        (:func:`check_sections`).
 
     """
 
@@ -106,6 +220,8 @@ class PIVelocity:
     torque_limit: np.ndarray
     dt: float
     integral: np.ndarray = field(default=None)  # type: ignore[assignment]
+    sos: np.ndarray = field(default=None)  # type: ignore[assignment]
+    filter_state: np.ndarray = field(default=None)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         self.kp = np.atleast_1d(np.asarray(self.kp, dtype=float))
@@ -120,6 +236,24 @@ class PIVelocity:
         if self.integral is None:
             self.integral = np.zeros(n)
         self.integral = np.asarray(self.integral, dtype=float).copy()
+        self.sos = np.zeros((n, 0, 6)) if self.sos is None else \
+            np.ascontiguousarray(self.sos, dtype=float).copy()
+        if self.sos.ndim != 3 or self.sos.shape[0] != n or self.sos.shape[2] != 6:
+            raise ValueError(f'sos: expected shape ({n}, n_sections, 6), got {self.sos.shape}')
+        for i in range(n):
+            problem = check_sections(self.sos[i])
+            if problem is not None:
+                raise ValueError(f'filters of axis {i}: {problem}')
+        self.filter_state = np.zeros(self.sos.shape[:2] + (2,)) if self.filter_state is None \
+            else np.ascontiguousarray(self.filter_state, dtype=float).copy()
+        if self.filter_state.shape != self.sos.shape[:2] + (2,):
+            raise ValueError(f'filter_state: expected shape {self.sos.shape[:2] + (2,)}, got '
+                             f'{self.filter_state.shape}')
+
+    @property
+    def n_sections(self) -> int:
+        """Return the number of filter sections per axis (0: the PI alone)."""
+        return self.sos.shape[1]
 
     @property
     def n_axes(self) -> int:
@@ -128,7 +262,7 @@ class PIVelocity:
 
     def reset(self, holding_torque: np.ndarray | None = None) -> None:
         """
-        Reset the integral state.
+        Reset the integral state (and the filters' states to rest).
 
         Parameters
         ----------
@@ -138,6 +272,7 @@ class PIVelocity:
         """
         self.integral = np.zeros(self.n_axes) if holding_torque is None else \
             np.asarray(holding_torque, dtype=float).copy()
+        self.filter_state = np.zeros_like(self.filter_state)
 
     def step(self, reference: np.ndarray, measured: np.ndarray,
              feedforward: np.ndarray | None = None) -> np.ndarray:
@@ -158,10 +293,16 @@ class PIVelocity:
         ndarray, shape (n,)
             Torque command u [N m], within +-torque_limit; ``integral`` is updated. An axis
             whose error or feedforward is not finite gets its integral torque alone (no P
-            action, no integration).
+            action, no integration; its filters hold their state).
 
         """
-        e = np.asarray(reference, dtype=float) - np.asarray(measured, dtype=float)
+        y = np.asarray(measured, dtype=float)
+        if self.sos.shape[1]:
+            yf = np.empty(self.n_axes)
+            filter_measurement(np.ascontiguousarray(y.reshape(self.n_axes)), self.sos,
+                               self.filter_state, yf)
+            y = yf
+        e = np.asarray(reference, dtype=float) - y
         ff = np.zeros(self.n_axes) if feedforward is None else np.asarray(feedforward, float)
         # a measurement that is no number (the PI is compiled with fastmath, which assumes
         # none): that axis gets no P action and no integration, so it keeps the integral
@@ -185,4 +326,4 @@ class PIVelocity:
 
         """
         return PIVelocity(self.kp.copy(), self.ki.copy(), self.torque_limit.copy(), self.dt,
-                          self.integral.copy())
+                          self.integral.copy(), self.sos.copy(), self.filter_state.copy())
