@@ -32,7 +32,8 @@ import os
 from pathlib import Path
 import sys
 
-from frf_ident.cli import demo, diagnose, estimate, fit, identify, import_data, loop, reproduce
+from frf_ident.cli import (demo, diagnose, estimate, fit, identify, import_data, loop, reproduce,
+                           tune)
 from frf_ident.cli.logsetup import configured
 from frf_ident.errors import FrfIdentInputError
 
@@ -45,6 +46,7 @@ COMMANDS = {
     'import': import_data,
     'fit': fit,
     'loop': loop,
+    'tune': tune,
     'diagnose': diagnose,
     'demo': demo,
     'reproduce': reproduce,

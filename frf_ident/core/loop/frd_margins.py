@@ -70,6 +70,8 @@ class FrdMargins:
         The line where |1 + L| is smallest [Hz] (where the sensitivity peaks).
     bandwidth_hz : ndarray
         Lowest gain crossing from |L| > 1 to |L| < 1 [Hz]; NaN without one.
+    phase_crossover_hz : ndarray
+        The phase crossing of the gain margin [Hz]; NaN without one.
     encirclements : ndarray of int
         Net encirclements of -1 over the band (clockwise negative).
     stable : ndarray of bool
@@ -86,6 +88,7 @@ class FrdMargins:
     modulus_margin: np.ndarray
     peak_frequency_hz: np.ndarray
     bandwidth_hz: np.ndarray
+    phase_crossover_hz: np.ndarray
     encirclements: np.ndarray
     stable: np.ndarray
     in_band: np.ndarray
@@ -147,9 +150,11 @@ def frd_margins(loop: np.ndarray, freq_hz: np.ndarray) -> FrdMargins:
     gm_all = np.where(pc, -20.0 / np.log(10.0) * (a + s * (b - a)), np.inf)
     pick = np.argmin(np.abs(gm_all), axis=-1)[..., None]
     gm = np.take_along_axis(gm_all, pick, axis=-1)[..., 0]
+    at_pf = np.where(pc, np.exp(lf[:-1] + s * (lf[1:] - lf[:-1])), np.nan)
+    w180 = np.take_along_axis(at_pf, pick, axis=-1)[..., 0]
     wind = np.unwrap(np.angle(1.0 + lo), axis=-1)
     laps = (wind[..., -1] - wind[..., 0] - np.angle(1.0 + lo[..., -1])
             + np.angle(1.0 + lo[..., 0])) / (2 * np.pi)
     enc = np.rint(laps).astype(int)
-    return FrdMargins(gm, pm, wc, dist.min(axis=-1), f[k], bw, enc, enc == 0,
+    return FrdMargins(gm, pm, wc, dist.min(axis=-1), f[k], bw, w180, enc, enc == 0,
                       (mag[..., 0] > 0) & (mag[..., -1] < 0))

@@ -20,25 +20,31 @@ Candidates (:func:`filter_sets` x a gain grid):
 
 - filters: none; per resonance band a notch of each width in NOTCH_WIDTHS (every
   combination over the bands, or, beyond MAX_COMBINATIONS, the same width for all bands and
-  each notch alone); a low-pass below the lowest band at each of LOWPASS_RATIOS;
+  each notch alone); each of these again with a low-pass below the lowest band at each of
+  LOWPASS_RATIOS (a resonance that moves too far for a notch to follow is lowered by both);
 - gains: kp = 1 / |P_0 F| at KP_POINTS crossovers log-spaced over the measured band (a P
   controller crossing there on the nominal pose), ki = kp r 2 pi f_c for every r in KI_RATIOS.
 
-Every candidate's loop L_k = C P_k is checked on the measured lines of every pose k
+Every candidate's loop L_0 = C P_0 is checked on the measured lines of the nominal pose
 (:func:`frf_ident.core.loop.frd_margins.frd_margins`) and, with a weight, for robust
-stability max |W T_0| < 1 on the nominal pose. A target's slack is margin / target (gain
-margin in dB, 1 / max |W T_0| for the robust test); a candidate is feasible when its smallest
-slack over targets and poses is >= 1. Chosen: with a crossover target the feasible candidate
-whose worst-pose bandwidth (its lowest gain crossing) is nearest to it (in log), else the
-feasible one with the highest worst-pose bandwidth; ties go to the most integral action
-ki / kp, then to the larger slack. Without a feasible candidate the one with
-the largest smallest slack is the best achievable, and :class:`Limit` names the target that
-binds, where and by how much.
+stability max |W T_0| < 1; those that meet every target there (no other can meet them at
+every pose), or the SCREEN_KEEP best when none does, are checked at every pose k,
+L_k = C P_k. A target's slack is margin / target (gain margin in dB, 1 / max |W T_0| for the
+robust test, 1 or 0 for Nyquist's stability on a band that holds the crossover); a candidate
+is feasible when its smallest slack over targets and poses is >= 1. Chosen: with a crossover
+target the feasible candidate whose worst-pose bandwidth (its lowest gain crossing) is
+nearest to it (in log), else the feasible one with the highest worst-pose bandwidth; among
+those within CROSSOVER_TOLERANCE of that bandwidth the most integral action ki / kp wins,
+then the larger slack. An ``accept`` callback (the margins as reported) may reject a choice:
+the next is taken. Without a feasible candidate the best achievable is the one whose margins
+and stability come nearest to their targets (then the robust test), and :class:`Limit` names
+the target that binds, where and by how much.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 import itertools
+from typing import Callable
 
 from frf_ident.core.loop.check import pi_response
 from frf_ident.core.loop.frd_margins import frd_margins, FrdMargins
@@ -49,7 +55,8 @@ from frf_ident.core.loop.targets import TuneTargets
 import numpy as np
 
 __all__ = ['AxisSetting', 'KI_RATIOS', 'KP_POINTS', 'LOWPASS_RATIOS', 'Limit',
-           'MAX_COMBINATIONS', 'ShapingResult', 'TARGET_NAMES', 'filter_sets', 'shape_axis']
+           'MAX_ACCEPT_TRIES', 'MAX_COMBINATIONS', 'SCREEN_KEEP', 'ShapingResult',
+           'TARGET_NAMES', 'filter_sets', 'shape_axis']
 
 #: crossovers the proportional gain grid places over the measured band
 KP_POINTS = 32
@@ -62,9 +69,16 @@ LOWPASS_RATIOS = (1.5, 3.0)
 MAX_COMBINATIONS = 64
 #: the targets in the order of the slack columns
 TARGET_NAMES = ('phase_margin_deg', 'gain_margin_db', 'modulus_margin', 'robust', 'stability')
+#: column of the robust test in the slack
+ROBUST = TARGET_NAMES.index('robust')
 #: the fields of FrdMargins, in order
 _FIELDS = ('gain_margin_db', 'phase_margin_deg', 'crossover_hz', 'modulus_margin',
-           'peak_frequency_hz', 'bandwidth_hz', 'encirclements', 'stable', 'in_band')
+           'peak_frequency_hz', 'bandwidth_hz', 'phase_crossover_hz', 'encirclements', 'stable',
+           'in_band')
+#: candidates checked at every pose when none meets the targets at the nominal pose
+SCREEN_KEEP = 256
+#: feasible choices an ``accept`` callback may reject before the last one is kept
+MAX_ACCEPT_TRIES = 25
 #: a crossover within this share of the target counts as reaching it
 CROSSOVER_TOLERANCE = 0.05
 
@@ -125,8 +139,11 @@ class Limit:
     value, wanted : float
         The margin reached and the target.
     frequency_hz : float
-        Where it binds: the crossover (phase margin, crossover), the sensitivity peak (modulus
-        margin, robust test) or the nominal crossover (gain margin).
+        Where it binds: the gain crossover (phase margin), the phase crossover (gain margin),
+        the sensitivity peak (modulus margin, robust test, stability) or the crossover asked.
+    because : Limit or None
+        For the crossover: what the best setting reaching it misses (None: no candidate
+        reaches it).
 
     """
 
@@ -135,6 +152,7 @@ class Limit:
     value: float
     wanted: float
     frequency_hz: float
+    because: 'Limit | None' = None
 
 
 @dataclass(frozen=True)
@@ -213,13 +231,14 @@ def filter_sets(bands: list[ResonanceBand], sample_rate: float) -> list[tuple[Bi
         sets += [(x,) for n in notches for x in n]
     if ok:
         low = min(b.low_hz for b in ok)
-        sets += [(design_lowpass(low / r, sample_rate),) for r in LOWPASS_RATIOS]
+        lows = [design_lowpass(low / r, sample_rate) for r in LOWPASS_RATIOS]
+        sets += [s + (lp,) for lp in lows for s in sets]
     return sets
 
 
 def _gain_grid(freq_hz: np.ndarray, nominal: np.ndarray, filt: np.ndarray,
                target: float | None) -> tuple[np.ndarray, np.ndarray]:
-    """kp (n_kp, 1) and ki (n_kp, n_ratio) of the candidates."""
+    """Return kp and ki of the candidates, both (n_kp, n_ratio)."""
     f = freq_hz
     lo, hi = f[0] * 1.05, f[-1] / 1.05
     fc = np.geomspace(lo, hi, KP_POINTS)
@@ -241,8 +260,8 @@ def _slack(m: FrdMargins, robust: np.ndarray, targets: TuneTargets) -> np.ndarra
     """
     pm = np.where(np.isfinite(m.phase_margin_deg), m.phase_margin_deg, -np.inf)
     with np.errstate(divide='ignore'):
-        rob = (1.0 / robust)[..., None] if targets.robust else np.full(robust.shape + (1,),
-                                                                         np.inf)
+        rob = (1.0 / robust)[..., None] if targets.robust else \
+            np.full(robust.shape + (1,), np.inf)
     cols = [pm / targets.phase_margin_deg, m.gain_margin_db / targets.gain_margin_db,
             m.modulus_margin / targets.modulus_margin, np.broadcast_to(rob, pm.shape),
             (m.stable & m.in_band).astype(float)]
@@ -251,7 +270,7 @@ def _slack(m: FrdMargins, robust: np.ndarray, targets: TuneTargets) -> np.ndarra
 
 def _limit(m: FrdMargins, slack: np.ndarray, robust: float, targets: TuneTargets,
            nominal: int) -> Limit:
-    """The binding target of one candidate (slack shape (n_poses, 4))."""
+    """Return the binding target of one candidate (m per pose, slack (n_poses, 5))."""
     pose, col = np.unravel_index(int(np.argmin(slack)), slack.shape)
     name = TARGET_NAMES[col]
     if name == 'robust':
@@ -261,14 +280,32 @@ def _limit(m: FrdMargins, slack: np.ndarray, robust: float, targets: TuneTargets
                      float(m.peak_frequency_hz[pose]))
     value = {'phase_margin_deg': m.phase_margin_deg, 'gain_margin_db': m.gain_margin_db,
              'modulus_margin': m.modulus_margin}[name][pose]
-    where = m.peak_frequency_hz[pose] if name == 'modulus_margin' else m.crossover_hz[pose]
+    where = {'phase_margin_deg': m.crossover_hz, 'gain_margin_db': m.phase_crossover_hz,
+             'modulus_margin': m.peak_frequency_hz}[name][pose]
     return Limit(name, int(pose), float(value), float(getattr(targets, name)), float(where))
+
+
+@dataclass
+class _Candidates:
+    """Every evaluated candidate, flattened: filter set, gains, margins per pose, slack."""
+
+    sets: list[int]
+    kp: np.ndarray
+    ki: np.ndarray
+    margins: FrdMargins          # fields shaped (n, n_poses)
+    robust: np.ndarray           # (n,)
+    slack: np.ndarray            # (n, n_poses, 5)
+
+    def at(self, q: int) -> FrdMargins:
+        """Return candidate q's margins per pose."""
+        return FrdMargins(*(getattr(self.margins, a)[q] for a in _FIELDS))
 
 
 def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: int,
                bands: list[ResonanceBand], dt: float, targets: TuneTargets,
                weight: np.ndarray | None = None,
-               sets: list[tuple[Biquad, ...]] | None = None) -> ShapingResult:
+               sets: list[tuple[Biquad, ...]] | None = None,
+               accept: Callable[[AxisSetting], bool] | None = None) -> ShapingResult:
     """
     Choose the PI and filters of one axis on its measured FRFs (module doc).
 
@@ -292,6 +329,10 @@ def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: i
         |W| at the lines (the robust test; None: skipped, NaN peak).
     sets : list of tuple of Biquad, optional
         Filter candidates; default :func:`filter_sets` of ``bands``.
+    accept : callable, optional
+        The final judge of a feasible choice, e.g. the reported margins (python-control
+        interpolates between the lines, which this search does not): a choice it rejects is
+        dropped and the next one taken, at most MAX_ACCEPT_TRIES times.
 
     Returns
     -------
@@ -305,64 +346,91 @@ def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: i
     w = np.zeros(f.size) if weight is None else np.asarray(weight, dtype=float)
     z = np.exp(2j * np.pi * f * dt)
     integ = dt * z / (z - 1)
-    rows = []
+    js, kps, kis, cs = [], [], [], []
     for j, fs in enumerate(sets):
         filt = AxisSetting(axis, 0.0, 0.0, fs).filter_response(f)
         kp, ki = _gain_grid(f, p[nominal], filt, targets.crossover_hz)
-        c = (kp[..., None] + ki[..., None] * integ) * filt           # (n_kp, n_r, F)
-        loops = c[:, :, None, :] * p[None, None]                     # (n_kp, n_r, K, F)
-        m = frd_margins(loops, f)
-        l0 = loops[:, :, nominal]
-        robust = np.max(np.abs(w * l0 / (1 + l0)), axis=-1) if weight is not None \
-            else np.zeros(kp.shape)
-        rows.append((j, kp.ravel(), ki.ravel(), m, robust.ravel(),
-                     _slack(m, robust, targets).reshape(kp.size, p.shape[0], 5)))
-    return _choose(axis, rows, sets, targets, nominal, weight is not None)
-
-
-def _choose(axis, rows, sets, targets: TuneTargets, nominal: int, weighted: bool
-            ) -> ShapingResult:
-    """Pick the candidate of the module doc among all evaluated ones."""
-    js = np.concatenate([np.full(r[1].size, r[0]) for r in rows])
-    kp = np.concatenate([r[1] for r in rows])
-    ki = np.concatenate([r[2] for r in rows])
-    idx = np.concatenate([np.arange(r[1].size) for r in rows])
-    slack = np.concatenate([r[5] for r in rows])                     # (N, K, 4)
-    least = slack.min(axis=(1, 2))
-    wc = np.concatenate([r[3].bandwidth_hz.reshape(r[1].size, -1) for r in rows])
-    wc_worst = np.where(np.isfinite(wc).all(axis=1), np.nanmin(np.where(np.isfinite(wc), wc,
-                                                                          np.inf), axis=1), 0.0)
-    feasible = (least >= 1.0) & (wc_worst > 0)
-    t = targets.crossover_hz
-    if feasible.any():
-        score = -np.abs(np.log(np.maximum(wc_worst, 1e-300) / t)) if t is not None \
-            else np.log(np.maximum(wc_worst, 1e-300))
-        score = np.where(feasible, score, -np.inf)
-        top = np.flatnonzero(score >= score.max() - 1e-9)
-        ratio = ki[top] / kp[top]
-        top = top[ratio >= ratio.max() * (1 - 1e-9)]       # most integral action, then slack
-        pick = int(top[np.argmax(least[top])])
+        cs.append(((kp[..., None] + ki[..., None] * integ) * filt).reshape(-1, f.size))
+        js.append(np.full(kp.size, j))
+        kps.append(kp.ravel())
+        kis.append(ki.ravel())
+    c = np.concatenate(cs)                                           # (N, F)
+    # stage 1, the nominal pose: its margins and the robust test for every candidate
+    l0 = c * p[nominal]
+    m0 = frd_margins(l0, f)
+    robust = np.max(np.abs(w * l0 / (1 + l0)), axis=-1)
+    slack0 = _slack(FrdMargins(*(getattr(m0, a)[:, None] for a in _FIELDS)),
+                    robust if weight is not None else np.zeros_like(robust), targets)
+    keep = _screen(slack0)
+    # stage 2, every pose, for the candidates the nominal pose leaves
+    if p.shape[0] == 1:
+        m = FrdMargins(*(getattr(m0, a)[keep, None] for a in _FIELDS))
     else:
-        pick = int(np.argmax(least))
-    j, k = int(js[pick]), int(idx[pick])
-    m = rows[[r[0] for r in rows].index(j)][3]
-    mp = FrdMargins(*(np.asarray(getattr(m, a)).reshape(-1, slack.shape[1])[k]
-                      for a in _FIELDS))
-    robust = float(np.concatenate([r[4] for r in rows])[pick]) if weighted else float('nan')
+        m = frd_margins(c[keep][:, None, :] * p[None], f)
+    cand = _Candidates(np.concatenate(js)[keep].tolist(), np.concatenate(kps)[keep],
+                       np.concatenate(kis)[keep], m,
+                       robust[keep] if weight is not None else np.full(keep.size, np.nan),
+                       _slack(m, robust[keep] if weight is not None else np.zeros(keep.size),
+                              targets))
+    rejected = np.zeros(cand.kp.size, dtype=bool)
+    for _ in range(MAX_ACCEPT_TRIES):
+        q, feasible, limit = _choose(cand, targets, nominal, rejected)
+        setting = AxisSetting(axis, float(cand.kp[q]), float(cand.ki[q]),
+                              tuple(sets[cand.sets[q]]))
+        if not feasible or accept is None or accept(setting):
+            break
+        rejected[q] = True
+    return ShapingResult(setting, feasible, cand.at(q), float(cand.robust[q]), limit,
+                         int(c.shape[0]))
+
+
+def _screen(slack0: np.ndarray) -> np.ndarray:
+    """
+    Return the indices of the candidates worth checking at every pose.
+
+    Those that meet every target at the nominal pose (no other can be feasible), or, when
+    none does, the SCREEN_KEEP best there in the order of the best achievable (margins and
+    stability first, then the robust test).
+    """
+    least = slack0.min(axis=(1, 2))
+    ok = np.flatnonzero(least >= 1.0)
+    if ok.size:
+        return ok
+    margin = np.minimum(np.delete(slack0, ROBUST, axis=2).min(axis=(1, 2)), 1.0)
+    return np.sort(np.lexsort((least, margin))[::-1][:SCREEN_KEEP])
+
+
+def _choose(cand: _Candidates, targets: TuneTargets, nominal: int, rejected: np.ndarray
+            ) -> tuple[int, bool, Limit | None]:
+    """Return the candidate of the module doc, its feasibility and what binds."""
+    least = np.where(rejected, -np.inf, cand.slack.min(axis=(1, 2)))
+    bw = cand.margins.bandwidth_hz
+    worst = np.where(np.isfinite(bw).all(axis=1), np.min(np.where(np.isfinite(bw), bw, np.inf),
+                                                         axis=1), 0.0)
+    feasible = (least >= 1.0) & (worst > 0)
+    t = targets.crossover_hz
+    if not feasible.any():
+        # best achievable: the margins and stability first (met counts as met), then the
+        # robust test, so a hopeless robust target does not give up the margins
+        margin = np.minimum(np.delete(cand.slack, ROBUST, axis=2).min(axis=(1, 2)), 1.0)
+        margin = np.where(rejected, -np.inf, margin)
+        q = int(np.lexsort((least, margin))[-1])
+        return q, False, _limit(cand.at(q), cand.slack[q], float(cand.robust[q]), targets,
+                                nominal)
+    with np.errstate(divide='ignore'):
+        score = -np.abs(np.log(worst / t)) if t is not None else np.log(worst)
+    score = np.where(feasible, score, -np.inf)
+    top = np.flatnonzero(score >= score.max() - np.log1p(CROSSOVER_TOLERANCE))
+    ratio = cand.ki[top] / cand.kp[top]
+    top = top[ratio >= ratio.max() * (1 - 1e-9)]          # most integral action, then slack
+    q = int(top[np.argmax(least[top])])
     limit = None
-    if not feasible[pick]:
-        limit = _limit(mp, slack[pick], robust, targets, nominal)
-    elif t is not None and wc_worst[pick] < (1 - CROSSOVER_TOLERANCE) * t:
-        reach = wc_worst >= (1 - CROSSOVER_TOLERANCE) * t
-        if reach.any():
-            q = int(np.flatnonzero(reach)[np.argmax(least[reach])])
-            jq, kq = int(js[q]), int(idx[q])
-            mq = rows[[r[0] for r in rows].index(jq)][3]
-            mq = FrdMargins(*(np.asarray(getattr(mq, a)).reshape(-1, slack.shape[1])[kq]
-                              for a in _FIELDS))
-            limit = _limit(mq, slack[q], float(np.concatenate([r[4] for r in rows])[q]),
-                           targets, nominal)
-        else:
-            limit = Limit('crossover_hz', nominal, float(wc_worst[pick]), float(t), float(t))
-    setting = AxisSetting(axis, float(kp[pick]), float(ki[pick]), tuple(sets[j]))
-    return ShapingResult(setting, bool(feasible[pick]), mp, robust, limit, int(kp.size))
+    if t is not None and worst[q] < (1 - CROSSOVER_TOLERANCE) * t:
+        reach = np.flatnonzero(worst >= (1 - CROSSOVER_TOLERANCE) * t)
+        because = None
+        if reach.size:
+            r = int(reach[np.argmax(least[reach])])
+            because = _limit(cand.at(r), cand.slack[r], float(cand.robust[r]), targets, nominal)
+        limit = Limit('crossover_hz', int(np.argmin(cand.margins.bandwidth_hz[q])),
+                      float(worst[q]), float(t), float(t), because)
+    return q, True, limit

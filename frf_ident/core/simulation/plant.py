@@ -397,9 +397,9 @@ def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
 # signals are bit-identical; the speed is `python -m benchmarks --markdown simulation`.
 @numba.njit(cache=True, fastmath=True, error_model='numpy', _nrt=False)
 def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, sos, zf,
-              m, dt, offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph, gsel,
-              nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v,
-              out_u, out_x, keep_x, out_r, sc, work):
+              m, dt, offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph,
+              gsel, nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q,
+              out_v, out_u, out_x, keep_x, out_r, sc, work):
     """
     Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
 
@@ -657,7 +657,8 @@ class FlexibleJointPlant:
             ulim, integ, closed = self.params.torque_limits(), np.zeros(n), False
             sos, zf = np.zeros((n, 0, 6)), np.zeros((n, 0, 2))
         _simulate(self.x, self.qprev, integ, self.buf, r, u_ext, uff, has_ff, kp, ki, ulim,
-                  closed, sos, zf, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm, p.ad,
+                  closed, sos, zf, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm,
+                  p.ad,
                   p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.gamp, p.gph,
                   p.gsel, p.nonlinear,
                   p.enc, bool(self.params.velocity_from_encoder), vn, tn, qplan, kpos, has_plan,
