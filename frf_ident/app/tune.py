@@ -338,9 +338,9 @@ def summary_lines(o: TuneOutcome) -> list[str]:
             if key not in v:
                 continue
             x = v[key]
-            val = 'n/a' if x['value'] is None else f'{x["value"]:.3g}'
-            parts.append(f'{label} {val}{" " + unit if unit else ""}'
-                         f'{"" if x["met"] else " (missed)"}')
+            val = 'none in the band' if x['value'] is None else \
+                f'{x["value"]:.3g}{" " + unit if unit else ""}'
+            parts.append(f'{label} {val}{"" if x["met"] else " (missed)"}')
         st = v['stability']
         worst = '' if len(names) == 1 else ' worst over the poses'
         lines.append(f'  {a.axis} tuned{worst}: ' + ', '.join(parts)

@@ -74,7 +74,7 @@ def phase_budget(freq_hz: np.ndarray, response: np.ndarray, setting: AxisSetting
 def _band(at_hz: float, bands: list[ResonanceBand]) -> str:
     for b in bands:
         if 0.9 * b.low_hz <= at_hz <= 1.1 * b.high_hz:
-            return f', at the resonance ({b.low_hz:.4g}-{b.high_hz:.4g} Hz over the poses)'
+            return f', at the resonance (band {b.low_hz:.4g}-{b.high_hz:.4g} Hz)'
     return ''
 
 

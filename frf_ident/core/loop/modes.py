@@ -149,8 +149,8 @@ def resonance_bands(modes: list[list[Mode]], nominal: int, band_hz: tuple[float,
     modes : list of list of Mode
         The fitted modes of every pose.
     nominal : int
-        Index of the nominal pose: each of its lightly damped modes inside ``band_hz`` starts a
-        band.
+        Index of the nominal pose: each of its lightly damped modes (0 < damping < ``light``)
+        inside ``band_hz`` starts a band; an unstable fitted pole (damping < 0) does not.
     band_hz : tuple of float
         The measured band (low, high) [Hz]: a mode outside it is not seen well enough to
         filter.
@@ -165,8 +165,9 @@ def resonance_bands(modes: list[list[Mode]], nominal: int, band_hz: tuple[float,
         By frequency.
 
     """
-    def lightly(ms):
-        return [m for m in ms if m.damping < light and band_hz[0] <= m.frequency_hz <= band_hz[1]]
+    def lightly(ms):      # a pole in the right half plane (damping < 0) is no resonance
+        return [m for m in ms if 0 < m.damping < light
+                and band_hz[0] <= m.frequency_hz <= band_hz[1]]
     out = []
     for m0 in lightly(modes[nominal]):
         picked: list[Mode | None] = []

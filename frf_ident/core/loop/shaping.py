@@ -361,7 +361,7 @@ def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: i
     robust = np.max(np.abs(w * l0 / (1 + l0)), axis=-1)
     slack0 = _slack(FrdMargins(*(getattr(m0, a)[:, None] for a in _FIELDS)),
                     robust if weight is not None else np.zeros_like(robust), targets)
-    keep = _screen(slack0)
+    keep = _screen(slack0, m0.bandwidth_hz, targets.crossover_hz)
     # stage 2, every pose, for the candidates the nominal pose leaves
     if p.shape[0] == 1:
         m = FrdMargins(*(getattr(m0, a)[keep, None] for a in _FIELDS))
@@ -384,20 +384,25 @@ def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: i
                          int(c.shape[0]))
 
 
-def _screen(slack0: np.ndarray) -> np.ndarray:
+def _screen(slack0: np.ndarray, bandwidth0: np.ndarray, crossover: float | None
+            ) -> np.ndarray:
     """
     Return the indices of the candidates worth checking at every pose.
 
-    Those that meet every target at the nominal pose (no other can be feasible), or, when
-    none does, the SCREEN_KEEP best there in the order of the best achievable (margins and
-    stability first, then the robust test).
+    Those that meet every target at the nominal pose (no other can be feasible); the
+    SCREEN_KEEP best there in the order of the best achievable (margins and stability first,
+    then the robust test) when none does; and with a crossover asked, the SCREEN_KEEP best of
+    those that reach it (what binds there is reported).
     """
     least = slack0.min(axis=(1, 2))
-    ok = np.flatnonzero(least >= 1.0)
-    if ok.size:
-        return ok
     margin = np.minimum(np.delete(slack0, ROBUST, axis=2).min(axis=(1, 2)), 1.0)
-    return np.sort(np.lexsort((least, margin))[::-1][:SCREEN_KEEP])
+    order = np.lexsort((least, margin))[::-1]
+    ok = np.flatnonzero(least >= 1.0)
+    keep = [ok if ok.size else order[:SCREEN_KEEP]]
+    if crossover is not None:
+        reach = (1 - CROSSOVER_TOLERANCE) * crossover <= np.nan_to_num(bandwidth0)
+        keep.append(order[reach[order]][:SCREEN_KEEP])
+    return np.unique(np.concatenate(keep))
 
 
 def _choose(cand: _Candidates, targets: TuneTargets, nominal: int, rejected: np.ndarray
