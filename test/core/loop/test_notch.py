@@ -25,8 +25,8 @@ from frf_ident.core.loop.modes import resonance_bands, two_mass_mode
 from frf_ident.core.loop.notch import design_lowpass, design_notch, sections_response
 from frf_ident.core.loop.shaping import AxisSetting
 import numpy as np
-from scipy import signal
 import pytest
+from scipy import signal
 
 
 @pytest.mark.parametrize('f0, fs', [(36.6, 1000.0), (0.0625, 1.0), (200.0, 1000.0)])
@@ -50,7 +50,7 @@ def test_prewarped_notch_has_its_minimum_at_the_centre(f0, fs):
 
 
 def test_notch_covers_its_band_and_costs_the_phase_it_should():
-    """Across [low, high]: |N| <= sqrt(2) x depth; the phase lag at w_c << w0 ~ 2 (zp - zz) w_c / w0."""
+    """Across [low, high] |N| <= sqrt(2) x depth; the lag at w_c << w0 ~ 2 (zp - zz) w_c / w0."""
     lo, hi = 40.0, 56.0
     n = design_notch(lo, hi, 0.01, 0.7, 1000.0)
     f = np.linspace(lo, hi, 400)

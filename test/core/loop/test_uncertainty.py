@@ -12,8 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-The uncertainty weight W(s): it covers its bound, it is stable and minimum phase, and the set
-it describes holds the true plants of a Monte-Carlo campaign (frf_ident/core/loop/uncertainty.py).
+The uncertainty weight W(s) of frf_ident/core/loop/uncertainty.py.
+
+It covers its bound, it is stable and minimum phase, and the set it describes holds the true
+plants of a Monte-Carlo campaign.
 """
 from frf_ident.core.loop.uncertainty import fit_weight, relative_bound
 from hypothesis import given, settings
