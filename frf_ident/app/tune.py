@@ -39,8 +39,9 @@ from typing import Any, Sequence
 from frf_ident.app.loop import margins
 from frf_ident.app.tune_check import check_controller, ControllerCheck, target_verdicts
 from frf_ident.app.tune_inputs import axis_modes, AxisModes, Campaign, read_campaign
-from frf_ident.core.loop.check import DRAWS
+from frf_ident.core.loop.check import DRAWS, loop_response, sensitivity_peak
 from frf_ident.core.loop.explain import explain_limit
+from frf_ident.core.loop.frd_margins import mimo_encirclements
 from frf_ident.core.loop.modes import resonance_bands, ResonanceBand
 from frf_ident.core.loop.notch import sections_response
 from frf_ident.core.loop.shaping import shape_axis, ShapingResult
@@ -50,7 +51,8 @@ from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
-__all__ = ['AxisTuning', 'TuneOutcome', 'run_tune', 'tune_campaign']
+__all__ = ['AxisTuning', 'TuneOutcome', 'run_tune', 'shared_bands', 'summary_lines',
+           'tune_campaign']
 
 
 @dataclass
@@ -191,23 +193,30 @@ def tune_campaign(camp: Campaign, targets: TuneTargets, sample_rate: float, *,
     say = sink(progress)
     f = camp.freq_hz
     dt = 1.0 / sample_rate
-    out = []
+    fits = [axis_modes(camp, j, modes, order) for j in range(len(camp.channels))]
+    own = [resonance_bands(am.modes, camp.nominal, (f[0], f[-1])) for am in fits]
+    out, fixed = [], []
     for j, (axis, _, _) in enumerate(camp.channels):
-        am = axis_modes(camp, j, modes, order)
-        bands = resonance_bands(am.modes, camp.nominal, (f[0], f[-1]))
+        am = fits[j]
+        bands = shared_bands(own, j)
         p, var = camp.axis_responses(j)
         weight = fit_weight(f, relative_bound(p, var, camp.nominal))
         res = shape_axis(axis, f, p, camp.nominal, bands, dt, targets,
-                         np.abs(weight.response(f)), accept=_reported(p, f, dt, targets))
+                         np.abs(weight.response(f)),
+                         accept=_reported(camp, j, fixed, dt, targets))
+        fixed.append(res.setting.response(f, dt))
         reason = ''
         if res.limit is not None:
             k = res.limit.pose
             reason = explain_limit(res.limit, f, p[k], res.setting, dt, pose=camp.names[k],
                                    delay_s=None if am.delay_s is None else am.delay_s[k],
                                    bands=bands)
-        for b in bands:
+        for b in own[j]:
             say(f'  {axis}: {b.summary()}')
-        if not bands:
+        if len(bands) > len(own[j]):
+            say(f'  {axis}: also tried at the other axes\' resonances '
+                + ', '.join(f'{b.centre_hz:.4g} Hz' for b in bands[len(own[j]):]))
+        if not own[j]:
             say(f'  {axis}: no lightly damped resonance (damping < 0.2) in the band')
         say(f'  {axis}: {weight.summary()}')
         say(f'  {res.setting.summary()}')
@@ -217,13 +226,51 @@ def tune_campaign(camp: Campaign, targets: TuneTargets, sample_rate: float, *,
     return out
 
 
-def _reported(p: np.ndarray, f: np.ndarray, dt: float, targets: TuneTargets):
-    """Return the search's judge: the margins ``loop`` reports meet the targets everywhere."""
+def shared_bands(own: list[list[ResonanceBand]], j: int) -> list[ResonanceBand]:
+    """
+    Return the bands axis j may filter: its own, then the other axes' it does not overlap.
+
+    The poles of a coupled robot are shared: a mode another axis's fit found can lift this
+    axis's loop, or the MIMO loop through the coupling; the search decides whether a filter
+    there pays.
+    """
+    out = list(own[j])
+    for k, bands in enumerate(own):
+        for b in bands if k != j else []:
+            if all(b.high_hz < o.low_hz or b.low_hz > o.high_hz for o in out):
+                out.append(b)
+    return out
+
+
+def _reported(camp: Campaign, j: int, fixed: list[np.ndarray], dt: float,
+              targets: TuneTargets):
+    """
+    Return the search's judge for axis j: what ``loop`` reports meets the targets everywhere.
+
+    The axis's margins (python-control, every pose), and, for a square FRF, the MIMO
+    sensitivity peak with the axes tuned before it closed too (the later ones open): at most
+    1 / modulus margin target at every pose, and no encirclement of det(I + L), so the
+    coupling cannot undo what each axis meets.
+    """
+    f = camp.freq_hz
+    p, _ = camp.axis_responses(j)
+    square = all(fr.noutputs == fr.ninputs for fr in camp.frfs) and len(camp.channels) > 1
+    inputs = [i for _, _, i in camp.channels]
+
     def accept(setting) -> bool:
-        m = margins(p * setting.response(f, dt)[None], 2 * np.pi * f)   # (K, 4)
+        c = setting.response(f, dt)
+        m = margins(p * c[None], 2 * np.pi * f)                          # (K, 4)
         gm, pm, _, mm = m.T
-        return bool(np.all(pm >= targets.phase_margin_deg) and np.all(mm >= targets.modulus_margin)
-                    and np.all(gm >= targets.gain_margin_db))
+        ok = bool(np.all(pm >= targets.phase_margin_deg) and np.all(mm >= targets.modulus_margin)
+                  and np.all(gm >= targets.gain_margin_db))
+        if not ok or not square:
+            return ok
+        cs = np.zeros((len(inputs), f.size), dtype=complex)
+        for k, ck in enumerate(fixed + [c]):
+            cs[inputs[k]] = ck
+        loops = [loop_response(fr.response, cs) for fr in camp.frfs]
+        return bool(max(sensitivity_peak(lo) for lo in loops) <= 1.0 / targets.modulus_margin
+                    and all(mimo_encirclements(lo) == 0 for lo in loops))
     return accept
 
 
@@ -251,6 +298,7 @@ def run_tune(sources: Sequence[str | Path], out: Path, *, targets: TuneTargets |
              model: str | Path | None = None, rate: float | None = None,
              modes: str = 'physical', order: int | None = None, nominal: str | None = None,
              draws: int = DRAWS, verify: bool = False,
+             verify_band: tuple[float, float] | None = None,
              progress: Progress | None = None) -> TuneOutcome:
     """
     Tune the velocity loop of every axis on measured FRFs and write the results.
@@ -280,6 +328,9 @@ def run_tune(sources: Sequence[str | Path], out: Path, *, targets: TuneTargets |
     verify : bool, optional
         Identify the model's robot again with the tuned controller and compare (needs
         ``model``).
+    verify_band : tuple of float, optional
+        Multisine band [Hz] of that identification (default ``identify``'s 2-60 Hz): the one
+        the tuned FRF was measured with.
     progress : callable, optional
         One line per stage.
 
@@ -320,9 +371,9 @@ def run_tune(sources: Sequence[str | Path], out: Path, *, targets: TuneTargets |
     outcome.files = write_tune_files(outcome, out, model=model, order=order_idx)
     say(f'tune: wrote {", ".join(p.name for p in outcome.files)} to {out}')
     if verify:
-        from frf_ident.app.tune_verify import verify_tuning
+        from frf_ident.app.tune_verify import BAND_HZ, verify_tuning
         outcome.verify = verify_tuning(outcome, out / 'tuned_model.yaml', out / 'verify',
-                                       progress=say)
+                                       band_hz=verify_band or BAND_HZ, progress=say)
     return outcome
 
 

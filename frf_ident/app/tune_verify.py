@@ -22,7 +22,9 @@ The two-command recipe it runs (docs/tune.md), on the model file's simulation:
 then the tuned controller's margins on the new FRF (what ``loop --model
 DIR/tuned_model.yaml`` reports) beside the prediction ``tune`` made on the FRF it was tuned
 on: per margin the difference over the combined standard deviation of the two, which should
-stay within AGREEMENT_SD.
+stay within AGREEMENT_SD. The multisine must be the one the tuned FRF was measured with (its
+band; the procedure's line set follows from it): margins read between other lines are other
+numbers. A new FRF on other lines is said so in one line.
 """
 from __future__ import annotations
 
@@ -38,7 +40,7 @@ from frf_ident.core.loop.notch import sections_response
 from frf_ident.core.progress import Progress, sink
 import numpy as np
 
-__all__ = ['AGREEMENT_SD', 'VERIFY_PERIODS', 'VERIFY_REALISATIONS', 'Verification',
+__all__ = ['AGREEMENT_SD', 'BAND_HZ', 'VERIFY_PERIODS', 'VERIFY_REALISATIONS', 'Verification',
            'verify_tuning']
 
 #: a measured margin agrees with the prediction within this many combined standard deviations
@@ -47,6 +49,8 @@ AGREEMENT_SD = 3.0
 VERIFY_REALISATIONS = 6
 #: periods per realisation (one more is the transient)
 VERIFY_PERIODS = 3
+#: multisine band of the verifying identification: identify's default
+BAND_HZ = (2.0, 60.0)
 #: the margins compared
 MARGINS = ('phase_margin_deg', 'gain_margin_db', 'modulus_margin', 'crossover_hz')
 
@@ -102,8 +106,9 @@ def _z(p, m) -> float:
     return float(abs(m.value - p.value) / sd)
 
 
-def verify_tuning(outcome, tuned_model: Path, out: Path, *, realisations: int =
-                  VERIFY_REALISATIONS, periods: int = VERIFY_PERIODS, draws: int = DRAWS,
+def verify_tuning(outcome, tuned_model: Path, out: Path, *,
+                  band_hz: tuple[float, float] = BAND_HZ, realisations: int = VERIFY_REALISATIONS,
+                  periods: int = VERIFY_PERIODS, draws: int = DRAWS,
                   progress: Progress | None = None) -> Verification:
     """
     Identify the model's robot with the tuned controller, estimate, compare (module doc).
@@ -116,6 +121,9 @@ def verify_tuning(outcome, tuned_model: Path, out: Path, *, realisations: int =
         tuned_model.yaml.
     out : Path
         Folder for the bag, the estimate and verify.json.
+    band_hz : tuple of float, optional
+        (f_low, f_high) of the multisine [Hz]: that of the tuned FRF's experiment (default
+        ``identify``'s).
     realisations, periods : int, optional
         Of the multisine.
     draws : int, optional
@@ -135,16 +143,21 @@ def verify_tuning(outcome, tuned_model: Path, out: Path, *, realisations: int =
     from frf_ident.core.simulation.runner import IdentificationConfig
     from frf_ident.io.model_file import load_model
     say = sink(progress)
-    f = outcome.campaign.freq_hz
-    cfg = IdentificationConfig(MultisineConfig(f_low=float(f[0]), f_high=float(f[-1]),
+    cfg = IdentificationConfig(MultisineConfig(f_low=float(band_hz[0]), f_high=float(band_hz[1]),
                                                n_realisations=realisations,
                                                n_periods=periods), None)
     out.mkdir(parents=True, exist_ok=True)
     say(f'verify: identify {tuned_model} with the tuned controller ({realisations} '
-        f'realisations x {periods} periods, {f[0]:.3g}-{f[-1]:.3g} Hz)')
+        f'realisations x {periods} periods, multisine {band_hz[0]:g}-{band_hz[1]:g} Hz)')
     run_identify(tuned_model, None, cfg, out / 'bag', progress=lambda s: None)
     estimate_bag(out / 'bag', out / 'estimate', progress=lambda s: None)
     camp = read_campaign([out / 'estimate'])
+    old = outcome.campaign.freq_hz
+    if camp.freq_hz.shape != old.shape or not np.allclose(camp.freq_hz, old, rtol=1e-9):
+        say(f'verify: the new FRF has {camp.freq_hz.size} lines {camp.freq_hz[0]:.3g}-'
+            f'{camp.freq_hz[-1]:.3g} Hz, the tuned one {old.size} lines {old[0]:.3g}-'
+            f'{old[-1]:.3g} Hz: margins between other lines differ (give the band the tuned '
+            f'FRF was measured with)')
     _, robot, ctrl = load_model(tuned_model)
     names = robot.joint_names
     order = [names.index(a) for a, _, _ in camp.channels]

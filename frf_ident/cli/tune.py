@@ -59,6 +59,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--verify', action='store_true',
                    help="identify --model's robot again with the tuned controller (its "
                         'simulation) and compare the measured margins with the predicted ones')
+    p.add_argument('--verify-band', type=float, nargs=2, default=None,
+                   metavar=('F_LOW', 'F_HIGH'),
+                   help="multisine band of --verify's identification [Hz] (default identify's "
+                        '2 60): the band the tuned FRF was measured with')
 
 
 def parse_targets(items: list[str]):
@@ -119,5 +123,5 @@ def run(args: argparse.Namespace) -> int:
     run_tune(args.source, out, targets=targets, model=args.model, rate=args.rate,
              modes=args.modes, order=args.order, nominal=args.nominal,
              draws=DRAWS if args.draws is None else args.draws, verify=args.verify,
-             progress=say)
+             verify_band=tuple(args.verify_band) if args.verify_band else None, progress=say)
     return 0

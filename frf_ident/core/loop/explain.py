@@ -120,6 +120,10 @@ def explain_limit(limit: Limit, freq_hz: np.ndarray, response: np.ndarray,
         sub = explain_limit(limit.because, freq_hz, response, setting, dt, pose='',
                             delay_s=delay_s, bands=bands)
         return f'{head}; the best setting that crosses there misses its {sub}'
+    if limit.target == 'gain_margin_db' and np.isinf(limit.frequency_hz):
+        return (f'gain margin: |L| at the highest measured line ({freq_hz[-1]:.4g} Hz) is '
+                f'{limit.value:.3g} dB below 1, less than the {limit.wanted:g} dB asked{at}; '
+                f'beyond the band the phase is unknown (measure a wider band)')
     if not np.isfinite(limit.frequency_hz):
         return f'{name} {limit.value:.3g} {unit} (target {limit.wanted:g} {unit}){at}'.strip()
     b = phase_budget(freq_hz, response, setting, dt, limit.frequency_hz, delay_s)

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ['FrdMargins', 'frd_margins']
+__all__ = ['FrdMargins', 'frd_margins', 'mimo_encirclements']
 
 
 @dataclass(frozen=True)
@@ -79,6 +79,9 @@ class FrdMargins:
     in_band : ndarray of bool
         |L| > 1 at the lowest line and < 1 at the highest: the band holds the crossover, so
         the margins and ``stable`` judge the loop.
+    top_db : ndarray
+        -20 log10 |L| at the highest line [dB]: beyond the band the phase is unknown, so no
+        gain margin larger than this can be claimed for frequencies above it.
 
     """
 
@@ -92,6 +95,7 @@ class FrdMargins:
     encirclements: np.ndarray
     stable: np.ndarray
     in_band: np.ndarray
+    top_db: np.ndarray
 
 
 def frd_margins(loop: np.ndarray, freq_hz: np.ndarray) -> FrdMargins:
@@ -157,4 +161,37 @@ def frd_margins(loop: np.ndarray, freq_hz: np.ndarray) -> FrdMargins:
             + np.angle(1.0 + lo[..., 0])) / (2 * np.pi)
     enc = np.rint(laps).astype(int)
     return FrdMargins(gm, pm, wc, dist.min(axis=-1), f[k], bw, w180, enc, enc == 0,
-                      (mag[..., 0] > 0) & (mag[..., -1] < 0))
+                      (mag[..., 0] > 0) & (mag[..., -1] < 0), -20.0 / np.log(10.0) * mag[..., -1])
+
+
+def mimo_encirclements(loop: np.ndarray) -> np.ndarray:
+    """
+    Return the net encirclements of the origin by det(I + L) over the band (MIMO Nyquist).
+
+    With a stable plant and PIs the closed loop is stable when it is 0 (and every SISO loop's
+    band holds its crossover); the coupling can make a loop unstable that every axis alone
+    finds stable.
+
+    Parameters
+    ----------
+    loop : ndarray of complex, shape (..., n, n, n_freq)
+        L = P C at the lines.
+
+    Returns
+    -------
+    ndarray of int, shape (...)
+        The count as :func:`frd_margins` counts it for 1 + L.
+
+    Examples
+    --------
+    >>> f = np.geomspace(0.1, 10.0, 200)
+    >>> int(mimo_encirclements(np.eye(2)[:, :, None] * (1.0 / (2j * np.pi * f))[None, None]))
+    0
+
+    """
+    lm = np.moveaxis(np.asarray(loop, dtype=complex), -1, -3)
+    n = lm.shape[-1]
+    d = np.linalg.det(np.eye(n) + lm)
+    wind = np.unwrap(np.angle(d), axis=-1)
+    laps = (wind[..., -1] - wind[..., 0] - np.angle(d[..., -1]) + np.angle(d[..., 0])) / (2 * np.pi)
+    return np.rint(laps).astype(int)

@@ -22,8 +22,11 @@ Candidates (:func:`filter_sets` x a gain grid):
   combination over the bands, or, beyond MAX_COMBINATIONS, the same width for all bands and
   each notch alone); each of these again with a low-pass below the lowest band at each of
   LOWPASS_RATIOS (a resonance that moves too far for a notch to follow is lowered by both);
-- gains: kp = 1 / |P_0 F| at KP_POINTS crossovers log-spaced over the measured band (a P
-  controller crossing there on the nominal pose), ki = kp r 2 pi f_c for every r in KI_RATIOS.
+- gains: kp = 1 / |P_0| at KP_POINTS crossovers log-spaced over the measured band (a P
+  controller without filters crossing there on the nominal pose: filters lower the crossover,
+  they never buy a gain the plant alone would not take), ki = kp r 2 pi f_c for every r in
+  KI_RATIOS; once a first choice is made, a finer grid around it (REFINE_KP x REFINE_KI)
+  with its filters.
 
 Every candidate's loop L_0 = C P_0 is checked on the measured lines of the nominal pose
 (:func:`frf_ident.core.loop.frd_margins.frd_margins`) and, with a weight, for robust
@@ -74,7 +77,15 @@ ROBUST = TARGET_NAMES.index('robust')
 #: the fields of FrdMargins, in order
 _FIELDS = ('gain_margin_db', 'phase_margin_deg', 'crossover_hz', 'modulus_margin',
            'peak_frequency_hz', 'bandwidth_hz', 'phase_crossover_hz', 'encirclements', 'stable',
-           'in_band')
+           'in_band', 'top_db')
+#: the finer grid around the first choice: kp factors and factors of its ki / kp
+REFINE_KP = tuple(np.geomspace(0.8, 1.25, 11))
+REFINE_KI = (0.5, 0.7, 1.0, 1.4, 2.0)
+#: a filter sits at least this factor above the loop's bandwidth: below it a notch or a
+#: low-pass turns the loop conditionally stable (stable only while its gain stays high: it
+#: loses stability when the torque saturates), the pathology of a search for the highest
+#: crossover that puts a low-pass under it
+FILTER_CLEARANCE = 2.0
 #: candidates checked at every pose when none meets the targets at the nominal pose
 SCREEN_KEEP = 256
 #: feasible choices an ``accept`` callback may reject before the last one is kept
@@ -236,35 +247,43 @@ def filter_sets(bands: list[ResonanceBand], sample_rate: float) -> list[tuple[Bi
     return sets
 
 
-def _gain_grid(freq_hz: np.ndarray, nominal: np.ndarray, filt: np.ndarray,
-               target: float | None) -> tuple[np.ndarray, np.ndarray]:
+def _gain_grid(freq_hz: np.ndarray, nominal: np.ndarray, target: float | None
+               ) -> tuple[np.ndarray, np.ndarray]:
     """Return kp and ki of the candidates, both (n_kp, n_ratio)."""
     f = freq_hz
     lo, hi = f[0] * 1.05, f[-1] / 1.05
     fc = np.geomspace(lo, hi, KP_POINTS)
     if target is not None and lo < target < hi:
         fc = np.unique(np.r_[fc, target * np.geomspace(0.8, 1.25, 9)])
-    mag = np.exp(np.interp(np.log(fc), np.log(f), np.log(np.abs(nominal * filt))))
+    # from the plant alone: a filter that attenuates at fc does not buy a larger gain
+    mag = np.exp(np.interp(np.log(fc), np.log(f), np.log(np.abs(nominal))))
     kp = (1.0 / mag)[:, None]
     ki = kp * np.asarray(KI_RATIOS)[None, :] * 2 * np.pi * fc[:, None]
     return np.broadcast_to(kp, ki.shape), ki
 
 
-def _slack(m: FrdMargins, robust: np.ndarray, targets: TuneTargets) -> np.ndarray:
+def _slack(m: FrdMargins, robust: np.ndarray, targets: TuneTargets, lowest: np.ndarray
+           ) -> np.ndarray:
     """
     Slack of every target, shape (..., n_poses, 5): margin / target, >= 1 when met.
 
-    The robust column (1 / max |W T_0|) repeats per pose; the stability column is 1 for a
-    loop Nyquist's criterion finds stable on a band that holds its crossover, else 0 (a
-    margin of an unstable loop, or of one that crosses outside the band, means nothing).
+    The gain margin counts no more than the loop's attenuation at the highest line (beyond
+    the band its phase is unknown). The robust column (1 / max |W T_0|) repeats per pose; the
+    stability column is 1 for a
+    loop Nyquist's criterion finds stable on a band that holds its crossover, with its lowest
+    filter (``lowest`` [Hz], per candidate) FILTER_CLEARANCE times above its bandwidth, else 0
+    (a margin of an unstable loop, or of one that crosses outside the band, means nothing).
     """
     pm = np.where(np.isfinite(m.phase_margin_deg), m.phase_margin_deg, -np.inf)
     with np.errstate(divide='ignore'):
         rob = (1.0 / robust)[..., None] if targets.robust else \
             np.full(robust.shape + (1,), np.inf)
-    cols = [pm / targets.phase_margin_deg, m.gain_margin_db / targets.gain_margin_db,
+    gm = np.minimum(m.gain_margin_db, m.top_db)       # the phase beyond the band is unknown
+    cols = [pm / targets.phase_margin_deg, gm / targets.gain_margin_db,
             m.modulus_margin / targets.modulus_margin, np.broadcast_to(rob, pm.shape),
-            (m.stable & m.in_band).astype(float)]
+            (m.stable & m.in_band & (lowest[:, None] >= FILTER_CLEARANCE
+                                     * np.nan_to_num(m.bandwidth_hz, nan=np.inf))
+             ).astype(float)]
     return np.stack(cols, axis=-1)
 
 
@@ -278,10 +297,12 @@ def _limit(m: FrdMargins, slack: np.ndarray, robust: float, targets: TuneTargets
     if name == 'stability':
         return Limit(name, int(pose), float(m.encirclements[pose]), 0.0,
                      float(m.peak_frequency_hz[pose]))
-    value = {'phase_margin_deg': m.phase_margin_deg, 'gain_margin_db': m.gain_margin_db,
-             'modulus_margin': m.modulus_margin}[name][pose]
-    where = {'phase_margin_deg': m.crossover_hz, 'gain_margin_db': m.phase_crossover_hz,
-             'modulus_margin': m.peak_frequency_hz}[name][pose]
+    top = bool(m.top_db[pose] < m.gain_margin_db[pose])
+    value = {'phase_margin_deg': m.phase_margin_deg, 'modulus_margin': m.modulus_margin,
+             'gain_margin_db': m.top_db if top else m.gain_margin_db}[name][pose]
+    where = {'phase_margin_deg': m.crossover_hz, 'modulus_margin': m.peak_frequency_hz,
+             'gain_margin_db': np.full(m.top_db.shape, np.inf) if top
+             else m.phase_crossover_hz}[name][pose]
     return Limit(name, int(pose), float(value), float(getattr(targets, name)), float(where))
 
 
@@ -299,6 +320,16 @@ class _Candidates:
     def at(self, q: int) -> FrdMargins:
         """Return candidate q's margins per pose."""
         return FrdMargins(*(getattr(self.margins, a)[q] for a in _FIELDS))
+
+    def join(self, other: '_Candidates') -> '_Candidates':
+        """Return both sets of candidates in one."""
+        return _Candidates(self.sets + other.sets, np.r_[self.kp, other.kp],
+                           np.r_[self.ki, other.ki],
+                           FrdMargins(*(np.concatenate([getattr(self.margins, a),
+                                                        getattr(other.margins, a)])
+                                        for a in _FIELDS)),
+                           np.r_[self.robust, other.robust],
+                           np.concatenate([self.slack, other.slack]))
 
 
 def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: int,
@@ -346,32 +377,23 @@ def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: i
     w = np.zeros(f.size) if weight is None else np.asarray(weight, dtype=float)
     z = np.exp(2j * np.pi * f * dt)
     integ = dt * z / (z - 1)
-    js, kps, kis, cs = [], [], [], []
-    for j, fs in enumerate(sets):
-        filt = AxisSetting(axis, 0.0, 0.0, fs).filter_response(f)
-        kp, ki = _gain_grid(f, p[nominal], filt, targets.crossover_hz)
-        cs.append(((kp[..., None] + ki[..., None] * integ) * filt).reshape(-1, f.size))
+    filts = [AxisSetting(axis, 0.0, 0.0, fs).filter_response(f) for fs in sets]
+    lows = [min([b.frequency_hz for b in fs], default=np.inf) for fs in sets]
+    js, kps, kis = [], [], []
+    for j in range(len(sets)):
+        kp, ki = _gain_grid(f, p[nominal], targets.crossover_hz)
         js.append(np.full(kp.size, j))
         kps.append(kp.ravel())
         kis.append(ki.ravel())
-    c = np.concatenate(cs)                                           # (N, F)
-    # stage 1, the nominal pose: its margins and the robust test for every candidate
-    l0 = c * p[nominal]
-    m0 = frd_margins(l0, f)
-    robust = np.max(np.abs(w * l0 / (1 + l0)), axis=-1)
-    slack0 = _slack(FrdMargins(*(getattr(m0, a)[:, None] for a in _FIELDS)),
-                    robust if weight is not None else np.zeros_like(robust), targets)
-    keep = _screen(slack0, m0.bandwidth_hz, targets.crossover_hz)
-    # stage 2, every pose, for the candidates the nominal pose leaves
-    if p.shape[0] == 1:
-        m = FrdMargins(*(getattr(m0, a)[keep, None] for a in _FIELDS))
-    else:
-        m = frd_margins(c[keep][:, None, :] * p[None], f)
-    cand = _Candidates(np.concatenate(js)[keep].tolist(), np.concatenate(kps)[keep],
-                       np.concatenate(kis)[keep], m,
-                       robust[keep] if weight is not None else np.full(keep.size, np.nan),
-                       _slack(m, robust[keep] if weight is not None else np.zeros(keep.size),
-                              targets))
+    js, kps, kis = np.concatenate(js), np.concatenate(kps), np.concatenate(kis)
+    ev = _Evaluation(f, p, nominal, integ, filts, np.array(lows), weight, targets)
+    cand = ev.candidates(js, kps, kis, screen=True)
+    searched = kps.size
+    q, feasible, _ = _choose(cand, targets, nominal, np.zeros(cand.kp.size, dtype=bool))
+    # refine around the choice: its filters, a finer grid of gains
+    rj, rkp, rki = _refinement(cand.sets[q], cand.kp[q], cand.ki[q])
+    cand = cand.join(ev.candidates(rj, rkp, rki, screen=False))
+    searched += rkp.size
     rejected = np.zeros(cand.kp.size, dtype=bool)
     for _ in range(MAX_ACCEPT_TRIES):
         q, feasible, limit = _choose(cand, targets, nominal, rejected)
@@ -381,7 +403,52 @@ def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: i
             break
         rejected[q] = True
     return ShapingResult(setting, feasible, cand.at(q), float(cand.robust[q]), limit,
-                         int(c.shape[0]))
+                         int(searched))
+
+
+def _refinement(j: int, kp: float, ki: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the finer grid of gains around one candidate: REFINE_KP x REFINE_KI."""
+    g = kp * np.asarray(REFINE_KP)[:, None] * np.ones(len(REFINE_KI))
+    r = ki / kp * np.asarray(REFINE_KI)[None, :] * np.ones((len(REFINE_KP), 1))
+    return np.full(g.size, j), g.ravel(), (g * r).ravel()
+
+
+@dataclass
+class _Evaluation:
+    """What every candidate's loops need: the lines, plants, filters and targets."""
+
+    f: np.ndarray
+    p: np.ndarray
+    nominal: int
+    integ: np.ndarray
+    filts: list[np.ndarray]
+    lows: np.ndarray
+    weight: np.ndarray | None
+    targets: TuneTargets
+
+    def candidates(self, js: np.ndarray, kps: np.ndarray, kis: np.ndarray, screen: bool
+                   ) -> '_Candidates':
+        """Return the candidates' margins at every pose (screened at the nominal first)."""
+        c = (kps[:, None] + kis[:, None] * self.integ) * np.stack([self.filts[j] for j in js])
+        lowest = self.lows[js]
+        w = np.zeros(self.f.size) if self.weight is None else self.weight
+        l0 = c * self.p[self.nominal]
+        m0 = frd_margins(l0, self.f)
+        robust = np.max(np.abs(w * l0 / (1 + l0)), axis=-1)
+        rob = robust if self.weight is not None else np.zeros_like(robust)
+        keep = np.arange(kps.size)
+        if screen:
+            slack0 = _slack(FrdMargins(*(getattr(m0, a)[:, None] for a in _FIELDS)), rob,
+                            self.targets, lowest)
+            keep = _screen(slack0, m0.bandwidth_hz, self.targets.crossover_hz)
+        if self.p.shape[0] == 1:
+            m = FrdMargins(*(getattr(m0, a)[keep, None] for a in _FIELDS))
+        else:
+            m = frd_margins(c[keep][:, None, :] * self.p[None], self.f)
+        return _Candidates(js[keep].tolist(), kps[keep], kis[keep], m,
+                           robust[keep] if self.weight is not None else
+                           np.full(keep.size, np.nan),
+                           _slack(m, rob[keep], self.targets, lowest[keep]))
 
 
 def _screen(slack0: np.ndarray, bandwidth0: np.ndarray, crossover: float | None
