@@ -214,7 +214,7 @@ def tune_campaign(camp: Campaign, targets: TuneTargets, sample_rate: float, *,
         for b in own[j]:
             say(f'  {axis}: {b.summary()}')
         if len(bands) > len(own[j]):
-            say(f'  {axis}: also tried at the other axes\' resonances '
+            say(f"  {axis}: also tried at the other axes' resonances "
                 + ', '.join(f'{b.centre_hz:.4g} Hz' for b in bands[len(own[j]):]))
         if not own[j]:
             say(f'  {axis}: no lightly damped resonance (damping < 0.2) in the band')

@@ -90,8 +90,8 @@ def _check(out, f, h, rate, name):
                       for z in NOTCH_WIDTHS if z > 1.5 * max(b['damping'], 1e-9)]
         sos = [np.array(x['discrete']['sos']) for x in chosen] + candidates
         grid = np.linspace(fm - 10 * se, fm + 10 * se, 20001)
-        minima = [grid[np.argmin(np.abs(signal.sosfreqz(s.reshape(1, 6), worN=grid,
-                                                          fs=rate)[1]))] for s in sos]
+        resp = [np.abs(signal.sosfreqz(s.reshape(1, 6), worN=grid, fs=rate)[1]) for s in sos]
+        minima = [grid[np.argmin(r)] for r in resp]
         print(f'{name}: mode {fm:.5g} +- {se:.2g} (damping {mode["damping"]:.4f}); notch '
               f'minima {", ".join(f"{x:.5g}" for x in minima[:len(chosen) or 1])}'
               f'{" (chosen by tune)" if chosen else " (candidate; tune chose other filters)"}; '

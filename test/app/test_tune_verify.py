@@ -52,10 +52,9 @@ def test_tuned_notches_and_the_loop_measured_again(tmp_path, capsys):
     for a in doc['axes']:
         notches = [f['frequency_hz'] for f in a['setting']['filters'] if f['kind'] == 'notch']
         err = [np.min(np.abs(n / true - 1)) for n in notches]
-        print(f"{a['axis']}: notches {np.round(notches, 2)} Hz, nearest true resonance off by "
-              f"{np.round(100 * np.array(err), 2)} %; filters cost "
-              f"{[round(f['phase_at_crossover_deg'], 1) for f in a['setting']['filters']]} deg "
-              f'at the crossover')
+        cost = [round(f['phase_at_crossover_deg'], 1) for f in a['setting']['filters']]
+        print(f'{a["axis"]}: notches {np.round(notches, 2)} Hz, nearest true resonance off by '
+              f'{np.round(100 * np.array(err), 2)} %; filters cost {cost} deg at the crossover')
         assert notches and min(err) < 0.05
     z = [v for d in ver['agreement'].values() for v in d.values() if v is not None]
     before = 20 * np.log10(doc['peak_sensitivity']['before'][0])
@@ -64,10 +63,10 @@ def test_tuned_notches_and_the_loop_measured_again(tmp_path, capsys):
     print(f'MIMO sensitivity peak: model file PI {before:.2f} dB, tuned predicted '
           f'{predicted:.2f} dB, tuned measured {measured:.2f} dB; largest |z| {max(z):.2f}')
     for p, m in zip(ver['predicted']['axes'], ver['measured']['axes']):
-        print(f"  {p['axis']}: " + ', '.join(
-            f"{k} {p[k]['value']:.3g} +- {p[k]['std']:.2g} -> {m[k]['value']:.3g} +- "
-            f"{m[k]['std']:.2g}" for k in ('phase_margin_deg', 'gain_margin_db',
-                                          'modulus_margin')))
+        keys = ('phase_margin_deg', 'gain_margin_db', 'modulus_margin')
+        print(f'  {p["axis"]}: ' + ', '.join(
+            f'{k} {p[k]["value"]:.3g} +- {p[k]["std"]:.2g} -> {m[k]["value"]:.3g} +- '
+            f'{m[k]["std"]:.2g}' for k in keys))
     assert 'verify: agrees' in said and ver['agrees']
     assert 'the new FRF has' not in said                   # the same lines as the tuned FRF
     assert max(z) <= 3.0

@@ -193,5 +193,6 @@ def mimo_encirclements(loop: np.ndarray) -> np.ndarray:
     n = lm.shape[-1]
     d = np.linalg.det(np.eye(n) + lm)
     wind = np.unwrap(np.angle(d), axis=-1)
-    laps = (wind[..., -1] - wind[..., 0] - np.angle(d[..., -1]) + np.angle(d[..., 0])) / (2 * np.pi)
+    laps = (wind[..., -1] - wind[..., 0] - np.angle(d[..., -1])
+            + np.angle(d[..., 0])) / (2 * np.pi)
     return np.rint(laps).astype(int)

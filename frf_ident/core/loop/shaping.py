@@ -374,7 +374,7 @@ def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: i
     f = np.asarray(freq_hz, dtype=float)
     p = np.asarray(responses, dtype=complex)
     sets = filter_sets(bands, 1.0 / dt) if sets is None else sets
-    w = np.zeros(f.size) if weight is None else np.asarray(weight, dtype=float)
+    weight = None if weight is None else np.asarray(weight, dtype=float)
     z = np.exp(2j * np.pi * f * dt)
     integ = dt * z / (z - 1)
     filts = [AxisSetting(axis, 0.0, 0.0, fs).filter_response(f) for fs in sets]
