@@ -36,12 +36,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
-from frf_ident.app.loop import margins
 from frf_ident.app.tune_check import check_controller, ControllerCheck, target_verdicts
 from frf_ident.app.tune_inputs import axis_modes, AxisModes, Campaign, read_campaign
 from frf_ident.core.loop.check import DRAWS, loop_response, sensitivity_peak
 from frf_ident.core.loop.explain import explain_limit
-from frf_ident.core.loop.frd_margins import mimo_encirclements
+from frf_ident.core.loop.frd_margins import frd_margins, mimo_encirclements
 from frf_ident.core.loop.modes import resonance_bands, ResonanceBand
 from frf_ident.core.loop.notch import sections_response
 from frf_ident.core.loop.shaping import shape_axis, ShapingResult
@@ -50,9 +49,14 @@ from frf_ident.core.loop.uncertainty import fit_weight, relative_bound, Uncertai
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
+from scipy import interpolate
 
-__all__ = ['AxisTuning', 'TuneOutcome', 'run_tune', 'shared_bands', 'summary_lines',
-           'tune_campaign']
+__all__ = ['AxisTuning', 'TuneOutcome', 'UPSAMPLE', 'run_tune', 'shared_bands',
+           'summary_lines', 'tune_campaign']
+
+#: the search's judge reads the margins off the spline between the lines at this many times
+#: their number (python-control's FRD interpolation, what the report reads)
+UPSAMPLE = 4
 
 
 @dataclass
@@ -245,32 +249,37 @@ def shared_bands(own: list[list[ResonanceBand]], j: int) -> list[ResonanceBand]:
 def _reported(camp: Campaign, j: int, fixed: list[np.ndarray], dt: float,
               targets: TuneTargets):
     """
-    Return the search's judge for axis j: what ``loop`` reports meets the targets everywhere.
+    Return the search's judge for axis j: the margins as reported meet the targets everywhere.
 
-    The axis's margins (python-control, every pose), and, for a square FRF, the MIMO
-    sensitivity peak with the axes tuned before it closed too (the later ones open): at most
-    1 / modulus margin target at every pose, and no encirclement of det(I + L), so the
+    The search reads the margins off the lines; ``loop`` and tune's report interpolate
+    between them (python-control's spline through real and imaginary part): the judge reads
+    them off that spline, UPSAMPLE times denser, at every pose. For a square FRF also the
+    MIMO sensitivity peak with the axes tuned before it closed too (the later ones open): at
+    most 1 / modulus margin target at every pose, and no encirclement of det(I + L), so the
     coupling cannot undo what each axis meets.
     """
     f = camp.freq_hz
     p, _ = camp.axis_responses(j)
     square = all(fr.noutputs == fr.ninputs for fr in camp.frfs) and len(camp.channels) > 1
     inputs = [i for _, _, i in camp.channels]
+    dense = np.geomspace(f[0], f[-1], UPSAMPLE * f.size)
 
     def accept(setting) -> bool:
         c = setting.response(f, dt)
-        m = margins(p * c[None], 2 * np.pi * f)                          # (K, 4)
-        gm, pm, _, mm = m.T
-        ok = bool(np.all(pm >= targets.phase_margin_deg) and np.all(mm >= targets.modulus_margin)
-                  and np.all(gm >= targets.gain_margin_db))
-        if not ok or not square:
-            return ok
-        cs = np.zeros((len(inputs), f.size), dtype=complex)
-        for k, ck in enumerate(fixed + [c]):
-            cs[inputs[k]] = ck
-        loops = [loop_response(fr.response, cs) for fr in camp.frfs]
-        return bool(max(sensitivity_peak(lo) for lo in loops) <= 1.0 / targets.modulus_margin
-                    and all(mimo_encirclements(lo) == 0 for lo in loops))
+        if square:
+            cs = np.zeros((len(inputs), f.size), dtype=complex)
+            for k, ck in enumerate(fixed + [c]):
+                cs[inputs[k]] = ck
+            loops = [loop_response(fr.response, cs) for fr in camp.frfs]
+            if not (max(sensitivity_peak(lo) for lo in loops) <= 1.0 / targets.modulus_margin
+                    and all(mimo_encirclements(lo) == 0 for lo in loops)):
+                return False
+        lo = interpolate.CubicSpline(2 * np.pi * f, p * c[None], axis=-1)(2 * np.pi * dense)
+        m = frd_margins(lo, dense)
+        return bool(np.all(m.phase_margin_deg >= targets.phase_margin_deg)
+                    and np.all(m.modulus_margin >= targets.modulus_margin)
+                    and np.all(np.minimum(m.gain_margin_db, m.top_db)
+                               >= targets.gain_margin_db))
     return accept
 
 

@@ -98,6 +98,17 @@ class FrdMargins:
     top_db: np.ndarray
 
 
+def _unwrap(phase: np.ndarray) -> np.ndarray:
+    """Unwrap along the last axis (numpy's unwrap, without its generality)."""
+    d = np.diff(phase, axis=-1)
+    d -= 2 * np.pi * np.round(d / (2 * np.pi))
+    out = np.empty_like(phase)
+    out[..., 0] = phase[..., 0]
+    np.cumsum(d, axis=-1, out=out[..., 1:])
+    out[..., 1:] += phase[..., :1]
+    return out
+
+
 def frd_margins(loop: np.ndarray, freq_hz: np.ndarray) -> FrdMargins:
     """
     Return the margins of SISO loops L given on the lines ``freq_hz``.
@@ -130,7 +141,7 @@ def frd_margins(loop: np.ndarray, freq_hz: np.ndarray) -> FrdMargins:
     lo = np.asarray(loop, dtype=complex)
     lf = np.log(f)
     mag = np.log(np.maximum(np.abs(lo), 1e-300))
-    ph = np.unwrap(np.angle(lo), axis=-1)
+    ph = _unwrap(np.angle(lo))
     dist = np.abs(1.0 + lo)
     k = np.argmin(dist, axis=-1)
     # gain crossings between line j and j + 1
@@ -156,7 +167,7 @@ def frd_margins(loop: np.ndarray, freq_hz: np.ndarray) -> FrdMargins:
     gm = np.take_along_axis(gm_all, pick, axis=-1)[..., 0]
     at_pf = np.where(pc, np.exp(lf[:-1] + s * (lf[1:] - lf[:-1])), np.nan)
     w180 = np.take_along_axis(at_pf, pick, axis=-1)[..., 0]
-    wind = np.unwrap(np.angle(1.0 + lo), axis=-1)
+    wind = _unwrap(np.angle(1.0 + lo))
     laps = (wind[..., -1] - wind[..., 0] - np.angle(1.0 + lo[..., -1])
             + np.angle(1.0 + lo[..., 0])) / (2 * np.pi)
     enc = np.rint(laps).astype(int)

@@ -31,8 +31,10 @@ Candidates (:func:`filter_sets` x a gain grid):
 Every candidate's loop L_0 = C P_0 is checked on the measured lines of the nominal pose
 (:func:`frf_ident.core.loop.frd_margins.frd_margins`) and, with a weight, for robust
 stability max |W T_0| < 1; those that meet every target there (no other can meet them at
-every pose), or the SCREEN_KEEP best when none does, are checked at every pose k,
-L_k = C P_k. A target's slack is margin / target (gain margin in dB, 1 / max |W T_0| for the
+every pose), or the SCREEN_KEEP best when none does, go on to the other poses, L_k = C P_k,
+the farthest from the nominal first, dropping at each the candidates that miss a target as
+long as others meet them all (:meth:`_Evaluation._eliminate`). A target's slack is
+margin / target (gain margin in dB, 1 / max |W T_0| for the
 robust test, 1 or 0 for Nyquist's stability on a band that holds the crossover); a candidate
 is feasible when its smallest slack over targets and poses is >= 1. Chosen: with a crossover
 target the feasible candidate whose worst-pose bandwidth (its lowest gain crossing) is
@@ -62,7 +64,7 @@ __all__ = ['AxisSetting', 'KI_RATIOS', 'KP_POINTS', 'LOWPASS_RATIOS', 'Limit',
            'TARGET_NAMES', 'filter_sets', 'shape_axis']
 
 #: crossovers the proportional gain grid places over the measured band
-KP_POINTS = 32
+KP_POINTS = 24
 #: integral corners w_i / w_c of the PI candidates (0.5 costs 27 deg at w_c; no P-only
 #: controller: the integral holds gravity and friction)
 KI_RATIOS = (0.05, 0.1, 0.2, 0.35, 0.5)
@@ -441,6 +443,7 @@ class _Evaluation:
             slack0 = _slack(FrdMargins(*(getattr(m0, a)[:, None] for a in _FIELDS)), rob,
                             self.targets, lowest)
             keep = _screen(slack0, m0.bandwidth_hz, self.targets.crossover_hz)
+            keep = self._eliminate(c, keep, rob, lowest, slack0)
         if self.p.shape[0] == 1:
             m = FrdMargins(*(getattr(m0, a)[keep, None] for a in _FIELDS))
         else:
@@ -449,6 +452,44 @@ class _Evaluation:
                            robust[keep] if self.weight is not None else
                            np.full(keep.size, np.nan),
                            _slack(m, rob[keep], self.targets, lowest[keep]))
+
+    def _eliminate(self, c: np.ndarray, keep: np.ndarray, rob: np.ndarray, lowest: np.ndarray,
+                   slack0: np.ndarray) -> np.ndarray:
+        """
+        Return the candidates left after checking the other poses one by one.
+
+        Farthest poses from the nominal first; after each, the candidates that missed a target
+        there are dropped while some meet every target so far (only those can be chosen).
+        When none does, the SCREEN_KEEP best so far stay (the best achievable is among them)
+        and are checked at the rest. Those reaching an asked crossover stay throughout (what
+        binds there is reported).
+        """
+        k0 = self.nominal
+        others = [k for k in np.argsort(-np.median(np.abs(self.p - self.p[k0])
+                                                   / np.abs(self.p[k0]), axis=-1))
+                  if k != k0]
+        least = slack0.min(axis=(1, 2))
+        protect = np.zeros(c.shape[0], dtype=bool)
+        if self.targets.crossover_hz is not None:
+            reach = np.flatnonzero(
+                np.nan_to_num(frd_margins(c[keep] * self.p[k0], self.f).bandwidth_hz)
+                >= (1 - CROSSOVER_TOLERANCE) * self.targets.crossover_hz)
+            protect[keep[reach[:SCREEN_KEEP]]] = True
+        alive, pruning = keep, True
+        for k in others:
+            m = frd_margins(c[alive] * self.p[k], self.f)
+            s = _slack(FrdMargins(*(getattr(m, a)[:, None] for a in _FIELDS)), rob[alive],
+                       self.targets, lowest[alive]).min(axis=(1, 2))
+            least[alive] = np.minimum(least[alive], s)
+            if not pruning:
+                continue
+            ok = (s >= 1.0) & (least[alive] >= 1.0)
+            if ok.any():
+                alive = alive[ok | protect[alive]]
+            else:
+                alive = alive[np.argsort(-least[alive])[:SCREEN_KEEP]]
+                pruning = False
+        return np.unique(np.r_[alive, keep[protect[keep]]])
 
 
 def _screen(slack0: np.ndarray, bandwidth0: np.ndarray, crossover: float | None

@@ -55,7 +55,7 @@ EXCESS_DB = 3.0
 MAX_SECTIONS = 3
 #: residual evaluations per fit (the final gain makes any fit cover the bound; more only
 #: tightens it)
-MAX_EVALUATIONS = 200
+MAX_EVALUATIONS = 60
 #: cost of a line where the fit lies below the bound, relative to one above it: the final
 #: gain lifts W over every line anyway, so a fit that dips is paid for everywhere
 UNDER_COST = 10.0
