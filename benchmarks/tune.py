@@ -20,9 +20,9 @@ resonances move by 30-46 %), 237 lines 2-120 Hz, 1 % noise, written as 9 estimat
 Timed: ``run_tune`` as the command runs it (reading, mode fits, weights, search, checks with
 50 draws of the nominal FRF, every file), and its fits, weights and search alone; wall and
 CPU time of this process (on a shared machine the wall time also counts the others' load).
-Beside it the simplest honest baseline: the PI ``loop --propose`` reads off the nominal FRF for the bandwidth tune reached
-(frf_ident/core/loop/design.py, no filters, one pose): its time, and both settings' worst
-margins over the 9 poses on the noise-free FRFs (python-control).
+Beside it the simplest honest baseline: the PI ``loop --propose`` reads off the nominal FRF
+for the bandwidth tune reached (frf_ident/core/loop/design.py, no filters, one pose): its
+time, and both settings' worst margins over the 9 poses on the noise-free FRFs (python-control).
 """
 from __future__ import annotations
 

@@ -12,8 +12,10 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-The controller node's velocity loop (and the plant node's, which hosts the same) runs a model
-file's filters: its torques equal the simulation kernel's on the same measurements.
+The nodes' velocity loop runs a model file's filters as the simulation kernel does.
+
+The controller node's VelocityLoop (and the plant node's, which hosts the same) commands the
+torques of the kernel on the same measurements.
 
 A model file with controller.filters (notch and low-pass sections) is simulated in closed
 loop; nodes/controller_node.py's VelocityLoop, loaded from the same file, is fed the recorded
