@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
+from frf_ident.app.loop import margins
 from frf_ident.app.tune_check import check_controller, ControllerCheck, target_verdicts
 from frf_ident.app.tune_inputs import axis_modes, AxisModes, Campaign, read_campaign
 from frf_ident.core.loop.check import DRAWS, loop_response, sensitivity_peak
@@ -56,7 +57,7 @@ __all__ = ['AxisTuning', 'TuneOutcome', 'UPSAMPLE', 'run_tune', 'shared_bands',
 
 #: the search's judge reads the margins off the spline between the lines at this many times
 #: their number (python-control's FRD interpolation, what the report reads)
-UPSAMPLE = 4
+UPSAMPLE = 8
 
 
 @dataclass
@@ -253,7 +254,8 @@ def _reported(camp: Campaign, j: int, fixed: list[np.ndarray], dt: float,
 
     The search reads the margins off the lines; ``loop`` and tune's report interpolate
     between them (python-control's spline through real and imaginary part): the judge reads
-    them off that spline, UPSAMPLE times denser, at every pose. For a square FRF also the
+    them off such a spline, UPSAMPLE times denser, at every pose, and a candidate that passes
+    there once more as reported (python-control, ~50 ms a pose: only for those). For a square FRF also the
     MIMO sensitivity peak with the axes tuned before it closed too (the later ones open): at
     most 1 / modulus margin target at every pose, and no encirclement of det(I + L), so the
     coupling cannot undo what each axis meets.
@@ -276,10 +278,14 @@ def _reported(camp: Campaign, j: int, fixed: list[np.ndarray], dt: float,
                 return False
         lo = interpolate.CubicSpline(2 * np.pi * f, p * c[None], axis=-1)(2 * np.pi * dense)
         m = frd_margins(lo, dense)
-        return bool(np.all(m.phase_margin_deg >= targets.phase_margin_deg)
-                    and np.all(m.modulus_margin >= targets.modulus_margin)
-                    and np.all(np.minimum(m.gain_margin_db, m.top_db)
-                               >= targets.gain_margin_db))
+        if not (np.all(m.phase_margin_deg >= targets.phase_margin_deg)
+                and np.all(m.modulus_margin >= targets.modulus_margin)
+                and np.all(np.minimum(m.gain_margin_db, m.top_db) >= targets.gain_margin_db)):
+            return False
+        gm, pm, _, mm = margins(p * c[None], 2 * np.pi * f).T          # what is reported
+        return bool(np.all(pm >= targets.phase_margin_deg)
+                    and np.all(mm >= targets.modulus_margin)
+                    and np.all(gm >= targets.gain_margin_db))
     return accept
 
 
