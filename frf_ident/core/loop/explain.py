@@ -108,6 +108,10 @@ def explain_limit(limit: Limit, freq_hz: np.ndarray, response: np.ndarray,
 
     """
     at = f' at pose {pose}' if pose else ''
+    if limit.target == 'judge':
+        return (f'the {int(limit.value)} best settings on the measured lines all miss a target '
+                f'as reported (python-control between the lines, or the MIMO loop with the axes '
+                f'tuned before closed); the last is kept: see its margins')
     if limit.target == 'stability':
         return (f'no setting keeps the loop stable with its crossover inside the measured band'
                 f'{at} (best: {int(limit.value)} encirclements of -1; sensitivity peak at '

@@ -175,13 +175,23 @@ def frd_margins(loop: np.ndarray, freq_hz: np.ndarray) -> FrdMargins:
                       (mag[..., 0] > 0) & (mag[..., -1] < 0), -20.0 / np.log(10.0) * mag[..., -1])
 
 
+def _laps(x: np.ndarray) -> np.ndarray:
+    """Net turns of x about the origin over the last axis, its ends by their principal value."""
+    wind = _unwrap(np.angle(x))
+    return np.rint((wind[..., -1] - wind[..., 0] - np.angle(x[..., -1])
+                    + np.angle(x[..., 0])) / (2 * np.pi)).astype(int)
+
+
 def mimo_encirclements(loop: np.ndarray) -> np.ndarray:
     """
     Return the net encirclements of the origin by det(I + L) over the band (MIMO Nyquist).
 
-    With a stable plant and PIs the closed loop is stable when it is 0 (and every SISO loop's
-    band holds its crossover); the coupling can make a loop unstable that every axis alone
-    finds stable.
+    Counted as those of every axis's 1 + L_ii (as :func:`frd_margins` counts them) plus those
+    of the interaction det(I + L) / prod_i (1 + L_ii): that ratio tends to the positive real
+    det(P) / prod P_ii (the rigid body's inertia) below the band and to 1 above it, so its
+    principal values at the band's ends are where its unmeasured parts start and end, which
+    det(I + L) itself, turning with every integrator, is not. With a stable plant and PIs
+    the closed loop is stable when it is 0 (and every loop's band holds its crossover).
 
     Parameters
     ----------
@@ -191,7 +201,7 @@ def mimo_encirclements(loop: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray of int, shape (...)
-        The count as :func:`frd_margins` counts it for 1 + L.
+        The count.
 
     Examples
     --------
@@ -200,10 +210,8 @@ def mimo_encirclements(loop: np.ndarray) -> np.ndarray:
     0
 
     """
-    lm = np.moveaxis(np.asarray(loop, dtype=complex), -1, -3)
+    lm = np.moveaxis(np.asarray(loop, dtype=complex), -1, -3)           # (..., F, n, n)
     n = lm.shape[-1]
-    d = np.linalg.det(np.eye(n) + lm)
-    wind = np.unwrap(np.angle(d), axis=-1)
-    laps = (wind[..., -1] - wind[..., 0] - np.angle(d[..., -1])
-            + np.angle(d[..., 0])) / (2 * np.pi)
-    return np.rint(laps).astype(int)
+    diag = 1.0 + np.diagonal(lm, axis1=-2, axis2=-1)                      # (..., F, n)
+    ratio = np.linalg.det(np.eye(n) + lm) / np.prod(diag, axis=-1)
+    return _laps(ratio) + _laps(np.moveaxis(diag, -1, -2)).sum(axis=-1)

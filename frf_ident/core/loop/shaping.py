@@ -146,7 +146,8 @@ class Limit:
     Attributes
     ----------
     target : str
-        One of TARGET_NAMES, or ``'crossover_hz'``.
+        One of TARGET_NAMES, ``'crossover_hz'``, or ``'judge'``: the ``accept`` callback
+        rejected the MAX_ACCEPT_TRIES best choices (``value`` their number).
     pose : int
         Index of the pose where it binds.
     value, wanted : float
@@ -397,13 +398,16 @@ def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: i
     cand = cand.join(ev.candidates(rj, rkp, rki, screen=False))
     searched += rkp.size
     rejected = np.zeros(cand.kp.size, dtype=bool)
-    for _ in range(MAX_ACCEPT_TRIES):
+    for tries in range(MAX_ACCEPT_TRIES):
         q, feasible, limit = _choose(cand, targets, nominal, rejected)
         setting = AxisSetting(axis, float(cand.kp[q]), float(cand.ki[q]),
                               tuple(sets[cand.sets[q]]))
         if not feasible or accept is None or accept(setting):
             break
         rejected[q] = True
+    else:       # every feasible choice tried was rejected: keep the last, say so
+        feasible = False
+        limit = Limit('judge', nominal, float(MAX_ACCEPT_TRIES), 0.0, float('nan'))
     return ShapingResult(setting, feasible, cand.at(q), float(cand.robust[q]), limit,
                          int(searched))
 

@@ -22,7 +22,7 @@ import warnings
 
 import control
 from frf_ident.core.loop.check import pi_response
-from frf_ident.core.loop.frd_margins import frd_margins
+from frf_ident.core.loop.frd_margins import frd_margins, mimo_encirclements
 from frf_ident.core.loop.notch import design_notch
 import numpy as np
 from scipy import signal
@@ -99,3 +99,27 @@ def test_a_crossover_outside_the_band_is_not_judged():
     lo = 0.1 * pi_response(F, 1.0, 1.0, 1 / FS) / (2j * np.pi * F)   # |L| < 1 at the first line
     m = frd_margins(lo, F)
     assert not m.in_band and np.isnan(m.phase_margin_deg)
+
+
+def test_mimo_count_matches_the_closed_loop_poles_of_a_coupled_pair():
+    """Two axes P = p [[1, k], [k, 1]] with the same PI: det(I + P C)'s roots against the count."""
+    b, a = _plant()
+    w = 2 * np.pi * WIDE / FS
+    p = signal.freqz(b, a, worN=w)[1]
+    verdicts = []
+    for k in (0.0, 0.5, 0.9):
+        for kp in (1500, 5000, 12000, 20000):
+            pb, pa = [kp + 4 * kp / FS, -kp], [1.0, -1.0]
+            cn, cd = np.convolve(b, pb), np.convolve(a, pa)          # p C = cn / cd
+            # det(I + P C) cd^2 = (cd + cn)^2 - k^2 cn^2
+            n = max(len(cn), len(cd))
+            cn_, cd_ = np.pad(cn, (0, n - len(cn))), np.pad(cd, (0, n - len(cd)))
+            char = np.convolve(cd_ + cn_, cd_ + cn_) - k ** 2 * np.convolve(cn_, cn_)
+            truth = bool(np.all(np.abs(np.roots(char)) < 1.0))
+            c = signal.freqz(pb, pa, worN=w)[1]
+            loop = np.array([[p * c, k * p * c], [k * p * c, p * c]])
+            count = int(mimo_encirclements(loop))
+            verdicts.append((k, kp, truth, count))
+    print('coupling, kp, stable (roots), encirclements (count):', verdicts)
+    assert all(t == (c == 0) for _, _, t, c in verdicts)
+    assert {t for _, _, t, _ in verdicts} == {True, False}
