@@ -255,9 +255,10 @@ def _reported(camp: Campaign, j: int, fixed: list[np.ndarray], dt: float,
     The search reads the margins off the lines; ``loop`` and tune's report interpolate
     between them (python-control's spline through real and imaginary part): the judge reads
     them off such a spline, UPSAMPLE times denser, at every pose, and a candidate that passes
-    there once more as reported (python-control, ~50 ms a pose: only for those). For a square FRF also the
-    MIMO sensitivity peak with the axes tuned before it closed too (the later ones open): at
-    most 1 / modulus margin target at every pose, and no encirclement of det(I + L), so the
+    there once more as reported (python-control, ~50 ms a pose: only for those). For a square
+    FRF also the MIMO sensitivity peak with the axes tuned before it closed too (the later
+    ones open): at most 1 / modulus margin target at every pose, and no encirclement of
+    det(I + L) (:func:`~frf_ident.core.loop.frd_margins.mimo_encirclements`), so the
     coupling cannot undo what each axis meets.
     """
     f = camp.freq_hz
