@@ -112,6 +112,11 @@ def explain_limit(limit: Limit, freq_hz: np.ndarray, response: np.ndarray,
         return (f'the {int(limit.value)} best settings on the measured lines all miss a target '
                 f'as reported (python-control between the lines, or the MIMO loop with the axes '
                 f'tuned before closed); the last is kept: see its margins')
+    if limit.target == 'band':
+        return ("no setting keeps the loop's crossover inside the measured band "
+                f'{freq_hz[0]:.4g}-{freq_hz[-1]:.4g} Hz{at} (|L| must exceed 1 at its lowest line '
+                f'and fall below 1 at its highest; best: {limit.value:.3g} dB below 1 at the '
+                f'highest): measure a wider band, or ask for a crossover inside it')
     if limit.target == 'stability':
         return (f'no setting keeps the loop stable with its crossover inside the measured band'
                 f'{at} (best: {int(limit.value)} encirclements of -1; sensitivity peak at '

@@ -146,8 +146,10 @@ class Limit:
     Attributes
     ----------
     target : str
-        One of TARGET_NAMES, ``'crossover_hz'``, or ``'judge'``: the ``accept`` callback
-        rejected the MAX_ACCEPT_TRIES best choices (``value`` their number).
+        One of TARGET_NAMES, ``'crossover_hz'``, ``'band'``: the crossover lies outside the
+        measured band (``value`` -20 log10 |L| at the highest line [dB]), or ``'judge'``: the
+        ``accept`` callback rejected the MAX_ACCEPT_TRIES best choices (``value`` their
+        number).
     pose : int
         Index of the pose where it binds.
     value, wanted : float
@@ -277,7 +279,7 @@ def _slack(m: FrdMargins, robust: np.ndarray, targets: TuneTargets, lowest: np.n
     filter (``lowest`` [Hz], per candidate) FILTER_CLEARANCE times above its bandwidth, else 0
     (a margin of an unstable loop, or of one that crosses outside the band, means nothing).
     """
-    pm = np.where(np.isfinite(m.phase_margin_deg), m.phase_margin_deg, -np.inf)
+    pm = np.where(np.isfinite(m.phase_margin_deg), m.phase_margin_deg, 0.0)   # no crossing
     with np.errstate(divide='ignore'):
         rob = (1.0 / robust)[..., None] if targets.robust else \
             np.full(robust.shape + (1,), np.inf)
@@ -294,7 +296,12 @@ def _limit(m: FrdMargins, slack: np.ndarray, robust: float, targets: TuneTargets
            nominal: int) -> Limit:
     """Return the binding target of one candidate (m per pose, slack (n_poses, 5))."""
     pose, col = np.unravel_index(int(np.argmin(slack)), slack.shape)
+    stab = TARGET_NAMES.index('stability')
+    if slack[:, stab].min() <= slack[pose, col]:       # an unjudged loop's margins mean nothing
+        pose, col = int(np.argmin(slack[:, stab])), stab
     name = TARGET_NAMES[col]
+    if name == 'stability' and not m.in_band[pose]:
+        return Limit('band', int(pose), float(m.top_db[pose]), 0.0, float('nan'))
     if name == 'robust':
         return Limit(name, nominal, float(robust), 1.0, float(m.peak_frequency_hz[nominal]))
     if name == 'stability':
