@@ -36,12 +36,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
-from frf_ident.app.loop import margins
 from frf_ident.app.tune_check import check_controller, ControllerCheck, target_verdicts
 from frf_ident.app.tune_inputs import axis_modes, AxisModes, Campaign, read_campaign
-from frf_ident.core.loop.check import DRAWS, loop_response, sensitivity_peak
+from frf_ident.app.tune_judge import reported_judge, shared_bands
+from frf_ident.core.loop.check import DRAWS
 from frf_ident.core.loop.explain import explain_limit
-from frf_ident.core.loop.frd_margins import frd_margins, mimo_encirclements
 from frf_ident.core.loop.modes import resonance_bands, ResonanceBand
 from frf_ident.core.loop.notch import sections_response
 from frf_ident.core.loop.shaping import shape_axis, ShapingResult
@@ -50,14 +49,8 @@ from frf_ident.core.loop.uncertainty import fit_weight, relative_bound, Uncertai
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
-from scipy import interpolate
 
-__all__ = ['AxisTuning', 'TuneOutcome', 'UPSAMPLE', 'run_tune', 'shared_bands',
-           'summary_lines', 'tune_campaign']
-
-#: the search's judge reads the margins off the spline between the lines at this many times
-#: their number (python-control's FRD interpolation, what the report reads)
-UPSAMPLE = 8
+__all__ = ['AxisTuning', 'TuneOutcome', 'run_tune', 'summary_lines', 'tune_campaign']
 
 
 @dataclass
@@ -208,7 +201,7 @@ def tune_campaign(camp: Campaign, targets: TuneTargets, sample_rate: float, *,
         weight = fit_weight(f, relative_bound(p, var, camp.nominal))
         res = shape_axis(axis, f, p, camp.nominal, bands, dt, targets,
                          np.abs(weight.response(f)),
-                         accept=_reported(camp, j, fixed, dt, targets))
+                         accept=reported_judge(camp, j, fixed, dt, targets))
         fixed.append(res.setting.response(f, dt))
         reason = ''
         if res.limit is not None:
@@ -229,65 +222,6 @@ def tune_campaign(camp: Campaign, targets: TuneTargets, sample_rate: float, *,
             say(f'  {axis}: {"best achievable; " if not res.feasible else ""}{reason}')
         out.append(AxisTuning(am, bands, weight, res, reason))
     return out
-
-
-def shared_bands(own: list[list[ResonanceBand]], j: int) -> list[ResonanceBand]:
-    """
-    Return the bands axis j may filter: its own, then the other axes' it does not overlap.
-
-    The poles of a coupled robot are shared: a mode another axis's fit found can lift this
-    axis's loop, or the MIMO loop through the coupling; the search decides whether a filter
-    there pays.
-    """
-    out = list(own[j])
-    for k, bands in enumerate(own):
-        for b in bands if k != j else []:
-            if all(b.high_hz < o.low_hz or b.low_hz > o.high_hz for o in out):
-                out.append(b)
-    return out
-
-
-def _reported(camp: Campaign, j: int, fixed: list[np.ndarray], dt: float,
-              targets: TuneTargets):
-    """
-    Return the search's judge for axis j: the margins as reported meet the targets everywhere.
-
-    The search reads the margins off the lines; ``loop`` and tune's report interpolate
-    between them (python-control's spline through real and imaginary part): the judge reads
-    them off such a spline, UPSAMPLE times denser, at every pose, and a candidate that passes
-    there once more as reported (python-control, ~50 ms a pose: only for those). For a square
-    FRF also the MIMO sensitivity peak with the axes tuned before it closed too (the later
-    ones open): at most 1 / modulus margin target at every pose, and no encirclement of
-    det(I + L) (:func:`~frf_ident.core.loop.frd_margins.mimo_encirclements`), so the
-    coupling cannot undo what each axis meets.
-    """
-    f = camp.freq_hz
-    p, _ = camp.axis_responses(j)
-    square = all(fr.noutputs == fr.ninputs for fr in camp.frfs) and len(camp.channels) > 1
-    inputs = [i for _, _, i in camp.channels]
-    dense = np.geomspace(f[0], f[-1], UPSAMPLE * f.size)
-
-    def accept(setting) -> bool:
-        c = setting.response(f, dt)
-        if square:
-            cs = np.zeros((len(inputs), f.size), dtype=complex)
-            for k, ck in enumerate(fixed + [c]):
-                cs[inputs[k]] = ck
-            loops = [loop_response(fr.response, cs) for fr in camp.frfs]
-            if not (max(sensitivity_peak(lo) for lo in loops) <= 1.0 / targets.modulus_margin
-                    and all(mimo_encirclements(lo) == 0 for lo in loops)):
-                return False
-        lo = interpolate.CubicSpline(2 * np.pi * f, p * c[None], axis=-1)(2 * np.pi * dense)
-        m = frd_margins(lo, dense)
-        if not (np.all(m.phase_margin_deg >= targets.phase_margin_deg)
-                and np.all(m.modulus_margin >= targets.modulus_margin)
-                and np.all(np.minimum(m.gain_margin_db, m.top_db) >= targets.gain_margin_db)):
-            return False
-        gm, pm, _, mm = margins(p * c[None], 2 * np.pi * f).T          # what is reported
-        return bool(np.all(pm >= targets.phase_margin_deg)
-                    and np.all(mm >= targets.modulus_margin)
-                    and np.all(gm >= targets.gain_margin_db))
-    return accept
 
 
 def _check(camp: Campaign, axes: list[AxisTuning], sample_rate: float, draws: int

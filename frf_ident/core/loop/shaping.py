@@ -31,11 +31,11 @@ Candidates (:func:`filter_sets` x a gain grid):
 Every candidate's loop L_0 = C P_0 is checked on the measured lines of the nominal pose
 (:func:`frf_ident.core.loop.frd_margins.frd_margins`) and, with a weight, for robust
 stability max |W T_0| < 1; those that meet every target there (no other can meet them at
-every pose), or the SCREEN_KEEP best when none does, go on to the other poses, L_k = C P_k,
-the farthest from the nominal first, dropping at each the candidates that miss a target as
-long as others meet them all (:meth:`_Evaluation._eliminate`). A target's slack is
-margin / target (gain margin in dB, 1 / max |W T_0| for the
-robust test, 1 or 0 for Nyquist's stability on a band that holds the crossover); a candidate
+every pose), or the best ones when none does, go on to the other poses, L_k = C P_k, the
+farthest from the nominal first, dropping at each the candidates that miss a target as long
+as others meet them all (:mod:`frf_ident.core.loop.candidates`). A target's slack is
+margin / target (gain margin in dB, 1 / max |W T_0| for the robust test, 1 or 0 for
+Nyquist's stability on a band that holds the crossover); a candidate
 is feasible when its smallest slack over targets and poses is >= 1. Chosen: with a crossover
 target the feasible candidate whose worst-pose bandwidth (its lowest gain crossing) is
 nearest to it (in log), else the feasible one with the highest worst-pose bandwidth; among
@@ -51,8 +51,10 @@ from dataclasses import dataclass
 import itertools
 from typing import Callable
 
+from frf_ident.core.loop.candidates import (Candidates, CROSSOVER_TOLERANCE, Evaluation,
+                                            ROBUST, TARGET_NAMES)
 from frf_ident.core.loop.check import pi_response
-from frf_ident.core.loop.frd_margins import frd_margins, FrdMargins
+from frf_ident.core.loop.frd_margins import FrdMargins
 from frf_ident.core.loop.modes import ResonanceBand
 from frf_ident.core.loop.notch import (Biquad, design_lowpass, design_notch, MAX_CENTRE_SHARE,
                                        NOTCH_WIDTHS)
@@ -60,8 +62,8 @@ from frf_ident.core.loop.targets import TuneTargets
 import numpy as np
 
 __all__ = ['AxisSetting', 'KI_RATIOS', 'KP_POINTS', 'LOWPASS_RATIOS', 'Limit',
-           'MAX_ACCEPT_TRIES', 'MAX_COMBINATIONS', 'SCREEN_KEEP', 'ShapingResult',
-           'TARGET_NAMES', 'filter_sets', 'shape_axis']
+           'MAX_ACCEPT_TRIES', 'MAX_COMBINATIONS', 'REFINE_KI', 'REFINE_KP', 'ShapingResult',
+           'filter_sets', 'shape_axis']
 
 #: crossovers the proportional gain grid places over the measured band
 KP_POINTS = 24
@@ -72,28 +74,11 @@ KI_RATIOS = (0.05, 0.1, 0.2, 0.35, 0.5)
 LOWPASS_RATIOS = (1.5, 3.0)
 #: most notch combinations over the bands before one common depth is used for all
 MAX_COMBINATIONS = 64
-#: the targets in the order of the slack columns
-TARGET_NAMES = ('phase_margin_deg', 'gain_margin_db', 'modulus_margin', 'robust', 'stability')
-#: column of the robust test in the slack
-ROBUST = TARGET_NAMES.index('robust')
-#: the fields of FrdMargins, in order
-_FIELDS = ('gain_margin_db', 'phase_margin_deg', 'crossover_hz', 'modulus_margin',
-           'peak_frequency_hz', 'bandwidth_hz', 'phase_crossover_hz', 'encirclements', 'stable',
-           'in_band', 'top_db')
 #: the finer grid around the first choice: kp factors and factors of its ki / kp
 REFINE_KP = tuple(np.geomspace(0.8, 1.25, 11))
 REFINE_KI = (0.5, 0.7, 1.0, 1.4, 2.0)
-#: a filter sits at least this factor above the loop's bandwidth: below it a notch or a
-#: low-pass turns the loop conditionally stable (stable only while its gain stays high: it
-#: loses stability when the torque saturates), the pathology of a search for the highest
-#: crossover that puts a low-pass under it
-FILTER_CLEARANCE = 2.0
-#: candidates checked at every pose when none meets the targets at the nominal pose
-SCREEN_KEEP = 256
 #: feasible choices an ``accept`` callback may reject before the last one is kept
 MAX_ACCEPT_TRIES = 25
-#: a crossover within this share of the target counts as reaching it
-CROSSOVER_TOLERANCE = 0.05
 
 
 @dataclass(frozen=True)
@@ -267,31 +252,6 @@ def _gain_grid(freq_hz: np.ndarray, nominal: np.ndarray, target: float | None
     return np.broadcast_to(kp, ki.shape), ki
 
 
-def _slack(m: FrdMargins, robust: np.ndarray, targets: TuneTargets, lowest: np.ndarray
-           ) -> np.ndarray:
-    """
-    Slack of every target, shape (..., n_poses, 5): margin / target, >= 1 when met.
-
-    The gain margin counts no more than the loop's attenuation at the highest line (beyond
-    the band its phase is unknown). The robust column (1 / max |W T_0|) repeats per pose; the
-    stability column is 1 for a
-    loop Nyquist's criterion finds stable on a band that holds its crossover, with its lowest
-    filter (``lowest`` [Hz], per candidate) FILTER_CLEARANCE times above its bandwidth, else 0
-    (a margin of an unstable loop, or of one that crosses outside the band, means nothing).
-    """
-    pm = np.where(np.isfinite(m.phase_margin_deg), m.phase_margin_deg, 0.0)   # no crossing
-    with np.errstate(divide='ignore'):
-        rob = (1.0 / robust)[..., None] if targets.robust else \
-            np.full(robust.shape + (1,), np.inf)
-    gm = np.minimum(m.gain_margin_db, m.top_db)       # the phase beyond the band is unknown
-    cols = [pm / targets.phase_margin_deg, gm / targets.gain_margin_db,
-            m.modulus_margin / targets.modulus_margin, np.broadcast_to(rob, pm.shape),
-            (m.stable & m.in_band & (lowest[:, None] >= FILTER_CLEARANCE
-                                     * np.nan_to_num(m.bandwidth_hz, nan=np.inf))
-             ).astype(float)]
-    return np.stack(cols, axis=-1)
-
-
 def _limit(m: FrdMargins, slack: np.ndarray, robust: float, targets: TuneTargets,
            nominal: int) -> Limit:
     """Return the binding target of one candidate (m per pose, slack (n_poses, 5))."""
@@ -314,32 +274,6 @@ def _limit(m: FrdMargins, slack: np.ndarray, robust: float, targets: TuneTargets
              'gain_margin_db': np.full(m.top_db.shape, np.inf) if top
              else m.phase_crossover_hz}[name][pose]
     return Limit(name, int(pose), float(value), float(getattr(targets, name)), float(where))
-
-
-@dataclass
-class _Candidates:
-    """Every evaluated candidate, flattened: filter set, gains, margins per pose, slack."""
-
-    sets: list[int]
-    kp: np.ndarray
-    ki: np.ndarray
-    margins: FrdMargins          # fields shaped (n, n_poses)
-    robust: np.ndarray           # (n,)
-    slack: np.ndarray            # (n, n_poses, 5)
-
-    def at(self, q: int) -> FrdMargins:
-        """Return candidate q's margins per pose."""
-        return FrdMargins(*(getattr(self.margins, a)[q] for a in _FIELDS))
-
-    def join(self, other: '_Candidates') -> '_Candidates':
-        """Return both sets of candidates in one."""
-        return _Candidates(self.sets + other.sets, np.r_[self.kp, other.kp],
-                           np.r_[self.ki, other.ki],
-                           FrdMargins(*(np.concatenate([getattr(self.margins, a),
-                                                        getattr(other.margins, a)])
-                                        for a in _FIELDS)),
-                           np.r_[self.robust, other.robust],
-                           np.concatenate([self.slack, other.slack]))
 
 
 def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: int,
@@ -396,13 +330,13 @@ def shape_axis(axis: str, freq_hz: np.ndarray, responses: np.ndarray, nominal: i
         kps.append(kp.ravel())
         kis.append(ki.ravel())
     js, kps, kis = np.concatenate(js), np.concatenate(kps), np.concatenate(kis)
-    ev = _Evaluation(f, p, nominal, integ, filts, np.array(lows), weight, targets)
-    cand = ev.candidates(js, kps, kis, screen=True)
+    ev = Evaluation(f, p, nominal, integ, filts, np.array(lows), weight, targets)
+    cand = ev.candidates(js, kps, kis, screened=True)
     searched = kps.size
     q, feasible, _ = _choose(cand, targets, nominal, np.zeros(cand.kp.size, dtype=bool))
     # refine around the choice: its filters, a finer grid of gains
     rj, rkp, rki = _refinement(cand.sets[q], cand.kp[q], cand.ki[q])
-    cand = cand.join(ev.candidates(rj, rkp, rki, screen=False))
+    cand = cand.join(ev.candidates(rj, rkp, rki, screened=False))
     searched += rkp.size
     rejected = np.zeros(cand.kp.size, dtype=bool)
     for tries in range(MAX_ACCEPT_TRIES):
@@ -426,105 +360,7 @@ def _refinement(j: int, kp: float, ki: float) -> tuple[np.ndarray, np.ndarray, n
     return np.full(g.size, j), g.ravel(), (g * r).ravel()
 
 
-@dataclass
-class _Evaluation:
-    """What every candidate's loops need: the lines, plants, filters and targets."""
-
-    f: np.ndarray
-    p: np.ndarray
-    nominal: int
-    integ: np.ndarray
-    filts: list[np.ndarray]
-    lows: np.ndarray
-    weight: np.ndarray | None
-    targets: TuneTargets
-
-    def candidates(self, js: np.ndarray, kps: np.ndarray, kis: np.ndarray, screen: bool
-                   ) -> '_Candidates':
-        """Return the candidates' margins at every pose (screened at the nominal first)."""
-        c = (kps[:, None] + kis[:, None] * self.integ) * np.stack([self.filts[j] for j in js])
-        lowest = self.lows[js]
-        w = np.zeros(self.f.size) if self.weight is None else self.weight
-        l0 = c * self.p[self.nominal]
-        m0 = frd_margins(l0, self.f)
-        robust = np.max(np.abs(w * l0 / (1 + l0)), axis=-1)
-        rob = robust if self.weight is not None else np.zeros_like(robust)
-        keep = np.arange(kps.size)
-        if screen:
-            slack0 = _slack(FrdMargins(*(getattr(m0, a)[:, None] for a in _FIELDS)), rob,
-                            self.targets, lowest)
-            keep = _screen(slack0, m0.bandwidth_hz, self.targets.crossover_hz)
-            keep = self._eliminate(c, keep, rob, lowest, slack0)
-        if self.p.shape[0] == 1:
-            m = FrdMargins(*(getattr(m0, a)[keep, None] for a in _FIELDS))
-        else:
-            m = frd_margins(c[keep][:, None, :] * self.p[None], self.f)
-        return _Candidates(js[keep].tolist(), kps[keep], kis[keep], m,
-                           robust[keep] if self.weight is not None else
-                           np.full(keep.size, np.nan),
-                           _slack(m, rob[keep], self.targets, lowest[keep]))
-
-    def _eliminate(self, c: np.ndarray, keep: np.ndarray, rob: np.ndarray, lowest: np.ndarray,
-                   slack0: np.ndarray) -> np.ndarray:
-        """
-        Return the candidates left after checking the other poses one by one.
-
-        Farthest poses from the nominal first; after each, the candidates that missed a target
-        there are dropped while some meet every target so far (only those can be chosen).
-        When none does, the SCREEN_KEEP best so far stay (the best achievable is among them)
-        and are checked at the rest. Those reaching an asked crossover stay throughout (what
-        binds there is reported).
-        """
-        k0 = self.nominal
-        others = [k for k in np.argsort(-np.median(np.abs(self.p - self.p[k0])
-                                                   / np.abs(self.p[k0]), axis=-1))
-                  if k != k0]
-        least = slack0.min(axis=(1, 2))
-        protect = np.zeros(c.shape[0], dtype=bool)
-        if self.targets.crossover_hz is not None:
-            reach = np.flatnonzero(
-                np.nan_to_num(frd_margins(c[keep] * self.p[k0], self.f).bandwidth_hz)
-                >= (1 - CROSSOVER_TOLERANCE) * self.targets.crossover_hz)
-            protect[keep[reach[:SCREEN_KEEP]]] = True
-        alive, pruning = keep, True
-        for k in others:
-            m = frd_margins(c[alive] * self.p[k], self.f)
-            s = _slack(FrdMargins(*(getattr(m, a)[:, None] for a in _FIELDS)), rob[alive],
-                       self.targets, lowest[alive]).min(axis=(1, 2))
-            least[alive] = np.minimum(least[alive], s)
-            if not pruning:
-                continue
-            ok = (s >= 1.0) & (least[alive] >= 1.0)
-            if ok.any():
-                alive = alive[ok | protect[alive]]
-            else:
-                alive = alive[np.argsort(-least[alive])[:SCREEN_KEEP]]
-                pruning = False
-        return np.unique(np.r_[alive, keep[protect[keep]]])
-
-
-def _screen(slack0: np.ndarray, bandwidth0: np.ndarray, crossover: float | None
-            ) -> np.ndarray:
-    """
-    Return the indices of the candidates worth checking at every pose.
-
-    Those that meet every target at the nominal pose (no other can be feasible); the
-    SCREEN_KEEP best there in the order of the best achievable (margins and stability first,
-    then the robust test) when none does; and with a crossover asked, the SCREEN_KEEP best of
-    those that reach it (what binds there is reported).
-    """
-    least = slack0.min(axis=(1, 2))
-    margin = np.minimum(np.delete(slack0, ROBUST, axis=2).min(axis=(1, 2)), 1.0)
-    order = np.lexsort((least, margin))[::-1]
-    ok = np.flatnonzero(least >= 1.0)
-    keep = [ok if ok.size else order[:SCREEN_KEEP]]
-    if crossover is not None:
-        reach = (1 - CROSSOVER_TOLERANCE) * crossover <= np.nan_to_num(bandwidth0)
-        keep.append(order[reach[order]][:SCREEN_KEEP])
-    return np.unique(np.concatenate(keep))
-
-
-def _choose(cand: _Candidates, targets: TuneTargets, nominal: int, rejected: np.ndarray
+def _choose(cand: Candidates, targets: TuneTargets, nominal: int, rejected: np.ndarray
             ) -> tuple[int, bool, Limit | None]:
     """Return the candidate of the module doc, its feasibility and what binds."""
     least = np.where(rejected, -np.inf, cand.slack.min(axis=(1, 2)))
