@@ -29,6 +29,8 @@ setup(
          glob(os.path.join('launch', '*launch.[pxy][yma]*'))),
         (os.path.join('share', package_name, 'config'),
          glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))),
+        (os.path.join('share', package_name, 'config', 'sros2'),
+         glob(os.path.join('config', 'sros2', '*.xml'))),
         (os.path.join('share', package_name, 'urdf'), glob(os.path.join('urdf', '*.urdf'))),
     ],
     python_requires='>=3.10',
@@ -56,12 +58,18 @@ setup(
                  'flake8-quotes==3.3.2', 'pydocstyle==6.3.0',
                  'wheel',    # test/ros installs the package into a prefix as colcon would
                  # the campaign (Dask LocalCluster) and pose (pinocchio) tests run in CI too
-                 'dask>=2023.1', 'distributed>=2023.1', 'pin>=2.7'],
+                 'dask>=2023.1', 'distributed>=2023.1', 'pin>=2.7',
+                 # MuJoCo as the plant and the nominal model (test/io/test_mjcf_*.py)
+                 'mujoco>=4.0'],
         'control': ['control>=0.10'],
         # campaigns on a Dask distributed cluster (`--scheduler`); the default needs neither
         'cluster': ['dask>=2023.1', 'distributed>=2023.1'],
         # pose-dependent link side of the simulated robot from its URDF (frf_ident.io.kinematics)
         'kinematics': ['pin>=2.7'],
+        # an MJCF robot as the plant (--plant mujoco), as the nominal model (mjcf:) and the
+        # fit's model.xml (frf_ident.io.mjcf; 4.0: mj_fullM(m, d, M), joint stiffness and damping
+        # polynomials, actuator delay)
+        'mujoco': ['mujoco>=4.0'],
     },
     zip_safe=True,
     maintainer='frf_ident developers',
@@ -76,6 +84,7 @@ setup(
             'controller_node = frf_ident.nodes.controller_node:main',
             'excitation_node = frf_ident.nodes.excitation_node:main',
             'estimator_node = frf_ident.nodes.estimator_node:main',
+            'operator = frf_ident.nodes.operator_node:main',
         ],
     },
 )

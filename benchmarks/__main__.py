@@ -64,7 +64,8 @@ def bench_robot():
 @section('simulation')
 def bench_simulation() -> list[tuple[str, str, str, str]]:
     """Simulate the 3-axis closed loop at 1 kHz (PI, friction, ripple) against real time."""
-    from frf_ident.core.model.schema import controller_from_dict, default_model_dict
+    from frf_ident.core.model.schema import default_model_dict
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     rows = []
     for substeps in (1, 2):
@@ -81,6 +82,13 @@ def bench_simulation() -> list[tuple[str, str, str, str]]:
                      f'{n * rob.dt / wall:,.0f}x real time', '1x (real time)',
                      f'{n * rob.dt / wall:,.0f}'))
     return rows
+
+
+@section('layout')
+def bench_layout() -> list[tuple[str, str, str, str]]:
+    """Count cycles, upward arrows, long modules and functions, dicts and meta keys; before."""
+    from benchmarks.layout import rows
+    return rows()
 
 
 @section('discretisation')
@@ -192,9 +200,9 @@ def bench_experiment_time() -> list[tuple[str, str, str, str]]:
     """
     from frf_ident.core.estimation.described import chirp_frf, multisine_frf
     from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
-    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
-                                             robot_from_dict)
+    from frf_ident.core.model.schema import default_model_dict, robot_from_dict
     from frf_ident.core.simulation.analytic import robot_frf_sampled
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
     d = default_model_dict()
@@ -250,8 +258,8 @@ def bench_chirp_iteration() -> list[tuple[str, str, str, str]]:
     robot's), 20 s chirps; the error is the worst channel's RMS dB error to U_des.
     """
     from frf_ident.core.excitation.procedures import ChirpConfig
-    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
-                                             robot_from_dict)
+    from frf_ident.core.model.schema import default_model_dict, robot_from_dict
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
     rows = []
@@ -307,9 +315,9 @@ def periodic_multisine_run(duration_s: float, seed: int = 0, fs: float = 1000.0)
     (2-60 Hz, 0.5 Hz resolution), 1e-3 rad/s noise on the measured velocity.
     """
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
-    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
-                                             robot_from_dict)
+    from frf_ident.core.model.schema import default_model_dict, robot_from_dict
     from frf_ident.core.recording import Recording
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     d = default_model_dict()
     rob = robot_from_dict(d)
@@ -363,6 +371,13 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
 def bench_lpm() -> list[tuple[str, str, str, str]]:
     """Time the LPM on a 3x3 record of 10^6 samples beside per-line np.linalg.lstsq."""
     from benchmarks.lpm import rows
+    return rows()
+
+
+@section('missing')
+def bench_missing() -> list[tuple[str, str, str, str]]:
+    """Time the LPM and the multisine with missing samples beside the records without gaps."""
+    from benchmarks.missing import rows
     return rows()
 
 
@@ -431,6 +446,13 @@ def bench_fit() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('fit_trust')
+def bench_fit_trust() -> list[tuple[str, str, str, str]]:
+    """Errors under a missing mode and the stable order choice, beside the old fits."""
+    from benchmarks.fit_trust import rows
+    return rows()
+
+
 @section('real_data')
 def bench_real_data() -> list[tuple[str, str, str, str]]:
     """Estimate the real data sets of ../shared/data through their maps, with figures."""
@@ -442,6 +464,13 @@ def bench_real_data() -> list[tuple[str, str, str, str]]:
 def bench_poses() -> list[tuple[str, str, str, str]]:
     """Run the 9-pose simulated campaign: one bag, estimate, fit, held-out pose model."""
     from benchmarks.poses import rows
+    return rows()
+
+
+@section('mujoco')
+def bench_mujoco() -> list[tuple[str, str, str, str]]:
+    """Run the iiwa 14 closed loop (3 axes, 1 kHz) in MuJoCo beside our own plant."""
+    from benchmarks.mujoco_plant import rows
     return rows()
 
 

@@ -36,12 +36,12 @@ RECORDS = [
      'map_kuka_kr300.yaml', 'model_kuka_kr300_axes123.yaml', None)]
 
 
-def _peaks(unexplained: list[dict]) -> str:
-    """Return the scan's entries as one short text."""
-    found = [f"{u['axis']}: {u['kind'].split()[0]} {u['signature']['peak_hz']:.0f} Hz "
-             f"({u['signature']['band_hz'][0]:.0f}-{u['signature']['band_hz'][1]:.0f} Hz, "
-             f"{u['signature']['peak_over_floor']:.0f}x floor)"
-             for u in unexplained if 'peak_hz' in u['signature']]
+def _peaks(unexplained: list) -> str:
+    """Return the scan's entries (:class:`Unexplained` records) as one short text."""
+    found = [f'{u.axis}: {u.kind.split()[0]} {u.signature.peak_hz:.0f} Hz '
+             f'({u.signature.band_hz[0]:.0f}-{u.signature.band_hz[1]:.0f} Hz, '
+             f'{u.signature.peak_over_floor:.0f}x floor)'
+             for u in unexplained if u.signature.peak_hz is not None]
     return '; '.join(found) or 'none'
 
 
@@ -49,7 +49,7 @@ def rows() -> list[tuple[str, str, str, str]]:
     """Diagnose each record present; return the band, the scan and the effects per record."""
     from frf_ident.app.diagnose import diagnose
     from frf_ident.core.diagnosis.regressors import model_residual
-    from frf_ident.core.diagnosis.resonance import resonances_above
+    from frf_ident.core.diagnosis.timeseries.resonance import resonances_above
     from frf_ident.report.residual_spectrum import residual_spectrum_figure
     out: list[tuple[str, str, str, str]] = []
     for name, data, mp, model, fig in RECORDS:
@@ -61,7 +61,7 @@ def rows() -> list[tuple[str, str, str, str]]:
             r = diagnose(data, ROOT / 'config' / model, Path(tmp), map_path=ROOT / 'config' / mp,
                          progress=lambda _line: None)
             wall = time.perf_counter() - t0
-        res, rec = r['result'], r['recording']
+        res, rec = r.result, r.recording
         t0 = time.perf_counter()
         resonances_above(model_residual(rec, res.extended)[0], rec.fs, res.band.fc_hz,
                          res.extended.joint_names)

@@ -207,7 +207,7 @@ def diagnose_scene(scene: dict[str, Any], bag: Path, out: Path, **kw: Any) -> di
     t0 = time.perf_counter()
     _diagnosis_log()
     res = diagnose(bag, MODEL, out, progress=lambda _m: None, **kw)
-    return score_scene(scene, res['report'], time.perf_counter() - t0, res['result'].n_sims)
+    return score_scene(scene, res.report(), time.perf_counter() - t0, res.result.n_sims)
 
 
 def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
@@ -387,8 +387,8 @@ def bench_rows() -> list[tuple[str, str, str, str]]:
             wall = time.perf_counter() - t0
         rows.append(('diagnose on the demo bag: wall time', f'{wall:.0f} s',
                      f'{res["result"].n_sims} simulations', 'goal < 120 s'))
-        ev = res['result'].detail.evaluator
-        robot = res['result'].extended
+        ev = res.result.detail.evaluator
+        robot = res.result.extended
         t_loss = min(_timed(lambda: ev.loss(robot, 0)) for _ in range(3))
         rows.append(('... one candidate evaluation (simulate + estimate)', f'{t_loss:.2f} s',
                      '', ''))
@@ -435,12 +435,12 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
             res = diagnose(bag, cfg / 'model_kuka_kr300_axes123.yaml', Path(tmp) / f'd{k}',
                            validate=[bags[1 - k]] if k < 2 else [], progress=lambda _m: None)
             if k < 2:
-                cross.append(res['report']['metrics']['validation_records'][0])
-            one_way = _one_way(res['report'])
-            est = _estimates(res['report'])
+                cross.append(res.report()['metrics']['validation_records'][0])
+            one_way = _one_way(res.report())
+            est = _estimates(res.report())
             fit = {key: v for key, (v, _) in est.items()}
             err = {key: se for key, (_, se) in est.items()}
-            for e in res['report']['effects']:
+            for e in res.report()['effects']:
                 if 'gravity_torque' in e['parameters'] and e['axis'] in one_way:
                     consts.setdefault(e['axis'], {})[one_way[e['axis']]] = float(
                         e['parameters']['gravity_torque'])
@@ -448,10 +448,10 @@ def kuka_halves_rows() -> list[tuple[str, str, str, str]]:
             errs.append(err)
             if k < 2:
                 names.append(sorted(f'{e["name"]}@{e["axis"]}'
-                                    for e in res['report']['effects']))
+                                    for e in res.report()['effects']))
                 unphysical.append(', '.join(
                     f'{r["name"]}@{r["axis"]} {r["fitted_value"]:.3g}'
-                    for r in res['report'].get('rejected', []) if 'fitted_value' in r)
+                    for r in res.report().get('rejected', []) if 'fitted_value' in r)
                     or 'none')
             robot = load_model(Path(tmp) / f'd{k}' / 'extended_model.yaml')[1]
             g3 = robot.gravity_load(rec.position[:, :3])[:, 2]
@@ -566,9 +566,9 @@ def kuka_trajectories_rows() -> list[tuple[str, str, str, str]]:
             res = diagnose(p, cfg / 'model_kuka_kr300_axes123.yaml', Path(tmp) / x,
                            map_path=cfg / 'map_kuka_kr300.yaml', validate=others,
                            progress=lambda _m: None)
-            rep = res['report']
+            rep = res.report()
             est[x] = _estimates(rep)
-            slopes[x] = _slopes_by_direction(res['recording'], res['result'].extended)
+            slopes[x] = _slopes_by_direction(res.recording, res.result.extended)
             m = rep['metrics']
             rows.append((f'KUKA trajectory {x} fitted: held-out NRMSE nominal -> extended',
                          f'{m["baseline"]["time_nrmse"]:.3f} -> {m["extended"]["time_nrmse"]:.3f}',
@@ -618,7 +618,7 @@ def kuka_baseline_rows() -> list[tuple[str, str, str, str]]:
             res = diagnose(KUKA, cfg / 'model_kuka_kr300_axes123.yaml', Path(tmp) / 'A',
                            map_path=cfg / 'map_kuka_kr300.yaml', validate=others, urdf=urdf,
                            progress=lambda _m: None)
-        rows += _baseline_rows(res['report']['metrics'], others, label)
+        rows += _baseline_rows(res.report()['metrics'], others, label)
     return rows
 
 
@@ -679,8 +679,10 @@ def _slopes_by_direction(rec: Recording, robot: RobotParams
     slope b + c_v + c_|v|, backward b + c_v - c_|v| (b the model's viscous friction), and the
     block-robust standard error of c_|v|, half their difference.
     """
-    from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
-    from frf_ident.core.diagnosis.timeseries import block_standard_errors, model_residual, moving
+    from frf_ident.core.diagnosis.regressors import model_residual, moving
+    from frf_ident.core.diagnosis.residual import lowpass
+    from frf_ident.core.diagnosis.selection import block_standard_errors
+    from frf_ident.core.diagnosis.thresholds import FC_HZ
     f, _, v, _ = model_residual(rec, robot)
     rows = moving(v, rec.velocity, rec.fs, FC_HZ)
     out = {}
@@ -737,7 +739,8 @@ def _estimates(report: dict[str, Any]) -> dict[tuple[str, str], tuple]:
 
 def _report(res: DiagnosisResult) -> dict[str, Any]:
     """Return the effects and rejected candidates of a core result as report.json has them."""
-    return {'effects': [e.to_dict() for e in res.effects], 'rejected': res.rejected}
+    return {'effects': [e.to_dict() for e in res.effects],
+            'rejected': [r.to_dict() for r in res.rejected]}
 
 
 def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
@@ -753,8 +756,9 @@ def kuka_synthetic_halves(runs: int = 20, seed: int = 0) -> dict[str, Any]:
     within 20 %}). Needs the KUKA data (:data:`KUKA`).
     """
     from frf_ident.app.diagnose import load_data
-    from frf_ident.core.diagnosis import diagnose_timeseries
-    from frf_ident.core.diagnosis.timeseries import model_residual, noise_level
+    from frf_ident.core.diagnosis.prediction import noise_level
+    from frf_ident.core.diagnosis.regressors import model_residual
+    from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
     from frf_ident.core.recording import Recording
     from frf_ident.io.model_file import load_model
     robot = load_model(ROOT / 'config' / 'model_kuka_kr300_axes123.yaml')[1]

@@ -91,8 +91,8 @@ def rows() -> list[tuple[str, str, str, str]]:
             t0, c0 = time.perf_counter(), _cpu_s()
             res = diagnose(bag, model, Path(tmp) / f'jobs{jobs}{fd}', jobs=jobs, fd_fit=fd)
             runs[jobs if fd else 'no_fd'] = (
-                time.perf_counter() - t0, res['result'].n_sims, _effects(res['report']),
-                res['report']['metrics'], _cpu_s() - c0)
+                time.perf_counter() - t0, res.result.n_sims, _effects(res.report()),
+                res.report()['metrics'], _cpu_s() - c0)
     speed.append(_simulation_ms(bag, model))
     (t1, n1, e1, m1, c1), (t2, n2, e2, m2, c2) = runs[1], runs[2]
     t0, n0, e0, m0, _ = runs['no_fd']

@@ -79,8 +79,8 @@ def discretisation_error(changes: dict, substeps: int, *, seconds: float = 20.0,
 
     """
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
-    from frf_ident.core.model.schema import (controller_from_dict, default_model_dict,
-                                             robot_from_dict)
+    from frf_ident.core.model.schema import default_model_dict, robot_from_dict
+    from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     d = default_model_dict()
     base = robot_from_dict(d).linear()

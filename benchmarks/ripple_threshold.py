@@ -35,7 +35,7 @@ SCANS = 1500
 
 def peaks(n: int, travel: float, scans: int = SCANS) -> tuple[np.ndarray, float]:
     """Return the peak ratios of ``scans`` white-noise scans and the scan's resolution cells."""
-    from frf_ident.core.diagnosis.residual import find_ripple, ripple_range
+    from frf_ident.core.diagnosis.regression import find_ripple, ripple_range
     q, mask = np.linspace(0.0, travel, n), np.ones(n, bool)
     s_min, s_max = ripple_range(q, mask)
     out = np.array([find_ripple(np.random.default_rng(s).standard_normal(n), q, mask)[1]
@@ -45,8 +45,8 @@ def peaks(n: int, travel: float, scans: int = SCANS) -> tuple[np.ndarray, float]
 
 def rows(scans: int = SCANS) -> list[tuple[str, str, str, str]]:
     """Return per size the realised false-alarm shares, calibrated and ln(M / alpha)."""
-    from frf_ident.core.diagnosis.residual import (RIPPLE_FALSE_ALARM, RIPPLE_LEVEL_WINDOW,
-                                                   ripple_threshold)
+    from frf_ident.core.diagnosis.regression import ripple_threshold
+    from frf_ident.core.diagnosis.thresholds import RIPPLE_FALSE_ALARM, RIPPLE_LEVEL_WINDOW
     out = []
     for n, travel in SIZES:
         pk, cells = peaks(n, travel, scans)

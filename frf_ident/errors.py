@@ -21,7 +21,7 @@ stale sensor), so it is an input error: one line, exit 2, never a traceback.
 """
 
 __all__ = ['BagError', 'DesignError', 'EstimationError', 'FrfIdentError', 'FrfIdentInputError',
-           'ModelFileError', 'SafetyError']
+           'MjcfError', 'ModelFileError', 'NotArmed', 'SafetyError']
 
 
 class FrfIdentError(Exception):
@@ -40,6 +40,10 @@ class ModelFileError(FrfIdentInputError):
     """A model file (docs/CONTRACT.md §5) is malformed."""
 
 
+class MjcfError(ModelFileError):
+    """An MJCF (MuJoCo model) cannot be used as the plant or model: file, element and value."""
+
+
 class BagError(FrfIdentInputError):
     """A bag cannot be read or lacks what the analysis needs."""
 
@@ -50,3 +54,7 @@ class EstimationError(FrfIdentInputError):
 
 class SafetyError(FrfIdentInputError):
     """A torque or position bound would be violated; the excitation was refused or stopped."""
+
+
+class NotArmed(SafetyError):
+    """A run was refused because no operator armed the excitation node (docs/ros2.md)."""

@@ -23,11 +23,14 @@ estimator creates; '' = ./frf_bag_<date>_<time>), ``sim`` (true: simulated plant
 its PI in lockstep on sim time; false: a real robot, the nodes run free on wall time and the
 robot's joint_state_broadcaster and velocity controller take the plant's place),
 ``use_sim_time`` (default: the value of ``sim``), ``params_file`` (default: the package's
-config/frf_ident.yaml; a copy of it with your settings). ``lockstep`` always equals ``sim``.
+config/frf_ident.yaml; a copy of it with your settings), ``arming`` ('' = by ``sim``: 'off' in
+simulation, 'token' on a robot, whose excitation node then refuses runs until the operator's
+console arms it, docs/ros2.md "Arming"). ``lockstep`` always equals ``sim``.
 Parameters are read at start-up and read-only afterwards. When a node exits (it refused its
 parameters, or crashed) the launch shuts down: no half graph accepts runs it cannot record;
 a node that exited non-zero makes ``ros2 launch`` exit 1 (scripts can tell). ``sim:=false``
-with ``use_sim_time:=true`` is refused (a real robot publishes no /clock).
+with ``use_sim_time:=true`` is refused (a real robot publishes no /clock), and so is
+``sim:=false`` with ``arming:=off`` (anyone on the domain could start the robot).
 
 Each node starts with SIGINT and SIGTERM blocked (``env --block-signal``, GNU coreutils >= 8.31)
 and unblocks them once its handlers are in place (frf_ident/nodes/__init__.py): a Ctrl-C during
@@ -78,6 +81,9 @@ def _check_time_source(context):
     if sim_time and not sim:
         raise NodeFailed('sim:=false with use_sim_time:=true: a real robot publishes no /clock;'
                          ' leave use_sim_time at its default (the value of sim)')
+    if not sim and LaunchConfiguration('arming').perform(context).lower() == 'off':
+        raise NodeFailed('sim:=false with arming:=off: any participant of the domain could '
+                         "start the robot; leave arming at its default ('token')")
     return []
 
 
@@ -89,6 +95,7 @@ def generate_launch_description():
         'use_sim_time': ParameterValue(LaunchConfiguration('use_sim_time'), value_type=bool),
         'lockstep': ParameterValue(sim, value_type=bool),
         'model': ParameterValue(LaunchConfiguration('model'), value_type=str)}]
+    arming = {'arming': ParameterValue(LaunchConfiguration('arming'), value_type=str)}
     bag = {'bag': ParameterValue(LaunchConfiguration('bag'), value_type=str)}
     prefix = [LaunchConfiguration('launch-prefix', default=''), _block_signals_prefix()]
 
@@ -107,11 +114,13 @@ def generate_launch_description():
         DeclareLaunchArgument('use_sim_time', default_value=sim,
                               description='default: the value of sim'),
         DeclareLaunchArgument('bag', default_value='', description='bag directory'),
+        DeclareLaunchArgument('arming', default_value='',
+                              description="'' (by sim), 'token' or 'off' (refused on a robot)"),
         DeclareLaunchArgument('params_file', default_value=params,
                               description="node parameters (default: the package's)"),
         OpaqueFunction(function=_check_time_source),
         # simulation: the plant hosts the velocity PI (as ros2_control hosts its controllers)
         node('plant_node', [{'velocity_control': True}], condition=IfCondition(sim)),
-        node('excitation_node'),
+        node('excitation_node', [arming]),
         node('estimator_node', [bag]),
     ])

@@ -123,3 +123,31 @@ def test_core_reexports_its_public_api():
         assert home is not None and getattr(home, name) is obj, name
     with pytest.raises(AttributeError):
         core.not_a_name  # noqa: B018
+
+
+def test_core_has_no_upward_arrows_and_diagnosis_stays_short():
+    """
+    Issue 53's floor plan, measured as ``python -m benchmarks layout`` measures it.
+
+    No import from a core subpackage to a higher floor (the order of .importlinter's
+    core-floors contract, checked there too); in core/diagnosis no module over 400 lines and
+    no function over 80.
+    """
+    from benchmarks.layout import diagnosis_sizes, imports, upward_arrows
+    assert upward_arrows(imports(ROOT)) == []
+    big, longest, n_big, n_long = diagnosis_sizes(ROOT)
+    assert (n_big, n_long) == (0, 0), (big, longest)
+
+
+def test_upward_arrow_detector_sees_one(tmp_path):
+    from benchmarks.layout import imports, upward_arrows
+    for sub in ('model', 'simulation'):
+        (tmp_path / PACKAGE / 'core' / sub).mkdir(parents=True)
+        (tmp_path / PACKAGE / 'core' / sub / '__init__.py').write_text('')
+    (tmp_path / PACKAGE / '__init__.py').write_text('')
+    (tmp_path / PACKAGE / 'core' / '__init__.py').write_text('')
+    (tmp_path / PACKAGE / 'core' / 'simulation' / 'plant.py').write_text('')
+    (tmp_path / PACKAGE / 'core' / 'model' / 'schema.py').write_text(
+        'from frf_ident.core.simulation.plant import x\n')
+    assert upward_arrows(imports(tmp_path)) == [
+        'frf_ident.core.model.schema -> frf_ident.core.simulation.plant']

@@ -14,35 +14,34 @@
 """
 The few lines a person reads after a diagnosis: effects found, what is unexplained, the gain.
 
-Used by ``frf-ident diagnose`` and ``frf-ident demo``. Numbers carry 3-4 significant digits
-(the report's JSON keeps 6); parameters are written ``name value`` instead of dict reprs
-(:func:`frf_ident.report.text.plain`, as in the HTML report).
+Used by ``frf-ident diagnose`` and ``frf-ident demo``, from the typed
+:class:`frf_ident.core.diagnosis.Diagnosis` (report.json is written from the same object).
+Numbers carry 3-4 significant digits (the report's JSON keeps 6) and their units; parameters
+are written ``name value unit`` (:func:`frf_ident.report.text.parameters_text`, as in the HTML
+report).
 """
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING
 
-from frf_ident.report.text import plain
+from frf_ident.report.text import parameters_text
+
+if TYPE_CHECKING:
+    from frf_ident.core.diagnosis import Diagnosis
+    from frf_ident.core.diagnosis.records import Scores, Unexplained
 
 __all__ = ['diagnosis_summary']
 
 
-def _band(signature: Mapping[str, Any]) -> str:
-    band = signature.get('band_hz')
-    if band:
-        return f', strongest misfit {band[0]:.3g}-{band[1]:.3g} Hz'
-    return ''
-
-
-def diagnosis_summary(report: Mapping[str, Any], out: Path) -> list[str]:
+def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
     """
-    Return the summary lines of a diagnosis report.
+    Return the summary lines of a diagnosis.
 
     Parameters
     ----------
-    report : mapping
-        The content of report.json.
+    diag : Diagnosis
+        The diagnosis.
     out : Path
         The output directory (named in the last line).
 
@@ -53,40 +52,39 @@ def diagnosis_summary(report: Mapping[str, Any], out: Path) -> list[str]:
         one per validation record, and where the report was written.
 
     """
-    lines = []
-    for k, e in enumerate(report['effects']):
-        se = e.get('standard_error')
-        se = f' (standard error {plain(se)})' if se else ''
-        lines.append(f"{k + 1}. {e['name']} on {e['axis']}: {plain(e['parameters'])}{se}; "
-                     f"score {e['score']:.2f}")
-    if not report['effects']:
+    res = diag.result
+    lines = [f'{k + 1}. {e.name} on {e.axis}: '
+             f'{parameters_text(e.parameters, e.standard_error)}; score {e.score:.2f}'
+             for k, e in enumerate(res.effects)]
+    if not res.effects:
         lines.append('no effects: none of the candidates improves the held-out data')
-    band = report.get('analysis_band')
-    if band:
-        lines.append(f"analysis band 0-{band['fc_hz']:.3g} Hz (set by the {band['set_by']}); "
+    if res.band is not None:
+        lines.append(f'analysis band 0-{res.band.fc_hz:.3g} Hz (set by the {res.band.reason}); '
                      'residual above it scanned for resonances')
-    for u in report['unexplained']:
-        if 'misfit_share' not in u:
-            s = u['signature']
-            lines.append(f"unexplained on {u['axis']}: {u['kind']}, {s['band_hz'][0]:.3g}-"
-                         f"{s['band_hz'][1]:.3g} Hz (peak {s['peak_hz']:.3g} Hz, "
-                         f"{s['peak_over_floor']:.3g}x the local noise floor)")
-            continue
-        lines.append(f"unexplained on {u['axis']}: {100 * u['misfit_share']:.0f} % of the "
-                     f"nominal misfit left{_band(u.get('signature', {}))}")
-    m = report['metrics']
-
-    def err(side: Mapping[str, Any]) -> str:
-        db = side.get('frf_error_db')
-        nrmse = side.get('time_nrmse')
-        parts = ([f'FRF {db:.3g} dB'] if isinstance(db, (int, float)) else []) + \
-            ([f'time NRMSE {nrmse:.3g}'] if isinstance(nrmse, (int, float)) else [])
-        return ', '.join(parts) or 'n/a'
-    lines.append(f"held-out error: nominal {err(m['baseline'])} -> extended "
-                 f"{err(m['extended'])} ({m.get('validation', 'held-out part')})")
-    for v in m.get('validation_records', []):
-        lines.append(f"on {v['record']}: nominal {err(v['baseline'])} -> extended "
-                     f"{err(v['extended'])}")
+    lines += [_unexplained(u) for u in res.unexplained]
+    m = res.metrics
+    lines.append(f'held-out error: nominal {_scores(m.baseline)} -> extended '
+                 f'{_scores(m.extended)} ({m.validation})')
+    lines += [f'on {v.record}: nominal {_scores(v.baseline)} -> extended {_scores(v.extended)}'
+              for v in diag.checks.validation_records]
     lines.append(f'wrote {out / "report.json"}, {out / "extended_model.yaml"}, '
                  f'{out / "report.html"}')
     return lines
+
+
+def _unexplained(u: Unexplained) -> str:
+    """Write an unexplained entry: an axis above its floor, or a peak above the band."""
+    s = u.signature
+    if u.misfit_share is None:
+        return (f'unexplained on {u.axis}: {u.kind}, {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz '
+                f'(peak {s.peak_hz:.3g} Hz, {s.peak_over_floor:.3g}x the local noise floor)')
+    band = f', strongest misfit {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz' if s.band_hz else ''
+    return (f'unexplained on {u.axis}: {100 * u.misfit_share:.0f} % of the nominal misfit '
+            f'left{band}')
+
+
+def _scores(s: Scores) -> str:
+    """Write a model's held-out numbers ('n/a' where neither is defined)."""
+    parts = ([f'FRF {s.frf_error_db:.3g} dB'] if s.frf_error_db == s.frf_error_db else []) + \
+        ([f'time NRMSE {s.time_nrmse:.3g}'] if s.time_nrmse == s.time_nrmse else [])
+    return ', '.join(parts) or 'n/a'

@@ -29,6 +29,7 @@ from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
 __all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'estimate_columns', 'frf_units',
+           'missing_lines',
            'read_estimates', 'report_distortion', 'report_robust_lpm']
 
 #: the files :func:`estimate_bag` writes into its output directory
@@ -195,9 +196,12 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         line = dropped_text(d)
         if line:
             progress(f'{k}: {line}')
+    missing = {k: v.meta['missing'] for k, v in estimates.items() if v.meta.get('missing')}
+    for line in missing_lines(estimates):
+        progress(line)
     summary = {'bag': str(bag), 'primary': key, 'estimates': sorted(estimates),
                'timing': timing.to_dict(), 'experiment': experiment, 'streaming': streamed,
-               'gaps': timing.missing, 'dropped': dropped}
+               'gaps': timing.missing, 'dropped': dropped, 'missing': missing}
     (out / 'summary.json').write_text(json.dumps(summary, indent=1, default=str))
     shown = ('multisine', 'chirp', 'lpm', 'lpm_h1')
     pairs = [(k, v) for k, v in estimates.items() if k in shown]
@@ -285,15 +289,43 @@ def report_distortion(estimates: dict, out: Path, *, title: str,
     progress = sink(progress)
     found = [(k, DistortionLines.from_dict(v.meta['distortion'])) for k, v in estimates.items()
              if isinstance(v.meta.get('distortion'), dict)]
-    for k, levels in found:
-        for line in levels.summary():
-            progress(f'{k} distortion: {line}')
+    for line in distortion_table(found):
+        progress(line)
     if not found:
         return None
     k, levels = found[0]
     path = distortion_figure(levels, out / 'distortion.png', title=f'{title}: {k}')
     progress(f'wrote {path} (output levels at excited, odd and even lines of {k})')
     return path
+
+
+def distortion_table(found: list) -> list[str]:
+    """
+    Return the distortion levels of several estimates as one small table for the console.
+
+    One row per estimate and output: the median level of the odd and even detection lines
+    and of the excited lines over the noise [dB]; estimates without a noise level (one
+    period) get their summary sentence instead.
+    """
+    rows, one_period = [], []
+    for k, levels in found:
+        if levels.noise is None:
+            one_period += [f'{k} distortion: {line}' for line in levels.summary()]
+            continue
+        lv = [levels.above_noise_db(x) for x in ('odd', 'even', 'excited')]
+        rows += [(k, name, *(f'{x[i]:+.1f}' for x in lv))
+                 for i, name in enumerate(levels.outputs)]
+    if not rows:
+        return one_period
+    levels = next(v for _, v in found if v.noise is not None)
+    n_odd, n_even = (int(np.sum(levels.kind == x)) for x in ('odd', 'even'))
+    head = ('estimate', 'output', 'odd', 'even', 'excited')
+    w = [max(len(r[c]) for r in rows + [head]) for c in range(len(head))]
+    table = ['  ' + '  '.join(v.ljust(w[c]) if c < 2 else v.rjust(w[c]) for c, v in enumerate(r))
+             for r in [head] + rows]
+    return [f'distortion above the noise [dB], median over {n_odd} odd and {n_even} even '
+            f'lines ({levels.freq_hz[0]:.3g}-{levels.freq_hz[-1]:.3g} Hz) and the excited lines:'
+            ] + table + one_period
 
 
 def frf_units(frf) -> str | None:
@@ -374,6 +406,40 @@ def estimate_columns(bag: Path, out: Path, progress: Progress | None, **options
             cols[f'resonance_hz_{j}'] = round(float(r), 4)
             cols[f'antiresonance_hz_{j}'] = round(float(a), 4)
     return cols
+
+
+def missing_lines(estimates: dict) -> list[str]:
+    """
+    One line per estimate whose record's missing samples were estimated (each text once).
+
+    Parameters
+    ----------
+    estimates : dict
+        Estimate name -> FrequencyResponse; meta['missing'] is a
+        :class:`~frf_ident.core.estimation.missing.MissingSamples` dict.
+
+    Returns
+    -------
+    list of str
+        e.g. 'detected/joint_2: 2700 missing samples (5.5 %) in 6 of 6 periods estimated
+        from the other periods and kept; sd of the estimates: tau_m/joint_2 0.064 N m ...';
+        an estimate whose line equals the one before it is named there.
+
+    """
+    from frf_ident.core.estimation.missing import MissingSamples
+    from frf_ident.core.recording import JOINT_STATE_UNITS
+    texts: dict[str, list[str]] = {}
+    for k, v in estimates.items():
+        if not v.meta.get('missing'):
+            continue
+        acc = MissingSamples.from_dict(v.meta['missing'])
+        u = v.meta.get('units') if isinstance(v.meta.get('units'), dict) else {}
+        units = {c: (u.get('input') or JOINT_STATE_UNITS['effort']) if c.startswith('tau_m/')
+                 else JOINT_STATE_UNITS['velocity'] for c in acc.channels}
+        for c, unit in zip(v.outputs, u.get('outputs') or []):
+            units[c] = unit or units.get(c, '')
+        texts.setdefault(acc.text(units), []).append(k)
+    return [f'{", ".join(names)}: {text}' for text, names in texts.items()]
 
 
 def dropped_text(d: dict) -> str:

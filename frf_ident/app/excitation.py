@@ -513,9 +513,10 @@ class ExcitationSession:
         if remedy is not None and self.model is not None:
             # outside the lock, which the watchdog thread takes; the node's executor is busy
             # here (no joint states), so a free-running run starts at the next one (_anchor)
-            robot, ctrl = self.model
+            robot, ctrl = self.model[:2]
+            dry = self.model[2] if len(self.model) > 2 else None     # MuJoCo's, for an MJCF
             peak = check_plan_torque(phases, robot, ctrl, self.torque_limit, name, remedy,
-                                     self.q_js, origin=self.q0)
+                                     self.q_js, origin=self.q0, plant=dry)
             self.out.log('info', f'{name}: predicted peak torque '
                                  f'{np.round(peak, 1).tolist()} N m on the model')
         with self.lock:

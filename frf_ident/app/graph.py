@@ -173,7 +173,8 @@ class Graph:
         # lockstep is the simulation's mode; free-running runs on wall time like a robot
         common: dict[str, Any] = {'use_sim_time': bool(lockstep), 'lockstep': bool(lockstep),
                                   'model': self.robot}
-        exc: dict[str, Any] = {}
+        # a simulated plant: no operator arming, also free-running (``params`` may ask for it)
+        exc: dict[str, Any] = {'arming': 'off'}
         if multisine is not None:
             exc.update(_cfg_params('multisine', multisine))
         if chirp is not None:

@@ -82,12 +82,13 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
     """
     from frf_ident.bag import write_recording
     from frf_ident.core.simulation.runner import run_identification
-    from frf_ident.io.model_file import load_model, load_plant
+    from frf_ident.io.model_file import dry_run_plant, load_model, load_plant
     out = check_out(out, outputs=None, overwrite=False)
     model, robot, ctrl = load_model(model_path)
     plant = load_plant(plant_spec, model)
     rec = run_identification(plant, ctrl, config, progress=progress,
-                             meta={'model': model, 'plant': plant_spec or 'model'}, model=robot)
+                             meta={'model': model, 'plant': plant_spec or 'model'}, model=robot,
+                             dry_run=dry_run_plant(model, robot))
     write_recording(rec, out)
     return rec
 

@@ -74,17 +74,17 @@ def bag_poses(bag: Path) -> list[PoseSpan] | None:
     from frf_ident.bag import read_experiment
     from frf_ident.errors import FrfIdentInputError
     try:
-        meta, segments = read_experiment(bag)
+        exp = read_experiment(bag)
     except FrfIdentInputError:              # not a bag (a CSV ...), or unreadable
         return None
     spans: dict[int, list] = {}
-    for s in segments:
+    for s in exp.segments:
         k = s.info.get('pose_index')
         if k is not None:
             spans.setdefault(int(k), []).append(s)
     if len(spans) < 2:
         return None
-    listed = {int(p['pose_index']): p for p in meta.get('summary', {}).get('poses', [])}
+    listed = {int(p['pose_index']): p for p in exp.meta.get('summary', {}).get('poses', [])}
     out = []
     for k in sorted(spans):
         segs = spans[k]

@@ -25,8 +25,9 @@ core's segment-wise estimators.
   (:func:`~frf_ident.core.estimation.detected.estimate_in_blocks`, which the in-memory
   estimate runs on the same blocks, so both take the same decisions).
 
-Gaps longer than the resampling limit are kept as missing data (``gaps='mark'``): they cost
-only the periods and chirp excerpts they touch.
+Gaps longer than the resampling limit are kept as missing data (``gaps='mark'``): their
+samples are estimated with the FRF (multisine periods, LPM frames; docs/bags.md), a chirp
+excerpt they touch is dropped.
 
 Memory is bounded by the longest window, not by the bag.
 """
@@ -40,6 +41,7 @@ from typing import Any
 from frf_ident.bag import timing as tm
 from frf_ident.bag import windows as bs
 from frf_ident.bag.coverage import cut_warning, split_covered
+from frf_ident.bag.info import bag_info
 from frf_ident.core.estimation.described import (check_joints, check_recording,
                                                  complete_chirp_iterations, cut_short_error,
                                                  experiment_joints, joint_channels,
@@ -47,7 +49,7 @@ from frf_ident.core.estimation.described import (check_joints, check_recording,
 from frf_ident.core.estimation.detected import block_length, estimate_in_blocks
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.progress import Progress, sink
-from frf_ident.errors import EstimationError
+from frf_ident.errors import BagError, EstimationError
 
 #: in-memory arrays take about this many bytes per byte of MCAP data (measured: 3-joint
 #: JointState bags, float64 columns plus the copies of timing repair and assembly)
@@ -179,7 +181,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
 
     """
     say = sink(progress)
-    block_s = block_length(block_s)
+    block_s = block_length(block_s, None if block_s is not None else _joint_state_rate(bag))
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
         raise EstimationError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
     if joints is not None:
@@ -251,6 +253,16 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     meta = dict(exp.meta)
     meta.pop('_frf_bag', None)
     return StreamedEstimate(estimates, timing, reader.stats, meta, notes)
+
+
+def _joint_state_rate(bag: Path) -> float | None:
+    """Return the joint-state rate [Hz] the bag's summary gives (None: not known)."""
+    try:
+        info = bag_info(bag)
+    except (BagError, OSError):      # the reader names what is wrong with the bag, later
+        return None
+    n = sum(t['count'] for t in info['topics'] if t['name'] == '/joint_states')
+    return (n - 1) / info['duration_s'] if n > 1 and info['duration_s'] > 0 else None
 
 
 __all__ = ['MEMORY_PER_BAG_BYTE', 'StreamedEstimate', 'default_memory_budget',

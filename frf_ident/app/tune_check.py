@@ -31,8 +31,8 @@ from dataclasses import dataclass
 from frf_ident.app.loop import margins
 from frf_ident.app.tune_inputs import Campaign
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.loop.check import (AxisMargins, draw_responses, loop_response, LoopCheck,
-                                       Margin, pi_response, sensitivity_peak)
+from frf_ident.core.loop.check import (AxisMargins, draw_responses, edge_gain_db, loop_response,
+                                       LoopCheck, Margin, pi_response, sensitivity_peak)
 from frf_ident.core.loop.frd_margins import frd_margins, FrdMargins
 from frf_ident.core.loop.targets import TuneTargets
 import numpy as np
@@ -162,8 +162,11 @@ def check_pose(frf: FrequencyResponse, channels, kp: np.ndarray, ki: np.ndarray,
         for q, name in enumerate(('gain_margin_db', 'phase_margin_deg', 'crossover_hz',
                                   'modulus_margin')):
             sds[:, q] = [_sd(getattr(m, name)[:, j]) for j in range(len(channels))]
+    edge = edge_gain_db(loops)
+    band = (float(frf.freq_hz.min()), float(frf.freq_hz.max()))
     axes = [AxisMargins(a, float(kp[j]), float(ki[j]),
-                        *[Margin(float(nominal[j, q]), float(sds[j, q])) for q in range(4)])
+                        *[Margin(float(nominal[j, q]), float(sds[j, q])) for q in range(4)],
+                        band_hz=band, edge_gain_db=float(edge[j]))
             for j, (a, _, _) in enumerate(channels)]
     peak = None
     if len(channels) > 1 and frf.noutputs == frf.ninputs:

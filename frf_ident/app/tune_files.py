@@ -29,7 +29,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from frf_ident.app.loop import check_dict
+from frf_ident.app.loop_document import check_dict
 from frf_ident.app.outdir import clear_outputs
 from frf_ident.core.jsonable import jsonable
 from frf_ident.core.loop.notch import Biquad

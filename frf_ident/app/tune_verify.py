@@ -32,7 +32,8 @@ from dataclasses import dataclass
 import json
 from pathlib import Path
 
-from frf_ident.app.loop import check_dict, loop_check
+from frf_ident.app.loop import loop_check
+from frf_ident.app.loop_document import check_dict
 from frf_ident.app.tune_inputs import read_campaign
 from frf_ident.core.jsonable import jsonable
 from frf_ident.core.loop.check import DRAWS, LoopCheck

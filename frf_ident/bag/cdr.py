@@ -31,8 +31,9 @@ from typing import Sequence
 
 import numpy as np
 
+from .structs import U32
+
 _HDR_LE = b'\x00\x01\x00\x00'
-_U32 = struct.Struct('<I')
 _STAMP = struct.Struct('<iI')
 
 
@@ -60,7 +61,7 @@ def _check_header(data: bytes | memoryview) -> None:
 
 def _read_string(data: bytes | memoryview, off: int) -> tuple[str, int]:
     off = _align(off, 4)
-    (n,) = _U32.unpack_from(data, off)
+    (n,) = U32.unpack_from(data, off)
     off += 4
     if n == 0 or off + n > len(data):
         raise CdrError(f'string length {n} at byte {off - 4} exceeds the message')
@@ -73,7 +74,7 @@ def _read_string(data: bytes | memoryview, off: int) -> tuple[str, int]:
 
 def _read_doubles(data: bytes | memoryview, off: int) -> tuple[tuple[float, ...], int]:
     off = _align(off, 4)
-    (n,) = _U32.unpack_from(data, off)
+    (n,) = U32.unpack_from(data, off)
     off += 4
     if n == 0:
         return (), off
@@ -116,7 +117,7 @@ class JointStateDecoder:
     def _decode_names(self, data: bytes | memoryview) -> tuple[tuple[str, ...], int]:
         _, off = _read_string(data, 12)  # header.frame_id
         off = _align(off, 4)
-        (n,) = _U32.unpack_from(data, off)
+        (n,) = U32.unpack_from(data, off)
         off += 4
         if n > (len(data) - off) // 5:
             raise CdrError(f'name count {n} exceeds the message')
@@ -133,7 +134,7 @@ def _float64_array_layout(data: bytes | memoryview) -> tuple[int, int]:
     """(data_start, count) of the ``data`` field of a Float64MultiArray."""
     try:
         _check_header(data)
-        (ndim,) = _U32.unpack_from(data, 4)
+        (ndim,) = U32.unpack_from(data, 4)
         off = 8
         if ndim > len(data) // 12:
             raise CdrError(f'layout.dim count {ndim} exceeds the message')
@@ -172,14 +173,14 @@ def _pad(buf: bytearray, n: int) -> None:
 def _put_string(buf: bytearray, text: str) -> None:
     raw = text.encode('utf-8') + b'\x00'
     _pad(buf, 4)
-    buf.extend(_U32.pack(len(raw)))
+    buf.extend(U32.pack(len(raw)))
     buf.extend(raw)
 
 
 def _put_doubles(buf: bytearray, values: np.ndarray | Sequence[float]) -> None:
     arr = np.ascontiguousarray(values, dtype='<f8')
     _pad(buf, 4)
-    buf.extend(_U32.pack(arr.size))
+    buf.extend(U32.pack(arr.size))
     if arr.size:
         _pad(buf, 8)
         buf.extend(arr.tobytes())
@@ -192,7 +193,7 @@ class JointStateEncoder:
         buf = bytearray(_HDR_LE + b'\x00' * 8)
         _put_string(buf, frame_id)
         _pad(buf, 4)
-        buf.extend(_U32.pack(len(names)))
+        buf.extend(U32.pack(len(names)))
         for name in names:
             _put_string(buf, name)
         self._tail = bytes(buf[12:])
@@ -251,7 +252,7 @@ def _same_structure(rows: np.ndarray, first: np.ndarray, data_regions: list[tupl
 def _doubles_layout(data: bytes | memoryview, off: int) -> tuple[int, int, int]:
     """(data_start, count, next_offset) of a float64 sequence at ``off``."""
     off = _align(off, 4)
-    (n,) = _U32.unpack_from(data, off)
+    (n,) = U32.unpack_from(data, off)
     off += 4
     if n == 0:
         return off, 0, off

@@ -36,13 +36,12 @@ import zlib
 import numba
 import numpy as np
 
+from .structs import U16, U32, U64
+
 MAGIC = b'\x89MCAP0\r\n'
 OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 1, 2, 3, 4, 5, 6
 OP_CHUNK_INDEX, OP_STATISTICS, OP_METADATA, OP_DATA_END = 0x08, 0x0B, 0x0C, 0x0F
 _REC = struct.Struct('<BQ')
-_U16 = struct.Struct('<H')
-_U32 = struct.Struct('<I')
-_U64 = struct.Struct('<Q')
 _MSG = struct.Struct('<HIQQ')
 _CHUNK = struct.Struct('<QQQI')
 #: chunks (uncompressed) larger than this are treated as corrupt rather than allocated.
@@ -91,7 +90,7 @@ class ScanStats:
 
 
 def _string(buf: bytes | memoryview, off: int) -> tuple[str, int]:
-    (n,) = _U32.unpack_from(buf, off)
+    (n,) = U32.unpack_from(buf, off)
     off += 4
     if off + n > len(buf):
         raise McapFormatError(f'string of {n} bytes overruns its record')
@@ -99,7 +98,7 @@ def _string(buf: bytes | memoryview, off: int) -> tuple[str, int]:
 
 
 def _bytes(buf: bytes | memoryview, off: int) -> tuple[bytes, int]:
-    (n,) = _U32.unpack_from(buf, off)
+    (n,) = U32.unpack_from(buf, off)
     off += 4
     if off + n > len(buf):
         raise McapFormatError(f'byte field of {n} bytes overruns its record')
@@ -107,7 +106,7 @@ def _bytes(buf: bytes | memoryview, off: int) -> tuple[bytes, int]:
 
 
 def _string_map(buf: bytes | memoryview, off: int) -> tuple[dict[str, str], int]:
-    (n,) = _U32.unpack_from(buf, off)
+    (n,) = U32.unpack_from(buf, off)
     off += 4
     end = off + n
     if end > len(buf):
@@ -223,7 +222,7 @@ class McapScanner:
 
     # ------------------------------------------------------------------ records
     def _on_schema(self, buf: bytes | memoryview) -> None:
-        (sid,) = _U16.unpack_from(buf, 0)
+        (sid,) = U16.unpack_from(buf, 0)
         name, _ = _string(buf, 2)
         self.schemas[sid] = name
 
@@ -310,7 +309,7 @@ class McapScanner:
     def _chunk(self, buf: bytes) -> Iterator[Batch]:
         _, _, size, crc = _CHUNK.unpack_from(buf, 0)
         compression, off = _string(buf, _CHUNK.size)
-        (n,) = _U64.unpack_from(buf, off)
+        (n,) = U64.unpack_from(buf, off)
         off += 8
         if off + n > len(buf):
             raise McapFormatError(f'chunk data of {n} bytes overruns the chunk record')
@@ -461,7 +460,7 @@ def chunk_starts(path: Path | str) -> list[int]:
     try:
         for op, rec in _summary_records(_summary_bytes(Path(path))):
             if op == OP_CHUNK_INDEX and len(rec) >= 24:
-                out.append(int(_U64.unpack_from(rec, 16)[0]))
+                out.append(int(U64.unpack_from(rec, 16)[0]))
     except (McapFormatError, struct.error, OSError, ValueError):
         pass                          # a damaged summary: the chunks indexed before it
     return sorted(out)
@@ -518,7 +517,7 @@ def _read_summary(path: Path) -> Summary | None:
     stats: tuple[dict[int, int], int, int] | None = None
     for op, rec in _summary_records(_summary_bytes(path)):
         if op == OP_SCHEMA:
-            (sid,) = _U16.unpack_from(rec, 0)
+            (sid,) = U16.unpack_from(rec, 0)
             schemas[sid], _ = _string(rec, 2)
         elif op == OP_CHANNEL:
             cid, sid = struct.unpack_from('<HH', rec, 0)
@@ -528,7 +527,7 @@ def _read_summary(path: Path) -> Summary | None:
             chans.append((cid, sid, topic, enc, meta))
         elif op == OP_STATISTICS:
             t0, t1 = struct.unpack_from('<QQ', rec, 30)
-            (n,) = _U32.unpack_from(rec, 46)
+            (n,) = U32.unpack_from(rec, 46)
             counts = {}
             for o in range(50, 50 + n, 10):
                 cid, cnt = struct.unpack_from('<HQ', rec, o)

@@ -27,6 +27,7 @@ compression), :mod:`~frf_ident.bag.collect` (scanning and decoding),
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 import json
 from pathlib import Path
 import struct
@@ -104,14 +105,38 @@ def read_recording(path: str | Path, *, joints: list[str] | None = None,
         raise BagError(f'{bag.name}: unreadable bag ({type(exc).__name__}: {exc})') from None
 
 
-def read_experiment(path: str | Path, *, topics: BagTopics | None = None
-                    ) -> tuple[dict[str, Any], list[Segment]]:
+@dataclass
+class ExperimentIndex:
+    """
+    What the /frf/experiment topic says: recording_meta, segments, warnings.
+
+    Parameters
+    ----------
+    meta : dict
+        Contents of the ``recording_meta`` events (empty without them).
+    segments : list of Segment
+        The experiment segments described, with times in s of the bag clock.
+    warnings : list of str
+        Problems found in the descriptors (end without start, ignored events).
+    events : int, optional
+        Number of messages read on the experiment topic.
+
+    """
+
+    meta: dict[str, Any]
+    segments: list[Segment]
+    warnings: list[str]
+    events: int = 0
+
+
+def read_experiment(path: str | Path, *, topics: BagTopics | None = None) -> ExperimentIndex:
     """
     Read only the experiment descriptors of a bag: its recording meta and segments.
 
     Scans the experiment topic alone (no joint states are decoded), so it costs a fraction
-    of :func:`read_recording`; ``frf-ident estimate`` uses it to find the poses of a bag
-    recorded at several (``identify --poses --one-bag``).
+    of :func:`read_recording`: the first pass of the bounded-memory reader
+    (:mod:`.windows`), and how ``frf-ident estimate`` finds the poses of a bag recorded at
+    several (``identify --poses --one-bag``).
 
     Parameters
     ----------
@@ -122,10 +147,14 @@ def read_experiment(path: str | Path, *, topics: BagTopics | None = None
 
     Returns
     -------
-    meta : dict
-        The ``recording_meta`` descriptor (empty when the bag has none).
-    segments : list of Segment
-        The experiment segments, start and end paired, in time order.
+    ExperimentIndex
+        Metadata, segments (start and end paired, in time order) and warnings of the
+        descriptors, and the number of messages.
+
+    Raises
+    ------
+    BagError
+        The bag cannot be read (one line naming it).
 
     """
     topics = topics or BagTopics()
@@ -133,13 +162,13 @@ def read_experiment(path: str | Path, *, topics: BagTopics | None = None
     try:
         col = Collector(bag, topics, None, expected_counts(bag))
         scan(bag, {topics.experiment}, None, col.feed)
-        meta, segments, _ = read_descriptors(col.events, bag, topics)
+        meta, segments, warnings = read_descriptors(col.events, bag, topics)
     except BagError:
         raise
     except (struct.error, ValueError, KeyError, IndexError, TypeError, UnicodeDecodeError,
             OverflowError, OSError) as exc:
         raise BagError(f'{bag.name}: unreadable bag ({type(exc).__name__}: {exc})') from None
-    return meta, segments
+    return ExperimentIndex(meta, segments, warnings, len(col.events))
 
 
 def _read(bag: BagFiles, joints: list[str] | None, topics: BagTopics,
@@ -226,4 +255,4 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
     return meta, list(segs.values()), warnings
 
 
-__all__ = ['read_descriptors', 'read_experiment', 'read_recording']
+__all__ = ['ExperimentIndex', 'read_descriptors', 'read_experiment', 'read_recording']

@@ -46,62 +46,11 @@ from .assemble import assemble, DEFAULT_GAPS
 from .collect import Collector, iter_batches
 from .layout import BagFiles, expected_counts, locate
 from .mcapio import ScanStats
-from .reader import read_descriptors
+from .reader import ExperimentIndex, read_experiment
 from .repair import recovery_report
 from .topics import BagTopics
 
 _PAD_NS = 10_000_000          # windows reach 10 ms beyond their segment
-
-
-@dataclass
-class ExperimentIndex:
-    """
-    What the /frf/experiment topic says: recording_meta, segments, warnings.
-
-    Parameters
-    ----------
-    meta : dict
-        Contents of the ``recording_meta`` events (empty without them).
-    segments : list of Segment
-        The experiment segments described, with times in s of the bag clock.
-    warnings : list of str
-        Problems found in the descriptors (end without start, ignored events).
-    events : int, optional
-        Number of messages read on the experiment topic.
-
-    """
-
-    meta: dict[str, Any]
-    segments: list[Segment]
-    warnings: list[str]
-    events: int = 0
-
-
-def read_experiment(path: str | Path, *, topics: BagTopics | None = None) -> ExperimentIndex:
-    """
-    First pass: the experiment descriptors only (no joint state is decoded).
-
-    Parameters
-    ----------
-    path : str or Path
-        rosbag2 directory or a bare .mcap file.
-    topics : BagTopics, optional
-        Topic names; default: the standard ones.
-
-    Returns
-    -------
-    ExperimentIndex
-        Metadata, segments and warnings of the descriptors, and the number of messages.
-
-    """
-    topics = topics or BagTopics()
-    bag = locate(path)
-    col = Collector(bag, topics, None, {})
-    stats: list[ScanStats] = []
-    for batch in iter_batches(bag, {topics.experiment}, None, stats):
-        col.feed(batch)
-    meta, segments, warnings = read_descriptors(col.events, bag, topics)
-    return ExperimentIndex(meta, segments, warnings, len(col.events))
 
 
 def segment_windows(segments: list[Segment]) -> list[tuple[int, int]]:

@@ -21,9 +21,16 @@ from frf_ident.cli.options import add_design_arguments
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['HELP', 'add_arguments', 'identification_config', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'add_arguments', 'identification_config', 'run']
 
 HELP = 'run the identification experiments in closed loop, record a bag'
+DESCRIPTION = """\
+Runs the Section 7 procedures in closed loop on the model's simulation or a plug-in plant and
+records a rosbag2 MCAP bag (an existing path is refused). Before anything runs it prints each
+plan's peak torque predicted on the model and refuses (exit 2, nothing recorded) a plan at 0.95
+of a limit, naming the setting to lower. Plug-in plants: docs/real_robot.md. --poses: the
+procedures at each pose on the model linearised there, one bag per pose or all in one bag
+(docs/CAMPAIGNS.md)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -23,12 +23,25 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_output_arguments
 
-__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'parse_targets', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'LOG_TO_OUT', 'add_arguments', 'parse_targets', 'run']
 
 #: the --out DIR also gets the DEBUG trace as DIR/<command>.log (cli/main.py)
 LOG_TO_OUT = True
 HELP = ('notch filters at the resonances and PI gains per axis shaped on the measured FRFs '
         '(worst case over a campaign), exported for ros2_control')
+DESCRIPTION = """\
+PI gains and notch / low-pass filters per axis, shaped on the measured FRFs (the method is
+docs/tune.md, the files docs/CONTRACT.md §8). Several FRFs (a folder of estimate folders, a
+glob, @LIST.txt) are one per pose or amplitude, on the same lines: the setting must hold at
+all of them. --model gives the controller's rate, its PI (checked as 'before') and the base
+of tuned_model.yaml; without it --rate. Prints per axis its resonances and their band, the
+weight W(s), the setting, and where a target is missed the best achievable with one sentence
+on what binds (target, pose, frequency; the phase of plant, delay, PI and filters there);
+then the worst margins over the poses and the MIMO sensitivity peak before and after. Writes
+tune.json, tune.html, tune.png, pid_controller.yaml (ros2_controllers pid_controller),
+filters.yaml (chained_filter_controller), control_objects.pkl (python-control) and with
+--model tuned_model.yaml; --verify identifies the model's simulation again with the tuned
+controller and compares (DIR/verify/verify.json)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

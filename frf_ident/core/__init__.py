@@ -32,10 +32,9 @@ from typing import Any
 #: public name -> module that defines it
 _API = {
     'frf_ident.core.model.params': ['AxisParams', 'RobotParams'],
-    'frf_ident.core.model.schema': ['controller_from_dict', 'default_robot', 'robot_from_dict',
-                                    'robot_to_dict'],
+    'frf_ident.core.model.schema': ['default_robot', 'robot_from_dict', 'robot_to_dict'],
     'frf_ident.core.simulation.plant': ['FlexibleJointPlant'],
-    'frf_ident.core.simulation.controller': ['PIVelocity'],
+    'frf_ident.core.simulation.controller': ['controller_from_dict', 'PIVelocity'],
     'frf_ident.core.simulation.runner': ['IdentificationConfig', 'run_identification'],
     'frf_ident.core.simulation.analytic': ['closed_loop_frfs', 'robot_frf', 'robot_frf_sampled',
                                            'two_mass_frf'],
@@ -48,11 +47,14 @@ _API = {
     'frf_ident.core.estimation.frd': ['FrequencyResponse'],
     'frf_ident.core.estimation.spectra': ['best_linear_approximation',
                                           'best_linear_approximation_reference',
-                                          'chirp_excerpt_dft', 'periodic_spectra'],
+                                          'periodic_spectra'],
+    'frf_ident.core.excitation.chirp_dft': ['chirp_excerpt_dft'],
     'frf_ident.core.estimation.described': ['chirp_frf', 'estimate_recording', 'multisine_frf'],
     'frf_ident.core.estimation.detected': ['ExcitationOptions'],
     'frf_ident.core.recording': ['Recording', 'Segment'],
-    'frf_ident.core.diagnosis': ['diagnose_experiments', 'diagnose_timeseries'],
+    'frf_ident.core.diagnosis.pipeline': ['diagnose', 'Diagnosis'],
+    'frf_ident.core.diagnosis.experiments.pipeline': ['diagnose_experiments'],
+    'frf_ident.core.diagnosis.timeseries.pipeline': ['diagnose_timeseries'],
 }
 _WHERE = {name: module for module, names in _API.items() for name in names}
 

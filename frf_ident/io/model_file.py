@@ -24,15 +24,29 @@ from pathlib import Path
 from typing import Any
 
 from frf_ident.core.model.params import RobotParams
-from frf_ident.core.model.schema import (controller_from_dict, default_model_dict, robot_from_dict,
-                                         robot_to_dict)
-from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.model.schema import default_model_dict, robot_from_dict, robot_to_dict
+from frf_ident.core.simulation.controller import controller_from_dict, PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import FrfIdentInputError, ModelFileError
 from frf_ident.io.yamlio import read_yaml_file
 import yaml
 
-__all__ = ['load_model', 'load_plant', 'read_model_dict', 'save_model']
+__all__ = ['MUJOCO', 'dry_run_plant', 'load_model', 'load_plant', 'read_model_dict',
+           'save_model']
+
+#: the plant spec that simulates an MJCF in MuJoCo (``mujoco`` or ``mujoco:FILE.xml``)
+MUJOCO = 'mujoco'
+
+
+def _mujoco_plant(spec: str, model: dict[str, Any]) -> Any:
+    """Return MuJoCo's plant for ``--plant mujoco[:FILE.xml]``, or say what to install."""
+    try:
+        from frf_ident.io.mjcf.plant import MujocoPlant
+    except ImportError as err:
+        raise FrfIdentInputError(f'--plant {spec}: needs the mujoco package ({err}); pip '
+                                 "install 'frf_ident[mujoco]'") from err
+    _, _, file = spec.partition(':')
+    return MujocoPlant(model, mjcf=file or None)
 
 
 def read_model_dict(path: str | Path) -> dict[str, Any]:
@@ -69,6 +83,9 @@ def load_model(path: str | Path | None) -> tuple[dict[str, Any], RobotParams, PI
     """
     Load and validate a model file (docs/CONTRACT.md §5).
 
+    A model naming an MJCF (``mjcf``) is returned with its axes filled from the MJCF at the
+    pose (:func:`frf_ident.io.mjcf.nominal.view_dict`; the mapping's ``mjcf`` made absolute).
+
     Parameters
     ----------
     path : str or Path or None
@@ -90,12 +107,44 @@ def load_model(path: str | Path | None) -> tuple[dict[str, Any], RobotParams, PI
 
     """
     d = default_model_dict() if path is None else read_model_dict(path)
+    if path is not None and 'mjcf' in d:
+        d = _mjcf_view(d, Path(path))
     try:
         robot = robot_from_dict(d)
         ctrl = controller_from_dict(d, robot)
+        if robot.mjcf is not None:      # an MJCF starts at its pose, not at q = 0
+            ctrl.reset(robot.gravity_load([robot.mjcf.pose[a] for a in robot.joint_names]))
     except ModelFileError as exc:
         raise ModelFileError(f'{path or "default model"}: {exc}') from None
     return d, robot, ctrl
+
+
+def _mjcf_view(d: dict[str, Any], path: Path) -> dict[str, Any]:
+    """Return a model naming an MJCF with the MJCF's values filled in (docs/model_file.md)."""
+    try:
+        from frf_ident.io.mjcf.nominal import view_dict
+    except ImportError as err:
+        raise ModelFileError(f'{path}: mjcf: needs the mujoco package ({err}); pip install '
+                             "'frf_ident[mujoco]'") from err
+    try:
+        return view_dict(d, path.parent)
+    except ModelFileError as exc:
+        raise ModelFileError(f'{path}: {exc}') from None
+
+
+def dry_run_plant(model: dict[str, Any], robot: RobotParams) -> Any:
+    """
+    Return the plant a plan's torque is predicted on: MuJoCo's for a model naming an MJCF.
+
+    A model with ``mjcf`` is predicted on its MJCF (noiseless), not on our parameters of it
+    (a rigid joint's spring there is an approximation, docs/mujoco.md); None for any other
+    model (the prediction then runs our plant of ``robot``).
+    """
+    if robot.mjcf is None:
+        return None
+    quiet = dict(model, axes=[{k: v for k, v in a.items() if not k.endswith('_noise')}
+                              for a in model['axes']])
+    return _mujoco_plant(MUJOCO, quiet)
 
 
 def save_model(path: str | Path, robot: RobotParams, controller: PIVelocity | None = None,
@@ -133,13 +182,14 @@ def load_plant(spec: str | None, model: dict[str, Any]) -> Any:
     Instantiate the plant: the model's own simulation or a plug-in.
 
     A plug-in ``'package.module:Class'`` is constructed with the model mapping as its config
-    (docs/CONTRACT.md §4).
+    (docs/CONTRACT.md §4); ``'mujoco'`` simulates the model's MJCF in MuJoCo,
+    ``'mujoco:FILE.xml'`` another MJCF (:class:`~frf_ident.io.mjcf.plant.MujocoPlant`).
 
     Parameters
     ----------
     spec : str or None
-        ``'package.module:Class'``, or None / empty for the model's
-        :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant`.
+        ``'package.module:Class'``, ``'mujoco'``, ``'mujoco:FILE.xml'``, or None / empty for
+        the model's :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant`.
     model : dict
         The model mapping (from :func:`load_model`).
 
@@ -157,6 +207,8 @@ def load_plant(spec: str | None, model: dict[str, Any]) -> Any:
     """
     if not spec:
         return FlexibleJointPlant(robot_from_dict(model))
+    if spec == MUJOCO or spec.startswith(MUJOCO + ':'):
+        return _mujoco_plant(spec, model)
     mod_name, sep, cls_name = spec.partition(':')
     if not sep or not mod_name or not cls_name:
         raise FrfIdentInputError(f"--plant {spec!r}: expected 'package.module:Class'")

@@ -138,7 +138,8 @@ def shutdown() -> None:
 
 
 def create_node(name: str, *, parameter_overrides: Optional[dict[str, Any]] = None,
-                use_sim_time: Optional[bool] = None, namespace: str = '/') -> Any:
+                use_sim_time: Optional[bool] = None, namespace: str = '/',
+                global_arguments: bool = True) -> Any:
     """
     Create a node on the chosen backend (initialising it with ``sys.argv`` if needed).
 
@@ -156,6 +157,10 @@ def create_node(name: str, *, parameter_overrides: Optional[dict[str, Any]] = No
         Forced value of the ``use_sim_time`` parameter; None (default): from the parameters.
     namespace : str, optional
         Node namespace; default ``'/'``.
+    global_arguments : bool, optional
+        False: the process's ``--ros-args`` (parameters, ``__node:=`` remaps) do not apply
+        to this node (rclpy's ``use_global_arguments``); for a helper node of a process
+        whose name a launch file remaps.
 
     Returns
     -------
@@ -165,7 +170,7 @@ def create_node(name: str, *, parameter_overrides: Optional[dict[str, Any]] = No
     """
     return backend().create_node(name, namespace=namespace,
                                  parameter_overrides=parameter_overrides,
-                                 use_sim_time=use_sim_time)
+                                 use_sim_time=use_sim_time, global_arguments=global_arguments)
 
 
 def spin(node: Any, stop_event: Optional[threading.Event] = None) -> None:

@@ -42,6 +42,7 @@ from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 from frf_ident.middleware import ros_types
+from frf_ident.middleware.dds_caller import CallerLookup, GRAPH_DEPTH
 from frf_ident.middleware.params import parse_ros_args
 from frf_ident.middleware.qos import as_qos_spec, qos_clock, qos_transient_local, QosSpec
 
@@ -161,6 +162,7 @@ class _Context:
             self.domain_id, qos=Qos(Policy.Userdata(_user_data(enclave='/'))))
         self._topics: dict[tuple[str, type], Topic] = {}
         self._pub_reader: Any = None
+        self._callers: Any = None
         self._graph_writer = DataWriter(
             self.participant,
             self.topic('ros_discovery_info', ros_types.ParticipantEntitiesInfo),
@@ -184,6 +186,18 @@ class _Context:
             self._graph_writer.write(ros_types.ParticipantEntitiesInfo(
                 gid=_gid(self.participant), node_entities_info_seq=infos))
 
+    def caller_lookup(self) -> Any:
+        """Return the lookup naming a request's caller (its readers created on first use)."""
+        with self.lock:
+            if self._callers is None:
+                self._callers = CallerLookup(
+                    self.participant,
+                    self.topic('ros_discovery_info', ros_types.ParticipantEntitiesInfo),
+                    _dds_qos(qos_transient_local(GRAPH_DEPTH), _user_data(
+                        typehash=ros_types.TYPE_HASHES[
+                            'rmw_dds_common/msg/ParticipantEntitiesInfo']), writer=False))
+            return self._callers
+
     def count_publishers(self, topic_name: str) -> int:
         """Alive DDS writers on ROS topic ``topic_name`` in the domain (discovery data)."""
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
@@ -203,6 +217,8 @@ class _Context:
         for node in list(self.nodes):
             node.destroy_node()
         _delete(self._graph_writer)
+        if self._callers is not None:
+            self._callers.close(_delete)
         if self._pub_reader is not None:
             _delete(self._pub_reader)
         _delete(self.participant)
@@ -464,10 +480,12 @@ class Service:
     """A service server speaking rmw_cyclonedds' request/reply framing."""
 
     def __init__(self, node: 'Node', srv_type: ros_types.ServiceType, name: str,
-                 callback: Callable[[Any, Any], Any]) -> None:
+                 callback: Callable[..., Any], caller: bool = False) -> None:
         self.srv_type = srv_type
         self.service_name = resolve_name(name, node.get_name(), node.get_namespace())
         self.callback = callback
+        #: ``caller=True``: the callback also gets the request's Caller (dds_caller.py)
+        self._callers = node._ctx.caller_lookup() if caller else None
         self._logger = node.get_logger()
         ctx = node._ctx
         qos = QosSpec(depth=10, reliable=True, transient_local=False)  # services_default
@@ -506,7 +524,11 @@ class Service:
         for wire in self._reader.take(_TAKE_BATCH, condition=self._condition):
             if not wire.sample_info.valid_data:
                 continue
-            response = self.callback(wire.body, self.srv_type.Response())
+            if self._callers is None:
+                response = self.callback(wire.body, self.srv_type.Response())
+            else:
+                caller = self._callers.caller(self.service_name, self._reader, wire)
+                response = self.callback(wire.body, self.srv_type.Response(), caller)
             if not isinstance(response, self.srv_type.Response):
                 self._logger.error(
                     f'service {self.service_name} callback returned {response=}; '
@@ -622,14 +644,17 @@ class Node:
 
     def __init__(self, name: str, *, namespace: str = '/',
                  parameter_overrides: Optional[dict[str, Any]] = None,
-                 use_sim_time: Optional[bool] = None) -> None:
+                 use_sim_time: Optional[bool] = None, global_arguments: bool = True) -> None:
         if not name or '/' in name:
             raise ValueError(f'invalid node name {name=}')
         self._ctx = _get_context()
         self._name = name
         self._namespace = '/' + namespace.strip('/')
         self._logger = Logger(name)
-        file_values, cli_overrides = parse_ros_args(self._ctx.args, name, self._namespace)
+        # global_arguments False: the command line's --ros-args are not this node's (rclpy's
+        # use_global_arguments): a helper node of a process takes no parameters from them
+        file_values, cli_overrides = (parse_ros_args(self._ctx.args, name, self._namespace)
+                                      if global_arguments else ({}, {}))
         self._overrides = {**file_values, **cli_overrides, **(parameter_overrides or {})}
         if use_sim_time is not None:
             self._overrides['use_sim_time'] = bool(use_sim_time)
@@ -709,8 +734,9 @@ class Node:
         return self._add(self._timers, Timer(self, period_sec, callback))
 
     def create_service(self, srv_type: ros_types.ServiceType, name: str,
-                       callback: Callable[[Any, Any], Any]) -> Service:
-        return self._add(self._services, Service(self, srv_type, name, callback))
+                       callback: Callable[..., Any], *, caller: bool = False) -> Service:
+        """As rclpy; ``caller``: ``callback(request, response, Caller)`` (caller.py)."""
+        return self._add(self._services, Service(self, srv_type, name, callback, caller))
 
     def create_client(self, srv_type: ros_types.ServiceType, name: str) -> Client:
         return self._add(self._clients, Client(self, srv_type, name))
@@ -788,9 +814,9 @@ class Node:
 
 def create_node(name: str, *, namespace: str = '/',
                 parameter_overrides: Optional[dict[str, Any]] = None,
-                use_sim_time: Optional[bool] = None) -> Node:
+                use_sim_time: Optional[bool] = None, global_arguments: bool = True) -> Node:
     return Node(name, namespace=namespace, parameter_overrides=parameter_overrides,
-                use_sim_time=use_sim_time)
+                use_sim_time=use_sim_time, global_arguments=global_arguments)
 
 
 def spin_once(node: Node, timeout_sec: Optional[float] = None) -> None:

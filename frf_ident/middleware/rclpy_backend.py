@@ -23,8 +23,10 @@ clock and timers, logging) is rclpy's own. This module is imported only when rcl
 
 import importlib
 import threading
+import time
 from typing import Any, Callable, Optional, Sequence
 
+from frf_ident.middleware.caller import Caller
 from frf_ident.middleware.qos import as_qos_spec, QosSpec
 from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
@@ -32,13 +34,21 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
                               ParameterException)
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy_impl
 from rclpy.node import Node as RclpyNode
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, qos_profile_services_default,
+                       QoSProfile, ReliabilityPolicy)
+from rclpy.service import Service
+from rclpy.type_support import check_is_valid_srv_type
 
 BACKEND_NAME = 'rclpy'
 #: a draining subscription takes at most this many more messages per wake
 DRAIN_BATCH = 64
+#: how long [s] a caller-aware service waits for the ROS graph to list the caller's node
+#: (its ros_discovery_info can come after its request: a first call of `ros2 service call`
+#: found no client listed)
+CALLER_GRAPH_WAIT_S = 0.5
 #: what rclpy raises for a parameter value of the wrong type or an invalid one
 PARAMETER_ERRORS: tuple = (ParameterException, InvalidParameterTypeException,
                            InvalidParameterValueException)
@@ -105,17 +115,35 @@ class Client:
         self._node.destroy_client(self._client)
 
 
+class HeaderKeepingService(_rclpy_impl.Service):
+    """
+    Keep the rmw service info of the request taken last (an rclpy service handle).
+
+    rclpy's executor takes a request (with its header) and calls the callback with the
+    request alone; the executor of a node runs take and callback one after the other in its
+    one thread, so the callback reads the header of its own request here.
+    """
+
+    last_info: Any = None
+
+    def service_take_request(self, request_cls: Any) -> Any:
+        taken = super().service_take_request(request_cls)
+        self.last_info = taken[1]
+        return taken
+
+
 class Node(RclpyNode):
     """Rclpy Node accepting the backend-neutral arguments of frf_ident.middleware."""
 
     def __init__(self, name: str, *, namespace: str = '/',
                  parameter_overrides: Optional[dict[str, Any]] = None,
-                 use_sim_time: Optional[bool] = None) -> None:
+                 use_sim_time: Optional[bool] = None, global_arguments: bool = True) -> None:
         overrides = dict(parameter_overrides or {})
         if use_sim_time is not None:
             overrides['use_sim_time'] = bool(use_sim_time)
         super().__init__(name, namespace=namespace, parameter_overrides=[
-            Parameter(key, value=value) for key, value in overrides.items()])
+            Parameter(key, value=value) for key, value in overrides.items()],
+            use_global_arguments=global_arguments)
         self._client_group = ReentrantCallbackGroup()
         self._spinners = 0
         self._spinners_lock = threading.Lock()
@@ -183,6 +211,48 @@ class Node(RclpyNode):
                                                   to_qos_profile(qos), **kwargs))
         return holder[0]
 
+    def create_service(self, srv_type: Any, srv_name: str, callback: Callable[..., Any], *,
+                       caller: bool = False, **kwargs: Any) -> Any:
+        """
+        As rclpy; ``caller``: ``callback(request, response, Caller)`` (middleware/caller.py).
+
+        rclpy passes no request header to a callback, so a caller-aware service is built
+        from a :class:`HeaderKeepingService` as ``rclpy.node.Node.create_service`` builds
+        one (test/ros/test_ros_arming.py fails if rclpy changes this).
+        """
+        if not caller:
+            return super().create_service(srv_type, srv_name, callback, **kwargs)
+        group = kwargs.get('callback_group') or self.default_callback_group
+        qos = kwargs.get('qos_profile', qos_profile_services_default)
+        check_is_valid_srv_type(srv_type)
+        with self.handle:
+            impl = HeaderKeepingService(self.handle, srv_type, srv_name,
+                                        qos.get_c_qos_profile())
+
+        def with_caller(request: Any, response: Any) -> Any:
+            return callback(request, response, self.caller_of(service, impl.last_info))
+        service = Service(impl, srv_type, srv_name, with_caller, group, qos)
+        group.add_entity(service)
+        self._services.append(service)
+        self._wake_executor()
+        return service
+
+    def caller_of(self, service: Any, info: Any) -> Caller:
+        """Return what rclpy tells of a request: sequence, send time, the client nodes."""
+        name = service.service_name
+        deadline = time.monotonic() + CALLER_GRAPH_WAIT_S
+        while True:       # the caller's node info may come a moment after its request
+            clients = self.get_publishers_info_by_topic(f'rq{name}Request', no_mangle=True)
+            nodes = sorted({f"{c.node_namespace.rstrip('/')}/{c.node_name}" for c in clients})
+            if nodes or time.monotonic() > deadline:
+                break
+            time.sleep(0.01)
+        seq, sent = -1, None
+        if info is not None:
+            seq, sent = int(info.request_id.sequence_number), int(info.source_timestamp) or None
+        return Caller('rclpy', name, seq, time.time_ns(), sent_ns=sent,
+                      node=nodes[0] if len(nodes) == 1 else None, candidates=tuple(nodes))
+
     def create_client(self, srv_type: Any, srv_name: str, **kwargs: Any) -> Client:
         kwargs.setdefault('callback_group', self._client_group)
         return Client(self, super().create_client(srv_type, srv_name, **kwargs))
@@ -208,10 +278,10 @@ def shutdown() -> None:
 
 def create_node(name: str, *, namespace: str = '/',
                 parameter_overrides: Optional[dict[str, Any]] = None,
-                use_sim_time: Optional[bool] = None) -> Node:
+                use_sim_time: Optional[bool] = None, global_arguments: bool = True) -> Node:
     init()
     return Node(name, namespace=namespace, parameter_overrides=parameter_overrides,
-                use_sim_time=use_sim_time)
+                use_sim_time=use_sim_time, global_arguments=global_arguments)
 
 
 def spin_once(node: Node, timeout_sec: Optional[float] = None) -> None:

@@ -15,7 +15,7 @@
 ROS 2 node suite of frf_ident (plant, controller, excitation + iteration service, estimator).
 
 Thin nodes: they wire topics and parameters to the core objects (plant, PI, procedure phases,
-ChirpIteration, BagRecorder, estimate_recording). See README_nodes.md.
+ChirpIteration, BagRecorder, estimate_recording). See docs/nodes.md.
 """
 import os
 import signal
@@ -24,7 +24,8 @@ import threading
 import time
 
 #: the node executables (console scripts and ``python -m frf_ident.nodes.<name>``)
-NODE_NAMES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node')
+NODE_NAMES = ('plant_node', 'controller_node', 'excitation_node', 'estimator_node',
+              'operator', 'operator_node')
 
 
 #: after a Ctrl-C in start-up, how long [s] a node waits for the SIGINT ``ros2 launch`` sends

@@ -34,6 +34,8 @@ TOPICS = {
     'experiment_topic': '/frf/experiment',
     'clock_topic': '/clock',
     'progress_topic': '/frf/progress',
+    'arming_topic': '/frf/arming',
+    'heartbeat_topic': '/frf/heartbeat',
 }
 READY = mw.READY
 #: default of the ``lockstep`` parameter of every node: free-running, the mode that is safe on a

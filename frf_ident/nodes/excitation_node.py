@@ -48,6 +48,7 @@ from frf_ident.app.excitation import ExcitationSession, SessionSettings
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.nodes import common as c
+from frf_ident.nodes.operator_gate import OperatorGate
 import numpy as np
 
 __all__ = ['ExcitationNode', 'main']
@@ -109,14 +110,14 @@ class ExcitationNode:
     """
 
     def __init__(self, node: Any) -> None:
-        from frf_ident.io.model_file import load_model
+        from frf_ident.io.model_file import dry_run_plant, load_model
         self.node = node
         settings = settings_from_parameters(node)
         c.refuse_lockstep_without_sim(node, settings.lockstep)
         t = c.topics(node, ('joint_states_topic', 'velocity_topic', 'excitation_topic',
                             'experiment_topic', 'progress_topic'))
         self.velocity_topic = t['velocity_topic']
-        _model, robot, ctrl = load_model(c.param(node, 'model', '') or None)
+        model, robot, ctrl = load_model(c.param(node, 'model', '') or None)
         self.joints = list(robot.joint_names)
         torque_limit = np.minimum(ctrl.torque_limit, robot.torque_limits())
         JointState = mw.msg('sensor_msgs/msg/JointState')
@@ -135,19 +136,22 @@ class ExcitationNode:
         # lockstep: staleness in simulation time (the plant's /clock); a robot: wall time
         sim_now = (lambda: clock.now().nanoseconds) if settings.lockstep else None
         self.session = ExcitationSession(settings, self.joints, robot.dt, torque_limit, self,
-                                         model=(robot, ctrl), sim_now_ns=sim_now)
+                                         model=(robot, ctrl, dry_run_plant(model, robot)),
+                                         sim_now_ns=sim_now)
         self.dt_ns = self.session.dt_ns
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None
         self.refuse_second_publisher(float(c.param(node, 'discovery_wait_s', 0.5)))
+        # arming and the operator heartbeat (docs/ros2.md, "Arming"); every request logged
+        self.gate = OperatorGate(node, settings.lockstep, self.log)
         # every joint state, in order (also free-running): the torque of each sample is in its
         # own joint state, and a busy node works through a backlog instead of losing samples
         node.create_subscription(JointState, t['joint_states_topic'], self._on_state,
                                  mw.qos_default(c.DEEP), drain=True)
         Trigger = mw.srv('std_srvs/srv/Trigger')
-        node.create_service(Trigger, '/frf/run_multisine', self._on_run_multisine)
-        node.create_service(Trigger, '/frf/run_iteration', self._on_run_iteration)
-        node.create_service(Trigger, '/frf/abort', self._on_abort)
+        node.create_service(Trigger, '/frf/run_multisine', self._on_run_multisine, caller=True)
+        node.create_service(Trigger, '/frf/run_iteration', self._on_run_iteration, caller=True)
+        node.create_service(Trigger, '/frf/abort', self._on_abort, caller=True)
         # the watchdog thread: sim time from the node clock in lockstep, wall time on a robot
         self._stop = threading.Event()
         self._signalled = threading.Event()      # SIGINT/SIGTERM (spin's stop event)
@@ -162,6 +166,7 @@ class ExcitationNode:
                 self.session.close()
                 return
             self.session.watch()
+            self.gate.watch(self.session)
 
     def spin(self, stop: threading.Event) -> None:
         """Spin the node until ``stop`` (a signal); the watchdog stops a run at the signal."""
@@ -272,33 +277,40 @@ class ExcitationNode:
         self.session.on_state(int(round(c.stamp_ns(msg) / self.dt_ns)),
                               np.array([p[i] for i in cols]), effort)
 
-    def _start(self, starter: Any, response: Any) -> Any:
+    def _start(self, starter: Any, response: Any, caller: Any) -> Any:
         try:
+            self.gate.check()            # first: who may start motion at all
             n = self.node.count_publishers(self.velocity_topic)
             if n > 1:
                 raise RuntimeError(f'{n - 1} other publisher(s) on {self.velocity_topic}')
             run = starter()
+            self.gate.run_started(run)
+            self.gate.log_request(caller, True, f'run {run.id} {run.name}')
             response.success = True
             response.message = json.dumps({'accepted': True, 'run': run.id,
                                            'procedure': run.name,
                                            'samples': run.stream.total})
         except Exception as exc:
             self.log('error', f'not started: {exc}')
+            who = self.gate.log_request(caller, False, str(exc))
             response.success = False
             # refused: unsafe or invalid settings, the user's to change (not a failure)
             response.message = json.dumps({'accepted': False, 'error': str(exc),
-                                           'refused': isinstance(exc, FrfIdentInputError)})
+                                           'refused': isinstance(exc, FrfIdentInputError),
+                                           'caller': who})
         return response
 
-    def _on_run_multisine(self, request: Any, response: Any) -> Any:
-        return self._start(self.session.start_multisine, response)
+    def _on_run_multisine(self, request: Any, response: Any, caller: Any) -> Any:
+        return self._start(self.session.start_multisine, response, caller)
 
-    def _on_run_iteration(self, request: Any, response: Any) -> Any:
-        return self._start(self.session.start_chirp_iteration, response)
+    def _on_run_iteration(self, request: Any, response: Any, caller: Any) -> Any:
+        return self._start(self.session.start_chirp_iteration, response, caller)
 
-    def _on_abort(self, request: Any, response: Any) -> Any:
+    def _on_abort(self, request: Any, response: Any, caller: Any) -> Any:
         """Stop the running procedure: the reference ramps to zero within abort_ramp_s."""
         run = self.session.abort('abort requested (/frf/abort)')
+        self.gate.log_request(caller, run is not None,
+                              f'run {run.id} aborted' if run else 'no procedure is running')
         response.success = run is not None
         response.message = json.dumps({'aborted': True, 'run': run.id, 'procedure': run.name}
                                       if run is not None else
@@ -308,6 +320,7 @@ class ExcitationNode:
     def close(self) -> None:
         self._stop.set()
         self.session.close()
+        self.gate.close()
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

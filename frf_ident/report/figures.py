@@ -26,8 +26,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from frf_ident.core.diagnosis.residual import FC_HZ, lowpass
+from frf_ident.core.diagnosis.residual import lowpass
 from frf_ident.core.diagnosis.result import DiagnosisResult
+from frf_ident.core.diagnosis.thresholds import FC_HZ
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.recording import JOINT_STATE_FRF_UNIT
 import matplotlib
@@ -480,8 +481,8 @@ def diagnosis_figures(out: Path, res: DiagnosisResult, rec: Any, mode: str
                     ax[2, i].semilogx(f, _db(r), style, color=col,
                                       label=f'{key}: measured/{lab}')
             for u in res.unexplained:
-                if u['axis'] == rec.joint_names[i] and 'band_hz' in u['signature']:
-                    ax[2, i].axvspan(*u['signature']['band_hz'], color='tab:orange', alpha=0.2,
+                if u.axis == rec.joint_names[i] and u.signature.band_hz:
+                    ax[2, i].axvspan(*u.signature.band_hz, color='tab:orange', alpha=0.2,
                                      label='unexplained band')
             ax[0, i].set_title(f'{rec.joint_names[i]}: dq_m/tau_m (held-out data)')
             ax[0, i].set_ylabel(f'|P| [dB re 1 {JOINT_STATE_FRF_UNIT}]' if i == 0 else '')
@@ -513,29 +514,29 @@ def diagnosis_figures(out: Path, res: DiagnosisResult, rec: Any, mode: str
                                      'controller) against velocity and position'))
         return figs
     r = res.detail.residual
-    n = r['f'].shape[1]
+    n = r.f.shape[1]
     fig, ax = plt.subplots(3, n, figsize=(5 * n, 9), squeeze=False)
     for i in range(n):
-        nom = r['f'][:, i]
+        nom = r.f[:, i]
         nom = lowpass(nom, rec.fs, FC_HZ)   # as the diagnosis low-passed its predictions
-        ext = nom - (r['pred_extended'][:, i] - r['pred_baseline'][:, i])
-        ax[0, i].plot(r['t'], nom, 'k', lw=0.6, label='nominal residual')
-        ax[0, i].plot(r['t'], ext, color='tab:green', lw=0.6, label='extended residual')
-        vm = np.r_[False, r['val_mask'], False].astype(int)
+        ext = nom - (r.pred_extended[:, i] - r.pred_baseline[:, i])
+        ax[0, i].plot(r.t, nom, 'k', lw=0.6, label='nominal residual')
+        ax[0, i].plot(r.t, ext, color='tab:green', lw=0.6, label='extended residual')
+        vm = np.r_[False, r.val_mask, False].astype(int)
         starts, ends = np.flatnonzero(np.diff(vm) == 1), np.flatnonzero(np.diff(vm) == -1)
         for k, (a, b) in enumerate(zip(starts, ends)):
-            ax[0, i].axvspan(r['t'][a], r['t'][b - 1], color='0.9',
+            ax[0, i].axvspan(r.t[a], r.t[b - 1], color='0.9',
                              label='held out' if k == 0 else None)
         ax[0, i].set_title(rec.joint_names[i])
         ax[0, i].set_xlabel('t [s]')
         ax[0, i].legend(fontsize=6)
-        ax[1, i].plot(r['v'][:, i], nom, '.', ms=1, color='tab:red')
-        ax[1, i].plot(r['v'][:, i], ext, '.', ms=1, color='tab:green')
+        ax[1, i].plot(r.v[:, i], nom, '.', ms=1, color='tab:red')
+        ax[1, i].plot(r.v[:, i], ext, '.', ms=1, color='tab:green')
         ax[0, i].set_ylabel('residual [N m]' if i == 0 else '')
         ax[1, i].set_xlabel('velocity [rad/s]')
         ax[1, i].set_ylabel('inverse-dynamics residual [N m]' if i == 0 else '')
-        ax[2, i].plot(r['q'][:, i], nom, '.', ms=1, color='tab:red')
-        ax[2, i].plot(r['q'][:, i], ext, '.', ms=1, color='tab:green')
+        ax[2, i].plot(r.q[:, i], nom, '.', ms=1, color='tab:red')
+        ax[2, i].plot(r.q[:, i], ext, '.', ms=1, color='tab:green')
         ax[2, i].set_xlabel('position [rad]')
         ax[2, i].set_ylabel('inverse-dynamics residual [N m]' if i == 0 else '')
     _save(fig, out / 'residual.png')

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from frf_ident.report.figures import frequency_axis
+from frf_ident.report.figures import DPI, frequency_axis
 import matplotlib
 
 matplotlib.use('Agg')
@@ -32,8 +32,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 __all__ = ['fit_figure', 'loop_figure']
-
-DPI = 100
 
 
 def _db(x: np.ndarray) -> np.ndarray:

@@ -38,13 +38,11 @@ with their standard errors and units, and the margins with their uncertainty.
 """
 from __future__ import annotations
 
-import datetime as _dt
 import html
 import math
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from frf_ident.core.diagnosis.result import DiagnosisResult
 from frf_ident.core.estimation.distortion import DistortionLines
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.lpm import RobustLpmLevels
@@ -56,29 +54,12 @@ from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.report import figures
 from frf_ident.report.distortion import distortion_figure, robust_lpm_figure
-from frf_ident.report.text import plain
+from frf_ident.report.page import figure_tag, num, page, table
 import numpy as np
 
-__all__ = ['fit_sections', 'write_diagnosis_report', 'write_fit_report', 'write_report']
+__all__ = ['fit_sections', 'proposal_section', 'write_fit_report', 'write_report']
 
 REPORT_NAME = 'report.html'
-
-_CSS = """
-body { font-family: system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 2em auto;
-       max-width: 1200px; color: #222; line-height: 1.45; padding: 0 1em; }
-h1 { border-bottom: 2px solid #3b6ea5; padding-bottom: .2em; }
-h2 { color: #3b6ea5; margin-top: 2em; }
-body { overflow-wrap: break-word; }
-figure { margin: 1em 0; } figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
-figcaption { font-size: .9em; color: #555; margin-top: .3em; }
-table { border-collapse: collapse; margin: .6em 0; font-size: .9em; display: block;
-        max-width: 100%; overflow-x: auto; }
-th, td { border: 1px solid #ccc; padding: .25em .6em; text-align: left; overflow-wrap: normal; }
-td:last-child { min-width: 14em; }
-th { background: #eef3f8; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
-.warn { color: #a33; } .ok { color: #272; } .muted { color: #777; font-size: .85em; }
-nav a { margin-right: 1em; }
-"""
 
 
 def write_report(out_dir: str | Path, *, frfs: Mapping[str, FrequencyResponse],
@@ -149,57 +130,8 @@ def write_report(out_dir: str | Path, *, frfs: Mapping[str, FrequencyResponse],
     if timing_d:
         sections.append(('timing', 'Timing of the recording', _timing_section(timing_d)))
     path = out / REPORT_NAME
-    path.write_text(_page(title, sections, recording))
+    path.write_text(page(title, sections, recording))
     return path
-
-
-# --------------------------------------------------------------------------- page
-
-def _page(title: str, sections: list[tuple[str, str, str]], rec: Recording | None) -> str:
-    nav = ' '.join(f'<a href="#{a}">{html.escape(h)}</a>' for a, h, _ in sections)
-    body = '\n'.join(f'<section id="{a}"><h2>{html.escape(h)}</h2>\n{content}\n</section>'
-                     for a, h, content in sections)
-    stamp = _dt.datetime.now().isoformat(timespec='seconds')
-    src = ''
-    if rec is not None:
-        src = (f' &middot; recording: {rec.t.size} samples at {rec.fs:.6g} Hz, '
-               f'{rec.t[-1] - rec.t[0]:.3f} s, joints {html.escape(", ".join(rec.joint_names))}')
-    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">\n'
-            f'<meta name="viewport" content="width=device-width, initial-scale=1">\n'
-            f'<title>{html.escape(title)}</title>\n<style>{_CSS}</style></head>\n<body>\n'
-            f'<h1>{html.escape(title)}</h1>\n<p class="muted">frf_ident report, {stamp}{src}'
-            f'</p>\n<nav>{nav}</nav>\n{body}\n</body></html>\n')
-
-
-def _figure(name: str, caption: str, alt: str) -> str:
-    # the image links to itself: on a phone the page shrinks it, a tap shows it full size
-    src = html.escape(name)
-    return (f'<figure><a href="{src}"><img src="{src}" alt="{html.escape(alt)}"></a>'
-            f'<figcaption>{caption}</figcaption></figure>')
-
-
-def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
-    head = ''.join(f'<th>{html.escape(str(h))}</th>' for h in header)
-    body = ''.join('<tr>' + ''.join(_cell(v) for v in row) + '</tr>' for row in rows)
-    return f'<table><tr>{head}</tr>{body}</table>'
-
-
-def _cell(v: Any) -> str:
-    if isinstance(v, bool) or v is None:
-        return f'<td>{html.escape(str(v))}</td>'
-    if isinstance(v, (int, np.integer)):
-        return f'<td class="num">{int(v)}</td>'
-    if isinstance(v, (float, np.floating)):
-        return f'<td class="num">{_num(float(v))}</td>'
-    if isinstance(v, (Mapping, list, tuple)):
-        return f'<td>{html.escape(plain(v))}</td>'
-    return f'<td>{html.escape(str(v))}</td>'
-
-
-def _num(v: float) -> str:
-    if not math.isfinite(v):
-        return str(v)
-    return f'{v:.4g}'
 
 
 # --------------------------------------------------------------------------- sections
@@ -221,8 +153,8 @@ def _estimates_table(frfs: Mapping[str, FrequencyResponse],
     first = next(iter(frfs.values()))
     chans = ', '.join(f'{html.escape(i)} \u2192 {html.escape(o)}'
                       for o in first.outputs for i in first.inputs)
-    return (_table(['estimate', 'outputs \u00d7 inputs', 'lines', 'band [Hz]', 'method',
-                    'variance', 'median SNR [dB]', 'RMS error to reference [dB]'], rows)
+    return (table(['estimate', 'outputs \u00d7 inputs', 'lines', 'band [Hz]', 'method',
+                   'variance', 'median SNR [dB]', 'RMS error to reference [dB]'], rows)
             + f'<p class="muted">Channels (input \u2192 output): {chans}</p>')
 
 
@@ -247,13 +179,13 @@ def _error_to_reference(frf: FrequencyResponse, ref: FrequencyResponse | None) -
 def _bode_section(out: Path, frfs: Mapping[str, FrequencyResponse],
                   reference: FrequencyResponse | None) -> str:
     figures.bode_figure(frfs, out / 'bode.png', reference=reference)
-    return _figure('bode.png',
-                   'Magnitude (upper row of each pair) and phase (lower row) of every channel '
-                   'input \u2192 output. Markers: estimated lines; shaded: \u00b12\u03c3 '
-                   'uncertainty from the total variance (noise + nonlinear distortion) or, '
-                   'without it, the noise variance; black line: reference. Wide bands and '
-                   'scattered markers mark lines the data do not determine well.',
-                   'Bode diagrams of the estimates')
+    return figure_tag('bode.png',
+                      'Magnitude (upper row of each pair) and phase (lower row) of every channel '
+                      'input \u2192 output. Markers: estimated lines; shaded: \u00b12\u03c3 '
+                      'uncertainty from the total variance (noise + nonlinear distortion) or, '
+                      'without it, the noise variance; black line: reference. Wide bands and '
+                      'scattered markers mark lines the data do not determine well.',
+                      'Bode diagrams of the estimates')
 
 
 def _distortion_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str:
@@ -264,7 +196,7 @@ def _distortion_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str
             levels = DistortionLines.from_dict(d)
             distortion_figure(levels, out / 'distortion.png', title=name)
             items = ''.join(f'<li>{html.escape(line)}</li>' for line in levels.summary())
-            return f'<ul>{items}</ul>' + _figure(
+            return f'<ul>{items}</ul>' + figure_tag(
                 'distortion.png',
                 'Output level |Y|² of the period mean at the excited lines (open), at the '
                 'odd lines the multisine leaves out (red: odd nonlinearities such as a cubic '
@@ -283,7 +215,7 @@ def _robust_lpm_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str
             levels = RobustLpmLevels.from_dict(d)
             robust_lpm_figure(levels, frf, out / 'robust_lpm.png', title=name)
             items = ''.join(f'<li>{html.escape(line)}</li>' for line in levels.summary())
-            return f'<ul>{items}</ul>' + _figure(
+            return f'<ul>{items}</ul>' + figure_tag(
                 'robust_lpm.png',
                 f'|P| of one multisine realisation ({levels.periods} periods; blue) with the '
                 'standard deviation of its noise (black, from the spread over periods) and of '
@@ -297,12 +229,12 @@ def _robust_lpm_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str
 def _snr_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str:
     if figures.snr_figure(frfs, out / 'snr.png') is None:
         return ''
-    return _figure('snr.png',
-                   'Coherence-like signal-to-noise ratio per line, |P|\u00b2 / var(P) in dB. '
-                   'Above 20 dB (dashed) the 1\u03c3 uncertainty is below 10 % of |P|; near '
-                   '0 dB (dotted) the estimate is as large as its uncertainty. Dips usually '
-                   'sit at anti-resonances or where friction or too little excitation hide the '
-                   'dynamics.', 'SNR per line')
+    return figure_tag('snr.png',
+                      'Coherence-like signal-to-noise ratio per line, |P|\u00b2 / var(P) in dB. '
+                      'Above 20 dB (dashed) the 1\u03c3 uncertainty is below 10 % of |P|; near '
+                      '0 dB (dotted) the estimate is as large as its uncertainty. Dips usually '
+                      'sit at anti-resonances or where friction or too little excitation hide the '
+                      'dynamics.', 'SNR per line')
 
 
 def _signals_section(out: Path, rec: Recording) -> str:
@@ -314,9 +246,9 @@ def _signals_section(out: Path, rec: Recording) -> str:
     figures.timeseries_figure(rec.t, series, rec.joint_names, out / 'timeseries.png')
     units = rec.meta.get('units')
     note = (f' Units per joint (import map): {html.escape(str(units))}.' if units else '')
-    return _figure('timeseries.png',
-                   f'Applied motor torque, measured velocity and velocity reference of each '
-                   f'joint over time.{note}', 'time series')
+    return figure_tag('timeseries.png',
+                      f'Applied motor torque, measured velocity and velocity reference of each '
+                      f'joint over time.{note}', 'time series')
 
 
 def _common_units(rec: Recording):
@@ -335,12 +267,12 @@ def _spectrogram_section(out: Path, rec: Recording) -> str:
     figures.spectrogram_figure(rec.effort, rec.fs, rec.joint_names, out / 'spectrogram.png',
                                f_range=(1.0, f_hi), t0=float(rec.t[0]),
                                unit=_common_units(rec)('effort', 'N m'))
-    return _figure('spectrogram.png',
-                   f'Power spectral density of the motor torques over time, 1\u2013{f_hi:g} Hz '
-                   'on a log axis (as Fig. 3 of Saupe &amp; Knoblach 2015). A chirp is a '
-                   'rising ridge; faint parallel ridges above it are harmonics from '
-                   'nonlinearities; a multisine is a set of horizontal lines; broadband '
-                   'vertical stripes are impacts or friction reversals.', 'torque spectrogram')
+    return figure_tag('spectrogram.png',
+                      f'Power spectral density of the motor torques over time, 1\u2013{f_hi:g} Hz '
+                      'on a log axis (as Fig. 3 of Saupe &amp; Knoblach 2015). A chirp is a '
+                      'rising ridge; faint parallel ridges above it are harmonics from '
+                      'nonlinearities; a multisine is a set of horizontal lines; broadband '
+                      'vertical stripes are impacts or friction reversals.', 'torque spectrogram')
 
 
 def _input_names(frfs: Mapping[str, FrequencyResponse], rec: Recording | None) -> list[str]:
@@ -360,21 +292,21 @@ def _iteration_section(out: Path, iterations: Sequence[Mapping[str, Any]],
     n = max(len(e) for e in errs)
     header = ['iteration'] + [names[c] if c < len(names) else f'channel {c}' for c in range(n)]
     rows = [[int(it['iteration'])] + [float(v) for v in e] for it, e in zip(iterations, errs)]
-    return (_figure('iterations.png',
-                    'Error of the measured plant input u to the desired u_des (dB, per '
-                    'channel) after each iteration of the closed-loop excitation design '
-                    '(Sec. 5.3, eq. 18). It should fall towards 0 dB; the paper needed six '
-                    'iterations.', 'iteration convergence')
-            + _table(header, rows))
+    return (figure_tag('iterations.png',
+                       'Error of the measured plant input u to the desired u_des (dB, per '
+                       'channel) after each iteration of the closed-loop excitation design '
+                       '(Sec. 5.3, eq. 18). It should fall towards 0 dB; the paper needed six '
+                       'iterations.', 'iteration convergence')
+            + table(header, rows))
 
 
 def _timing_section(t: Mapping[str, Any]) -> str:
     rate = 1.0 / t['dt_s'] if t.get('dt_s') else float('nan')
     facts = [['samples', t.get('n_samples')], ['sample rate [Hz]', rate],
-             ['time span [s]', f"{_num(t.get('t_start_s', float('nan')))} \u2013 "
-                               f"{_num(t.get('t_end_s', float('nan')))}"],
+             ['time span [s]', f"{num(t.get('t_start_s', float('nan')))} \u2013 "
+                               f"{num(t.get('t_end_s', float('nan')))}"],
              ['time grid', t.get('grid')], ['resampled', t.get('resampled')]]
-    parts = [_table(['finding', 'value'], facts)]
+    parts = [table(['finding', 'value'], facts)]
     topics = t.get('topics') or {}
     if topics:
         rows = [[name, d.get('count'), d.get('rate_hz'), d.get('stamp_source'),
@@ -383,9 +315,9 @@ def _timing_section(t: Mapping[str, Any]) -> str:
                  None if d.get('header_log_offset_mean_s') is None
                  else 1e3 * d['header_log_offset_mean_s']]
                 for name, d in topics.items()]
-        parts.append(_table(['topic', 'messages', 'rate [Hz]', 'stamps', 'jitter [% of dt]',
-                             'gaps', 'missing samples', 'duplicates', 'non-monotonic',
-                             'log - header [ms]'], rows))
+        parts.append(table(['topic', 'messages', 'rate [Hz]', 'stamps', 'jitter [% of dt]',
+                            'gaps', 'missing samples', 'duplicates', 'non-monotonic',
+                            'log - header [ms]'], rows))
     rec = t.get('recovery') or {}
     if rec.get('damaged'):
         parts.append(f'<p class="warn">Recovered a damaged or unfinished bag: '
@@ -401,145 +333,6 @@ def _timing_section(t: Mapping[str, Any]) -> str:
     return '\n'.join(parts)
 
 
-# --------------------------------------------------------------------------- diagnosis
-
-def write_diagnosis_report(out_dir: str | Path, report: Mapping[str, Any],
-                           res: DiagnosisResult, rec: Recording, mode: str,
-                           data: str | Path) -> Path:
-    """
-    Write the HTML report of ``frf-ident diagnose``.
-
-    ``out_dir/report.html`` of ``frf-ident diagnose``: ranked effects with evidence, what is
-    left unexplained and where, held-out metrics (also per axis and per --validate record),
-    rejected candidates and the figures of :func:`figures.diagnosis_figures`.
-
-    Parameters
-    ----------
-    out_dir
-        Directory of report.json (created if missing).
-    report
-        The report.json content (docs/CONTRACT.md §7).
-    res
-        The diagnosis result (its ``detail``: estimates, simulations or residuals for the
-        figures).
-    rec
-        The diagnosed recording.
-    mode
-        'experiments' or 'timeseries'.
-    data
-        The diagnosed file (shown in the title).
-
-    Returns
-    -------
-    Path of report.html.
-
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    evidence = ('identification experiments (FRF of multisine and chirp, closed-loop '
-                'simulation of the same reference)' if mode == 'experiments' else
-                'time series (inverse-dynamics residual regression)')
-    eff = report['effects']
-    if eff:
-        eff_html = _table(['#', 'effect', 'axis', 'score', 'parameters',
-                           'standard error', 'evidence'],
-                          [[k + 1, x['name'], x['axis'], x['score'],
-                            plain(x['parameters']),
-                            plain(x['standard_error']) if 'standard_error' in x else '',
-                            x['evidence']]
-                           for k, x in enumerate(eff)])
-    else:
-        eff_html = '<p>none of the candidate effects improves the held-out data.</p>'
-    une = report.get('unexplained', [])
-    if une:
-        une_html = ('<p>The extended model leaves these axes clearly above their noise floor; '
-                    'the signature says where the rest of the misfit lives.</p>'
-                    + _table(['axis', 'share of the nominal misfit left',
-                              'bands [Hz], strongest first', 'residual correlates with'],
-                             [[u['axis'], u.get('misfit_share', u.get('kind')),
-                               ', '.join(f'{b[0]:g}-{b[1]:g}' for b in u['signature'].get(
-                                   'bands_hz', [u['signature']['band_hz']]
-                                   if 'band_hz' in u['signature'] else [])) or '-',
-                               u['signature'].get('correlates_with', '-')] for u in une]))
-    else:
-        une_html = '<p>nothing: every axis is explained to within its noise floor.</p>'
-    if report.get('analysis_band'):
-        b = report['analysis_band']
-        une_html += (f'<p>Effects fitted in the analysis band 0-{b["fc_hz"]:g} Hz (set by the '
-                     f'{html.escape(b["set_by"])}); the residual above it is scanned for '
-                     f'resonances (listed above as "resonance above the analysis band").</p>')
-    m = report['metrics']
-    rows = [['nominal', m['baseline']['frf_error_db'], m['baseline']['time_nrmse']],
-            ['extended', m['extended']['frf_error_db'], m['extended']['time_nrmse']]]
-    for ax, v in m['baseline'].get('per_axis', {}).items():
-        e = m['extended']['per_axis'][ax]
-        rows += [[f'{ax}: nominal', v['frf_error_db'], v['time_nrmse']],
-                 [f'{ax}: extended', e['frf_error_db'], e['time_nrmse']]]
-    met = (_table(['model', 'frf_error_db', 'time_nrmse'], rows)
-           + f'<p>{html.escape(str(m["validation"]))}</p>')
-    for v in m.get('validation_records', []):
-        met += (f'<h3>other record {html.escape(str(v["record"]))}</h3>'
-                + _table(['model', 'frf_error_db', 'time_nrmse'],
-                         [['nominal', v['baseline']['frf_error_db'],
-                           v['baseline']['time_nrmse']],
-                          ['extended', v['extended']['frf_error_db'],
-                           v['extended']['time_nrmse']]]))
-        far = v.get('beyond_fitted_range') or {}
-        if far:
-            met += ('<p class="warn">This record leaves the configuration range the model was '
-                    'fitted on (position-dependent terms are extrapolated): '
-                    + '; '.join(f'{html.escape(ax)} reaches {r["reached_deg"][0]:.1f} .. '
-                                f'{r["reached_deg"][1]:.1f} deg, fitted {r["fitted_deg"][0]:.1f}'
-                                f' .. {r["fitted_deg"][1]:.1f} deg ({r["beyond_deg"]:.1f} deg '
-                                f'beyond)' for ax, r in far.items()) + '.</p>')
-    ls = m.get('least_squares')
-    if ls:
-        met += ('<h3>Against the least-squares baseline</h3>'
-                f'<p>{html.escape(ls["model"])}; {html.escape(ls["metric"])}.</p>'
-                + _table(['held-out set', 'axis', 'nominal', 'least squares',
-                          'extended (as fitted)'],
-                         [[s['record'], ax, v['nominal'], v['least_squares'], v['extended']]
-                          for s in ls['held_out_as_fitted'] for ax, v in s['per_axis'].items()])
-                + '<ul>' + ''.join(f'<li>{html.escape(ax)}: the extended model '
-                                   f'{html.escape(v)}</li>'
-                                   for ax, v in ls['extended_vs_baseline'].items()) + '</ul>')
-    step = report.get('discretisation')
-    if step:
-        met += (f'<p>Integrator check: the extended model simulated at twice its '
-                f'simulation.substeps ({step["substeps"]}) moves the held-out misfit '
-                + ', '.join(f'{html.escape(str(ax))} {x:.4g} -> {y:.4g}' for ax, x, y in zip(
-                    step['axes'], step['held_out_misfit'],
-                    step['held_out_misfit_double_substeps']))
-                + ' noise floors; '
-                + (html.escape(', '.join(step['too_coarse'])) + ': simulated too coarsely for '
-                   'this record, raise simulation.substeps in the model file.</p>'
-                   if step['too_coarse'] else 'within the noise on every axis.</p>'))
-    rej = report.get('rejected', [])
-    rej_html = (_table(list(rej[0].keys()), [list(r.values()) for r in rej]) if rej else
-                '<p>none.</p>')
-    figs = figures.diagnosis_figures(out, res, rec, mode)
-    if res.band is not None:
-        from .residual_spectrum import residual_spectrum_figure
-        residual_spectrum_figure(res, rec, out / 'residual_spectrum.png')
-        figs.append(('residual_spectrum.png',
-                     'Residual spectrum of the extended model: the analysis band (grey) and '
-                     'the peaks above it the scan reports (orange, in Unexplained)'))
-    fig_html = '\n'.join(_figure(fn, html.escape(cap), cap) for fn, cap in figs)
-    sections = [
-        ('effects', 'Effects (most likely first)',
-         f'<p>Evidence: {html.escape(evidence)}.</p>' + eff_html
-         + '<p>Extended model: <a href="extended_model.yaml">extended_model.yaml</a></p>'),
-        ('unexplained', 'Unexplained', une_html),
-        ('metrics', 'Gain on held-out data', met),
-        ('rejected', 'Rejected candidates', rej_html),
-        ('figures', 'Figures', fig_html)]
-    p = out / 'report.html'
-    p.write_text(_page(f'Diagnosis of {data}', sections, rec))
-    return p
-
-
-# --------------------------------------------------------------------------- fit and loop
-
 def _pm(value: float, std: float, scale: float = 1.0) -> str:
     """Return ``value +- std`` (4 significant digits, the error to 2) or the value alone."""
     if not math.isfinite(value):
@@ -550,81 +343,130 @@ def _pm(value: float, std: float, scale: float = 1.0) -> str:
 
 def _verdict(cost) -> str:
     cls = 'warn' if cost.structure_missing else 'ok' if cost.weighted else 'muted'
-    return f'<p class="{cls}">{html.escape(cost.summary())}</p>'
+    return (f'<p class="{cls}">{html.escape(cost.summary())}: '
+            f'<b>{html.escape(cost.verdict)}</b></p>')
 
 
-def _delay_row(name: str, delay_s: float, std_s: float) -> list[Any]:
+def _delay_row(name: str, delay_s: float, std_s: float, hold_s: float = 0.0) -> list[Any]:
     how = 'fitted' if math.isfinite(std_s) else 'given (--delay)'
-    return [name, f'delay ({how})', _pm(delay_s, std_s, 1e3), 'ms',
-            _relative(delay_s, std_s)]
+    if not hold_s:
+        return [name, f'delay ({how})', _pm(delay_s, std_s, 1e3), 'ms',
+                _relative(delay_s, std_s)]
+    return [name, f'time_delay ({how}; the whole delay {1e3 * delay_s:.4g} ms less the '
+                  f"zero-order hold's {1e3 * hold_s:.4g} ms, as model.yaml)",
+            _pm(max(delay_s - hold_s, 0.0), std_s, 1e3), 'ms', '\u2014']
 
 
 def _relative(value: float, std: float) -> str:
     return f'{100 * abs(std / value):.2g}' if value and math.isfinite(std) else '\u2014'
 
 
-def _physical_html(fits: Sequence[PhysicalFit]) -> str:
+def _physical_html(fits: Sequence[PhysicalFit], hold_s: float = 0.0) -> str:
     rows = []
     for f in fits:
         fa, fr = f.resonances_hz()
         rows += [[f.name, k, _pm(v, sd), UNITS[k], _relative(v, sd)]
-                 for k, v, sd in zip(f.names, f.value, f.std)]
-        rows.append(_delay_row(f.name, f.delay_s, f.delay_std_s))
+                 for k, v, sd in zip(f.names, f.value, f.reported_std)]
+        rows.append(_delay_row(f.name, f.delay_s, f.delay_reported_std_s, hold_s))
         rows.append([f.name, 'antiresonance / resonance', f'{fa:.4g} / {fr:.4g}', 'Hz', ''])
     verdicts = ''.join(f'<li>{html.escape(f.name)}: {_verdict(f.cost)}</li>' for f in fits)
-    return (_table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
-                    'standard error [%]'], rows)
+    return (table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
+                   'standard error [%]'], rows)
             + f'<p>Cost test per axis:</p><ul>{verdicts}</ul>')
 
 
-def _coupled_html(fit: CoupledFit) -> str:
+def _coupled_html(fit: CoupledFit, hold_s: float = 0.0) -> str:
     rows = []
     for i, name in enumerate(fit.names):
-        sd = fit.axis_std(i)
+        sd = fit.axis_std(i, reported=True)
         rows += [[name, k, _pm(v, sd[k]), UNITS[k], _relative(v, sd[k])]
                  for k, v in fit.axis_parameters(i).items()]
-    c, csd = fit.link_coupling()
+    c, csd = fit.link_coupling(reported=True)
     for i, j in zip(*np.triu_indices(len(fit.names), 1)):
         rows.append([f'{fit.names[i]} \u2013 {fit.names[j]}', 'link coupling',
                      _pm(c[i, j], csd[i, j]), 'kg m^2', _relative(c[i, j], csd[i, j])])
-    rows.append(_delay_row('all axes', fit.delay_s, fit.delay_std_s))
-    return (_table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
-                    'standard error [%]'], rows)
-            + '<p>Cost test of the coupled fit:</p>' + _verdict(fit.cost))
+    rows.append(_delay_row('all axes', fit.delay_s, fit.delay_reported_std_s, hold_s))
+    apart = ''.join(f'<li>{html.escape(line)}</li>' for line in fit.disagreements())
+    return (table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
+                   'standard error [%]'], rows)
+            + '<p>Cost test of the coupled fit:</p>' + _verdict(fit.cost)
+            + (f'<p>Per-axis fits (no coupling) against the coupled fit, beyond their '
+               f'errors:</p><ul>{apart}</ul>' if apart else ''))
 
 
 def _rational_html(fit: RationalFit) -> str:
-    rows = [[_pm(m.frequency_hz, m.frequency_std_hz), _pm(m.damping, m.damping_std)]
-            for m in fit.modes()]
+    rows = [[_pm(m.frequency_hz, math.hypot(m.frequency_std_hz, m.frequency_bound_hz)),
+             _pm(m.damping, math.hypot(m.damping_std, m.damping_bound)),
+             'yes' if m.in_band else 'NO: not supported by the data'] for m in fit.modes()]
+    stab = (f' The free ML fit had {fit.reflected} unstable pole(s); the model is the ML fit '
+            f'over stable denominators.' if fit.reflected else '')
     return (f'<p>Order {fit.order} (poles), {fit.n_params} real parameters, '
-            f'{fit.freq_hz.size} lines; the model is in model.mat (A, B, C, D).</p>'
-            + _table(['natural frequency \u00b1 SE [Hz]', 'damping ratio \u00b1 SE [-]'],
-                     rows)
+            f'{fit.freq_hz.size} lines; the model is in model.mat (A, B, C, D).{stab}</p>'
+            + table(['natural frequency \u00b1 SE [Hz]', 'damping ratio \u00b1 SE [-]',
+                     'in the fitted band'], rows)
             + '<p>Cost test:</p>' + _verdict(fit.cost))
 
 
 def _margins_html(check: LoopCheck) -> str:
-    def m(v: Margin) -> str:
-        return _pm(v.value, v.std)
-    rows = [[a.axis, a.kp, a.ki, m(a.gain_margin_db), m(a.phase_margin_deg),
-             m(a.modulus_margin), m(a.crossover_hz)] for a in check.axes]
+    def m(v: Margin, note: str | None = None) -> str:
+        return _pm(v.value, v.std) if math.isfinite(v.value) or note is None else note
+    rows, edges = [], []
+    for a in check.axes:
+        notes = a.notes()
+        rows.append([a.axis, a.kp, a.ki, m(a.gain_margin_db, notes.get('gain_margin_db')),
+                     m(a.phase_margin_deg, notes.get('phase_margin_deg')),
+                     m(a.modulus_margin), m(a.crossover_hz, notes.get('crossover_hz'))])
+        if 'band_edge' in notes:
+            edges.append(f'<li>{html.escape(a.axis)}: {html.escape(notes["band_edge"])}</li>')
     pi = (f'discrete at dt = {check.discrete_dt:g} s' if check.discrete_dt
           else 'continuous')
     text = (f'<p>L = C P-hat per axis on the measured FRF, velocity PI {pi}. Standard '
             f'deviations over {check.draws} draws of the FRF from its variance'
             + (' (none: the FRF has no variance).' if not check.draws else '.') + '</p>')
-    text += _table(['axis', 'kp [N m s/rad]', 'ki [N m/rad]', 'gain margin [dB]',
-                    'phase margin [deg]', 'modulus margin [-]', 'crossover [Hz]'], rows)
+    text += table(['axis', 'kp [N m s/rad]', 'ki [N m/rad]', 'gain margin [dB]',
+                   'phase margin [deg]', 'modulus margin [-]', 'crossover [Hz]'], rows)
+    if edges:
+        text += f'<ul class="warn">{"".join(edges)}</ul>'
     if check.peak_sensitivity is not None:
         text += (f'<p>MIMO: peak of the largest singular value of S = (I + P C)^-1: '
                  f'{_pm(check.peak_sensitivity.value, check.peak_sensitivity.std)}</p>')
     return text
 
 
+def proposal_section(check: LoopCheck | None, target: tuple[float, float],
+                     verdicts: Sequence[tuple[str, str, bool]]) -> tuple[str, str, str]:
+    """
+    Return the report section of proposed PI gains: their margins and the targets' verdicts.
+
+    Parameters
+    ----------
+    check : LoopCheck or None
+        The proposed gains checked on the measured FRF; None when the page's margins section
+        already shows them (only ``--propose`` given).
+    target : tuple of float
+        (bandwidth [Hz], phase margin [deg]) asked for.
+    verdicts : sequence of tuple
+        (axis, 'targets met' or what is missed, met) per axis.
+
+    Returns
+    -------
+    tuple of str
+        (anchor, heading, html) as :func:`fit_sections` gives them.
+
+    """
+    items = ''.join(f'<li class="{"ok" if met else "warn"}">{html.escape(axis)}: '
+                    f'{html.escape(text)}</li>' for axis, text, met in verdicts)
+    body = (f'<p>PI gains read off the measured FRF for {target[1]:g} deg at {target[0]:g} '
+            f'Hz, checked on the measured loop:</p><ul>{items}</ul>')
+    if check is not None:
+        body += _margins_html(check)
+    return ('proposal', f'PI proposed for {target[1]:g} deg at {target[0]:g} Hz', body)
+
+
 def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | None = None,
                  rational: RationalFit | None = None, check: LoopCheck | None = None,
-                 fit_png: str | None = None, loop_png: str | None = None
-                 ) -> list[tuple[str, str, str]]:
+                 fit_png: str | None = None, loop_png: str | None = None,
+                 hold_s: float = 0.0) -> list[tuple[str, str, str]]:
     """
     Return the report sections of a fit and a controller check as (anchor, heading, html).
 
@@ -640,6 +482,9 @@ def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | 
         Margins of the velocity PI on the measured FRF.
     fit_png, loop_png : str, optional
         File names (next to the page) of the fit figure and the loop figure.
+    hold_s : float, optional
+        The zero-order hold's half sample [s] of the model file: a fitted delay is shown as
+        model.yaml's ``time_delay`` (the delay less it); 0: the whole delay.
 
     Returns
     -------
@@ -649,7 +494,7 @@ def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | 
     """
     out = []
     if fit_png:
-        out.append(('fit', 'Fitted model over the FRF', _figure(
+        out.append(('fit', 'Fitted model over the FRF', figure_tag(
             fit_png, 'Magnitude and phase of the measured FRF (dots) and the fitted model '
             '(line) per channel; bottom row: the residual per line in units of the standard '
             'deviation of the FRF, |P \u2212 P_fit| / \u03c3. A right model leaves it '
@@ -658,20 +503,21 @@ def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | 
             'fitted model over the measured FRF')))
     params = ''
     if coupled is not None:
-        params = _coupled_html(coupled)
+        params = _coupled_html(coupled, hold_s)
     elif physical:
-        params = _physical_html(physical)
+        params = _physical_html(physical, hold_s)
     if rational is not None:
         params += _rational_html(rational)
     if params:
-        out.append(('parameters', 'Fitted parameters (Cram\u00e9r-Rao standard errors)',
+        out.append(('parameters', 'Fitted parameters (Cram\u00e9r-Rao standard errors, '
+                                  'widened by the model-error bound where the cost test fails)',
                     params))
     if check is not None:
         body = _margins_html(check)
         if loop_png:
-            body += _figure(loop_png, 'Bode plot of L = C P-hat per axis with the 95 % band '
-                            'of the draws of the FRF, and its Nyquist curve with the circle '
-                            'of the modulus margin around \u22121.', 'loop Bode and Nyquist')
+            body += figure_tag(loop_png, 'Bode plot of L = C P-hat per axis with the 95 % band '
+                               'of the draws of the FRF, and its Nyquist curve with the circle '
+                               'of the modulus margin around \u22121.', 'loop Bode and Nyquist')
         out.append(('margins', 'Margins of the measured loop', body))
     return out
 
@@ -697,5 +543,5 @@ def write_fit_report(path: str | Path, *, title: str,
 
     """
     path = Path(path)
-    path.write_text(_page(title, list(sections), None))
+    path.write_text(page(title, list(sections), None))
     return path

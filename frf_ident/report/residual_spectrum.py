@@ -16,17 +16,16 @@ Figure of the time-series residual's spectrum: the analysis band and what stands
 
 Per axis the Welch PSD of the extended model's inverse-dynamics residual (not low-passed),
 its local noise floor and the scan's threshold above the analysis band, the band shaded grey
-and each ``unexplained`` peak's band orange (:mod:`frf_ident.core.diagnosis.resonance`).
+and each ``unexplained`` peak's band orange (:mod:`frf_ident.core.diagnosis.timeseries.resonance`).
 """
 from __future__ import annotations
 
 from pathlib import Path
 
 from frf_ident.core.diagnosis.regressors import model_residual
-from frf_ident.core.diagnosis.residual import FC_HZ
-from frf_ident.core.diagnosis.resonance import scan_spectrum
 from frf_ident.core.diagnosis.result import DiagnosisResult
-from frf_ident.core.diagnosis.thresholds import RESONANCE_FALSE_ALARM
+from frf_ident.core.diagnosis.thresholds import FC_HZ, RESONANCE_FALSE_ALARM
+from frf_ident.core.diagnosis.timeseries.resonance import scan_spectrum
 from frf_ident.core.recording import Recording
 
 from .figures import legend_below, plt, under_title
@@ -71,12 +70,12 @@ def residual_spectrum_figure(res: DiagnosisResult, rec: Recording, path: Path, *
                     label=f'threshold (false alarm {RESONANCE_FALSE_ALARM:g} per axis)')
         ax.axvspan(0.0, fc, color='0.85', label=f'analysis band 0-{fc:.3g} Hz')
         for u in res.unexplained:
-            s = u['signature']
-            if u['axis'] == name and 'peak_hz' in s:
-                ax.axvspan(*s['band_hz'], color='tab:orange', alpha=0.35,
+            s = u.signature
+            if u.axis == name and s.peak_hz is not None:
+                ax.axvspan(*s.band_hz, color='tab:orange', alpha=0.35,
                            label='unexplained: resonance or line')
-                ax.annotate(f"{u['kind'].split()[0]} {s['peak_hz']:.0f} Hz",
-                            (s['band_hz'][1], p.max()), fontsize=8, ha='left', va='top',
+                ax.annotate(f'{u.kind.split()[0]} {s.peak_hz:.0f} Hz',
+                            (s.band_hz[1], p.max()), fontsize=8, ha='left', va='top',
                             rotation=90)
         ax.set_xlim(0.0, f[-1])
         ax.set_ylabel(f'{name}: PSD [torque^2/Hz]')

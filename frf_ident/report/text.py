@@ -16,7 +16,9 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
-__all__ = ['plain']
+from frf_ident.core.model.units import with_unit
+
+__all__ = ['parameters_text', 'plain']
 
 
 def plain(value: Any) -> str:
@@ -45,3 +47,52 @@ def plain(value: Any) -> str:
         return '; '.join(inner) if any(isinstance(v, Mapping) for v in value) \
             else '[' + ', '.join(inner) + ']'
     return str(value)
+
+
+def parameters_text(parameters: Mapping[str, Any], standard_error: Mapping[str, Any] | None = None
+                    ) -> str:
+    """
+    Write an effect's parameters for a person: ``key value +- se unit``, terms one by one.
+
+    Parameters
+    ----------
+    parameters : mapping
+        Model-file keys to values; a ``torque_ripple`` or ``gravity`` value is a list of terms
+        (dicts of ``amplitude``, ``spatial_frequency``/``phase``, ``joints``).
+    standard_error : mapping, optional
+        The same keys to standard errors (a list of ``{'amplitude': se}`` or None per term).
+
+    Returns
+    -------
+    str
+        E.g. ``coulomb_friction 14.78 +- 0.051 N m`` or ``torque_ripple amplitude 4.014 N m,
+        spatial_frequency 122.3 1/rad, phase 0.3243 rad``.
+
+    """
+    se = standard_error or {}
+    parts = []
+    for key, value in parameters.items():
+        if isinstance(value, (list, tuple)):
+            errs = se.get(key) or [None] * len(value)
+            parts += [f'{key} ' + _term(term, err) for term, err in zip(value, errs)]
+        elif isinstance(value, (int, float)) and not isinstance(value, bool):
+            parts.append(f'{key} {with_unit(key, float(value), _number(se.get(key)))}')
+        else:
+            parts.append(f'{key} {plain(value)}')
+    return '; '.join(parts)
+
+
+def _term(term: Mapping[str, Any], err: Mapping[str, Any] | None) -> str:
+    """Write one ripple or gravity term: its keys with units, the joints it sums."""
+    out = []
+    for k, v in term.items():
+        if k == 'joints':
+            out.append('of ' + ' + '.join(v))
+        else:
+            out.append(f'{k} {with_unit(k, float(v), _number((err or {}).get(k)))}')
+    return ', '.join(out)
+
+
+def _number(x: Any) -> float | None:
+    """Return a standard error as a float, None where there is none."""
+    return float(x) if isinstance(x, (int, float)) and not isinstance(x, bool) else None

@@ -33,9 +33,10 @@ from benchmarks.diagnosis import (draw_scene, identification_config, KINDS, MODE
                                   run_scene, scene_of)
 from frf_ident.app.diagnose import load_data
 from frf_ident.app.identify import run_identify
-from frf_ident.core.diagnosis.candidates import coupled_ripples, fit_ripple, friction_regression
-from frf_ident.core.diagnosis.evaluator import Evaluator
-from frf_ident.core.diagnosis.unexplained import discretisation_check
+from frf_ident.core.diagnosis.experiments.candidates import (coupled_ripples, fit_ripple,
+                                                             friction_regression)
+from frf_ident.core.diagnosis.experiments.evaluator import Evaluator
+from frf_ident.core.diagnosis.experiments.unexplained import discretisation_check
 from frf_ident.io.model_file import load_model
 import numpy as np
 import pytest
@@ -125,9 +126,9 @@ def test_mismatched_axis_keeps_its_nominal_friction(tmp_path):
     Bench kind ``mismatch``, seed 9109: joint_1 9 % stiffer than nominal, Coulomb friction
     11 N m on joint_2. The joint refit of joint_1 settled on stiffness and damping next to a
     viscous friction of 1.02 (nominal 20), which the held-out check kept until the mismatch
-    became the viscous term's partner, refitted without it (README_diagnosis, acceptance):
-    with its partners refitted the model without the viscous term fits even the fit part
-    better (11.7 floors against 13.8 with it), while held out two misfits this far above the
+    became the viscous term's partner, refitted without it (docs/diagnosis/experiments.md,
+    acceptance): with its partners refitted the model without the viscous term fits even the fit
+    part better (11.7 floors against 13.8 with it), while held out two misfits this far above the
     floor differ by chance (11.9 against 10.3), so both are asked (``held_out_check``).
     """
     scene = draw_scene(np.random.default_rng(9109), 'mismatch')
@@ -212,8 +213,8 @@ def test_a_ripple_seen_through_the_link_coupling_is_not_the_axis_own(own, tmp_pa
     joint_1's own ripple of ``own`` N m (the low end of the bench's range) at 1060 /rad, inside
     the scan's resolution of joint_3's: that one is joint_1's.
 
-    The same scene shaped two more stages (core/diagnosis/experiments.py): joint_3's ripple,
-    left out of stage 1 because the stiffening gear dominated the axis' misfit, is offered
+    The same scene shaped two more stages (core/diagnosis/experiments/pipeline.py): joint_3's
+    ripple, left out of stage 1 because the stiffening gear dominated the axis' misfit, is offered
     with the FRF-shape candidates (``frf_shape_candidates``); offered after them, a backlash
     and a viscous term took its torque and it then worsened the axis (3.22 -> 3.47 floors),
     while its coupling torque was named as joint_1's own ripple (0.15 N m at 1026 /rad). And a
@@ -317,12 +318,12 @@ def test_a_simulation_too_coarse_for_the_record_is_reported(tmp_path):
     ev = _evaluator(scene['scene'], tmp_path)
     coarse, fine = (replace(truth, substeps=m) for m in (1, 8))
     step = discretisation_check(ev, coarse, ev.misfit(ev.terms(coarse, held_out=True)))
-    print(step)    # the figures README_diagnosis quotes (pytest -s)
-    assert step['axes'] == robot.joint_names, step
-    assert step['substeps'] == 1 and 'joint_1' in step['too_coarse'], step
+    print(step)    # the figures docs/diagnosis/experiments.md quotes (pytest -s)
+    assert step.axes == robot.joint_names, step
+    assert step.substeps == 1 and 'joint_1' in step.too_coarse, step
     # the finer simulation is the closer one to the record
-    j = step['axes'].index('joint_1')
-    assert step['held_out_misfit_double_substeps'][j] < step['held_out_misfit'][j], step
+    j = step.axes.index('joint_1')
+    assert step.held_out_misfit_double_substeps[j] < step.held_out_misfit[j], step
     step = discretisation_check(ev, fine, ev.misfit(ev.terms(fine, held_out=True)))
     print(step)
-    assert step['too_coarse'] == [], step
+    assert step.too_coarse == [], step

@@ -53,9 +53,11 @@ def test_estimate_prints_and_plots_odd_and_even_levels(tmp_path, capsys, cubic):
     assert main(['estimate', str(_bag(tmp_path, cubic)), '--out', str(out)]) == 0
     text = capsys.readouterr().out
     print(text)
-    line, = [x for x in text.splitlines() if 'distortion: dq_m/j' in x]
-    odd = float(line.split('odd lines ')[1].split(' dB')[0])
-    even = float(line.split('even lines ')[1].split(' dB')[0])
+    lines = text.splitlines()
+    head = next(k for k, x in enumerate(lines) if x.startswith('distortion above the noise'))
+    assert lines[head + 1].split() == ['estimate', 'output', 'odd', 'even', 'excited']
+    _, _, odd, even, _ = lines[head + 2].split()
+    odd, even = float(odd), float(even)
     assert abs(even) < 3                          # no even nonlinearity: noise only
     if cubic:
         assert odd > 8                            # the cubic, above the noise

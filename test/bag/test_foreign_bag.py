@@ -16,8 +16,9 @@ from frf_ident.bag import read_recording
 from frf_ident.cli import main
 from frf_ident.core.estimation.described import estimate_recording
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
-from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
+from frf_ident.core.model.schema import default_model_dict, robot_from_dict
 from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.controller import controller_from_dict
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 import numpy as np
 import pytest

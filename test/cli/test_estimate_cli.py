@@ -26,8 +26,9 @@ from frf_ident.cli import main
 from frf_ident.core.excitation.chirp import chirp_phase
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
 from frf_ident.core.excitation.procedures import MultisineConfig
-from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
+from frf_ident.core.model.schema import default_model_dict, robot_from_dict
 from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.controller import controller_from_dict
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
 from frf_ident.io.model_file import load_model, load_plant

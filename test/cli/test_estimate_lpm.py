@@ -25,9 +25,10 @@ import json
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.model.schema import controller_from_dict, default_model_dict, robot_from_dict
+from frf_ident.core.model.schema import default_model_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.analytic import robot_frf_sampled
+from frf_ident.core.simulation.controller import controller_from_dict
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 import numpy as np
 import pytest

@@ -19,8 +19,8 @@ the regressor the code uses; the record is an arm written here whose torques fol
 """
 from pathlib import Path
 
-from frf_ident.core.diagnosis import diagnose_timeseries
-from frf_ident.core.diagnosis.kinematic_gravity import fit_kinematic_gravity
+from frf_ident.core.diagnosis.crosscheck.kinematic_gravity import fit_kinematic_gravity
+from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
 from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.io.kinematics import load_kinematics
@@ -83,8 +83,8 @@ def test_the_joint_fit_extrapolates_the_gravity_over_the_whole_circle():
     res = diagnose_timeseries(rec, robot)
     poses = np.random.default_rng(0).uniform(-np.pi, np.pi, (64, 3))
     q = 0.5 * (rec.position[1:] + rec.position[:-1])
-    out = fit_kinematic_gravity(res, rec, robot, kin.gravity_basis(q),
-                                (poses, kin.gravity_basis(poses)), source='KR300')
+    out, fit = fit_kinematic_gravity(res, rec, robot, kin.gravity_basis(q),
+                                     (poses, kin.gravity_basis(poses)), source='KR300')
     far = np.random.default_rng(1).uniform(-np.pi, np.pi, (200, 3))
     truth = np.array([kin.at(qk).gravity for qk in far]) / kin.reduction
     got = out.extended.gravity_load(far) - np.array([a.gravity_torque
@@ -94,5 +94,5 @@ def test_the_joint_fit_extrapolates_the_gravity_over_the_whole_circle():
     found = {(e.name, e.axis): e.parameters for e in out.effects}
     fc2 = found[('coulomb_friction', 'joint_2')]['coulomb_friction']
     assert fc2 == pytest.approx(2.0, rel=0.05)
-    assert len(out.metrics['kinematic_gravity']['base_parameters']) == 4
-    assert out.metrics['extended']['time_nrmse'] < 0.1
+    assert len(fit.base_parameters) == 4
+    assert out.metrics.extended.time_nrmse < 0.1

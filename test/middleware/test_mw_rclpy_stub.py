@@ -61,7 +61,13 @@ def rclpy_backend(monkeypatch):
         'rclpy.node': types.SimpleNamespace(Node=_Recorder),
         'rclpy.qos': types.SimpleNamespace(
             QoSProfile=_QoSProfile, HistoryPolicy=Policy, ReliabilityPolicy=Policy,
-            DurabilityPolicy=Policy),
+            DurabilityPolicy=Policy, qos_profile_services_default=_QoSProfile(depth=10)),
+        # caller-aware services (middleware/caller.py): not exercised by this stand-in
+        'rclpy.impl': types.ModuleType('rclpy.impl'),
+        'rclpy.impl.implementation_singleton': types.SimpleNamespace(
+            rclpy_implementation=types.SimpleNamespace(Service=object)),
+        'rclpy.service': types.SimpleNamespace(Service=object),
+        'rclpy.type_support': types.SimpleNamespace(check_is_valid_srv_type=lambda t: None),
         'rclpy.parameter': types.SimpleNamespace(
             Parameter=lambda name, value=None: types.SimpleNamespace(name=name, value=value)),
         'rclpy.callback_groups': types.SimpleNamespace(ReentrantCallbackGroup=object),

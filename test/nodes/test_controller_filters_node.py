@@ -25,7 +25,8 @@ recorded torques.
 import copy
 
 from frf_ident.core.loop.notch import design_lowpass, design_notch
-from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
+from frf_ident.core.model.schema import robot_from_dict
+from frf_ident.core.simulation.controller import controller_from_dict
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
 from frf_ident.nodes.controller_node import VelocityLoop

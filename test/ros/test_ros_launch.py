@@ -266,10 +266,18 @@ def test_launch_real_robot_mode(ros_env, prefix, tmp_path):
     proc = _launch(env, tmp_path, 'sim:=false', f'bag:={tmp_path / "robot_bag"}')
     log = []
     try:
-        names = obs.names(['excitation_node', 'estimator_node'])
+        names = obs.names(['excitation_node', 'excitation_node_arming', 'estimator_node'])
         time.sleep(1.0)
         assert proc.poll() is None, 'launch ended (a node refused its parameters?)'
-        assert sorted(names) == ['estimator_node', 'excitation_node'], names
+        # excitation_node_arming: the excitation node's heartbeat listener (issue 56)
+        assert sorted(names) == ['estimator_node', 'excitation_node',
+                                 'excitation_node_arming'], names
+        # a robot starts unarmed: a run is refused before anything else, naming the caller
+        call = subprocess.run(['ros2', 'service', 'call', '/frf/run_multisine',
+                               'std_srvs/srv/Trigger'], env=env, text=True,
+                              capture_output=True, timeout=120)
+        assert 'not armed: no operator heartbeat yet' in call.stdout, call.stdout
+        assert '_ros2cli_requester' in call.stdout, call.stdout
         from rcl_interfaces.srv import GetParameters
         import rclpy
         cl = obs.node.create_client(GetParameters, '/excitation_node/get_parameters')
@@ -278,6 +286,9 @@ def test_launch_real_robot_mode(ros_env, prefix, tmp_path):
         _until(fut.done, 20, 'get_parameters')
         values = [v.bool_value for v in fut.result().values]
         assert values == [False, False], values
+        fut = cl.call_async(GetParameters.Request(names=['arming']))
+        _until(fut.done, 20, 'get_parameters arming')
+        assert fut.result().values[0].string_value == '', fut.result()   # '' = by lockstep
         # read at start-up, so read-only: a set used to report success and change nothing
         from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
         from rcl_interfaces.srv import SetParameters
@@ -293,7 +304,8 @@ def test_launch_real_robot_mode(ros_env, prefix, tmp_path):
     finally:
         _stop(proc, log)
         obs.close()
-    assert 'refused' not in log[0], log[0][-1000:]
+    assert 'ARMING TOKEN of this start: ' in log[0], log[0][-2000:]
+    assert 'refused:' not in log[0], log[0][-1000:]       # no node refused its parameters
 
 
 def test_launch_ends_when_a_node_refuses(ros_env, prefix, tmp_path):
@@ -362,3 +374,13 @@ def test_ctrl_c_at_start_up(ros_env, prefix, tmp_path):
     print(text[-3000:])
     _quiet_exit(proc, text)
     assert not early.exists() or (early / 'metadata.yaml').is_file(), list(early.iterdir())
+
+
+def test_launch_refuses_robot_without_arming(ros_env, prefix, tmp_path):
+    """sim:=false arming:=off: anyone on the domain could start the robot; refused at once."""
+    env = _env(ros_env, prefix, tmp_path)
+    proc = _launch(env, tmp_path, 'sim:=false', 'arming:=off', f'bag:={tmp_path / "never"}')
+    out = proc.communicate(timeout=120)[0]
+    assert proc.returncode == 1, out[-2000:]
+    assert 'sim:=false with arming:=off' in out, out[-2000:]
+    assert not (tmp_path / 'never').exists()

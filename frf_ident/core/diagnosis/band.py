@@ -16,7 +16,7 @@ Choose the analysis band of a time-series record from its sample rate, motion an
 
 The friction, inertia and gravity effects are read from the inverse-dynamics residual below a
 low-pass cut-off ``fc``; above it the residual is scanned for structure no rigid-body effect
-explains (:mod:`.resonance`). The rule (:func:`analysis_band`), per moving axis:
+explains (:mod:`.timeseries.resonance`). The rule (:func:`analysis_band`), per moving axis:
 
 1. the velocity's white noise floor: the median Welch PSD between 0.6 and 0.95 of the Nyquist
    frequency (as :func:`.prediction.noise_level` takes the torque's);

@@ -71,6 +71,26 @@ def _plain(x: Any) -> Any:
     return x
 
 
+def has_experiments(rec: Recording) -> bool:
+    """
+    Return whether the record holds identification experiments.
+
+    Parameters
+    ----------
+    rec : Recording
+        The record to inspect.
+
+    Returns
+    -------
+    bool
+        True when it has a reference column and at least one multisine or chirp segment (the
+        experiments route of the diagnosis), else False (time-series route).
+
+    """
+    return rec.reference is not None and any(
+        s.info.get('design') in ('multisine', 'chirp') for s in rec.segments)
+
+
 def apply_effect(robot: RobotParams, eff: Effect) -> RobotParams:
     """Return the robot with the effect's parameters written into its axis (model-file keys)."""
     axes = list(robot.axes)

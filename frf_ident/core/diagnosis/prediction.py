@@ -19,8 +19,8 @@ record of the robot, the NRMSE^2 torque noise alone leaves, and where a residual
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 import math
-from typing import Any
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
@@ -28,9 +28,24 @@ import numpy as np
 from scipy import signal
 
 from .common import bridge_gaps
+from .records import AxisScore, Scores, Signature
 from .regressors import model_residual, moving
-from .residual import FC_HZ, lowpass
-from .thresholds import EDGE
+from .residual import lowpass
+from .thresholds import EDGE, FC_HZ
+
+__all__ = ['default_mask', 'noise_floor', 'noise_level', 'predict_metrics', 'Prediction',
+           'signature', 'torque_metrics']
+
+
+@dataclass
+class Prediction:
+    """A model's torque prediction on a record: its scores, residual and compared rows."""
+
+    scores: Scores
+    #: measured minus predicted torque, low-passed, between samples, shape (N-1, n)
+    residual: np.ndarray
+    #: per axis the rows the scores were taken over (in the mask, not bridged, moving)
+    rows: np.ndarray
 
 
 def noise_floor(rec: Recording, f: np.ndarray, fc: float, use: np.ndarray | None = None
@@ -95,14 +110,14 @@ def noise_level(f: np.ndarray, fs: float) -> np.ndarray:
     return np.median(p[sel], axis=0) if sel.any() else np.zeros(f.shape[1])
 
 
-def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
+def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> Signature:
     """
     Return where a held-out residual lives (band and correlated signal).
 
     Where a held-out residual lives: the band [f1, f2] Hz holding the middle half of its
     power (quartiles below fc) and the signal it correlates with most (|r| >= 0.3).
     """
-    out: dict[str, Any] = {}
+    band = None
     r = res[mask]
     if r.size >= 64:
         nper = int(min(2 ** int(math.log2(r.size // 4)), 4096))
@@ -112,9 +127,8 @@ def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
             c = np.cumsum(p[sel]) / p[sel].sum()
             fsel = fr[sel]
             df = float(fr[1] - fr[0])      # a spectral line stands for its bin's width
-            out['band_hz'] = [round(max(float(fsel[np.searchsorted(c, 0.25)]) - df, 0.0), 2),
-                              round(float(fsel[min(np.searchsorted(c, 0.75), fsel.size - 1)])
-                                    + df, 2)]
+            band = [round(max(float(fsel[np.searchsorted(c, 0.25)]) - df, 0.0), 2),
+                    round(float(fsel[min(np.searchsorted(c, 0.75), fsel.size - 1)]) + df, 2)]
     best, rb = None, 0.3
     rr = r - r.mean()
     for name, x in (('position', q), ('velocity', v), ('acceleration', a), ('time', t)):
@@ -123,13 +137,11 @@ def signature(res: np.ndarray, q, v, a, t, mask, fs, fc) -> dict[str, Any]:
         c = abs(float(xm @ rr)) / den if den > 0 else 0.0
         if c >= rb:
             best, rb = name, c
-    if best:
-        out['correlates_with'] = best
-    return out
+    return Signature(band_hz=band, correlates_with=best)
 
 
 def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
-                    mask: np.ndarray | None = None) -> dict[str, Any]:
+                    mask: np.ndarray | None = None) -> Prediction:
     """
     Return held-out metrics of a model file on a recording.
 
@@ -151,10 +163,9 @@ def predict_metrics(rec: Recording, robot: RobotParams, *, fc: float = FC_HZ,
 
     Returns
     -------
-    dict
-        'frf_error_db', 'time_nrmse', 'per_axis' {name: {...}}, 'residual' (N-1, n)
-        (measured minus predicted torque, low-passed) and 'rows' (N-1, n) (per axis the rows
-        the metrics were taken over: in ``mask``, not bridged, moving).
+    Prediction
+        The scores (``frf_error_db``, ``time_nrmse``, per axis), the residual (measured minus
+        predicted torque, low-passed) and per axis the rows the scores were taken over.
 
     """
     rec, lost = bridge_gaps(rec)
@@ -172,14 +183,14 @@ def default_mask(n_rows: int) -> np.ndarray:
 
 
 def torque_metrics(rec: Recording, lost: np.ndarray, ff: np.ndarray, names: list[str], *,
-                   fc: float = FC_HZ, mask: np.ndarray | None = None) -> dict[str, Any]:
+                   fc: float = FC_HZ, mask: np.ndarray | None = None) -> Prediction:
     """
     Return the §7 metrics of a torque prediction given as its low-passed residual.
 
     The one definition of ``time_nrmse`` and ``frf_error_db`` of the time-series route, for
     any predictor (a model file through :func:`predict_metrics`, the least-squares baseline
-    of :mod:`.baseline`): on ``mask`` minus the bridged rows, per axis only where it moves
-    (at rest static friction holds any torque).
+    of :mod:`.crosscheck.baseline`): on ``mask`` minus the bridged rows, per axis only where it
+    moves (at rest static friction holds any torque).
 
     Parameters
     ----------
@@ -198,7 +209,7 @@ def torque_metrics(rec: Recording, lost: np.ndarray, ff: np.ndarray, names: list
 
     Returns
     -------
-    dict
+    Prediction
         As :func:`predict_metrics`.
 
     """
@@ -216,17 +227,15 @@ def torque_metrics(rec: Recording, lost: np.ndarray, ff: np.ndarray, names: list
         e = ff[m, i]
         du = uf[m, i] - uf[m, i].mean() if m.any() else np.zeros(0)
         err2, var2 = err2 + float(e @ e), var2 + float(du @ du)
-        per[name] = {'frf_error_db': round(_frf_error(rec.velocity[:-1][m][:, [i]],
-                                                      uf[m][:, [i]], u_model[m][:, [i]],
-                                                      fs), 4),
-                     'time_nrmse': round(math.sqrt(float(e @ e) / max(float(du @ du), 1e-300)),
-                                         5),
-                     'moving_share': round(float(m.sum()) / max(int(mask.sum()), 1), 3)}
+        per[name] = AxisScore(
+            round(_frf_error(rec.velocity[:-1][m][:, [i]], uf[m][:, [i]], u_model[m][:, [i]],
+                             fs), 4),
+            round(math.sqrt(float(e @ e) / max(float(du @ du), 1e-300)), 5),
+            moving_share=round(float(m.sum()) / max(int(mask.sum()), 1), 3))
     rows = use.any(axis=1)
-    return {'frf_error_db': round(_frf_error(rec.velocity[:-1][rows], uf[rows], u_model[rows],
-                                             fs), 4),
-            'time_nrmse': round(math.sqrt(err2 / max(var2, 1e-300)), 5),
-            'per_axis': per, 'residual': ff, 'rows': use}
+    scores = Scores(round(_frf_error(rec.velocity[:-1][rows], uf[rows], u_model[rows], fs), 4),
+                    round(math.sqrt(err2 / max(var2, 1e-300)), 5), per)
+    return Prediction(scores, ff, use)
 
 
 def _frf_error(v: np.ndarray, u_meas: np.ndarray, u_model: np.ndarray, fs: float) -> float:

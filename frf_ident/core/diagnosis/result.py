@@ -14,8 +14,8 @@
 """
 Hold the one result type of both diagnosis routes.
 
-:class:`DiagnosisResult` is what :func:`.experiments.diagnose_experiments` and
-:func:`.timeseries.diagnose_timeseries` return, what ``frf-ident diagnose`` writes into
+:class:`DiagnosisResult` is what :func:`.experiments.pipeline.diagnose_experiments` and
+:func:`.timeseries.pipeline.diagnose_timeseries` return, what ``frf-ident diagnose`` writes into
 report.json (docs/CONTRACT.md §7) and what the HTML report draws. The route's own data for the
 figures sit in ``detail`` (:class:`ExperimentsDetail` or :class:`TimeseriesDetail`).
 """
@@ -30,13 +30,15 @@ import numpy as np
 
 from .band import AnalysisBand
 from .common import Effect
+from .records import IntegratorCheck, Rejected, RouteMetrics, Unexplained
 
 
 @dataclass
 class ExperimentsDetail:
     """What the experiments route keeps for the figures and the benchmarks."""
 
-    #: the recording's evaluator (:class:`.evaluator.Evaluator`; simulations, noise floors)
+    #: the recording's evaluator (:class:`.experiments.evaluator.Evaluator`; simulations,
+    #: noise floors)
     evaluator: Any
     #: FRF estimates of the held-out part: 'measured', 'nominal', 'extended' -> {design: FRD}
     estimates: dict[str, dict[str, Any]]
@@ -47,11 +49,28 @@ class ExperimentsDetail:
 
 
 @dataclass
+class ResidualTrace:
+    """The time-series route's residuals between samples, for the figures."""
+
+    #: [s] time of the rows, shape (N-1,)
+    t: np.ndarray
+    #: inverse-dynamics residual of the nominal model, shape (N-1, n)
+    f: np.ndarray
+    #: positions, velocities between samples, shape (N-1, n)
+    q: np.ndarray
+    v: np.ndarray
+    #: the torque the nominal and the extended model predict (low-passed residual removed)
+    pred_baseline: np.ndarray
+    pred_extended: np.ndarray
+    #: the held-out rows, shape (N-1,)
+    val_mask: np.ndarray
+
+
+@dataclass
 class TimeseriesDetail:
     """What the time-series route keeps for the figures."""
 
-    #: 't', 'f' (residual), 'q', 'v', 'pred_baseline', 'pred_extended', 'val_mask' arrays
-    residual: dict[str, np.ndarray]
+    residual: ResidualTrace
     #: per axis the NRMSE^2 torque noise alone leaves on the held-out rows
     noise_floor_nrmse2: list[float]
 
@@ -73,7 +92,7 @@ class DiagnosisResult:
         Axes whose held-out misfit stays clearly above noise, with their signature; and
         (time-series route) resonances in the residual above the analysis band, ``kind``
         'resonance above the analysis band' with the ``band_hz`` of each
-        (:mod:`.resonance`).
+        (:mod:`.timeseries.resonance`).
     metrics : dict
         ``baseline`` (nominal model), ``extended``, ``validation`` text; the app adds
         ``validation_records`` and ``least_squares``.
@@ -87,20 +106,20 @@ class DiagnosisResult:
         The route's data for the figures.
     fit_rows, held_out_rows : ndarray of bool, shape (N-1,)
         The rows (between samples) the route fitted on and held out; the least-squares
-        baseline (:mod:`.baseline`) is fitted and judged on the same.
+        baseline (:mod:`.crosscheck.baseline`) is fitted and judged on the same.
 
     """
 
     mode: str
     effects: list[Effect]
-    rejected: list[dict[str, Any]]
-    unexplained: list[dict[str, Any]]
-    metrics: dict[str, Any]
+    rejected: list[Rejected]
+    unexplained: list[Unexplained]
+    metrics: RouteMetrics
     extended: RobotParams
     detail: ExperimentsDetail | TimeseriesDetail
     fit_rows: np.ndarray
     held_out_rows: np.ndarray
-    discretisation: dict[str, Any] | None = None
+    discretisation: IntegratorCheck | None = None
     n_sims: int = 0
     #: the candidates that were not taken (experiments route; their rejected entries)
     candidates: list[Effect] = field(default_factory=list)

@@ -165,7 +165,7 @@ def _backward(groups, y, fit, val, chosen, forced, info) -> list[str]:
         removed.append(worst)
 
 
-def block_length(fs: float) -> int:
+def block_samples(fs: float) -> int:
     """Return the length of a fit / held-out block [samples]: BLOCK_S, at least 8."""
     # rounded: a rate taken from float timestamps (249.99999999999977 Hz for 4 ms) must not
     # cut a sample off every block, and the two halves of one record then differ in blocks
@@ -181,7 +181,7 @@ def split_blocks(n: int, fs: float, fc: float) -> tuple[np.ndarray, np.ndarray]:
     of extrapolating to the end of a short trajectory), a guard of half a filter period
     dropped at every block boundary and EDGE of the record at both ends.
     """
-    blk = block_length(fs)
+    blk = block_samples(fs)
     k = np.arange(n)
     held = (k // blk) % HOLD_EVERY == HOLD_EVERY - 1
     guard = int(0.5 * fs / fc)
@@ -226,8 +226,8 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
     times the residual's integrated correlation time (:func:`correlation_time`) where that is
     longer (a misfit that drifts over the motion), but at most a third of the record: so the
     sandwich takes the residual as it is, coloured, and with whatever misfit the model still
-    has within a block, where a formula for white noise would not (docs/diagnosis.md,
-    "Standard errors"). The error of the amplitude
+    has within a block, where a formula for white noise would not
+    (docs/diagnosis/crosschecks.md, "Standard errors"). The error of the amplitude
     hypot(a_sin, a_cos) of a sin / cos pair is its spread under the pair's normal distribution.
 
     Parameters
@@ -259,8 +259,8 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
     e = y[fit] - X @ coef
     full = np.zeros(y.size)
     full[fit] = e
-    blk = max(block_length(fs), min(int(math.ceil(SE_BLOCK_TAUS * correlation_time(full, fit))),
-                                    y.size // 3))
+    blk = max(block_samples(fs),
+              min(int(math.ceil(SE_BLOCK_TAUS * correlation_time(full, fit))), y.size // 3))
     ids = (np.arange(y.size) // blk)[fit]
     used = np.unique(ids)
     if used.size < 3:

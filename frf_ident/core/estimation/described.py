@@ -30,12 +30,15 @@ from typing import Any
 from frf_ident.core.estimation.checks import check_remaining, EXPERIMENT, missing_rows
 from frf_ident.core.estimation.distortion import distortion_lines
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.estimation.missing import MissingSamples
+from frf_ident.core.estimation.missing_periodic import fill_periods, FilledPeriods, GAP_HINT
 from frf_ident.core.estimation.spectra import (best_linear_approximation,
                                                best_linear_approximation_reference, BLAResult,
-                                               chirp_spectra, detection_levels_from_spectra,
+                                               detection_levels_from_spectra,
                                                detection_line_spectra, frf_from_reference,
                                                frf_from_spectra, periodic_spectra)
 from frf_ident.core.excitation.chirp import ChirpDesign
+from frf_ident.core.excitation.chirp_dft import chirp_spectra
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError, FrfIdentInputError
 import numpy as np
@@ -132,6 +135,36 @@ def check_joints(joints: list[str], names: list[str] | None = None) -> None:
     if missing:
         raise FrfIdentInputError(f'--joints: {", ".join(missing)} not in the bag (its joints: '
                                  f'{", ".join(names)})')
+
+
+def _filled_series(x: dict[str, np.ndarray], gone: np.ndarray,
+                   names: tuple[list[str], list[str]]
+                   ) -> tuple[dict[str, np.ndarray], FilledPeriods,
+                              dict[bool, MissingSamples]] | None:
+    """
+    Return a segment's steady series with their missing samples estimated, or None.
+
+    ``x`` holds (n_q, n_per, n) arrays u, y, r (and du, dy with a constant-velocity run),
+    ``gone`` (n_q, n_per) the missing samples. u and y are estimated together (the account's
+    channels), r alone (periodic: exactly). With a run the compensated series x - d are
+    estimated, which the compensated BLA uses, and d becomes what gives them. Also the
+    periods' :class:`FilledPeriods` and the account per ``compensate``. None where a sample
+    is missing in every period (nothing to estimate it from).
+    """
+    n = x['u'].shape[2]
+    channels = names[0] + names[1]
+    uy = fill_periods(np.concatenate([x['u'], x['y']], axis=2), gone)
+    r = fill_periods(x['r'], gone)
+    if not (uy.complete and r.complete):
+        return None
+    out = {'u': uy.values[..., :n], 'y': uy.values[..., n:], 'r': r.values}
+    missing = {False: uy.account(channels)}
+    if 'du' in x:
+        c = fill_periods(np.concatenate([x['u'] - x['du'], x['y'] - x['dy']], axis=2), gone)
+        out['du'] = out['u'] - c.values[..., :n]
+        out['dy'] = out['y'] - c.values[..., n:]
+        missing[True] = c.account(channels)
+    return out, uy.periods(), missing
 
 
 def _segment_arrays(rec: Recording, seg: Segment) -> dict[str, np.ndarray]:
@@ -236,29 +269,32 @@ class MultisineSpectra:
         shape = (self.n_q, self.n_per, len(rec.joint_names))
 
         def lines(x: np.ndarray) -> np.ndarray:          # (n_q, F, n)
-            x = x[steady]
             # zeroing costs a copy and three passes: only where a gap left NaN
             x = x if np.isfinite(x).all() else np.nan_to_num(x)
-            return periodic_spectra(x.reshape(shape), self.bins, axis=1)
+            return periodic_spectra(x, self.bins, axis=1)
         series = {k: a[k][:need] for k in ('u', 'y', 'r')}
-        det = {'y': a['y'][:need]}
         if self.cv is not None:
             for k in ('u', 'y'):
                 series['d' + k] = _disturbance_at(self.cv, k, a['q'][:need], self.align,
                                                   self._tables)
-                if k == 'y':
-                    det['dy'] = series['dy']
-        # a period with a missing sample in any series is dropped (NaN rows: gaps); the
-        # others are transformed with those samples zeroed, then never used
-        gone = missing_rows(*(x[steady] for x in series.values()))
-        out = {k: lines(x) for k, x in series.items()}
-        out['valid'] = ~gone.reshape(self.n_q, self.n_per).any(axis=1)
+        steady_x = {k: x[steady].reshape(shape) for k, x in series.items()}
+        # a sample missing in any series (NaN rows: gaps) is estimated from the other periods
+        # (missing_periodic.py) and the period kept; only where a sample is missing in every
+        # period is the period dropped, as are the periods a gap touches then
+        gone = missing_rows(*(x[steady] for x in series.values())).reshape(self.n_q, self.n_per)
+        filled = _filled_series(steady_x, gone, _names(self.joint_names)) if gone.any() \
+            else None
+        out = {k: lines(x) for k, x in (filled[0] if filled else steady_x).items()}
+        out['valid'] = np.ones(self.n_q, bool) if filled else ~gone.any(axis=1)
+        if filled:
+            out['filled'], out['missing'] = filled[1], filled[2]
         t_first = seg.t_start + self.n_tr * self.n_per / rec.fs
         out['t'] = t_first + np.arange(self.n_q + 1) * self.n_per / rec.fs
         if seg.info['experiment'] == 0:                 # detection lines (Sec. 4.3 remark)
-            for k, x in det.items():
+            src = filled[0] if filled else steady_x
+            for k in ('y', 'dy') if 'dy' in src else ('y',):
                 _, out['det_' + k] = detection_line_spectra(
-                    np.nan_to_num(x[steady]).reshape(shape), int(self.bins[-1]), axis=1)
+                    np.nan_to_num(src[k]), int(self.bins[-1]), axis=1)
         self.spec[(seg.info['realisation'], seg.info['experiment'])] = out
 
     def _shape(self) -> tuple[int, int]:
@@ -363,15 +399,40 @@ class MultisineSpectra:
             rows.append(np.stack(row, axis=-1))          # (n_q_p, F, n, n_ex)
         return rows
 
+    def _filled(self, used: dict[int, np.ndarray], compensate: bool
+                ) -> tuple[list[FilledPeriods] | None, MissingSamples | None]:
+        """
+        Return per used realisation its periods' :class:`FilledPeriods`, and the account.
+
+        A MIMO period is made of the n_ex experiments' periods: its lost share and variance
+        factor are their means. (None, None) when no used segment had a missing sample.
+        """
+        _, n_ex = self._check_complete()
+        segs = [[self.spec[(p, m)] for m in range(n_ex)] for p in used]
+        if not any('filled' in s for row in segs for s in row):
+            return None, None
+        filled, missing = [], None
+        for row, qs in zip(segs, used.values()):
+            lost = np.mean([s['filled'].lost[qs] if 'filled' in s else np.zeros(qs.size)
+                            for s in row], axis=0)
+            factor = np.mean([s['filled'].factor[qs] if 'filled' in s else np.ones(qs.size)
+                              for s in row], axis=0)
+            filled.append(FilledPeriods(lost, factor))
+            for s in row:
+                if 'missing' in s:
+                    missing = s['missing'][compensate].merged(missing)
+        return filled, missing
+
     def frf(self, *, compensate: bool = True, method: str = 'reference'
             ) -> tuple[FrequencyResponse, BLAResult]:
         """
         Multisine best linear approximation (eq. 14) of the gathered segments.
 
         method 'reference': P_p = (sum_q Y R^H)(sum_q U R^H)^-1 per realisation, averaged
-        over p; 'plain': P[p,q] = Y U^+ (eq. 7) per period, averaged over p and q. Only the
-        periods without missing samples are used (:meth:`used_periods`); fewer than two in
-        all is refused.
+        over p; 'plain': P[p,q] = Y U^+ (eq. 7) per period, averaged over p and q. Periods
+        whose missing samples were estimated from the other periods are used, the noise
+        variance corrected for them (:meth:`_filled`); a period holding a sample missing in
+        every period is dropped (:meth:`used_periods`); fewer than two left is refused.
         """
         if not self.spec:
             raise EstimationError('recording has no multisine segments')
@@ -381,12 +442,14 @@ class MultisineSpectra:
         check_remaining(n_used, drop['periods'], need=2, what='multisine periods',
                         where=f'{EXPERIMENT} multisine',
                         dropped_at=[(d['t_start'], d['t_end']) for d in drop['items']],
-                        hint='record again or more realisations')
+                        hint=f'{GAP_HINT}; record again or more realisations')
         spec = {k: self._stack(k, compensate) for k in ('y', 'u', 'r')}
+        filled, missing = self._filled(used, compensate)
         if method == 'reference':
-            bla = best_linear_approximation_reference(spec['y'], spec['u'], spec['r'])
+            bla = best_linear_approximation_reference(spec['y'], spec['u'], spec['r'],
+                                                      filled=filled)
         elif method == 'plain':
-            bla = best_linear_approximation(spec['y'], spec['u'])
+            bla = best_linear_approximation(spec['y'], spec['u'], filled=filled)
         else:
             raise ValueError(f"{method=} must be 'reference' or 'plain'")
         first = [(self.spec[(p, 0)], qs) for p, qs in used.items()]
@@ -395,6 +458,14 @@ class MultisineSpectra:
             Yd, np.arange(1, Yd[0].shape[1] + 1), self.bins)
         ins, outs = _names(self.joint_names)
         f0 = self.info['design_params']['f0']
+        dist = distortion_lines(Yd, np.arange(1, Yd[0].shape[1] + 1), self.bins, f0, outs)
+        # their noise is the spread over the first experiment's periods: estimated samples
+        # reduce it (missing_periodic.FilledPeriods)
+        scale = np.mean([FilledPeriods(s['filled'].lost[qs], s['filled'].factor[qs])
+                         .spread_scale() for s, qs in first if 'filled' in s] or [1.0])
+        if scale != 1.0:
+            det.noise = None if det.noise is None else det.noise * scale
+            dist.noise = None if dist.noise is None else dist.noise * scale
         frf = FrequencyResponse(self.bins * f0, bla.response, ins, outs, bla.noise_variance,
                                 bla.total_variance, {
                                     'design': 'multisine', 'method': method,
@@ -403,11 +474,10 @@ class MultisineSpectra:
                                     'periods_used': {int(p): int(v.size)
                                                      for p, v in used.items()},
                                     'dropped': drop,
+                                    **({'missing': missing.to_dict()} if missing else {}),
                                     'cond_max': float(np.max(bla.cond)),
                                     'detection_lines': det.to_dict(),
-                                    'distortion': distortion_lines(
-                                        Yd, np.arange(1, Yd[0].shape[1] + 1), self.bins, f0,
-                                        outs).to_dict()})
+                                    'distortion': dist.to_dict()})
         return frf, bla
 
 
@@ -772,6 +842,8 @@ def estimate_detected(rec: Recording, options=None, *, block_s: float | None = N
     detection where given) and checked; one entry 'detected/<joint>' per excited input, the
     detection sentences in each estimate's meta['detected'].
     """
-    from frf_ident.core.estimation.detected import estimate_in_blocks, RecordingBlocks
+    from frf_ident.core.estimation.detected import (block_length, estimate_in_blocks,
+                                                    RecordingBlocks)
+    block_s = block_length(block_s, rec.fs)
     blocks = RecordingBlocks(rec, block_s)
     return estimate_in_blocks(blocks, options, resume=blocks.continue_from, block_s=block_s)

@@ -21,19 +21,16 @@ Non-parametric FRF estimation (Saupe & Knoblach 2015, Sections 3, 4.3 and 5.1).
 - :func:`best_linear_approximation` — eq. 14 over n_p realisations x n_q periods, with the
   noise variance (from periods) and total / nonlinear variance (from realisations)
 - :func:`detection_line_levels` — output levels at non-excited odd and even lines
-- :func:`chirp_excerpt_dft` — Sec. 5.1 processing of one analysis frequency
-- :func:`chirp_spectra` — Sec. 5.1 for all analysis frequencies and channels
+
+The chirp's Sec. 5.1 processing (excerpt DFTs) is :mod:`frf_ident.core.excitation.chirp_dft`,
+beside the chirp design: the chirp iteration needs it before anything is estimated.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-import functools
-import math
 
 from frf_ident.errors import EstimationError
-import numba
 import numpy as np
-from scipy import signal
 
 
 def frf_from_spectra(Y: np.ndarray, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -137,7 +134,7 @@ def _realisations(X, name: str, ndim: int = 4) -> list[np.ndarray]:
     return out
 
 
-def best_linear_approximation(Y, U) -> BLAResult:
+def best_linear_approximation(Y, U, *, filled=None) -> BLAResult:
     """
     Multisine BLA P_l = 1/(n_p n_q) sum_p sum_q P[p,q] (eq. 14) with variances.
 
@@ -147,6 +144,10 @@ def best_linear_approximation(Y, U) -> BLAResult:
         (n_q_p, n_freq, n_y, n_ex) array per realisation (periods removed by gaps).
     U
         Input spectra, shaped alike with n_u.
+    filled : list of FilledPeriods, optional
+        Per realisation, what estimated missing samples do to the spread over its periods
+        (:class:`frf_ident.core.estimation.missing_periodic.FilledPeriods`); the noise
+        variance is corrected for them.
 
     Returns
     -------
@@ -167,10 +168,10 @@ def best_linear_approximation(Y, U) -> BLAResult:
         Ppq.append(np.array([P for P, _ in per]))
         cond.append(np.max([c for _, c in per], axis=0))
     Pp = np.array([P.mean(axis=0) for P in Ppq])
-    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), np.array(cond), Pp)
+    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp, filled), np.array(cond), Pp)
 
 
-def _bla_variances(Ppq, Pp: np.ndarray):
+def _bla_variances(Ppq, Pp: np.ndarray, filled=None):
     """
     Compute the variances of the eq. 14 mean.
 
@@ -181,6 +182,9 @@ def _bla_variances(Ppq, Pp: np.ndarray):
     The per-period variance is pooled over the realisations (sum of squares over
     sum(n_q_p - 1)); the variance of P_p is that over n_q_p, of the mean over p the sum over
     p divided by n_p^2 (equal n_q: the usual sum_p var_q / (n_q (n_q - 1)) / n_p^2).
+    With ``filled`` (per realisation, :class:`~frf_ident.core.estimation.missing_periodic.
+    FilledPeriods`), periods holding estimated missing samples: the dof loses their share
+    and each realisation's variance its factor.
     """
     n_p = Pp.shape[0]
     nq = np.array([P.shape[0] for P in Ppq])
@@ -188,7 +192,12 @@ def _bla_variances(Ppq, Pp: np.ndarray):
     dof = int(np.sum(nq - 1))
     if dof >= 1:
         ss = sum(np.sum(np.abs(P - P.mean(axis=0)) ** 2, axis=0) for P in Ppq)
-        noise_var = ss / dof * np.sum(1.0 / nq) / n_p ** 2
+        if filled is None:
+            noise_var = ss / dof * np.sum(1.0 / nq) / n_p ** 2
+        else:
+            left = dof - sum(float(np.sum(f.lost)) for f in filled)
+            noise_var = (ss / left if left > 0 else np.inf * ss) * np.sum(
+                [np.mean(f.factor) / n for f, n in zip(filled, nq)]) / n_p ** 2
     if n_p >= 2:
         total_var = np.sum(np.abs(Pp - Pp.mean(axis=0)) ** 2, axis=0) / (n_p - 1) / n_p
         if noise_var is not None:
@@ -196,7 +205,7 @@ def _bla_variances(Ppq, Pp: np.ndarray):
     return noise_var, total_var, nl_var
 
 
-def best_linear_approximation_reference(Y, U, R) -> BLAResult:
+def best_linear_approximation_reference(Y, U, R, *, filled=None) -> BLAResult:
     """
     Estimate the closed-loop BLA through the reference.
 
@@ -206,7 +215,8 @@ def best_linear_approximation_reference(Y, U, R) -> BLAResult:
     Shapes as :func:`best_linear_approximation` (arrays or one array per realisation), R with
     n_r. Averaging the cross spectra with r over the periods before inverting removes the
     noise that the controller feeds back into u (uncorrelated with r), which biases the
-    per-period Y U^+. Noise variance from the spread of the per-period estimates, total
+    per-period Y U^+. Noise variance from the spread of the per-period estimates (corrected
+    for estimated missing samples by ``filled``, as :func:`best_linear_approximation`), total
     variance from the spread over realisations.
     """
     Ys, Us, Rs = _realisations(Y, 'Y'), _realisations(U, 'U'), _realisations(R, 'R')
@@ -220,7 +230,7 @@ def best_linear_approximation_reference(Y, U, R) -> BLAResult:
         cond.append(sv[..., 0] / np.maximum(sv[..., -1], 1e-300))
         Ppq.append(np.moveaxis(Syr @ np.linalg.pinv(Sur), 1, -1))     # (q, n_y, n_u, F)
     Pp = np.array(Pp)
-    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), np.array(cond), Pp)
+    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp, filled), np.array(cond), Pp)
 
 
 @dataclass
@@ -301,227 +311,3 @@ def detection_levels_from_spectra(Y, bins: np.ndarray,
     def level(mask):
         return power[mask].mean(axis=0) if np.any(mask) else np.full(n_y, np.nan)
     return DetectionLevels(level(excited), level(odd), level(even), noise)
-
-
-# --- chirp processing (Section 5.1) -----------------------------------------------------------
-
-@functools.lru_cache(maxsize=None)
-def decimation_filter(q: int) -> np.ndarray:
-    """
-    Return the FIR low-pass that :func:`scipy.signal.resample_poly` designs for down = q.
-
-    The same filter scipy designs by default (Kaiser window, beta 5, cut-off 1/q of the
-    Nyquist frequency, 20 q + 1 taps), designed once per q: the chirp processing decimates
-    thousands of excerpts with a few factors.
-
-    Parameters
-    ----------
-    q : int
-        Decimation factor (> 1).
-
-    Returns
-    -------
-    ndarray
-        The filter taps (read-only).
-
-    """
-    h = signal.firwin(2 * 10 * q + 1, 1.0 / q, window=('kaiser', 5.0))
-    h.flags.writeable = False
-    return h
-
-
-def _filter_bank(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """
-    Return the decimation filters of the factors ``q``, concatenated, and where each starts.
-
-    :func:`decimation_filter` of every factor > 1 once, and per element of ``q`` the index of
-    its taps in the concatenation (0 for q = 1, which filters nothing).
-    """
-    bank, at = [np.zeros(0)], {}
-    n = 0
-    for f in np.unique(q[q > 1]):
-        at[int(f)] = n
-        bank.append(decimation_filter(int(f)))
-        n += bank[-1].size
-    return np.concatenate(bank), np.array([at.get(int(f), 0) for f in q], dtype=np.int64)
-
-
-@numba.njit(cache=True)
-def _excerpt_weights(i0, i1, q, f_x, t_center, t_first, fs, bank, start):
-    """
-    Return the Sec. 5.1 DFT weights of the excerpts x[i0[k]:i1[k]] at f_x[k], all k at once.
-
-    The excerpt's mean removed, the zero-phase FIR of ``bank[start[k]:]`` (2 L + 1 taps,
-    L = 10 q) applied with zeros outside the excerpt and every q-th sample kept, as
-    ``scipy.signal.resample_poly(seg, 1, q, window=h)`` does (output m at input m q), then a
-    periodic Hann window and the DFT at exactly f_x, over the sum of the window. All of it is
-    linear in the excerpt, so it is one weight per input sample, c_j = sum_m w_m
-    exp(-i 2 pi f_x t_m) h(m q - j): ``c[at[k]:at[k + 1]]`` for excerpt k, with the sum of its
-    weights and of its window (:func:`_apply_weights` applies them to every channel).
-    """
-    n = f_x.size
-    at = np.zeros(n + 1, dtype=np.int64)
-    for k in range(n):
-        at[k + 1] = at[k] + max(i1[k] - i0[k], 0)
-    c = np.zeros(at[n], dtype=np.complex128)
-    c_sum = np.zeros(n, dtype=np.complex128)
-    w_sums = np.zeros(n)
-    for k in range(n):
-        a, qq = i0[k], q[k]
-        n_in = i1[k] - a
-        if n_in <= 0:
-            continue
-        b = at[k]
-        n_out = (n_in + qq - 1) // qq
-        half = 10 * qq if qq > 1 else 0
-        h0 = start[k] + half
-        w_sum = 0.0
-        for m in range(n_out):
-            w = 1.0 if n_out == 1 else 0.5 - 0.5 * math.cos(2.0 * math.pi * m / n_out)
-            w_sum += w
-            t = t_first + a / fs + m * (qq / fs)
-            kern = w * np.exp(-2j * np.pi * f_x[k] * (t - t_center[k]))
-            centre = m * qq
-            if qq == 1:
-                c[b + centre] += kern
-                continue
-            for d in range(max(-half, centre - n_in + 1), min(half, centre) + 1):
-                c[b + centre - d] += kern * bank[h0 + d]
-        acc = 0j
-        for j in range(n_in):
-            acc += c[b + j]
-        c_sum[k] = acc
-        w_sums[k] = w_sum
-    return c, at, c_sum, w_sums
-
-
-@numba.njit(cache=True)
-def _apply_weights(x, i0, c, at, c_sum, w_sums, out):
-    """
-    Fill out[k] with the DFT of the excerpt x[i0[k]:...] by :func:`_excerpt_weights`' weights.
-
-    NaN for a channel whose excerpt holds a non-finite sample, and for an empty excerpt.
-    """
-    n_ch = x.shape[1]
-    for k in range(at.size - 1):
-        a, b = i0[k], at[k]
-        n_in = at[k + 1] - b
-        if n_in <= 0:
-            for ch in range(n_ch):
-                out[k, ch] = np.nan + 0j
-            continue
-        for ch in range(n_ch):
-            mean = 0.0
-            acc = 0j
-            for j in range(n_in):
-                mean += x[a + j, ch]
-                acc += c[b + j] * x[a + j, ch]
-            # a missing sample makes both sums NaN: the channel loses this frequency only
-            out[k, ch] = (acc - mean / n_in * c_sum[k]) / w_sums[k]
-
-
-#: weights of recent chirp analyses, by their excerpts (:func:`chirp_spectra`): the diagnosis
-#: analyses the same chirp segments of every simulated model, and forming the weights was
-#: half of the analysis
-_WEIGHTS: dict[tuple, tuple] = {}
-_WEIGHTS_KEPT = 16
-
-
-def _weights(i0, i1, q, f, tc, t_first: float, fs: float) -> tuple:
-    """Return :func:`_excerpt_weights` of these excerpts, kept for the next call alike."""
-    key = (i0.tobytes(), i1.tobytes(), q.tobytes(), f.tobytes(), tc.tobytes(), t_first, fs)
-    if key not in _WEIGHTS:
-        bank, start = _filter_bank(q)
-        while len(_WEIGHTS) >= _WEIGHTS_KEPT:
-            del _WEIGHTS[next(iter(_WEIGHTS))]
-        _WEIGHTS[key] = _excerpt_weights(i0, i1, q, f, tc, t_first, fs, bank, start)
-    return _WEIGHTS[key]
-
-
-def chirp_excerpt_dft(x: np.ndarray, fs: float, f_x: float, t_center: float, *,
-                      n_periods: float = 4.0, samples_per_period: float = 10.0,
-                      t_first: float = 0.0) -> np.ndarray:
-    """
-    One analysis frequency of the Sec. 5.1 chirp processing.
-
-    Takes the excerpt of ``n_periods`` periods of f_x centred on the time ``t_center`` at which
-    f_x is excited, subtracts its mean, low-pass filters and downsamples it to about
-    ``samples_per_period`` samples per period (polyphase FIR, zero phase: the filter and
-    alignment of :func:`scipy.signal.resample_poly` with :func:`decimation_filter`), applies a
-    Hann window and evaluates the DFT at exactly f_x.
-
-    ``x`` : (N, ...) samples at rate fs, the first at time ``t_first``. Returns (...) complex,
-    NaN for a channel whose excerpt holds a missing (NaN) sample: a gap removes that frequency
-    of that channel only.
-    """
-    return chirp_spectra(x, fs, np.array([f_x], dtype=float), np.array([t_center], dtype=float),
-                         t_first=t_first, n_periods=n_periods,
-                         samples_per_period=samples_per_period)[0]
-
-
-def chirp_analysis_frequencies(f_candidates: np.ndarray, t_of_f, t_start: float,
-                               t_end: float, n_periods: float = 4.0) -> np.ndarray:
-    """Analysis frequencies whose excerpt of ``n_periods`` periods lies inside [t_start, t_end]."""
-    f = np.asarray(f_candidates, dtype=float)
-    tc = t_of_f(f)
-    half = 0.5 * n_periods / f
-    return f[(tc - half >= t_start) & (tc + half <= t_end)]
-
-
-def chirp_spectra(x: np.ndarray, fs: float, freqs: np.ndarray, t_centers: np.ndarray, *,
-                  t_first: float = 0.0, n_periods: float = 4.0,
-                  samples_per_period: float = 10.0) -> np.ndarray:
-    """
-    Return the Sec. 5.1 spectra of all channels at the chirp's analysis frequencies.
-
-    :func:`chirp_excerpt_dft` at every analysis frequency, compiled over all of them at once
-    (a chirp has hundreds of analysis frequencies; the diagnosis processes one chirp per
-    simulated model).
-
-    Parameters
-    ----------
-    x : ndarray, shape (N, ...)
-        Samples at rate ``fs``, the first at time ``t_first``.
-    fs : float
-        Sample rate [Hz].
-    freqs : ndarray, shape (n_freq,)
-        Analysis frequencies [Hz].
-    t_centers : ndarray, shape (n_freq,)
-        Times [s] at which the chirp excites each of them.
-    t_first : float
-        Time of the first sample [s].
-    n_periods : float
-        Length of each excerpt in periods of its frequency.
-    samples_per_period : float
-        Samples per period the excerpt is decimated to.
-
-    Returns
-    -------
-    ndarray, shape (n_freq, ...)
-        Complex spectra; NaN for a channel whose excerpt holds a missing sample.
-
-    Raises
-    ------
-    EstimationError
-        When an excerpt reaches outside the record.
-
-    """
-    x = np.asarray(x, dtype=float)
-    f = np.asarray(freqs, dtype=float).ravel()
-    tc = np.asarray(t_centers, dtype=float).ravel()
-    if f.size == 0:
-        return np.zeros((0,) + x.shape[1:], dtype=complex)
-    half = 0.5 * n_periods / f
-    i0 = np.round((tc - half - t_first) * fs).astype(np.int64)
-    i1 = np.round((tc + half - t_first) * fs).astype(np.int64)
-    outside = (i0 < 0) | (i1 > x.shape[0])
-    if outside.any():
-        k = int(np.argmax(outside))
-        raise EstimationError(f'excerpt for f_x={f[k]:g} Hz around t={tc[k]:g} s is outside '
-                              f'the record [{t_first:g}, {t_first + x.shape[0] / fs:g}] s')
-    q = np.maximum(1, np.floor(fs / (samples_per_period * f))).astype(np.int64)
-    c, at, c_sum, w_sums = _weights(i0, i1, q, f, tc, float(t_first), float(fs))
-    flat = np.ascontiguousarray(x.reshape(x.shape[0], -1))
-    out = np.empty((f.size, flat.shape[1]), dtype=complex)
-    _apply_weights(flat, i0, c, at, c_sum, w_sums, out)
-    return out.reshape((f.size,) + x.shape[1:])

@@ -33,10 +33,10 @@ from dataclasses import dataclass, field
 import math
 from typing import Any
 
-from frf_ident.core.estimation.spectra import (chirp_analysis_frequencies, chirp_excerpt_dft,
-                                               chirp_spectra)
 from frf_ident.core.excitation.chirp import (chirp_instantaneous_frequency, chirp_phase,
                                              chirp_phase_flips, ChirpDesign)
+from frf_ident.core.excitation.chirp_dft import (chirp_analysis_frequencies, chirp_excerpt_dft,
+                                                 chirp_spectra)
 from frf_ident.core.excitation.multisine import (design_odd_multisine, multisine_realisation,
                                                  MultisineDesign, reference_frequency_set)
 from frf_ident.errors import DesignError, SafetyError

@@ -30,7 +30,7 @@ from typing import Any
 from frf_ident.errors import ModelFileError
 import numpy as np
 
-__all__ = ['AxisParams', 'RobotParams']
+__all__ = ['AxisParams', 'MjcfSource', 'RobotParams']
 
 
 @dataclass
@@ -186,6 +186,31 @@ class AxisParams:
         return out
 
 
+@dataclass(frozen=True)
+class MjcfSource:
+    """
+    The MJCF (MuJoCo model) a model file names as its rigid body (docs/model_file.md).
+
+    Plain data: the adapter :mod:`frf_ident.io.mjcf` reads the file; the parameters of a
+    :class:`RobotParams` with an ``mjcf`` are the MJCF linearised at ``pose`` in our terms.
+
+    Parameters
+    ----------
+    file : str
+        Path of the MJCF (absolute once loaded).
+    keyframe : str or None
+        Keyframe whose ``qpos`` is the start pose; None: the file's first keyframe, else its
+        reference pose ``qpos0``.
+    pose : dict of str to float
+        Joint name -> position [rad], applied over the keyframe.
+
+    """
+
+    file: str
+    keyframe: str | None = None
+    pose: dict[str, float] = field(default_factory=dict)
+
+
 @dataclass
 class RobotParams:
     """
@@ -209,6 +234,9 @@ class RobotParams:
         real drive) instead of the true motor velocity.
     seed : int, optional
         Seed of the simulated measurement noise.
+    mjcf : MjcfSource, optional
+        The MJCF these parameters were linearised from (a model file's ``mjcf``); None: a
+        model of our own.
 
     Raises
     ------
@@ -225,6 +253,7 @@ class RobotParams:
     substeps: int = 2
     velocity_from_encoder: bool = False
     seed: int = 0
+    mjcf: MjcfSource | None = None
 
     def __post_init__(self) -> None:
         if not self.axes:

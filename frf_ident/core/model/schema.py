@@ -24,7 +24,8 @@ Extensions beyond the contract (all optional, documented in docs/model_file.md):
 - per axis ``gravity_torque``, ``gravity`` (configuration-dependent load, list of
   {amplitude, phase, joints}), ``encoder_resolution``, ``velocity_noise``, ``torque_noise``
 - ``controller.filters``: {axis name: list of second-order sections [b0, b1, b2, 1, a1, a2]}
-  on the measured velocity, discrete at ``sample_rate`` (what ``frf-ident tune`` writes)
+  on the measured velocity, discrete at ``sample_rate`` (what ``frf-ident tune`` writes;
+  :func:`controller_filters`, :func:`check_sections`)
 """
 from __future__ import annotations
 
@@ -34,19 +35,21 @@ import math
 from typing import Any
 
 from frf_ident.core.model.fields import expect_bool, expect_int
-from frf_ident.core.model.params import AxisParams, RobotParams
-from frf_ident.core.simulation.controller import check_sections, PIVelocity
+from frf_ident.core.model.params import AxisParams, MjcfSource, RobotParams
 from frf_ident.errors import ModelFileError
 import numpy as np
 
 MODEL_VERSION = 1
 _AXIS_KEYS = {f.name for f in fields(AxisParams)}
 _TOP_KEYS = {'frf_ident_model', 'sample_rate', 'axes', 'controller', 'link_coupling',
-             'simulation', 'description'}
+             'simulation', 'description', 'mjcf', 'pose'}
 _SIM_KEYS = {'substeps', 'velocity_from_encoder', 'seed'}
 _CONTROLLER_KEYS = {'kind', 'kp', 'ki', 'filters'}
 #: a pass-through section: pads an axis with fewer sections than another
 PASS_SECTION = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
+#: a filter chain must pass DC within this share: a velocity feedback that does not (a
+#: high-pass, a gain) leaves the PI's integral without its measurement and is refused
+DC_GAIN_TOLERANCE = 0.01
 
 
 def _number(where: str, value: Any, *, allow_none: bool = False) -> float | None:
@@ -155,7 +158,7 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
             raise ModelFileError(f'link_coupling: expected an {len(axes)}x{len(axes)} matrix '
                                  f'of numbers, got {coupling!r}') from None
     return RobotParams(
-        axes=axes, link_coupling=coupling,
+        axes=axes, link_coupling=coupling, mjcf=mjcf_source_from_dict(d),
         sample_rate=_number('sample_rate', d.get('sample_rate', RobotParams.sample_rate)),
         substeps=expect_int('simulation.substeps', sim.get('substeps', RobotParams.substeps),
                             1, ModelFileError),
@@ -167,8 +170,38 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
                         ModelFileError))
 
 
-def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
-    """Convert the ``controller`` section to a PIVelocity (torque limits from the axes)."""
+def mjcf_source_from_dict(d: dict[str, Any]) -> MjcfSource | None:
+    """
+    Return the model file's ``mjcf`` and ``pose`` as an MjcfSource (None without ``mjcf``).
+
+    ``mjcf``: the MJCF file; ``pose``: a keyframe name, or a mapping joint name -> position
+    [rad] (with an optional ``keyframe`` entry it is applied over).
+    """
+    path, pose = d.get('mjcf'), d.get('pose')
+    if path is None:
+        if pose is not None:
+            raise ModelFileError('pose: only a model with mjcf (an MJCF file) takes a pose')
+        return None
+    if not isinstance(path, str) or not path:
+        raise ModelFileError(f'mjcf: expected the path of an MJCF file, got {path!r}')
+    if pose is None or isinstance(pose, str):
+        return MjcfSource(path, pose or None, {})
+    if not isinstance(pose, dict):
+        raise ModelFileError(f'pose: expected a keyframe name or a mapping joint name -> '
+                             f'position [rad], got {pose!r}')
+    key = pose.get('keyframe')
+    if key is not None and not isinstance(key, str):
+        raise ModelFileError(f'pose.keyframe: expected a keyframe name, got {key!r}')
+    joints = {str(k): _number(f'pose.{k}', v) for k, v in pose.items() if k != 'keyframe'}
+    return MjcfSource(path, key, joints)
+
+
+def controller_gains(d: dict[str, Any], robot: RobotParams) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the ``controller`` section's velocity-PI gains (kp, ki), one per axis, checked.
+
+    :func:`frf_ident.core.simulation.controller.controller_from_dict` builds the controller.
+    """
     c = d.get('controller')
     if not isinstance(c, dict):
         raise ModelFileError(f'controller: expected a mapping with kind, kp, ki, got {c!r}')
@@ -191,14 +224,67 @@ def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
         if np.any(gains[key] < 0):
             raise ModelFileError(f'controller.{key}: gains must be >= 0, got '
                                  f'{gains[key].tolist()}')
-    ctrl = PIVelocity(gains['kp'], gains['ki'], robot.torque_limits(), robot.dt,
-                      sos=_filters(c.get('filters'), robot))
-    ctrl.reset(robot.gravity_load(np.zeros(robot.n_axes)))
-    return ctrl
+    return gains['kp'], gains['ki']
 
 
-def _filters(spec: Any, robot: RobotParams) -> np.ndarray:
-    """``controller.filters`` -> sos (n, n_sections, 6), pass-through sections as padding."""
+def check_sections(sections: np.ndarray) -> str | None:
+    """
+    Return what is wrong with one axis' chain of filter sections, or None when it is usable.
+
+    A usable chain has rows [b0, b1, b2, 1, a1, a2] of finite numbers, every section stable
+    (its poles inside the unit circle) and a DC gain within DC_GAIN_TOLERANCE of 1.
+
+    Parameters
+    ----------
+    sections : ndarray, shape (n_sections, 6)
+        The chain.
+
+    Returns
+    -------
+    str or None
+        One sentence naming the section and the problem.
+
+    """
+    sec = np.asarray(sections, dtype=float)
+    if sec.ndim != 2 or sec.shape[1] != 6:
+        return f'expected rows of 6 numbers [b0, b1, b2, 1, a1, a2], got shape {sec.shape}'
+    for k, row in enumerate(sec):
+        if not np.all(np.isfinite(row)):
+            return f'section {k}: not all numbers are finite'
+        if row[3] != 1.0:
+            return f'section {k}: a0 must be 1 (normalised), got {row[3]:g}'
+        if np.any(np.abs(np.roots(row[3:])) >= 1.0):
+            return f'section {k}: unstable (a pole on or outside the unit circle)'
+    dc = float(np.prod(sec[:, :3].sum(axis=1) / sec[:, 3:].sum(axis=1))) if len(sec) else 1.0
+    if abs(dc - 1.0) > DC_GAIN_TOLERANCE:
+        return (f'DC gain {dc:.4g}: a filter on the measured velocity must pass DC (1 within '
+                f'{DC_GAIN_TOLERANCE:g}), or the integral loses its measurement')
+    return None
+
+
+def controller_filters(d: dict[str, Any], robot: RobotParams) -> np.ndarray:
+    """
+    Return ``controller.filters`` as sos (n, n_sections, 6), pass-through sections as padding.
+
+    Parameters
+    ----------
+    d : dict
+        The model-file mapping.
+    robot : RobotParams
+        Its robot (the axis names).
+
+    Returns
+    -------
+    ndarray, shape (n, n_sections, 6)
+        No sections without ``filters``.
+
+    Raises
+    ------
+    ModelFileError
+        Not a mapping of axis names to lists of usable sections (:func:`check_sections`).
+
+    """
+    spec = (d.get('controller') or {}).get('filters')
     n = robot.n_axes
     if spec is None:
         return np.zeros((n, 0, 6))
@@ -225,8 +311,14 @@ def _filters(spec: Any, robot: RobotParams) -> np.ndarray:
                     ).reshape(n, m, 6)
 
 
-def robot_to_dict(robot: RobotParams, controller: PIVelocity | None = None) -> dict[str, Any]:
-    """Convert RobotParams (+ controller) to a model-file mapping (inverse of robot_from_dict)."""
+def robot_to_dict(robot: RobotParams, controller: Any = None) -> dict[str, Any]:
+    """
+    Convert RobotParams (+ controller) to a model-file mapping (inverse of robot_from_dict).
+
+    ``controller``: a velocity PI with ``kp`` and ``ki`` arrays (a
+    :class:`frf_ident.core.simulation.controller.PIVelocity`, its ``sos`` filters written as
+    ``filters``), or None.
+    """
     axes = []
     for a in robot.axes:
         ad = asdict(a)
@@ -242,10 +334,13 @@ def robot_to_dict(robot: RobotParams, controller: PIVelocity | None = None) -> d
     d['simulation'] = {'substeps': int(robot.substeps),
                        'velocity_from_encoder': bool(robot.velocity_from_encoder),
                        'seed': int(robot.seed)}
+    if robot.mjcf is not None:
+        d['description'] = f'{robot.mjcf.file} linearised at its pose, in our parameters'
     if controller is not None:
         d['controller'] = {'kind': 'pi_velocity', 'kp': controller.kp.tolist(),
                            'ki': controller.ki.tolist()}
-        chains = {a.name: [row.tolist() for row in controller.sos[i]
+        sos = getattr(controller, 'sos', np.zeros((robot.n_axes, 0, 6)))
+        chains = {a.name: [row.tolist() for row in sos[i]
                            if not np.array_equal(row, PASS_SECTION)]
                   for i, a in enumerate(robot.axes)}
         chains = {k: v for k, v in chains.items() if v}

@@ -29,16 +29,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+from typing import Any
 
+from frf_ident.core.model.params import RobotParams
+from frf_ident.core.model.schema import check_sections, controller_filters, controller_gains
 import numba
 import numpy as np
 
-__all__ = ['DC_GAIN_TOLERANCE', 'PIVelocity', 'check_sections', 'filter_measurement', 'pi_step',
-           'sos_step']
-
-#: a filter chain must pass DC within this share: a velocity feedback that does not (a
-#: high-pass, a gain) leaves the PI's integral without its measurement and is refused
-DC_GAIN_TOLERANCE = 0.01
+__all__ = ['controller_from_dict', 'filter_measurement', 'PIVelocity', 'pi_step', 'sos_step']
 
 
 @numba.njit(cache=True, fastmath=True, inline='always')
@@ -96,41 +94,6 @@ def filter_measurement(y, sos, zf, out):
     """
     for i in range(y.shape[0]):
         out[i] = sos_step(y[i], sos, zf, i) if math.isfinite(y[i]) else y[i]
-
-
-def check_sections(sections: np.ndarray) -> str | None:
-    """
-    Return what is wrong with one axis' chain of sections, or None when it is usable.
-
-    A usable chain has rows [b0, b1, b2, 1, a1, a2] of finite numbers, every section stable
-    (its poles inside the unit circle) and a DC gain within DC_GAIN_TOLERANCE of 1.
-
-    Parameters
-    ----------
-    sections : ndarray, shape (n_sections, 6)
-        The chain.
-
-    Returns
-    -------
-    str or None
-        One sentence naming the section and the problem.
-
-    """
-    sec = np.asarray(sections, dtype=float)
-    if sec.ndim != 2 or sec.shape[1] != 6:
-        return f'expected rows of 6 numbers [b0, b1, b2, 1, a1, a2], got shape {sec.shape}'
-    for k, row in enumerate(sec):
-        if not np.all(np.isfinite(row)):
-            return f'section {k}: not all numbers are finite'
-        if row[3] != 1.0:
-            return f'section {k}: a0 must be 1 (normalised), got {row[3]:g}'
-        if np.any(np.abs(np.roots(row[3:])) >= 1.0):
-            return f'section {k}: unstable (a pole on or outside the unit circle)'
-    dc = float(np.prod(sec[:, :3].sum(axis=1) / sec[:, 3:].sum(axis=1))) if len(sec) else 1.0
-    if abs(dc - 1.0) > DC_GAIN_TOLERANCE:
-        return (f'DC gain {dc:.4g}: a filter on the measured velocity must pass DC (1 within '
-                f'{DC_GAIN_TOLERANCE:g}), or the integral loses its measurement')
-    return None
 
 
 @numba.njit(cache=True, fastmath=True, inline='always')
@@ -211,7 +174,7 @@ class PIVelocity:
     ------
     ValueError
         A gain is negative, a torque limit not positive, or a filter not usable
-        (:func:`check_sections`).
+        (:func:`frf_ident.core.model.schema.check_sections`).
 
     """
 
@@ -327,3 +290,18 @@ class PIVelocity:
         """
         return PIVelocity(self.kp.copy(), self.ki.copy(), self.torque_limit.copy(), self.dt,
                           self.integral.copy(), self.sos.copy(), self.filter_state.copy())
+
+
+def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
+    """
+    Return the model file's velocity controller (torque limits from the axes).
+
+    The ``controller`` section of a loaded model file (docs/CONTRACT.md §5), its gains checked
+    by :func:`frf_ident.core.model.schema.controller_gains` and its filters (an extension,
+    docs/model_file.md) by :func:`frf_ident.core.model.schema.controller_filters`; the
+    integral starts at the gravity load of the zero pose.
+    """
+    kp, ki = controller_gains(d, robot)
+    ctrl = PIVelocity(kp, ki, robot.torque_limits(), robot.dt, sos=controller_filters(d, robot))
+    ctrl.reset(robot.gravity_load(np.zeros(robot.n_axes)))
+    return ctrl

@@ -24,10 +24,10 @@ from dataclasses import dataclass
 
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.spectra import (best_linear_approximation, BLAResult,
-                                               chirp_analysis_frequencies, chirp_spectra,
                                                detection_line_levels, frf_from_spectra,
                                                periodic_spectra)
 from frf_ident.core.excitation.chirp import ChirpDesign
+from frf_ident.core.excitation.chirp_dft import chirp_analysis_frequencies, chirp_spectra
 from frf_ident.core.excitation.multisine import (multisine_realisation, MultisineDesign,
                                                  MultisineRealisation, reference_frequency_set)
 from frf_ident.core.simulation.plant import FlexibleJointPlant

@@ -14,8 +14,9 @@
 """
 Offline runner: executes procedure phases in closed loop on a simulated or plug-in plant.
 
-The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` (run at compiled
-speed, the PI inside the kernel) or any docs/CONTRACT.md §4 plug-in with ``dt``,
+The plant is a :class:`~frf_ident.core.simulation.plant.FlexibleJointPlant` or another plant
+with its batch ``simulate`` (run at compiled speed, the PI inside the kernel; MuJoCo's plant in
+:mod:`frf_ident.io.mjcf.plant`) or any docs/CONTRACT.md §4 plug-in with ``dt``,
 ``joint_names``, ``reset()`` and ``step(torque) -> (position, velocity, effort)``, driven sample
 by sample through the same
 PI. Everything lands in one :class:`~frf_ident.core.recording.Recording` on a single timeline.
@@ -59,10 +60,13 @@ class ClosedLoop:
         if controller.n_axes != self.n:
             raise FrfIdentInputError(f'controller has {controller.n_axes} axes, plant '
                                      f'{self.n} joints {plant.joint_names}')
-        self.fast = isinstance(plant, FlexibleJointPlant)
+        # a plant with the batch interface (our own, MuJoCo's) runs whole phases compiled
+        self.fast = isinstance(plant, FlexibleJointPlant) or callable(
+            getattr(plant, 'simulate', None))
         if position is not None and not self.fast:
-            raise FrfIdentInputError('a start position needs a FlexibleJointPlant: the plug-in '
-                                     'interface resets to its own rest state')
+            raise FrfIdentInputError('a start position needs a plant with simulate() and '
+                                     'reset(position=): the plug-in interface resets to its '
+                                     'own rest state')
         if self.fast:
             plant.reset(position=position)
         else:
@@ -136,7 +140,7 @@ class ClosedLoop:
 
 def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIVelocity,
                         position: np.ndarray | None = None,
-                        origin: np.ndarray | None = None) -> np.ndarray:
+                        origin: np.ndarray | None = None, plant: Any = None) -> np.ndarray:
     """
     Dry-run a plan on the nominal model and return the peak torque of every axis.
 
@@ -159,6 +163,10 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
     origin : array_like, shape (n,), optional
         The operating point [rad] the plan's move targets are relative to; default
         ``position``.
+    plant : object, optional
+        A noiseless plant with ``simulate`` and ``reset(position=)`` to run the plan on instead
+        (the MJCF of a model that names one, simulated by MuJoCo); default our plant of
+        ``robot``.
 
     Returns
     -------
@@ -166,8 +174,9 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
         Peak absolute motor torque [N m] of every axis over the whole plan.
 
     """
-    quiet = [replace(a, velocity_noise=0.0, torque_noise=0.0) for a in robot.axes]
-    plant = FlexibleJointPlant(replace(robot, axes=quiet))
+    if plant is None:
+        quiet = [replace(a, velocity_noise=0.0, torque_noise=0.0) for a in robot.axes]
+        plant = FlexibleJointPlant(replace(robot, axes=quiet))
     ctrl = controller.copy()
     q0 = np.zeros(robot.n_axes) if position is None else np.asarray(position, dtype=float)
     ctrl.reset(plant.equilibrium_torque(q0))
@@ -183,7 +192,7 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
 def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVelocity,
                       torque_limit: np.ndarray, name: str, remedy: str,
                       position: np.ndarray | None = None,
-                      origin: np.ndarray | None = None) -> np.ndarray:
+                      origin: np.ndarray | None = None, plant: Any = None) -> np.ndarray:
     """
     Predict a plan's peak torque and refuse the plan when it reaches 0.95 of a limit.
 
@@ -193,7 +202,7 @@ def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVel
 
     Parameters
     ----------
-    phases, robot, controller, position, origin
+    phases, robot, controller, position, origin, plant
         As for :func:`predict_peak_torque`.
     torque_limit : array_like, shape (n,)
         Torque limit [N m] of every axis.
@@ -213,7 +222,7 @@ def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVel
         An axis' predicted peak reaches 0.95 of its limit.
 
     """
-    peak = predict_peak_torque(phases, robot, controller, position, origin)
+    peak = predict_peak_torque(phases, robot, controller, position, origin, plant)
     check_torque_bound(peak, torque_limit, robot.joint_names, name, remedy)
     return peak
 
@@ -228,7 +237,7 @@ def run_identification(plant: Any, controller: PIVelocity,
                        config: IdentificationConfig | None = None, *,
                        progress: Progress | None = None,
                        meta: dict[str, Any] | None = None,
-                       model: RobotParams | None = None) -> Recording:
+                       model: RobotParams | None = None, dry_run: Any = None) -> Recording:
     """
     Run the Section 7 procedures (multisine with compensation run, iterated chirps).
 
@@ -248,6 +257,9 @@ def run_identification(plant: Any, controller: PIVelocity,
         The nominal model: the multisine plan and the first chirp step are refused when their
         peak torque predicted on it (:func:`predict_peak_torque`) reaches 0.95 of a limit,
         as the excitation node refuses them on a robot. None: no prediction.
+    dry_run : object, optional
+        The noiseless plant the prediction runs on instead of our plant of ``model``
+        (:func:`predict_peak_torque`'s ``plant``).
 
     Returns
     -------
@@ -277,7 +289,7 @@ def run_identification(plant: Any, controller: PIVelocity,
                                    ('chirp_iteration_1', it and it.phases(), cfg.chirp)):
             if plan is not None:
                 peak = check_plan_torque(plan, model, controller, controller.torque_limit,
-                                         name, remedy.remedy(), loop.q0)
+                                         name, remedy.remedy(), loop.q0, plant=dry_run)
                 say(f"{name}: predicted peak torque {' / '.join(f'{p:.1f}' for p in peak)} N m "
                     'on the model (limits '
                     f"{' / '.join(f'{u:.0f}' for u in controller.torque_limit)} N m)")

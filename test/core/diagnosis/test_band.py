@@ -22,9 +22,9 @@ spectrum for the false-alarm rate; the real EMPS and KUKA records for the band r
 from pathlib import Path
 
 from frf_ident.core.diagnosis.band import analysis_band
-from frf_ident.core.diagnosis.resonance import resonances_above, scan_spectrum
 from frf_ident.core.diagnosis.thresholds import FC_HZ, RESONANCE_FALSE_ALARM
-from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
+from frf_ident.core.diagnosis.timeseries.pipeline import diagnose_timeseries
+from frf_ident.core.diagnosis.timeseries.resonance import resonances_above, scan_spectrum
 from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
 import numpy as np
@@ -91,16 +91,16 @@ def test_unmodelled_mode_above_the_band_is_named_with_its_band(records):
     rec = records[35.0]
     res = diagnose_timeseries(rec, robot_from_dict(MODEL))
     assert res.band.fc_hz < 35.0
-    res_modes = [u for u in res.unexplained if u.get('kind')]
+    res_modes = [u for u in res.unexplained if u.kind]
     assert res_modes, res.unexplained
     # 35 Hz is the mode with the link held; the PD loop (5 Hz) leaves the drive free above
     # its bandwidth, where the mode rings at 35 Hz * sqrt(1 + its inertia over the rest)
     free = 35.0 * np.sqrt(1 + 0.3 / (0.5 + 0.7))
-    f1, f2 = res_modes[0]['signature']['band_hz']
+    f1, f2 = res_modes[0].signature.band_hz
     assert f1 <= 35.0 < free <= f2 and f2 - f1 < 15.0, res_modes
-    assert res_modes[0]['signature']['peak_hz'] == pytest.approx(free, abs=1.5)
+    assert res_modes[0].signature.peak_hz == pytest.approx(free, abs=1.5)
     assert len(res_modes) == 1, res_modes
-    assert res_modes[0]['kind'] == 'resonance above the analysis band'
+    assert res_modes[0].kind == 'resonance above the analysis band'
 
 
 def test_same_plant_without_the_mode_leaves_nothing_unexplained(records):
@@ -142,15 +142,15 @@ def test_scan_finds_a_resonance_of_known_band_in_noise():
     f, p, floor, thr = scan_spectrum(x, FS, FC_HZ)
     assert f[0] > FC_HZ and f[-1] <= 0.45 * FS
     (hit,) = resonances_above(x[:, None], FS, FC_HZ, ['a'])
-    f1, f2 = hit['signature']['band_hz']
+    f1, f2 = hit.signature.band_hz
     assert f1 <= 60.0 <= f2 and f2 - f1 < 10.0
-    assert hit['kind'] == 'resonance above the analysis band'
-    assert hit['signature']['half_power_width_hz'] == pytest.approx(3.6, rel=0.4)
+    assert hit.kind == 'resonance above the analysis band'
+    assert hit.signature.half_power_width_hz == pytest.approx(3.6, rel=0.4)
     t = np.arange(20000) / FS
     x = rng.standard_normal(t.size) + 0.3 * np.sin(2 * np.pi * 150.3 * t)
     (hit,) = resonances_above(x[:, None], FS, FC_HZ, ['a'])
-    assert hit['kind'] == 'line above the analysis band'
-    assert hit['signature']['peak_hz'] == pytest.approx(150.3, abs=1.0)
+    assert hit.kind == 'line above the analysis band'
+    assert hit.signature.peak_hz == pytest.approx(150.3, abs=1.0)
 
 
 @pytest.mark.parametrize('data, map_name, n_axes, motion_max', [

@@ -14,8 +14,9 @@
 """The bounded Brent wrapper opens with the points scipy evaluates first and returns its result."""
 import math
 
-from frf_ident.core.diagnosis.brent import bounded_minimum, opening_points
-from hypothesis import given, settings, strategies as st
+from frf_ident.core.diagnosis.experiments.brent import bounded_minimum, opening_points
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy import optimize
 
 

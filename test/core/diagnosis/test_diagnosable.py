@@ -25,7 +25,7 @@ from pathlib import Path
 
 from frf_ident.app.diagnose import load_data
 from frf_ident.cli import main
-from frf_ident.core.diagnosis.diagnosable import check_diagnosable
+from frf_ident.core.diagnosis.timeseries.diagnosable import check_diagnosable
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 from frf_ident.io.model_file import load_model
@@ -65,8 +65,8 @@ def test_a_record_that_can_be_diagnosed_passes(emps):
     ('still', r'no axis moves in this record'),
 ])
 def test_a_record_that_cannot_be_diagnosed_is_refused(emps, tmp_path, kind, match, capsys):
-    from frf_ident.core.diagnosis import diagnose_timeseries
     from frf_ident.bag import write_recording
+    from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
     rec = {'short': lambda: _variant(emps, n=1499), 'tiny': lambda: _variant(emps, n=3),
            'zero effort': lambda: _variant(emps, effort=np.zeros_like(emps.effort)),
            'still': lambda: _variant(emps, position=0.1 + np.random.default_rng(1).normal(
@@ -84,10 +84,9 @@ def test_a_record_that_cannot_be_diagnosed_is_refused(emps, tmp_path, kind, matc
 
 def test_a_model_sampled_at_another_rate_is_named_and_the_record_rate_written(emps, tmp_path):
     """A model at 500 Hz on the 1 kHz record: a line says so; extended_model.yaml has 1000."""
-    import yaml
-
     from frf_ident.app.diagnose import diagnose
     from frf_ident.bag import write_recording
+    import yaml
     model = yaml.safe_load((CFG / 'model_emps.yaml').read_text())
     model['sample_rate'] = 500.0
     path = tmp_path / 'm500.yaml'

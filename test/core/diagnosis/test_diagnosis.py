@@ -26,18 +26,22 @@ from pathlib import Path
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
 from frf_ident.core.diagnosis.common import bridge_gaps, GAP_GUARD_S, simulate_like
-from frf_ident.core.diagnosis.evaluator import missing_reference
-from frf_ident.core.diagnosis.residual import (
-    delayed_effort, effective_samples, find_ripple, lowpass, regress_axis, ripple_range)
-from frf_ident.core.diagnosis.timeseries import (
-    block_standard_errors, diagnose_timeseries, f_test, FC_HZ, noise_level, select_groups,
-    split_blocks)
-from frf_ident.core.diagnosis.unexplained import residual_bands
-from frf_ident.core.model.schema import controller_from_dict, robot_from_dict
+from frf_ident.core.diagnosis.experiments.evaluator import missing_reference
+from frf_ident.core.diagnosis.experiments.unexplained import residual_bands
+from frf_ident.core.diagnosis.prediction import noise_level
+from frf_ident.core.diagnosis.regression import find_ripple, regress_axis, ripple_range
+from frf_ident.core.diagnosis.residual import delayed_effort, effective_samples, lowpass
+from frf_ident.core.diagnosis.selection import (block_standard_errors, f_test, select_groups,
+                                                split_blocks)
+from frf_ident.core.diagnosis.thresholds import FC_HZ
+from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
+from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.controller import controller_from_dict
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 import numpy as np
 import pytest
 import scipy.io as sio
@@ -177,7 +181,7 @@ def _arm_record(seed: int, *, disturbance_hz: float = 0.0, cable: float = 0.0):
             q[:, i] += rng.uniform(0.1, 0.35) * np.sin(2 * np.pi * f * t + rng.uniform(0, 6))
     v = np.gradient(q, 1 / fs, axis=0)
     # the torque u[k] holds over the sample interval (zero-order hold, as a drive applies a
-    # command; README_diagnosis.md): the equations of motion at the interval's middle
+    # command; docs/diagnosis/timeseries.md): the equations of motion at the interval's middle
     qh, vh, th = 0.5 * (q[1:] + q[:-1]), 0.5 * (v[1:] + v[:-1]), t[:-1] + 0.5 / fs
     a = np.diff(v, axis=0) * fs
     J = np.array([6.0, 4.0, 1.5])
@@ -219,7 +223,7 @@ def test_timeseries_names_gravity_of_a_coupled_arm_and_friction():
         assert found[('coulomb_friction', name)]['coulomb_friction'] == \
             pytest.approx(truth['fc'][i], rel=0.02)
     m = res.metrics
-    assert m['extended']['time_nrmse'] < 0.3 < m['baseline']['time_nrmse']
+    assert m.extended.time_nrmse < 0.3 < m.baseline.time_nrmse
     assert res.unexplained == []
 
 
@@ -251,9 +255,9 @@ def test_unexplained_disturbance_gets_its_band_and_axis():
     rec, _ = _arm_record(6, disturbance_hz=7.0)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     res = diagnose_timeseries(rec, robot)
-    un = {u['axis']: u for u in res.unexplained}
+    un = {u.axis: u for u in res.unexplained}
     assert 'joint_1' in un, res.unexplained
-    f1, f2 = un['joint_1']['signature']['band_hz']
+    f1, f2 = un['joint_1'].signature.band_hz
     assert f1 <= 7.0 <= f2 and f2 - f1 < 3.0
     assert 'joint_2' not in un and 'joint_3' not in un
 
@@ -441,10 +445,10 @@ def test_torque_held_at_rest_is_neither_fitted_nor_scored():
             pytest.approx(truth['fc'][i], rel=0.03)
     grav3 = found[('gravity', 'joint_3')]['gravity']
     assert grav3[0]['amplitude'] == pytest.approx(truth['g3'], rel=0.03)
-    ext = res.metrics['extended']
-    assert ext['time_nrmse'] < 0.15
+    ext = res.metrics.extended
+    assert ext.time_nrmse < 0.15
     for name in rec.joint_names:
-        assert 0.4 < ext['per_axis'][name]['moving_share'] < 0.95
+        assert 0.4 < ext.per_axis[name].moving_share < 0.95
 
 
 def _sweep_arm(rng, fs, T, two_way, f_hi, sweep):
@@ -494,8 +498,8 @@ def test_axis_moving_one_way_keeps_friction_out_of_the_gravity_shape():
     J, fc, g3, p3 = np.array([6.0, 4.0, 1.5]), np.array([3.0, 4.0, 6.0]), 25.0, -1.9
     res, found = _diagnose_arm(rng, t, q, v, J * a + fc * np.sign(v), 60.0, g3, p3)
     assert ('coulomb_friction', 'joint_3') not in found
-    assert any(r['name'] == 'coulomb_friction' and r['axis'] == 'joint_3' and 'one way' in
-               r.get('reason', '') for r in res.rejected)
+    assert any(r.name == 'coulomb_friction' and r.axis == 'joint_3' and 'one way' in
+               (r.reason or '') for r in res.rejected)
     grav3 = found[('gravity', 'joint_3')]['gravity']
     assert grav3[0]['amplitude'] == pytest.approx(g3, rel=0.03)
     # the constant carries the friction: -Fc plus no load
@@ -531,8 +535,8 @@ def test_sinusoid_of_a_one_way_angle_is_not_taken_for_gravity(seed):
     assert ('gravity', 'joint_1') not in found, found
     assert all('joint_1' not in g['joints'] for ax in ('joint_2', 'joint_3')
                for g in found[('gravity', ax)]['gravity'])
-    assert any(r['name'] == 'gravity' and r['axis'] == 'joint_1'
-               and 'q_joint_1 moves one way only' in r.get('reason', '')
+    assert any(r.name == 'gravity' and r.axis == 'joint_1'
+               and 'q_joint_1 moves one way only' in (r.reason or '')
                for r in res.rejected)
     assert found[('gravity', 'joint_3')]['gravity'][0]['amplitude'] == \
         pytest.approx(g3, rel=0.03)
@@ -743,7 +747,7 @@ def test_axis_refitted_with_the_baseline_terms_takes_exactly_those():
     no load): the refit finds them (within 2 %, as the selection does), says in its evidence
     where the terms come from, and leaves axes 2 and 3 as the plain diagnosis has them.
     """
-    from frf_ident.core.diagnosis.baseline import BASELINE_GROUPS
+    from frf_ident.core.diagnosis.crosscheck.baseline import BASELINE_GROUPS
     rec, truth = _arm_record(5)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     plain = diagnose_timeseries(rec, robot)
@@ -762,13 +766,14 @@ def test_axis_refitted_with_the_baseline_terms_takes_exactly_those():
 
 def test_axes_taken_from_the_baseline_refit_move_their_effects_to_rejected():
     """:func:`.baseline.with_axes_of`: the lost axis as refitted, its old effects rejected."""
-    from frf_ident.core.diagnosis.baseline import BASELINE_GROUPS, with_axes_of
+    from frf_ident.core.diagnosis.crosscheck.baseline import (BASELINE_GROUPS, HeldOutSet,
+                                                              ThreeModels, with_axes_of)
     rec, _ = _arm_record(6)
     robot = replace(robot_from_dict(RIGID), sample_rate=rec.fs)
     plain = diagnose_timeseries(rec, robot)
     alt = diagnose_timeseries(rec, robot, only={'joint_2': BASELINE_GROUPS})
-    comp = [{'record': 'B.mat', 'per_axis': {'joint_2': {'extended': 0.5,
-                                                         'least_squares': 0.25}}}]
+    comp = [HeldOutSet('B.mat', ThreeModels(0.4, 0.25, 0.5),
+                       {'joint_2': ThreeModels(0.4, 0.25, 0.5)})]
     got = with_axes_of(plain, alt, {'joint_2': ['B.mat']}, comp)
     assert got.extended.axes[1] == alt.extended.axes[1]
     assert [got.extended.axes[i] for i in (0, 2)] == [plain.extended.axes[i] for i in (0, 2)]
@@ -777,6 +782,6 @@ def test_axes_taken_from_the_baseline_refit_move_their_effects_to_rejected():
         + [(e.name, e.axis) for e in alt.effects if e.axis == 'joint_2'])
     old = [e for e in plain.effects if e.axis == 'joint_2']
     new = got.rejected[len(plain.rejected):]
-    assert old and [(r['name'], r['axis']) for r in new] == [(e.name, e.axis) for e in old]
-    assert all('B.mat: extended 0.500, least squares 0.250' in r['reason']
-               and "the baseline's terms" in r['reason'] for r in new)
+    assert old and [(r.name, r.axis) for r in new] == [(e.name, e.axis) for e in old]
+    assert all('B.mat: extended 0.500, least squares 0.250' in r.reason
+               and "the baseline's terms" in r.reason for r in new)

@@ -20,8 +20,9 @@ code under test.
 """
 import math
 
-from frf_ident.core.diagnosis.baseline import (axes_not_beating, fit_least_squares,
-                                               least_squares_metrics, TERMS)
+from frf_ident.core.diagnosis.crosscheck.baseline import (axes_not_beating, fit_least_squares,
+                                                          HeldOutSet, least_squares_metrics,
+                                                          TERMS, ThreeModels)
 from frf_ident.core.recording import Recording
 import numpy as np
 import pytest
@@ -60,7 +61,7 @@ def test_fit_recovers_the_coefficients_and_predicts_held_out_torque():
     held[-50:] = False
     m = least_squares_metrics(rec, ls, held)
     # white noise of 0.05 N m in the 20 Hz band, over a torque of several N m
-    assert m['per_axis']['j']['time_nrmse'] < 0.02, m
+    assert m.scores.per_axis['j'].time_nrmse < 0.02, m.scores
 
 
 def test_a_torque_the_four_terms_lack_is_not_fitted_and_loses_to_a_model_that_has_it():
@@ -69,15 +70,15 @@ def test_a_torque_the_four_terms_lack_is_not_fitted_and_loses_to_a_model_that_ha
     fit = np.arange(n) < int(0.66 * n)
     ls = fit_least_squares(rec, fit)
     m = least_squares_metrics(rec, ls, ~fit)
-    assert m['per_axis']['j']['time_nrmse'] > 0.2, m
-    comp = [{'record': 'held out', 'per_axis': {'j': {'nominal': 1.0, 'least_squares':
-                                                      m['per_axis']['j']['time_nrmse'],
-                                                      'extended': 0.02}}},
-            {'record': 'B', 'per_axis': {'j': {'nominal': 1.0, 'least_squares': 0.3,
-                                               'extended': 0.35}}},
+    ls_held = m.scores.per_axis['j'].time_nrmse
+    assert ls_held > 0.2, m.scores
+
+    def held_out_set(name, ls_nrmse, ext_nrmse):
+        three = ThreeModels(1.0, ls_nrmse, ext_nrmse)
+        return HeldOutSet(name, three, {'j': three})
+    comp = [held_out_set('held out', ls_held, 0.02), held_out_set('B', 0.3, 0.35),
             # a tie within LS_BASELINE_MARGIN (10 %) is no loss (EMPS: 0.0323 vs 0.0320)
-            {'record': 'C', 'per_axis': {'j': {'nominal': 1.0, 'least_squares': 0.3,
-                                               'extended': 0.32}}}]
+            held_out_set('C', 0.3, 0.32)]
     # not below the baseline on B (a tie is no win)
     assert axes_not_beating(comp) == {'j': ['B']}
 

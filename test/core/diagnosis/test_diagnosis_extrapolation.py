@@ -14,8 +14,8 @@
 """Test leave-range-out and the warning range of a validation record on data drawn here."""
 import math
 
-from frf_ident.core.diagnosis.extrapolation import (
-    beyond_fitted_range, failing_position_terms, range_ends)
+from frf_ident.core.diagnosis.crosscheck.validation import beyond_fitted_range
+from frf_ident.core.diagnosis.timeseries.extrapolation import failing_position_terms, range_ends
 from frf_ident.core.recording import Recording
 import numpy as np
 import pytest
@@ -35,8 +35,8 @@ def test_an_axis_beyond_the_fitted_range_is_named_with_its_degrees():
     far = beyond_fitted_range(fit, rows, other, ['j1', 'j2'])
     # j2 leaves by 0.005 rad = 0.29 deg: within the tolerance
     assert set(far) == {'j1'}, far
-    assert far['j1']['beyond_deg'] == pytest.approx(math.degrees(0.2), abs=0.05)
-    assert far['j1']['reached_deg'][0] == pytest.approx(math.degrees(-0.2), abs=0.01)
+    assert far['j1'].beyond_deg == pytest.approx(math.degrees(0.2), abs=0.05)
+    assert far['j1'].reached_deg[0] == pytest.approx(math.degrees(-0.2), abs=0.01)
 
 
 def test_only_the_fit_rows_count_as_fitted():

@@ -20,8 +20,8 @@ the other record around 0.6 rad, mostly beyond the fitted range.
 """
 from dataclasses import replace
 
-from frf_ident.core.diagnosis import diagnose_timeseries
-from frf_ident.core.diagnosis.generalisation import drop_terms_not_generalising
+from frf_ident.core.diagnosis.crosscheck.generalisation import drop_terms_not_generalising
+from frf_ident.core.diagnosis.timeseries import diagnose_timeseries
 from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
 import numpy as np
@@ -71,12 +71,12 @@ def test_a_position_term_is_kept_only_if_it_predicts_the_other_record(load, kept
     assert {('coulomb_friction', f'joint_{k}') for k in (1, 2, 3)} <= names
     if kept:
         # 0.017 with the weight's sinusoid, 6.1 with a constant in its place
-        assert verdict['joint_2']['with'][0] < 0.1 < verdict['joint_2']['without'][0]
+        assert verdict['joint_2'].with_terms[0] < 0.1 < verdict['joint_2'].without_terms[0]
         assert out is res
     else:
         # 9.0 with the sinusoid (amplitude 816 N m), 4.6 refitted without it
-        (why,) = [r for r in out.rejected if r['name'] == 'gravity' and 'other' in
-                  r.get('reason', '')]
-        assert 'does not generalise' in why['reason']
+        (why,) = [r for r in out.rejected if r.name == 'gravity' and 'other' in
+                  (r.reason or '')]
+        assert 'does not generalise' in why.reason
         assert out.extended.axes[1].gravity == []
-        assert out.metrics['extended']['per_axis']['joint_2']['time_nrmse'] > 0
+        assert out.metrics.extended.per_axis['joint_2'].time_nrmse > 0

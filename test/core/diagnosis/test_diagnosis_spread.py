@@ -13,7 +13,7 @@
 # limitations under the License.
 """Test the check of standard errors across records on draws of known spread."""
 from frf_ident.core.diagnosis.common import Effect
-from frf_ident.core.diagnosis.spread import estimates, spread_check, widened
+from frf_ident.core.diagnosis.crosscheck.spread import scalar_estimates, spread_check, widened
 from frf_ident.core.diagnosis.thresholds import SPREAD_ALPHA
 import numpy as np
 import pytest
@@ -27,7 +27,7 @@ def _runs(rng, n_par: int, se: float, spread: float):
 
 def test_errors_that_hold_are_widened_at_the_false_alarm_rate():
     rng = np.random.default_rng(0)
-    widened_share = np.mean([spread_check(_runs(rng, 6, 0.1, 0.1))['factor'] > 1.0
+    widened_share = np.mean([spread_check(_runs(rng, 6, 0.1, 0.1)).factor > 1.0
                              for _ in range(400)])
     # 400 checks of standard errors that hold: binomial 5 % +- 3 sigma
     assert abs(widened_share - SPREAD_ALPHA) < 3 * np.sqrt(SPREAD_ALPHA * 0.95 / 400)
@@ -36,7 +36,7 @@ def test_errors_that_hold_are_widened_at_the_false_alarm_rate():
 def test_errors_3_3_times_too_small_are_widened_by_about_that():
     """The issue's EMPS case: two records 3.3 combined standard errors apart."""
     rng = np.random.default_rng(1)
-    f = [spread_check(_runs(rng, 8, 0.1, 0.33))['factor'] for _ in range(50)]
+    f = [spread_check(_runs(rng, 8, 0.1, 0.33)).factor for _ in range(50)]
     assert min(f) > 1.0
     # RMS of z over 8 pairs: chi with 8 dof scaled by 3.3, within about 25 %
     assert np.median(f) == pytest.approx(3.3, rel=0.15)
@@ -49,8 +49,8 @@ def test_only_friction_and_inertia_with_an_error_are_compared_and_all_errors_sca
                    standard_error={'gravity_torque': 0.2}),
             Effect('gravity', 'b', 1.0, {'gravity': [{'amplitude': 3.0}]}, '',
                    standard_error={'gravity': [None, {'amplitude': 0.5}]})]
-    assert estimates(effs) == {('a', 'coulomb_friction'): (2.0, 0.1)}
+    assert scalar_estimates(effs) == {('a', 'coulomb_friction'): (2.0, 0.1)}
     out = widened(effs, 2.0)
     assert out[0].standard_error == {'coulomb_friction': 0.2}
     assert out[2].standard_error == {'gravity': [None, {'amplitude': 1.0}]}
-    assert spread_check([estimates(effs)])['factor'] == 1.0
+    assert spread_check([scalar_estimates(effs)]).factor == 1.0

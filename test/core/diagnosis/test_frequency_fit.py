@@ -24,8 +24,8 @@ mismatch remains.
 from dataclasses import replace
 from pathlib import Path
 
-from frf_ident.core.diagnosis.frequency_fit import (fd_parameter_mismatch, linear_shifts,
-                                                    load_dependence)
+from frf_ident.core.diagnosis.experiments.frequency_fit import (fd_parameter_mismatch,
+                                                                linear_shifts, load_dependence)
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.simulation.analytic import robot_frf_sampled
 from frf_ident.io.model_file import load_model

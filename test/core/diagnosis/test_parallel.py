@@ -17,8 +17,8 @@ import os
 from pathlib import Path
 
 from frf_ident.core.diagnosis.common import simulate_like
-from frf_ident.core.diagnosis.evaluator import Evaluator
-from frf_ident.core.diagnosis.parallel import can_fork, WorkerPool
+from frf_ident.core.diagnosis.experiments.evaluator import Evaluator
+from frf_ident.core.diagnosis.experiments.parallel import can_fork, WorkerPool
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.analytic import robot_frf, robot_frf_sampled
 from frf_ident.core.simulation.plant import FlexibleJointPlant

@@ -21,7 +21,7 @@ guesses never reach the objective as evaluations.
 """
 from __future__ import annotations
 
-from frf_ident.core.diagnosis.simplex import nelder_mead
+from frf_ident.core.diagnosis.experiments.simplex import nelder_mead
 from hypothesis import given, settings
 from hypothesis import strategies as st
 import numpy as np

@@ -12,10 +12,9 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """Estimators against analytic truth and Monte-Carlo truth."""
-from frf_ident.core.estimation.spectra import (chirp_excerpt_dft, chirp_spectra,
-                                               decimation_filter, frf_from_reference,
-                                               frf_from_spectra)
+from frf_ident.core.estimation.spectra import frf_from_reference, frf_from_spectra
 from frf_ident.core.excitation.chirp import chirp_phase_flips, ChirpDesign
+from frf_ident.core.excitation.chirp_dft import chirp_excerpt_dft, chirp_spectra, decimation_filter
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
 from frf_ident.core.model.params import AxisParams, RobotParams
 from frf_ident.core.model.schema import default_robot

@@ -19,7 +19,7 @@ Two joints driven open loop by independent white-noise torques through known dig
 in the middle. Before issue 39 this recording was refused ("no multisine or chirp found").
 """
 from frf_ident.core.estimation.described import estimate_recording
-from frf_ident.core.estimation.lpm import DIRECT_WARNING
+from frf_ident.core.estimation.lpm_frames import DIRECT_WARNING
 from frf_ident.core.recording import Recording
 import numpy as np
 from scipy import signal

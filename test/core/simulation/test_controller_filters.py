@@ -23,8 +23,8 @@ unusable ones, naming the field.
 import copy
 
 from frf_ident.core.loop.notch import design_lowpass, design_notch
-from frf_ident.core.model.schema import (controller_from_dict, PASS_SECTION, robot_from_dict,
-                                         robot_to_dict)
+from frf_ident.core.model.schema import PASS_SECTION, robot_from_dict, robot_to_dict
+from frf_ident.core.simulation.controller import controller_from_dict
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import ModelFileError
 from frf_ident.io.model_file import load_model
@@ -100,3 +100,31 @@ def test_the_model_file_round_trip_and_refusals():
         d = _model(spec)
         with pytest.raises(ModelFileError, match=match):
             controller_from_dict(d, robot_from_dict(d))
+
+
+def test_the_mujoco_plant_runs_the_sections_too(tmp_path):
+    """The MuJoCo closed loop (frf_ident/io/mjcf/loop.py): filtered torques as written out."""
+    pytest.importorskip('mujoco')
+    from frf_ident.core.simulation.controller import PIVelocity
+    from frf_ident.io.model_file import load_plant
+    from plants.mujoco_iiwa import AXES, elastic_xml, home, KI, KP
+    path = tmp_path / 'iiwa.xml'
+    path.write_text(elastic_xml())
+    pose = home()
+    model = {'frf_ident_model': 1, 'sample_rate': 1000.0, 'mjcf': str(path),
+             'pose': {a: pose[a] for a in AXES}, 'axes': [{'name': a} for a in AXES],
+             'controller': {'kind': 'pi_velocity', 'kp': KP, 'ki': KI}}
+    lp = design_lowpass(15.0, 1000.0).sos
+    sos = np.array([[PASS_SECTION], [lp], [PASS_SECTION]], dtype=float)
+    r = np.cumsum(np.random.default_rng(0).standard_normal((1500, 3)), axis=0) * 2e-4
+    runs = []
+    for s in (sos, np.zeros((3, 0, 6))):
+        plant = load_plant('mujoco', model)
+        ctrl = PIVelocity(KP, KI, plant.torque_limit, plant.dt, plant.hold.copy(), sos=s)
+        runs.append((plant.simulate(reference=r, controller=ctrl), plant))
+    (res, plant), (plain, _) = runs
+    assert np.all(np.abs(res.effort) < 0.9 * plant.torque_limit)
+    e = r[:, 1] - signal.sosfilt(lp.reshape(1, 6), res.velocity[:, 1])
+    u = KP[1] * e + plant.hold[1] + KI[1] * plant.dt * np.cumsum(e)
+    np.testing.assert_allclose(res.effort[:, 1], u, rtol=1e-9, atol=1e-7)
+    assert not np.allclose(res.effort[:, 1], plain.effort[:, 1])

@@ -1,0 +1,213 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The closing stages of the experiments route: the held-out check and what follows it.
+
+Kept effects the held-out data do not ask for are dropped (:func:`held_out_check`), a
+parameter mismatch that leaves its axis above its floor is withdrawn as missing structure
+(:func:`structure_missing`), and :func:`finish` ranks the effects and takes the metrics.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+import logging
+import math
+
+from frf_ident.core.recording import Recording
+import numpy as np
+
+from .acceptance import left_unexplained
+from .evaluator import frf_estimates, replace_segments
+from .refit import FRICTION, rebuild, refit_friction, refit_jointly
+from .search import named, Search
+from .unexplained import (axis_signature, discretisation_check, rival_instead,
+                          typical_unscalable_misfit)
+from ..common import Effect
+from ..records import Rejected, RouteMetrics, Unexplained
+from ..result import DiagnosisResult, ExperimentsDetail
+from ..thresholds import UNEXPLAINED_RATIO
+
+__all__ = ['finish', 'held_out_check', 'partners_without', 'rejected_entry',
+           'structure_missing']
+
+log = logging.getLogger(__name__)
+
+
+def held_out_check(s: Search) -> tuple[np.ndarray, Recording]:
+    """
+    Drop every kept effect whose removal does not worsen its axis' held-out misfit.
+
+    A friction term is checked against the axis' other friction term refitted without it (the
+    two were fitted together, so the partner left at its value cannot show what the data need
+    without it); so is a parameter mismatch of the axis, whose joint damping dissipates like
+    viscous friction: both are refitted jointly by simulation without the term. With its
+    partners refitted, the model without the term may fit even the fit part better: then the
+    data do not ask for it either.
+
+    Returns
+    -------
+    (ndarray, Recording)
+        The held-out misfit per axis of the extended model and its simulation.
+
+    """
+    ev, robot, kept = s.ev, s.robot, s.kept
+    sim_ext = ev.simulate(s.ext)
+    val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+    for c in list(kept):
+        others = [k for k in kept if k is not c]
+        refit = partners_without(s, c, others)
+        alt = [refit.get(id(k), k) for k in others]
+        i = c.axis_index
+        without = rebuild(robot, alt)
+        v = ev.misfit(ev.terms(without, held_out=True))
+        v_fit = ev.misfit(ev.terms(without))[i] if refit else math.inf
+        if v[i] <= val_ext[i] or v_fit <= s.cur[i]:
+            s.say(f'  dropped {c.axis} {c.name}: misfit without it held out '
+                  f'{v[i]:.4g} (with it {val_ext[i]:.4g}), fitted {v_fit:.4g} (with it '
+                  f'{s.cur[i]:.4g})'
+                  + ''.join(f' ({r.name} refitted without it: ' + ', '.join(
+                      f'{k} {x:.4g}' for k, x in r.parameters.items()
+                      if isinstance(x, (int, float))) + ')' for r in refit.values()))
+            kept.remove(c)
+            c.gain = 0.0
+            for k in others:
+                if id(k) in refit:
+                    k.parameters, k.evidence = refit[id(k)].parameters, refit[id(k)].evidence
+    if len(kept) != len([c for c in s.cands if c.score > 0]):
+        s.ext = rebuild(robot, kept)
+        sim_ext = ev.simulate(s.ext)
+        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+    log.info('held-out check: %s', named(kept))
+    return val_ext, sim_ext
+
+
+def partners_without(s: Search, c: Effect, others: list[Effect]) -> dict[int, Effect]:
+    """Return the partners of a friction term refitted without it (by id), else nothing."""
+    ev, robot = s.ev, s.robot
+    refit: dict[int, Effect] = {}
+    if c.name not in FRICTION:
+        return refit
+    for p in others:
+        if p.axis_index == c.axis_index and p.name in FRICTION:
+            refit[id(p)] = refit_friction(
+                ev, rebuild(robot, [k for k in others if k is not p]), p, local=True)
+    if any(p.axis_index == c.axis_index and p.name == 'parameter_mismatch' for p in others):
+        mine = {id(k): replace(refit.get(id(k), k)) for k in others
+                if k.axis_index == c.axis_index}
+        trial = [mine.get(id(k), k) for k in others]
+        refit_jointly(ev, robot, trial, c.axis_index,
+                      ev.misfit(ev.terms(rebuild(robot, trial))), s.say)
+        refit.update(mine)
+    return refit
+
+
+def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
+                      ) -> tuple[np.ndarray, Recording, np.ndarray]:
+    """
+    Withdraw a parameter mismatch that leaves its axis clearly above its floor.
+
+    A mismatch claims the axis' linear parameters are off; if the axis stays clearly above its
+    floor with them refitted, the model lacks structure there (an unmodelled resonance near the
+    first one looks like a softer joint): the axis is reported unexplained, or the spring
+    rival the mismatch won over takes its place where it explains the axis
+    (:func:`.unexplained.rival_instead`). Clearly above: a share of the misfit left, or an FRF
+    no rescale of the axis' linear parameters brings near the measured one.
+
+    Returns
+    -------
+    (ndarray, Recording, ndarray)
+        Held-out misfit per axis of the extended model, its simulation, and the held-out
+        misfit of the nominal model.
+
+    """
+    ev, robot, kept = s.ev, s.robot, s.kept
+    val_base = ev.misfit(ev.terms(robot, s.sim0, held_out=True))
+    lacking = []
+    for c in kept:
+        if c.name != 'parameter_mismatch':
+            continue
+        # the share rule first: the FRF test costs the estimates of the simulation
+        if left_unexplained(val_ext, val_base, c.axis_index):
+            why = 'its share of the nominal misfit'
+        else:
+            off = typical_unscalable_misfit(ev, sim_ext, c.axis_index, s.ext)
+            if off <= UNEXPLAINED_RATIO:
+                continue
+            why = f'its FRF {off:.3g} x on the typical line with the parameters refitted'
+        s.say(f'  {c.axis} parameter_mismatch not named: the axis stays at '
+              f'{val_ext[c.axis_index]:.4g} x its floor with it ({why}): structure missing, '
+              f'not parameters')
+        lacking.append(c)
+    for c in lacking:
+        trial = rival_instead(ev, robot, kept, c, s.rivals, val_base, s.say)
+        new = trial if trial is not None else [k for k in kept if k is not c]
+        for k in kept:
+            if all(k is not x for x in new):
+                k.gain = 0.0
+        kept[:] = new
+    if lacking:
+        s.ext = rebuild(robot, kept)
+        sim_ext = ev.simulate(s.ext)
+        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+    return val_ext, sim_ext, val_base
+
+
+def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndarray
+           ) -> DiagnosisResult:
+    """
+    Check the step, rank the effects, list the unexplained axes and take the metrics.
+
+    The integrator check (:func:`.unexplained.discretisation_check`) may raise the extended
+    model's substeps; the model is then simulated and judged at the step it is written with.
+    """
+    ev, robot, kept = s.ev, s.robot, s.kept
+    step = discretisation_check(ev, s.ext, val_ext)
+    if step.written_substeps != step.substeps:
+        log.info('simulation.substeps = %d is too coarse for this record (at twice as many the '
+                 'held-out misfit moves from %s noise floors): the extended model is written '
+                 'with %d', step.substeps, ', '.join(
+                     f'{a} {x:.4g} to {y:.4g}' for a, x, y in zip(
+                         step.axes, step.held_out_misfit, step.held_out_misfit_double_substeps)
+                     if a in step.too_coarse), step.written_substeps)
+        s.ext = replace(s.ext, substeps=step.written_substeps)
+        sim_ext = ev.simulate(s.ext)
+        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+    ext = s.ext
+    kept.sort(key=lambda c: -c.score)
+    unexplained = []
+    for i, a in enumerate(robot.axes):
+        if left_unexplained(val_ext, val_base, i):
+            share = float(np.clip((val_ext[i] - 1) / max(val_base[i] - 1, 1e-12), 0, 1))
+            unexplained.append(Unexplained(a.name, axis_signature(ev, sim_ext, i, ext),
+                                           misfit_share=round(share, 3)))
+    metrics = RouteMetrics(ev.metrics(robot, s.sim0), ev.metrics(ext, sim_ext),
+                           ev.validation_text)
+    part = ev.val if ev.val.segments else ev.fit
+    plots = {'measured': ev.meas_val or ev.meas_fit,
+             'nominal': frf_estimates(replace_segments(s.sim0, part)),
+             'extended': frf_estimates(replace_segments(sim_ext, part))}
+    log.info('%d simulations of the recorded excitation', ev.n_sims)
+    rest = [c for c in s.cands if c not in kept]
+    return DiagnosisResult(
+        'experiments', kept, [rejected_entry(c) for c in rest], unexplained, metrics, ext,
+        ExperimentsDetail(ev, plots, {'nominal': s.sim0, 'extended': sim_ext},
+                          {'baseline': val_base.tolist(), 'extended': val_ext.tolist()}),
+        ev.fit_mask[:-1], (ev.val_mask if ev.val_mask.any() else ev.fit_mask)[:-1],
+        discretisation=step, n_sims=ev.n_sims, candidates=rest)
+
+
+def rejected_entry(c: Effect) -> Rejected:
+    """Return the report.json ``rejected`` entry of a candidate that was not taken."""
+    return Rejected(c.name, c.axis, c.to_dict()['parameters'],
+                    misfit_share_removed=round(float(c.gain), 4))

@@ -1,0 +1,52 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""The state the stages of the experiments route share (:mod:`.pipeline`)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+from frf_ident.core.model.params import RobotParams
+from frf_ident.core.recording import Recording
+import numpy as np
+
+from .evaluator import Evaluator
+from ..common import Effect
+
+__all__ = ['named', 'Search']
+
+
+@dataclass
+class Search:
+    """The state the stages of :func:`diagnose_experiments` share."""
+
+    ev: Evaluator
+    robot: RobotParams                  # the nominal model
+    say: Callable[[str], None]          # the search trace
+    sim0: Recording                     # the nominal model's simulation
+    ext: RobotParams                    # the model so far
+    cur: np.ndarray                     # its misfit per axis on the fit part
+    kept: list[Effect] = field(default_factory=list)
+    cands: list[Effect] = field(default_factory=list)      # every candidate offered
+    stage0: list[Effect] = field(default_factory=list)     # frequency-domain fit candidates
+    stage1: list[Effect] = field(default_factory=list)     # torque-residual candidates
+    stage2: list[Effect] = field(default_factory=list)     # FRF-shape candidates
+    rivals: dict[int, list[Effect]] = field(default_factory=dict)
+    shaped: set[int] = field(default_factory=set)   # axes that took an FRF-shape effect
+    again: list[Effect] = field(default_factory=list)  # second-pass candidates
+
+
+def named(kept: list[Effect]) -> str:
+    """Return 'kept: name@axis, ...' for a log line."""
+    return 'kept: ' + (', '.join(f'{c.name}@{c.axis}' for c in kept) or 'none')

@@ -1,0 +1,205 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The entries of a diagnosis report as typed records, shared by both routes.
+
+Each record is what report.json (docs/CONTRACT.md §7) holds under one key, and what the
+console summary and the HTML report read: the held-out scores of a model (:class:`Scores`),
+the route's metrics (:class:`RouteMetrics`), an axis left unexplained (:class:`Unexplained`,
+with its :class:`Signature`), a candidate not taken (:class:`Rejected`) and the integrator
+check (:class:`IntegratorCheck`). ``to_dict`` writes the report's entry, keys in the order
+report.json has always had them; absent optional fields are left out.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+__all__ = ['AxisScore', 'IntegratorCheck', 'Rejected', 'RouteMetrics', 'Scores', 'Signature',
+           'Unexplained']
+
+
+def _present(obj: Any, names: tuple[str, ...]) -> dict[str, Any]:
+    """Return ``{name: value}`` of the fields of ``obj`` in ``names`` that are not None."""
+    return {k: getattr(obj, k) for k in names if getattr(obj, k) is not None}
+
+
+@dataclass(frozen=True)
+class AxisScore:
+    """One axis' held-out numbers of one model."""
+
+    #: RMS over the analysed lines of 20 log10 |P_measured / P_model| [dB] (NaN: no line)
+    frf_error_db: float
+    #: RMS of the output error over the RMS of the measured output (docs/CONTRACT.md §7)
+    time_nrmse: float
+    #: time series: the share of held-out samples where the axis moves (None: experiments)
+    moving_share: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's ``per_axis`` entry."""
+        out = {'frf_error_db': self.frf_error_db,
+               'time_nrmse': self.time_nrmse}
+        if self.moving_share is not None:
+            out['moving_share'] = self.moving_share
+        return out
+
+
+@dataclass(frozen=True)
+class Scores:
+    """A model's held-out numbers: pooled over the axes and per axis."""
+
+    frf_error_db: float
+    time_nrmse: float
+    per_axis: dict[str, AxisScore]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's ``metrics.baseline`` / ``metrics.extended`` entry."""
+        return {'frf_error_db': self.frf_error_db,
+                'time_nrmse': self.time_nrmse,
+                'per_axis': {ax: s.to_dict() for ax, s in self.per_axis.items()}}
+
+
+@dataclass(frozen=True)
+class RouteMetrics:
+    """The nominal and the extended model on the data held out from the fit."""
+
+    #: the nominal model (report.json calls it ``baseline``)
+    baseline: Scores
+    extended: Scores
+    #: which data were held out for these numbers (one sentence)
+    validation: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the route's part of report.json ``metrics``."""
+        return {'baseline': self.baseline.to_dict(), 'extended': self.extended.to_dict(),
+                'validation': self.validation}
+
+
+@dataclass(frozen=True)
+class Signature:
+    """Where the misfit an unexplained entry names lives."""
+
+    #: [f1, f2] Hz of the strongest band of the residual
+    band_hz: list[float] | None = None
+    #: experiments: every band where the FRF residual concentrates, strongest first
+    bands_hz: list[list[float]] | None = None
+    #: what the time residual correlates with: position, velocity, acceleration or time
+    correlates_with: str | None = None
+    #: a peak of the residual spectrum above the analysis band (time series)
+    peak_hz: float | None = None
+    half_power_width_hz: float | None = None
+    peak_over_floor: float | None = None
+    threshold: float | None = None
+    false_alarm: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's ``signature`` entry."""
+        return _present(self, tuple(f.name for f in fields(self)))
+
+
+@dataclass(frozen=True)
+class Unexplained:
+    """An axis the extended model leaves clearly above its floor, or a peak above the band."""
+
+    axis: str
+    signature: Signature
+    #: share of the nominal misfit above the floor that is left (None: a spectral peak)
+    misfit_share: float | None = None
+    #: 'resonance above the analysis band' or 'line above the analysis band' (time series);
+    #: None for an axis left above its floor
+    kind: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's ``unexplained`` entry."""
+        out: dict[str, Any] = {'axis': self.axis}
+        out.update(_present(self, ('kind', 'misfit_share')))
+        out['signature'] = self.signature.to_dict()
+        return out
+
+
+#: the numbers a rejected candidate may carry, in the order report.json writes them
+_REJECTED_NUMBERS = ('misfit_share_removed', 'p_value', 'residual_share', 'held_out_gain',
+                     'forward_share', 'fitted_value')
+
+
+@dataclass(frozen=True)
+class Rejected:
+    """A candidate effect that was fitted or considered but not taken, and why."""
+
+    name: str
+    axis: str
+    #: the parameter values it was fitted with (model-file keys; None: not fitted)
+    parameters: dict[str, Any] | None = None
+    #: why a rule, not only a number, rejected it (one sentence; None: its numbers say it)
+    reason: str | None = None
+    #: experiments: the share of its axis' misfit it removed (taken above a threshold)
+    misfit_share_removed: float | None = None
+    #: time series: F-test p value, share of the residual it explains, held-out gain
+    p_value: float | None = None
+    residual_share: float | None = None
+    held_out_gain: float | None = None
+    #: time series: the share of the axis' moving samples with positive velocity
+    forward_share: float | None = None
+    #: time series: the value a joint fit gave it outside the physical range
+    fitted_value: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's ``rejected`` entry."""
+        out: dict[str, Any] = {'name': self.name, 'axis': self.axis}
+        out.update(_present(self, _REJECTED_NUMBERS + ('parameters', 'reason')))
+        return out
+
+    def numbers(self) -> str:
+        """Return its numbers as one short text for people ('' without any)."""
+        return ', '.join(f'{k.replace("_", " ")} {getattr(self, k):.3g}'
+                         for k in _REJECTED_NUMBERS if getattr(self, k) is not None)
+
+
+@dataclass(frozen=True)
+class IntegratorCheck:
+    """Whether the plant's integrator step is fine enough for the record (experiments)."""
+
+    axes: list[str]
+    #: the model's ``simulation.substeps``
+    substeps: int
+    #: held-out misfit per axis (noise floors) at ``substeps`` and at twice as many
+    held_out_misfit: list[float]
+    held_out_misfit_double_substeps: list[float]
+    #: the axes whose misfit moved by more than the noise allows: simulated too coarsely
+    too_coarse: list[str] = field(default_factory=list)
+    #: the substeps the extended model is written (and scored) with: ``substeps``, doubled
+    #: while doubling lowers the held-out misfit of every axis it moves (at most MAX_SUBSTEPS)
+    written_substeps: int = 0
+    #: whether doubling ``written_substeps`` once more moves no axis beyond the noise
+    settled: bool = True
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's ``discretisation`` entry."""
+        return {'axes': list(self.axes), 'substeps': self.substeps,
+                'held_out_misfit': list(self.held_out_misfit),
+                'held_out_misfit_double_substeps': list(self.held_out_misfit_double_substeps),
+                'too_coarse': list(self.too_coarse),
+                'written_substeps': self.written_substeps or self.substeps,
+                'settled': self.settled}
+
+    def verdict(self) -> str:
+        """Return what the check found and did, as one sentence."""
+        if not self.too_coarse:
+            return 'within the noise on every axis.'
+        return (f'{", ".join(self.too_coarse)} simulated too coarsely for this record at '
+                f'{self.substeps} substeps: extended_model.yaml is written, and its held-out '
+                f'metrics taken, with simulation.substeps = {self.written_substeps}'
+                + (' (doubling it again moves no axis beyond the noise).' if self.settled else
+                   ' (doubling it again no longer lowers the misfit of every axis it moves: '
+                   "the rest of the misfit is not the integrator's alone)."))

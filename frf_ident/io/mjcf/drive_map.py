@@ -1,0 +1,266 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The one mapping between our drive parameters and MJCF attributes, both directions.
+
+Our parameters are :class:`~frf_ident.core.model.params.AxisParams`; docs/mujoco.md prints
+:data:`MAPPING` as its table.
+
+A flexible joint is two hinges in series on the same axis: the actuated motor-side hinge keeps
+the joint's name and carries the rotor (``armature``), its viscous friction (``damping``) and
+dry friction (``frictionloss``); a child body holds the link-side hinge ``<joint>`` +
+:data:`LINK_SUFFIX` with ``stiffness`` and ``damping`` on the relative angle (the spring of
+eqs. 1-2). A joint without that child hinge is rigid. The actuator is a torque motor on the
+motor-side hinge: our command u [N m] is ``gear * ctrl``, the torque MuJoCo applies
+``gainprm[0] * u`` (1 for a ``motor``: the torque constant's ratio to its nominal value), the
+limit ``gear * ctrlrange``.
+
+Nothing here imports mujoco: these are names, numbers and the limits of the mapping.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+from frf_ident.core.model.params import AxisParams
+
+__all__ = ['JointDrive', 'LINK_SUFFIX', 'Limitation', 'MAPPING', 'MOTOR_BODY_INERTIA',
+           'MOTOR_BODY_MASS', 'RIGID_ANTIRESONANCE_NYQUIST', 'RIGID_MOTOR_SHARE',
+           'drive_from_axis', 'limitations', 'mapping_table', 'rigid_split']
+
+#: name of the link-side hinge of a series-elastic joint: ``<joint name>`` + this
+LINK_SUFFIX = '_link'
+
+#: mass [kg] and principal inertia [kg m^2] of the body between the two hinges: MuJoCo refuses a
+#: moving body without mass (``mjMINVAL``), so the motor-side body gets this much; the rotor is
+#: the hinge's ``armature``. 1e-6 kg at 0.3 m adds 1e-7 kg m^2 to a parent axis: nothing a
+#: measured FRF can see (the smallest armature of a real drive is ~1e-3 kg m^2 at the joint)
+MOTOR_BODY_MASS = 1e-6
+MOTOR_BODY_INERTIA = 1e-9
+
+#: our parameters of a rigid MJCF joint (no link-side hinge), an approximation: the two-mass
+#: model needs a spring and a motor inertia, so the joint gets a spring whose antiresonance lies
+#: this many Nyquist frequencies up (its effect below Nyquist < (1/20)^2 = 0.25 %, 0.02 dB) ...
+RIGID_ANTIRESONANCE_NYQUIST = 20.0
+#: ... and, without an ``armature``, this share of its inertia on the motor side (the total kept)
+RIGID_MOTOR_SHARE = 0.01
+
+
+@dataclass(frozen=True)
+class Row:
+    """One row of :data:`MAPPING`: our key, the MJCF element and attribute, unit, how exact."""
+
+    ours: str
+    mjcf: str
+    unit: str
+    note: str
+
+
+#: our parameter -> MJCF attribute (docs/mujoco.md prints this table)
+MAPPING: tuple[Row, ...] = (
+    Row('motor_inertia', 'motor-side `joint@armature`', 'kg m^2',
+        'exact (rotor inertia through the gear; MuJoCo ignores its gyroscopic coupling, as '
+        'we do)'),
+    Row('link_inertia, link_coupling', "the bodies' `inertial` (M(q) of the link side)",
+        'kg m^2', 'MJCF -> ours: M(q) at the pose; ours -> MJCF: kept from the MJCF '
+        '(a standalone export puts link_inertia on one body per axis, no coupling)'),
+    Row('stiffness', f'link-side `joint@stiffness` (hinge `<joint>{LINK_SUFFIX}`)', 'N m/rad',
+        'exact: spring on the relative angle, springref 0'),
+    Row('damping', f'link-side `joint@damping` (hinge `<joint>{LINK_SUFFIX}`)', 'N m s/rad',
+        'exact: acts on the relative velocity'),
+    Row('viscous_friction', 'motor-side `joint@damping`', 'N m s/rad', 'exact'),
+    Row('coulomb_friction', 'motor-side `joint@frictionloss`', 'N m',
+        'approximate: a soft constraint (solref/solimp), not a set-valued or tanh law: a '
+        'stuck joint creeps, see docs/mujoco.md'),
+    Row('torque_limit', '`actuator@ctrlrange` x `gear` (`forcerange` if set)', 'N m', 'exact'),
+    Row('(torque constant)', '`general` actuator `gainprm[0]` (1 for `motor`)', '1',
+        'exact: applied torque = gainprm[0] x command'),
+    Row('time_delay', '`actuator@delay` (ctrl history, `nsample` >= delay / timestep + 1)',
+        's', 'whole time steps exact; a fraction of a step interpolated (`interp` linear)'),
+    Row('gravity_torque, gravity', "the bodies' masses and `option@gravity`", 'N m',
+        'MJCF -> ours: g(q) at the pose and its gradient; ours -> MJCF: not written (the '
+        "MJCF's rigid body holds it)"),
+    Row('stiffness_k2, stiffness_breakpoint', '(link-side `joint@stiffness` polynomial)',
+        'N m/rad, rad', 'not representable as a breakpoint; MuJoCo 4 takes stiffness="k1 c2 c3" '
+        '(torque k1 d + c2 d^2 + c3 d^3), the closest is a cubic; written: the linear k1'),
+    Row('backlash', '-', 'rad', 'not representable (no dead zone on a joint spring)'),
+    Row('torque_ripple', '-', 'N m', 'not representable (no position-periodic joint torque)'),
+    Row('encoder_resolution, velocity_noise, torque_noise', '-', '',
+        'measurement, not the MJCF: the model file keeps them, the plant applies them'),
+)
+
+
+def mapping_table() -> str:
+    """
+    Return :data:`MAPPING` as the Markdown table docs/mujoco.md shows.
+
+    Returns
+    -------
+    str
+        Header and one row per entry.
+
+    Examples
+    --------
+    >>> print(mapping_table().splitlines()[0])
+    | ours | MJCF | unit | how exact |
+
+    """
+    lines = ['| ours | MJCF | unit | how exact |', '|---|---|---|---|']
+    lines += [f'| `{r.ours}` | {r.mjcf} | {r.unit} | {r.note} |' for r in MAPPING]
+    return '\n'.join(lines)
+
+
+@dataclass(frozen=True)
+class JointDrive:
+    """
+    The drive terms of one joint in MJCF attributes (SI units).
+
+    Parameters
+    ----------
+    joint : str
+        The actuated (motor-side) joint's name.
+    armature : float
+        Motor-side ``armature`` [kg m^2].
+    damping : float
+        Motor-side ``damping`` [N m s/rad].
+    frictionloss : float
+        Motor-side ``frictionloss`` [N m].
+    stiffness : float or None
+        Link-side hinge ``stiffness`` [N m/rad]; None: a rigid joint (no link-side hinge).
+    link_damping : float
+        Link-side hinge ``damping`` [N m s/rad].
+    torque_limit : float
+        ``gear * ctrlrange`` [N m].
+    delay : float
+        Actuator ``delay`` [s].
+
+    """
+
+    joint: str
+    armature: float
+    damping: float
+    frictionloss: float
+    stiffness: float | None
+    link_damping: float
+    torque_limit: float
+    delay: float = 0.0
+
+    @property
+    def elastic(self) -> bool:
+        """Tell whether the joint has the series-elastic hinge pair."""
+        return self.stiffness is not None
+
+    @property
+    def link_joint(self) -> str:
+        """Return the name of the link-side hinge."""
+        return self.joint + LINK_SUFFIX
+
+
+@dataclass(frozen=True)
+class Limitation:
+    """A term of ours MJCF cannot hold: the axis, our key, its value, the closest MJCF."""
+
+    axis: str
+    key: str
+    value: str
+    closest: str
+
+    def __str__(self) -> str:
+        """Return one line: what is not representable and what was written instead."""
+        return f'{self.axis}: {self.key} = {self.value} not representable in MJCF; {self.closest}'
+
+
+def drive_from_axis(axis: AxisParams, *, elastic: bool = True) -> JointDrive:
+    """
+    Return the MJCF drive terms of one of our axes (ours -> MJCF).
+
+    Parameters
+    ----------
+    axis : AxisParams
+        The axis.
+    elastic : bool, optional
+        Write the series-elastic hinge pair (default); False: a rigid joint (motor inertia as
+        armature, no spring, the transmission damping dropped).
+
+    Returns
+    -------
+    JointDrive
+        The attributes; what they cannot hold is in :func:`limitations`.
+
+    """
+    return JointDrive(joint=axis.name, armature=float(axis.motor_inertia),
+                      damping=float(axis.viscous_friction),
+                      frictionloss=float(axis.coulomb_friction),
+                      stiffness=float(axis.stiffness) if elastic else None,
+                      link_damping=float(axis.damping) if elastic else 0.0,
+                      torque_limit=float(axis.torque_limit), delay=float(axis.time_delay))
+
+
+def limitations(axis: AxisParams) -> list[Limitation]:
+    """
+    Return the terms of ``axis`` that MJCF cannot hold, with the closest approximation.
+
+    Parameters
+    ----------
+    axis : AxisParams
+        The axis.
+
+    Returns
+    -------
+    list of Limitation
+        Empty when every term maps (see :data:`MAPPING`).
+
+    """
+    out = []
+    if axis.stiffness_k2 is not None and axis.stiffness_k2 != axis.stiffness:
+        out.append(Limitation(axis.name, 'stiffness_k2', f'{axis.stiffness_k2:g} N m/rad beyond '
+                              f'{axis.stiffness_breakpoint:g} rad',
+                              f'written: the linear stiffness {axis.stiffness:g} N m/rad'))
+    if axis.backlash > 0:
+        out.append(Limitation(axis.name, 'backlash', f'{axis.backlash:g} rad',
+                              'written: none (a spring without dead zone)'))
+    if axis.torque_ripple:
+        amp = max(abs(float(r['amplitude'])) for r in axis.torque_ripple)
+        out.append(Limitation(axis.name, 'torque_ripple', f'{len(axis.torque_ripple)} term(s) up '
+                              f'to {amp:g} N m', 'written: none'))
+    return out
+
+
+def rigid_split(inertia: float, armature: float, fs: float) -> tuple[float, float, float]:
+    """
+    Return (motor_inertia, link_inertia, stiffness) of our view of a rigid MJCF joint.
+
+    The approximation of :data:`RIGID_ANTIRESONANCE_NYQUIST` and :data:`RIGID_MOTOR_SHARE`.
+
+    Parameters
+    ----------
+    inertia : float
+        The joint's link-side inertia M_ii [kg m^2] (without the armature).
+    armature : float
+        Its ``armature`` [kg m^2].
+    fs : float
+        Sample rate [Hz].
+
+    Returns
+    -------
+    tuple of float
+        Motor inertia, link inertia [kg m^2] and spring stiffness [N m/rad].
+
+    """
+    if armature > 0:
+        jm, jo = armature, inertia
+    else:
+        jm, jo = RIGID_MOTOR_SHARE * inertia, (1.0 - RIGID_MOTOR_SHARE) * inertia
+    w = 2.0 * math.pi * RIGID_ANTIRESONANCE_NYQUIST * fs / 2.0
+    return jm, jo, jo * w * w

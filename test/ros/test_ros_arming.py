@@ -1,0 +1,346 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Arming, the operator heartbeat and caller logs (issue 56) in real-robot mode on the plant.
+
+The graph runs free on wall time (``lockstep: false``, as ``sim:=false``) with the simulated
+plant and ``arming: token`` (what a robot gets by default). ``ros2 bag record`` records the
+heartbeat, the announcements and the velocity reference with its own receive times: the
+truth the timing is judged on. Then the recorded bag is played (``ros2 bag play``) into the
+same session and into a new start of the node (on the DDS backend): neither starts a run.
+"""
+import json
+import os
+from pathlib import Path
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.xdist_group('ros_arming')
+
+ROOT = Path(__file__).resolve().parents[2]
+RECORDED = ['/frf/heartbeat', '/frf/arming', '/velocity_controller/commands', '/frf/progress',
+            '/frf/experiment']
+#: heartbeat_timeout_ms of the test: the longest accepted, for a loaded 2-core PC (the
+#: console's own send gaps reached 0.61 s at load 14, test printed below; the default 250 ms
+#: is for a robot PC; the same reason as stale_samples 500 here)
+TIMEOUT_MS = 1000.0
+RAMP_S = 0.01              # its default abort_ramp_s
+#: receive-time slack of the recorder, the watchdog tick and the ramp's sleeps on a loaded
+#: 2-core PC [ms] (146 ms measured at load 15)
+SLACK_MS = 250.0
+
+
+class Proc:
+    """A subprocess whose output lines are collected by a thread."""
+
+    def __init__(self, cmd, env, stdin=None):
+        self.p = subprocess.Popen(cmd, env=env, stdin=stdin, stdout=subprocess.PIPE,
+                                  stderr=subprocess.STDOUT, text=True, start_new_session=True,
+                                  cwd=str(ROOT))
+        self.lines = []
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self):
+        for line in self.p.stdout:
+            self.lines.append(line.rstrip())
+
+    def text(self):
+        return '\n'.join(self.lines)
+
+    def wait_for(self, pattern, timeout=60.0):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if re.search(pattern, self.text()):
+                return
+            if self.p.poll() is not None:
+                break
+            time.sleep(0.05)
+        pytest.fail(f'no {pattern!r} within {timeout} s:\n{self.text()[-3000:]}')
+
+    def send(self, sig):
+        try:
+            os.killpg(self.p.pid, sig)
+        except ProcessLookupError:
+            pass                     # ended already
+
+    def stop(self, sig=signal.SIGINT):
+        if self.p.poll() is None:
+            self.send(sig)
+            try:
+                self.p.wait(60)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.p.pid, signal.SIGKILL)
+                self.p.wait()
+
+
+def _until(cond, timeout, what):
+    deadline = time.monotonic() + timeout
+    while not cond():
+        if time.monotonic() > deadline:
+            pytest.fail(f'timed out waiting for {what}')
+        time.sleep(0.05)
+
+
+def _log(g):
+    return (g.out / 'excitation_node.log').read_text(errors='replace')
+
+
+def _token(g):
+    _until(lambda: 'ARMING TOKEN' in _log(g), 30, 'the token on the console')
+    return re.search(r'ARMING TOKEN of this start: (\S+)', _log(g)).group(1)
+
+
+def _call(env, service='/frf/run_multisine'):
+    out = subprocess.run(['ros2', 'service', 'call', service, 'std_srvs/srv/Trigger'],
+                         env=env, text=True, capture_output=True, timeout=120).stdout
+    m = re.search(r"message='(.*)'\)", out)
+    assert m, out
+    return json.loads(m.group(1).replace("\\'", "'"))
+
+
+def _operator(g, token):
+    return Proc([sys.executable, '-m', 'frf_ident.nodes.operator_node', '--token', token,
+                 '--name', 'test-operator@robot-pc', '--ros-args', '--params-file',
+                 str(g.params_file)], g.env, stdin=subprocess.PIPE)
+
+
+def _graph(out, middleware, domain=None):
+    from frf_ident.app.graph import Graph
+    from frf_ident.core.excitation.procedures import MultisineConfig
+    ms = MultisineConfig(n_realisations=1, n_periods=8, resolution_hz=2.0, compensate=False,
+                         return_s=2.0, settle_s=0.3)
+    return Graph(out, multisine=ms, lockstep=False, middleware=middleware, domain_id=domain,
+                 # a loaded 2-core PC: the free-running simulation lags (as in
+                 # test/nodes/test_free_running.py); the live bound of a robot is not tested here
+                 params={'excitation_node': {'arming': 'token', 'stale_samples': 500,
+                                             'heartbeat_timeout_ms': TIMEOUT_MS,
+                                             'live_position_bound_deg': 30.0},
+                         'controller_node': {'reference_timeout_s': 0.5}})
+
+
+class _Segments:
+    """The test's own rclpy subscriber of /frf/experiment: when does an excitation run."""
+
+    def __init__(self, domain):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from std_msgs.msg import String
+        self.ctx = rclpy.Context()
+        rclpy.init(context=self.ctx, domain_id=domain)
+        self.node = rclpy.create_node('frf_arming_observer', context=self.ctx)
+        latched = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.events = []
+        self.node.create_subscription(String, '/frf/experiment',
+                                      lambda m: self.events.append(json.loads(m.data)), latched)
+        self.ex = SingleThreadedExecutor(context=self.ctx)
+        self.ex.add_node(self.node)
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self):
+        while not self.stop.is_set():
+            self.ex.spin_once(timeout_sec=0.05)
+
+    def long_segment_started(self):
+        return any(e.get('event') == 'start' and e['t_end'] - e['t_start'] > 2.0
+                   for e in self.events)
+
+    def close(self):
+        import rclpy
+        self.stop.set()
+        self.thread.join(2.0)
+        self.ex.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.ctx)
+
+
+def _play(recorded, env):
+    """Run ``ros2 bag play`` of the recorded heartbeats and announcements, from the first."""
+    rec = _read_recorded(recorded)
+    t0 = min(t for msgs in rec.values() for t, _ in msgs)
+    offset = max(0.0, (rec['/frf/heartbeat'][0][0] - t0) * 1e-9 - 0.2)
+    return Proc(['ros2', 'bag', 'play', str(recorded), '--start-offset', f'{offset:.3f}',
+                 '--topics', '/frf/heartbeat', '/frf/arming'], env)
+
+
+def _read_recorded(path):
+    """Read the recorder's bag: {topic: [(receive ns, message)]}, with rosbags' reader."""
+    from rosbags.highlevel import AnyReader
+    out = {}
+    with AnyReader([Path(path)]) as reader:
+        for conn, t_ns, raw in reader.messages():
+            out.setdefault(conn.topic, []).append((t_ns, reader.deserialize(raw, conn.msgtype)))
+    return out
+
+
+@pytest.fixture(scope='module')
+def session(tmp_path_factory, new_domain):
+    """
+    Run one armed session on rclpy: refused unarmed, accepted armed, heartbeat stopped.
+
+    Then its recorded bag played back into the same session (the node still running).
+    """
+    out = tmp_path_factory.mktemp('arming')
+    g = _graph(out / 'graph', 'rclpy', new_domain())
+    g.start()
+    env = dict(g.env)
+    res = {'graph': g}
+    recorder = op = player = None
+    segments = _Segments(g.domain_id)
+    try:
+        token = _token(g)
+        recorder = Proc(['ros2', 'bag', 'record', '-s', 'mcap', '-o', str(out / 'recorded'),
+                         *RECORDED], env)
+        recorder.wait_for("Subscribed to topic '/frf/arming'")
+        res['unarmed'] = _call(env)
+        op = _operator(g, token)
+        op.wait_for('ARMED')
+        recorder.wait_for("Subscribed to topic '/frf/heartbeat'")
+        res['armed'] = _call(env)
+        _until(segments.long_segment_started, 120, 'an excitation segment')
+        time.sleep(1.0)                          # the multisine moves the (simulated) robot
+        op.send(signal.SIGSTOP)                  # a hung console: no more heartbeats
+        t_stop = time.monotonic()
+        _until(lambda: 'operator heartbeat lost' in _log(g), 30, 'the heartbeat abort')
+        res['abort_seen_s'] = time.monotonic() - t_stop
+        _until(lambda: 'operator heartbeat of run' in _log(g), 10, 'the heartbeat summary')
+        time.sleep(0.5)
+        recorder.stop()
+        res['recorded'] = out / 'recorded'
+        # the recorded session played back while the same node runs: never a run
+        op.send(signal.SIGKILL)
+        player = _play(out / 'recorded', env)
+        time.sleep(2.0)
+        res['replayed_same_session'] = _call(env)
+        player.stop()
+        res['log'] = _log(g)
+        res['operator'] = op.text()
+    finally:
+        for p in (player, op, recorder):
+            if p is not None:
+                if p is op:
+                    p.send(signal.SIGKILL)
+                p.stop()
+        segments.close()
+        g.stop()
+    return res
+
+
+def test_unarmed_refuses_and_names_caller(session):
+    """An unarmed node refuses a run from another process: reply and log name both."""
+    r = session['unarmed']
+    assert r['accepted'] is False and r['refused'] is True, r
+    assert 'not armed: no operator heartbeat yet' in r['error'], r
+    assert '_ros2cli_requester' in r['caller'], r
+    line = next(ln for ln in session['log'].splitlines()
+                if '/frf/run_multisine refused at' in ln)
+    print(line)
+    assert 'not armed' in line and 'caller: node /_ros2cli_requester' in line, line
+    assert 'ARMING TOKEN' not in line
+
+
+def test_armed_accepts_and_heartbeat_loss_ramps_to_zero(session):
+    """
+    Armed, the run starts; the heartbeat stopped mid-run ramps the reference to zero.
+
+    Judged on the recorder's receive times: from the last heartbeat to the zero reference
+    at most heartbeat_timeout_ms + abort_ramp_s (+ slack); no step in the reference.
+    """
+    r = session['armed']
+    assert r['accepted'] is True, r
+    log = session['log']
+    assert re.search(r'/frf/run_multisine accepted at \S+: run \d+ multisine; caller: node '
+                     r'/_ros2cli_requester', log), log[-3000:]
+    assert 'aborted: operator heartbeat lost' in log, log[-3000:]
+    print(re.search(r'operator heartbeat of run.*', log).group(0))
+    print(re.search(r'aborted: operator heartbeat lost: none for \d+ ms', log).group(0))
+    rec = _read_recorded(session['recorded'])
+    finished = [json.loads(m.data) for _, m in rec['/frf/progress']]
+    end = [e for e in finished if e.get('event') == 'finished'][-1]
+    assert end['aborted'] and 'operator heartbeat lost' in end['error'], end
+    t_hb = rec['/frf/heartbeat'][-1][0]
+    cmds = rec['/velocity_controller/commands']
+    t = np.array([tc for tc, _ in cmds])
+    r_all = np.array([m.data for _, m in cmds])
+    after = np.flatnonzero(t > t_hb)
+    zero = after[np.all(r_all[after] == 0.0, axis=1)][0]
+    dt_ms = (t[zero] - t_hb) * 1e-6
+    print(f'last heartbeat to zero reference: {dt_ms:.0f} ms (limit {TIMEOUT_MS:.0f} + '
+          f'{1e3 * RAMP_S:.0f} ms); the abort seen in the log {session["abort_seen_s"]:.2f} s '
+          'after SIGSTOP')
+    assert TIMEOUT_MS - 5.0 <= dt_ms <= TIMEOUT_MS + 1e3 * RAMP_S + SLACK_MS
+    assert np.all(r_all[zero:] == 0.0), 'the reference left zero after the abort'
+    ramp = np.abs(np.diff(r_all[zero - 4:zero + 1], axis=0)).max()
+    run_steps = np.abs(np.diff(r_all[:zero - 4], axis=0)).max()
+    r0 = np.abs(r_all[zero - 4]).max()
+    print(f'largest reference step in the ramp {ramp:.4f} rad/s (reference before it '
+          f'{r0:.4f} rad/s), in the run before {run_steps:.4f} rad/s')
+    assert ramp <= run_steps + 1e-12, 'the abort ramp steps more than the excitation does'
+
+
+def test_replayed_bag_never_starts_a_run(session):
+    """The recorded heartbeats played into the same session: seen numbers, refused."""
+    r = session['replayed_same_session']
+    assert r['accepted'] is False, r
+    assert 'not armed' in r['error'] and 'replayed or duplicated' in r['error'], r
+    runs = re.findall(r'/frf/run_multisine accepted', session['log'])
+    assert len(runs) == 1, runs
+
+
+def test_replay_into_a_new_start_on_dds(session, tmp_path):
+    """
+    A new start of the node (new session and token) on the DDS backend.
+
+    The recorded bag played into it cannot arm it; the console with the new token can, and
+    the caller line then carries what the DDS backend tells (host, enclave, process).
+    """
+    g = _graph(tmp_path / 'graph', 'dds')
+    g.start()
+    env = dict(g.env)
+    player = op = None
+    try:
+        token = _token(g)
+        player = _play(session['recorded'], env)
+        time.sleep(2.0)
+        replayed = _call(env)
+        player.stop()
+        op = _operator(g, token)
+        op.wait_for('ARMED')
+        armed = _call(env)
+        _until(lambda: 'multisine started' in op.text(), 60, 'the run on the console')
+        op.p.stdin.write('q\n')
+        op.p.stdin.flush()
+        _until(lambda: 'operator heartbeat lost' in _log(g), 30, 'the abort after q')
+        log = _log(g)
+    finally:
+        for p in (player, op):
+            if p is not None:
+                p.stop()
+        g.stop()
+    assert replayed['accepted'] is False, replayed
+    assert 'another session' in replayed['error'], replayed
+    assert armed['accepted'] is True, armed
+    line = next(ln for ln in log.splitlines() if '/frf/run_multisine accepted at' in ln)
+    print(line)
+    assert re.search(r'caller: node /_ros2cli_requester\S* on \S+, enclave /, process ', line)
