@@ -511,6 +511,13 @@ def bench_mujoco() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('tune')
+def bench_tune() -> list[tuple[str, str, str, str]]:
+    """Time ``frf-ident tune`` on a 3x3 FRF campaign of 9 poses beside ``loop --propose``."""
+    from benchmarks.tune import rows
+    return rows()
+
+
 def main(argv: list[str] | None = None) -> int:
     """
     Run the named sections (all without names) and print their rows.

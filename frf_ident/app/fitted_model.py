@@ -103,7 +103,8 @@ def write_fitted_model(values: dict[str, dict[str, float]], coupling: np.ndarray
     axes = [replace(base.axes[k], name=n, **dict(v, viscous_friction=max(
         v['viscous_friction'], 0.0)), **extra[n]) for (n, v), k in zip(values.items(), pick)]
     robot = replace(base, axes=axes, link_coupling=coupling)
-    pi = PIVelocity(ctrl.kp[pick], ctrl.ki[pick], robot.torque_limits(), robot.dt)
+    pi = PIVelocity(ctrl.kp[pick], ctrl.ki[pick], robot.torque_limits(), robot.dt,
+                    sos=ctrl.sos[pick])
     how = ('fitted with the link coupling' if coupling is not None else
            'fitted per axis (link_coupling not fitted: left out)')
     path = save_model(out / 'model.yaml', robot, pi,

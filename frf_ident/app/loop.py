@@ -36,6 +36,7 @@ from frf_ident.core.loop.check import (AxisMargins, draw_responses, DRAWS, edge_
                                        loop_response, LoopCheck, Margin, pi_response,
                                        sensitivity_peak)
 from frf_ident.core.loop.design import check_targets, PIProposal, propose_pi, TargetCheck
+from frf_ident.core.loop.notch import sections_response
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.model_file import load_model
@@ -114,7 +115,8 @@ class LoopData:
 
 
 def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
-              dt: float | None = None, draws: int = DRAWS, seed: int = 0) -> LoopData:
+              dt: float | None = None, draws: int = DRAWS, seed: int = 0,
+              filters: np.ndarray | None = None) -> LoopData:
     """
     Return the controller responses and the FRF's draws for a check (args of loop_check).
 
@@ -130,6 +132,9 @@ def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         Monte-Carlo draws of the FRF.
     seed : int, optional
         Seed of the draws.
+    filters : ndarray of complex, shape (n_axes, n_freq), optional
+        Response of each axis' filters on the measured velocity (issue #51; the model
+        file's ``controller.filters``): C_i = PI_i F_i.
 
     Returns
     -------
@@ -153,11 +158,14 @@ def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
     if var is not None and draws > 0:
         sample = draw_responses(frf.response, var, draws, np.random.default_rng(seed))
     c = np.stack([pi_response(frf.freq_hz, kp[j], ki[j], dt) for j in range(len(chans))])
+    if filters is not None:
+        c = c * np.asarray(filters).reshape(c.shape)
     return LoopData(chans, c, sample)
 
 
 def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
-               dt: float | None = None, draws: int = DRAWS, seed: int = 0) -> LoopCheck:
+               dt: float | None = None, draws: int = DRAWS, seed: int = 0,
+               filters: np.ndarray | None = None) -> LoopCheck:
     """
     Check the velocity PI on the measured loop: margins with their uncertainty.
 
@@ -174,6 +182,8 @@ def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         Monte-Carlo draws of the FRF for the standard deviations.
     seed : int, optional
         Seed of the draws.
+    filters : ndarray of complex, shape (n_axes, n_freq), optional
+        Response of each axis' filters (:func:`loop_data`).
 
     Returns
     -------
@@ -186,7 +196,7 @@ def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         The number of gains is not the number of axes.
 
     """
-    data = loop_data(frf, kp, ki, dt=dt, draws=draws, seed=seed)
+    data = loop_data(frf, kp, ki, dt=dt, draws=draws, seed=seed, filters=filters)
     loops = data.axis_loops(frf.response)
     nominal = margins(loops, frf.omega)
     edge = edge_gain_db(loops)
@@ -343,9 +353,13 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
 
     """
     frf = read_source(source)
+    filters = None
     if kp is None and model is not None:
         _, robot, ctrl = load_model(model)
         kp, ki, dt = ctrl.kp.tolist(), ctrl.ki.tolist(), robot.dt
+        if ctrl.n_sections:          # the model's filters on the measured velocity (#51)
+            filters = np.stack([sections_response(frf.freq_hz, ctrl.sos[j], robot.sample_rate)
+                                for j in range(ctrl.n_axes)])
     if (kp is None) != (ki is None):
         raise FrfIdentInputError('--kp and --ki: give both (one value per axis)')
     if kp is None and propose is None:
@@ -358,7 +372,7 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
     check = None
     figure_gains = None
     if kp is not None:
-        check = loop_check(frf, kp, ki, dt=dt, draws=draws)
+        check = loop_check(frf, kp, ki, dt=dt, draws=draws, filters=filters)
         figure_gains = (kp, ki, dt, check)
         for line in check.summary():
             progress(f'  {line}')
@@ -374,9 +388,9 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
             progress(f'    {a.summary()}')
             progress(f'    {a.axis}: {t.text()}')
         if figure_gains is None:
-            figure_gains = (pkp, pki, None, pcheck)
+            figure_gains, filters = (pkp, pki, None, pcheck), None
     gkp, gki, gdt, gcheck = figure_gains
-    data = loop_data(frf, gkp, gki, dt=gdt, draws=draws)
+    data = loop_data(frf, gkp, gki, dt=gdt, draws=draws, filters=filters)
     files = [loop_figure(frf.freq_hz, data.axis_loops(frf.response),
                          None if data.draws is None else data.axis_loops(data.draws),
                          [c[0] for c in data.channels],

@@ -36,7 +36,8 @@ from pathlib import Path
 import sys
 
 from frf_ident import __version__
-from frf_ident.cli import demo, diagnose, estimate, fit, identify, import_data, loop, reproduce
+from frf_ident.cli import (demo, diagnose, estimate, fit, identify, import_data, loop, reproduce,
+                           tune)
 from frf_ident.cli.logsetup import configured
 from frf_ident.errors import FrfIdentInputError
 
@@ -49,6 +50,7 @@ COMMANDS = {
     'import': import_data,
     'fit': fit,
     'loop': loop,
+    'tune': tune,
     'diagnose': diagnose,
     'demo': demo,
     'reproduce': reproduce,
