@@ -25,6 +25,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from frf_ident.report.effect_names import effect_phrase
 from frf_ident.report.text import parameters_text
 
 if TYPE_CHECKING:
@@ -54,7 +55,7 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
 
     """
     res = diag.result
-    lines = [f'{k + 1}. {e.name} on {e.axis}: '
+    lines = [f'{k + 1}. {effect_phrase(e.name)} on {e.axis}: '
              f'{parameters_text(e.parameters, e.standard_error)}; score {e.score:.2f}'
              for k, e in enumerate(res.effects)]
     if not res.effects:

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from frf_ident.report import figures
+from frf_ident.report.effect_names import effect_phrase
 from frf_ident.report.page import figure_tag, page, table
 from frf_ident.report.text import parameters_text
 
@@ -79,7 +80,7 @@ def _effects(res: DiagnosisResult) -> str:
     if not res.effects:
         return '<p>none of the candidate effects improves the held-out data.</p>'
     return table(['#', 'effect', 'axis', 'score', 'value (\u00b1 standard error)', 'evidence'],
-                 [[k + 1, e.name, e.axis, round(e.score, 3),
+                 [[k + 1, effect_phrase(e.name), e.axis, round(e.score, 3),
                    parameters_text(e.parameters, e.standard_error), e.evidence]
                   for k, e in enumerate(res.effects)])
 

@@ -97,8 +97,10 @@ class LineCause:
 
     def describe(self) -> str:
         """Return the line people read."""
-        head = {'position': 'locked to position (moves with speed)',
-                'time': 'locked to time (stays put at every speed)'}.get(
+        head = {'position': 'locked to position (moves with speed: cogging, torque ripple, '
+                            'gear mesh or a screw pitch)',
+                'time': 'locked to time (stays put at every speed: the mains, PWM or a '
+                        'structural mode)'}.get(
                     self.locked_to, 'not determined')
         mains = ''
         if self.mains_multiple:

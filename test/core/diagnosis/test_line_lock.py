@@ -22,7 +22,7 @@ real EMPS record, whose residual the diagnosis scans.
 import math
 from pathlib import Path
 
-from frf_ident.core.diagnosis.line_cause import mains_multiple
+from frf_ident.core.diagnosis.line_cause import LineCause, mains_multiple
 from frf_ident.core.diagnosis.timeseries.line_lock import steady_speeds
 from frf_ident.core.diagnosis.timeseries.pipeline import diagnose_timeseries
 from frf_ident.core.model.schema import robot_from_dict
@@ -121,3 +121,12 @@ def test_emps_lines_with_their_cause():
     assert cause[50].mains_multiple == '1 x 50 Hz' and 'not the mains' in cause[50].describe()
     assert cause[445].locked_to == 'time'
     assert cause[100].locked_to == 'undetermined' and cause[100].mains_multiple == '2 x 50 Hz'
+
+
+def test_each_class_names_its_causes_in_a_drives_engineers_words():
+    """A class says which causes it leaves: what moves with speed, what stays put."""
+    ripple = LineCause('position', 30.0, 'r', cycles_per_unit=30.0).describe()
+    mains = LineCause('time', 100.0, 'r', mains_multiple='2 x 50 Hz').describe()
+    assert 'cogging' in ripple and 'gear mesh' in ripple and 'mains' not in ripple
+    assert 'the mains, PWM or a structural mode' in mains and 'at a mains multiple' in mains
+    assert 'not determined' in LineCause('undetermined', 100.0, 'r').describe()
