@@ -115,6 +115,10 @@ def test_emps_lines_with_their_cause():
     cause = {round(u.signature.peak_hz): u.cause for u in res.unexplained if u.cause}
     for hz, c in sorted(cause.items()):
         print(f'{hz} Hz: {c.describe()}')
+    # every line the scan keeps carries its class and the evidence at each steady speed
+    lines = [u for u in res.unexplained if u.misfit_share is None]
+    assert lines and all(u.cause is not None and u.cause.speeds for u in lines), lines
+    assert all(u.cause.to_dict()['speeds'] for u in lines)
     assert cause[33].locked_to == 'position' and cause[50].locked_to == 'position'
     assert cause[33].cycles_per_unit == pytest.approx(400, rel=0.02)
     assert cause[50].cycles_per_unit == pytest.approx(cause[33].cycles_per_unit, rel=0.02)
