@@ -20,9 +20,9 @@ record's evidence calls for (identification experiments: :mod:`.experiments`, an
 (:mod:`.crosscheck`): the gravity of the robot's kinematics, position-dependent terms on the
 other records, standard errors across records, the least-squares baseline and both model
 files on every other record; last the sensor the record shows is named (:mod:`.sensor`; the
-experiments route already read its effects against it). Its :class:`Diagnosis` is what ``frf-ident diagnose`` writes
-(report.json from :meth:`Diagnosis.report`, docs/CONTRACT.md §7) and what the console and
-the HTML report read.
+experiments route already read its effects against it). Its :class:`Diagnosis` is what
+``frf-ident diagnose`` writes (report.json from :meth:`Diagnosis.report`, docs/CONTRACT.md
+§7) and what the console and the HTML report read.
 """
 from __future__ import annotations
 
