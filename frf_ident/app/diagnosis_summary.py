@@ -25,7 +25,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from frf_ident.report.effect_names import effect_phrase
 from frf_ident.report.text import parameters_text
 
 if TYPE_CHECKING:
@@ -55,7 +54,7 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
 
     """
     res = diag.result
-    lines = [f'{k + 1}. {effect_phrase(e.name)} on {e.axis}: '
+    lines = [f'{k + 1}. {e.name} on {e.axis}: '
              f'{parameters_text(e.parameters, e.standard_error)}; score {e.score:.2f}'
              for k, e in enumerate(res.effects)]
     if not res.effects:
@@ -65,15 +64,17 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
                      'residual above it scanned for resonances')
     lines += [_unexplained(u) for u in res.unexplained]
     m = res.metrics
+    # what was held out on a line of its own: it names records and realisations (120 chars)
     lines.append(f'held-out error: nominal {_scores(m.baseline)} -> extended '
-                 f'{_scores(m.extended)} ({m.validation})')
+                 f'{_scores(m.extended)}')
+    lines.append(f'  {m.validation}')
     lines += [f'on {v.record}: nominal {_scores(v.baseline)} -> extended {_scores(v.extended)}'
               for v in diag.checks.validation_records]
     ls = diag.checks.least_squares
     if ls is not None:
         lines += _against_baseline(ls)
-    lines.append(f'wrote {out / "report.json"}, {out / "extended_model.yaml"}, '
-                 f'{out / "report.html"}')
+    # the folder once: three full paths made a 230-character line in a deep output folder
+    lines.append(f'wrote report.json, extended_model.yaml and report.html in {out}')
     return lines
 
 
