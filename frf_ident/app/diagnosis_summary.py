@@ -23,6 +23,7 @@ report).
 from __future__ import annotations
 
 from pathlib import Path
+import textwrap
 from typing import TYPE_CHECKING
 
 from frf_ident.report.text import parameters_text
@@ -97,8 +98,11 @@ def _against_baseline(ls: LeastSquaresCheck) -> list[str]:
     for v in ls.verdicts:
         by_set.setdefault(v.record, []).append(
             f'{v.axis} {v.verdict} ({v.extended:.3g} / {v.least_squares:.3g})')
-    return [f'against the least-squares baseline on {rec} (time NRMSE extended / baseline): '
-            + ', '.join(parts) for rec, parts in by_set.items()]
+    # wrapped: three axes of a long record name made a 170-character line
+    return [line for rec, parts in by_set.items()
+            for line in textwrap.wrap(f'against the least-squares baseline on {rec} (time NRMSE '
+                                      'extended / baseline): ' + ', '.join(parts), 150,
+                                      subsequent_indent='  ', break_on_hyphens=False)]
 
 
 def _scores(s: Scores) -> str:
