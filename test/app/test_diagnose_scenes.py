@@ -52,16 +52,19 @@ def _check(r: dict, msg: str) -> None:
     """
     Assert the per-scene floors.
 
-    Clean and second-mode scenes name nothing (the mode is unexplained on its axis with a
-    band containing it); the others name at least half of the hidden (effect, axis) pairs
-    with at most one false alarm, at least half of the found parameters within 20 % and at
-    most one outside (floors all 96 scenes of the three README sweeps meet; the rates are
-    measured by the sweep).
+    Clean scenes name nothing; second-mode scenes name nothing else than the mode on its axis
+    (issue 57), or, where it is not named, report it unexplained there with a band containing
+    it; the others name at least half of the hidden (effect, axis) pairs with at most one
+    false alarm, at least half of the found parameters within 20 % and at most one outside
+    (floors all 96 scenes of the three README sweeps meet; the rates are measured by the
+    sweep).
     """
-    if r['kind'] in ('clean', 'second_mode'):
+    if r['kind'] == 'clean':
         assert r['n_found'] == 0, msg
-        if r['kind'] == 'second_mode':
-            assert r['mode_unexplained'], msg
+        return
+    if r['kind'] == 'second_mode':
+        assert r['false_alarms'] == 0, msg
+        assert r['mode_named'] or r['mode_unexplained'], msg
         return
     assert r['hits'] >= math.ceil(r['n_hidden'] / 2), msg
     assert r['false_alarms'] <= 1, msg

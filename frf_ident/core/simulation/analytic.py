@@ -33,8 +33,8 @@ from frf_ident.core.simulation.plant import state_space
 import numpy as np
 from scipy import linalg
 
-__all__ = ['closed_loop_frfs', 'robot_frf', 'robot_frf_sampled', 'second_mode_stiffness',
-           'two_mass_frf']
+__all__ = ['closed_loop_frfs', 'link_chain_frf', 'robot_frf', 'robot_frf_sampled',
+           'second_mode_stiffness', 'two_mass_frf']
 
 
 def two_mass_frf(freq_hz: np.ndarray, motor_inertia: float, link_inertia: float,
@@ -128,10 +128,39 @@ def robot_frf(params: RobotParams, freq_hz: np.ndarray) -> np.ndarray:
     freq_hz = np.asarray(freq_hz, dtype=float).reshape(-1)
     n, jm, bv, k, d, mr = _link_stiffness_terms(params)
     s = 2j * np.pi * freq_hz
-    sf = s[:, None, None]
-    link = mr * sf ** 2 + np.eye(n) * second_mode_stiffness(params, s)[:, None, :]
-    z = k + d * sf
-    dyn = jm * sf ** 2 + bv * sf + z - z @ np.linalg.solve(link + z, z)
+    return link_chain_frf(np.diag(jm), np.diag(bv), np.diag(k), np.diag(d), mr,
+                          second_mode_stiffness(params, s), freq_hz)
+
+
+def link_chain_frf(jm: np.ndarray, bv: np.ndarray, k: np.ndarray, d: np.ndarray,
+                   rigid_link: np.ndarray, mode_stiffness: np.ndarray, freq_hz: np.ndarray
+                   ) -> np.ndarray:
+    """
+    Return the MIMO FRF tau_m -> dq_m of :func:`robot_frf` from its arrays (fits call it).
+
+    Parameters
+    ----------
+    jm, bv, k, d : ndarray, shape (n,)
+        Motor inertia, viscous friction, stiffness, damping per axis (SI).
+    rigid_link : ndarray, shape (n, n)
+        The link inertia matrix without the second modes' inertia [kg m^2].
+    mode_stiffness : ndarray of complex, shape (n_freq, n)
+        :func:`second_mode_stiffness` at the lines (zeros without second modes).
+    freq_hz : ndarray, shape (n_freq,)
+        Frequencies in Hz.
+
+    Returns
+    -------
+    ndarray of complex, shape (n, n, n_freq)
+        P[i, j]: motor velocity of axis i per motor torque of axis j.
+
+    """
+    n = jm.size
+    sf = (2j * np.pi * np.asarray(freq_hz, dtype=float))[:, None, None]
+    eye = np.eye(n)
+    link = rigid_link * sf ** 2 + eye * mode_stiffness[:, None, :]
+    z = eye * (k + d * sf)
+    dyn = eye * (jm * sf ** 2 + bv * sf) + z - z @ np.linalg.solve(link + z, z)
     return np.moveaxis(sf * np.linalg.inv(dyn), 0, -1)
 
 

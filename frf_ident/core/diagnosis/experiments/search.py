@@ -22,6 +22,7 @@ from frf_ident.core.recording import Recording
 import numpy as np
 
 from .evaluator import Evaluator
+from .structure import StructureReading
 from ..common import Effect
 
 __all__ = ['named', 'Search']
@@ -45,6 +46,8 @@ class Search:
     rivals: dict[int, list[Effect]] = field(default_factory=dict)
     shaped: set[int] = field(default_factory=set)   # axes that took an FRF-shape effect
     again: list[Effect] = field(default_factory=list)  # second-pass candidates
+    #: stage 0's residual tests of the linear fit (None: no multisine variance, or no stage 0)
+    structure: StructureReading | None = None
 
 
 def named(kept: list[Effect]) -> str:
