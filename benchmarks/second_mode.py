@@ -107,9 +107,12 @@ def run_mode_scene(kind: str, seed: int, bags: Path | None = None) -> dict[str, 
         res = diagnose(bag, MODEL, Path(tmp) / 'diag', progress=lambda _m: None)
         t2 = time.perf_counter()
         written = model_file_modes(Path(tmp) / 'diag' / 'extended_model.yaml')
+        page = (Path(tmp) / 'diag' / 'report.html').read_text()
     out = mode_result(scene, res.report())
     out['model_file_modes'] = written
     out['in_model_file'] = in_model_file(out, written)
+    # the held-out table of report.html shows the bands' error before and after
+    out['bands_in_page'] = bool(out['resonance_bands']) == ('In the band of every' in page)
     out.update(seed=seed, identify_s=round(t1 - t0, 1), diagnose_s=round(t2 - t1, 1),
                n_sims=res.result.n_sims)
     return out
