@@ -181,8 +181,12 @@ def sweep(n: int, seed: int = 5700, kinds: tuple[str, ...] = KINDS, jobs: int | 
         bags.mkdir(parents=True, exist_ok=True)
     # each kind its own seeds (SEED + 1000 j + i for the j-th kind): link_mode_beside of the
     # same seed as link_mode would draw the same mode
-    todo = [(k, seed + 1000 * j + i) for j, k in enumerate(kinds)
-            for i in range(n // 2 if k in NOMINAL_KINDS and len(kinds) > 1 else n)]
+    # the mode kinds first, then the nominal ones, each interleaved (scene i of every kind,
+    # then i + 1): a sweep cut short has its mode scenes of both kinds
+    todo = sorted(((k, seed + 1000 * j + i) for j, k in enumerate(kinds)
+                   for i in range(n // 2 if k in NOMINAL_KINDS and len(kinds) > 1 else n)),
+                  key=lambda t: (t[0] in NOMINAL_KINDS, (t[1] - seed) % 1000,
+                                 kinds.index(t[0])))
     runs = []
     with ProcessPoolExecutor(max_workers=jobs or os.cpu_count() or 1) as pool:
         for r in pool.map(run_mode_scene, [k for k, _ in todo], [s for _, s in todo],
