@@ -24,11 +24,11 @@ never ``parameter_mismatch`` of the link inertia on the mode's axis, and the mod
 on its axis (frequency within 5 %) or reported unexplained there with a band: never a silent
 wrong answer. The rate the issue asks for (frequency within 5 % and damping ratio within 30 %
 in >= 90 % of >= 20 scenes) is what :func:`test_second_mode_rates_over_fresh_seeds` holds:
-about 60 scenes, some 50 minutes on two cores, too long for ``make test`` (whose ``slow``
+30 scenes (a scene takes about 100 s of one core), too long for ``make test`` (whose ``slow``
 tests all run), so it runs only when FRF_MODE_SEEDS=<N per mode kind> is set, e.g.
-``FRF_MODE_SEEDS=20 pytest -s test/app/test_diagnose_modes.py -k rates`` (the same sweep as
-``python -m benchmarks.second_mode 20 SEED``, docs/diagnosis/measured.md); each run of the
-scene test prints its scene's line of it.
+``FRF_MODE_SEEDS=10 pytest -s test/app/test_diagnose_modes.py -k rates`` (20 mode scenes, 10
+nominal; the same sweep as ``python -m benchmarks.second_mode 10 SEED``,
+docs/diagnosis/measured.md); each run of the scene test prints its scene's line of it.
 """
 import json
 import os
@@ -80,16 +80,18 @@ MODE_SEEDS = int(os.environ.get('FRF_MODE_SEEDS', '0') or 0)
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(MODE_SEEDS <= 0, reason='set FRF_MODE_SEEDS=20 (about 50 min on 2 cores)')
+@pytest.mark.skipif(MODE_SEEDS <= 0, reason='set FRF_MODE_SEEDS=10 (30 scenes, ~50 min on 2 '
+                    'idle cores)')
 def test_second_mode_rates_over_fresh_seeds():
     """
     The issue's rates over fresh scenes: N of each mode kind, N // 2 of each nominal kind.
 
     A mode scene succeeds when the mode is named on its axis (frequency within 5 %, damping
     ratio within 30 %) and ``parameter_mismatch`` of ``link_inertia`` is not named there: >= 90
-    % of each mode kind. No mode named on an axis without one in more than 10 % of the
-    nominal scenes (the rate is printed). Every named mode is in extended_model.yaml and has
-    its resonance band's held-out error before and after in the report.
+    % of the mode scenes, with and without another effect. A mode named on an axis without
+    one in at most 10 % of the nominal scenes (the rate is printed). Every named mode is in
+    extended_model.yaml and has its resonance band's held-out error before and after in the
+    report.
     """
     seed = _seed()
     print(f'FRF_DIAG_SEED={seed} FRF_MODE_SEEDS={MODE_SEEDS}', file=sys.stderr)
@@ -99,10 +101,13 @@ def test_second_mode_rates_over_fresh_seeds():
         print(json.dumps(r, default=float), file=sys.stderr)
     print(json.dumps(out['rates'], indent=1), file=sys.stderr)
     msg = f'FRF_DIAG_SEED={seed}: {json.dumps(out["rates"])}'
-    for kind in ('link_mode', 'link_mode_beside'):
-        rs = [r for r in runs if r['kind'] == kind]
-        assert sum(success(r) for r in rs) >= 0.9 * len(rs), msg
+    modes = [r for r in runs if r['kind'] not in NOMINAL_KINDS]
+    print(f'mode found without a link_inertia mismatch: {sum(map(success, modes))}/'
+          f'{len(modes)} scenes', file=sys.stderr)
+    assert sum(success(r) for r in modes) >= 0.9 * len(modes), msg
     nominal = [r for r in runs if r['kind'] in NOMINAL_KINDS]
+    print(f'false alarms (a mode named on a nominal scene): '
+          f'{sum(r["false_modes"] > 0 for r in nominal)}/{len(nominal)} scenes', file=sys.stderr)
     assert sum(r['false_modes'] > 0 for r in nominal) <= 0.1 * len(nominal), msg
     named = [r for r in runs if r.get('named_mode')]
     assert all(r['in_model_file'] for r in named), msg
