@@ -26,7 +26,7 @@ coupled axes too.
 - :func:`fit_linear_ratio`: log scale factors of every axis' motor inertia, link inertia,
   stiffness and damping (:data:`LINEAR`), maximum likelihood (Levenberg-Marquardt on the
   residual over its standard deviation). Its residual is what no linear parameter change
-  explains (:mod:`frf_ident.core.fit.residual_test` says where).
+  explains (:mod:`frf_ident.core.fit.residual_whiteness` says where).
 - :func:`fit_second_mode`: the same with one axis' second mode added (the keys of
   docs/model_file.md: the frequency tuned with the link held, the damping ratio, the share of
   the link's inertia on the spring) and every axis' linear scales; started from a grid around
@@ -136,7 +136,8 @@ class _Model:
         self.n = robot.n_axes
         # the model's own second modes: their inertia leaves the rigid link, their dynamic
         # stiffness loads it (second_mode_stiffness)
-        self.mode_inertia = np.diag(robot.link_inertia_matrix() - robot.rigid_link_inertia_matrix())
+        self.mode_inertia = np.diag(robot.link_inertia_matrix()
+                                    - robot.rigid_link_inertia_matrix())
         self.mode_stiffness = second_mode_stiffness(robot, self.s)
         self.data = data
         self.nominal = self.diagonal(np.zeros((self.n, 4)))

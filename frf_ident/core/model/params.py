@@ -332,7 +332,7 @@ class RobotParams:
             raise ModelFileError('link inertia matrix (link_inertia + link_coupling) must be '
                                  'positive definite')
         if np.any(np.linalg.eigvalsh(self.rigid_link_inertia_matrix()) <= 0):
-            raise ModelFileError('link inertia matrix without the second modes\' inertia must be '
+            raise ModelFileError("link inertia matrix without the second modes' inertia must be "
                                  'positive definite (a second_mode.inertia too large for the '
                                  'link coupling)')
 

@@ -15,8 +15,9 @@
 The unit of every model-file parameter: one table for the console, the reports and the docs.
 
 Keys are the model-file keys of docs/CONTRACT.md §5 (and docs/model_file.md), plus the keys
-inside a ``torque_ripple`` or ``gravity`` term and a ``second_mode`` mapping. Units are motor side, SI: what the plant
-simulates and the diagnosis fits. :func:`with_unit` writes a value for a person.
+inside a ``torque_ripple`` or ``gravity`` term and a ``second_mode`` mapping. Units are motor
+side, SI: what the plant simulates and the diagnosis fits. :func:`with_unit` writes a value
+for a person.
 """
 from __future__ import annotations
 

@@ -23,7 +23,7 @@ linear fit's residual not white where the mode is and white where there is none.
 from dataclasses import replace
 
 from frf_ident.core.fit.link_mode import fit_linear_ratio, fit_second_mode, RatioData
-from frf_ident.core.fit.residual_test import residual_test
+from frf_ident.core.fit.residual_whiteness import residual_test
 from frf_ident.core.model.schema import default_robot
 import numpy as np
 import pytest

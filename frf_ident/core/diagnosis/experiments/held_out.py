@@ -24,7 +24,7 @@ from dataclasses import replace
 import logging
 import math
 
-from frf_ident.core.fit.residual_test import ResidualBand
+from frf_ident.core.fit.residual_whiteness import ResidualBand
 from frf_ident.core.recording import Recording
 import numpy as np
 

@@ -32,7 +32,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from frf_ident.core.fit.residual_test import RESIDUAL_ALPHA
+from frf_ident.core.fit.residual_whiteness import RESIDUAL_ALPHA
 from frf_ident.core.model.params import RobotParams
 import numpy as np
 

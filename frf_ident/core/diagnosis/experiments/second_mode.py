@@ -21,18 +21,19 @@ frequency, wrong where a notch or a bandwidth is chosen. Where stage 0's residua
 (:mod:`.structure`) has bands, the axes are tried strongest band first: the mode and every
 axis' linear scales are fitted to the ratio of the record's multisine FRF to the nominal
 simulation's (:func:`~frf_ident.core.fit.link_mode.fit_second_mode`, started in the band).
-A fit that explains its band (MODE_COST_SHARE of the linear fit's cost above its degrees of
-freedom removed, no band left on its axis beyond MODE_LEFT_SHARE of the one that asked for
-it, the frequency determined within MODE_FREQUENCY_SE and such that the mode acts in the band
-(MODE_BAND_SPAN), the damping ratio in MODE_DAMPING_RANGE, at least MODE_MIN_INERTIA_SHARE of
-the link's inertia on the spring, the mode in the measured band) is
-a candidate ``second_mode``, with the Cramer-Rao standard errors of its frequency, damping
-ratio and inertia, and any linear parameter of its axis the same fit moves as stage 0 would
-name it (MISMATCH_MIN_LOG and FD_MISMATCH_Z). The candidates are judged by simulation one
-after the other (:func:`take_second_mode`); the first taken ends the search. Once the other effects are in the model, :func:`refine_modes` refits each named
-mode's frequency, damping ratio and inertia by simulation: the multisine lines may lie a few
-half-power widths off a light mode, whose damping then only the chirp's passage through it
-shows. :func:`mode_band` is the band of a named mode the held-out check reports.
+A fit that explains its band (MODE_COST_SHARE of the linear fit's cost above its degrees of freedom
+removed, no band left on its axis beyond MODE_LEFT_SHARE of the one that asked for it, the
+frequency determined within MODE_FREQUENCY_SE and such that the mode acts in the band
+(MODE_BAND_SPAN), the damping ratio in MODE_DAMPING_RANGE, at least MODE_MIN_INERTIA_SHARE of the
+link's inertia on the spring, the mode in the measured band) is a candidate ``second_mode``, with
+the Cramer-Rao standard errors of its frequency, damping ratio and inertia, and any linear
+parameter of its axis the same fit moves as stage 0 would name it (MISMATCH_MIN_LOG and
+FD_MISMATCH_Z). The candidates are judged by simulation one after the other
+(:func:`take_second_mode`); the first taken ends the search. Once the other effects are in the
+model, :func:`refine_modes` refits each named mode's frequency, damping ratio and inertia by
+simulation: the multisine lines may lie a few half-power widths off a light mode, whose damping
+then only the chirp's passage through it shows. :func:`mode_band` is the band of a named mode the
+held-out check reports.
 """
 from __future__ import annotations
 
@@ -41,7 +42,7 @@ import math
 from typing import Callable, Iterator
 
 from frf_ident.core.fit.link_mode import fit_second_mode, LINEAR, ModeFit
-from frf_ident.core.fit.residual_test import residual_test, ResidualBand
+from frf_ident.core.fit.residual_whiteness import residual_test, ResidualBand
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.simulation.analytic import robot_frf
 import numpy as np
@@ -50,7 +51,7 @@ from .acceptance import accept
 from .refit import rebuild
 from .search import Search
 from .simplex import nelder_mead
-from .structure import StructureReading, structural
+from .structure import structural, StructureReading
 from ..common import apply_effect, Effect
 from ..thresholds import (FD_MISMATCH_Z, MISMATCH_MIN_LOG, MODE_BAND_DB, MODE_BAND_SPAN,
                           MODE_COST_SHARE, MODE_DAMPING_RANGE, MODE_FREQUENCY_SE,
@@ -119,7 +120,7 @@ def _why_not(fit: ModeFit, reading: StructureReading, asked: ResidualBand, link_
     f = reading.data.freq_hz
     left = structural(residual_test(f, fit.residual[fit.axis]))
     if removed < MODE_COST_SHARE:
-        return f'it removes {100 * removed:.0f} % of the linear fit\'s cost above the noise'
+        return f"it removes {100 * removed:.0f} % of the linear fit's cost above the noise"
     if left and left[0].statistic > MODE_LEFT_SHARE * asked.statistic:
         return f'it leaves {left[0].text()}'
     lo, hi = asked.lo_hz / MODE_BAND_SPAN[1], asked.hi_hz / MODE_BAND_SPAN[0]
@@ -133,7 +134,7 @@ def _why_not(fit: ModeFit, reading: StructureReading, asked: ResidualBand, link_
         return f'damping ratio {fit.damping_ratio:.3g} outside [{lo:g}, {hi:g}]'
     share = fit.inertia / (link_inertia * math.exp(fit.log_scale[1]))
     if share < MODE_MIN_INERTIA_SHARE:
-        return f'it carries {100 * share:.2g} % of the link\'s inertia'
+        return f"it carries {100 * share:.2g} % of the link's inertia"
     if not f.min() <= fit.frequency_hz <= f.max():
         return 'outside the measured band'
     return ''
@@ -223,14 +224,14 @@ def refine_modes(s: Search) -> None:
     """
     Refit every named mode's frequency, damping ratio and inertia by simulation.
 
-    Where its axis is still above its noise floor: Nelder-Mead on their log scale factors (MODE_REFINE_STEP the first simplex) with the
-    axis' misfit on the fit part, every other effect in the model, at most
-    MODE_REFINE_EVALUATIONS simulations; kept when the axis' misfit drops. The standard errors
-    stay those of the frequency-domain fit (the evidence says so). The lines of a multisine
-    a few half-power widths off a light mode leave its damping to the time signals: scene
-    link_mode 4 of benchmarks/second_mode.py (44.3 Hz, damping ratio 0.0063 on joint_3,
-    lines 2.6 Hz apart there) was fitted at 0.0039 (the misfit of the axis 1.13 floors, the
-    truth's 0.40).
+    Where its axis is still above its noise floor: Nelder-Mead on their log scale factors
+    (MODE_REFINE_STEP the first simplex) with the axis' misfit on the fit part, every other effect
+    in the model, at most MODE_REFINE_EVALUATIONS simulations; kept when the axis' misfit drops.
+    The standard errors stay those of the frequency-domain fit (the evidence says so). The lines of
+    a multisine a few half-power widths off a light mode leave its damping to the time signals:
+    scene link_mode 4 of benchmarks/second_mode.py (44.3 Hz, damping ratio 0.0063 on joint_3, lines
+    2.6 Hz apart there) was fitted at 0.0039 (the misfit of the axis 1.13 floors, the truth's
+    0.40).
     """
     for c in [k for k in s.kept if k.name == 'second_mode']:
         i = c.axis_index

@@ -25,7 +25,7 @@ realisations has two degrees of freedom per line; the noise spectrum is smooth, 
 - :func:`read_structure` (stage 0): every axis' inertias, stiffness and damping fitted to the
   ratio of the nominal model (:func:`~frf_ident.core.fit.link_mode.fit_linear_ratio`) and
   the residual tested line by line, in bands of neighbouring lines and for whiteness
-  (:func:`~frf_ident.core.fit.residual_test.residual_test`). A band of at least
+  (:func:`~frf_ident.core.fit.residual_whiteness.residual_test`). A band of at least
   MODE_MIN_LINES lines above the noise marks where the structure is missing: no parameter
   change explains it. A parameter mismatch is named only on an axis whose residual is white;
   a second mode is fitted in the band (:mod:`.second_mode`).
@@ -40,7 +40,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from frf_ident.core.fit.link_mode import fit_linear_ratio, LinearRatioFit, RatioData
-from frf_ident.core.fit.residual_test import residual_test, ResidualBand, ResidualTest
+from frf_ident.core.fit.residual_whiteness import residual_test, ResidualBand, ResidualTest
 from frf_ident.core.model.params import RobotParams
 import numpy as np
 
@@ -66,7 +66,7 @@ class StructureReading:
     tests: list[ResidualTest]
 
     def white(self, axis: int) -> bool:
-        """Return whether the linear fit leaves axis' residual white (no parameter is missing)."""
+        """Tell whether the linear fit leaves only noise in the axis' residual: nothing missing."""
         return self.tests[axis].white
 
     def bands(self, axis: int) -> list[ResidualBand]:

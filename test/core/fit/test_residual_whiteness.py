@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """The residual test: false alarms under noise by Monte Carlo, and bands where they are."""
-from frf_ident.core.fit.residual_test import RESIDUAL_ALPHA, residual_test
+from frf_ident.core.fit.residual_whiteness import RESIDUAL_ALPHA, residual_test
 import numpy as np
 from scipy import stats
 
