@@ -166,6 +166,11 @@ NOISE_SMOOTH_LINES = 3
 #: mode the model lacks moves its axis' resonances: 7-53 lines in the second-mode scenes of
 #: benchmarks/diagnosis.py); a lone line or two is reported by the residual test, not read
 MODE_MIN_LINES = 3
+#: a second mode is fitted in each axis' strongest bands, at most this many: the mode's own
+#: band need not be the strongest (its shift of the axis' first resonance can be: a 35.3 Hz
+#: mode on joint_2, its band 7.0 x the noise, the first resonance's 6.45 x), and a band no
+#: mode explains costs a fit of about half a second. Set by hand
+MODE_BANDS_TRIED = 3
 #: a second mode explains the band it was fitted in when it removes at least this share of the
 #: linear fit's cost above its degrees of freedom (all axes' diagonal channels). The right
 #: axis' fit removes 81-116 % in the second-mode scenes, a fit on a coupled axis that only

@@ -54,7 +54,7 @@ from .simplex import nelder_mead
 from .structure import structural, StructureReading
 from ..common import apply_effect, Effect
 from ..thresholds import (FD_MISMATCH_Z, MISMATCH_MIN_LOG, MODE_BAND_DB, MODE_BAND_SPAN,
-                          MODE_COST_SHARE, MODE_DAMPING_RANGE, MODE_FREQUENCY_SE,
+                          MODE_BANDS_TRIED, MODE_COST_SHARE, MODE_DAMPING_RANGE, MODE_FREQUENCY_SE,
                           MODE_LEFT_SHARE, MODE_MIN_INERTIA_SHARE, MODE_REFINE_EVALUATIONS,
                           MODE_REFINE_STEP)
 
@@ -66,13 +66,18 @@ def second_mode_candidates(reading: StructureReading, robot: RobotParams,
     """
     Yield the second modes that explain a band of stage 0's residual, strongest band first.
 
-    Each axis' strongest band, in the order of their statistics: a mode is fitted there
-    (:func:`~frf_ident.core.fit.link_mode.fit_second_mode`) and yielded when it explains the
-    band (:func:`_why_not`). The caller judges each by simulation and stops at the first it
-    takes: a mode behind one link shows on the coupled axes too, and a fit on a coupled axis
-    may explain its band with a mode the simulation then rejects (scene link_mode_beside 3 of
-    benchmarks/second_mode.py: Coulomb friction on joint_1, the mode on joint_3 at 39 Hz;
-    joint_2's band at its resonance, the mode's coupling, was the strongest).
+    Each axis' MODE_BANDS_TRIED strongest bands, in the order of their statistics: a mode is fitted
+    there (:func:`~frf_ident.core.fit.link_mode.fit_second_mode`) and yielded when it explains the
+    band (:func:`_why_not`); an axis' weaker bands are tried only while none of its stronger ones
+    gave a candidate. A mode moves its axis' first resonance and antiresonance too, so its own band
+    need not be the strongest (scene link_mode 6587472 of ``python -m benchmarks.second_mode 10
+    6587468``: a 35.3 Hz mode on joint_2, its band 35.5-42.6 Hz at 7.0 x the noise, the shifted
+    first resonance 11.4-17.3 Hz at 6.45 x; the fit there explains 47 % of the cost, the mode was
+    reported unexplained). The caller judges each by simulation and stops at the first it takes: a
+    mode behind one link shows on the coupled axes too, and a fit on a coupled axis may explain its
+    band with a mode the simulation then rejects (scene link_mode_beside 3 of
+    benchmarks/second_mode.py: Coulomb friction on joint_1, the mode on joint_3 at 39 Hz; joint_2's
+    band at its resonance, the mode's coupling, was the strongest).
 
     Parameters
     ----------
@@ -89,9 +94,13 @@ def second_mode_candidates(reading: StructureReading, robot: RobotParams,
         ``second_mode`` candidates, one per axis at most.
 
     """
-    order = sorted((b.statistic, i, b) for i in range(robot.n_axes)
-                   for b in reading.bands(i)[:1])
-    for _, i, band in reversed(order):
+    order = sorted(((b.statistic, i, k, b) for i in range(robot.n_axes)
+                    for k, b in enumerate(reading.bands(i)[:MODE_BANDS_TRIED])),
+                   key=lambda t: t[:3], reverse=True)
+    done: set[int] = set()
+    for _, i, _, band in order:
+        if i in done:
+            continue
         fit = fit_second_mode(robot, reading.data, i, band.centre_hz, reading.linear)
         if fit is None:
             say(f'  {robot.axes[i].name}: no second mode converged in {band.text()}')
@@ -100,6 +109,7 @@ def second_mode_candidates(reading: StructureReading, robot: RobotParams,
         say(f'  {robot.axes[i].name}: second mode in {band.text()}: {_fit_text(fit)}'
             + (f': not offered ({why})' if why else ': offered'))
         if not why:
+            done.add(i)
             left = structural(residual_test(reading.data.freq_hz, fit.residual[i]))
             yield _effect(fit, reading, robot, band.text(),
                           f'leaves {left[0].text()}' if left else 'leaves no band')
