@@ -103,3 +103,40 @@ def test_without_a_mode_the_linear_fit_leaves_white_residuals():
         assert np.exp(lin.log_scale[1, 2]) == pytest.approx(1.1, rel=3e-3)
         white += all(residual_test(F, e).white for e in lin.residual)
     assert white >= 18
+
+
+@pytest.mark.parametrize('axis, mode', [(1, (35.3, 0.037, 48.3)), (0, (25.0, 0.02, 20.0)),
+                                        (2, (18.2, 0.0086, 6.06))])
+def test_stage_0_offers_the_mode_on_its_axis_and_nothing_without_one(axis, mode):
+    """
+    The diagnosis' stage-0 candidates (experiments/second_mode.py) on the analytic chain.
+
+    The modes of sweep scenes 6587472 and 6587468 of benchmarks/second_mode.py and one of
+    joint_1: the first candidate offered is on the mode's axis, its frequency within 5 % and
+    its damping ratio within 30 %; with a stiffness 10 % off and no mode, none is offered.
+    (The 37.4 Hz mode of damping ratio 0.07 and 20.5 kg m^2 on joint_1 of scene 6588469 leaves
+    this chain's residual white at this noise: it is not seen in stage 0.)
+    """
+    from frf_ident.core.diagnosis.experiments.second_mode import second_mode_candidates
+    from frf_ident.core.diagnosis.experiments.structure import StructureReading
+    robot = default_robot()
+    nominal = _robot_by_hand(robot)
+    axes = list(robot.axes)
+    axes[1] = replace(axes[1], stiffness=1.1 * axes[1].stiffness)
+    rng = np.random.default_rng(axis)
+    for truth, want in ((_robot_by_hand(robot, axis, mode) / nominal, mode),
+                        (_robot_by_hand(replace(robot, axes=axes)) / nominal, None)):
+        noise = SIGMA * (rng.standard_normal(truth.shape) + 1j * rng.standard_normal(truth.shape))
+        data = RatioData(F, truth * (1 + noise / np.sqrt(2)), SIGMA * np.abs(truth))
+        lin = fit_linear_ratio(robot, data)
+        reading = StructureReading(data, lin, [residual_test(F, e) for e in lin.residual])
+        trace = []
+        found = list(second_mode_candidates(reading, robot, trace.append))
+        print('\n'.join(trace))
+        if want is None:
+            assert found == []
+            continue
+        assert [c.axis_index for c in found][:1] == [axis]
+        got = found[0].parameters['second_mode']
+        assert got['frequency_hz'] == pytest.approx(want[0], rel=0.05)
+        assert got['damping_ratio'] == pytest.approx(want[1], rel=0.3)
