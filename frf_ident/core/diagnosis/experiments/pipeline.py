@@ -149,9 +149,8 @@ def frequency_domain_fit(s: Search) -> None:
     (:func:`.frequency_fit.load_dependence`) and a residual the linear parameters leave white
     (:func:`.structure.read_structure`), gets a ``parameter_mismatch`` candidate
     (:func:`.frequency_fit.fd_parameter_mismatch`); where the residual has a band, a second
-    mode fitted there may explain it (:func:`.second_mode.take_second_mode`). Each is
-    judged by simulation like every other; taken, it is the model the later stages read
-    against (and the held-out check may still drop it).
+    mode fitted there may explain it (:func:`.second_mode.take_second_mode`). Each is judged
+    by simulation; taken, it is what the later stages read against (held out, it may be dropped).
     """
     ev, robot = s.ev, s.robot
     sim_est = ev.fit_estimates(robot, s.sim0)
@@ -175,18 +174,18 @@ def frequency_domain_fit(s: Search) -> None:
 
 def _say_shifts(s: Search, shifts: list, load: np.ndarray) -> None:
     """Write stage 0's log shifts and load dependence per axis to the trace."""
-    robot = s.robot
+    axes = s.robot.axes
     for sh in shifts:
         s.say(f'stage 0 {sh.key}: log shift of ' + ', '.join(
             f'{a.name} ' + '/'.join(f'{d:+.3f}+-{e:.3f}'
                                     for d, e in zip(sh.log_scale[i], sh.std[i]))
-            for i, a in enumerate(robot.axes)) + ' (motor inertia/link inertia/stiffness)'
+            for i, a in enumerate(axes)) + ' (motor inertia/link inertia/stiffness)'
             + ''.join(f'; {a.name}: own channel {c:.3g} x its noise per dof'
                       + (' (structure missing)' if m else '')
-                      for a, c, m in zip(robot.axes, sh.channel_cost, sh.structure_missing)
+                      for a, c, m in zip(axes, sh.channel_cost, sh.structure_missing)
                       if np.isfinite(c)))
     s.say('stage 0 load dependence (stiffness scale chirp/multisine): ' + ', '.join(
-        f'{a.name} x{math.exp(x):.3f}' for a, x in zip(robot.axes, load)))
+        f'{a.name} x{math.exp(x):.3f}' for a, x in zip(axes, load)))
 
 
 def torque_residual_effects(s: Search) -> None:
