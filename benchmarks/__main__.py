@@ -418,6 +418,13 @@ def bench_diagnosis() -> list[tuple[str, str, str, str]]:
     return bench_rows()
 
 
+@section('second_mode')
+def bench_second_mode() -> list[tuple[str, str, str, str]]:
+    """Second link-side modes found in reference-plant scenes, false alarms on clean ones."""
+    from benchmarks.second_mode import bench_rows
+    return bench_rows()
+
+
 @section('diagnosis_demo')
 def bench_diagnosis_demo() -> list[tuple[str, str, str, str]]:
     """Diagnose the demo bag with its simulations on 1 and on 2 processes: wall time."""

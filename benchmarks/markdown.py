@@ -36,7 +36,8 @@ ROOT = Path(__file__).resolve().parent.parent
 RUNS_DIR = ROOT / 'docs' / 'benchmarks'
 PAGE = ROOT / 'docs' / 'BENCHMARKS.md'
 #: environment variables that change what a section measures (named in its command)
-SETTINGS = ('FRF_BENCH_SCENES', 'KUKA_BC', 'FRF_IDENT_MIDDLEWARE', 'FRF_DEMO_BAG')
+SETTINGS = ('FRF_BENCH_SCENES', 'KUKA_BC', 'FRF_IDENT_MIDDLEWARE', 'FRF_DEMO_BAG',
+            'FRF_MODE_RUNS', 'FRF_MODE_SCENES', 'FRF_MODE_SEED')
 
 
 def _cpu_model() -> str:

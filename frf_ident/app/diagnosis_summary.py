@@ -69,6 +69,9 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
     lines.append(f'held-out error: nominal {_scores(m.baseline)} -> extended '
                  f'{_scores(m.extended)}')
     lines.append(f'  {m.validation}')
+    lines += [f'held-out FRF error in the band of {r.text()}' for r in m.resonance_bands]
+    if m.resonance_bands and not m.improved:
+        lines.append('not an improvement: the extension is worse in a resonance band')
     lines += [f'on {v.record}: nominal {_scores(v.baseline)} -> extended {_scores(v.extended)}'
               for v in diag.checks.validation_records]
     ls = diag.checks.least_squares
@@ -82,6 +85,10 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
 def _unexplained(u: Unexplained) -> str:
     """Write an unexplained entry: an axis above its floor, or a peak above the band."""
     s = u.signature
+    if u.misfit_share is None and s.centre_hz is not None:
+        return (f'unexplained on {u.axis}: {u.kind}, {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz '
+                f'(centre {s.centre_hz:.3g} Hz, peak {s.peak_hz:.3g} Hz, '
+                f'{s.peak_over_floor:.3g}x the noise)')
     if u.misfit_share is None:
         cause = f'; {u.cause.describe()}' if u.cause is not None else ''
         return (f'unexplained on {u.axis}: {u.kind}, {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz '

@@ -122,7 +122,23 @@ def _metrics(res: DiagnosisResult) -> str:
         rows += [[f'{ax}: nominal', v.frf_error_db, v.time_nrmse],
                  [f'{ax}: extended', e.frf_error_db, e.time_nrmse]]
     return (table(['model', 'frf_error_db', 'time_nrmse'], rows)
-            + f'<p>{html.escape(m.validation)}</p>')
+            + f'<p>{html.escape(m.validation)}</p>' + _resonance_bands(m))
+
+
+def _resonance_bands(m) -> str:
+    """Return the held-out error in the band of every named or unexplained mode (or '')."""
+    if not m.resonance_bands:
+        return ''
+    verdict = ('an improvement: no worse over all lines and in no band' if m.improved else
+               'not an improvement: worse over all lines or in a resonance band')
+    return ('<p>In the band of every named or unexplained mode (the error over all lines '
+            'hides the few lines around a resonance):</p>'
+            + table(['axis', 'band [Hz]', 'source', 'nominal [dB]', 'extended [dB]',
+                     'nominal p95 [dB]', 'extended p95 [dB]', 'lines'],
+                    [[r.axis, f'{r.band_hz[0]:g}-{r.band_hz[1]:g}', r.source, r.nominal_db,
+                      r.extended_db, r.nominal_p95_db, r.extended_p95_db, r.n_lines]
+                     for r in m.resonance_bands])
+            + f'<p>The extension is {verdict}.</p>')
 
 
 def _checks(checks: CrossChecks) -> str:

@@ -58,9 +58,11 @@ def parameters_text(parameters: Mapping[str, Any], standard_error: Mapping[str, 
     ----------
     parameters : mapping
         Model-file keys to values; a ``torque_ripple`` or ``gravity`` value is a list of terms
-        (dicts of ``amplitude``, ``spatial_frequency``/``phase``, ``joints``).
+        (dicts of ``amplitude``, ``spatial_frequency``/``phase``, ``joints``), a
+        ``second_mode`` one mapping (``frequency_hz``, ``damping_ratio``, ``inertia``).
     standard_error : mapping, optional
-        The same keys to standard errors (a list of ``{'amplitude': se}`` or None per term).
+        The same keys to standard errors (a list of ``{'amplitude': se}`` or None per term, a
+        mapping for a ``second_mode``).
 
     Returns
     -------
@@ -77,13 +79,15 @@ def parameters_text(parameters: Mapping[str, Any], standard_error: Mapping[str, 
             parts += [f'{key} ' + _term(term, err) for term, err in zip(value, errs)]
         elif isinstance(value, (int, float)) and not isinstance(value, bool):
             parts.append(f'{key} {with_unit(key, float(value), _number(se.get(key)))}')
+        elif isinstance(value, Mapping):
+            parts.append(f'{key} ' + _term(value, se.get(key)))
         else:
             parts.append(f'{key} {plain(value)}')
     return '; '.join(parts)
 
 
 def _term(term: Mapping[str, Any], err: Mapping[str, Any] | None) -> str:
-    """Write one ripple or gravity term: its keys with units, the joints it sums."""
+    """Write one ripple, gravity or second-mode term: its keys with units, the joints it sums."""
     out = []
     for k, v in term.items():
         if k == 'joints':

@@ -52,16 +52,19 @@ def _check(r: dict, msg: str) -> None:
     """
     Assert the per-scene floors.
 
-    Clean and second-mode scenes name nothing (the mode is unexplained on its axis with a
-    band containing it); the others name at least half of the hidden (effect, axis) pairs
-    with at most one false alarm, at least half of the found parameters within 20 % and at
-    most one outside (floors all 96 scenes of the three README sweeps meet; the rates are
-    measured by the sweep).
+    Clean scenes name nothing; second-mode scenes name nothing else than the mode on its axis
+    (issue 57), or, where it is not named, report it unexplained there with a band containing
+    it; the others name at least half of the hidden (effect, axis) pairs with at most one
+    false alarm, at least half of the found parameters within 20 % and at most one outside
+    (floors all 96 scenes of the three README sweeps meet; the rates are measured by the
+    sweep).
     """
-    if r['kind'] in ('clean', 'second_mode'):
+    if r['kind'] == 'clean':
         assert r['n_found'] == 0, msg
-        if r['kind'] == 'second_mode':
-            assert r['mode_unexplained'], msg
+        return
+    if r['kind'] == 'second_mode':
+        assert r['false_alarms'] == 0, msg
+        assert r['mode_named'] or r['mode_unexplained'], msg
         return
     assert r['hits'] >= math.ceil(r['n_hidden'] / 2), msg
     assert r['false_alarms'] <= 1, msg
@@ -97,7 +100,10 @@ def test_scene_of_the_reference_plant(kind, seed, tmp_path):
 @pytest.mark.slow
 def test_unmodelled_second_mode_is_unexplained_on_its_axis(tmp_path):
     """
-    Report an unmodelled second mode as unexplained on its axis, not as a mismatch.
+    Report an unmodelled second mode as such (or unexplained on its axis), not as a mismatch.
+
+    Since issue 57 the mode may be named (``second_mode`` on its axis, the only effect); the
+    history of the scene:
 
     A CI draw (seed 15626261): the mode at 23.7 Hz on joint_3 (resonance 31 Hz) was named a
     stiffness and damping mismatch that removed 93 % of the axis' misfit (left 220 floors,
@@ -112,10 +118,11 @@ def test_unmodelled_second_mode_is_unexplained_on_its_axis(tmp_path):
     scene = draw_scene(np.random.default_rng(seed), 'second_mode')
     r = run_scene(scene, tmp_path)
     msg = f'seed {seed}: {r}'
-    # no named effect for the mode; its axis unexplained with a band around the resonance the
-    # extra mode adds (within 10 %)
-    assert r['n_found'] == 0, msg
-    assert r['mode_unexplained'], msg
+    # nothing but the mode named (no mismatch, no friction for it); where it is not named, its
+    # axis unexplained with a band around the resonance the extra mode adds (within 10 %)
+    print(f'seed {seed}: found {r["found"]}, parameters {r["parameters"]}', file=sys.stderr)
+    assert r['false_alarms'] == 0, msg
+    assert r['mode_named'] or r['mode_unexplained'], msg
 
 
 @pytest.mark.slow

@@ -78,3 +78,28 @@ def test_band_and_a_resonance_above_it_are_said_in_words():
         'resonances',
         'unexplained on emps: resonance above the analysis band, 435-450 Hz (peak 445 Hz, 16.9x '
         'the local noise floor)']
+
+
+def test_second_mode_and_its_band_before_and_after_are_said_in_words():
+    """A named second mode (issue 57): its values with units, its band's error before/after."""
+    from frf_ident.core.diagnosis.records import ResonanceBand
+    mode = Effect('second_mode', 'joint_3', 0.9,
+                  {'second_mode': {'frequency_hz': 28.16, 'damping_ratio': 0.0058,
+                                   'inertia': 8.939}}, 'evidence',
+                  standard_error={'second_mode': {'frequency_hz': 0.012,
+                                                  'damping_ratio': 0.0004, 'inertia': 0.05}})
+    bands = [ResonanceBand('joint_3', [30.13, 31.45], 'second_mode', 0.6349, 0.0001, 0.6349,
+                           0.0001, 1),
+             ResonanceBand('joint_1', [12.0, 14.0], 'unexplained', 0.5, 0.9, 0.7, 1.2, 3)]
+    metrics = RouteMetrics(METRICS.baseline, METRICS.extended, 'held-out realisation', bands)
+    res = DiagnosisResult('experiments', [mode], [], [], metrics, default_robot(), None,
+                          np.ones(3, bool), np.ones(3, bool))
+    diag = Diagnosis(res, CrossChecks(), None)
+    lines = diagnosis_summary(diag, Path('D'))
+    assert lines[0].startswith('1. second_mode on joint_3: second_mode frequency_hz 28.16')
+    assert ('held-out FRF error in the band of joint_3 30.13-31.45 Hz (second_mode): 0.635 dB '
+            '(95th percentile 0.635) -> 0.0001 dB (0.0001)') in lines
+    assert any('joint_1 12-14 Hz (unexplained)' in x and 'worse with the extension' in x
+               for x in lines)
+    assert 'not an improvement: the extension is worse in a resonance band' in lines
+    assert not metrics.improved and metrics.to_dict()['improved'] is False

@@ -33,7 +33,7 @@ import numpy as np
 from .thresholds import GAP_GUARD_S
 
 EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'backlash',
-           'torque_ripple', 'time_delay', 'gravity', 'parameter_mismatch',
+           'torque_ripple', 'time_delay', 'gravity', 'parameter_mismatch', 'second_mode',
            # the sensor, read from the record (sensor.py)
            'velocity_from_encoder', 'quantisation')
 

@@ -28,8 +28,8 @@ from typing import Any
 
 from .line_cause import LineCause
 
-__all__ = ['AxisScore', 'IntegratorCheck', 'Rejected', 'RouteMetrics', 'Scores', 'Signature',
-           'Unexplained']
+__all__ = ['AxisScore', 'IntegratorCheck', 'Rejected', 'ResonanceBand', 'RouteMetrics', 'Scores',
+           'Signature', 'Unexplained']
 
 
 def _present(obj: Any, names: tuple[str, ...]) -> dict[str, Any]:
@@ -47,13 +47,15 @@ class AxisScore:
     time_nrmse: float
     #: time series: the share of held-out samples where the axis moves (None: experiments)
     moving_share: float | None = None
+    #: experiments: the 95th percentile over the analysed lines of |20 log10 |P_measured /
+    #: P_model|| [dB]: the few lines around a resonance the RMS over all lines hides
+    frf_error_p95_db: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Return the report's ``per_axis`` entry."""
         out = {'frf_error_db': self.frf_error_db,
                'time_nrmse': self.time_nrmse}
-        if self.moving_share is not None:
-            out['moving_share'] = self.moving_share
+        out.update(_present(self, ('moving_share', 'frf_error_p95_db')))
         return out
 
 
@@ -73,6 +75,44 @@ class Scores:
 
 
 @dataclass(frozen=True)
+class ResonanceBand:
+    """The held-out FRF error of one axis in the band of a named or unexplained mode."""
+
+    axis: str
+    #: [f1, f2] Hz
+    band_hz: list[float]
+    #: 'second_mode' (a named mode's band) or 'unexplained' (a band the extended model leaves)
+    source: str
+    #: RMS over the held-out lines in the band of 20 log10 |P_measured / P_model| [dB] of the
+    #: nominal and the extended model, and the 95th percentile of its magnitude over them
+    nominal_db: float
+    extended_db: float
+    nominal_p95_db: float
+    extended_p95_db: float
+    #: the held-out lines in the band (multisine and chirp)
+    n_lines: int
+
+    @property
+    def worse(self) -> bool:
+        """Return True when the extended model is further from the record here than the nominal."""
+        return self.extended_db > self.nominal_db
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's ``metrics.resonance_bands`` entry."""
+        return {'axis': self.axis, 'band_hz': list(self.band_hz), 'source': self.source,
+                'nominal_db': self.nominal_db, 'extended_db': self.extended_db,
+                'nominal_p95_db': self.nominal_p95_db, 'extended_p95_db': self.extended_p95_db,
+                'n_lines': self.n_lines, 'worse': self.worse}
+
+    def text(self) -> str:
+        """Return one line for people: the band's error before and after."""
+        return (f'{self.axis} {self.band_hz[0]:.4g}-{self.band_hz[1]:.4g} Hz ({self.source}): '
+                f'{self.nominal_db:.3g} dB (95th percentile {self.nominal_p95_db:.3g}) -> '
+                f'{self.extended_db:.3g} dB ({self.extended_p95_db:.3g})'
+                + (': worse with the extension' if self.worse else ''))
+
+
+@dataclass(frozen=True)
 class RouteMetrics:
     """The nominal and the extended model on the data held out from the fit."""
 
@@ -81,11 +121,28 @@ class RouteMetrics:
     extended: Scores
     #: which data were held out for these numbers (one sentence)
     validation: str
+    #: experiments: the error in the band of every named or unexplained mode, per axis
+    resonance_bands: list[ResonanceBand] = field(default_factory=list)
+
+    @property
+    def improved(self) -> bool:
+        """
+        Return whether the extension is an improvement on the held-out data.
+
+        Its FRF error over all lines is not above the nominal's (or not defined) and no
+        resonance band is worse: a better median that worsens a resonance is not one.
+        """
+        e, b = self.extended.frf_error_db, self.baseline.frf_error_db
+        return not (e > b) and not any(r.worse for r in self.resonance_bands)
 
     def to_dict(self) -> dict[str, Any]:
         """Return the route's part of report.json ``metrics``."""
-        return {'baseline': self.baseline.to_dict(), 'extended': self.extended.to_dict(),
-                'validation': self.validation}
+        out = {'baseline': self.baseline.to_dict(), 'extended': self.extended.to_dict(),
+               'validation': self.validation}
+        if self.resonance_bands:
+            out['resonance_bands'] = [r.to_dict() for r in self.resonance_bands]
+            out['improved'] = self.improved
+        return out
 
 
 @dataclass(frozen=True)
@@ -98,7 +155,11 @@ class Signature:
     bands_hz: list[list[float]] | None = None
     #: what the time residual correlates with: position, velocity, acceleration or time
     correlates_with: str | None = None
-    #: a peak of the residual spectrum above the analysis band (time series)
+    #: experiments, a band of the FRF fit's residual above the noise (kind 'structure missing
+    #: in the FRF'): the lines weighted by their excess [Hz]
+    centre_hz: float | None = None
+    #: a peak of the residual spectrum above the analysis band (time series), or the line of
+    #: largest residual in a band of the FRF fit's residual (experiments)
     peak_hz: float | None = None
     half_power_width_hz: float | None = None
     peak_over_floor: float | None = None

@@ -30,7 +30,10 @@ from typing import Any
 from frf_ident.errors import ModelFileError
 import numpy as np
 
-__all__ = ['AxisParams', 'MjcfSource', 'RobotParams']
+__all__ = ['AxisParams', 'MjcfSource', 'RobotParams', 'SECOND_MODE_KEYS']
+
+#: the keys of an axis' ``second_mode`` (docs/model_file.md), in the order they are written
+SECOND_MODE_KEYS = ('frequency_hz', 'damping_ratio', 'inertia')
 
 
 @dataclass
@@ -44,7 +47,8 @@ class AxisParams:
     ``G sin(sum of the named joints' link positions + phi)``; ``joints`` defaults to the axis
     itself, several names give the coupled-arm case, e.g. ``G sin(q2 + q3 + phi)``),
     ``encoder_resolution`` [rad/count] (0 = ideal), ``velocity_noise`` [rad/s] and
-    ``torque_noise`` [N m] standard deviations of additive measurement noise.
+    ``torque_noise`` [N m] standard deviations of additive measurement noise, and
+    ``second_mode``, a link-side mass on a spring (see below).
 
     Parameters
     ----------
@@ -85,6 +89,13 @@ class AxisParams:
         Standard deviation [rad/s] of the additive velocity measurement noise.
     torque_noise : float, optional
         Standard deviation [N m] of the additive torque measurement noise.
+    second_mode : dict or None, optional
+        A share of the link's inertia that sits on a spring behind the link (a tool, a cable
+        carrier, a second gear stage): ``{frequency_hz: f [Hz], damping_ratio: zeta [-],
+        inertia: J_e [kg m^2]}``. ``J_e`` is part of ``link_inertia`` (0 < J_e <
+        link_inertia; the rigid link keeps the rest, so at low frequency the link weighs
+        ``link_inertia``), tuned to ``f`` with the link held (stiffness J_e (2 pi f)^2) and
+        damped at ``zeta`` of critical. None (default): no such mode.
 
     Raises
     ------
@@ -112,6 +123,7 @@ class AxisParams:
     encoder_resolution: float = 0.0
     velocity_noise: float = 0.0
     torque_noise: float = 0.0
+    second_mode: dict[str, float] | None = None
 
     def __post_init__(self) -> None:
         for key in ('motor_inertia', 'link_inertia', 'stiffness'):
@@ -147,6 +159,41 @@ class AxisParams:
             if unknown:
                 raise ModelFileError(f'axis {self.name}: gravity[{i}] has unknown key(s) '
                                      f'{sorted(unknown)}; expected amplitude, phase, joints')
+        if self.second_mode is not None:
+            self._check_second_mode()
+
+    def _check_second_mode(self) -> None:
+        """Refuse a second mode that is not {frequency_hz > 0, damping_ratio >= 0, inertia}."""
+        m = self.second_mode
+        where = f'axis {self.name}: second_mode'
+        if not isinstance(m, dict) or set(m) != set(SECOND_MODE_KEYS):
+            raise ModelFileError(f'{where} must be a mapping with exactly '
+                                 f'{", ".join(SECOND_MODE_KEYS)}, got {m!r}')
+        for key in SECOND_MODE_KEYS:
+            val = m[key]
+            if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(
+                    val):
+                raise ModelFileError(f'{where}.{key}={val!r} must be a finite number')
+        if not m['frequency_hz'] > 0:
+            raise ModelFileError(f'{where}.frequency_hz={m["frequency_hz"]!r} must be positive')
+        if not m['damping_ratio'] >= 0:
+            raise ModelFileError(f'{where}.damping_ratio={m["damping_ratio"]!r} must be >= 0')
+        if not 0 < m['inertia'] < self.link_inertia:
+            raise ModelFileError(f'{where}.inertia={m["inertia"]!r} must be positive and below '
+                                 f'link_inertia={self.link_inertia!r} (it is part of the link)')
+
+    def second_mode_terms(self) -> tuple[float, float, float] | None:
+        """
+        Return the second mode's inertia [kg m^2], stiffness [N m/rad] and damping [N m s/rad].
+
+        None without a second mode. Stiffness J_e (2 pi f)^2, damping 2 zeta J_e 2 pi f.
+        """
+        m = self.second_mode
+        if m is None:
+            return None
+        w = 2 * math.pi * float(m['frequency_hz'])
+        je = float(m['inertia'])
+        return je, je * w * w, 2 * float(m['damping_ratio']) * je * w
 
     @property
     def is_linear(self) -> bool:
@@ -284,6 +331,10 @@ class RobotParams:
         if np.any(np.linalg.eigvalsh(self.link_inertia_matrix()) <= 0):
             raise ModelFileError('link inertia matrix (link_inertia + link_coupling) must be '
                                  'positive definite')
+        if np.any(np.linalg.eigvalsh(self.rigid_link_inertia_matrix()) <= 0):
+            raise ModelFileError("link inertia matrix without the second modes' inertia must be "
+                                 'positive definite (a second_mode.inertia too large for the '
+                                 'link coupling)')
 
     @property
     def n_axes(self) -> int:
@@ -312,6 +363,20 @@ class RobotParams:
             off = self.link_coupling - np.diag(np.diag(self.link_coupling))
             m = m + off
         return m
+
+    def rigid_link_inertia_matrix(self) -> np.ndarray:
+        """
+        Return the link inertia matrix without the inertia the second modes carry on springs.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            :meth:`link_inertia_matrix` minus diag(``second_mode.inertia``) (0 where an axis
+            has none) [kg m^2]: what moves rigidly with the link positions.
+
+        """
+        return self.link_inertia_matrix() - np.diag(
+            [float(a.second_mode['inertia']) if a.second_mode else 0.0 for a in self.axes])
 
     def gravity_load(self, q_link: np.ndarray) -> np.ndarray:
         """

@@ -22,7 +22,8 @@ Extensions beyond the contract (all optional, documented in docs/model_file.md):
 - top level ``link_coupling``: symmetric n x n off-diagonal link inertia [kg m^2]
 - top level ``simulation``: {substeps, velocity_from_encoder, seed}
 - per axis ``gravity_torque``, ``gravity`` (configuration-dependent load, list of
-  {amplitude, phase, joints}), ``encoder_resolution``, ``velocity_noise``, ``torque_noise``
+  {amplitude, phase, joints}), ``encoder_resolution``, ``velocity_noise``, ``torque_noise``,
+  ``second_mode`` ({frequency_hz, damping_ratio, inertia}: a link-side mass on a spring)
 - ``controller.filters``: {axis name: list of second-order sections [b0, b1, b2, 1, a1, a2]}
   on the measured velocity, discrete at ``sample_rate`` (what ``frf-ident tune`` writes;
   :func:`controller_filters`, :func:`check_sections`)
@@ -35,7 +36,7 @@ import math
 from typing import Any
 
 from frf_ident.core.model.fields import expect_bool, expect_int
-from frf_ident.core.model.params import AxisParams, MjcfSource, RobotParams
+from frf_ident.core.model.params import AxisParams, MjcfSource, RobotParams, SECOND_MODE_KEYS
 from frf_ident.errors import ModelFileError
 import numpy as np
 
@@ -85,6 +86,8 @@ def axis_from_dict(d: dict[str, Any], index: int) -> AxisParams:
             kw[key] = rip
         elif key == 'gravity':
             kw[key] = _gravity_terms(where, val)
+        elif key == 'second_mode':
+            kw[key] = _second_mode(where, val)
         elif key in ('stiffness_k2', 'stiffness_breakpoint'):
             kw[key] = _number(where, val, allow_none=True)
         else:
@@ -118,6 +121,16 @@ def _gravity_terms(where: str, val: Any) -> list[dict[str, Any]]:
             term['joints'] = list(js)
         out.append(term)
     return out
+
+
+def _second_mode(where: str, val: Any) -> dict[str, float] | None:
+    """``second_mode``: null, or {frequency_hz [Hz], damping_ratio [-], inertia [kg m^2]}."""
+    if val is None:
+        return None
+    if not isinstance(val, dict) or set(val) != set(SECOND_MODE_KEYS):
+        raise ModelFileError(f'{where}: expected a mapping with exactly '
+                             f'{", ".join(SECOND_MODE_KEYS)}, got {val!r}')
+    return {k: _number(f'{where}.{k}', val[k]) for k in SECOND_MODE_KEYS}
 
 
 def robot_from_dict(d: dict[str, Any]) -> RobotParams:
@@ -326,6 +339,10 @@ def robot_to_dict(robot: RobotParams, controller: Any = None) -> dict[str, Any]:
         ad['gravity'] = [dict(g) for g in a.gravity]
         if not ad['gravity']:
             del ad['gravity']
+        if a.second_mode is None:
+            del ad['second_mode']
+        else:
+            ad['second_mode'] = {k: float(a.second_mode[k]) for k in SECOND_MODE_KEYS}
         axes.append(ad)
     d: dict[str, Any] = {'frf_ident_model': MODEL_VERSION, 'sample_rate': robot.sample_rate,
                          'axes': axes}

@@ -15,8 +15,9 @@
 The unit of every model-file parameter: one table for the console, the reports and the docs.
 
 Keys are the model-file keys of docs/CONTRACT.md §5 (and docs/model_file.md), plus the keys
-inside a ``torque_ripple`` or ``gravity`` term. Units are motor side, SI: what the plant
-simulates and the diagnosis fits. :func:`with_unit` writes a value for a person.
+inside a ``torque_ripple`` or ``gravity`` term and a ``second_mode`` mapping. Units are motor
+side, SI: what the plant simulates and the diagnosis fits. :func:`with_unit` writes a value
+for a person.
 """
 from __future__ import annotations
 
@@ -45,6 +46,9 @@ PARAMETER_UNITS = {
     'amplitude': 'N m',
     'spatial_frequency': '1/rad',
     'phase': 'rad',
+    # inside a second_mode mapping (damping_ratio has no unit)
+    'frequency_hz': 'Hz',
+    'inertia': 'kg m^2',
 }
 
 

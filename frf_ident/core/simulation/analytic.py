@@ -16,7 +16,8 @@ Closed-form frequency responses of the linear flexible-joint robot (analytic tru
 
 - :func:`two_mass_frf` — SISO dq_m / tau_m of eqs. 20-22 (linear):
   (Jo s^2 + d s + k1) / (s (Jm Jo s^2 + (Jm + Jo)(d s + k1)))   (+ viscous friction)
-- :func:`robot_frf` — MIMO continuous-time tau_m -> dq_m with link inertial coupling
+- :func:`robot_frf` — MIMO continuous-time tau_m -> dq_m with link inertial coupling and the
+  axes' second modes (:func:`second_mode_stiffness`)
 - :func:`~frf_ident.core.simulation.plant.state_space` (defined with the plant) — linear
   state-space model (A, B, C) of the robot, used by :func:`robot_frf_sampled`
 - :func:`robot_frf_sampled` — the exact FRF of the sampled plant as the simulation realises it:
@@ -32,7 +33,8 @@ from frf_ident.core.simulation.plant import state_space
 import numpy as np
 from scipy import linalg
 
-__all__ = ['closed_loop_frfs', 'robot_frf', 'robot_frf_sampled', 'two_mass_frf']
+__all__ = ['closed_loop_frfs', 'link_chain_frf', 'robot_frf', 'robot_frf_sampled',
+           'second_mode_stiffness', 'two_mass_frf']
 
 
 def two_mass_frf(freq_hz: np.ndarray, motor_inertia: float, link_inertia: float,
@@ -78,21 +80,42 @@ def _link_stiffness_terms(params: RobotParams):
     bv = np.diag([a.viscous_friction for a in params.axes])
     k = np.diag([a.stiffness for a in params.axes])
     d = np.diag([a.damping for a in params.axes])
-    return n, jm, bv, k, d, params.link_inertia_matrix()
+    return n, jm, bv, k, d, params.rigid_link_inertia_matrix()
+
+
+def second_mode_stiffness(params: RobotParams, s: np.ndarray) -> np.ndarray:
+    """
+    Return the dynamic stiffness each axis' second mode adds to its link, shape (n_freq, n).
+
+    A mass J_e on a spring and damper Z_e = k_e + d_e s behind the link loads it with
+    J_e s^2 Z_e / (J_e s^2 + Z_e) (0 where an axis has no second mode).
+    """
+    s = np.asarray(s, dtype=complex)
+    out = np.zeros((s.size, params.n_axes), dtype=complex)
+    for i, a in enumerate(params.axes):
+        terms = a.second_mode_terms()
+        if terms is not None:
+            je, ke, de = terms
+            ze = ke + de * s
+            out[:, i] = je * s ** 2 * ze / (je * s ** 2 + ze)
+    return out
 
 
 def robot_frf(params: RobotParams, freq_hz: np.ndarray) -> np.ndarray:
     """
     Return the MIMO continuous FRF tau_m -> dq_m of the linearised robot.
 
-    (Jm s^2 + Bv s + Z - Z (M_o s^2 + Z)^-1 Z) q_m = tau with Z = K + D s, P = s q_m / tau.
-    Symmetric (reciprocal) for a symmetric link inertia matrix.
+    (Jm s^2 + Bv s + Z - Z (L(s) + Z)^-1 Z) q_m = tau with Z = K + D s, P = s q_m / tau, and
+    the link's dynamic stiffness L(s) = M_r s^2 plus each second mode's
+    (:func:`second_mode_stiffness`; M_r the rigid link inertia, M_o without the modes'
+    inertia; L = M_o s^2 without second modes). Symmetric (reciprocal) for a symmetric link
+    inertia matrix.
 
     Parameters
     ----------
     params : RobotParams
-        The robot (k1, d, viscous friction, link inertia and coupling; nonlinear terms are
-        ignored).
+        The robot (k1, d, viscous friction, link inertia and coupling, second modes;
+        nonlinear terms are ignored).
     freq_hz : array_like, shape (n_freq,)
         Frequencies in Hz.
 
@@ -102,15 +125,43 @@ def robot_frf(params: RobotParams, freq_hz: np.ndarray) -> np.ndarray:
         P[i, j]: motor velocity of axis i per motor torque of axis j.
 
     """
-    freq_hz = np.asarray(freq_hz, dtype=float)
-    n, jm, bv, k, d, mo = _link_stiffness_terms(params)
-    out = np.empty((n, n, freq_hz.size), dtype=complex)
-    for i, f in enumerate(freq_hz):
-        s = 2j * np.pi * f
-        z = k + d * s
-        dyn = jm * s ** 2 + bv * s + z - z @ np.linalg.solve(mo * s ** 2 + z, z)
-        out[:, :, i] = s * np.linalg.inv(dyn)
-    return out
+    freq_hz = np.asarray(freq_hz, dtype=float).reshape(-1)
+    n, jm, bv, k, d, mr = _link_stiffness_terms(params)
+    s = 2j * np.pi * freq_hz
+    return link_chain_frf(np.diag(jm), np.diag(bv), np.diag(k), np.diag(d), mr,
+                          second_mode_stiffness(params, s), freq_hz)
+
+
+def link_chain_frf(jm: np.ndarray, bv: np.ndarray, k: np.ndarray, d: np.ndarray,
+                   rigid_link: np.ndarray, mode_stiffness: np.ndarray, freq_hz: np.ndarray
+                   ) -> np.ndarray:
+    """
+    Return the MIMO FRF tau_m -> dq_m of :func:`robot_frf` from its arrays (fits call it).
+
+    Parameters
+    ----------
+    jm, bv, k, d : ndarray, shape (n,)
+        Motor inertia, viscous friction, stiffness, damping per axis (SI).
+    rigid_link : ndarray, shape (n, n)
+        The link inertia matrix without the second modes' inertia [kg m^2].
+    mode_stiffness : ndarray of complex, shape (n_freq, n)
+        :func:`second_mode_stiffness` at the lines (zeros without second modes).
+    freq_hz : ndarray, shape (n_freq,)
+        Frequencies in Hz.
+
+    Returns
+    -------
+    ndarray of complex, shape (n, n, n_freq)
+        P[i, j]: motor velocity of axis i per motor torque of axis j.
+
+    """
+    n = jm.size
+    sf = (2j * np.pi * np.asarray(freq_hz, dtype=float))[:, None, None]
+    eye = np.eye(n)
+    link = rigid_link * sf ** 2 + eye * mode_stiffness[:, None, :]
+    z = eye * (k + d * sf)
+    dyn = eye * (jm * sf ** 2 + bv * sf) + z - z @ np.linalg.solve(link + z, z)
+    return np.moveaxis(sf * np.linalg.inv(dyn), 0, -1)
 
 
 def _zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:

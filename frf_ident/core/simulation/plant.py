@@ -27,7 +27,8 @@ sum a sin(s q_m + phase), a constant link-side gravity torque plus configuration
 gravity terms G sin(sum_j q_o,j + phi) (a link's weight about its own joint, or summed over the
 joints it depends on for a coupled arm), an input delay and a torque limit.
 ``M_o`` is the link inertia matrix: diagonal ``link_inertia`` plus optional symmetric coupling,
-which makes the MIMO FRF non-diagonal and reciprocal.
+which makes the MIMO FRF non-diagonal and reciprocal. An axis' optional ``second_mode`` carries
+part of its link inertia on a spring and damper behind the link (linear, in :func:`state_space`).
 
 Measurement: motor position, optionally quantised by the encoder resolution; velocity either the
 true motor velocity or, like a real drive, the difference of quantised positions over one sample;
@@ -67,14 +68,14 @@ JM, K1, K2, BS, DAMP, BV, FC, BL, GRAV, ULIM, NPARAM = range(11)
 @dataclass
 class _Packed:
     prm: np.ndarray       # (n, NPARAM)
-    ad: np.ndarray        # (4n, 4n) state transition over one substep
-    ga: np.ndarray        # (4n, n) input matrices for the stage values at start,
+    ad: np.ndarray        # (nx, nx) state transition over one substep (nx = 4n + 2 modes)
+    ga: np.ndarray        # (nx, n) input matrices for the stage values at start,
     gm: np.ndarray        # ... middle and end of a substep (quadratic interpolation)
     gb: np.ndarray
-    gw: np.ndarray        # (4n, 2n) residual torques (motor side, link side), held
-    cg: np.ndarray        # (4n,) effect of the constant gravity torque over one substep
+    gw: np.ndarray        # (nx, 2n) residual torques (motor side, link side), held
+    cg: np.ndarray        # (nx,) effect of the constant gravity torque over one substep
     nonlinear: bool       # any residual torque (nonlinear spring, backlash, ripple)
-    gold: np.ndarray      # (m, 4n, n) held command, delayed: part of substep s under the older
+    gold: np.ndarray      # (m, nx, n) held command, delayed: part of substep s under the older
     gnew: np.ndarray      # ... command u[k + offsets[s, 0, i]] and under the newer one
     ra: np.ndarray        # (n, R) ripple amplitudes
     rs: np.ndarray        # (n, R) spatial frequencies
@@ -134,23 +135,56 @@ def state_space(params: RobotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray
     """
     Linear state space x' = A x + B tau of eqs. 20-22 (k1, d, viscous friction, coupling).
 
-    x = [q_m, v_m, q_o, v_o] (blocks of n). Returns (A, B, C_velocity, C_position).
+    x = [q_m, v_m, q_o, v_o] (blocks of n), then [q_e, v_e] (blocks of one per axis with a
+    ``second_mode``, in axis order): the mode's inertia J_e sits on a spring k_e and damper d_e
+    behind its link, and the link's rigid inertia (:meth:`RobotParams.rigid_link_inertia_matrix`)
+    keeps the rest,
+
+        M_r ddq_o = k1 (q_m - q_o) + d (v_m - v_o) - k_e (q_o - q_e) - d_e (v_o - v_e)
+        J_e ddq_e = k_e (q_o - q_e) + d_e (v_o - v_e)
+
+    Returns (A, B, C_velocity, C_position).
     """
     n = params.n_axes
+    modes = [(i, a.second_mode_terms()) for i, a in enumerate(params.axes)
+             if a.second_mode is not None]
+    ne = len(modes)
     jmi = np.diag([1.0 / a.motor_inertia for a in params.axes])
     bv = np.diag([a.viscous_friction for a in params.axes])
     k = np.diag([a.stiffness for a in params.axes])
     d = np.diag([a.damping for a in params.axes])
-    moi = np.linalg.inv(params.link_inertia_matrix())
+    moi = np.linalg.inv(params.rigid_link_inertia_matrix())
     z, eye = np.zeros((n, n)), np.eye(n)
-    A = np.block([
+    A = np.zeros((4 * n + 2 * ne, 4 * n + 2 * ne))
+    A[:4 * n, :4 * n] = np.block([
         [z, eye, z, z],
         [-jmi @ k, -jmi @ (d + bv), jmi @ k, jmi @ d],
         [z, z, z, eye],
         [moi @ k, moi @ d, -moi @ k, -moi @ d],
     ])
-    B = np.vstack([z, jmi, z, z])
-    return A, B, np.hstack([z, eye, z, z]), np.hstack([eye, z, z, z])
+    vo = slice(3 * n, 4 * n)
+    for j, (i, (je, ke, de)) in enumerate(modes):
+        qe, ve = 4 * n + j, 4 * n + ne + j
+        A[qe, ve] = 1.0
+        for col, gain in ((2 * n + i, -ke), (qe, ke), (3 * n + i, -de), (ve, de)):
+            A[vo, col] += moi[:, i] * gain              # the mode's reaction on the links
+            A[ve, col] -= gain / je
+    B = np.zeros((A.shape[0], n))
+    B[n:2 * n] = jmi
+    C = np.zeros((n, A.shape[0]))
+    Cv, Cq = C.copy(), C
+    Cv[:, n:2 * n] = eye
+    Cq[:, :n] = eye
+    return A, B, Cv, Cq
+
+
+def link_torque_input(params: RobotParams) -> np.ndarray:
+    """Return the input matrix of a link-side torque per axis in :func:`state_space` (nx, n)."""
+    n = params.n_axes
+    nx = 4 * n + 2 * sum(a.second_mode is not None for a in params.axes)
+    out = np.zeros((nx, n))
+    out[3 * n:4 * n] = np.linalg.inv(params.rigid_link_inertia_matrix())
+    return out
 
 
 def _hold_response(A: np.ndarray, b: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
@@ -200,13 +234,13 @@ def _substep_matrices(params: RobotParams, h: float):
 
     Augmented exponential of [[A, Bu, 0, 0], [0, 0, I, 0], [0, 0, 0, I], [0, 0, 0, 0]] h gives
     the responses to an input a + b s + c s^2 / 2; rewritten for the values at s = 0, h/2, h.
-    The residual torques enter like inputs: motor side through B, link side through M_o^-1.
+    The residual torques enter like inputs: motor side through B, link side through the rigid
+    link inertia's inverse (:func:`link_torque_input`).
     """
     A, B, _, _ = state_space(params)
     n = params.n_axes
-    nx = 4 * n
-    Bo = np.vstack([np.zeros((3 * n, n)), np.linalg.inv(params.link_inertia_matrix())])
-    Bu = np.hstack([B, Bo])
+    nx = A.shape[0]
+    Bu = np.hstack([B, link_torque_input(params)])
     nu = 2 * n
     M = np.zeros((nx + 3 * nu, nx + 3 * nu))
     M[:nx, :nx] = A
@@ -409,7 +443,8 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
     r_k <- r_k + kpos (qplan_k - q_k), as the excitation node does for moves; out_r holds the
     reference actually used.
 
-    ``sc`` (_NSCRATCH, 4 n) and ``work`` (4, n) are scratch arrays of the caller's.
+    ``sc`` (_NSCRATCH, nx) and ``work`` (4, n) are scratch arrays of the caller's (nx the
+    state's length, 4 n plus two per second mode).
     ``uff`` adds a torque on the integrator's stage grid (continuous excitations). Fills
     out_q, out_v, out_u (measured effort = commanded torque at the sample + torque noise) and
     out_x (true states, N x 4 x n) where ``keep_x``. State arrays are updated in place so runs
@@ -548,8 +583,8 @@ class FlexibleJointPlant:
 
     @property
     def state(self) -> np.ndarray:
-        """Return true state as a (4, n) view: rows q_m, v_m, q_o, v_o."""
-        return self.x.reshape(4, self.n_axes)
+        """Return true state as a (4, n) view: rows q_m, v_m, q_o, v_o (second modes left out)."""
+        return self.x[:4 * self.n_axes].reshape(4, self.n_axes)
 
     def equilibrium_torque(self, position: np.ndarray | None = None) -> np.ndarray:
         """
@@ -586,15 +621,18 @@ class FlexibleJointPlant:
         n = self.n_axes
         q_link = np.zeros(n) if position is None else np.asarray(position, dtype=float)
         hold = self.equilibrium_torque(q_link)
-        self.x = np.zeros(4 * n)  # flat [q_m, v_m, q_o, v_o]; see ``state``
+        # flat [q_m, v_m, q_o, v_o, q_e, v_e] (state_space); see ``state``
+        self.x = np.zeros(self._packed.ad.shape[0])
         self.x[2 * n:3 * n] = q_link
+        modes = [i for i, a in enumerate(self.params.axes) if a.second_mode is not None]
+        self.x[4 * n:4 * n + len(modes)] = q_link[modes]      # a second mode rests unloaded
         self.x[:n] = q_link + [static_deflection(a, g) for a, g in zip(self.params.axes, hold)]
         self.qprev = self.x[:n].copy()
         enc = self._packed.enc
         self.qprev = np.where(enc > 0, enc * np.floor(self.qprev / np.where(enc > 0, enc, 1)
                                                       + 0.5), self.qprev)
         self.buf = np.tile(hold, (self._packed.nbuf, 1))
-        self._scratch = np.zeros((_NSCRATCH, 4 * n))
+        self._scratch = np.zeros((_NSCRATCH, self.x.size))
         self.k = 0
         if seed is not None or not hasattr(self, 'rng'):
             self.rng = np.random.default_rng(self.params.seed if seed is None else seed)
@@ -663,7 +701,7 @@ class FlexibleJointPlant:
                   p.gsel, p.nonlinear,
                   p.enc, bool(self.params.velocity_from_encoder), vn, tn, qplan, kpos, has_plan,
                   out_q, out_v, out_u, out_x, keep_states, out_r,
-                  np.zeros((_NSCRATCH, 4 * n)), np.zeros((4, n)))
+                  np.zeros((_NSCRATCH, self.x.size)), np.zeros((4, n)))
         t = (self.k + np.arange(N)) * self.dt
         self.k += N
         self._rebase_buffer(N)

@@ -77,6 +77,39 @@ def test_mimo_closed_form_is_reciprocal_and_matches_siso():
                                     a.viscous_friction))
 
 
+def _chain_frf(f, jm, jo, k, d, je, fe, ze):
+    """dq_m / tau_m of the free chain motor - k, d - rigid link - k_e, d_e - mode, by hand."""
+    s = 2j * np.pi * np.asarray(f)
+    we = 2 * np.pi * fe
+    ke, de = je * we ** 2, 2 * ze * je * we
+    # nodal dynamic stiffness matrix of the three inertias, solved for the motor's response
+    kk = np.zeros((s.size, 3, 3), complex)
+    kk[:, 0, 0] = jm * s ** 2 + d * s + k
+    kk[:, 0, 1] = kk[:, 1, 0] = -(d * s + k)
+    kk[:, 1, 1] = (jo - je) * s ** 2 + d * s + k + de * s + ke
+    kk[:, 1, 2] = kk[:, 2, 1] = -(de * s + ke)
+    kk[:, 2, 2] = je * s ** 2 + de * s + ke
+    return s * np.linalg.inv(kk)[:, 0, 0]
+
+
+def test_second_mode_frf_is_the_three_mass_chain_and_the_plant_realises_it():
+    """The model-file second mode is a share of the link on a spring (docs/model_file.md)."""
+    mode = {'frequency_hz': 22.0, 'damping_ratio': 0.02, 'inertia': 30.0}
+    ax = AxisParams(second_mode=mode)
+    rob = RobotParams([ax], sample_rate=FS, substeps=1)
+    d = _design()
+    hand = _chain_frf(d.freq_hz, 35, 150, 1.5e5, 400, 30.0, 22.0, 0.02)
+    assert np.max(np.abs(robot_frf(rob, d.freq_hz)[0, 0] / hand - 1)) < 1e-10
+    # at low frequency the link weighs its whole inertia: the mode adds nothing there
+    assert robot_frf(rob, [0.2])[0, 0, 0] == pytest.approx(
+        two_mass_frf([0.2], 35, 150, 1.5e5, 400)[0], rel=1e-4)
+    # the plant's linear run is the exact sampled FRF, which has the chain's resonances
+    P = _run_siso(FlexibleJointPlant(rob), d, fine=False, transient_periods=6)
+    assert np.max(np.abs(P / robot_frf_sampled(rob, d.freq_hz)[0, 0] - 1)) < 1e-6
+    Pc = two_mass_frf(d.freq_hz, 35, 150, 1.5e5, 400)
+    assert np.max(np.abs(np.log(np.abs(P / Pc)))) > 0.03     # the mode changes the FRF
+
+
 def test_coulomb_friction_sticks_below_fc_and_slides_above():
     rob = RobotParams([AxisParams(coulomb_friction=50.0)], sample_rate=FS, substeps=2)
     plant = FlexibleJointPlant(rob)

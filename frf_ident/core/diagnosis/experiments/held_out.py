@@ -24,6 +24,7 @@ from dataclasses import replace
 import logging
 import math
 
+from frf_ident.core.fit.residual_whiteness import ResidualBand
 from frf_ident.core.recording import Recording
 import numpy as np
 
@@ -31,7 +32,9 @@ from .acceptance import left_unexplained
 from .evaluator import frf_estimates, replace_segments
 from .noise_gain import held_out_gain, HeldOutGain
 from .refit import FRICTION, rebuild, refit_friction, refit_jointly
+from .resonance_bands import bands_left, resonance_bands, with_p95
 from .search import named, Search
+from .structure import model_bands
 from .unexplained import (axis_signature, discretisation_check, rival_instead,
                           typical_unscalable_misfit)
 from ..common import Effect
@@ -123,8 +126,10 @@ def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
     floor with them refitted, the model lacks structure there (an unmodelled resonance near the
     first one looks like a softer joint): the axis is reported unexplained, or the spring
     rival the mismatch won over takes its place where it explains the axis
-    (:func:`.unexplained.rival_instead`). Clearly above: a share of the misfit left, or an FRF
-    no rescale of the axis' linear parameters brings near the measured one.
+    (:func:`.unexplained.rival_instead`). Clearly above: a share of the misfit left, an FRF
+    no rescale of the axis' linear parameters brings near the measured one on the typical
+    line, or a band of its FRF residual (:func:`_band_left`): a mode the model lacks leaves
+    a few lines far off, which the typical line does not see.
 
     Returns
     -------
@@ -144,9 +149,11 @@ def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
             why = 'its share of the nominal misfit'
         else:
             off = typical_unscalable_misfit(ev, sim_ext, c.axis_index, s.ext)
-            if off <= UNEXPLAINED_RATIO:
+            band = _band_left(s, sim_ext, c.axis_index)
+            if off <= UNEXPLAINED_RATIO and band is None:
                 continue
-            why = f'its FRF {off:.3g} x on the typical line with the parameters refitted'
+            why = (f'its FRF {off:.3g} x on the typical line with the parameters refitted'
+                   if band is None else f'its FRF residual leaves {band.text()}')
         s.say(f'  {c.axis} parameter_mismatch not named: the axis stays at '
               f'{val_ext[c.axis_index]:.4g} x its floor with it ({why}): structure missing, '
               f'not parameters')
@@ -163,6 +170,20 @@ def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
         sim_ext = ev.simulate(s.ext)
         val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
     return val_ext, sim_ext, val_base
+
+
+def _band_left(s: Search, sim: Recording, axis: int) -> ResidualBand | None:
+    """
+    Return the strongest band of missing structure a model leaves on an axis, or None.
+
+    The model's multisine residual on the fit part, its linear parameters refitted, where
+    stage 0 found a band (:func:`.structure.model_bands`): a band of at least MODE_MIN_LINES
+    lines UNEXPLAINED_RATIO times its noise. A parameter change is named only where the
+    residual left after it has none.
+    """
+    bands = model_bands(s.ev.meas_fit, s.ev.fit_estimates(s.ext, sim), s.ext, s.structure)
+    left = [b for b in bands[axis] if b.excess >= UNEXPLAINED_RATIO]
+    return left[0] if left else None
 
 
 def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndarray
@@ -200,12 +221,15 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
         nominal, sim_nominal = s.nominal, ev.simulate(s.nominal)
         misfit['without_sensor'] = ev.misfit(ev.terms(nominal, sim_nominal,
                                                       held_out=True)).tolist()
-    metrics = RouteMetrics(ev.metrics(nominal, sim_nominal), ev.metrics(ext, sim_ext),
-                           ev.validation_text)
     part = ev.val if ev.val.segments else ev.fit
     plots = {'measured': ev.meas_val or ev.meas_fit,
              'nominal': frf_estimates(replace_segments(sim_nominal, part)),
              'extended': frf_estimates(replace_segments(sim_ext, part))}
+    unexplained += bands_left(ev.meas_fit, ev.fit_estimates(ext, sim_ext), ext, s.structure)
+    metrics = RouteMetrics(
+        with_p95(ev.metrics(nominal, sim_nominal), plots['measured'], plots['nominal']),
+        with_p95(ev.metrics(ext, sim_ext), plots['measured'], plots['extended']),
+        ev.validation_text, resonance_bands(ext, kept, unexplained, plots))
     log.info('%d simulations of the recorded excitation', ev.n_sims)
     rest = [c for c in s.cands if c not in kept]
     for c in kept:

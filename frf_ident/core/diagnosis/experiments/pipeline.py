@@ -43,6 +43,8 @@ from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
 from .held_out import finish, held_out_check, structure_missing
 from .refit import FRICTION, refit_friction, refit_jointly
 from .search import named, Search
+from .second_mode import refine_modes, take_second_mode
+from .structure import read_structure
 from ..common import apply_effect, Effect
 from ..result import DiagnosisResult
 from ..sensor import describe_sensor, read_sensor, sensor_effects, with_sensor
@@ -104,6 +106,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         second_pass(s)
         joint_refits(s)
         late_ripples(s)
+        refine_modes(s)
         val_ext, sim_ext = held_out_check(s)
         val_ext, sim_ext, val_base = structure_missing(s, val_ext, sim_ext)
         return finish(s, val_ext, sim_ext, val_base)
@@ -138,37 +141,51 @@ def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_
 
 def frequency_domain_fit(s: Search) -> None:
     """
-    Stage 0: take a linear parameter mismatch the FRF fits show, before simulating a search.
+    Stage 0: take a linear parameter mismatch or a second mode the FRF fits show.
 
     The physical fit of the measured multisine and chirp FRFs against the same fit of the
     nominal simulation (:func:`.frequency_fit.linear_shifts`); an axis whose inertias or
     stiffness differ at both loads, with a spring stage 2 would call linear
-    (:func:`.frequency_fit.load_dependence`), gets a ``parameter_mismatch`` candidate
-    (:func:`.frequency_fit.fd_parameter_mismatch`), judged by simulation like every other; taken,
-    it is the model the later stages read against (and the held-out check may still drop it).
+    (:func:`.frequency_fit.load_dependence`) and a residual the linear parameters leave white
+    (:func:`.structure.read_structure`), gets a ``parameter_mismatch`` candidate
+    (:func:`.frequency_fit.fd_parameter_mismatch`); where the residual has a band, a second
+    mode fitted there may explain it (:func:`.second_mode.take_second_mode`). Each is judged
+    by simulation; taken, it is what the later stages read against (held out, it may be dropped).
     """
     ev, robot = s.ev, s.robot
     sim_est = ev.fit_estimates(robot, s.sim0)
     shifts = linear_shifts(ev.meas_fit, sim_est, robot)
     load = load_dependence(ev.meas_fit, sim_est, robot)
+    _say_shifts(s, shifts, load)
+    s.structure = read_structure(ev.meas_fit, sim_est, robot)
+    if s.structure is not None:
+        s.say('stage 0 residual of the linear fit (multisine against the nominal simulation): '
+              + s.structure.text(robot.joint_names))
+    s.stage0 = [c for c in (fd_parameter_mismatch(shifts, robot, i, load[i])
+                            for i in range(robot.n_axes)
+                            if s.structure is None or s.structure.white(i)) if c is not None]
+    if s.stage0:
+        s.ext, s.cur = accept(ev, robot, s.kept, s.stage0, s.cur, s.say)
+    s.cands += s.stage0
+    take_second_mode(s)
+    log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0),
+             named(s.kept))
+
+
+def _say_shifts(s: Search, shifts: list, load: np.ndarray) -> None:
+    """Write stage 0's log shifts and load dependence per axis to the trace."""
+    axes = s.robot.axes
     for sh in shifts:
         s.say(f'stage 0 {sh.key}: log shift of ' + ', '.join(
             f'{a.name} ' + '/'.join(f'{d:+.3f}+-{e:.3f}'
                                     for d, e in zip(sh.log_scale[i], sh.std[i]))
-            for i, a in enumerate(robot.axes)) + ' (motor inertia/link inertia/stiffness)'
+            for i, a in enumerate(axes)) + ' (motor inertia/link inertia/stiffness)'
             + ''.join(f'; {a.name}: own channel {c:.3g} x its noise per dof'
                       + (' (structure missing)' if m else '')
-                      for a, c, m in zip(robot.axes, sh.channel_cost, sh.structure_missing)
+                      for a, c, m in zip(axes, sh.channel_cost, sh.structure_missing)
                       if np.isfinite(c)))
     s.say('stage 0 load dependence (stiffness scale chirp/multisine): ' + ', '.join(
-        f'{a.name} x{math.exp(x):.3f}' for a, x in zip(robot.axes, load)))
-    s.stage0 = [c for c in (fd_parameter_mismatch(shifts, robot, i, load[i])
-                            for i in range(robot.n_axes)) if c is not None]
-    if s.stage0:
-        s.ext, s.cur = accept(ev, robot, s.kept, s.stage0, s.cur, s.say)
-    s.cands += s.stage0
-    log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0),
-             named(s.kept))
+        f'{a.name} x{math.exp(x):.3f}' for a, x in zip(axes, load)))
 
 
 def torque_residual_effects(s: Search) -> None:

@@ -24,6 +24,7 @@ import numpy as np
 
 from .evaluator import Evaluator
 from .noise_gain import HeldOutGain
+from .structure import StructureReading
 from ..common import Effect
 
 __all__ = ['named', 'Search']
@@ -47,6 +48,8 @@ class Search:
     rivals: dict[int, list[Effect]] = field(default_factory=dict)
     shaped: set[int] = field(default_factory=set)   # axes that took an FRF-shape effect
     again: list[Effect] = field(default_factory=list)  # second-pass candidates
+    #: stage 0's residual tests of the linear fit (None: no multisine variance, or no stage 0)
+    structure: StructureReading | None = None
     #: the model file as given, where ``robot`` is it with the sensor the record shows
     #: (:mod:`..sensor`: the search reads every effect against the sensor); None: the same
     nominal: RobotParams | None = None
