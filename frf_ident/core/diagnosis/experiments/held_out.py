@@ -209,5 +209,7 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
 
 def rejected_entry(c: Effect) -> Rejected:
     """Return the report.json ``rejected`` entry of a candidate that was not taken."""
+    if c.reason is not None:
+        return Rejected(c.name, c.axis, c.to_dict()['parameters'] or None, reason=c.reason)
     return Rejected(c.name, c.axis, c.to_dict()['parameters'],
                     misfit_share_removed=round(float(c.gain), 4))
