@@ -67,8 +67,9 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
                  f'{_scores(m.extended)} ({m.validation})')
     lines += [f'on {v.record}: nominal {_scores(v.baseline)} -> extended {_scores(v.extended)}'
               for v in diag.checks.validation_records]
+    xml = out / 'extended_model.xml'        # a model naming an MJCF (docs/mujoco.md)
     lines.append(f'wrote {out / "report.json"}, {out / "extended_model.yaml"}, '
-                 f'{out / "report.html"}')
+                 + (f'{xml}, ' if xml.is_file() else '') + f'{out / "report.html"}')
     return lines
 
 
