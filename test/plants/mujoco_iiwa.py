@@ -164,7 +164,9 @@ def linear_frf(xml: str, freq_hz: np.ndarray, pose: dict[str, float], axes: list
     MJCF of a URDF): every hinge that is not an axis or an axis' link-side hinge
     (``<axis>_link``) is removed through MuJoCo's own editor at its position in ``pose``
     (which must be 0: a removed joint is the joint held at 0), the axes' actuators are found
-    by their joint; then as :func:`truth_frf`.
+    by their joint, and dry friction is switched off (``mjDSBL_FRICTIONLOSS``: MuJoCo's
+    frictionloss is a constraint that holds a joint at rest, it has no linearisation there;
+    its value is checked on its own); then as :func:`truth_frf`.
     """
     import mujoco
     spec = mujoco.MjSpec.from_string(xml)
@@ -178,6 +180,7 @@ def linear_frf(xml: str, freq_hz: np.ndarray, pose: dict[str, float], axes: list
             spec.delete(j)
     for k in list(spec.keys):
         spec.delete(k)
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS
     return truth_frf(spec.to_xml(), freq_hz, pose, axes, dt)
 
 
