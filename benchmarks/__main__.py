@@ -425,6 +425,13 @@ def bench_diagnosis_demo() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('diagnosis_sensor')
+def bench_diagnosis_sensor() -> list[tuple[str, str, str, str]]:
+    """Sweep scenes with a realistic sensor: nominal, and two small effects on two axes."""
+    from benchmarks.diagnosis_sensor import rows
+    return rows()
+
+
 @section('diagnosis_real')
 def bench_diagnosis_real() -> list[tuple[str, str, str, str]]:
     """Compare the KUKA KR300 diagnosis of the halves of trajectory A (and of A, B, C)."""

@@ -64,8 +64,14 @@ CHECK_KEY = {'coulomb_friction': 'coulomb_friction', 'viscous_friction': 'viscou
              'parameter_mismatch': 'stiffness'}
 # gravity and a parameter mismatch: scene kinds of their own
 DRAWN = tuple(k for k in CHECK_KEY if k not in ('gravity', 'parameter_mismatch'))
-# drawn only when asked for by name (not in the cycle, so the README sweeps keep their scenes)
-EXTRA_KINDS = ('mismatch',)
+# drawn only when asked for by name (not in the cycle, so the README sweeps keep their scenes):
+# 'sensor' is the nominal plant read by a realistic sensor, 'sensor_two' the same with two
+# small effects on two axes (issue 55)
+EXTRA_KINDS = ('mismatch', 'sensor', 'sensor_two')
+#: the sensor effects the diagnosis names (issue 55), scored apart from the plant's
+SENSOR_EFFECTS = ('velocity_from_encoder', 'quantisation')
+#: [rad] the encoder steps of a realistic sensor are drawn log-uniformly between these
+ENCODER_RANGE = (1e-6, 1e-5)
 
 
 def _nominal() -> dict[str, Any]:
@@ -156,10 +162,20 @@ def draw_scene(rng: np.random.Generator, kind: str) -> dict[str, Any]:
         scale = float(rng.uniform(1.05, 1.2)) ** (1 if rng.uniform() < 0.5 else -1)
         truth = [('parameter_mismatch', ax, {'stiffness': float(axes[ax]['stiffness']) * scale})]
         add_random(2 + int(rng.integers(0, 2)))      # the mismatch and 1-2 others
+    elif kind == 'sensor_two':
+        # two small effects of different kinds on two different axes
+        ax = [int(a) for a in rng.choice(3, 2, replace=False)]
+        names = [str(n) for n in rng.choice(DRAWN, 2, replace=False)]
+        truth = [(n, a, draw_effect(n, rng, axes[a], small=True)) for n, a in zip(names, ax)]
     elif kind == 'second_mode':
         ax = int(rng.integers(3))
         mode = (ax, float(rng.uniform(18.0, 30.0)))
     sc: dict[str, Any] = {'axes': {}, 'velocity_noise': NOISE, 'seed': int(rng.integers(1e6))}
+    if kind in ('sensor', 'sensor_two'):
+        # every axis read by an encoder, its velocity the difference of two readings
+        lo, hi = np.log(ENCODER_RANGE)
+        sc['encoder_resolution'] = [float(np.exp(rng.uniform(lo, hi))) for _ in axes]
+        sc['velocity_from_encoder'] = True
     for name, ax, ch in truth:
         sc['axes'].setdefault(str(ax), {}).update(ch)
     if mode:
@@ -207,7 +223,10 @@ def diagnose_scene(scene: dict[str, Any], bag: Path, out: Path, **kw: Any) -> di
     t0 = time.perf_counter()
     _diagnosis_log()
     res = diagnose(bag, MODEL, out, progress=lambda _m: None, **kw)
-    return score_scene(scene, res.report(), time.perf_counter() - t0, res.result.n_sims)
+    gains = getattr(res.result.detail, 'held_out_gains', {})
+    return score_scene(scene, res.report(), time.perf_counter() - t0, res.result.n_sims,
+                       {k: (round(g.gain, 4), round(g.z, 2), g.beyond_noise)
+                        for k, g in gains.items()})
 
 
 def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
@@ -224,11 +243,21 @@ def param_error(name: str, truth: dict[str, Any], found: dict[str, Any]) -> floa
 
 
 def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0,
-                n_sims: int = 0) -> dict[str, Any]:
-    """Compare a report with the scene's truth."""
+                n_sims: int = 0, gains: dict[str, tuple] | None = None) -> dict[str, Any]:
+    """
+    Compare a report with the scene's truth.
+
+    ``gains``: the held-out check's gain test per effect it judged, 'name@axis' -> (gain
+    [noise floors], z, beyond noise); each is marked true or spurious by the scene's truth.
+    """
     names = _nominal_names()
     hidden = {(n, names[a]): p for n, a, p in scene['truth']}
-    found = {(e['name'], e['axis']): e['parameters'] for e in report['effects']}
+    found = {(e['name'], e['axis']): e['parameters'] for e in report['effects']
+             if e['name'] not in SENSOR_EFFECTS}
+    sensor = {(e['name'], e['axis']): e['parameters'] for e in report['effects']
+              if e['name'] in SENSOR_EFFECTS}
+    has_sensor = bool(scene['scene'].get('velocity_from_encoder'))
+    sensor_hidden = {(n, a) for n in SENSOR_EFFECTS for a in names} if has_sensor else set()
     hits = [k for k in hidden if k in found]
     perr = {f'{k[0]}@{k[1]}': param_error(k[0], hidden[k], found[k]) for k in hits}
     mode_ok = mode_first = None
@@ -247,8 +276,19 @@ def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0
             'false_alarms': len([k for k in found if k not in hidden]),
             'n_found': len(found), 'param_errors': perr, 'mode_unexplained': mode_ok,
             'mode_band_first': mode_first,
+            'sensor_hidden': sorted(f'{n}@{a}' for n, a in sensor_hidden),
+            'sensor_found': sorted(f'{n}@{a}' for n, a in sensor),
+            'sensor_missed': len(sensor_hidden - set(sensor)),
+            'sensor_false': len(set(sensor) - sensor_hidden),
             'unexplained': report['unexplained'], 'wall_s': round(wall, 1), 'n_sims': n_sims,
-            'parameters': {f'{n}@{a}': p for (n, a), p in found.items()}}
+            'parameters': {f'{n}@{a}': p for (n, a), p in found.items()},
+            'gain_tests': {k: [*v, tuple(k.split('@')) in hidden]
+                           for k, v in (gains or {}).items()},
+            'sensor_resolution_error': {
+                a: abs(p['encoder_resolution'] / scene['scene']['encoder_resolution'][
+                    names.index(a)] - 1)
+                for (n, a), p in sensor.items()
+                if n == 'quantisation' and has_sensor}}
 
 
 def second_mode_hz(scene: dict[str, Any], ax: int) -> float:

@@ -29,6 +29,7 @@ from frf_ident.report.text import parameters_text
 
 if TYPE_CHECKING:
     from frf_ident.core.diagnosis import Diagnosis
+    from frf_ident.core.diagnosis.crosscheck.least_squares import LeastSquaresCheck
     from frf_ident.core.diagnosis.records import Scores, Unexplained
 
 __all__ = ['diagnosis_summary']
@@ -69,6 +70,9 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
     lines.append(f'  {m.validation}')
     lines += [f'on {v.record}: nominal {_scores(v.baseline)} -> extended {_scores(v.extended)}'
               for v in diag.checks.validation_records]
+    ls = diag.checks.least_squares
+    if ls is not None:
+        lines += _against_baseline(ls)
     # the folder once: three full paths made a 230-character line in a deep output folder;
     # extended_model.xml where a model naming an MJCF wrote it (docs/mujoco.md)
     xml = ', extended_model.xml' if (out / 'extended_model.xml').is_file() else ''
@@ -80,11 +84,23 @@ def _unexplained(u: Unexplained) -> str:
     """Write an unexplained entry: an axis above its floor, or a peak above the band."""
     s = u.signature
     if u.misfit_share is None:
+        cause = f'; {u.cause.describe()}' if u.cause is not None else ''
         return (f'unexplained on {u.axis}: {u.kind}, {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz '
-                f'(peak {s.peak_hz:.3g} Hz, {s.peak_over_floor:.3g}x the local noise floor)')
+                f'(peak {s.peak_hz:.3g} Hz, {s.peak_over_floor:.3g}x the local noise floor)'
+                f'{cause}')
     band = f', strongest misfit {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz' if s.band_hz else ''
     return (f'unexplained on {u.axis}: {100 * u.misfit_share:.0f} % of the nominal misfit '
             f'left{band}')
+
+
+def _against_baseline(ls: LeastSquaresCheck) -> list[str]:
+    """Write per held-out set whether each axis beats, ties or loses to the baseline."""
+    by_set: dict[str, list[str]] = {}
+    for v in ls.verdicts:
+        by_set.setdefault(v.record, []).append(
+            f'{v.axis} {v.verdict} ({v.extended:.3g} / {v.least_squares:.3g})')
+    return [f'against the least-squares baseline on {rec} (time NRMSE extended / baseline): '
+            + ', '.join(parts) for rec, parts in by_set.items()]
 
 
 def _scores(s: Scores) -> str:

@@ -49,6 +49,8 @@ DRAIN_BATCH = 64
 #: (its ros_discovery_info can come after its request: a first call of `ros2 service call`
 #: found no client listed)
 CALLER_GRAPH_WAIT_S = 0.5
+#: the part of the name rmw gives a writer whose node's info has not come yet
+UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'
 #: what rclpy raises for a parameter value of the wrong type or an invalid one
 PARAMETER_ERRORS: tuple = (ParameterException, InvalidParameterTypeException,
                            InvalidParameterValueException)
@@ -244,7 +246,11 @@ class Node(RclpyNode):
         while True:       # the caller's node info may come a moment after its request
             clients = self.get_publishers_info_by_topic(f'rq{name}Request', no_mangle=True)
             nodes = sorted({f"{c.node_namespace.rstrip('/')}/{c.node_name}" for c in clients})
-            if nodes or time.monotonic() > deadline:
+            # a writer the graph lists before its node's info came is named
+            # _NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_: not listed yet either
+            known = [n for n in nodes if UNKNOWN_NODE not in n]
+            if known or time.monotonic() > deadline:
+                nodes = known or nodes
                 break
             time.sleep(0.01)
         seq, sent = -1, None

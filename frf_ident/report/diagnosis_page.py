@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from frf_ident.report import figures
+from frf_ident.report.effect_names import effect_phrase
 from frf_ident.report.page import figure_tag, page, table
 from frf_ident.report.text import parameters_text
 
@@ -86,7 +87,7 @@ def _effects(res: DiagnosisResult) -> str:
     if not res.effects:
         return '<p>none of the candidate effects improves the held-out data.</p>'
     return table(['#', 'effect', 'axis', 'score', 'value (\u00b1 standard error)', 'evidence'],
-                 [[k + 1, e.name, e.axis, round(e.score, 3),
+                 [[k + 1, effect_phrase(e.name), e.axis, round(e.score, 3),
                    parameters_text(e.parameters, e.standard_error), e.evidence]
                   for k, e in enumerate(res.effects)])
 
@@ -103,6 +104,12 @@ def _unexplained(res: DiagnosisResult) -> str:
                               u.signature.bands_hz or ([u.signature.band_hz]
                                                        if u.signature.band_hz else []))) or '-',
                           u.signature.correlates_with or '-'] for u in une]))
+        causes = [u for u in une if u.cause is not None]
+        if causes:
+            text += ('<p>What locks each peak (its frequency at the steady speeds of the '
+                     'record):</p><ul>' + ''.join(
+                         f'<li>{html.escape(u.axis)}, {u.cause.frequency_hz:g} Hz: '
+                         f'{html.escape(u.cause.describe())}</li>' for u in causes) + '</ul>')
     else:
         text = '<p>nothing: every axis is explained to within its noise floor.</p>'
     if res.band is not None:
@@ -147,7 +154,10 @@ def _checks(checks: CrossChecks) -> str:
                           for s in ls.held_out_as_fitted for ax, v in s.per_axis.items()])
                  + '<ul>' + ''.join(f'<li>{html.escape(ax)}: the extended model '
                                     f'{html.escape(v)}</li>'
-                                    for ax, v in ls.extended_vs_baseline.items()) + '</ul>')
+                                    for ax, v in ls.extended_vs_baseline.items()) + '</ul>'
+                 + '<p>After the rule (time_nrmse, extended against least squares):</p>'
+                 + '<ul>' + ''.join(f'<li>{html.escape(v.sentence())}</li>'
+                                    for v in ls.verdicts) + '</ul>')
     return text
 
 

@@ -25,7 +25,16 @@ nominal model mapping (the §5 model file) for the linear part and adds the hidd
 
     {"axes": {"0": {"coulomb_friction": 12.0, "torque_ripple": [...], ...}},   # §5 keys
      "extra_mode": {"1": {"frequency_hz": 35.0, "mass_ratio": 0.3, "damping_ratio": 0.03}},
-     "velocity_noise": 2e-5, "torque_noise": 0.0, "seed": 3}
+     "velocity_noise": 2e-5, "torque_noise": 0.0, "seed": 3,
+     "encoder_resolution": 2e-6, "velocity_from_encoder": true}
+
+The sensor (issue 55), written here and not taken from the package: the motor position is
+read by an encoder of ``encoder_resolution`` [rad per count] (one number for every axis or a
+list per axis; 0: ideal), rounded to the nearest count; with ``velocity_from_encoder`` the
+velocity is the difference of two successive readings over the sample time (what a drive
+without a velocity sensor measures: the mean velocity of the last sample, half a sample late,
+and the quantisation's noise 2 q^2 / 12 / dt^2 in its variance), else the true motor velocity;
+``velocity_noise`` is added either way.
 
 Use (with test/ on PYTHONPATH, as under pytest):
 ``frf-ident identify --model M.yaml --plant plants.reference:ReferencePlant``.
@@ -222,6 +231,9 @@ class ReferencePlant:
         self.delay_steps = np.floor(delay / self.dt)
         self.frac = delay / self.dt - self.delay_steps
         self.nbuf = int(self.delay_steps.max()) + 4
+        res = scene.get('encoder_resolution', 0.0)
+        self.encoder = np.broadcast_to(np.asarray(res, float), (n,)).copy()
+        self.differenced = bool(scene.get('velocity_from_encoder', False))
         self.vnoise = float(scene.get('velocity_noise', 0.0))
         self.tnoise = float(scene.get('torque_noise', 0.0))
         self.seed = int(scene.get('seed', 0))
@@ -250,6 +262,12 @@ class ReferencePlant:
         self.hist = np.tile(g, (self.nbuf, 1))
         self.k = 0
         self.rng = np.random.default_rng(self.seed)
+        self.q_read = self._encoder(self.s[:n])
+
+    def _encoder(self, q: np.ndarray) -> np.ndarray:
+        """Return the encoder's reading of motor positions q (nearest count)."""
+        step = np.where(self.encoder > 0, self.encoder, 1.0)
+        return np.where(self.encoder > 0, np.round(q / step) * step, q)
 
     def step(self, torque: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Apply motor torque for one sample; return (position, velocity, effort) at its end."""
@@ -259,7 +277,9 @@ class ReferencePlant:
         _advance(self.s, self.hist, self.k, self.delay_steps, self.frac, self.dt, self.p,
                  self.minv, self.gamp, self.gph, self.gsel, self.mode, SUBSTEPS)
         self.k += 1
-        q = self.s[:n].copy()
-        v = self.s[n:2 * n] + self.vnoise * self.rng.standard_normal(n)
+        q = self._encoder(self.s[:n])
+        v = (q - self.q_read) / self.dt if self.differenced else self.s[n:2 * n].copy()
+        self.q_read = q
+        v = v + self.vnoise * self.rng.standard_normal(n)
         e = u + self.tnoise * self.rng.standard_normal(n)
         return q, v, e

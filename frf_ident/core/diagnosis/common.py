@@ -33,7 +33,9 @@ import numpy as np
 from .thresholds import GAP_GUARD_S
 
 EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'backlash',
-           'torque_ripple', 'time_delay', 'gravity', 'parameter_mismatch')
+           'torque_ripple', 'time_delay', 'gravity', 'parameter_mismatch',
+           # the sensor, read from the record (sensor.py)
+           'velocity_from_encoder', 'quantisation')
 
 
 @dataclass
@@ -94,10 +96,16 @@ def has_experiments(rec: Recording) -> bool:
 
 
 def apply_effect(robot: RobotParams, eff: Effect) -> RobotParams:
-    """Return the robot with the effect's parameters written into its axis (model-file keys)."""
+    """
+    Return the robot with the effect's parameters written into its axis (model-file keys).
+
+    ``velocity_from_encoder`` is the model's (``simulation.velocity_from_encoder``).
+    """
+    params = copy.deepcopy(eff.parameters)
+    top = {k: params.pop(k) for k in ('velocity_from_encoder',) if k in params}
     axes = list(robot.axes)
-    axes[eff.axis_index] = replace(axes[eff.axis_index], **copy.deepcopy(eff.parameters))
-    return replace(robot, axes=axes)
+    axes[eff.axis_index] = replace(axes[eff.axis_index], **params)
+    return replace(robot, axes=axes, **top)
 
 
 def quiet(robot: RobotParams) -> RobotParams:

@@ -19,9 +19,10 @@ record's evidence calls for (identification experiments: :mod:`.experiments`, an
 :mod:`.timeseries`), then the checks against what the route did not fit on
 (:mod:`.crosscheck`): the gravity of the robot's kinematics, position-dependent terms on the
 other records, standard errors across records, the least-squares baseline and both model
-files on every other record. Its :class:`Diagnosis` is what ``frf-ident diagnose`` writes
-(report.json from :meth:`Diagnosis.report`, docs/CONTRACT.md §7) and what the console and
-the HTML report read.
+files on every other record; last the sensor the record shows is named (:mod:`.sensor`; the
+experiments route already read its effects against it). Its :class:`Diagnosis` is what
+``frf-ident diagnose`` writes (report.json from :meth:`Diagnosis.report`, docs/CONTRACT.md
+§7) and what the console and the HTML report read.
 """
 from __future__ import annotations
 
@@ -43,6 +44,7 @@ from .crosscheck.spread import standard_errors_across
 from .crosscheck.validation import on_other_records
 from .experiments.pipeline import diagnose_experiments
 from .result import DiagnosisResult
+from .sensor import name_sensor
 from .thresholds import SIM_JOBS
 from .timeseries.pipeline import diagnose_timeseries
 
@@ -148,7 +150,7 @@ def diagnose(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
     res, checks.least_squares = against_least_squares(res, rec, others, robot, progress)
     checks.validation_records = on_other_records(res, rec, others, robot, ctrl, progress,
                                                  name=name, simulator=simulator)
-    return Diagnosis(res, checks, rec, others)
+    return Diagnosis(name_sensor(res, rec, robot), checks, rec, others)
 
 
 def route(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *, jobs: int, fd_fit: bool,

@@ -26,6 +26,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, fields
 from typing import Any
 
+from .line_cause import LineCause
+
 __all__ = ['AxisScore', 'IntegratorCheck', 'Rejected', 'RouteMetrics', 'Scores', 'Signature',
            'Unexplained']
 
@@ -119,12 +121,16 @@ class Unexplained:
     #: 'resonance above the analysis band' or 'line above the analysis band' (time series);
     #: None for an axis left above its floor
     kind: str | None = None
+    #: a peak above the band: locked to position or to time, with the evidence
+    cause: LineCause | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Return the report's ``unexplained`` entry."""
         out: dict[str, Any] = {'axis': self.axis}
         out.update(_present(self, ('kind', 'misfit_share')))
         out['signature'] = self.signature.to_dict()
+        if self.cause is not None:
+            out['cause'] = self.cause.to_dict()
         return out
 
 

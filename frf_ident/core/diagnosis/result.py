@@ -44,8 +44,13 @@ class ExperimentsDetail:
     estimates: dict[str, dict[str, Any]]
     #: closed-loop simulations of the nominal and extended model: 'nominal', 'extended'
     sims: dict[str, Recording]
-    #: held-out misfit per axis (noise floors) of the nominal ('baseline') and extended model
+    #: held-out misfit per axis (noise floors) of the nominal ('baseline': with the sensor
+    #: the record shows, :mod:`.sensor`) and extended model, and of the model file as given
+    #: where the record's sensor changed it ('without_sensor')
     misfit: dict[str, list[float]]
+    #: the held-out check's gain test per effect it judged, 'name@axis' ->
+    #: :class:`.experiments.noise_gain.HeldOutGain`
+    held_out_gains: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass

@@ -29,6 +29,7 @@ import numpy as np
 
 from .acceptance import left_unexplained
 from .evaluator import frf_estimates, replace_segments
+from .noise_gain import held_out_gain, HeldOutGain
 from .refit import FRICTION, rebuild, refit_friction, refit_jointly
 from .search import named, Search
 from .unexplained import (axis_signature, discretisation_check, rival_instead,
@@ -72,10 +73,11 @@ def held_out_check(s: Search) -> tuple[np.ndarray, Recording]:
         without = rebuild(robot, alt)
         v = ev.misfit(ev.terms(without, held_out=True))
         v_fit = ev.misfit(ev.terms(without))[i] if refit else math.inf
-        if v[i] <= val_ext[i] or v_fit <= s.cur[i]:
+        g = s.gains[id(c)] = held_out_gain(ev, s.ext, without, i)
+        if v[i] <= val_ext[i] or v_fit <= s.cur[i] or not g.beyond_noise:
             s.say(f'  dropped {c.axis} {c.name}: misfit without it held out '
-                  f'{v[i]:.4g} (with it {val_ext[i]:.4g}), fitted {v_fit:.4g} (with it '
-                  f'{s.cur[i]:.4g})'
+                  f'{v[i]:.4g} (with it {val_ext[i]:.4g}; {g.describe()}), fitted {v_fit:.4g} '
+                  f'(with it {s.cur[i]:.4g})'
                   + ''.join(f' ({r.name} refitted without it: ' + ', '.join(
                       f'{k} {x:.4g}' for k, x in r.parameters.items()
                       if isinstance(x, (int, float))) + ')' for r in refit.values()))
@@ -191,25 +193,44 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
             share = float(np.clip((val_ext[i] - 1) / max(val_base[i] - 1, 1e-12), 0, 1))
             unexplained.append(Unexplained(a.name, axis_signature(ev, sim_ext, i, ext),
                                            misfit_share=round(share, 3)))
-    metrics = RouteMetrics(ev.metrics(robot, s.sim0), ev.metrics(ext, sim_ext),
+    nominal, sim_nominal = robot, s.sim0
+    misfit = {'baseline': val_base.tolist(), 'extended': val_ext.tolist()}
+    if s.nominal is not None:
+        # the search read against the record's sensor; the report's nominal is the file
+        nominal, sim_nominal = s.nominal, ev.simulate(s.nominal)
+        misfit['without_sensor'] = ev.misfit(ev.terms(nominal, sim_nominal,
+                                                      held_out=True)).tolist()
+    metrics = RouteMetrics(ev.metrics(nominal, sim_nominal), ev.metrics(ext, sim_ext),
                            ev.validation_text)
     part = ev.val if ev.val.segments else ev.fit
     plots = {'measured': ev.meas_val or ev.meas_fit,
-             'nominal': frf_estimates(replace_segments(s.sim0, part)),
+             'nominal': frf_estimates(replace_segments(sim_nominal, part)),
              'extended': frf_estimates(replace_segments(sim_ext, part))}
     log.info('%d simulations of the recorded excitation', ev.n_sims)
     rest = [c for c in s.cands if c not in kept]
+    for c in kept:
+        if id(c) in s.gains:
+            c.evidence += f'; {s.gains[id(c)].describe()}'
     return DiagnosisResult(
-        'experiments', kept, [rejected_entry(c) for c in rest], unexplained, metrics, ext,
-        ExperimentsDetail(ev, plots, {'nominal': s.sim0, 'extended': sim_ext},
-                          {'baseline': val_base.tolist(), 'extended': val_ext.tolist()}),
+        'experiments', kept, [rejected_entry(c, s.gains.get(id(c))) for c in rest], unexplained,
+        metrics, ext,
+        ExperimentsDetail(ev, plots, {'nominal': sim_nominal, 'extended': sim_ext}, misfit,
+                          {f'{c.name}@{c.axis}': s.gains[id(c)] for c in kept + rest
+                           if id(c) in s.gains}),
         ev.fit_mask[:-1], (ev.val_mask if ev.val_mask.any() else ev.fit_mask)[:-1],
         discretisation=step, n_sims=ev.n_sims, candidates=rest)
 
 
-def rejected_entry(c: Effect) -> Rejected:
-    """Return the report.json ``rejected`` entry of a candidate that was not taken."""
+def rejected_entry(c: Effect, gain: HeldOutGain | None = None) -> Rejected:
+    """
+    Return the report.json ``rejected`` entry of a candidate that was not taken.
+
+    One the simulator cannot hold carries the rule's ``reason`` (``c.reason``); one the
+    held-out check dropped for a gain within noise carries that as its ``reason``.
+    """
     if c.reason is not None:
         return Rejected(c.name, c.axis, c.to_dict()['parameters'] or None, reason=c.reason)
-    return Rejected(c.name, c.axis, c.to_dict()['parameters'],
+    reason = (f'{gain.describe()}: within what the noise alone gives, dropped'
+              if gain is not None and not gain.beyond_noise else None)
+    return Rejected(c.name, c.axis, c.to_dict()['parameters'], reason=reason,
                     misfit_share_removed=round(float(c.gain), 4))

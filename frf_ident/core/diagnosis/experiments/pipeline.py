@@ -47,6 +47,7 @@ from .search import named, Search
 from .unheld import not_held, spring_shapes_skipped
 from ..common import apply_effect, Effect, Simulator
 from ..result import DiagnosisResult
+from ..sensor import describe_sensor, read_sensor, sensor_effects, with_sensor
 from ..thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS, UNEXPLAINED_RATIO
 
 __all__ = ['diagnose_experiments']
@@ -124,6 +125,11 @@ def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_
         raise EstimationError('recording has no velocity reference: use the time-series '
                               'diagnosis')
     ev = Evaluator(rec, ctrl, jobs=jobs, simulator=simulator)
+    given, reading = robot, read_sensor(rec, robot.joint_names)
+    if sensor_effects(reading, robot):
+        robot = with_sensor(robot, reading)
+        log.info('the record shows its sensor (%s): the search reads every effect against '
+                 'the model with it', describe_sensor(given, robot))
     if ev.missing.any():
         log.info('%.1f %% of the samples lack a reference (or follow such a stretch): left '
                  'out of the comparison', 100 * ev.missing.mean())
@@ -133,7 +139,8 @@ def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_
     ev.floor_seen(e0)
     log.info('nominal misfit per axis (1 = noise floor): %s (noise sd %.3g)', ', '.join(
         f'{a.name} {v:.4g}' for a, v in zip(robot.axes, e0)), ev.misfit_sd())
-    return Search(ev, robot, log.debug, sim0, robot, e0)
+    return Search(ev, robot, log.debug, sim0, robot, e0,
+                  nominal=given if robot is not given else None)
 
 
 def frequency_domain_fit(s: Search) -> None:

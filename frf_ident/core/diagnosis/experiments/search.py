@@ -23,6 +23,7 @@ from frf_ident.core.recording import Recording
 import numpy as np
 
 from .evaluator import Evaluator
+from .noise_gain import HeldOutGain
 from ..common import Effect
 
 __all__ = ['named', 'Search']
@@ -33,7 +34,7 @@ class Search:
     """The state the stages of :func:`diagnose_experiments` share."""
 
     ev: Evaluator
-    robot: RobotParams                  # the nominal model
+    robot: RobotParams                  # the nominal model (with the record's sensor)
     say: Callable[[str], None]          # the search trace
     sim0: Recording                     # the nominal model's simulation
     ext: RobotParams                    # the model so far
@@ -46,6 +47,11 @@ class Search:
     rivals: dict[int, list[Effect]] = field(default_factory=dict)
     shaped: set[int] = field(default_factory=set)   # axes that took an FRF-shape effect
     again: list[Effect] = field(default_factory=list)  # second-pass candidates
+    #: the model file as given, where ``robot`` is it with the sensor the record shows
+    #: (:mod:`..sensor`: the search reads every effect against the sensor); None: the same
+    nominal: RobotParams | None = None
+    #: the held-out check's gain test of each effect it judged (by id)
+    gains: dict[int, HeldOutGain] = field(default_factory=dict)
 
 
 def named(kept: list[Effect]) -> str:

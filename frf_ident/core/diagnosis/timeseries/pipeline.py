@@ -52,6 +52,7 @@ from frf_ident.core.recording import Recording
 import numpy as np
 
 from .effects import axis_effects, axis_groups, rejected_groups, select_extrapolating
+from .line_lock import classify_lines
 from .prepared import prepare, Prepared
 from .resonance import resonances_above
 from ..band import analysis_band, fixed_band
@@ -125,8 +126,10 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
     ext = replace(robot, axes=ext_axes)
     metrics, val = held_out_metrics(d, robot, ext)
     floor = noise_floor(d.rec, d.f, fc, val['extended'].rows)
-    unexplained = unexplained_axes(d, robot, val, floor) + resonances_above(
-        model_residual(d.rec, ext)[0], d.rec.fs, fc, robot.joint_names)
+    wide = model_residual(d.rec, ext)[0]
+    unexplained = unexplained_axes(d, robot, val, floor) + classify_lines(
+        resonances_above(wide, d.rec.fs, fc, robot.joint_names), wide, d.vh, d.rec.fs,
+        robot.joint_names)
     low = lowpass(d.f, d.rec.fs, fc)
     residual = ResidualTrace(d.rec.t[:-1], d.f, d.qh, d.vh, low - val['baseline'].residual,
                              low - val['extended'].residual, d.val_m)

@@ -1,0 +1,100 @@
+# Copyright 2026 frf_ident developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Scenes read by a realistic sensor, end to end (issue 55 items 1-2).
+
+The independent reference plant (test/plants/reference.py) read by an encoder of 1e-6 to
+1e-5 rad per count, its velocity the difference of two readings over a sample, plus noise:
+``identify --plant`` records a bag, ``diagnose`` compares it with the nominal
+config/model_3axis.yaml. Drawn afresh on every run (the seed printed; FRF_DIAG_SEED=<seed>
+repeats one, as in test_diagnose_scenes.py): a nominal plant, where only the sensor may be
+named, on every axis; and two small effects on two axes, each to be found on its own axis.
+Before issue 55 the nominal scenes named a time delay of about half a sample on every axis
+(`python -m benchmarks.diagnosis 2 5500 sensor`: 3 of 3 axes in both).
+
+The issue's sweep, >= 20 scenes of each kind drawn afresh: ``FRF_SENSOR_SCENES=20`` runs
+:func:`test_sensor_sweep` (about 40 scene-minutes, too long for ``make test``, which runs
+the one scene per kind above); the same sweep with its rows printed is
+``python -m benchmarks.diagnosis_sensor 20``, and :func:`check_sweep` is what it must show.
+"""
+import os
+import sys
+
+from benchmarks.diagnosis import draw_scene, run_scene
+from benchmarks.diagnosis_sensor import sensor_sweep
+import numpy as np
+import pytest
+
+
+def _seed() -> int:
+    """Return FRF_DIAG_SEED when set (to repeat a scene), else a fresh random seed."""
+    given = os.environ.get('FRF_DIAG_SEED', '')
+    return int(given) if given else int.from_bytes(os.urandom(3), 'little')
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('kind', ['sensor', 'sensor_two'])
+def test_sensor_scene_drawn_at_random(kind, tmp_path):
+    seed = _seed()
+    scene = draw_scene(np.random.default_rng(seed), kind)
+    print(f'FRF_DIAG_SEED={seed} kind={kind} hidden={scene["truth"]} encoder='
+          f'{scene["scene"]["encoder_resolution"]}', file=sys.stderr)
+    r = run_scene(scene, tmp_path)
+    msg = f'FRF_DIAG_SEED={seed} kind={kind}: {r}'
+    print(f'found {r["found"]}, sensor {r["sensor_found"]}, gain tests {r["gain_tests"]}',
+          file=sys.stderr)
+    # the sensor on every axis, nowhere else, its step read to 1 %
+    assert r['sensor_missed'] == 0 and r['sensor_false'] == 0, msg
+    assert all(e < 0.01 for e in r['sensor_resolution_error'].values()), msg
+    assert not any(f.startswith('time_delay') for f in r['found']) or any(
+        h.startswith('time_delay') for h in r['hidden']), msg
+    if kind == 'sensor':
+        assert r['n_found'] == 0, msg
+        return
+    # two small effects: each on its own axis; nothing named on an effect's axis that is
+    # not its own (a rate over many scenes is the benchmark's; one scene may miss one)
+    assert r['hits'] >= 1, msg
+    axes = {h.split('@')[1] for h in r['hidden']}
+    assert not [f for f in r['found'] if f not in r['hidden'] and f.split('@')[1] in axes], msg
+    assert r['false_alarms'] <= 1, msg
+
+
+#: scenes of each kind the sweep draws (0: skipped; the issue asks for >= 20)
+SWEEP = int(os.environ.get('FRF_SENSOR_SCENES', '0'))
+
+
+def check_sweep(a: dict) -> None:
+    """
+    Assert what the issue's sweep must show (the aggregate of ``sensor_sweep``).
+
+    Nominal scenes: no plant effect named, the sensor on every axis, nowhere else. The
+    held-out gain rule on effects that buy nothing passes at most 1 % of them (its bound
+    is 0.13 % each; 1 % leaves room for a few hundred tests). Two small effects on two axes:
+    nothing named on an effect's axis but its own effect; recall and false alarms printed.
+    """
+    msg = {k: v for k, v in a.items() if k != 'runs'}
+    assert a['nominal_scenes'] >= 1 and a['two_effect_scenes'] >= 1, msg
+    assert a['nominal_without_plant_effect'] == a['nominal_scenes'], msg
+    assert a['sensor_on_every_axis'] == a['scenes'] and a['sensor_false'] == 0, msg
+    passed, n = (int(x) for x in a['null_rule_false_alarms'].split('/'))
+    assert n >= 12 * a['nominal_scenes'] and passed <= 0.01 * n, msg
+    assert a['borrowed_by_an_effect_axis'] == 0, msg
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(SWEEP < 1, reason='FRF_SENSOR_SCENES=N sweeps N scenes of each kind')
+def test_sensor_sweep():
+    a = sensor_sweep(SWEEP, verbose=False)
+    print({k: v for k, v in a.items() if k != 'runs'}, file=sys.stderr)
+    check_sweep(a)
