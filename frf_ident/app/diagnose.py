@@ -43,13 +43,14 @@ from frf_ident.errors import FrfIdentInputError
 
 if TYPE_CHECKING:   # the diagnosis is loaded when a diagnosis runs, not with the command table
     from frf_ident.core.diagnosis.pipeline import Diagnosis
+    from frf_ident.io.mjcf.candidate import MjcfModels
 
 __all__ = ['OUTPUT_FILES', 'diagnose', 'diagnose_columns', 'load_data']
 
 #: the files :func:`diagnose` writes into its output directory (report.html's figures: an
 #: experiments diagnosis draws bode.png and residual.png, a time-series one residual.png)
-OUTPUT_FILES = ('report.json', 'extended_model.yaml', 'report.html', 'bode.png',
-                'residual.png', 'residual_spectrum.png')
+OUTPUT_FILES = ('report.json', 'extended_model.yaml', 'extended_model.xml', 'report.html',
+                'bode.png', 'residual.png', 'residual_spectrum.png')
 
 
 def load_data(path: Path, map_path: Path | None = None) -> Recording:
@@ -157,11 +158,20 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         from frf_ident.core.diagnosis import GravityBasis
         from frf_ident.io.kinematics import load_kinematics
         gravity = GravityBasis(str(urdf), load_kinematics(urdf, robot.joint_names).gravity_basis)
+    mjcf = mjcf_models(robot)
     diag = diagnose_record(rec, robot, ctrl, others=others, gravity=gravity,
                            jobs=SIM_JOBS if jobs is None else jobs, fd_fit=fd_fit,
-                           name=str(data), progress=progress)
-    write_diagnosis(out, diag, model, ctrl, data)
+                           name=str(data), progress=progress, simulator=mjcf)
+    write_diagnosis(out, diag, model, ctrl, data, mjcf=mjcf, progress=progress)
     return diag
+
+
+def mjcf_models(robot: RobotParams) -> MjcfModels | None:
+    """Return the MuJoCo simulator of a model naming an MJCF (None for a model of ours)."""
+    if robot.mjcf is None:
+        return None
+    from frf_ident.io.mjcf.candidate import MjcfModels
+    return MjcfModels(robot)
 
 
 def load_records(data: Path, validate: Sequence[Path], robot: RobotParams, model_path: Path,
@@ -209,8 +219,13 @@ def at_record_rate(robot: RobotParams, rec: Recording, model_path: Path, data: P
 
 
 def write_diagnosis(out: Path, diag: Diagnosis, model: dict[str, Any], ctrl: Any,
-                    data: Path) -> None:
-    """Write extended_model.yaml, report.json and report.html (its figures) into ``out``."""
+                    data: Path, *, mjcf: Any = None, progress: Progress | None = None) -> None:
+    """
+    Write extended_model.yaml, report.json and report.html (its figures) into ``out``.
+
+    With ``mjcf`` (the :class:`~frf_ident.io.mjcf.candidate.MjcfModels` of a model naming an
+    MJCF) also extended_model.xml, its gain measured by MuJoCo (report.json ``mjcf``).
+    """
     from frf_ident.io.model_file import save_model
     from frf_ident.report.diagnosis_page import write_diagnosis_report
     out.mkdir(parents=True, exist_ok=True)
@@ -220,8 +235,17 @@ def write_diagnosis(out: Path, diag: Diagnosis, model: dict[str, Any], ctrl: Any
     save_model(out / 'extended_model.yaml', res.extended, ctrl,
                extra={'description': f'{model.get("description", "nominal model")} + diagnosed '
                                      f'effects: {found}'})
-    (out / 'report.json').write_text(json.dumps(diag.report(), indent=1))
-    write_diagnosis_report(out, diag, data)
+    report = diag.report()
+    written = None
+    if mjcf is not None:
+        from frf_ident.core.diagnosis.pipeline import strict_json
+        from frf_ident.io.mjcf.diagnosed import write_extended
+        written = write_extended(mjcf, diag, ctrl, out)
+        report['mjcf'] = strict_json(written.to_dict())
+        for line in written.lines():
+            sink(progress)(line)
+    (out / 'report.json').write_text(json.dumps(report, indent=1))
+    write_diagnosis_report(out, diag, data, mjcf=written)
 
 
 def diagnose_columns(data: Path, out: Path, progress: Progress | None, *,

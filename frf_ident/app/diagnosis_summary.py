@@ -77,8 +77,10 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
     ls = diag.checks.least_squares
     if ls is not None:
         lines += _against_baseline(ls)
-    # the folder once: three full paths made a 230-character line in a deep output folder
-    lines.append(f'wrote report.json, extended_model.yaml and report.html in {out}')
+    # the folder once: three full paths made a 230-character line in a deep output folder;
+    # extended_model.xml where a model naming an MJCF wrote it (docs/mujoco.md)
+    xml = ', extended_model.xml' if (out / 'extended_model.xml').is_file() else ''
+    lines.append(f'wrote report.json, extended_model.yaml{xml} and report.html in {out}')
     return lines
 
 

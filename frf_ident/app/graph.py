@@ -158,7 +158,8 @@ class Graph:
                  middleware: Optional[str | dict[str, str]] = None) -> None:
         self.nodes = tuple(nodes if nodes is not None else
                            (LOCKSTEP_NODES if lockstep else NODES))
-        self.out = Path(out_dir)
+        # absolute: the node processes run in the source tree (cwd=SOURCE_ROOT below)
+        self.out = Path(out_dir).resolve()
         self.out.mkdir(parents=True, exist_ok=True)
         self.bag = self.out / 'bag'
         self.frf_dir = self.out / 'frf_live'
@@ -168,7 +169,7 @@ class Graph:
         self.middleware = self.env[mw.ENV_BACKEND]
         #: backend of each node process (a dict ``middleware`` mixes rclpy and DDS nodes)
         self.node_middleware = {n: per_node.get(n, self.middleware) for n in self.nodes}
-        self.robot = str(robot or model or '')
+        self.robot = str(Path(robot or model).resolve()) if (robot or model) else ''
         self.say = log or (lambda m: None)
         # lockstep is the simulation's mode; free-running runs on wall time like a robot
         common: dict[str, Any] = {'use_sim_time': bool(lockstep), 'lockstep': bool(lockstep),

@@ -34,11 +34,13 @@ from frf_ident.report.text import parameters_text
 if TYPE_CHECKING:
     from frf_ident.core.diagnosis import Diagnosis, DiagnosisResult
     from frf_ident.core.diagnosis.crosscheck.checks import CrossChecks
+    from frf_ident.io.mjcf.diagnosed import MjcfResult
 
 __all__ = ['write_diagnosis_report']
 
 
-def write_diagnosis_report(out_dir: str | Path, diag: Diagnosis, data: str | Path) -> Path:
+def write_diagnosis_report(out_dir: str | Path, diag: Diagnosis, data: str | Path, *,
+                           mjcf: MjcfResult | None = None) -> Path:
     """
     Write ``out_dir/report.html`` of ``frf-ident diagnose`` and its figures.
 
@@ -50,6 +52,9 @@ def write_diagnosis_report(out_dir: str | Path, diag: Diagnosis, data: str | Pat
         The diagnosis.
     data
         The diagnosed file (shown in the title).
+    mjcf
+        A diagnosis against an MJCF: extended_model.xml, its drive terms, what the MJCF cannot
+        hold and the gain MuJoCo measured (a section of its own).
 
     Returns
     -------
@@ -71,6 +76,8 @@ def write_diagnosis_report(out_dir: str | Path, diag: Diagnosis, data: str | Pat
          + _integrator(res)),
         ('rejected', 'Rejected candidates', _rejected(res)),
         ('figures', 'Figures', _figures(out, diag))]
+    if mjcf is not None:
+        sections.insert(1, ('mjcf', 'Written back as MJCF', _mjcf(mjcf)))
     p = out / 'report.html'
     p.write_text(page(f'Diagnosis of {data}', sections, rec))
     return p
@@ -179,6 +186,31 @@ def _integrator(res: DiagnosisResult) -> str:
     return (f'<p>Integrator check: the extended model simulated at twice its '
             f'simulation.substeps ({step.substeps}) moves the held-out misfit {moved} noise '
             f'floors; ' + html.escape(step.verdict()) + '</p>')
+
+
+def _mjcf(m: MjcfResult) -> str:
+    """Return the MJCF section: both files' drive terms, the limitations, MuJoCo's metrics."""
+    rows = [[t.axis, k, _term(a), _term(b)] for t in m.axes for k, (a, b) in t.changed().items()]
+    text = (f'<p><a href="{html.escape(m.file)}">{html.escape(m.file)}</a>: '
+            f'{html.escape(m.base)} with the diagnosed drive terms '
+            f'(<code>mujoco.MjModel.from_xml_path</code> loads it; docs/mujoco.md).</p>')
+    text += (table(['axis', 'MJCF term', 'nominal', 'extended'], rows) if rows
+             else '<p>no drive term changed.</p>')
+    if m.not_representable or m.notes:
+        text += '<p>Not representable in MJCF, and notes:</p><ul>' + ''.join(
+            f'<li>{html.escape(x)}</li>' for x in m.not_representable + m.notes) + '</ul>'
+    if m.nominal is not None:
+        text += table(['held out, simulated by MuJoCo', 'FRF error [dB]', 'time NRMSE'],
+                      [['nominal MJCF', f'{m.nominal.frf_error_db:.3g}',
+                        f'{m.nominal.time_nrmse:.3g}'],
+                       [m.file, f'{m.extended.frf_error_db:.3g}',
+                        f'{m.extended.time_nrmse:.3g}']])
+        text += f'<p>{html.escape(m.validation)}</p>'
+    return text
+
+
+def _term(x) -> str:
+    return 'rigid' if x is None else f'{x:.4g}'
 
 
 def _rejected(res: DiagnosisResult) -> str:

@@ -43,19 +43,37 @@ KP = [150.0, 150.0, 50.0]
 KI = [1500.0, 1500.0, 500.0]
 
 
-def elastic_xml(held: list[str] = (), elastic: dict = ELASTIC) -> str:
-    """Return the shared MJCF text with the series hinge pairs and without ``held`` joints."""
+def elastic_xml(held: list[str] = (), elastic: dict = ELASTIC, *, rigid: dict | None = None,
+                frictionloss: dict | None = None) -> str:
+    """
+    Return the shared MJCF text with drive terms added and without ``held`` joints.
+
+    ``elastic``: joint -> (armature, motor damping, stiffness, link damping), the series hinge
+    pair; ``rigid``: joint -> (armature, damping) on a joint left rigid; ``frictionloss``:
+    joint -> dry friction [N m] on the (motor-side) joint.
+    """
     text = SHARED_IIWA.read_text()
+    rigid, frictionloss = dict(rigid or {}), dict(frictionloss or {})
+    for joint, (arm, damp) in rigid.items():
+        pat = rf'<joint name="{joint}" class="(\w+)"/>'
+        assert re.search(pat, text), joint
+        text = re.sub(pat, rf'<joint name="{joint}" class="\1" armature="{arm}" '
+                           rf'damping="{damp}"/>', text)
+    for joint, fc in frictionloss.items():
+        pat = rf'(<joint name="{joint}" class="\w+")'
+        assert re.search(pat, text), joint
+        text = re.sub(pat, rf'\1 frictionloss="{fc}"', text)
     for joint, (arm, damp, k, dl) in elastic.items():
         n = joint[-1]
         pat = re.compile(rf'(<body name="link{n}"([^>]*)>)(\s*)(<inertial [^>]*/>)'
-                         rf'(\s*)<joint name="{joint}" class="(\w+)"/>')
+                         rf'(\s*)<joint name="{joint}" class="(\w+)"([^/]*)/>')
         m = pat.search(text)
         assert m, joint
         frame, ws = m.group(2), m.group(3)
         new = (f'<body name="link{n}_motor"{frame}>{ws}'
                f'<inertial pos="0 0 0" mass="1e-6" diaginertia="1e-9 1e-9 1e-9"/>{ws}'
-               f'<joint name="{joint}" class="{m.group(6)}" armature="{arm}" damping="{damp}"/>'
+               f'<joint name="{joint}" class="{m.group(6)}"{m.group(7)} armature="{arm}" '
+               f'damping="{damp}"/>'
                f'{ws}<body name="link{n}">{ws}{m.group(4)}{ws}'
                f'<joint name="{joint}_link" axis="0 0 1" limited="false" stiffness="{k}" '
                f'damping="{dl}"/>')
@@ -65,7 +83,7 @@ def elastic_xml(held: list[str] = (), elastic: dict = ELASTIC) -> str:
     for joint in held:
         text = re.sub(rf'\s*<joint name="{joint}" [^>]*/>', '', text)
         text = re.sub(rf'\s*<motor name="actuator{joint[-1]}" [^>]*/>', '', text)
-    if held or elastic:
+    if held or elastic or rigid or frictionloss:
         text = re.sub(r'\s*<keyframe>.*</keyframe>', '', text, flags=re.S)
     return text
 
@@ -98,7 +116,8 @@ def truth_frf(xml: str, freq_hz: np.ndarray, pose: dict[str, float], axes=AXES,
 
     The rest: the link angle at the pose, each series spring deflected so that the link-side
     hinge needs no force (scipy root of mj_inverse's force there); then mjd_transitionFD with
-    the holding torques applied, and C (zI - A)^-1 B at z = exp(j 2 pi f dt) (timestep = dt).
+    the holding torques applied (each axis' actuator found by its joint), and C (zI - A)^-1 B
+    at z = exp(j 2 pi f dt) (timestep = dt).
     """
     import mujoco
     from scipy.optimize import fsolve
@@ -122,8 +141,7 @@ def truth_frf(xml: str, freq_hz: np.ndarray, pose: dict[str, float], axes=AXES,
 
     delta = fsolve(put, np.zeros(len(link)), xtol=1e-14) if link else np.zeros(0)
     put(delta)
-    acts = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, f'actuator{a[-1]}')
-            for a in axes]
+    acts = [next(k for k in range(m.nu) if m.actuator_trnid[k, 0] == jid[a]) for a in axes]
     d.ctrl[acts] = [d.qfrc_inverse[m.jnt_dofadr[jid[a]]] for a in axes]
     mujoco.mj_forward(m, d)
     nx = 2 * m.nv
@@ -135,3 +153,76 @@ def truth_frf(xml: str, freq_hz: np.ndarray, pose: dict[str, float], axes=AXES,
         C[i, m.nv + m.jnt_dofadr[jid[a]]] = 1.0
     z = np.exp(2j * np.pi * np.asarray(freq_hz) * dt)
     return np.stack([C @ np.linalg.solve(zk * np.eye(nx) - A, B) for zk in z], axis=-1)
+
+
+def linear_frf(xml: str, freq_hz: np.ndarray, pose: dict[str, float], axes: list[str],
+               dt: float = 1e-3) -> np.ndarray:
+    """
+    Return MuJoCo's linearisation of any MJCF text at rest at ``pose`` (torque -> velocity).
+
+    :func:`truth_frf` for an MJCF written by anyone (the diagnosis' extended_model.xml, an
+    MJCF of a URDF): every hinge that is not an axis or an axis' link-side hinge
+    (``<axis>_link``) is removed through MuJoCo's own editor at its position in ``pose``
+    (which must be 0: a removed joint is the joint held at 0), the axes' actuators are found
+    by their joint, and dry friction is switched off (``mjDSBL_FRICTIONLOSS``: MuJoCo's
+    frictionloss is a constraint that holds a joint at rest, it has no linearisation there;
+    its value is checked on its own); then as :func:`truth_frf`.
+    """
+    import mujoco
+    spec = mujoco.MjSpec.from_string(xml)
+    keep = set(axes) | {a + '_link' for a in axes}
+    for a in list(spec.actuators):
+        if a.target not in keep:
+            spec.delete(a)
+    for j in list(spec.joints):
+        if j.name not in keep:
+            assert abs(pose.get(j.name, 0.0)) < 1e-12, j.name
+            spec.delete(j)
+    for k in list(spec.keys):
+        spec.delete(k)
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS
+    return truth_frf(spec.to_xml(), freq_hz, pose, axes, dt)
+
+
+def with_drives(xml: str, *, elastic: dict | None = None, rigid: dict | None = None,
+                frictionloss: dict | None = None) -> str:
+    """
+    Return any MJCF text with drive terms added, by the test's own XML edits.
+
+    :func:`elastic_xml` for an MJCF other than the shared iiwa file (e.g. one MuJoCo wrote
+    from a URDF): the same arguments; each elastic joint must be alone in its body, whose
+    frame attributes move to a new body ``<body>_motor`` holding the motor-side joint, the
+    body itself (inertial, children) inside it with the link-side hinge ``<joint>_link``.
+    Written without :mod:`frf_ident.io.mjcf` (the code under test).
+    """
+    import xml.etree.ElementTree as ET
+    root = ET.fromstring(xml)
+    parents = {c: p for p in root.iter() for c in p}
+    joints = {j.get('name'): j for j in root.iter('joint') if j.get('name')}
+    for name, (arm, damp) in (rigid or {}).items():
+        joints[name].set('armature', repr(arm))
+        joints[name].set('damping', repr(damp))
+    for name, fc in (frictionloss or {}).items():
+        joints[name].set('frictionloss', repr(fc))
+    for name, (arm, damp, k, dl) in (elastic or {}).items():
+        j = joints[name]
+        body = parents[j]
+        outer = ET.Element('body', {'name': body.get('name') + '_motor'})
+        for key in ('pos', 'quat', 'euler', 'axisangle', 'xyaxes', 'zaxis'):
+            if key in body.attrib:
+                outer.set(key, body.attrib.pop(key))
+        parent = parents[body]
+        parent.insert(list(parent).index(body), outer)
+        parent.remove(body)
+        ET.SubElement(outer, 'inertial', {'pos': j.get('pos', '0 0 0'), 'mass': '1e-6',
+                                          'diaginertia': '1e-9 1e-9 1e-9'})
+        body.remove(j)
+        j.set('armature', repr(arm))
+        j.set('damping', repr(damp))
+        outer.append(j)
+        outer.append(body)
+        body.insert(0, ET.Element('joint', {
+            'name': name + '_link', 'axis': j.get('axis', '0 0 1'),
+            'pos': j.get('pos', '0 0 0'), 'limited': 'false', 'stiffness': repr(k),
+            'damping': repr(dl)}))
+    return ET.tostring(root, encoding='unicode')

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Protocol
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording, Segment
@@ -52,6 +52,8 @@ class Effect:
     support: float = 0.0       # |t| of the regression coefficient that proposed it (0: none)
     #: the parameters' standard errors, same keys (None: not estimated, e.g. a nominal term)
     standard_error: dict[str, Any] | None = None
+    #: why a rule, not a simulation, kept it out (its report.json ``rejected`` reason)
+    reason: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out = {'name': self.name, 'axis': self.axis, 'score': round(float(self.score), 3),
@@ -188,6 +190,28 @@ def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
     c.reset(plant.equilibrium_torque())
     res = plant.simulate(reference=r, controller=c, keep_states=False)
     return as_simulation(rec, res.position, res.velocity, res.effort)
+
+
+class Simulator(Protocol):
+    """
+    What simulates a model like a record: :func:`simulate_like`'s signature.
+
+    The diagnosis simulates its candidate models through one of these (dependency
+    inversion): by default :func:`simulate_like`, our own plant; an adapter may inject
+    another engine, e.g. MuJoCo for a nominal model naming an MJCF
+    (frf_ident/io/mjcf/candidate.py), which simulates each candidate as the MJCF it would
+    write. It must be deterministic in ``robot`` (simulations are kept by the model's repr)
+    and may run in a forked worker process.
+    """
+
+    def __call__(self, rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
+                 reference: np.ndarray | None = None) -> Recording:
+        """Return ``robot`` simulated in closed loop on ``rec``'s reference (its segments)."""
+
+
+def unheld_by(simulator: Any) -> dict[str, str]:
+    """Return the effects ``simulator`` cannot hold (name -> why); none for our plant."""
+    return dict(getattr(simulator, 'unheld', None) or {})
 
 
 def as_simulation(rec: Recording, position: np.ndarray, velocity: np.ndarray,

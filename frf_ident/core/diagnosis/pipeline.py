@@ -35,7 +35,7 @@ from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
 
-from .common import has_experiments
+from .common import has_experiments, Simulator
 from .crosscheck.checks import CrossChecks
 from .crosscheck.generalisation import position_terms_on_others
 from .crosscheck.kinematic_gravity import GravityBasis, kinematic_gravity
@@ -96,7 +96,8 @@ class Diagnosis:
 def diagnose(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
              others: Sequence[tuple[str, Recording]] = (), gravity: GravityBasis | None = None,
              jobs: int = SIM_JOBS, fd_fit: bool = True, name: str = 'the record',
-             progress: Progress | None = None) -> Diagnosis:
+             progress: Progress | None = None, simulator: Simulator | None = None
+             ) -> Diagnosis:
     """
     Diagnose ``rec`` against the nominal ``robot`` and check the result.
 
@@ -125,6 +126,10 @@ def diagnose(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
     progress : callable, optional
         Gets one line per step people read; the stages log their trace to
         ``logging.getLogger('frf_ident.core.diagnosis.*')``.
+    simulator : Simulator, optional
+        What simulates the candidate models on the record's and the other records'
+        experiments (:class:`.common.Simulator`); default our plant. An adapter injects
+        another engine here (MuJoCo for a model naming an MJCF).
 
     Returns
     -------
@@ -133,7 +138,8 @@ def diagnose(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
     """
     progress = sink(progress)
     others = list(others)
-    res = route(rec, robot, ctrl, jobs=jobs, fd_fit=fd_fit, progress=progress)
+    res = route(rec, robot, ctrl, jobs=jobs, fd_fit=fd_fit, progress=progress,
+                simulator=simulator)
     checks = CrossChecks()
     if gravity is not None:
         res, checks.kinematic_gravity = kinematic_gravity(res, rec, robot, gravity, progress)
@@ -143,16 +149,17 @@ def diagnose(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
                                                                 progress)
     res, checks.least_squares = against_least_squares(res, rec, others, robot, progress)
     checks.validation_records = on_other_records(res, rec, others, robot, ctrl, progress,
-                                                 name=name)
+                                                 name=name, simulator=simulator)
     return Diagnosis(name_sensor(res, rec, robot), checks, rec, others)
 
 
 def route(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *, jobs: int, fd_fit: bool,
-          progress: Progress) -> DiagnosisResult:
+          progress: Progress, simulator: Simulator | None = None) -> DiagnosisResult:
     """Run the route the record's evidence calls for and return its result."""
     if has_experiments(rec):
         progress('identification experiments found: FRF and closed-loop simulation evidence')
-        return diagnose_experiments(rec, robot, ctrl, jobs=jobs, fd_fit=fd_fit)
+        return diagnose_experiments(rec, robot, ctrl, jobs=jobs, fd_fit=fd_fit,
+                                    simulator=simulator)
     progress('no identification experiments: time-series (inverse-dynamics) evidence')
     return diagnose_timeseries(rec, robot)
 

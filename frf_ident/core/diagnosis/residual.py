@@ -99,8 +99,7 @@ def coulomb_and_ripple(robot: RobotParams, q: np.ndarray, v: np.ndarray) -> np.n
 
 def is_rigid(robot: RobotParams, fs: float) -> bool:
     """Return true when every axis' locked resonance lies far above the Nyquist frequency."""
-    return all(math.sqrt(a.stiffness * (1 / a.motor_inertia + 1 / a.link_inertia)) / (2 * math.pi)
-               > 2 * fs for a in robot.axes)
+    return bool(np.all(_locked_above(robot, fs)))
 
 
 def delayed_effort(u: np.ndarray, delay: np.ndarray, dt: float) -> np.ndarray:
@@ -168,6 +167,61 @@ def _discrete_response(ad, bd, cd, dd, u, x0):
     return y
 
 
+def _locked_above(robot: RobotParams, fs: float) -> np.ndarray:
+    """Return per axis whether its locked resonance lies far above the Nyquist frequency."""
+    return np.array([math.sqrt(a.stiffness * (1 / a.motor_inertia + 1 / a.link_inertia))
+                     / (2 * math.pi) > 2 * fs for a in robot.axes])
+
+
+def _elastic_residual(u: np.ndarray, qh: np.ndarray, vh: np.ndarray, ah: np.ndarray,
+                      dt: float, robot: RobotParams) -> np.ndarray:
+    """
+    Return the residual of a model with elastic axes, its rigid axes' links on their motors.
+
+    The link states of the elastic axes E follow from the link-side equation driven by the
+    measured motor motion; an axis whose locked resonance lies far above the Nyquist frequency
+    (rigid, R) has its link on the motor (q_o = q_m): its spring would make the discretised
+    link equation stiff beyond double precision (a rigid MJCF joint's view next to an elastic
+    one). Rows E: M_EE a_oE + M_ER a_mR + K_E (q_oE - q_mE) + D_E (v_oE - v_mE) + g_E = 0.
+    The transmission torque of an elastic axis is its spring's and damper's, of a rigid one
+    the link side's M_RR a_mR + M_RE a_oE + g_R. Without rigid axes this is the link-side
+    equation of the module docstring.
+    """
+    jm = np.array([a.motor_inertia for a in robot.axes])
+    bv = np.array([a.viscous_friction for a in robot.axes])
+    k = np.array([a.stiffness for a in robot.axes])
+    d = np.array([a.damping for a in robot.axes])
+    rig = _locked_above(robot, 1 / dt)
+    el = np.flatnonzero(~rig)
+    ri = np.flatnonzero(rig)
+    m = robot.link_inertia_matrix()
+    moi = np.linalg.inv(m[np.ix_(el, el)])
+    K, D = np.diag(k[el]), np.diag(d[el])
+    ne = el.size
+    z, eye, zr = np.zeros((ne, ne)), np.eye(ne), np.zeros((ne, ri.size))
+    mer = m[np.ix_(el, ri)]
+    A = np.block([[z, eye], [-moi @ K, -moi @ D]])
+    B = np.block([[z, z, z, zr], [moi @ K, moi @ D, -moi, -moi @ mer]])
+    # the model's link-side load (constant plus gravity terms) at the link positions,
+    # taken as the motor positions: the deflection is far below the terms' angular scale
+    g = robot.gravity_load(qh)
+    sysd = signal.cont2discrete((A, B, np.eye(2 * ne), np.zeros((2 * ne, 3 * ne + ri.size))),
+                                dt, method='foh')
+    w = np.hstack([qh[:, el], vh[:, el], g[:, el], ah[:, ri]])
+    x0 = np.concatenate([qh[0, el] - g[0, el] / k[el], vh[0, el]])
+    xs = _discrete_response(*(np.ascontiguousarray(x) for x in sysd[:4]),
+                            np.ascontiguousarray(w), x0)
+    qo, vo = qh.copy(), vh.copy()
+    qo[:, el], vo[:, el] = xs[:, :ne], xs[:, ne:]
+    f = u - (jm * ah + bv * vh)
+    f[:, el] -= k[el] * (qh[:, el] - qo[:, el]) + d[el] * (vh[:, el] - vo[:, el])
+    if ri.size:
+        ao = (k[el] * (qh[:, el] - qo[:, el]) + d[el] * (vh[:, el] - vo[:, el])
+              - g[:, el] - ah[:, ri] @ mer.T) @ moi.T
+        f[:, ri] -= ah[:, ri] @ m[np.ix_(ri, ri)].T + ao @ mer + g[:, ri]
+    return f
+
+
 def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: float,
                               robot: RobotParams, link_position: np.ndarray | None = None
                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -180,7 +234,6 @@ def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: f
     residual is regressed on). Returns (f, q_half, v_half, a_half), each (N-1, n).
     With ``link_position`` (a link-side encoder) the deflection is measured, not simulated.
     """
-    n = robot.n_axes
     u = delayed_effort(u, [a.time_delay for a in robot.axes], dt)
     qh = 0.5 * (q[1:] + q[:-1])
     vh = 0.5 * (v[1:] + v[:-1])
@@ -198,21 +251,5 @@ def inverse_dynamics_residual(q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: f
         # coupling, RobotParams.link_coupling) adds to the motor inertias
         f = u[:-1] - (jm * ah + ah @ robot.link_inertia_matrix() + bv * vh)
     else:
-        mo = robot.link_inertia_matrix()
-        moi = np.linalg.inv(mo)
-        K, D = np.diag(k), np.diag(d)
-        z, eye = np.zeros((n, n)), np.eye(n)
-        A = np.block([[z, eye], [-moi @ K, -moi @ D]])
-        B = np.block([[z, z, z], [moi @ K, moi @ D, -moi]])
-        # the model's link-side load (constant plus gravity terms) at the link positions,
-        # taken as the motor positions: the deflection is far below the terms' angular scale
-        g = robot.gravity_load(qh)
-        sysd = signal.cont2discrete((A, B, np.eye(2 * n), np.zeros((2 * n, 3 * n))), dt,
-                                    method='foh')
-        w = np.hstack([qh, vh, g])
-        x0 = np.concatenate([qh[0] - g[0] / k, vh[0]])
-        xs = _discrete_response(*(np.ascontiguousarray(m) for m in sysd[:4]),
-                                np.ascontiguousarray(w), x0)
-        qo, vo = xs[:, :n], xs[:, n:]
-        f = u[:-1] - (jm * ah + bv * vh + k * (qh - qo) + d * (vh - vo))
+        f = _elastic_residual(u[:-1], qh, vh, ah, dt, robot)
     return f, qh, vh, ah

@@ -202,6 +202,19 @@ FRICTION_RANGE_SHARE = 0.3
 STAGE2_ROUNDS = 3
 #: a delay candidate this many samples long makes the friction be read again with it
 MIN_DELAY_SAMPLES = 0.1
+#: an axis the nominal model holds rigid (experiments/rigid_axes.py) is offered a joint spring
+#: where the two-mass joint fits its measured FRFs (both loads, complex log error) this many
+#: times better than a rotor inertia alone. Set by hand between the iiwa 14 scene of
+#: test/app/test_diagnose_mjcf.py: its elastic joint2 45 x, its rigid joint4 (coupled to
+#: joint2, nothing added) 1.09 x
+SPRING_COST_RATIO = 4.0
+#: ... its spring reading starts from the best of this many antiresonances, log-spaced over
+#: the measured band (times three motor-inertia shares)
+RIGID_SPRING_GRID = 12
+#: ... with this damping ratio (5 %, a geared joint's)
+RIGID_SPRING_DAMPING = 0.05
+#: rounds of that stage: springs first, then what the axes left read again on top
+RIGID_ROUNDS = 3
 
 # --- experiments route: missing structure and second modes (structure.py, second_mode.py) -----
 

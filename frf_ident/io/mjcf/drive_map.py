@@ -59,45 +59,70 @@ RIGID_MOTOR_SHARE = 0.01
 
 @dataclass(frozen=True)
 class Row:
-    """One row of :data:`MAPPING`: our key, the MJCF element and attribute, unit, how exact."""
+    """
+    One row of :data:`MAPPING`: our key, the MJCF attribute, unit, how exact, the diagnosis.
+
+    ``diagnosis``: which effect of ``diagnose`` against an MJCF sets it and what is written
+    (frf_ident/io/mjcf/held.py, docs/mujoco.md "Diagnosis against an MJCF").
+    """
 
     ours: str
     mjcf: str
     unit: str
     note: str
+    diagnosis: str = '-'
 
 
 #: our parameter -> MJCF attribute (docs/mujoco.md prints this table)
 MAPPING: tuple[Row, ...] = (
     Row('motor_inertia', 'motor-side `joint@armature`', 'kg m^2',
         'exact (rotor inertia through the gear; MuJoCo ignores its gyroscopic coupling, as '
-        'we do)'),
+        'we do)',
+        '`parameter_mismatch` motor_inertia -> `armature`; on a rigid joint the change of '
+        "its total inertia (the view's 1 % motor share is never reported)"),
     Row('link_inertia, link_coupling', "the bodies' `inertial` (M(q) of the link side)",
         'kg m^2', 'MJCF -> ours: M(q) at the pose; ours -> MJCF: kept from the MJCF '
-        '(a standalone export puts link_inertia on one body per axis, no coupling)'),
+        '(a standalone export puts link_inertia on one body per axis, no coupling)',
+        '`parameter_mismatch` link_inertia on a rigid joint -> `armature` (the total); on '
+        "an elastic one not written, reported (the MJCF's bodies kept)"),
     Row('stiffness', f'link-side `joint@stiffness` (hinge `<joint>{LINK_SUFFIX}`)', 'N m/rad',
-        'exact: spring on the relative angle, springref 0'),
+        'exact: spring on the relative angle, springref 0',
+        '`parameter_mismatch` stiffness on a rigid joint with a resonance in the band '
+        '(stage 0b) -> the series-elastic pair inserted; a spring too stiff for the time '
+        'step: written rigid, reported'),
     Row('damping', f'link-side `joint@damping` (hinge `<joint>{LINK_SUFFIX}`)', 'N m s/rad',
-        'exact: acts on the relative velocity'),
-    Row('viscous_friction', 'motor-side `joint@damping`', 'N m s/rad', 'exact'),
+        'exact: acts on the relative velocity',
+        '`parameter_mismatch` damping -> link-side `damping` (elastic joints)'),
+    Row('viscous_friction', 'motor-side `joint@damping`', 'N m s/rad', 'exact',
+        '`viscous_friction` -> motor-side `damping`'),
     Row('coulomb_friction', 'motor-side `joint@frictionloss`', 'N m',
         'approximate: a soft constraint (solref/solimp), not a set-valued or tanh law: a '
-        'stuck joint creeps, see docs/mujoco.md'),
-    Row('torque_limit', '`actuator@ctrlrange` x `gear` (`forcerange` if set)', 'N m', 'exact'),
+        'stuck joint creeps, see docs/mujoco.md',
+        '`coulomb_friction` -> `frictionloss` (simulated so: candidates run in MuJoCo)'),
+    Row('torque_limit', '`actuator@ctrlrange` x `gear` (`forcerange` if set)', 'N m', 'exact',
+        '- (kept)'),
     Row('(torque constant)', '`general` actuator `gainprm[0]` (1 for `motor`)', '1',
-        'exact: applied torque = gainprm[0] x command'),
+        'exact: applied torque = gainprm[0] x command',
+        '- (not in the vocabulary; kept)'),
     Row('time_delay', '`actuator@delay` (ctrl history, `nsample` >= delay / timestep + 1)',
-        's', 'whole time steps exact; a fraction of a step interpolated (`interp` linear)'),
+        's', 'whole time steps exact; a fraction of a step interpolated (`interp` linear)',
+        '`time_delay` -> `actuator@delay`'),
     Row('gravity_torque, gravity', "the bodies' masses and `option@gravity`", 'N m',
         'MJCF -> ours: g(q) at the pose and its gradient; ours -> MJCF: not written (the '
-        "MJCF's rigid body holds it)"),
+        "MJCF's rigid body holds it)",
+        '`gravity`: not simulated, listed in `rejected` (a different gravity means wrong '
+        'masses)'),
     Row('stiffness_k2, stiffness_breakpoint', '(link-side `joint@stiffness` polynomial)',
         'N m/rad, rad', 'not representable as a breakpoint; MuJoCo 4 takes stiffness="k1 c2 c3" '
-        '(torque k1 d + c2 d^2 + c3 d^3), the closest is a cubic; written: the linear k1'),
-    Row('backlash', '-', 'rad', 'not representable (no dead zone on a joint spring)'),
-    Row('torque_ripple', '-', 'N m', 'not representable (no position-periodic joint torque)'),
+        '(torque k1 d + c2 d^2 + c3 d^3), the closest is a cubic; written: the linear k1',
+        '`stiffness_nonlinearity`: not simulated, listed in `rejected`'),
+    Row('backlash', '-', 'rad', 'not representable (no dead zone on a joint spring)',
+        '`backlash`: not simulated, listed in `rejected`'),
+    Row('torque_ripple', '-', 'N m', 'not representable (no position-periodic joint torque)',
+        '`torque_ripple`: not simulated, listed in `rejected`'),
     Row('encoder_resolution, velocity_noise, torque_noise', '-', '',
-        'measurement, not the MJCF: the model file keeps them, the plant applies them'),
+        'measurement, not the MJCF: the model file keeps them, the plant applies them',
+        "- (the record's)"),
 )
 
 
@@ -113,11 +138,13 @@ def mapping_table() -> str:
     Examples
     --------
     >>> print(mapping_table().splitlines()[0])
-    | ours | MJCF | unit | how exact |
+    | ours | MJCF | unit | how exact | diagnosis against an MJCF |
 
     """
-    lines = ['| ours | MJCF | unit | how exact |', '|---|---|---|---|']
-    lines += [f'| `{r.ours}` | {r.mjcf} | {r.unit} | {r.note} |' for r in MAPPING]
+    lines = ['| ours | MJCF | unit | how exact | diagnosis against an MJCF |',
+             '|---|---|---|---|---|']
+    lines += [f'| `{r.ours}` | {r.mjcf} | {r.unit} | {r.note} | {r.diagnosis} |'
+              for r in MAPPING]
     return '\n'.join(lines)
 
 

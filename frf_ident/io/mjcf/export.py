@@ -36,7 +36,7 @@ from frf_ident.io.mjcf.spec_edit import set_drive, split_elastic
 import mujoco
 import numpy as np
 
-__all__ = ['MjcfExport', 'write_mjcf']
+__all__ = ['MjcfExport', 'drive_spec', 'write_mjcf']
 
 #: spacing [m] of the axes of a standalone MJCF along x (they do not touch: no geoms anyway)
 AXIS_SPACING = 1.0
@@ -141,18 +141,45 @@ def write_mjcf(robot: RobotParams, path: str | Path, *, base: str | Path | None 
     lims = [x for a in robot.axes for x in limitations(a)]
     if base is None:
         spec, notes = _standalone(robot)
+        spec = drive_spec(spec, drives)
     else:
-        spec = split_elastic(load_spec(base), [d.joint for d in drives if d.elastic])
-        notes = []
-    for d in drives:
-        set_drive(spec, d)
-        _set_delay(spec.actuator(_actuator_name(spec, d.joint)), d.delay,
-                   float(spec.option.timestep))
+        spec, notes = drive_spec(load_spec(base), drives), []
     spec.compile()
     path.write_text(spec.to_xml())
     if base is not None and robot.mjcf is not None:
         notes += _inertia_notes(robot, path)
     return MjcfExport(path, lims, notes)
+
+
+def drive_spec(spec: mujoco.MjSpec, drives: list[JointDrive], *,
+               timestep: float | None = None) -> mujoco.MjSpec:
+    """
+    Return ``spec`` with the drive terms written: the elastic joints split, each joint's terms.
+
+    Parameters
+    ----------
+    spec : mujoco.MjSpec
+        The MJCF (a fresh read: :func:`~frf_ident.io.mjcf.spec_edit.split_elastic` may return
+        a new spec, :func:`~frf_ident.io.mjcf.spec_edit.set_drive` edits in place).
+    drives : list of JointDrive
+        One per joint to write; ``stiffness`` not None inserts the series-elastic pair.
+    timestep : float, optional
+        MuJoCo's ``option timestep`` [s] to write (default: the MJCF's).
+
+    Returns
+    -------
+    mujoco.MjSpec
+        The edited spec (not compiled).
+
+    """
+    spec = split_elastic(spec, [d.joint for d in drives if d.elastic])
+    if timestep is not None:
+        spec.option.timestep = float(timestep)
+    for d in drives:
+        set_drive(spec, d)
+        _set_delay(spec.actuator(_actuator_name(spec, d.joint)), d.delay,
+                   float(spec.option.timestep))
+    return spec
 
 
 def _actuator_name(spec: mujoco.MjSpec, joint: str) -> str:

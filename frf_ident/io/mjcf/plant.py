@@ -34,11 +34,22 @@ from frf_ident.core.model.schema import default_model_dict, mjcf_source_from_dic
 from frf_ident.core.simulation.plant import SimResult
 from frf_ident.errors import MjcfError
 from frf_ident.io.mjcf.loop import run_loop
-from frf_ident.io.mjcf.robot import load_robot
+from frf_ident.io.mjcf.robot import load_robot, MjcfRobot
 import mujoco
 import numpy as np
 
 __all__ = ['MujocoPlant']
+
+
+def _source(d: dict[str, Any], mjcf: str | Path | None) -> MjcfSource:
+    """Return the MJCF to simulate: ``mjcf`` at the model's pose, else the model's own."""
+    src = mjcf_source_from_dict(d) if 'mjcf' in d else None
+    if mjcf is not None:      # the model's pose, joint by joint (not its keyframe's name)
+        src = MjcfSource(str(mjcf), None, src.pose if src else {})
+    if src is None:
+        raise MjcfError('--plant mujoco: the model file names no mjcf; give one in the '
+                        'model (mjcf: robot.xml) or as --plant mujoco:FILE.xml')
+    return src
 
 
 class MujocoPlant:
@@ -55,6 +66,9 @@ class MujocoPlant:
         The MJCF to simulate instead of the model's (``--plant mujoco:FILE.xml``); it starts at
         the model's pose (every joint the model's MJCF poses must be in it), else at its first
         keyframe or ``qpos0``.
+    robot : MjcfRobot, optional
+        The MJCF already prepared (:func:`~frf_ident.io.mjcf.robot.load_robot`, e.g. a
+        candidate model of the diagnosis); then ``mjcf`` and the model's ``mjcf`` are not read.
 
     Raises
     ------
@@ -64,17 +78,11 @@ class MujocoPlant:
     """
 
     def __init__(self, config: dict[str, Any] | None = None, *,
-                 mjcf: str | Path | None = None) -> None:
+                 mjcf: str | Path | None = None, robot: MjcfRobot | None = None) -> None:
         d = config if config is not None else default_model_dict()
-        src = mjcf_source_from_dict(d) if 'mjcf' in d else None
-        if mjcf is not None:      # the model's pose, joint by joint (not its keyframe's name)
-            src = MjcfSource(str(mjcf), None, src.pose if src else {})
-        if src is None:
-            raise MjcfError('--plant mujoco: the model file names no mjcf; give one in the '
-                            'model (mjcf: robot.xml) or as --plant mujoco:FILE.xml')
         axes = d.get('axes') or []
         names = [str(a.get('name', f'joint_{i + 1}')) for i, a in enumerate(axes)]
-        self.robot = load_robot(src, names)
+        self.robot = robot if robot is not None else load_robot(_source(d, mjcf), names)
         self.sample_rate = float(d.get('sample_rate', 1000.0))
         self.substeps = self.robot.substeps(1.0 / self.sample_rate)
         n = len(names)

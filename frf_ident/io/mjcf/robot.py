@@ -227,7 +227,8 @@ def start_pose(spec: mujoco.MjSpec, model: mujoco.MjModel, source: MjcfSource) -
     return pose
 
 
-def load_robot(source: MjcfSource, axes: list[str]) -> MjcfRobot:
+def load_robot(source: MjcfSource, axes: list[str], *,
+               spec: mujoco.MjSpec | None = None) -> MjcfRobot:
     """
     Read an MJCF and prepare it for identifying ``axes`` (the others held at the pose).
 
@@ -237,6 +238,9 @@ def load_robot(source: MjcfSource, axes: list[str]) -> MjcfRobot:
         The file, keyframe and joint positions of the start pose.
     axes : list of str
         The actuated joints to identify, in axis order.
+    spec : mujoco.MjSpec, optional
+        The MJCF already read and edited (a candidate model of the diagnosis): used instead
+        of reading ``source.file`` (changed in place); ``source`` still names the pose.
 
     Returns
     -------
@@ -250,7 +254,7 @@ def load_robot(source: MjcfSource, axes: list[str]) -> MjcfRobot:
         keyframe or pose joint is unknown, another joint is a ball or free joint.
 
     """
-    spec = load_spec(source.file)
+    spec = load_spec(source.file) if spec is None else spec
     full = _compile(spec, source.file)
     pose = start_pose(spec, full, source)
     names = set(pose)

@@ -32,7 +32,7 @@ from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np
 
-from ..common import has_experiments
+from ..common import has_experiments, Simulator
 from ..experiments.evaluator import Evaluator
 from ..prediction import predict_metrics
 from ..records import Scores
@@ -84,16 +84,17 @@ class RecordCheck:
 
 
 def validate_on(name: str, other: Recording, robot: RobotParams, ext: RobotParams,
-                ctrl: PIVelocity) -> RecordCheck:
+                ctrl: PIVelocity, simulator: Simulator | None = None) -> RecordCheck:
     """
     Return the scores of the nominal and the extended model on another record (no refit).
 
-    Simulation of its experiments when it has them, else the time-series torque prediction.
+    Simulation of its experiments when it has them (by ``simulator``, default our plant),
+    else the time-series torque prediction.
     """
     robot = replace(robot, sample_rate=other.fs)
     ext = replace(ext, sample_rate=other.fs)
     if has_experiments(other):
-        ev = Evaluator(other, ctrl)
+        ev = Evaluator(other, ctrl, simulator=simulator)
         try:
             return RecordCheck(name, ev.metrics(robot), ev.metrics(ext))
         finally:
@@ -104,7 +105,8 @@ def validate_on(name: str, other: Recording, robot: RobotParams, ext: RobotParam
 
 def on_other_records(res: DiagnosisResult, rec: Recording, others: list[tuple[str, Recording]],
                      robot: RobotParams, ctrl: PIVelocity, progress: Progress, *,
-                     name: str = 'the record') -> list[RecordCheck]:
+                     name: str = 'the record', simulator: Simulator | None = None
+                     ) -> list[RecordCheck]:
     """
     Return :func:`validate_on` of every other record, with its excursion beyond the fit.
 
@@ -114,7 +116,7 @@ def on_other_records(res: DiagnosisResult, rec: Recording, others: list[tuple[st
     out = []
     for other_name, other in others:
         far = beyond_fitted_range(rec, res.fit_rows, other, robot.joint_names)
-        out.append(replace(validate_on(other_name, other, robot, res.extended, ctrl),
+        out.append(replace(validate_on(other_name, other, robot, res.extended, ctrl, simulator),
                            beyond_fitted_range=far))
         if far:
             progress(f'warning: --validate {other_name} leaves the configuration range fitted '

@@ -29,9 +29,11 @@ from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np
 
+from .floors import period_noise
 from .parallel import WorkerPool
 from ..common import (as_simulation, bridge_gaps, diag_ratio, drive_reference, frf_error_db, nrmse,
-                      rms_about_mean, segment_mask, simulate_like, split_recording)
+                      rms_about_mean, segment_mask, simulate_like, Simulator, split_recording,
+                      unheld_by)
 from ..records import AxisScore, Scores
 from ..residual import inverse_dynamics_residual
 from ..thresholds import EST_CACHE, FLOOR_MIN, INDEPENDENT_SAMPLE_S, SETTLE_S, SIM_CACHE, SIM_JOBS
@@ -67,35 +69,6 @@ def missing_reference(rec: Recording) -> np.ndarray:
     return bad
 
 
-def period_noise(rec: Recording, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """
-    Return the noise variance of velocity and effort per axis from the multisine periods.
-
-    Noise variance of velocity and effort per axis measured from the multisine periods:
-    half the mean square difference of consecutive steady-state periods (periodic signal
-    cancels, noise doubles). NaN where the recording has no repeated periods.
-    """
-    dv, du = [], []
-    for s in rec.segments:
-        info = s.info
-        if info.get('design') != 'multisine' or int(info.get('periods', 0)) < 2:
-            continue
-        P = int(info.get('period_samples', 0))
-        sl = rec.slice(s.t_start, s.t_end)
-        k0 = sl.start + P * int(info.get('transient_periods', 0))
-        k1 = min(sl.stop, sl.start + P * (int(info.get('transient_periods', 0))
-                                          + int(info['periods'])))
-        if P < 2 or k1 - k0 < 2 * P or not mask[k0:k1].all():
-            continue
-        dv.append(rec.velocity[k0 + P:k1] - rec.velocity[k0:k1 - P])
-        du.append(rec.effort[k0 + P:k1] - rec.effort[k0:k1 - P])
-    n = rec.velocity.shape[1]
-    if not dv:
-        return np.full(n, np.nan), np.full(n, np.nan)
-    return (0.5 * np.mean(np.concatenate(dv) ** 2, axis=0),
-            0.5 * np.mean(np.concatenate(du) ** 2, axis=0))
-
-
 class Evaluator:
     """
     Simulates candidate models on the recorded excitation and scores them per axis.
@@ -104,12 +77,15 @@ class Evaluator:
     output error) is expressed in units of its noise floor measured in the data: the BLA noise
     variance from the multisine periods for the FRFs, the period-to-period variance of the
     measured torque and velocity for the time signals. A model that explains the axis to its
-    noise scores about 1.
+    noise scores about 1. ``simulator``: :class:`..common.Simulator` (default our plant).
     """
 
-    def __init__(self, rec: Recording, ctrl: PIVelocity, *, jobs: int = SIM_JOBS) -> None:
+    def __init__(self, rec: Recording, ctrl: PIVelocity, *, jobs: int = SIM_JOBS,
+                 simulator: Simulator | None = None) -> None:
         #: processes that simulate the models of one :meth:`prefetch` at once
         self.jobs = jobs
+        self.simulator: Simulator = simulate_like if simulator is None else simulator
+        self.unheld = unheld_by(simulator)      # effects it cannot hold: name -> why
         # rows lost in gaps of the bag are bridged and lose their reference: left out below
         self.rec, self.ctrl = bridge_gaps(rec)[0], ctrl
         rec = self.rec
@@ -186,7 +162,7 @@ class Evaluator:
         """
         Return the closed-loop simulation of a model on the recorded excitation.
 
-        :func:`..common.simulate_like` of ``robot`` on the (gap-bridged) recording, counted in
+        :attr:`simulator` of ``robot`` on the (gap-bridged) recording, counted in
         :attr:`n_sims`. The same model is simulated again where a candidate is checked before
         its round (a damping mismatch before its viscous rival is refitted): the last
         SIM_CACHE simulations are kept, keyed by the model's repr.
@@ -204,7 +180,7 @@ class Evaluator:
         """
         key = repr(robot)
         if key not in self._sims:
-            self._keep(key, simulate_like(self.rec, robot, self.ctrl, reference=self._drive))
+            self._keep(key, self.simulator(self.rec, robot, self.ctrl, reference=self._drive))
         return self._sims[key]
 
     def prefetch(self, robots: Sequence[RobotParams]) -> None:
@@ -237,10 +213,11 @@ class Evaluator:
     def _pool(self) -> WorkerPool:
         """Return the workers that simulate a model and estimate its fit part (forked once)."""
         if self._workers is None:
-            rec, ctrl, fit, drive = self.rec, self.ctrl, self.fit, self._drive
+            rec, ctrl, fit, drive, simulate = (self.rec, self.ctrl, self.fit, self._drive,
+                                               self.simulator)
 
             def run(robot: RobotParams) -> tuple:
-                sim = simulate_like(rec, robot, ctrl, reference=drive)
+                sim = simulate(rec, robot, ctrl, reference=drive)
                 return (sim.position, sim.velocity, sim.effort,
                         frf_estimates(replace_segments(sim, fit)))
             # the three signals of a simulation come back through shared memory
@@ -304,13 +281,15 @@ class Evaluator:
         """
         Return :func:`..common.nrmse` ^ 2 per axis of a simulated signal on the mask ``m``.
 
-        The measured side (its masked samples and their RMS about the mean) is formed once
-        per signal and part.
+        Both parts scaled by the fit part's RMS, the floor's scale (term / floor = mean square
+        error / noise variance: with the held-out part's own RMS a weak held-out chirp put
+        the true model at hundreds of floors). The measured side is formed once per part.
         """
         ref = self._measured.get((key, held_out))
         if ref is None:
             meas = getattr(self.rec, key)
-            ref = [(a, rms_about_mean(a)) for a in (meas[:, i][m] for i in range(self.n))]
+            ref = [(meas[:, i][m], rms_about_mean(meas[:, i][self.fit_mask]))
+                   for i in range(self.n)]
             self._measured[(key, held_out)] = ref
         return np.array([nrmse(a, x[:, i][m], scale=den) ** 2 for i, (a, den) in enumerate(ref)])
 

@@ -52,7 +52,8 @@ from ..common import Effect
 from ..thresholds import (FD_MISMATCH_Z, FD_STRUCTURE_RATIO, LOAD_DEPENDENCE_MIN_LOG,
                           MISMATCH_MIN_LOG)
 
-__all__ = ['FD_KEYS', 'LinearShift', 'fd_parameter_mismatch', 'linear_shifts', 'load_dependence']
+__all__ = ['FD_KEYS', 'LinearShift', 'fd_parameter_mismatch', 'linear_shifts', 'load_dependence',
+           'shifts_text']
 
 log = logging.getLogger(__name__)
 
@@ -267,3 +268,18 @@ def fd_parameter_mismatch(shifts: list[LinearShift], robot: RobotParams, axis: i
                   + '; '.join(said) + f'; stiffness scale chirp/multisine '
                   f'x{math.exp(load_shift):.3f} (linear spring); the cost test finds no '
                   f'structure missing', axis, standard_error=se)
+
+
+def shifts_text(shifts: list, load: np.ndarray, robot: RobotParams) -> str:
+    """Return stage 0's log shifts and load dependence per axis, a trace line each."""
+    axes = robot.axes
+    lines = [f'stage 0 {sh.key}: log shift of ' + ', '.join(
+        f'{a.name} ' + '/'.join(f'{d:+.3f}+-{e:.3f}' for d, e in zip(sh.log_scale[i], sh.std[i]))
+        for i, a in enumerate(axes)) + ' (motor inertia/link inertia/stiffness)'
+        + ''.join(f'; {a.name}: own channel {c:.3g} x its noise per dof'
+                  + (' (structure missing)' if m else '')
+                  for a, c, m in zip(axes, sh.channel_cost, sh.structure_missing)
+                  if np.isfinite(c)) for sh in shifts]
+    lines.append('stage 0 load dependence (stiffness scale chirp/multisine): ' + ', '.join(
+        f'{a.name} x{math.exp(x):.3f}' for a, x in zip(axes, load)))
+    return '\n'.join(lines)

@@ -249,8 +249,11 @@ def rejected_entry(c: Effect, gain: HeldOutGain | None = None) -> Rejected:
     """
     Return the report.json ``rejected`` entry of a candidate that was not taken.
 
-    One the held-out check dropped for a gain within noise carries that as its ``reason``.
+    One the simulator cannot hold carries the rule's ``reason`` (``c.reason``); one the
+    held-out check dropped for a gain within noise carries that as its ``reason``.
     """
+    if c.reason is not None:
+        return Rejected(c.name, c.axis, c.to_dict()['parameters'] or None, reason=c.reason)
     reason = (f'{gain.describe()}: within what the noise alone gives, dropped'
               if gain is not None and not gain.beyond_noise else None)
     return Rejected(c.name, c.axis, c.to_dict()['parameters'], reason=reason,

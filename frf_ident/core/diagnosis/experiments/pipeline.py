@@ -39,13 +39,15 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
                          fit_time_delay, fit_viscous, friction_regression, ripple_again,
                          stiffness_seen, with_params)
 from .evaluator import Evaluator
-from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
+from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence, shifts_text
 from .held_out import finish, held_out_check, structure_missing
 from .refit import FRICTION, refit_friction, refit_jointly
+from .rigid_axes import rigid_axes, rigid_in_band
 from .search import named, Search
 from .second_mode import refine_modes, take_second_mode
 from .structure import read_structure
-from ..common import apply_effect, Effect
+from .unheld import not_held, spring_shapes_skipped
+from ..common import apply_effect, Effect, Simulator
 from ..result import DiagnosisResult
 from ..sensor import describe_sensor, read_sensor, sensor_effects, with_sensor
 from ..thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS, UNEXPLAINED_RATIO
@@ -56,7 +58,8 @@ log = logging.getLogger(__name__)
 
 
 def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
-                         jobs: int = SIM_JOBS, fd_fit: bool = True) -> DiagnosisResult:
+                         jobs: int = SIM_JOBS, fd_fit: bool = True,
+                         simulator: Simulator | None = None) -> DiagnosisResult:
     """
     Diagnose an identification recording against the nominal ``robot``.
 
@@ -84,6 +87,9 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     fd_fit : bool
         Run stage 0 (default); False: the mismatch is read in stage 2 only (the path before
         issue 40 item 5, kept for the before/after benchmark).
+    simulator : Simulator, optional
+        What simulates the candidate models (:class:`..common.Simulator`); default our plant
+        (:func:`..common.simulate_like`).
 
     Returns
     -------
@@ -97,10 +103,11 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     DEBUG level.
 
     """
-    s = start(rec, robot, ctrl, jobs)
+    s = start(rec, robot, ctrl, jobs, simulator)
     try:
         if fd_fit:
             frequency_domain_fit(s)
+        rigid_axes(s)
         torque_residual_effects(s)
         frf_shape_effects(s)
         second_pass(s)
@@ -114,13 +121,13 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         s.ev.close()
 
 
-def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_JOBS
-          ) -> Search:
+def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_JOBS,
+          simulator: Simulator | None = None) -> Search:
     """Build the evaluator and simulate the nominal model: its misfit per axis."""
     if rec.reference is None:
         raise EstimationError('recording has no velocity reference: use the time-series '
                               'diagnosis')
-    ev = Evaluator(rec, ctrl, jobs=jobs)
+    ev = Evaluator(rec, ctrl, jobs=jobs, simulator=simulator)
     given, reading = robot, read_sensor(rec, robot.joint_names)
     if sensor_effects(reading, robot):
         robot = with_sensor(robot, reading)
@@ -156,36 +163,23 @@ def frequency_domain_fit(s: Search) -> None:
     sim_est = ev.fit_estimates(robot, s.sim0)
     shifts = linear_shifts(ev.meas_fit, sim_est, robot)
     load = load_dependence(ev.meas_fit, sim_est, robot)
-    _say_shifts(s, shifts, load)
+    s.say(shifts_text(shifts, load, robot))
     s.structure = read_structure(ev.meas_fit, sim_est, robot)
     if s.structure is not None:
         s.say('stage 0 residual of the linear fit (multisine against the nominal simulation): '
               + s.structure.text(robot.joint_names))
     s.stage0 = [c for c in (fd_parameter_mismatch(shifts, robot, i, load[i])
                             for i in range(robot.n_axes)
-                            if s.structure is None or s.structure.white(i)) if c is not None]
+                            # a rigid axis has no motor/link split to rescale: rigid_axes reads it
+                            if not rigid_in_band(robot, i)
+                            and (s.structure is None or s.structure.white(i)))
+                if c is not None]
     if s.stage0:
         s.ext, s.cur = accept(ev, robot, s.kept, s.stage0, s.cur, s.say)
     s.cands += s.stage0
     take_second_mode(s)
     log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0),
              named(s.kept))
-
-
-def _say_shifts(s: Search, shifts: list, load: np.ndarray) -> None:
-    """Write stage 0's log shifts and load dependence per axis to the trace."""
-    axes = s.robot.axes
-    for sh in shifts:
-        s.say(f'stage 0 {sh.key}: log shift of ' + ', '.join(
-            f'{a.name} ' + '/'.join(f'{d:+.3f}+-{e:.3f}'
-                                    for d, e in zip(sh.log_scale[i], sh.std[i]))
-            for i, a in enumerate(axes)) + ' (motor inertia/link inertia/stiffness)'
-            + ''.join(f'; {a.name}: own channel {c:.3g} x its noise per dof'
-                      + (' (structure missing)' if m else '')
-                      for a, c, m in zip(axes, sh.channel_cost, sh.structure_missing)
-                      if np.isfinite(c)))
-    s.say('stage 0 load dependence (stiffness scale chirp/multisine): ' + ', '.join(
-        f'{a.name} x{math.exp(x):.3f}' for a, x in zip(axes, load)))
 
 
 def torque_residual_effects(s: Search) -> None:
@@ -205,13 +199,10 @@ def torque_residual_effects(s: Search) -> None:
         s.say(f'{robot.axes[i].name}: residual regression '
               f'{ {k: round(v, 4) for k, v in reg.coef.items()} }, ripple scan peak '
               f'{reg.ripple_peak_ratio:.1f} (threshold {reg.ripple_threshold:.1f})')
-        for fn in (fit_coulomb, fit_viscous, fit_ripple):
-            e = fn(reg, ext, i)
-            if e is not None:
+        for e in [fn(reg, ext, i) for fn in (fit_coulomb, fit_viscous, fit_ripple)] + [
+                fit_gravity(ev, ext, i)]:
+            if e is not None and not_held(s, e) is None:
                 s.stage1.append(e)
-        e = fit_gravity(ev, ext, i)
-        if e is not None:
-            s.stage1.append(e)
     for c in coupled_ripples(s.stage1, robot.link_inertia_matrix(), resolution):
         s.stage1.remove(c)
         c.evidence += ('; at the spatial frequency of a stronger ripple on another axis, '
@@ -286,12 +277,14 @@ def frf_shape_candidates(s: Search, i: int, sim_est: dict) -> list[Effect]:
     taken = {k.name for k in kept if k.axis_index == i}
     # the delay and the mismatch are FRF fits whose values serve the re-reads below; the
     # simulation fits of a stiffening or a backlash are not run for an axis that took one (it
-    # is not offered again below)
+    # is not offered again below), nor for an axis rigid in the band (no spring to bend or
+    # rescale: rigid_axes reads it) or where the simulator cannot hold them
+    skip = spring_shapes_skipped(s, i, s_ms, s_ch) | taken
     found = [fit_time_delay(ev, sim_est, ext, i),
-             fit_parameter_mismatch(ev, ext, i, s_ms, s_ch),
-             None if 'stiffness_nonlinearity' in taken
+             None if rigid_in_band(ext, i) else fit_parameter_mismatch(ev, ext, i, s_ms, s_ch),
+             None if 'stiffness_nonlinearity' in skip
              else fit_stiffness_nonlinearity(ev, ext, i, s_ms, s_ch),
-             None if 'backlash' in taken else fit_backlash(ev, ext, i, s_ms, s_ch)]
+             None if 'backlash' in skip else fit_backlash(ev, ext, i, s_ms, s_ch)]
     out: list[Effect] = []
     td = found[0]
     if (td is not None and td.parameters['time_delay'] - ext.axes[i].time_delay
