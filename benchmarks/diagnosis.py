@@ -201,18 +201,28 @@ def identify_scene(scene: dict[str, Any], bag: Path) -> Path:
     return bag
 
 
-def diagnose_scene(scene: dict[str, Any], bag: Path, out: Path, **kw: Any) -> dict[str, Any]:
-    """Diagnose a scene's bag against MODEL (``kw``: of ``diagnose``) and score it."""
+def diagnose_scene(scene: dict[str, Any], bag: Path, out: Path, *, keep_report: bool = False,
+                   **kw: Any) -> dict[str, Any]:
+    """
+    Diagnose a scene's bag against MODEL (``kw``: of ``diagnose``) and score it.
+
+    With ``keep_report`` the score holds the report.json content too (``report``).
+    """
     from frf_ident.app.diagnose import diagnose
     t0 = time.perf_counter()
     _diagnosis_log()
     res = diagnose(bag, MODEL, out, progress=lambda _m: None, **kw)
-    return score_scene(scene, res.report(), time.perf_counter() - t0, res.result.n_sims)
+    r = score_scene(scene, res.report(), time.perf_counter() - t0, res.result.n_sims)
+    if keep_report:
+        r['report'] = res.report()
+    return r
 
 
-def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
+def run_scene(scene: dict[str, Any], work: Path, *, keep_report: bool = False
+              ) -> dict[str, Any]:
     """Identify the scene's plant through ``--plant`` into a bag, diagnose the bag."""
-    return diagnose_scene(scene, identify_scene(scene, work / 'bag'), work / 'diag')
+    return diagnose_scene(scene, identify_scene(scene, work / 'bag'), work / 'diag',
+                          keep_report=keep_report)
 
 
 def param_error(name: str, truth: dict[str, Any], found: dict[str, Any]) -> float:
@@ -225,10 +235,18 @@ def param_error(name: str, truth: dict[str, Any], found: dict[str, Any]) -> floa
 
 def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0,
                 n_sims: int = 0) -> dict[str, Any]:
-    """Compare a report with the scene's truth."""
+    """
+    Compare a report with the scene's truth.
+
+    An effect with a value the record does not determine (``not_determined``) does not count
+    as found, nor as a false alarm: it is listed under ``not_determined``.
+    """
     names = _nominal_names()
     hidden = {(n, names[a]): p for n, a, p in scene['truth']}
-    found = {(e['name'], e['axis']): e['parameters'] for e in report['effects']}
+    found = {(e['name'], e['axis']): e['parameters'] for e in report['effects']
+             if not e.get('not_determined')}
+    loose = sorted(f'{e["name"]}@{e["axis"]}' for e in report['effects']
+                   if e.get('not_determined'))
     hits = [k for k in hidden if k in found]
     perr = {f'{k[0]}@{k[1]}': param_error(k[0], hidden[k], found[k]) for k in hits}
     mode_ok = mode_first = None
@@ -242,7 +260,7 @@ def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0
         mode_ok = any(near(b) for sig in on_axis for b in sig.get('bands_hz', []))
         mode_first = any(near(sig['band_hz']) for sig in on_axis if 'band_hz' in sig)
     return {'kind': scene['kind'], 'hidden': sorted(f'{n}@{a}' for n, a in hidden),
-            'found': sorted(f'{n}@{a}' for n, a in found),
+            'found': sorted(f'{n}@{a}' for n, a in found), 'not_determined': loose,
             'hits': len(hits), 'n_hidden': len(hidden),
             'false_alarms': len([k for k in found if k not in hidden]),
             'n_found': len(found), 'param_errors': perr, 'mode_unexplained': mode_ok,

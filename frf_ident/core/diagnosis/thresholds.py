@@ -248,3 +248,37 @@ RANGE_OUT_SHARE = 0.1
 #: combined standard errors, are this unlikely under chi-square (one false widening in 20
 #: checks of errors that hold)
 SPREAD_ALPHA = 0.05
+
+# --- uncertainty of the diagnosed values (experiments/standard_errors.py, determination.py) ----
+
+#: a parameter whose standard error exceeds this share of its value is not determined by the
+#: record (after the joint refits that may settle it). Set so that a value within 2 of its
+#: standard errors of the truth is within a factor of 3 of it: at a share of 1/3 the truth
+#: lies between 1/3 and 5/3 of the value. Held by the two-effects-on-one-axis sweep
+#: (``python -m benchmarks diagnosis_uncertainty``)
+NOT_DETERMINED_SHARE = 1.0 / 3.0
+#: the refits of a parameter on the record's multisine alone and on its chirp alone disagree
+#: beyond their errors where they differ by more than this many combined standard errors
+#: (MIN_Z's 3: about 1 in 370 pairs by chance if the errors were Gaussian)
+REFITS_AGREE_Z = 3.0
+#: a parameter trades against another of its axis when their estimates correlate by at
+#: least this much (|r|): the joint refit of an unsettled parameter takes those along
+TRADE_CORRELATION = 0.5
+#: joint refits (Gauss-Newton steps on the parameter and its partners) before an unsettled
+#: parameter is reported not determined
+SETTLE_ROUNDS = 2
+#: a scalar parameter further than this many of its standard errors from the linearised
+#: optimum of its axis' fit is taken there in the same step: the search stopped short of it (a
+#: simplex's tolerance of 1 % is several errors of a sharp parameter). Half an error adds at
+#: most an eighth to the values' variance. Set on the Monte Carlo of
+#: test/core/diagnosis/test_experiment_standard_errors.py (at 2 the values' spread was 1.2x the
+#: standard error of the fit at its optimum)
+OFF_OPTIMUM_Z = 0.5
+#: finite-difference step of the Jacobian of the simulated residual: this share of a value
+#: (a scale parameter), or this many radians of phase (a phase; a spatial frequency by the
+#: phase it drifts over the axis' travel). Forward differences, one simulation per parameter
+SE_STEP = 0.02
+#: an effect is dropped before the held-out check when each of its parameters lies within this
+#: many standard errors of the nominal model's value: the record cannot tell it from the
+#: nominal model
+NOMINAL_Z = 2.0

@@ -209,5 +209,7 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
 
 def rejected_entry(c: Effect) -> Rejected:
     """Return the report.json ``rejected`` entry of a candidate that was not taken."""
-    return Rejected(c.name, c.axis, c.to_dict()['parameters'],
+    reason = ('not determined by this record: ' + '; '.join(
+        f'{n.parameter} {n.reason}' for n in c.not_determined)) if c.not_determined else None
+    return Rejected(c.name, c.axis, c.to_dict()['parameters'], reason=reason,
                     misfit_share_removed=round(float(c.gain), 4))

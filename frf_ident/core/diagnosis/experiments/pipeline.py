@@ -43,6 +43,7 @@ from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
 from .held_out import finish, held_out_check, structure_missing
 from .refit import FRICTION, refit_friction, refit_jointly
 from .search import named, Search
+from .settle import final_errors, settle, within_nominal
 from ..common import apply_effect, Effect
 from ..result import DiagnosisResult
 from ..thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS, UNEXPLAINED_RATIO
@@ -64,8 +65,10 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     (Coulomb and viscous friction, torque ripple, gravity) from one joint regression per axis;
     then, against the simulation of that model, the FRF-shape effects (time delay, parameter
     mismatch, stiffening, backlash), so friction does not pose as stiffness. A second pass,
-    joint refits and a held-out check follow; kept effects whose removal does not worsen the
-    held-out misfit are dropped.
+    joint refits follow; then every value's standard error (a parameter that has not settled
+    is refitted jointly with those it trades against, else labelled not determined) and the
+    held-out check: kept effects within their errors of the nominal model, or whose removal
+    does not worsen the held-out misfit, are dropped.
 
     Parameters
     ----------
@@ -103,8 +106,11 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         second_pass(s)
         joint_refits(s)
         late_ripples(s)
+        settled = settle(s)
+        within_nominal(s, settled)
         val_ext, sim_ext = held_out_check(s)
         val_ext, sim_ext, val_base = structure_missing(s, val_ext, sim_ext)
+        final_errors(s, settled)
         return finish(s, val_ext, sim_ext, val_base)
     finally:
         s.ev.close()
