@@ -27,11 +27,11 @@ import math
 from typing import Iterator
 
 from .common import Effect
-from .records import NotDetermined
+from .records import NotDetermined, Unexplained
 from .thresholds import NOT_DETERMINED_SHARE
 
-__all__ = ['EXPERIMENT', 'labelled', 'magnitudes', 'not_determined', 'share_text',
-           'undetermined_effects']
+__all__ = ['EXPERIMENT', 'labelled', 'magnitudes', 'not_determined', 'on_unexplained_axes',
+           'share_text', 'undetermined_effects']
 
 #: per parameter, the experiment that would determine it where a record did not (why: viscous
 #: friction grows with speed where Coulomb friction and a backlash do not; a stiffening gear
@@ -133,5 +133,29 @@ def undetermined_effects(effects: list[Effect]) -> list[Effect]:
         labels = [not_determined(k, v, float(se), share_text(v, float(se)))
                   for k, v, se in magnitudes(e)
                   if se is not None and not float(se) <= NOT_DETERMINED_SHARE * abs(v)]
+        out.append(labelled(e, labels) if labels else e)
+    return out
+
+
+def on_unexplained_axes(effects: list[Effect], unexplained: list[Unexplained]) -> list[Effect]:
+    """
+    Return the effects with the values on an axis left unexplained labelled not determined.
+
+    An axis the extended model leaves clearly above its noise floor (an ``unexplained`` entry
+    with its ``misfit_share``) lacks something the effects were fitted next to: a missed
+    effect or a mode shifts their values by more than their standard errors say (a
+    stiffening gear's breakpoint 36 % off next to a joint damping the diagnosis did not
+    keep, 6.6 errors: ``python -m benchmarks.diagnosis_uncertainty 1 5804``). Values without
+    a standard error (nominal terms) are left alone.
+    """
+    left = {u.axis: u.misfit_share for u in unexplained
+            if u.misfit_share is not None and u.kind is None}
+    out = []
+    for e in effects:
+        labels = [] if e.axis not in left else [
+            not_determined(k, v, float(se), f'its axis stays unexplained ({100 * left[e.axis]:.0f}'
+                                            f' % of the nominal misfit left): what the model '
+                                            f'lacks there moves it beyond its error')
+            for k, v, se in magnitudes(e) if se is not None]
         out.append(labelled(e, labels) if labels else e)
     return out

@@ -42,7 +42,7 @@ from .crosscheck.kinematic_gravity import GravityBasis, kinematic_gravity
 from .crosscheck.least_squares import against_least_squares
 from .crosscheck.spread import standard_errors_across
 from .crosscheck.validation import on_other_records
-from .determination import undetermined_effects
+from .determination import on_unexplained_axes, undetermined_effects
 from .experiments.pipeline import diagnose_experiments
 from .result import DiagnosisResult
 from .thresholds import SIM_JOBS
@@ -160,15 +160,17 @@ def route(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *, jobs: int, fd
 
 def undetermined(res: DiagnosisResult) -> DiagnosisResult:
     """
-    Label the values whose standard error exceeds NOT_DETERMINED_SHARE of them; rank again.
+    Label the values the record does not determine; rank again.
 
     On either route, after the standard errors were checked against the spread between
-    records (:func:`.determination.undetermined_effects`); an effect with such a value scores
-    0 and goes after the effects found. The experiments route labelled its own already (the
+    records: a value whose standard error exceeds NOT_DETERMINED_SHARE of it
+    (:func:`.determination.undetermined_effects`), and the values on an axis left unexplained
+    (:func:`.determination.on_unexplained_axes`); an effect with such a value scores 0 and
+    goes after the effects found. The experiments route labelled its own already (the
     joint refits that may settle a value are simulations, :mod:`.experiments.settle`).
     """
-    effects = sorted(undetermined_effects(res.effects), key=lambda e: -e.score)
-    return replace(res, effects=effects)
+    effects = on_unexplained_axes(undetermined_effects(res.effects), res.unexplained)
+    return replace(res, effects=sorted(effects, key=lambda e: -e.score))
 
 
 def strict_json(x: Any) -> Any:

@@ -125,9 +125,10 @@ def layout(ev: Evaluator, residual: np.ndarray) -> Layout:
     in_ms = segment_mask(ev.fit, ('multisine',))[m]
     width = block_samples(ev.rec.fs)
     for _ in SIGNALS:
-        full = np.zeros(m.size)
-        full[m] = residual[at:at + idx.size]
-        width = max(width, _block(full, m, block_samples(ev.rec.fs), m.size))
+        # the fit samples one after the other (the few lags across a gap between segments
+        # do not move the correlation time): a transform of their length, not the record's
+        width = max(width, _block(residual[at:at + idx.size], np.ones(idx.size, bool),
+                                  block_samples(ev.rec.fs), idx.size))
         at += idx.size
     for _ in SIGNALS:
         blocks.append(next_id + idx // width)

@@ -22,7 +22,7 @@ Three stages of :func:`.pipeline.diagnose_experiments` around the held-out check
   beyond REFITS_AGREE_Z combined errors, is refitted jointly with the parameters of its axis
   it trades against (correlation >= TRADE_CORRELATION), a Gauss-Newton step on the Jacobian
   already simulated, up to SETTLE_ROUNDS times; one that its joint refit would still move by
-  more than REFITS_AGREE_Z errors has not settled either.
+  more than REFITS_AGREE_Z errors when the rounds run out has not settled either.
 - :func:`within_nominal`: an effect each of whose parameters lies within NOMINAL_Z standard
   errors of the nominal model's value is dropped before the held-out check: the record
   cannot tell it from the nominal model.
@@ -62,6 +62,8 @@ class Settled:
     seen: dict[int, dict[tuple[int, str], list[float]]] = field(default_factory=dict)
     #: per axis its kept effects' parameters at the fit (changed: the fit is taken again)
     snapshot: dict[int, str] = field(default_factory=dict)
+    #: the axes whose last joint refit was taken when the rounds ran out (still moving)
+    moving: set[int] = field(default_factory=set)
 
 
 def _key(fit: AxisFit, j: int) -> tuple[int, str]:
@@ -72,16 +74,17 @@ def _snapshot(kept: list[Effect], axis: int) -> str:
     return repr([(c.name, c.parameters) for c in kept if c.axis_index == axis])
 
 
-def unsettled(fit: AxisFit, *, disagree: bool = False) -> dict[int, list[str]]:
+def unsettled(fit: AxisFit, *, disagree: bool = False, moving: bool = False
+              ) -> dict[int, list[str]]:
     """
     Return per scale slot that has not settled the reasons, in words.
 
-    Its error exceeds NOT_DETERMINED_SHARE of its value, or (a scalar parameter) the
-    linearised refit of the axis would still move it by more than REFITS_AGREE_Z of its
-    errors within the record; with ``disagree`` also where its refits on the multisine alone
-    and on the chirp alone differ by more than REFITS_AGREE_Z combined errors (a reason to
-    refit it jointly; their spread is then part of its error, so it alone leaves a value
-    determined).
+    Its error exceeds NOT_DETERMINED_SHARE of its value; with ``moving`` (the joint refits
+    ran out of rounds while still lowering the misfit), a scalar parameter the linearised
+    refit would still move by more than REFITS_AGREE_Z of its errors within the record; with
+    ``disagree`` also where its refits on the multisine alone and on the chirp alone differ
+    by more than REFITS_AGREE_Z combined errors (a reason to refit it jointly; their spread is
+    then part of its error, so it alone leaves a value determined).
     """
     z = fit.disagreement()
     out: dict[int, list[str]] = {}
@@ -96,7 +99,7 @@ def unsettled(fit: AxisFit, *, disagree: bool = False) -> dict[int, list[str]]:
             why.append(f'its refits on the multisine alone ({a[j]:.4g}) and on the chirp '
                        f'alone ({b[j]:.4g}) differ by {z[j]:.1f} combined standard errors')
         step = abs(fit.optimum[j] - sl.value)
-        if sl.field is None and step > REFITS_AGREE_Z * fit.within[j]:
+        if moving and sl.field is None and step > REFITS_AGREE_Z * fit.within[j]:
             why.append(f'its joint refit still moves it, to {fit.optimum[j]:.4g} '
                        f'({step / fit.within[j]:.1f} standard errors)')
         if why:
@@ -130,12 +133,18 @@ def settle_axis(s: Search, i: int, out: Settled) -> None:
     seen = out.seen.setdefault(i, {})
     _note(seen, fit)
     _trace(s, i, fit)
-    for rnd in range(SETTLE_ROUNDS):
+    out.moving.discard(i)
+    for rnd in range(SETTLE_ROUNDS + 1):
         loose = unsettled(fit, disagree=rnd == 0)
         off = [j for j, sl in enumerate(fit.slots) if sl.field is None
                and abs(fit.optimum[j] - sl.value) > OFF_OPTIMUM_Z * fit.within[j]]
         if not loose and not off:
             break
+        if rnd == SETTLE_ROUNDS:
+            out.moving.add(i)
+            break
+        # a step that does not lower the misfit: the values sit at its optimum (where the
+        # linearisation points elsewhere, its distance is part of their errors)
         if joint_step(s, i, fit, list(loose), off) is None:
             break
         fit = axis_fit(s.ev, s.robot, s.kept, i)
@@ -270,7 +279,7 @@ def final_errors(s: Search, out: Settled) -> None:
             if i not in out.fits:
                 continue
         fit = out.fits[i]
-        loose = unsettled(fit)
+        loose = unsettled(fit, moving=i in out.moving)
         errors: dict[int, dict[str, Any]] = {}
         labels: dict[int, list[NotDetermined]] = {}
         for j, sl in enumerate(fit.slots):
