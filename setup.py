@@ -28,7 +28,8 @@ setup(
         (os.path.join('share', package_name, 'launch'),
          glob(os.path.join('launch', '*launch.[pxy][yma]*'))),
         (os.path.join('share', package_name, 'config'),
-         glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))),
+         glob(os.path.join('config', '*.yaml')) + glob(os.path.join('config', '*.xml'))
+         + glob(os.path.join('config', '*.json'))),
         (os.path.join('share', package_name, 'config', 'sros2'),
          glob(os.path.join('config', 'sros2', '*.xml'))),
         (os.path.join('share', package_name, 'urdf'), glob(os.path.join('urdf', '*.urdf'))),
@@ -60,7 +61,9 @@ setup(
                  # the campaign (Dask LocalCluster) and pose (pinocchio) tests run in CI too
                  'dask>=2023.1', 'distributed>=2023.1', 'pin>=2.7',
                  # MuJoCo as the plant and the nominal model (test/io/test_mjcf_*.py)
-                 'mujoco>=4.0'],
+                 'mujoco>=4.0',
+                 # the live stream's Foxglove WebSocket and a protocol client for its test
+                 'foxglove-sdk>=0.30', 'websockets>=12'],
         'control': ['control>=0.10'],
         # campaigns on a Dask distributed cluster (`--scheduler`); the default needs neither
         'cluster': ['dask>=2023.1', 'distributed>=2023.1'],
@@ -70,6 +73,8 @@ setup(
         # fit's model.xml (frf_ident.io.mjcf; 4.0: mj_fullM(m, d, M), joint stiffness and damping
         # polynomials, actuator delay)
         'mujoco': ['mujoco>=4.0'],
+        # the live stream on a Foxglove WebSocket without ROS (frf_ident.io.foxglove_server)
+        'foxglove': ['foxglove-sdk>=0.30'],
     },
     zip_safe=True,
     maintainer='frf_ident developers',

@@ -233,6 +233,7 @@ def bench_experiment_time() -> list[tuple[str, str, str, str]]:
         else:
             rows.append((f'multisine to 1 dB at {resolution:g} Hz', 'not reached',
                          'paper 1845 s at 0.1 Hz', '-'))
+    rows += _target_rows(rob, ctrl)
     for duration in (5.0, 10.0, 20.0):
         rec = run_identification(FlexibleJointPlant(rob), ctrl.copy(), IdentificationConfig(
             None, ChirpConfig(duration=duration)))
@@ -247,6 +248,35 @@ def bench_experiment_time() -> list[tuple[str, str, str, str]]:
     else:
         rows.append(('chirp to 1 dB', 'not reached', 'paper 720 s', '-'))
     return rows
+
+
+def _target_rows(rob, ctrl) -> list[tuple[str, str, str, str]]:
+    """
+    Experiment time of the default multisine design with and without a 1 dB sd target.
+
+    The same model and noise as the rows above; without the target the design runs its 10 x 5
+    periods; with it the run ends at the first period whose worst diagonal sd is <= 1 dB
+    (docs/live.md). Both FRFs are judged against the exact sampled one (_db_error).
+    """
+    from frf_ident.core.estimation.described import multisine_frf
+    from frf_ident.core.estimation.target import UncertaintyTarget
+    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.simulation.analytic import robot_frf_sampled
+    from frf_ident.core.simulation.plant import FlexibleJointPlant
+    from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
+    out = {}
+    for name, target in (('without', None), ('with', UncertaintyTarget(1.0))):
+        rec = run_identification(FlexibleJointPlant(rob), ctrl.copy(), IdentificationConfig(
+            MultisineConfig(), None, target))
+        frf, _ = multisine_frf(rec)
+        err = _db_error(frf.response, robot_frf_sampled(rob, frf.freq_hz))
+        s = rec.meta['summary']['multisine']
+        periods = (s['target'] or {}).get('periods') or 50
+        out[name] = (s['experiment_time_s'], err, periods)
+    (t1, e1, n1), (t0, e0, _) = out['with'], out['without']
+    return [(f'multisine 0.25 Hz, target sd 1 dB (stopped after {n1} periods, {e1:.2f} dB)',
+             f'{t1:.0f} s', f'no target: 10 x 5 periods {t0:.0f} s ({e0:.2f} dB)',
+             f'{t0 / t1:.1f}x shorter')]
 
 
 @section('chirp_iteration')
@@ -349,7 +379,7 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
     from frf_ident.app.stream_estimate import stream_estimate
     from frf_ident.bag import read_recording, write_recording
     from frf_ident.core.estimation.described import estimate_recording
-    from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S
+    from frf_ident.core.estimation.detected import DEFAULT_WINDOW_S
     rows = []
     mb = 1024 ** 2
     with tempfile.TemporaryDirectory() as tmp:
@@ -357,10 +387,10 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
             path = write_recording(periodic_multisine_run(60.0 * minutes),
                                    Path(tmp) / f'long_{minutes}')
             size = sum(f.stat().st_size for f in path.glob('*.mcap'))
-            s_sec, s_peak = measure(lambda: stream_estimate(path, block_s=DEFAULT_BLOCK_S))
+            s_sec, s_peak = measure(lambda: stream_estimate(path, window_s=DEFAULT_WINDOW_S))
             m_sec, m_peak = measure(lambda: estimate_recording(read_recording(path)[0]))
             rows.append((f'{minutes} min bag ({size / mb:.0f} MB): streamed '
-                         f'({DEFAULT_BLOCK_S:.0f} s blocks, the CLI default) peak / time',
+                         f'({DEFAULT_WINDOW_S:.0f} s blocks, the CLI default) peak / time',
                          f'{s_peak / mb:.0f} MB / {s_sec:.1f} s',
                          f'in memory {m_peak / mb:.0f} MB / {m_sec:.1f} s',
                          f'{m_peak / max(s_peak, 1):.1f}x less'))
@@ -371,6 +401,13 @@ def bench_stream() -> list[tuple[str, str, str, str]]:
 def bench_lpm() -> list[tuple[str, str, str, str]]:
     """Time the LPM on a 3x3 record of 10^6 samples beside per-line np.linalg.lstsq."""
     from benchmarks.lpm import rows
+    return rows()
+
+
+@section('missing')
+def bench_missing() -> list[tuple[str, str, str, str]]:
+    """Time the LPM and the multisine with missing samples beside the records without gaps."""
+    from benchmarks.missing import rows
     return rows()
 
 
@@ -418,6 +455,13 @@ def bench_nodes() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('live_graph')
+def bench_live_graph() -> list[tuple[str, str, str, str]]:
+    """Run the lockstep graph with the live estimate on and off, alternating, same run."""
+    from benchmarks.live_graph import rows
+    return rows()
+
+
 @section('campaign')
 def bench_campaign() -> list[tuple[str, str, str, str]]:
     """Estimate 8 demo bags serially and with --jobs 2: speed-up, identity, peak memory."""
@@ -446,6 +490,13 @@ def bench_fit() -> list[tuple[str, str, str, str]]:
     return rows()
 
 
+@section('fit_trust')
+def bench_fit_trust() -> list[tuple[str, str, str, str]]:
+    """Errors under a missing mode and the stable order choice, beside the old fits."""
+    from benchmarks.fit_trust import rows
+    return rows()
+
+
 @section('real_data')
 def bench_real_data() -> list[tuple[str, str, str, str]]:
     """Estimate the real data sets of ../shared/data through their maps, with figures."""
@@ -464,6 +515,13 @@ def bench_poses() -> list[tuple[str, str, str, str]]:
 def bench_mujoco() -> list[tuple[str, str, str, str]]:
     """Run the iiwa 14 closed loop (3 axes, 1 kHz) in MuJoCo beside our own plant."""
     from benchmarks.mujoco_plant import rows
+    return rows()
+
+
+@section('tune')
+def bench_tune() -> list[tuple[str, str, str, str]]:
+    """Time ``frf-ident tune`` on a 3x3 FRF campaign of 9 poses beside ``loop --propose``."""
+    from benchmarks.tune import rows
     return rows()
 
 

@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import time
 
-from frf_ident.core.estimation.lpm import default_half_width, DEFAULT_ORDER, lpm_frf, lpm_lines
+from frf_ident.core.estimation.lpm import default_half_width, DEFAULT_ORDER, lpm_lines
+from frf_ident.core.estimation.lpm_frames import lpm_frf
 import numpy as np
 from scipy import signal
 

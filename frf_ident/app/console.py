@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import logging
 import sys
-from typing import Any
+from typing import Any, Callable, Optional, TextIO
 
-__all__ = ['bars_enabled', 'progress_bar', 'say', 'set_bars']
+__all__ = ['bars_enabled', 'LiveLine', 'progress_bar', 'say', 'set_bars']
 
 _log = logging.getLogger('frf_ident.app')
 
@@ -98,3 +98,54 @@ def progress_bar(total: float | None, desc: str, unit: str = 'it', **kwargs: Any
     from tqdm import tqdm
     return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, leave=False,
                 disable=not bars_enabled(), **kwargs)
+
+
+class LiveLine:
+    """
+    One updating line per run (the live estimate's status): redrawn in place on a terminal.
+
+    On a terminal (``stream.isatty()`` and no ``-q``) each :meth:`update` rewrites the line
+    after a carriage return; elsewhere (a pipe, a log file, CI) each update is one plain line
+    through ``plain``. :meth:`end` closes a drawn line, so what is printed next starts on a
+    line of its own.
+
+    Parameters
+    ----------
+    plain : callable, optional
+        Where plain lines go (default :func:`say`).
+    stream : file, optional
+        The terminal (default sys.stdout, where the command's lines go).
+
+    """
+
+    def __init__(self, plain: Optional[Callable[[str], None]] = None,
+                 stream: Optional[TextIO] = None) -> None:
+        self.plain = plain or say
+        self.stream = stream if stream is not None else sys.stdout
+        self.tty = _BARS['enabled'] is not False and self.stream.isatty()
+        self.drawn = 0
+
+    def update(self, text: str) -> None:
+        """
+        Show the run's newest status.
+
+        Parameters
+        ----------
+        text : str
+            One line, without a newline.
+
+        """
+        if not self.tty:
+            self.plain(text)
+            return
+        pad = max(0, self.drawn - len(text))
+        self.stream.write('\r' + text + ' ' * pad)
+        self.stream.flush()
+        self.drawn = len(text)
+
+    def end(self) -> None:
+        """Leave the drawn line as it is and move to the next line."""
+        if self.tty and self.drawn:
+            self.stream.write('\n')
+            self.stream.flush()
+        self.drawn = 0

@@ -29,7 +29,8 @@ from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.share import config_file
 
-__all__ = ['DEMO_CHIRP', 'DEMO_MODEL', 'DEMO_MULTISINE', 'DEMO_ROBOT', 'run_demo']
+__all__ = ['DEMO_CHIRP', 'DEMO_MODEL', 'DEMO_MULTISINE', 'DEMO_ROBOT', 'estimate_and_diagnose',
+           'run_demo']
 
 _log = logging.getLogger(__name__)
 
@@ -70,9 +71,6 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
 
     """
     progress = sink(progress)
-    from frf_ident.app.diagnose import diagnose
-    from frf_ident.app.diagnosis_summary import diagnosis_summary
-    from frf_ident.app.estimate import estimate_bag
     from frf_ident.app.graph import run_graph
     model = Path(model) if model else config_file(DEMO_MODEL)
     robot = Path(robot) if robot else (config_file(DEMO_ROBOT) or model)
@@ -87,9 +85,22 @@ def run_demo(out: Path, *, model: Path | None = None, robot: Path | None = None,
     bag, _ = run_graph(out / 'graph', robot=robot, multisine=multisine, chirp=chirp,
                        log=progress, params={'plant_node': {'plant': plant}} if plant else None)
     progress(f'demo: bag {bag}')
+    estimate_and_diagnose(Path(bag), model, out, progress)
+    return 0
+
+
+def estimate_and_diagnose(bag: Path, model: Path, out: Path, progress: Progress) -> None:
+    """
+    Run the demo's stages after the run: estimate, diagnose, print the summary.
+
+    Writes ``out/estimate`` and ``out/diagnosis``; the diagnosis' stages log their few INFO
+    lines (the console shows them), its search trace goes to the log file.
+    """
+    from frf_ident.app.diagnose import diagnose
+    from frf_ident.app.diagnosis_summary import diagnosis_summary
+    from frf_ident.app.estimate import estimate_bag
     estimate_bag(bag, out / 'estimate', progress=progress)
     progress('demo: diagnosis against the nominal model (its search trace: -v, or demo.log)')
-    res = diagnose(Path(bag), Path(model), out / 'diagnosis', progress=_log.debug)
+    res = diagnose(bag, model, out / 'diagnosis', progress=_log.debug)
     for line in diagnosis_summary(res, out / 'diagnosis'):
         progress(line)
-    return 0

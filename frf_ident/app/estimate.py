@@ -29,6 +29,7 @@ from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
 __all__ = ['OUTPUT_FILES', 'dropped_text', 'estimate_bag', 'estimate_columns', 'frf_units',
+           'missing_lines',
            'read_estimates', 'report_distortion', 'report_robust_lpm']
 
 #: the files :func:`estimate_bag` writes into its output directory
@@ -60,7 +61,7 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
         memory, at most 4 GiB (:func:`~frf_ident.app.stream_estimate.default_memory_budget`).
     window_s : float or None
         Block length in s (> 0) for bags without experiment descriptors; None: the
-        default :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
+        default :data:`~frf_ident.core.estimation.detected.DEFAULT_WINDOW_S`.
     progress : callable
         Called with one line of text per step.
 
@@ -78,7 +79,7 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
         int(max_memory_mb * (1 << 20))
     if stream or stream_estimate.needs_streaming(bag, budget):
         res = stream_estimate.stream_estimate(bag, joints=joints, t_range=t_range,
-                                              block_s=window_s, options=options,
+                                              window_s=window_s, options=options,
                                               progress=progress)
         st = res.stats
         progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
@@ -102,12 +103,12 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     for line in timing.summary():
         progress(line)
     if joints is None:
-        return (estimate_recording(rec, options=options, block_s=window_s), timing,
+        return (estimate_recording(rec, options=options, window_s=window_s), timing,
                 rec.meta.get('summary', {}), None)
     check_joints(joints, rec.joint_names)
     # every joint the experiments excited takes part; the wanted channels are picked
     part = rec.select_joints(experiment_joints(rec, joints))
-    est = estimate_recording(part, options=options, block_s=window_s)
+    est = estimate_recording(part, options=options, window_s=window_s)
     return ({k: joint_channels(v, joints) for k, v in est.items()}, timing,
             rec.meta.get('summary', {}), None)
 
@@ -143,7 +144,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         Memory budget of the in-memory reader (default: a quarter of RAM).
     window_s
         Block length for bags without experiment descriptors [s]; None: the default
-        :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
+        :data:`~frf_ident.core.estimation.detected.DEFAULT_WINDOW_S`.
     fit : :class:`~frf_ident.app.fit.FitOptions`, optional
         Fit a model to frf.json with these options (``estimate --fit``); None: no fit.
     progress
@@ -195,9 +196,12 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         line = dropped_text(d)
         if line:
             progress(f'{k}: {line}')
+    missing = {k: v.meta['missing'] for k, v in estimates.items() if v.meta.get('missing')}
+    for line in missing_lines(estimates):
+        progress(line)
     summary = {'bag': str(bag), 'primary': key, 'estimates': sorted(estimates),
                'timing': timing.to_dict(), 'experiment': experiment, 'streaming': streamed,
-               'gaps': timing.missing, 'dropped': dropped}
+               'gaps': timing.missing, 'dropped': dropped, 'missing': missing}
     (out / 'summary.json').write_text(json.dumps(summary, indent=1, default=str))
     shown = ('multisine', 'chirp', 'lpm', 'lpm_h1')
     pairs = [(k, v) for k, v in estimates.items() if k in shown]
@@ -402,6 +406,40 @@ def estimate_columns(bag: Path, out: Path, progress: Progress | None, **options
             cols[f'resonance_hz_{j}'] = round(float(r), 4)
             cols[f'antiresonance_hz_{j}'] = round(float(a), 4)
     return cols
+
+
+def missing_lines(estimates: dict) -> list[str]:
+    """
+    One line per estimate whose record's missing samples were estimated (each text once).
+
+    Parameters
+    ----------
+    estimates : dict
+        Estimate name -> FrequencyResponse; meta['missing'] is a
+        :class:`~frf_ident.core.estimation.missing.MissingSamples` dict.
+
+    Returns
+    -------
+    list of str
+        e.g. 'detected/joint_2: 2700 missing samples (5.5 %) in 6 of 6 periods estimated
+        from the other periods and kept; sd of the estimates: tau_m/joint_2 0.064 N m ...';
+        an estimate whose line equals the one before it is named there.
+
+    """
+    from frf_ident.core.estimation.missing import MissingSamples
+    from frf_ident.core.recording import JOINT_STATE_UNITS
+    texts: dict[str, list[str]] = {}
+    for k, v in estimates.items():
+        if not v.meta.get('missing'):
+            continue
+        acc = MissingSamples.from_dict(v.meta['missing'])
+        u = v.meta.get('units') if isinstance(v.meta.get('units'), dict) else {}
+        units = {c: (u.get('input') or JOINT_STATE_UNITS['effort']) if c.startswith('tau_m/')
+                 else JOINT_STATE_UNITS['velocity'] for c in acc.channels}
+        for c, unit in zip(v.outputs, u.get('outputs') or []):
+            units[c] = unit or units.get(c, '')
+        texts.setdefault(acc.text(units), []).append(k)
+    return [f'{", ".join(names)}: {text}' for text, names in texts.items()]
 
 
 def dropped_text(d: dict) -> str:

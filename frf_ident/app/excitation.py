@@ -59,7 +59,8 @@ from typing import Any, Callable, Optional, Protocol
 from frf_ident.core.excitation.engine import PhaseEngine, PhaseStream, SegmentEvent
 from frf_ident.core.excitation.procedures import (check_position_bound, ChirpConfig,
                                                   ChirpIteration, multisine_procedure,
-                                                  MultisineConfig)
+                                                  multisine_tail, MultisineConfig,
+                                                  STOP_FADE_S)
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Segment
 from frf_ident.core.simulation.controller import PIVelocity
@@ -629,6 +630,57 @@ class ExcitationSession:
                     'max_abs_torque': np.asarray(s['max_abs_torque']).tolist()}
         return self._start(f'chirp_iteration_{it.iteration}', it.phases(), True, end,
                            remedy=None if it.history else self.s.chirp.remedy())
+
+    def stop_at_target(self, k_end: int, periods: int) -> bool:
+        """
+        End the running multisine where its uncertainty target was met (frf_ident/app/live.py).
+
+        The running segment ends after its whole period ending at ``k_end``: its excitation
+        fades out over ``STOP_FADE_S`` from the next reference not yet sent, an ``end``
+        descriptor with ``stopped`` ``{t_end, periods}`` goes out (docs/CONTRACT.md §3), and
+        the procedure's tail (ramp down, settle, move back) replaces the runs left. When the
+        segment has ended already (its last period met the target), the tail follows it.
+
+        Parameters
+        ----------
+        k_end : int
+            One past the last sample of the period that met the target.
+        periods : int
+            The steady periods the segment holds up to there.
+
+        Returns
+        -------
+        bool
+            False when no multisine segment is running or just ended (nothing changed).
+
+        """
+        with self.lock:
+            run = self.run
+            if run is None or run.done.is_set() or not run.stream.segments:
+                return False
+            st = run.stream
+            i = st.phase_index
+            i_seg = max((j for j, ph in enumerate(st.phases[:i + 1]) if ph.segment is not None),
+                        default=None)
+            if i_seg is None or st.phases[i_seg].segment.get('design') != 'multisine':
+                return False
+            seg_ph = st.phases[i_seg]
+            tail = multisine_tail(st.phases, i_seg)
+            k0, k1, _ = st.segments[-1]
+            if i == i_seg and k_end < k1:
+                if not st.stop_segment(int(round(STOP_FADE_S * self.fs)), tail):
+                    return False
+                info = dict(seg_ph.segment, effort_lag=self.offset)
+                d = json.loads(Segment(k0 * self.dt, k1 * self.dt, info).descriptor('end'))
+                d['stopped'] = {'t_end': k_end * self.dt, 'periods': int(periods)}
+                self.out.experiment(json.dumps(d, sort_keys=True))
+            elif i - i_seg <= len(tail) - 2:
+                st.replace_after_current(tail[i - i_seg:])
+            else:
+                return False
+            self.out.log('info', f'{run.name}: uncertainty target met after {periods} '
+                                 f'period(s) of segment {len(st.segments)}: the run ends')
+            return True
 
     # -- safety -------------------------------------------------------------------------------
     def _abort(self, reason: str, level: str = 'error') -> None:

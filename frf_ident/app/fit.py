@@ -15,36 +15,42 @@
 `frf-ident fit`: a parametric model fitted to a measured FRF, with its uncertainty.
 
 Stages of :func:`fit_frf`: read the FRF (an ``estimate`` directory's frf.json, or any FRF file
-:func:`~frf_ident.io.export.read_frf` reads), keep the band, fit (the physical two-mass model
-per axis with ``physical``, else a common-denominator rational model of the given order or the
-lowest order the cost test accepts), write fit.json, the figure and the model: model.yaml (the
-model file the other commands take) for the physical fit, model.mat (A, B, C, D) for the
-rational one; with a model file, check its velocity PI on the measured loop
-(:func:`frf_ident.app.loop.run_loop`: loop.json, loop.png); last fit.html, the report page
-of it all. ``estimate --fit`` runs :func:`fit_frf` on the FRF it has just written.
+:func:`~frf_ident.io.export.read_frf` reads), keep the band, fit
+(:mod:`frf_ident.app.fit_stages`: the physical two-mass model
+per axis with ``physical``, and the coupled robot on a square FRF; else a common-denominator
+rational model of the given order or the order :func:`~frf_ident.core.fit.rational.
+select_order` chooses), write fit.json (:mod:`frf_ident.app.fit_document`), the figure and the
+model: model.yaml (:mod:`frf_ident.app.fitted_model`) for the physical fit, model.mat
+(A, B, C, D) for the rational one; with a model file, check its velocity PI on the measured
+loop (:func:`frf_ident.app.loop.run_loop`); last fit.html, the report page of it all.
+``estimate --fit`` runs :func:`fit_frf` on the FRF it has just written.
+
+Printed per fit: the parameters with their reported errors (Cramer-Rao, widened by the
+model-error bound where the cost test fails) and units, the delay as model.yaml's
+``time_delay``, the cost test and a one-line verdict; for a coupled fit the per-axis
+details go to the log (``-v``, fit.log) and each disagreement of a per-axis and the coupled
+estimate beyond their errors is named.
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass
 import json
 from pathlib import Path
 from typing import Any, Callable
 
+from frf_ident.app.fit_document import cost_dict, coupled_dict, physical_dict, rational_dict
+from frf_ident.app.fit_stages import MAX_ORDER, physical_stage, rational_stage
+from frf_ident.app.fitted_model import hold_of
 from frf_ident.app.frf_source import axis_channels, read_source
 from frf_ident.app.loop import LoopOutcome, run_loop
 from frf_ident.app.outdir import clear_outputs
-from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.fit.cost import CostTest
-from frf_ident.core.fit.coupled import CoupledFit, fit_coupled
-from frf_ident.core.fit.physical import fit_two_mass, PhysicalFit
-from frf_ident.core.fit.rational import OrderSelection, select_order
+from frf_ident.core.fit.coupled import CoupledFit
+from frf_ident.core.fit.physical import PhysicalFit
+from frf_ident.core.fit.rational import OrderSelection
 from frf_ident.core.jsonable import jsonable
-from frf_ident.core.model.params import RobotParams
 from frf_ident.core.progress import Progress, sink
-from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.errors import FrfIdentInputError
-from frf_ident.io.lti import write_lti_mat
-from frf_ident.io.model_file import load_model, save_model
+from frf_ident.io.model_file import load_model
 from frf_ident.report.fit_figures import fit_figure
 from frf_ident.report.html import fit_sections, write_fit_report
 import numpy as np
@@ -54,11 +60,7 @@ __all__ = ['FitOptions', 'FitOutcome', 'MAX_ORDER', 'OUTPUT_FILES', 'cost_dict',
 
 #: the files :func:`fit_frf` may write into its output directory (loop.*: with a model file)
 OUTPUT_FILES = ('fit.json', 'fit.png', 'fit.html', 'model.yaml', 'model.xml', 'model.urdf',
-                'model.mat', 'loop.json',
-                'loop.png')
-#: highest order tried when no --order is given: 9 states (3 twists, 6 velocities) describe the
-#: 3-axis robot's velocity FRF; 12 leaves room for a second mode per axis
-MAX_ORDER = 12
+                'model.mat', 'loop.json', 'loop.png')
 
 
 @dataclass
@@ -153,120 +155,6 @@ def source_pose(source: str | Path) -> list[float] | None:
     return [float(v) for v in pose] if isinstance(pose, list) else None
 
 
-def cost_dict(c: CostTest) -> dict[str, Any]:
-    """Return the cost test as the JSON mapping of fit.json."""
-    def num(x):
-        return float(x) if np.isfinite(x) else None
-    return {'cost': c.cost, 'dof': c.dof, 'ratio': c.ratio, 'p_value': num(c.p_value),
-            'limit': num(c.limit), 'weighted': c.weighted,
-            'structure_missing': c.structure_missing}
-
-
-def _physical_dict(fit: PhysicalFit) -> dict[str, Any]:
-    fa, fr = fit.resonances_hz()
-    return {'axis': fit.name, 'parameters': fit.parameters(), 'std': fit.standard_errors(),
-            'start': dict(zip(fit.names, fit.start.tolist())), 'antiresonance_hz': fa,
-            'resonance_hz': fr, 'delay_s': fit.delay_s,
-            'delay_std_s': fit.delay_std_s if fit.delay_fitted else None,
-            'cost': cost_dict(fit.cost)}
-
-
-def _rational_dict(sel: OrderSelection) -> dict[str, Any]:
-    best = sel.best
-    return {'order': best.order, 'n_num': best.num_scaled.shape[-1] - 1,
-            'inputs': best.inputs, 'outputs': best.outputs, 'num': best.num, 'den': best.den,
-            'modes': [asdict(m) for m in best.modes()], 'cost': cost_dict(best.cost),
-            'aic': best.aic, 'selected_by': sel.reason,
-            'tried': [{'order': f.order, 'cost': f.cost.cost, 'dof': f.cost.dof, 'aic': f.aic}
-                      for f in sel.fits]}
-
-
-def _coupled_dict(fit: CoupledFit) -> dict[str, Any]:
-    c, sd = fit.link_coupling()
-    return {'axes': [{'axis': n, 'parameters': fit.axis_parameters(i), 'std': fit.axis_std(i)}
-                     for i, n in enumerate(fit.names)],
-            'link_coupling': c, 'link_coupling_std': sd, 'delay_s': fit.delay_s,
-            'delay_std_s': fit.delay_std_s if np.isfinite(fit.delay_std_s) else None,
-            'cost': cost_dict(fit.cost)}
-
-
-def _fitted_model(values: dict[str, dict[str, float]], coupling: np.ndarray | None,
-                  delays: dict[str, float] | None, model: str | Path | None, out: Path
-                  ) -> tuple[Path, RobotParams]:
-    """
-    Write model.yaml: the base model (``model``, else the embedded default) with fitted axes.
-
-    ``values`` maps each fitted axis to its five parameters. Every fitted axis keeps the other
-    keys (limits, nonlinear effects) and the PI gains of the base model's axis of the same
-    name, else of its first axis; a negative viscous friction estimate is written as 0. The
-    link coupling is ``coupling`` (the coupled fit's), else left out. A fitted delay
-    (``delays``, per axis) becomes the axis's ``time_delay`` less the half sample the
-    zero-order hold of the model's sample rate adds by itself (at least 0).
-    """
-    _, base, ctrl = load_model(model)
-    names = base.joint_names
-    pick = [names.index(n) if n in names else 0 for n in values]
-    extra = {n: {} if delays is None else {'time_delay': max(delays[n] - base.dt / 2, 0.0)}
-             for n in values}
-    axes = [replace(base.axes[k], name=n, **dict(v, viscous_friction=max(
-        v['viscous_friction'], 0.0)), **extra[n]) for (n, v), k in zip(values.items(), pick)]
-    robot = replace(base, axes=axes, link_coupling=coupling)
-    pi = PIVelocity(ctrl.kp[pick], ctrl.ki[pick], robot.torque_limits(), robot.dt)
-    how = 'fitted with the link coupling' if coupling is not None else \
-        'fitted per axis (link_coupling not fitted: left out)'
-    return save_model(out / 'model.yaml', robot, pi,
-                      extra={'description': f'two-mass parameters {how} by frf-ident fit; '
-                                            f'other keys from {model or "the default model"}'}
-                      ), robot
-
-
-def _export_drive(robot, out: Path, progress: Callable[[str], None]) -> list[Path]:
-    """
-    Write the fitted drive terms as model.urdf and (with mujoco) model.xml, docs/mujoco.md.
-
-    model.xml keeps the model file's MJCF rigid body when it names one (else one standalone
-    two-mass chain per axis); every term it cannot hold is said in one line.
-    """
-    from frf_ident.io.urdf_drive import write_drive_urdf
-    files = [write_drive_urdf(robot, out / 'model.urdf')]
-    try:
-        from frf_ident.io.mjcf.export import write_mjcf
-    except ImportError:
-        progress("fit: model.xml (MJCF) left out: pip install 'frf_ident[mujoco]'")
-        return files
-    exp = write_mjcf(robot, out / 'model.xml')
-    for line in exp.lines():
-        progress(f'  model.xml: {line}')
-    return [exp.path] + files
-
-
-def _physical(frf: FrequencyResponse, var: np.ndarray | None, delay_s: float | None,
-              progress: Callable[[str], None]):
-    """Fit per axis, and the coupled robot when the FRF is square with >= 2 axes."""
-    chans = axis_channels(frf)
-    outs, ins = [o for _, o, _ in chans], [i for _, _, i in chans]
-    names = [n for n, _, _ in chans]
-    if len(chans) >= 2 and len(set(outs)) == len(outs) == frf.noutputs:
-        sub = frf.response[np.ix_(outs, ins)]
-        coupled = fit_coupled(frf.freq_hz, sub, None if var is None else var[np.ix_(outs, ins)],
-                              delay_s=delay_s, names=names)
-        for fit in coupled.per_axis:
-            for line in fit.summary():
-                progress(f'  per axis: {line}')
-        for line in coupled.summary():
-            progress(f'  {line}')
-        values = {n: coupled.axis_parameters(k) for k, n in enumerate(names)}
-        return coupled.per_axis, coupled, values, sub, coupled.model
-    phys = [fit_two_mass(frf.freq_hz, frf.response[o, i], None if var is None else var[o, i],
-                         delay_s=delay_s, name=n) for n, o, i in chans]
-    for fit in phys:
-        for line in fit.summary():
-            progress(f'  {line}')
-    measured = np.stack([frf.response[o, i] for _, o, i in chans])[:, None]
-    return phys, None, {f.name: f.parameters() for f in phys}, measured, \
-        np.stack([f.model for f in phys])[:, None]
-
-
 def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical: bool = False,
             delay_s: float | None = None, band: tuple[float, float] | None = None,
             model: str | Path | None = None, figure: bool = True,
@@ -281,8 +169,8 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     out : Path
         Output directory (created if missing; the caller has checked it).
     order : int, optional
-        Rational model order; None: the lowest of 1..:data:`MAX_ORDER` the cost test accepts
-        (else the lowest AIC). Ignored with ``physical``.
+        Rational model order; None: chosen by :func:`~frf_ident.core.fit.rational.
+        select_order` among 1..:data:`MAX_ORDER`. Ignored with ``physical``.
     physical : bool, optional
         Fit the two-mass flexible joint per axis instead and write model.yaml.
     delay_s : float, optional
@@ -319,93 +207,53 @@ def fit_frf(source: str | Path, out: Path, *, order: int | None = None, physical
     if frf.freq_hz.size < 4:
         raise FrfIdentInputError(f'--band {band}: keeps {frf.freq_hz.size} lines of '
                                  f'{source}; a fit needs at least 4')
-    var = frf.variance()
-    which = frf.variance_kind()
-    progress = sink(progress)
-    progress(f'fit: {frf.noutputs}x{frf.ninputs} FRF, {frf.freq_hz.size} lines '
-             f'{frf.freq_hz.min():.3g}-{frf.freq_hz.max():.3g} Hz, weights: '
-             f'{which + " variance" if which else "none (relative error)"}')
+    var, which = frf.variance(), frf.variance_kind()
+    say = sink(progress)
+    say(f'fit: {frf.noutputs}x{frf.ninputs} FRF, {frf.freq_hz.size} lines '
+        f'{frf.freq_hz.min():.3g}-{frf.freq_hz.max():.3g} Hz, weights: '
+        f'{which + " variance" if which else "none (relative error)"}')
     out.mkdir(parents=True, exist_ok=True)
     clear_outputs(out, OUTPUT_FILES)
-    files: list[Path] = []
-    phys, sel, coupled = None, None, None
-    if physical:
-        phys, coupled, values, measured, fitted = _physical(frf, var, delay_s, progress)
-        delays = None
-        if delay_s is None:
-            delays = {f.name: (f.delay_s if coupled is None else coupled.delay_s)
-                      for f in phys}
-        yaml_path, fitted_robot = _fitted_model(values, None if coupled is None else
-                                                coupled.link_coupling()[0], delays, model, out)
-        files += [yaml_path] + _export_drive(fitted_robot, out, progress)
-        chans = axis_channels(frf)
-        if coupled is not None:
-            v = None if var is None else var[np.ix_([o for _, o, _ in chans],
-                                                    [i for _, _, i in chans])]
-            names = [f'{a} -> {b}: coupled fit' for b, _, _ in chans for a, _, _ in chans]
-            verdicts = [_short(coupled.cost)] * len(names)
-        else:
-            v = None if var is None else np.stack([var[o, i] for _, o, i in chans])
-            names = [f'{n}: two-mass fit' for n, _, _ in chans]
-            verdicts = [_short(f.cost) for f in phys]
-        measured = measured.reshape(-1, frf.freq_hz.size)
-        fitted = fitted.reshape(measured.shape)
-        v = None if v is None else v.reshape(measured.shape)
-    else:
-        if order is not None and order < 1:
-            raise FrfIdentInputError(f'--order {order}: expected an order >= 1')
-        orders = [order] if order is not None else range(1, MAX_ORDER + 1)
-        sel = select_order(frf.freq_hz, frf.response, var, orders,
-                           inputs=list(frf.inputs), outputs=list(frf.outputs))
-        for line in sel.best.summary():
-            progress(f'  {line}')
-        if order is None:
-            progress(f'  order {sel.best.order} chosen by the {sel.reason} '
-                     f'(tried {sel.fits[0].order}-{sel.fits[-1].order})')
-        files.append(write_lti_mat(sel.best, out / 'model.mat'))
-        measured = frf.response.reshape(-1, frf.freq_hz.size)
-        fitted = sel.best.model.reshape(measured.shape)
-        v = None if var is None else var.reshape(measured.shape)
-        names = [f'{a} -> {b}' for b in frf.outputs for a in frf.inputs]
-        verdicts = [_short(sel.best.cost)] * len(names)
+    res = (physical_stage(frf, var, delay_s, model, out, say) if physical
+           else rational_stage(frf, var, order, out, say))
+    files = res.files
     if figure:
-        files.append(fit_figure(frf.freq_hz, measured, fitted, v, names, out / 'fit.png',
-                                verdicts))
+        files.append(fit_figure(frf.freq_hz, res.measured, res.fitted, res.variance, res.names,
+                                out / 'fit.png', res.verdicts))
+    hold = hold_of(model) if physical else 0.0
     doc = {'source': str(source), 'pose_rad': source_pose(source),
            'freq_hz': [float(frf.freq_hz.min()), float(frf.freq_hz.max())],
            'n_lines': int(frf.freq_hz.size), 'variance': which,
            'delay_s': None if delay_s is None else float(delay_s),
-           'physical': None if phys is None else [_physical_dict(f) for f in phys],
-           'coupled': None if coupled is None else _coupled_dict(coupled),
-           'rational': None if sel is None else _rational_dict(sel),
+           'physical': None if res.physical is None else
+           [physical_dict(f, hold) for f in res.physical],
+           'coupled': None if res.coupled is None else coupled_dict(res.coupled, hold),
+           'rational': None if res.rational is None else rational_dict(res.rational),
            'files': [p.name for p in files] + ['fit.json']}
     (out / 'fit.json').write_text(json.dumps(jsonable(doc), indent=1))
     files.append(out / 'fit.json')
-    progress(f'fit: wrote {", ".join(p.name for p in files)} to {out}')
-    loop = None
-    if model is not None:
-        n_pi, n_axes = load_model(model)[2].kp.size, len(axis_channels(frf))
-        if n_pi == n_axes:
-            loop = run_loop(source, out, model=model, page=False, progress=progress)
-        else:
-            progress(f'loop: no margins: the controller of {model} has {n_pi} axes, the FRF '
-                     f'{n_axes}')
-    sections = fit_sections(physical=phys or (), coupled=coupled,
-                            rational=None if sel is None else sel.best,
+    say(f'fit: wrote {", ".join(p.name for p in files)} to {out}')
+    loop = _loop_stage(source, out, model, len(axis_channels(frf)), say)
+    sections = fit_sections(physical=res.physical or (), coupled=res.coupled,
+                            rational=None if res.rational is None else res.rational.best,
                             check=None if loop is None else loop.check,
                             fit_png='fit.png' if figure else None,
-                            loop_png=None if loop is None else 'loop.png')
+                            loop_png=None if loop is None else 'loop.png', hold_s=hold)
     page = write_fit_report(out / 'fit.html', title=f'Fit of {source}', sections=sections)
-    progress(f'fit: report {page}')
-    return FitOutcome(phys, coupled, sel, files + [page], loop)
+    say(f'fit: report {page}')
+    return FitOutcome(res.physical, res.coupled, res.rational, files + [page], loop)
 
 
-def _short(cost: CostTest) -> str:
-    """Return the cost test's verdict in a few words for a figure title."""
-    if not cost.weighted:
-        return 'cost test: no FRF variance'
-    word = 'structure missing' if cost.structure_missing else 'explained by the noise'
-    return f'cost/dof {cost.ratio:.2f}: {word}'
+def _loop_stage(source: str | Path, out: Path, model: str | Path | None, n_axes: int,
+                say: Callable[[str], None]) -> LoopOutcome | None:
+    """Check the model file's velocity PI on the measured FRF when it has one per axis."""
+    if model is None:
+        return None
+    n_pi = load_model(model)[2].kp.size
+    if n_pi != n_axes:
+        say(f'loop: no margins: the controller of {model} has {n_pi} axes, the FRF {n_axes}')
+        return None
+    return run_loop(source, out, model=model, page=False, progress=say)
 
 
 def fit_columns(source: Path, out: Path, progress: Progress, **options: Any) -> dict[str, Any]:

@@ -244,10 +244,15 @@ class Graph:
         Raises FrfIdentInputError when the excitation node refused a run (its error, e.g. a
         torque predicted beyond 0.95 of a limit), RuntimeError when a run failed or aborted.
         """
+        from frf_ident.app.console import LiveLine
         proc = self.driver(**kw)
         results: dict[str, Any] = {'iterations': []}
+        status = LiveLine(self.say)
         for line in proc.stdout:
-            if line.startswith('FRF_RESULT '):
+            if line.startswith('FRF_ESTIMATE '):
+                status.update(json.loads(line[len('FRF_ESTIMATE '):])['line'])
+            elif line.startswith('FRF_RESULT '):
+                status.end()
                 d = json.loads(line[len('FRF_RESULT '):])
                 if d.get('kind') == 'multisine':
                     results['multisine'] = d
@@ -350,8 +355,23 @@ def result_line(d: dict) -> str:
     return f"{head}: {', '.join(found + [timing])}"
 
 
+_EMIT = threading.Lock()
+
+
+def _emit(line: str) -> None:
+    """Write one whole line to stdout (the driver writes from two threads)."""
+    with _EMIT:
+        sys.stdout.write(line + '\n')
+        sys.stdout.flush()
+
+
 class _Waiter:
-    """The driver's view of /frf/progress: the ``finished`` event of each run."""
+    """
+    The driver's view of /frf/progress: the ``finished`` event of each run.
+
+    Each live ``estimate`` event goes to stdout as ``FRF_ESTIMATE {json}`` (Graph.drive
+    shows its status line).
+    """
 
     def __init__(self, node: Any) -> None:
         self.cond = threading.Condition()
@@ -361,6 +381,8 @@ class _Waiter:
 
     def _on(self, msg: Any) -> None:
         d = json.loads(msg.data)
+        if d.get('event') == 'estimate' and d.get('line'):
+            _emit('FRF_ESTIMATE ' + json.dumps(d))
         if d.get('event') == 'finished':
             with self.cond:
                 self.finished[int(d['run'])] = d
@@ -409,14 +431,14 @@ def _drive(args: argparse.Namespace) -> int:
         time.sleep(0.5)   # the plant re-sends its joint state: every recorder has sample 0
         if args.multisine:
             ok, reply = _run(cl_ms, Trigger, waiter, args.timeout)
-            print('FRF_RESULT ' + json.dumps({'kind': 'multisine', 'success': ok,
-                                              'reply': reply}), flush=True)
+            _emit('FRF_RESULT ' + json.dumps({'kind': 'multisine', 'success': ok,
+                                             'reply': reply}))
             if not ok:
                 return REFUSED if reply.get('refused') else 1
         for _ in range(args.iterations):
             ok, reply = _run(cl_it, Trigger, waiter, args.timeout)
-            print('FRF_RESULT ' + json.dumps({'kind': 'iteration', 'success': ok,
-                                              'reply': reply}), flush=True)
+            _emit('FRF_RESULT ' + json.dumps({'kind': 'iteration', 'success': ok,
+                                             'reply': reply}))
             if not ok:
                 return REFUSED if reply.get('refused') else 1
             if reply.get('converged'):

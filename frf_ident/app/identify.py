@@ -25,6 +25,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from frf_ident.app.console import LiveLine
 from frf_ident.app.outdir import check_out
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
@@ -48,7 +49,8 @@ POSE_GRAVITY_SHARE = 0.95
 
 
 def run_identify(model_path: str | Path | None, plant_spec: str | None, config: Any,
-                 out: str | Path, *, progress: Progress | None = None):
+                 out: str | Path, *, progress: Progress | None = None,
+                 foxglove_port: int | None = None):
     """
     Run the identification experiments in closed loop and write the bag.
 
@@ -64,7 +66,12 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
         Bag directory to create; an existing path, or one that cannot be created, is
         refused before anything runs (:func:`~frf_ident.app.outdir.check_out`).
     progress : callable, optional
-        Called with one line per step; default None: silent.
+        Called with one line per step; default None: silent. With it, the multisine's live
+        estimate after every whole MIMO period is one updating status line
+        (:class:`frf_ident.app.live_view.LiveView`).
+    foxglove_port : int, optional
+        Serve the live estimate on a Foxglove WebSocket at ws://127.0.0.1:PORT (0: a free
+        port) during the run and, after it, until Ctrl-C; None: no server.
 
     Returns
     -------
@@ -86,10 +93,31 @@ def run_identify(model_path: str | Path | None, plant_spec: str | None, config: 
     out = check_out(out, outputs=None, overwrite=False)
     model, robot, ctrl = load_model(model_path)
     plant = load_plant(plant_spec, model)
-    rec = run_identification(plant, ctrl, config, progress=progress,
-                             meta={'model': model, 'plant': plant_spec or 'model'}, model=robot,
-                             dry_run=dry_run_plant(model, robot))
+    view = None
+    if config.multisine is not None and (progress is not None or foxglove_port is not None):
+        from frf_ident.app.live_view import LiveView
+        view = LiveView(list(robot.joint_names), ctrl.torque_limit, config.target,
+                        foxglove_port, LiveLine(sink(progress)))
+        if view.server is not None:
+            sink(progress)(f'live estimate on the Foxglove WebSocket {view.server.url} '
+                           f'(the app: Open connection; config/foxglove_layout.json)')
+    say = sink(progress)
+    if view is not None:
+        def say(line: str, _say=say) -> None:     # a stage line closes the status line first
+            view.end()
+            _say(line)
+    try:
+        rec = run_identification(plant, ctrl, config, progress=say, on_estimate=view,
+                                 meta={'model': model, 'plant': plant_spec or 'model'},
+                                 model=robot, dry_run=dry_run_plant(model, robot))
+    finally:
+        if view is not None:
+            view.end()
     write_recording(rec, out)
+    if view is not None and view.server is not None:
+        sink(progress)(f'bag written; the final estimate stays on {view.server.url} until '
+                       f'Ctrl-C')
+        view.serve_until_interrupted()
     return rec
 
 

@@ -32,7 +32,7 @@ def import_file(file: Path, map_path: Path, out: str | Path, *,
     file
         Measured data, .csv or .mat.
     map_path
-        YAML map naming the time, joints, columns and unit scales (see README, "Files").
+        YAML map naming the time, joints, columns and unit scales (see docs/import_maps.md).
     out
         Bag directory to create; an existing path, or one that cannot be created, is
         refused before the file is read (:func:`~frf_ident.app.outdir.check_out`).

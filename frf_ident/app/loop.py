@@ -23,27 +23,29 @@ bandwidth; :func:`loop_check` then checks them on the measured FRF itself.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import json
 from pathlib import Path
-from typing import Any
 import warnings
 
 from frf_ident.app.frf_source import axis_channels, read_source
+from frf_ident.app.loop_document import check_dict
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.jsonable import jsonable
-from frf_ident.core.loop.check import (AxisMargins, draw_responses, DRAWS, loop_response,
-                                       LoopCheck, Margin, pi_response, sensitivity_peak)
-from frf_ident.core.loop.design import PIProposal, propose_pi
+from frf_ident.core.loop.check import (AxisMargins, draw_responses, DRAWS, edge_gain_db,
+                                       loop_response, LoopCheck, Margin, pi_response,
+                                       sensitivity_peak)
+from frf_ident.core.loop.design import check_targets, PIProposal, propose_pi, TargetCheck
+from frf_ident.core.loop.notch import sections_response
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.model_file import load_model
 from frf_ident.report.fit_figures import loop_figure
-from frf_ident.report.html import fit_sections, write_fit_report
+from frf_ident.report.html import fit_sections, proposal_section, write_fit_report
 import numpy as np
 
 __all__ = ['LoopData', 'LoopOutcome', 'OUTPUT_FILES', 'check_dict', 'loop_check', 'loop_data',
-           'margins', 'propose_gains', 'run_loop']
+           'margins', 'propose_gains', 'proposal_targets', 'run_loop']
 
 
 def margins(loop: np.ndarray, omega: np.ndarray) -> np.ndarray:
@@ -61,7 +63,9 @@ def margins(loop: np.ndarray, omega: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (..., 4)
         Gain margin [dB], phase margin [deg], gain crossover [Hz], modulus margin; NaN where
-        python-control finds no crossover.
+        python-control finds no crossover. The modulus margin is the least |1 + L| over the
+        measured band: python-control's interior minima, or a measured line where |1 + L| is
+        least at the band's edge (python-control reports none there: an infinite margin).
 
     """
     import control
@@ -73,7 +77,7 @@ def margins(loop: np.ndarray, omega: np.ndarray) -> np.ndarray:
             gm, pm, sm, _, wgc, _ = control.stability_margins(
                 control.frd(lk, omega, smooth=True), method='frd')
         res[k] = [20 * np.log10(gm) if gm and np.isfinite(gm) else np.inf, pm,
-                  wgc / (2 * np.pi), sm]
+                  wgc / (2 * np.pi), min(sm, float(np.min(np.abs(1 + lk))))]
     return res.reshape(loop.shape[:-1] + (4,))
 
 
@@ -111,7 +115,8 @@ class LoopData:
 
 
 def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
-              dt: float | None = None, draws: int = DRAWS, seed: int = 0) -> LoopData:
+              dt: float | None = None, draws: int = DRAWS, seed: int = 0,
+              filters: np.ndarray | None = None) -> LoopData:
     """
     Return the controller responses and the FRF's draws for a check (args of loop_check).
 
@@ -127,6 +132,9 @@ def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         Monte-Carlo draws of the FRF.
     seed : int, optional
         Seed of the draws.
+    filters : ndarray of complex, shape (n_axes, n_freq), optional
+        Response of each axis' filters on the measured velocity (issue #51; the model
+        file's ``controller.filters``): C_i = PI_i F_i.
 
     Returns
     -------
@@ -150,11 +158,14 @@ def loop_data(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
     if var is not None and draws > 0:
         sample = draw_responses(frf.response, var, draws, np.random.default_rng(seed))
     c = np.stack([pi_response(frf.freq_hz, kp[j], ki[j], dt) for j in range(len(chans))])
+    if filters is not None:
+        c = c * np.asarray(filters).reshape(c.shape)
     return LoopData(chans, c, sample)
 
 
 def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
-               dt: float | None = None, draws: int = DRAWS, seed: int = 0) -> LoopCheck:
+               dt: float | None = None, draws: int = DRAWS, seed: int = 0,
+               filters: np.ndarray | None = None) -> LoopCheck:
     """
     Check the velocity PI on the measured loop: margins with their uncertainty.
 
@@ -171,6 +182,8 @@ def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         Monte-Carlo draws of the FRF for the standard deviations.
     seed : int, optional
         Seed of the draws.
+    filters : ndarray of complex, shape (n_axes, n_freq), optional
+        Response of each axis' filters (:func:`loop_data`).
 
     Returns
     -------
@@ -183,14 +196,18 @@ def loop_check(frf: FrequencyResponse, kp: np.ndarray, ki: np.ndarray, *,
         The number of gains is not the number of axes.
 
     """
-    data = loop_data(frf, kp, ki, dt=dt, draws=draws, seed=seed)
-    nominal = margins(data.axis_loops(frf.response), frf.omega)
+    data = loop_data(frf, kp, ki, dt=dt, draws=draws, seed=seed, filters=filters)
+    loops = data.axis_loops(frf.response)
+    nominal = margins(loops, frf.omega)
+    edge = edge_gain_db(loops)
+    band = (float(frf.freq_hz.min()), float(frf.freq_hz.max()))
     drawn = None if data.draws is None else margins(data.axis_loops(data.draws), frf.omega)
     axes = []
     for j, (name, _, _) in enumerate(data.channels):
         axes.append(AxisMargins(name, float(np.atleast_1d(kp)[j]), float(np.atleast_1d(ki)[j]),
                                 *[_margin(nominal[j, q], None if drawn is None
-                                          else drawn[:, j, q]) for q in range(4)]))
+                                          else drawn[:, j, q]) for q in range(4)],
+                                band_hz=band, edge_gain_db=float(edge[j])))
     peak = None
     if len(data.channels) > 1 and frf.noutputs == frf.ninputs:
         peak = _margin(float(sensitivity_peak(loop_response(frf.response, data.controller))),
@@ -221,7 +238,8 @@ def propose_gains(frf: FrequencyResponse, bandwidth_hz: float, phase_margin_deg:
     Raises
     ------
     FrfIdentInputError
-        The bandwidth lies outside the measured band.
+        The bandwidth lies outside the measured band (the message names ``--propose`` and
+        the band).
 
     """
     out = []
@@ -230,8 +248,31 @@ def propose_gains(frf: FrequencyResponse, bandwidth_hz: float, phase_margin_deg:
             out.append(propose_pi(frf.freq_hz, frf.response[o, i], bandwidth_hz,
                                   phase_margin_deg))
         except ValueError as err:
-            raise FrfIdentInputError(f'--bandwidth: axis {name}: {err}') from err
+            raise FrfIdentInputError(
+                f'--propose {bandwidth_hz:g} {phase_margin_deg:g}: axis {name}: {err}; give a '
+                f'bandwidth inside it (the design reads the FRF at the bandwidth)') from err
     return out
+
+
+def proposal_targets(proposals: list[PIProposal], check: LoopCheck) -> list[TargetCheck]:
+    """
+    Return per axis whether the measured loop with the proposed gains meets the targets.
+
+    Parameters
+    ----------
+    proposals : list of PIProposal
+        The proposed gains per axis.
+    check : LoopCheck
+        Those gains checked on the measured FRF (:func:`loop_check`).
+
+    Returns
+    -------
+    list of TargetCheck
+        One per axis (:func:`~frf_ident.core.loop.design.check_targets`).
+
+    """
+    return [check_targets(p, a.phase_margin_deg.value, a.crossover_hz.value, a.edge_gain_db,
+                          a.band_hz) for p, a in zip(proposals, check.axes)]
 
 
 #: the files :func:`run_loop` writes into its output directory
@@ -253,6 +294,8 @@ class LoopOutcome:
         The proposed gains checked on the measured FRF.
     files : list of Path
         Files written.
+    targets : list of TargetCheck
+        Per axis, whether the proposed gains meet the targets on the measured loop.
 
     """
 
@@ -260,24 +303,7 @@ class LoopOutcome:
     proposals: list[PIProposal]
     proposal_check: LoopCheck | None
     files: list[Path]
-
-
-def _finite(x: float) -> float | None:
-    return float(x) if np.isfinite(x) else None
-
-
-def check_dict(check: LoopCheck) -> dict[str, Any]:
-    """Return a LoopCheck as the JSON mapping of loop.json (non-finite values as null)."""
-    def m(v: Margin) -> dict[str, float | None]:
-        return {'value': _finite(v.value), 'std': _finite(v.std)}
-    return {'draws': check.draws, 'discrete_dt': check.discrete_dt,
-            'axes': [{'axis': a.axis, 'kp': a.kp, 'ki': a.ki,
-                      'gain_margin_db': m(a.gain_margin_db),
-                      'phase_margin_deg': m(a.phase_margin_deg),
-                      'crossover_hz': m(a.crossover_hz),
-                      'modulus_margin': m(a.modulus_margin)} for a in check.axes],
-            'peak_sensitivity': None if check.peak_sensitivity is None
-            else m(check.peak_sensitivity)}
+    targets: list[TargetCheck] = field(default_factory=list)
 
 
 def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
@@ -327,9 +353,13 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
 
     """
     frf = read_source(source)
+    filters = None
     if kp is None and model is not None:
         _, robot, ctrl = load_model(model)
         kp, ki, dt = ctrl.kp.tolist(), ctrl.ki.tolist(), robot.dt
+        if ctrl.n_sections:          # the model's filters on the measured velocity (#51)
+            filters = np.stack([sections_response(frf.freq_hz, ctrl.sos[j], robot.sample_rate)
+                                for j in range(ctrl.n_axes)])
     if (kp is None) != (ki is None):
         raise FrfIdentInputError('--kp and --ki: give both (one value per axis)')
     if kp is None and propose is None:
@@ -342,23 +372,25 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
     check = None
     figure_gains = None
     if kp is not None:
-        check = loop_check(frf, kp, ki, dt=dt, draws=draws)
+        check = loop_check(frf, kp, ki, dt=dt, draws=draws, filters=filters)
         figure_gains = (kp, ki, dt, check)
         for line in check.summary():
             progress(f'  {line}')
-    proposals, pcheck = [], None
+    proposals, pcheck, targets = [], None, []
     if propose is not None:
         proposals = propose_gains(frf, *propose)
         pkp, pki = [p.kp for p in proposals], [p.ki for p in proposals]
         pcheck = loop_check(frf, pkp, pki, draws=draws)
+        targets = proposal_targets(proposals, pcheck)
         progress(f'  proposed PI for {propose[1]:g} deg at {propose[0]:g} Hz, checked on the '
                  f'measured FRF:')
-        for p, line in zip(proposals, pcheck.summary()):
-            progress(f'    {line}' + ('' if p.feasible else ' (target not reachable by a PI)'))
+        for a, t in zip(pcheck.axes, targets):
+            progress(f'    {a.summary()}')
+            progress(f'    {a.axis}: {t.text()}')
         if figure_gains is None:
-            figure_gains = (pkp, pki, None, pcheck)
+            figure_gains, filters = (pkp, pki, None, pcheck), None
     gkp, gki, gdt, gcheck = figure_gains
-    data = loop_data(frf, gkp, gki, dt=gdt, draws=draws)
+    data = loop_data(frf, gkp, gki, dt=gdt, draws=draws, filters=filters)
     files = [loop_figure(frf.freq_hz, data.axis_loops(frf.response),
                          None if data.draws is None else data.axis_loops(data.draws),
                          [c[0] for c in data.channels],
@@ -366,17 +398,19 @@ def run_loop(source: str | Path, out: Path, *, kp: list[float] | None = None,
     doc = {'source': str(source), 'check': None if check is None else check_dict(check),
            'proposal': None if propose is None else {
                'bandwidth_hz': propose[0], 'phase_margin_deg': propose[1],
-               'gains': [{'axis': c[0], 'kp': p.kp, 'ki': p.ki, 'feasible': p.feasible}
-                         for c, p in zip(axis_channels(frf), proposals)],
+               'gains': [{'axis': c[0], 'kp': p.kp, 'ki': p.ki, 'feasible': p.feasible,
+                          'targets_met': t.met, 'missed': list(t.missed)}
+                         for c, p, t in zip(axis_channels(frf), proposals, targets)],
                'check': check_dict(pcheck)}}
     (out / 'loop.json').write_text(json.dumps(jsonable(doc), indent=1))
     files.append(out / 'loop.json')
     if page:
         sections = fit_sections(check=gcheck, loop_png='loop.png')
-        if check is not None and pcheck is not None:
-            sections += [('proposal', f'Margins with the PI proposed for {propose[1]:g} deg '
-                          f'at {propose[0]:g} Hz', fit_sections(check=pcheck)[0][2])]
+        if pcheck is not None:
+            sections.append(proposal_section(
+                pcheck if check is not None else None, propose,
+                [(a.axis, t.text(), t.met) for a, t in zip(pcheck.axes, targets)]))
         files.append(write_fit_report(out / 'loop.html', title=f'Loop check of {source}',
                                       sections=sections))
     progress(f'loop: wrote {", ".join(p.name for p in files)} to {out}')
-    return LoopOutcome(check, proposals, pcheck, files)
+    return LoopOutcome(check, proposals, pcheck, files, targets)

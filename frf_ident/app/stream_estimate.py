@@ -20,13 +20,14 @@ core's segment-wise estimators.
 - bags with /frf/experiment descriptors: one window per experiment segment, the spectra of
   each segment kept (:class:`~frf_ident.core.estimation.described.SegmentEstimator`); the estimates
   equal the in-memory ones;
-- bags without descriptors: blocks of ``block_s`` seconds; each block's excitation is
+- bags without descriptors: blocks of ``window_s`` seconds; each block's excitation is
   detected and its periods added to the H1 sums of that excitation
   (:func:`~frf_ident.core.estimation.detected.estimate_in_blocks`, which the in-memory
   estimate runs on the same blocks, so both take the same decisions).
 
-Gaps longer than the resampling limit are kept as missing data (``gaps='mark'``): they cost
-only the periods and chirp excerpts they touch.
+Gaps longer than the resampling limit are kept as missing data (``gaps='mark'``): their
+samples are estimated with the FRF (multisine periods, LPM frames; docs/bags.md), a chirp
+excerpt they touch is dropped.
 
 Memory is bounded by the longest window, not by the bag.
 """
@@ -40,14 +41,15 @@ from typing import Any
 from frf_ident.bag import timing as tm
 from frf_ident.bag import windows as bs
 from frf_ident.bag.coverage import cut_warning, split_covered
+from frf_ident.bag.info import bag_info
 from frf_ident.core.estimation.described import (check_joints, check_recording,
                                                  complete_chirp_iterations, cut_short_error,
                                                  experiment_joints, joint_channels,
                                                  SegmentEstimator)
-from frf_ident.core.estimation.detected import block_length, estimate_in_blocks
+from frf_ident.core.estimation.detected import estimate_in_blocks, window_length
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.progress import Progress, sink
-from frf_ident.errors import EstimationError
+from frf_ident.errors import BagError, EstimationError
 
 #: in-memory arrays take about this many bytes per byte of MCAP data (measured: 3-joint
 #: JointState bags, float64 columns plus the copies of timing repair and assembly)
@@ -133,7 +135,7 @@ def _in_range(windows: list[tuple[int, int]], t_range: tuple[float, float] | Non
 
 
 def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
-                    t_range: tuple[float, float] | None = None, block_s: float | None = None,
+                    t_range: tuple[float, float] | None = None, window_s: float | None = None,
                     options: Any = None, progress: Progress | None = None
                     ) -> StreamedEstimate:
     """
@@ -155,9 +157,9 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     t_range : tuple of float, optional
         (t_start, t_end) in s of the bag clock, t_start < t_end: analyse only the segments
         or blocks inside this range; default: the whole bag.
-    block_s : float, optional
+    window_s : float, optional
         Block length in s for bags without experiment descriptors; default
-        :data:`~frf_ident.core.estimation.detected.DEFAULT_BLOCK_S`.
+        :data:`~frf_ident.core.estimation.detected.DEFAULT_WINDOW_S`.
     options : ExcitationOptions, optional
         Excitation options replacing detection; default None: detect the excitation.
     progress : callable, optional
@@ -179,17 +181,51 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
 
     """
     say = sink(progress)
-    block_s = block_length(block_s)
+    window_s = window_length(window_s, None if window_s is not None else _joint_state_rate(bag))
     if t_range is not None and not (len(t_range) == 2 and t_range[0] < t_range[1]):
         raise EstimationError(f'{t_range=}: expected (t_start, t_end) with t_start < t_end')
     if joints is not None:
         check_joints(joints)
     exp = bs.read_experiment(bag)
+    segments, cut = estimated_segments(exp, t_range, say)
+    reports: list[tm.TimingReport] = []
+    notes: list[str] = []
+    if segments:
+        reader = bs.WindowReader(bag, windows=_in_range(bs.segment_windows(segments), t_range),
+                                 experiment=exp, progress=progress)
+        say(f'streaming: {len(segments)} experiment segments in {len(reader.windows)} windows')
+        estimates = segment_estimates(reader, segments, exp, joints, options, reports)
+    elif exp.meta.get('segments_left_out') and (t_range is None or cut):
+        raise cut_short_error(len(exp.meta['segments_left_out']))
+    else:
+        say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '
+            f'{window_s:g} s')
+        span = None if t_range is None else tuple(int(round(x * 1e9)) for x in t_range)
+        reader = bs.WindowReader(bag, window_s=window_s, joints=joints, experiment=exp,
+                                 span=span, progress=progress)
+        estimates = block_estimates(reader, options, window_s, reports)
+        notes = [n for n in next(iter(estimates.values())).meta['detected']
+                 if n.startswith('block ')]
+    if not reports:
+        raise EstimationError(f'{bag}: no joint states inside the analysed windows')
+    timing = tm.merge_reports(reports, reader.stats.recovery)
+    meta = dict(exp.meta)
+    meta.pop('_frf_bag', None)
+    return StreamedEstimate(estimates, timing, reader.stats, meta, notes)
+
+
+def estimated_segments(exp: Any, t_range: tuple[float, float] | None, say: Progress
+                       ) -> tuple[list, list]:
+    """
+    Return the segments to estimate and those ``t_range`` cuts (named, left out).
+
+    Only the last chirp iteration is read (the estimate), or the last complete one when it
+    was cut short.
+    """
     segments = [s for s in exp.segments
                 if s.info.get('design') in ('multisine', 'chirp', 'constant_velocity')]
     chirps = [s.info.get('iteration', 0) for s in segments if s.info.get('design') == 'chirp']
     if chirps:
-        # the last iteration is the estimate, or the last complete one when it was cut short
         keep = {max(chirps)} | set(complete_chirp_iterations(segments)[-1:])
         segments = [s for s in segments if s.info.get('design') != 'chirp'
                     or s.info.get('iteration', 0) in keep]
@@ -200,57 +236,58 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         for s in cut:
             say(f'warning: {cut_warning(s, *t_range)}')
         exp.meta.setdefault('segments_left_out', []).extend([s.t_start, s.t_end] for s in cut)
-    reports: list[tm.TimingReport] = []
-    notes: list[str] = []
-    if segments:
-        windows = _in_range(bs.segment_windows(segments), t_range)
-        say(f'streaming: {len(segments)} experiment segments in {len(windows)} windows')
-        # every joint the experiments excited takes part; the wanted channels are picked
-        reader = bs.WindowReader(bag, windows=windows, experiment=exp, progress=progress)
-        est = SegmentEstimator(segments)
-        for rec, report in reader:
-            if joints is not None:
-                check_joints(joints, rec.joint_names)
-                rec = rec.select_joints(experiment_joints(rec, joints))
-            check_recording(rec, options)
-            est.add_window(rec)
-            reports.append(report)
-        missing = est.missing()
-        if missing:
-            s = missing[0]
-            raise EstimationError(f'{len(missing)} experiment segment(s) have no joint states '
-                                  f'in the bag, first {s.info.get("design")} at '
-                                  f'{s.t_start:.3f}..{s.t_end:.3f} s')
-        estimates = est.results()
-        if not estimates:
-            left_out = len(exp.meta.get('segments_left_out', []))
-            raise (cut_short_error(left_out) if left_out else
-                   EstimationError('the experiment segments give no estimate'))
-        if joints is not None:
-            estimates = {k: joint_channels(v, joints) for k, v in estimates.items()}
-    elif exp.meta.get('segments_left_out') and (t_range is None or cut):
-        raise cut_short_error(len(exp.meta['segments_left_out']))
-    else:
-        say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '
-            f'{block_s:g} s')
-        span = None if t_range is None else tuple(int(round(x * 1e9)) for x in t_range)
-        reader = bs.WindowReader(bag, block_s=block_s, joints=joints, experiment=exp,
-                                 span=span, progress=progress)
+    return segments, cut
 
-        def blocks():
-            for rec, report in reader:
-                reports.append(report)
-                yield rec
-        estimates = estimate_in_blocks(blocks(), options, resume=reader.continue_from,
-                                       block_s=block_s)
-        notes = [n for n in next(iter(estimates.values())).meta['detected']
-                 if n.startswith('block ')]
-    if not reports:
-        raise EstimationError(f'{bag}: no joint states inside the analysed windows')
-    timing = tm.merge_reports(reports, reader.stats.recovery)
-    meta = dict(exp.meta)
-    meta.pop('_frf_bag', None)
-    return StreamedEstimate(estimates, timing, reader.stats, meta, notes)
+
+def segment_estimates(reader: Any, segments: list, exp: Any, joints: list[str] | None,
+                      options: Any, reports: list) -> dict[str, FrequencyResponse]:
+    """
+    Estimate the described segments window by window; add each window's timing to ``reports``.
+
+    Every joint the experiments excited takes part; the wanted channels are picked after.
+    """
+    est = SegmentEstimator(segments)
+    for rec, report in reader:
+        if joints is not None:
+            check_joints(joints, rec.joint_names)
+            rec = rec.select_joints(experiment_joints(rec, joints))
+        check_recording(rec, options)
+        est.add_window(rec)
+        reports.append(report)
+    missing = est.missing()
+    if missing:
+        s = missing[0]
+        raise EstimationError(f'{len(missing)} experiment segment(s) have no joint states '
+                              f'in the bag, first {s.info.get("design")} at '
+                              f'{s.t_start:.3f}..{s.t_end:.3f} s')
+    estimates = est.results()
+    if not estimates:
+        left_out = len(exp.meta.get('segments_left_out', []))
+        raise (cut_short_error(left_out) if left_out else
+               EstimationError('the experiment segments give no estimate'))
+    if joints is not None:
+        estimates = {k: joint_channels(v, joints) for k, v in estimates.items()}
+    return estimates
+
+
+def block_estimates(reader: Any, options: Any, window_s: float, reports: list
+                    ) -> dict[str, FrequencyResponse]:
+    """Detect and estimate block by block (no descriptors); add the timings to ``reports``."""
+    def blocks():
+        for rec, report in reader:
+            reports.append(report)
+            yield rec
+    return estimate_in_blocks(blocks(), options, resume=reader.continue_from, window_s=window_s)
+
+
+def _joint_state_rate(bag: Path) -> float | None:
+    """Return the joint-state rate [Hz] the bag's summary gives (None: not known)."""
+    try:
+        info = bag_info(bag)
+    except (BagError, OSError):      # the reader names what is wrong with the bag, later
+        return None
+    n = sum(t['count'] for t in info['topics'] if t['name'] == '/joint_states')
+    return (n - 1) / info['duration_s'] if n > 1 and info['duration_s'] > 0 else None
 
 
 __all__ = ['MEMORY_PER_BAG_BYTE', 'StreamedEstimate', 'default_memory_budget',

@@ -11,7 +11,7 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""rosbag2 MCAP input/output of frf_ident (see README_bag.md)."""
+"""rosbag2 MCAP input/output of frf_ident (see docs/bag_format.md)."""
 from .info import bag_info
 from .reader import read_experiment, read_recording
 from .repair import reindex

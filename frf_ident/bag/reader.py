@@ -233,8 +233,12 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
             if d.get('event', 'start') not in ('start', 'end'):
                 other[str(d.get('event'))] = other.get(str(d.get('event')), 0) + 1
                 continue
-            key = json.dumps({k: v for k, v in d.items() if k != 'event'}, sort_keys=True)
+            key = json.dumps({k: v for k, v in d.items() if k not in ('event', 'stopped')},
+                             sort_keys=True)
             event, seg = Segment.from_descriptor(text)
+            stop = seg.info.pop('stopped', None)
+            if event == 'end' and isinstance(stop, dict) and key in segs:
+                stopped_early(segs[key], stop)
         except (ValueError, TypeError, KeyError) as exc:
             raise BagError(f'{bag.name}: {topics.experiment} message at {log * 1e-9:.6f} s is '
                            f'not a segment descriptor (JSON with t_start, t_end): {exc}') from None
@@ -255,4 +259,35 @@ def read_descriptors(events: list[tuple[int, str]], bag: BagFiles,
     return meta, list(segs.values()), warnings
 
 
-__all__ = ['ExperimentIndex', 'read_descriptors', 'read_experiment', 'read_recording']
+def stopped_early(seg: Segment, stop: dict[str, Any]) -> None:
+    """
+    Shorten a multisine segment to where its run stopped at the uncertainty target.
+
+    The end descriptor of such a segment repeats its start descriptor with ``stopped``:
+    ``{"t_end": s, "periods": n}``, the time of its last whole period's end and the steady
+    periods it holds (docs/CONTRACT.md §3).
+
+    Parameters
+    ----------
+    seg : Segment
+        The segment from its start descriptor (changed in place).
+    stop : dict
+        The ``stopped`` entry of its end descriptor.
+
+    Raises
+    ------
+    KeyError, TypeError, ValueError
+        ``stopped`` lacks ``t_end`` or ``periods``, or they are no numbers.
+
+    """
+    t_end, periods = float(stop['t_end']), int(stop['periods'])
+    if not seg.t_start < t_end <= seg.t_end or not 1 <= periods <= int(seg.info['periods']):
+        raise ValueError(f'stopped {stop} is outside the segment {seg.t_start:.3f}..'
+                         f'{seg.t_end:.3f} s of {seg.info["periods"]} periods')
+    seg.info.setdefault('periods_planned', int(seg.info['periods']))
+    seg.info['periods'] = periods
+    seg.t_end = t_end
+
+
+__all__ = ['ExperimentIndex', 'read_descriptors', 'read_experiment', 'read_recording',
+           'stopped_early']

@@ -119,8 +119,9 @@ class TimingReport:
             where = ', '.join(f'{a:.3f}..{b:.3f} s' for a, b in self.missing[:6])
             more = f' and {len(self.missing) - 6} more' if len(self.missing) > 6 else ''
             lines.append(f'{len(self.missing)} gaps longer than {MAX_GAP_SAMPLES} samples kept '
-                         f'as missing data ({n} samples: {where}{more}); the periods and '
-                         f'excerpts they touch are dropped')
+                         f'as missing data ({n} samples: {where}{more}); the estimators '
+                         f'estimate them (multisine periods, LPM frames) or drop the chirp '
+                         f'excerpts they touch')
         lines += [f'warning: {w}' for w in self.warnings]
         return lines
 

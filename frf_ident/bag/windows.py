@@ -20,7 +20,7 @@ is more than a machine holds. Here the bag is scanned once (after a first pass o
 
 - bags with experiment descriptors: one window per segment (overlapping segments merged);
   samples between windows are dropped as soon as the scan has passed them;
-- bags without descriptors (``block_s``): consecutive blocks of ``block_s`` seconds from the
+- bags without descriptors (``window_s``): consecutive blocks of ``window_s`` seconds from the
   first sample, for detection and estimation block by block.
 
 Each window is assembled by the same code as :func:`read_recording` (timing analysis,
@@ -110,7 +110,7 @@ class WindowReader:
     Iterate ``(Recording, TimingReport)`` per window of a bag, in one scan.
 
     ``windows`` are (start_ns, end_ns) in the bag's sample time (header stamps when valid);
-    ``block_s`` instead cuts consecutive blocks from the first sample (within ``span`` =
+    ``window_s`` instead cuts consecutive blocks from the first sample (within ``span`` =
     (start_ns, end_ns) when given). ``joints`` selects joints as in :func:`read_recording`;
     ``experiment`` is the first pass (:func:`read_experiment`, run here when not given);
     ``gaps`` as in :func:`read_recording`. After the iteration :attr:`stats` holds the counts
@@ -121,8 +121,8 @@ class WindowReader:
     path : str or Path
         rosbag2 directory or a bare .mcap file.
     windows : list of tuple of int, optional
-        (start_ns, end_ns) windows in ns of the bag clock; give either this or ``block_s``.
-    block_s : float, optional
+        (start_ns, end_ns) windows in ns of the bag clock; give either this or ``window_s``.
+    window_s : float, optional
         Block length in s (> 0): consecutive blocks from the first sample.
     joints : list of str, optional
         Joint names to read, in this order; default: those of the first joint state message.
@@ -131,7 +131,7 @@ class WindowReader:
     experiment : ExperimentIndex, optional
         Result of :func:`read_experiment` for this bag; default: read here.
     span : tuple of int, optional
-        (start_ns, end_ns) limiting the blocks of ``block_s`` mode; default: the whole bag.
+        (start_ns, end_ns) limiting the blocks of ``window_s`` mode; default: the whole bag.
     margin_s : float, optional
         Margin in s: a window is assembled once the scan has read this far beyond its end,
         and rows this close to a window are kept for it.
@@ -146,29 +146,29 @@ class WindowReader:
     Raises
     ------
     ValueError
-        Not exactly one of ``windows`` and ``block_s`` given, or an unknown ``gaps`` mode.
+        Not exactly one of ``windows`` and ``window_s`` given, or an unknown ``gaps`` mode.
     BagError
-        ``block_s`` is not > 0, ``joints`` is empty or a string, or the bag cannot be located.
+        ``window_s`` is not > 0, ``joints`` is empty or a string, or the bag cannot be located.
 
     """
 
     def __init__(self, path: str | Path, *, windows: list[tuple[int, int]] | None = None,
-                 block_s: float | None = None, joints: list[str] | None = None,
+                 window_s: float | None = None, joints: list[str] | None = None,
                  topics: BagTopics | None = None, experiment: ExperimentIndex | None = None,
                  span: tuple[int, int] | None = None,
                  margin_s: float = 1.0, drain_rows: int = 1 << 16,
                  progress: Progress | None = None, gaps: str = DEFAULT_GAPS) -> None:
-        if (windows is None) == (block_s is None):
-            raise ValueError('give exactly one of windows= or block_s=')
-        if block_s is not None and not block_s > 0:
-            raise BagError(f'{block_s=}: expected a window length > 0 s')
+        if (windows is None) == (window_s is None):
+            raise ValueError('give exactly one of windows= or window_s=')
+        if window_s is not None and not window_s > 0:
+            raise BagError(f'{window_s=}: expected a window length > 0 s')
         if joints is not None and (isinstance(joints, str) or not joints):
             raise BagError(f'{joints=}: expected a non-empty list of joint names')
         self.bag: BagFiles = locate(path)
         self.topics = topics or BagTopics()
         self.joints = joints
         self.windows = sorted(windows) if windows is not None else None
-        self.block_ns = int(round(block_s * 1e9)) if block_s is not None else None
+        self.block_ns = int(round(window_s * 1e9)) if window_s is not None else None
         self.experiment = experiment or read_experiment(path, topics=self.topics)
         self.margin_ns = int(round(margin_s * 1e9))
         self.drain_rows = int(drain_rows)

@@ -23,7 +23,7 @@ Two writers:
 
 Both use rosbags' ``Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)``, the
 ROS2_JAZZY typestore (message definitions and RIHS01 hashes) and always record
-``offered_qos_profiles`` (frf_ident/bag/README_bag.md; ros2 bag play offers each topic
+``offered_qos_profiles`` (docs/bag_format.md; ros2 bag play offers each topic
 with them, e.g. /frf/experiment transient-local).
 """
 from __future__ import annotations

@@ -19,11 +19,19 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_design_arguments
 
-__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
 #: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
 LOG_TO_OUT = True
 HELP = 'the main job: node graph on the simulated robot, estimation, diagnosis'
+DESCRIPTION = """\
+The main job: the node graph (simulated 3-axis robot with friction, ripple, a stiffening gear
+and noise, config/robot_3axis_demo.yaml) runs the identification over DDS, then estimation,
+diagnosis against the nominal model (config/model_3axis.yaml), and the report. `make demo`
+runs it into out/demo/ (replacing an earlier demo's): out/demo/graph/bag (the recorded bag),
+out/demo/estimate/ (as `estimate` writes it), out/demo/diagnosis/ (as `diagnose` writes it,
+with report.html). Without ROS 2 the nodes run on the built-in DDS backend; with ROS 2 sourced
+on rclpy."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -19,12 +19,21 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_campaign_arguments, add_output_arguments, run_many
 
-__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
 #: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
 LOG_TO_OUT = True
 HELP = ('compare data with the nominal model, name the effects it lacks, extend the model '
         '(report.json, extended_model.yaml, report.html)')
+DESCRIPTION = """\
+Sim-to-real diagnosis (docs/diagnosis.md): DIR/report.json (effects, unexplained, rejected,
+held-out metrics per axis and per OTHER record), DIR/extended_model.yaml, DIR/report.html.
+DATA/OTHER: a bag, or CSV/MAT with --map (e.g. config/map_kuka_kr300.yaml). An OTHER must name
+its joints as DATA does. Stretches a bag lost (gaps of more than 3 joint-state samples) are
+bridged for the filters and the simulation and left out of fit and validation (0.1 s either
+side, plus 0.5 s of settling for experiments); a line names them. It ends with one line per
+effect found, per unexplained axis, the held-out error of the nominal and the extended model,
+and where it wrote; the search itself goes to the DEBUG trace (-v, DIR/diagnose.log)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -20,11 +20,23 @@ from pathlib import Path
 from frf_ident.cli.options import (add_campaign_arguments, add_fit_arguments,
                                    add_output_arguments, fit_options, run_many)
 
-__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'excitation_options', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'LOG_TO_OUT', 'add_arguments', 'excitation_options',
+           'run']
 
 #: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
 LOG_TO_OUT = True
 HELP = 'estimate FRFs offline from a bag'
+DESCRIPTION = """\
+Offline estimation: DIR/frf.json = {inputs, outputs, freq_hz, re, im, noise_variance,
+total_variance} with re/im shaped (n_out, n_in, n_freq); DIR/estimates.json (every estimate
+the bag supports: multisine reference-based / plain / uncompensated, chirp, or the LPM and its
+Welch H1); DIR/summary.json (timing findings, experiment summary); DIR/bode.png; with a
+multisine DIR/distortion.png, and DIR/robust_lpm.png where one realisation of a detected
+multisine has two or more steady periods. A bag without descriptors is detected block by block
+(--window; its excitation given by --input, --multisine-period, --chirp, --band, --method):
+docs/bags.md, docs/LPM.md. A segment that started but never ended is left out with a warning; a
+bag of several poses (identify --poses --one-bag) is estimated pose by pose into DIR/pose_NN/
+(docs/CAMPAIGNS.md). --fit fits a model to the estimate as `fit` does."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -37,7 +49,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The subcommand's parser; the arguments are added to it.
 
     """
-    from frf_ident.core.estimation.detected import DEFAULT_BLOCK_S, LPM_METHODS
+    from frf_ident.core.estimation.detected import (DEFAULT_WINDOW_S, DEFAULT_WINDOW_SAMPLES,
+                                                    LPM_METHODS)
     p.add_argument('bag', nargs='+',
                    help='a bag; or several, a folder of bags, a glob or @LIST.txt (one per '
                         'line): a campaign, one folder per bag under --out plus summary.csv, '
@@ -61,9 +74,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help='memory the in-memory reader may use before streaming (default: a '
                         'quarter of RAM, at most 4096)')
     p.add_argument('--window', type=float, default=None, metavar='S',
-                   help=f'streaming block length for bags without experiment descriptors '
-                        f'[s] (default {DEFAULT_BLOCK_S:g}; must hold a few multisine periods '
-                        f'or a whole chirp)')
+                   help=f'block length [s] in which a bag without experiment descriptors is '
+                        f'detected and estimated, in memory and streamed (default '
+                        f'{DEFAULT_WINDOW_S:g} s, or {DEFAULT_WINDOW_SAMPLES:,} samples where the '
+                        f'record is sampled slower; must hold a few multisine periods or a '
+                        f'whole chirp)')
     f = p.add_argument_group('a model fitted to the estimate (what `frf-ident fit` does, into '
                              'the same folder)')
     f.add_argument('--fit', action='store_true',

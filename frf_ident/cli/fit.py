@@ -26,11 +26,25 @@ from pathlib import Path
 from frf_ident.cli.options import (add_campaign_arguments, add_fit_arguments,
                                    add_output_arguments, fit_options, run_many)
 
-__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
 #: the --out DIR also gets the DEBUG trace as DIR/<command>.log (cli/main.py)
 LOG_TO_OUT = True
 HELP = 'fit a parametric model (rational or physical two-mass) to a measured FRF'
+DESCRIPTION = """\
+A parametric model fitted to a measured FRF by maximum likelihood, weighted by the FRF's
+variance (docs/fit.md). --physical: the two-mass flexible joint per axis and, on a square FRF of
+two or more axes, all axes with the link coupling, with a fitted input delay (printed as
+model.yaml's time_delay: the delay beyond the zero-order hold's half sample); model.yaml keeps
+every other key of --model (else of the default model, which the output names). Otherwise a
+common-denominator rational model (model.mat): the order given, or the lowest admissible one
+the cost test accepts (else the lowest AIC); every fit is stable, a mode outside the band or at
+the stability limit makes an order inadmissible, and the orders tried, their costs and the
+runner-up are printed. Standard errors are Cramer-Rao, widened by a model-error bound where the
+cost test fails; each fit ends with a verdict ('parameters describe the data' / 'structure
+missing: treat errors as lower bounds'). Writes fit.json, fit.png, fit.html and model.yaml or
+model.mat; with --model also the margins of its velocity PI (loop.json, loop.png). Several
+inputs are a campaign (docs/CAMPAIGNS.md)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

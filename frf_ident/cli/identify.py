@@ -21,9 +21,16 @@ from frf_ident.cli.options import add_design_arguments
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['HELP', 'add_arguments', 'identification_config', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'add_arguments', 'identification_config', 'run']
 
 HELP = 'run the identification experiments in closed loop, record a bag'
+DESCRIPTION = """\
+Runs the Section 7 procedures in closed loop on the model's simulation or a plug-in plant and
+records a rosbag2 MCAP bag (an existing path is refused). Before anything runs it prints each
+plan's peak torque predicted on the model and refuses (exit 2, nothing recorded) a plan at 0.95
+of a limit, naming the setting to lower. Plug-in plants: docs/real_robot.md. --poses: the
+procedures at each pose on the model linearised there, one bag per pose or all in one bag
+(docs/CAMPAIGNS.md)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -65,6 +72,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--no-compensation', action='store_true',
                    help='skip the constant-velocity run (no periodic-disturbance compensation)')
     add_design_arguments(p, ms, ch)
+    p.add_argument('--target-sd-db', type=float, default=0.0, metavar='DB',
+                   help='end the multisine at the first whole period whose largest 1-sigma '
+                        'magnitude sd over the diagonal channels is at most DB (default 0: '
+                        'run the design; docs/live.md)')
+    p.add_argument('--foxglove', type=int, default=None, metavar='PORT',
+                   help='serve the live estimate on a Foxglove WebSocket at '
+                        'ws://127.0.0.1:PORT during the run and, after it, until Ctrl-C '
+                        '(0: a free port; needs the [foxglove] extra; docs/live.md)')
     p.add_argument('--seed', type=int, default=ms.seed,
                    help=f'random phases of the multisine realisations (default {ms.seed})')
 
@@ -89,6 +104,7 @@ def identification_config(args: argparse.Namespace):
         ``--procedures`` is empty or names something other than multisine, chirp.
 
     """
+    from frf_ident.core.estimation.target import UncertaintyTarget
     from frf_ident.core.simulation.runner import IdentificationConfig
     procs = {s.strip() for s in args.procedures.split(',') if s.strip()}
     unknown = procs - {'multisine', 'chirp'}
@@ -102,7 +118,7 @@ def identification_config(args: argparse.Namespace):
                          seed=args.seed) if 'multisine' in procs else None
     ch = ChirpConfig(duration=args.chirp_duration, max_iterations=args.max_iterations) \
         if 'chirp' in procs else None
-    return IdentificationConfig(ms, ch)
+    return IdentificationConfig(ms, ch, UncertaintyTarget(getattr(args, 'target_sd_db', 0.0)))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -128,6 +144,9 @@ def run(args: argparse.Namespace) -> int:
     from frf_ident.app.console import say
     from frf_ident.app.identify import run_identify, run_identify_poses
     if args.poses is not None:
+        if args.foxglove is not None:
+            raise FrfIdentInputError(f'--foxglove {args.foxglove} with --poses: the live view '
+                                     f'serves one run; leave out --poses or --foxglove')
         if args.plant:
             raise FrfIdentInputError(f'--plant {args.plant} with --poses: poses linearise the '
                                      f"model's own simulation; leave out --plant")
@@ -138,8 +157,11 @@ def run(args: argparse.Namespace) -> int:
                         (args.one_bag, '--one-bag')):
         if given:
             raise FrfIdentInputError(f'{flag}: only used with --poses FILE')
+    if args.foxglove is not None and not 0 <= args.foxglove <= 65535:
+        raise FrfIdentInputError(f'--foxglove {args.foxglove}: expected a TCP port 0..65535 '
+                                 f'(0: a free one)')
     rec = run_identify(args.model, args.plant, identification_config(args), args.out,
-                       progress=say)
+                       progress=say, foxglove_port=args.foxglove)
     s = rec.meta['summary']
     if 'multisine' in s:
         m = s['multisine']

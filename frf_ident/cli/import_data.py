@@ -17,9 +17,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'add_arguments', 'run']
 
 HELP = 'convert measured data (CSV or MAT table) into a bag, using a map file'
+DESCRIPTION = """\
+Converts measured data (a CSV or MAT table) into a bag with a YAML map: the joints, or the
+inputs and outputs of a test rig, their columns, scales and units. The map format is in
+docs/import_maps.md; examples: config/map_emps.yaml, config/map_kuka_kr300.yaml,
+config/map_daisy_arm.yaml. It prints what it did: samples, rate, derived signals, and the
+excitation it recognises. An existing BAG is never overwritten."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -35,7 +41,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('file', type=Path, help='measured data: .csv or .mat')
     p.add_argument('--map', type=Path, required=True,
                    help='YAML map: time, joints and their columns/variables, unit scales '
-                        '(see README, "Files"; examples in config/map_*.yaml)')
+                        '(see docs/import_maps.md; examples in config/map_*.yaml)')
     p.add_argument('--out', required=True, help='bag directory to create (must not exist)')
 
 

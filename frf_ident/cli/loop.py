@@ -23,11 +23,20 @@ from pathlib import Path
 
 from frf_ident.cli.options import add_output_arguments
 
-__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
 #: the --out DIR also gets the DEBUG trace as DIR/<command>.log (cli/main.py)
 LOG_TO_OUT = True
 HELP = 'check a velocity PI on the measured loop L = C P-hat: margins with uncertainty'
+DESCRIPTION = """\
+Checks a velocity PI on the measured loop L_i = C_i P_ii of every axis: gain, phase and
+modulus margins and the crossover with their standard deviations from draws of the FRF
+(docs/fit.md); for several axes the peak of the largest singular value of S = (I + P C)^-1.
+Margins are read within the measured band: no -180 deg crossing there reads 'no gain margin
+within the measured band', and |L| above 1 at the band edge is named. --propose BW PM reads PI
+gains off the FRF for that crossover and phase margin and checks them on the measured loop:
+per axis 'targets met' or which target is missed and by how much. Writes loop.json, loop.png,
+loop.html."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

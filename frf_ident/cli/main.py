@@ -14,8 +14,11 @@
 """
 `frf-ident` command line: an explicit table of subcommands, one module each.
 
-Each module in :mod:`frf_ident.cli` has ``HELP``, ``add_arguments(parser)`` and ``run(args)``;
-``run`` translates the arguments and calls one application function of :mod:`frf_ident.app`.
+Each module in :mod:`frf_ident.cli` has ``HELP``, ``add_arguments(parser)`` and ``run(args)``
+(and may have ``DESCRIPTION``, the paragraph ``frf-ident CMD --help`` and docs/commands.md
+show); ``run`` translates the arguments and calls one application function of
+:mod:`frf_ident.app`. docs/commands.md is generated from :func:`build_parser`
+(``python -m frf_ident.cli.docs > docs/commands.md``, :mod:`frf_ident.cli.docs`).
 
 Exit status: 0 success, 2 usage/input error (one line on stderr naming the file, field or
 value), 1 failure. Set FRF_IDENT_DEBUG=1 to see tracebacks of failures.
@@ -32,7 +35,9 @@ import os
 from pathlib import Path
 import sys
 
-from frf_ident.cli import demo, diagnose, estimate, fit, identify, import_data, loop, reproduce
+from frf_ident import __version__
+from frf_ident.cli import (demo, diagnose, estimate, fit, identify, import_data, loop, reproduce,
+                           tune)
 from frf_ident.cli.logsetup import configured
 from frf_ident.errors import FrfIdentInputError
 
@@ -45,6 +50,7 @@ COMMANDS = {
     'import': import_data,
     'fit': fit,
     'loop': loop,
+    'tune': tune,
     'diagnose': diagnose,
     'demo': demo,
     'reproduce': reproduce,
@@ -93,7 +99,10 @@ def build_parser() -> argparse.ArgumentParser:
     """
     p = OneLineParser(prog='frf-ident', description='Closed-loop FRF identification of '
                                                     'flexible-joint robots (Saupe & Knoblach '
-                                                    '2015).')
+                                                    '2015). Every command and option: '
+                                                    'docs/commands.md.')
+    p.add_argument('--version', action='version', version=f'frf-ident {__version__}',
+                   help='print the version and exit')
     out = p.add_mutually_exclusive_group()
     out.add_argument('-v', '--verbose', action='store_true',
                      help='also print the DEBUG trace (search steps) on the console')
@@ -101,7 +110,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help='print warnings and errors only; no progress bars')
     sub = p.add_subparsers(dest='command', required=True, parser_class=OneLineParser)
     for name, module in COMMANDS.items():
-        module.add_arguments(sub.add_parser(name, help=module.HELP))
+        module.add_arguments(sub.add_parser(
+            name, help=module.HELP, description=getattr(module, 'DESCRIPTION', module.HELP),
+            formatter_class=argparse.RawDescriptionHelpFormatter))
     return p
 
 

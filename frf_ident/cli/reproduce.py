@@ -20,11 +20,16 @@ from frf_ident.app.reproduce import PAPER_REALISATIONS, PAPER_SEED
 from frf_ident.cli.options import add_output_arguments
 from frf_ident.errors import FrfIdentInputError
 
-__all__ = ['HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
+__all__ = ['DESCRIPTION', 'HELP', 'LOG_TO_OUT', 'add_arguments', 'run']
 
 #: the DEBUG trace goes to ``--out``/<command>.log (``--out`` is a directory)
 LOG_TO_OUT = True
 HELP = "reproduce the seed paper's Section 6 example"
+DESCRIPTION = """\
+The paper's Section 6 example: three cases (linear, Fc = 50 N m, k2 = 1.7 k1) x two designs;
+DIR/results.json (each estimate as freq_hz, re, im, the analytic FRF, the power ratio and the
+paper's findings as numbers) and Figures 4/5 as PNG. The figures it prints are listed in
+docs/method.md."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -195,6 +195,11 @@ class Recording:
         names = {c['name'] for c in layout.get('outputs', [])}
         return [k for k, n in enumerate(self.joint_names) if n in names]
 
+    @property
+    def is_layout(self) -> bool:
+        """Return whether the recording is an import layout of inputs and outputs (no robot)."""
+        return isinstance(self.meta, dict) and isinstance(self.meta.get('layout'), dict)
+
     def unit(self, name: str, signal: str) -> str:
         """
         Return the unit of one signal of joint ``name``: as an import map states it, else SI.

@@ -15,7 +15,7 @@
 Data exchange with other tools, model files and the package's data files.
 
 Import measured tables (CSV/MAT) as recordings, export frequency responses (python-control,
-MATLAB idfrd, CSV, JSON); see README_io.md.
+MATLAB idfrd, CSV, JSON); see docs/import_maps.md.
 """
 from .export import from_control, read_frf, to_control, write_frf
 

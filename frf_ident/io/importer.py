@@ -753,7 +753,7 @@ def _time_range(t: np.ndarray, rng: Any, where: str) -> np.ndarray:
 
 def _import_joint(table: Table, joint: dict[str, Any], j: int, n: int, keep: np.ndarray,
                   dt: float, cols: dict[str, np.ndarray], info: dict[str, Any],
-                  map_name: str) -> None:
+                  map_name: str, derive: bool = True) -> None:
     name = joint['name']
     for sig in SIGNALS:
         spec = joint.get(sig)
@@ -770,16 +770,22 @@ def _import_joint(table: Table, joint: dict[str, Any], j: int, n: int, keep: np.
                                      f'sample {int(np.flatnonzero(bad)[0])}) in '
                                      f'{table.name()}')
         cols[sig][:, j] = x
-    _derive(cols, j, dt, name, info)
+    if derive:
+        _derive(cols, j, dt, name, info)
 
 
 def _layout_channel(table: Table, joint: dict[str, Any], j: int, n: int, keep: np.ndarray,
                     dt: float, cols: dict[str, np.ndarray], info: dict[str, Any],
                     map_name: str) -> None:
-    """Read one input or output of a layout; the signals it does not have are zero."""
+    """
+    Read one input or output of a layout; the signals it does not have are zero.
+
+    Nothing is derived as for a joint (a sensor's signal is no joint velocity whose position
+    a robot would have): only the ``derive`` the map asks for.
+    """
     name = joint['name']
     _import_joint(table, {k: v for k, v in joint.items() if k != 'derive_steps'}, j, n, keep,
-                  dt, cols, info, map_name)
+                  dt, cols, info, map_name, derive=False)
     steps = joint['derive_steps']
     x = cols['velocity'][:, j]
     for _ in range(abs(steps)):

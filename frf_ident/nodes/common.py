@@ -36,7 +36,11 @@ TOPICS = {
     'progress_topic': '/frf/progress',
     'arming_topic': '/frf/arming',
     'heartbeat_topic': '/frf/heartbeat',
+    'live_topic': '/frf/live',            # + /frf, /distortion, /summary (docs/live.md)
+    'warnings_topic': '/frf/warnings',
 }
+#: the live frames under ``live_topic`` (frf_ident/io/live_frame.py)
+LIVE_FRAMES = ('frf', 'distortion', 'summary')
 READY = mw.READY
 #: default of the ``lockstep`` parameter of every node: free-running, the mode that is safe on a
 #: real robot; the simulation (config/frf_ident.yaml, launch sim:=true, app.graph) sets true

@@ -176,6 +176,22 @@ class Estimator:
         node.create_subscription(mw.msg(F64), t['effort_topic'], self._on_eff, deep, **raw)
         node.create_subscription(mw.msg(STR), t['experiment_topic'], self._on_exp,
                                  mw.qos_transient_local(100))
+        # the live estimate, its warnings and the excitation's progress with its status line
+        # (docs/live.md): a replay of the bag shows them in the Foxglove layout, logged at the
+        # newest joint state's stamp (when they were made)
+        live = c.topics(node, ('live_topic', 'warnings_topic', 'progress_topic'))
+        for k in c.LIVE_FRAMES:
+            self._record_as_is(node, f'{live["live_topic"]}/{k}', F64, raw)
+        self._record_as_is(node, live['warnings_topic'], STR, raw)
+        self._record_as_is(node, live['progress_topic'], STR, raw)
+
+    def _record_as_is(self, node: Any, topic: str, msg_type: str, raw: dict) -> None:
+        self.counts[topic] = 0
+
+        def on(msg: Any) -> None:
+            self._write(topic, msg_type, max(self.last_js, 0), _cdr(msg))
+        node.create_subscription(mw.msg(msg_type), topic, on, mw.qos_transient_local(50),
+                                 **raw)
 
     def _write(self, topic: str, msg_type: str, stamp: int, data: bytes) -> None:
         self.counts[topic] += 1

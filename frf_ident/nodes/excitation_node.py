@@ -25,6 +25,9 @@ Services (std_srvs/Trigger), answering once the plan is made and checked (second
 during a run is refused at once) with ``{"accepted": true, "run": id, ...}``:
 ``/frf/run_multisine`` starts the multisine procedure, ``/frf/run_iteration`` one step of the
 chirp iteration (its ``finished`` event carries ``iteration``, ``error_db``, ``converged``).
+``foxglove_port`` (default 0: none) serves the live stream, progress, warnings and joint
+states on a Foxglove WebSocket at ws://127.0.0.1:PORT (frf_ident/io/foxglove_server.py; the
+``[foxglove]`` extra), for the DDS backend where no foxglove_bridge runs.
 ``/frf/abort`` stops the running procedure (reference ramped to zero within ``abort_ramp_s``,
 an ``aborted`` event on /frf/experiment, a ``finished`` event with ``"aborted": true`` on
 /frf/progress); it answers ``{"aborted": false, ...}`` (success false) when nothing runs.
@@ -112,6 +115,7 @@ class ExcitationNode:
     def __init__(self, node: Any) -> None:
         from frf_ident.io.model_file import dry_run_plant, load_model
         self.node = node
+        self.foxglove: Any = None          # the session may report before it is wired
         settings = settings_from_parameters(node)
         c.refuse_lockstep_without_sim(node, settings.lockstep)
         t = c.topics(node, ('joint_states_topic', 'velocity_topic', 'excitation_topic',
@@ -141,6 +145,8 @@ class ExcitationNode:
         self.dt_ns = self.session.dt_ns
         self.order: Optional[list[int]] = None
         self.names: Optional[list[str]] = None
+        self.live = self._wire_live(node, torque_limit, robot.dt)
+        self.foxglove = self._wire_foxglove(int(c.param(node, 'foxglove_port', 0)))
         self.refuse_second_publisher(float(c.param(node, 'discovery_wait_s', 0.5)))
         # arming and the operator heartbeat (docs/ros2.md, "Arming"); every request logged
         self.gate = OperatorGate(node, settings.lockstep, self.log)
@@ -157,6 +163,77 @@ class ExcitationNode:
         self._signalled = threading.Event()      # SIGINT/SIGTERM (spin's stop event)
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
+
+    def _wire_live(self, node: Any, torque_limit: np.ndarray, dt: float) -> Any:
+        """Wire the live estimate, its publishers and the uncertainty target (docs/live.md)."""
+        from frf_ident.app.live import LiveMonitor
+        from frf_ident.core.estimation.target import UncertaintyTarget
+        target = UncertaintyTarget(float(c.param(node, 'target_sd_db', 0.0)),
+                                   str(c.param(node, 'target_channels', 'diagonal')))
+        if not c.param(node, 'live', True):
+            if target.enabled:
+                raise c.Refused('target_sd_db needs the live estimate (live: true)')
+            return None
+        t = c.topics(node, ('live_topic', 'warnings_topic'))
+        F64 = mw.msg('std_msgs/msg/Float64MultiArray')
+        self.Layout = mw.msg('std_msgs/msg/MultiArrayLayout')
+        self.Dim = mw.msg('std_msgs/msg/MultiArrayDimension')
+        self.F64 = F64
+        # transient-local: a viewer that joins late gets the newest estimate at once
+        self.live_pubs = {k: node.create_publisher(F64, f'{t["live_topic"]}/{k}',
+                                                   mw.qos_transient_local(1))
+                          for k in c.LIVE_FRAMES}
+        self.warn_pub = node.create_publisher(self.String, t['warnings_topic'],
+                                              mw.qos_transient_local(50))
+        return LiveMonitor(self.joints, dt, self.session.offset, torque_limit, target, self,
+                           stop=self.session.stop_at_target if target.enabled else None)
+
+    def _wire_foxglove(self, port: int) -> Any:
+        """Serve the live stream on a Foxglove WebSocket at ``port`` (0: none; docs/live.md)."""
+        if not port:
+            return None
+        from frf_ident.io.foxglove_server import FoxgloveLive
+        try:
+            fox = FoxgloveLive(port, name='frf_ident excitation_node')
+        except FrfIdentInputError as exc:
+            raise c.Refused(str(exc)) from None
+        self.log('info', f'Foxglove WebSocket on {fox.url} (the app: Open connection)')
+        return fox
+
+    def _now_ns(self) -> int:
+        return int(self.node.get_clock().now().nanoseconds)
+
+    def live_frame(self, topic: str, frame: Any) -> None:
+        """
+        Publish a live frame as a Float64MultiArray on /frf/live/<topic>.
+
+        Parameters
+        ----------
+        topic : str
+            'frf', 'distortion' or 'summary'.
+        frame : ArrayFrame
+            Its dims and data (frf_ident/io/live_frame.py).
+
+        """
+        layout = self.Layout(dim=[self.Dim(label=lab, size=n, stride=st)
+                                  for lab, n, st in frame.dims], data_offset=0)
+        self.live_pubs[topic].publish(self.F64(layout=layout, data=frame.data.tolist()))
+        if self.foxglove is not None:
+            self.foxglove.frame(topic, frame, self._now_ns())
+
+    def warning(self, event: dict) -> None:
+        """
+        Publish an early warning as JSON on the warnings topic.
+
+        Parameters
+        ----------
+        event : dict
+            ``EarlyWarning.to_dict()``.
+
+        """
+        self.warn_pub.publish(self.String(data=json.dumps(event, sort_keys=True)))
+        if self.foxglove is not None:
+            self.foxglove.text('/frf/warnings', event, self._now_ns())
 
     def _watch(self) -> None:
         while not self._stop.wait(0.002):
@@ -188,6 +265,8 @@ class ExcitationNode:
             Excitation part of ``r`` [rad/s], published on the excitation topic.
 
         """
+        if self.live is not None:
+            self.live.reference(k, x)
         c.set_stamp(self.exc_msg, k * self.dt_ns)
         self.exc_msg.velocity = x.tolist()
         self.exc_pub.publish(self.exc_msg)   # first: recorders pair the command with this stamp
@@ -205,6 +284,8 @@ class ExcitationNode:
 
         """
         self.exp_pub.publish(self.String(data=text))
+        if self.live is not None:
+            self.live.experiment(text)
 
     def progress(self, event: dict) -> None:
         """
@@ -219,6 +300,8 @@ class ExcitationNode:
         # compact: `ros2 topic echo` shows 128 characters unless --full-length
         self.progress_pub.publish(self.String(data=json.dumps(event, sort_keys=True,
                                                               separators=(',', ':'))))
+        if self.foxglove is not None:
+            self.foxglove.text('/frf/progress', event, self._now_ns())
 
     def log(self, level: str, text: str) -> None:
         """
@@ -274,8 +357,14 @@ class ExcitationNode:
             self.order = [pos[j] for j in self.joints]
         p, e, cols = msg.position, msg.effort, self.order
         effort = np.array([e[i] for i in cols]) if len(e) else None
-        self.session.on_state(int(round(c.stamp_ns(msg) / self.dt_ns)),
-                              np.array([p[i] for i in cols]), effort)
+        k, q = int(round(c.stamp_ns(msg) / self.dt_ns)), np.array([p[i] for i in cols])
+        if len(msg.velocity) and (self.live is not None or self.foxglove is not None):
+            v = np.array([msg.velocity[i] for i in cols])
+            if self.live is not None:
+                self.live.state(k, q, v, effort)
+            if self.foxglove is not None:
+                self.foxglove.joint_state(k * self.dt_ns, self.joints, q, v, effort)
+        self.session.on_state(k, q, effort)
 
     def _start(self, starter: Any, response: Any, caller: Any) -> Any:
         try:
@@ -321,6 +410,10 @@ class ExcitationNode:
         self._stop.set()
         self.session.close()
         self.gate.close()
+        if self.live is not None:
+            self.live.close()
+        if self.foxglove is not None:
+            self.foxglove.close()
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -57,7 +57,7 @@ from frf_ident.report.distortion import distortion_figure, robust_lpm_figure
 from frf_ident.report.page import figure_tag, num, page, table
 import numpy as np
 
-__all__ = ['fit_sections', 'write_fit_report', 'write_report']
+__all__ = ['fit_sections', 'proposal_section', 'write_fit_report', 'write_report']
 
 REPORT_NAME = 'report.html'
 
@@ -343,26 +343,31 @@ def _pm(value: float, std: float, scale: float = 1.0) -> str:
 
 def _verdict(cost) -> str:
     cls = 'warn' if cost.structure_missing else 'ok' if cost.weighted else 'muted'
-    return f'<p class="{cls}">{html.escape(cost.summary())}</p>'
+    return (f'<p class="{cls}">{html.escape(cost.summary())}: '
+            f'<b>{html.escape(cost.verdict)}</b></p>')
 
 
-def _delay_row(name: str, delay_s: float, std_s: float) -> list[Any]:
+def _delay_row(name: str, delay_s: float, std_s: float, hold_s: float = 0.0) -> list[Any]:
     how = 'fitted' if math.isfinite(std_s) else 'given (--delay)'
-    return [name, f'delay ({how})', _pm(delay_s, std_s, 1e3), 'ms',
-            _relative(delay_s, std_s)]
+    if not hold_s:
+        return [name, f'delay ({how})', _pm(delay_s, std_s, 1e3), 'ms',
+                _relative(delay_s, std_s)]
+    return [name, f'time_delay ({how}; the whole delay {1e3 * delay_s:.4g} ms less the '
+                  f"zero-order hold's {1e3 * hold_s:.4g} ms, as model.yaml)",
+            _pm(max(delay_s - hold_s, 0.0), std_s, 1e3), 'ms', '\u2014']
 
 
 def _relative(value: float, std: float) -> str:
     return f'{100 * abs(std / value):.2g}' if value and math.isfinite(std) else '\u2014'
 
 
-def _physical_html(fits: Sequence[PhysicalFit]) -> str:
+def _physical_html(fits: Sequence[PhysicalFit], hold_s: float = 0.0) -> str:
     rows = []
     for f in fits:
         fa, fr = f.resonances_hz()
         rows += [[f.name, k, _pm(v, sd), UNITS[k], _relative(v, sd)]
-                 for k, v, sd in zip(f.names, f.value, f.std)]
-        rows.append(_delay_row(f.name, f.delay_s, f.delay_std_s))
+                 for k, v, sd in zip(f.names, f.value, f.reported_std)]
+        rows.append(_delay_row(f.name, f.delay_s, f.delay_reported_std_s, hold_s))
         rows.append([f.name, 'antiresonance / resonance', f'{fa:.4g} / {fr:.4g}', 'Hz', ''])
     verdicts = ''.join(f'<li>{html.escape(f.name)}: {_verdict(f.cost)}</li>' for f in fits)
     return (table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
@@ -370,37 +375,49 @@ def _physical_html(fits: Sequence[PhysicalFit]) -> str:
             + f'<p>Cost test per axis:</p><ul>{verdicts}</ul>')
 
 
-def _coupled_html(fit: CoupledFit) -> str:
+def _coupled_html(fit: CoupledFit, hold_s: float = 0.0) -> str:
     rows = []
     for i, name in enumerate(fit.names):
-        sd = fit.axis_std(i)
+        sd = fit.axis_std(i, reported=True)
         rows += [[name, k, _pm(v, sd[k]), UNITS[k], _relative(v, sd[k])]
                  for k, v in fit.axis_parameters(i).items()]
-    c, csd = fit.link_coupling()
+    c, csd = fit.link_coupling(reported=True)
     for i, j in zip(*np.triu_indices(len(fit.names), 1)):
         rows.append([f'{fit.names[i]} \u2013 {fit.names[j]}', 'link coupling',
                      _pm(c[i, j], csd[i, j]), 'kg m^2', _relative(c[i, j], csd[i, j])])
-    rows.append(_delay_row('all axes', fit.delay_s, fit.delay_std_s))
+    rows.append(_delay_row('all axes', fit.delay_s, fit.delay_reported_std_s, hold_s))
+    apart = ''.join(f'<li>{html.escape(line)}</li>' for line in fit.disagreements())
     return (table(['axis', 'parameter', 'value \u00b1 standard error', 'unit',
                    'standard error [%]'], rows)
-            + '<p>Cost test of the coupled fit:</p>' + _verdict(fit.cost))
+            + '<p>Cost test of the coupled fit:</p>' + _verdict(fit.cost)
+            + (f'<p>Per-axis fits (no coupling) against the coupled fit, beyond their '
+               f'errors:</p><ul>{apart}</ul>' if apart else ''))
 
 
 def _rational_html(fit: RationalFit) -> str:
-    rows = [[_pm(m.frequency_hz, m.frequency_std_hz), _pm(m.damping, m.damping_std)]
-            for m in fit.modes()]
+    rows = [[_pm(m.frequency_hz, math.hypot(m.frequency_std_hz, m.frequency_bound_hz)),
+             _pm(m.damping, math.hypot(m.damping_std, m.damping_bound)),
+             'yes' if m.in_band else 'NO: not supported by the data'] for m in fit.modes()]
+    stab = (f' The free ML fit had {fit.reflected} unstable pole(s); the model is the ML fit '
+            f'over stable denominators.' if fit.reflected else '')
     return (f'<p>Order {fit.order} (poles), {fit.n_params} real parameters, '
-            f'{fit.freq_hz.size} lines; the model is in model.mat (A, B, C, D).</p>'
-            + table(['natural frequency \u00b1 SE [Hz]', 'damping ratio \u00b1 SE [-]'],
-                    rows)
+            f'{fit.freq_hz.size} lines; the model is in model.mat (A, B, C, D).{stab}</p>'
+            + table(['natural frequency \u00b1 SE [Hz]', 'damping ratio \u00b1 SE [-]',
+                     'in the fitted band'], rows)
             + '<p>Cost test:</p>' + _verdict(fit.cost))
 
 
 def _margins_html(check: LoopCheck) -> str:
-    def m(v: Margin) -> str:
-        return _pm(v.value, v.std)
-    rows = [[a.axis, a.kp, a.ki, m(a.gain_margin_db), m(a.phase_margin_deg),
-             m(a.modulus_margin), m(a.crossover_hz)] for a in check.axes]
+    def m(v: Margin, note: str | None = None) -> str:
+        return _pm(v.value, v.std) if math.isfinite(v.value) or note is None else note
+    rows, edges = [], []
+    for a in check.axes:
+        notes = a.notes()
+        rows.append([a.axis, a.kp, a.ki, m(a.gain_margin_db, notes.get('gain_margin_db')),
+                     m(a.phase_margin_deg, notes.get('phase_margin_deg')),
+                     m(a.modulus_margin), m(a.crossover_hz, notes.get('crossover_hz'))])
+        if 'band_edge' in notes:
+            edges.append(f'<li>{html.escape(a.axis)}: {html.escape(notes["band_edge"])}</li>')
     pi = (f'discrete at dt = {check.discrete_dt:g} s' if check.discrete_dt
           else 'continuous')
     text = (f'<p>L = C P-hat per axis on the measured FRF, velocity PI {pi}. Standard '
@@ -408,16 +425,48 @@ def _margins_html(check: LoopCheck) -> str:
             + (' (none: the FRF has no variance).' if not check.draws else '.') + '</p>')
     text += table(['axis', 'kp [N m s/rad]', 'ki [N m/rad]', 'gain margin [dB]',
                    'phase margin [deg]', 'modulus margin [-]', 'crossover [Hz]'], rows)
+    if edges:
+        text += f'<ul class="warn">{"".join(edges)}</ul>'
     if check.peak_sensitivity is not None:
         text += (f'<p>MIMO: peak of the largest singular value of S = (I + P C)^-1: '
                  f'{_pm(check.peak_sensitivity.value, check.peak_sensitivity.std)}</p>')
     return text
 
 
+def proposal_section(check: LoopCheck | None, target: tuple[float, float],
+                     verdicts: Sequence[tuple[str, str, bool]]) -> tuple[str, str, str]:
+    """
+    Return the report section of proposed PI gains: their margins and the targets' verdicts.
+
+    Parameters
+    ----------
+    check : LoopCheck or None
+        The proposed gains checked on the measured FRF; None when the page's margins section
+        already shows them (only ``--propose`` given).
+    target : tuple of float
+        (bandwidth [Hz], phase margin [deg]) asked for.
+    verdicts : sequence of tuple
+        (axis, 'targets met' or what is missed, met) per axis.
+
+    Returns
+    -------
+    tuple of str
+        (anchor, heading, html) as :func:`fit_sections` gives them.
+
+    """
+    items = ''.join(f'<li class="{"ok" if met else "warn"}">{html.escape(axis)}: '
+                    f'{html.escape(text)}</li>' for axis, text, met in verdicts)
+    body = (f'<p>PI gains read off the measured FRF for {target[1]:g} deg at {target[0]:g} '
+            f'Hz, checked on the measured loop:</p><ul>{items}</ul>')
+    if check is not None:
+        body += _margins_html(check)
+    return ('proposal', f'PI proposed for {target[1]:g} deg at {target[0]:g} Hz', body)
+
+
 def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | None = None,
                  rational: RationalFit | None = None, check: LoopCheck | None = None,
-                 fit_png: str | None = None, loop_png: str | None = None
-                 ) -> list[tuple[str, str, str]]:
+                 fit_png: str | None = None, loop_png: str | None = None,
+                 hold_s: float = 0.0) -> list[tuple[str, str, str]]:
     """
     Return the report sections of a fit and a controller check as (anchor, heading, html).
 
@@ -433,6 +482,9 @@ def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | 
         Margins of the velocity PI on the measured FRF.
     fit_png, loop_png : str, optional
         File names (next to the page) of the fit figure and the loop figure.
+    hold_s : float, optional
+        The zero-order hold's half sample [s] of the model file: a fitted delay is shown as
+        model.yaml's ``time_delay`` (the delay less it); 0: the whole delay.
 
     Returns
     -------
@@ -451,13 +503,14 @@ def fit_sections(*, physical: Sequence[PhysicalFit] = (), coupled: CoupledFit | 
             'fitted model over the measured FRF')))
     params = ''
     if coupled is not None:
-        params = _coupled_html(coupled)
+        params = _coupled_html(coupled, hold_s)
     elif physical:
-        params = _physical_html(physical)
+        params = _physical_html(physical, hold_s)
     if rational is not None:
         params += _rational_html(rational)
     if params:
-        out.append(('parameters', 'Fitted parameters (Cram\u00e9r-Rao standard errors)',
+        out.append(('parameters', 'Fitted parameters (Cram\u00e9r-Rao standard errors, '
+                                  'widened by the model-error bound where the cost test fails)',
                     params))
     if check is not None:
         body = _margins_html(check)

@@ -54,7 +54,7 @@ def _peak_bytes(fn):
 def test_windows_equal_the_in_memory_recording(foreign_bags):
     bag = foreign_bags[60.0]
     full, _ = read_recording(bag)
-    reader = WindowReader(bag, block_s=7.0, drain_rows=5000)
+    reader = WindowReader(bag, window_s=7.0, drain_rows=5000)
     n = 0
     for rec, report in reader:
         i0 = full.index_of(rec.t[0])
@@ -75,7 +75,7 @@ def test_blocks_of_a_foreign_bag_give_the_in_memory_estimate(foreign_bags):
     bag = foreign_bags[60.0]
     rec, _ = read_recording(bag)
     ref = estimate_recording(rec)['detected/joint_2']
-    got = stream_estimate(bag, block_s=12.0).estimates['detected/joint_2']
+    got = stream_estimate(bag, window_s=12.0).estimates['detected/joint_2']
     np.testing.assert_allclose(got.freq_hz, ref.freq_hz, rtol=1e-9)   # f0 from each fs
     # the next block starts where the last whole period ended and skips no transient: all
     # steady-state periods are used as in memory (19 periods, the first three transient by
@@ -121,7 +121,7 @@ def test_streamed_estimate_of_an_own_bag_equals_the_in_memory_one(tmp_path, caps
 def test_memory_does_not_grow_with_the_bag(foreign_bags):
     """4x the bag: the streamed estimate holds the same memory, the in-memory one 4x."""
     def streamed(d):
-        return _peak_bytes(lambda: stream_estimate(foreign_bags[d], block_s=12.0))
+        return _peak_bytes(lambda: stream_estimate(foreign_bags[d], window_s=12.0))
 
     def in_memory(d):
         return _peak_bytes(lambda: estimate_recording(read_recording(foreign_bags[d])[0]))

@@ -54,7 +54,7 @@ def write_robot_bag(path, *, seconds: float = 10.0, fs: float = 1000.0, jitter: 
     """
     Return a /joint_states-only bag as a real robot records it, written with rosbags.
 
-    Timing model (documented in README_bag.md): the controller samples at
+    Timing model (documented in docs/bag_format.md): the controller samples at
     s_k = t0 + k*dt + u_k with u_k ~ U(-jitter*dt, +jitter*dt) (scheduling jitter) and stamps
     each JointState with that instant, so the values are the true signals at s_k. A fraction
     ``drop`` of the messages is lost at random (never the first/last); ``gap`` = (t, n) removes

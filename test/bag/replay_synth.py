@@ -39,7 +39,9 @@ EXCITED = 1                # joint_2
 
 def multisine_run(n_periods: int = 6, f_high: float = 80.0, bound: float = 0.01,
                   seed: int = 0, lead_s: float = 0.0, tail_s: float = 0.0,
-                  period_samples: int = 8192, period_scale: float = 1.0) -> Recording:
+                  period_samples: int = 8192, period_scale: float = 1.0,
+                  velocity_noise: float = 0.0, torque_noise: float = 0.0,
+                  noise_seed: int = 0) -> Recording:
     """
     Simulate a closed-loop multisine run of the default plant.
 
@@ -47,12 +49,18 @@ def multisine_run(n_periods: int = 6, f_high: float = 80.0, bound: float = 0.01,
     in closed loop, the multisine on joint_2's velocity reference; ``lead_s`` / ``tail_s`` of
     a partial period before / after (the reference runs on periodically). ``period_scale``
     stretches the multisine's period in time (1.0002: 8193.6 samples, not a whole number).
+    ``velocity_noise`` [rad/s] / ``torque_noise`` [N m]: standard deviations of white
+    measurement noise on every axis (the velocity's fed back by the controller), drawn with
+    ``noise_seed``.
     """
     from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
     from frf_ident.core.model.schema import default_model_dict, robot_from_dict
     from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     d = default_model_dict()
+    for axis in d['axes']:
+        axis['velocity_noise'], axis['torque_noise'] = velocity_noise, torque_noise
+    d['simulation']['seed'] = noise_seed
     rob = robot_from_dict(d)
     ctrl = controller_from_dict(d, rob)
     des = design_odd_multisine(2.0, f_high, bound=bound, resolution_hz=FS / period_samples,

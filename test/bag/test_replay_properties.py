@@ -213,5 +213,5 @@ def test_fractional_period_is_refused_not_estimated_by_the_lpm(method):
         return
     rec = run('fractional')
     with pytest.raises(UnusableExcitationError, match='is periodic') as err:
-        estimate_in_blocks(RecordingBlocks(rec, block_s=5.0), ExcitationOptions(method='lpm'))
+        estimate_in_blocks(RecordingBlocks(rec, window_s=5.0), ExcitationOptions(method='lpm'))
     print(err.value)

@@ -69,7 +69,9 @@ def test_estimate_fit_writes_the_fit_of_frf_ident_fit_into_the_estimate(joint, t
     assert main(['estimate', str(bag), '--out', str(out), '--fit', '--physical',
                  '--model', str(model)]) == 0
     said = capsys.readouterr().out
-    assert re.search(r'delay 0\.50\d* \+- [0-9.e-]+ ms \(fitted\)', said), said
+    # the delay as model.yaml's time_delay: the whole delay less the hold's half sample
+    assert re.search(r'time_delay [0-9.e-]+ \+- [0-9.e-]+ ms \(fitted; the whole delay '
+                     r'0\.50\d* ms less the zero-order hold\'s 0\.5 ms\)', said), said
     assert 'phase margin' in said and 'fit: report' in said
     doc = json.loads((out / 'fit.json').read_text())
     (fit,) = doc['physical']
@@ -93,7 +95,7 @@ def test_estimate_fit_writes_the_fit_of_frf_ident_fit_into_the_estimate(joint, t
     # the page: its sections, and every figure it shows is there
     page = (out / 'fit.html').read_text()
     for heading in ('Fitted model over the FRF', 'Fitted parameters', 'Margins of the '
-                    'measured loop', 'delay (fitted)', 'N m/rad', 'crossover [Hz]'):
+                    'measured loop', 'time_delay (fitted', 'N m/rad', 'crossover [Hz]'):
         assert heading in page, heading
     for png in re.findall(r'src="([^"]+\.png)"', page):
         assert (out / png).stat().st_size > 0, png

@@ -20,4 +20,9 @@ Estimation: FRFs from recorded data and the checks that the data support them.
   descriptors
 - :mod:`frf_ident.core.estimation.detected` — estimates from data without descriptors
 - :mod:`frf_ident.core.estimation.checks` — refusals: clipping, band, periods, coverage
+- :mod:`frf_ident.core.estimation.lpm`, :mod:`~frf_ident.core.estimation.lpm_frames` — the
+  Local Polynomial Method (lines; frames of time records)
+- :mod:`frf_ident.core.estimation.missing_periodic`,
+  :mod:`~frf_ident.core.estimation.missing_lpm` — samples a gap took, estimated with the FRF
+  (periodic records; the LPM), accounted for in :mod:`~frf_ident.core.estimation.missing`
 """

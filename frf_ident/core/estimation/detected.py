@@ -33,7 +33,7 @@ excerpt holds one; the estimate's meta lists what was dropped, and the estimate 
 only when fewer than two periods (or no line) remain.
 
 A recording is estimated block by block (:func:`estimate_in_blocks`, blocks of
-``DEFAULT_BLOCK_S``), in memory (:class:`RecordingBlocks`) and when a bag is streamed alike,
+``DEFAULT_WINDOW_S``), in memory (:class:`RecordingBlocks`) and when a bag is streamed alike,
 so both take the same decisions whatever the size of the bag.
 """
 from __future__ import annotations
@@ -47,6 +47,8 @@ from frf_ident.core.estimation.checks import (check_band, check_covers, check_no
 from frf_ident.core.estimation.distortion import distortion_lines
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.lpm import default_half_width, DEFAULT_ORDER, robust_lpm_periods
+from frf_ident.core.estimation.missing_periodic import (fill_steady_periods, FilledPeriods,
+                                                        GAP_HINT)
 from frf_ident.core.estimation.nonperiodic import LpmBlocks
 from frf_ident.core.estimation.spectra import periodic_spectra
 from frf_ident.core.estimation.transient import steady_periods, SteadyState
@@ -61,16 +63,21 @@ from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError
 import numpy as np
 
-__all__ = ['DEFAULT_BLOCK_S', 'LPM_METHODS', 'MIN_ADVANCE_S', 'DetectedEstimator',
-           'ExcitationOptions', 'NoExcitationError', 'RecordingBlocks',
-           'UnusableExcitationError', 'block_length', 'check_detected_segment',
+__all__ = ['DEFAULT_WINDOW_S', 'DEFAULT_WINDOW_SAMPLES', 'LPM_METHODS', 'MIN_ADVANCE_S',
+           'DetectedEstimator', 'ExcitationOptions', 'NoExcitationError', 'RecordingBlocks',
+           'UnusableExcitationError', 'window_length', 'check_detected_segment',
            'check_not_periodic', 'detect_segments', 'detected_frf', 'estimate_in_blocks']
 
 #: block length [s] in which recordings without descriptors are detected and estimated (in
 #: memory and streamed alike): a few multisine periods or a whole chirp must fit in one block.
-#: Defined here only: every signature above (app, cli) takes ``block_s=None`` and
-#: :func:`block_length` resolves it.
-DEFAULT_BLOCK_S = 300.0
+#: Defined here only: every signature above (app, cli) takes ``window_s=None`` and
+#: :func:`window_length` resolves it.
+DEFAULT_WINDOW_S = 300.0
+#: ... and a block holds at least this many samples: 300 s at the 1 kHz the default was set
+#: for (a block's memory and a period's length in samples scale with the samples, not the
+#: seconds). A record sampled slower gets a longer block: the DaISy arm at 1 s per sample is
+#: one block of its 1024 samples, where 300 s cut it into four that each held a wrong period
+DEFAULT_WINDOW_SAMPLES = 300_000
 
 #: a block that used data up to t starts the next block there (no period lost at the
 #: boundary), unless t is less than this far [s] into the block (the scan must move on)
@@ -528,7 +535,7 @@ class DetectedEstimator:
             # not used again
             going_on = e is not None and seg.t_start - e['t_end'] < 1.5 * info[
                 'period_samples'] / rec.fs
-            bins, U, Y, skip, dropped, Yd, Ul = _multisine_periods(
+            bins, U, Y, skip, dropped, Yd, Ul, filled = _multisine_periods(
                 rec, seg, used_until=e['t_end'] if going_on else None)
             Y, Yd = Y[:, :, outs], Yd[:, :, outs]
             if U.shape[0]:          # refused before anything is kept (the reason, not '0 of 0')
@@ -538,6 +545,7 @@ class DetectedEstimator:
                 e = self.entries[key] = {'names': names, 'f0': info['f0'], 'bins': bins,
                                          'u': [], 'y': [], 'det_y': [], 'det_u': [],
                                          'skip': 0, 'blocks': 0, 'dropped': [],
+                                         'filled': [], 'missing': [],
                                          'runs': 0, 'run': [],
                                          'units': [_output_units(rec)[k] for k in outs],
                                          'input_unit': _input_unit(rec, j),
@@ -557,6 +565,11 @@ class DetectedEstimator:
             for k, x in (('u', U[:, :, j]), ('y', Y), ('det_y', Yd), ('det_u', Ul)):
                 e[k].append(x)
             e['run'].append(np.full(U.shape[0], e['runs']))
+            # missing samples estimated: what they do to the spread over these periods, and
+            # each period's account of them (merged over the steady periods in the end)
+            e['filled'].append(filled[0] if filled else FilledPeriods(
+                np.zeros(U.shape[0]), np.ones(U.shape[0])))
+            e['missing'].extend(filled[1] if filled else [None] * U.shape[0])
             return
         freqs, U, Y = _chirp_lines(rec, seg)
         Y = Y[:, outs]
@@ -623,35 +636,49 @@ class DetectedEstimator:
         suu = np.sum(np.abs(Uj) ** 2, axis=0)
         keep = _strong_lines(suu[None, :])
         P = (np.einsum('qfo,qf->fo', Y, np.conj(Uj))[keep] / suu[keep, None]).T[:, None, :]
+        # estimated missing samples make the spread over periods smaller: its scale
+        missing = None
+        for acc in e['missing'][first:]:
+            missing = acc.merged(missing) if acc is not None else missing
+        scale = FilledPeriods(np.concatenate([f.lost for f in e['filled']])[first:],
+                              np.concatenate([f.factor for f in e['filled']])[first:]
+                              ).spread_scale() if missing is not None else 1.0
         var = None
         if n >= 2:
             var = (np.var(Y / Uj[:, :, None], axis=0, ddof=1)[keep] / n).T[:, None, :]
+            var = var * scale if scale != 1.0 else var
         det_y = np.concatenate(e['det_y'])[first:]
         dist = distortion_lines(det_y, np.arange(1, det_y.shape[1] + 1), e['bins'][keep],
                                 e['f0'], names_out, units=e['units'])
+        if scale != 1.0 and dist.noise is not None:
+            dist.noise = dist.noise * scale
         one_run = np.unique(np.concatenate(e['run'])[first:]).size == 1
         robust = _robust_levels(Y[:, keep], Uj[:, keep], e['bins'][keep] * e['f0'], names_out,
-                                e) if one_run else None
+                                e, scale) if one_run else None
         return FrequencyResponse(e['bins'][keep] * e['f0'], P, [name_in], names_out, var, None, {
             'design': 'detected_multisine', 'periods': n, 'distortion': dist.to_dict(),
             'units': {'input': e['input_unit'], 'outputs': e['units']},
             'transient_periods': e['skip'] + first, 'transient': steady.describe(),
             'blocks': e['blocks'], **({'robust_lpm': robust} if robust else {}),
+            **({'missing': missing.to_dict()} if missing is not None else {}),
             'dropped': {'periods': len(e['dropped']), 'times': [list(d) for d in e['dropped']]}})
 
 
 def _robust_levels(Y: np.ndarray, U: np.ndarray, freq_hz: np.ndarray, outputs: list[str],
-                   e: dict[str, Any]) -> dict[str, Any] | None:
+                   e: dict[str, Any], scale: float = 1.0) -> dict[str, Any] | None:
     """
     Robust LPM of the steady periods of one realisation (its meta['robust_lpm']).
 
     ``Y`` (n_q, F, n_out) and ``U`` (n_q, F) at the excited lines. None when fewer lines
     than one local-polynomial window: the BLA's spread over periods is then all there is.
+    ``scale``: of the noise variance from the spread (estimated missing samples reduce it).
     """
     if freq_hz.size < 2 * default_half_width(1, DEFAULT_ORDER, transient=False) + 1:
         return None
     res = robust_lpm_periods(np.transpose(Y, (0, 2, 1)), U, freq_hz)
-    return res.levels(outputs, e['units'], e['input_unit']).to_dict()
+    levels = res.levels(outputs, e['units'], e['input_unit'])
+    levels.noise = levels.noise * scale if scale != 1.0 else levels.noise
+    return levels.to_dict()
 
 
 def _check_enough(e: dict[str, Any]) -> None:
@@ -666,7 +693,7 @@ def _check_enough(e: dict[str, Any]) -> None:
     n = sum(u.shape[0] for u in e['u']) - (_steady(e).first if e['u'] else 0)
     check_remaining(n, len(e['dropped']), need=MIN_PERIODS,
                     what='multisine periods', where=f'detected multisine of {name}',
-                    dropped_at=e['dropped'], hint='record more periods')
+                    dropped_at=e['dropped'], hint=f'{GAP_HINT}; record more periods')
 
 
 def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None = None
@@ -702,25 +729,57 @@ def _multisine_periods(rec: Recording, seg: Segment, *, used_until: float | None
     bins = np.asarray(info['harmonics'])
     j = int(info['input'])
     gone = missing_rows(rec.effort[:, j], rec.velocity)
-    use, dropped = [], []
-    for q in range(skip, n_q):
-        a = i0 + q * n_per
-        if np.any(gone[a:a + n_per]):
-            dropped.append((float(starts[q]), float(starts[q] + n_per / rec.fs)))
-        else:
-            use.append(a)
     # detection lines: every line up to three times the band (a cubic's products); the
     # transient test looks at the input's lines up to the band
     lines = np.arange(1, min(3 * int(np.max(bins)), (n_per - 1) // 2) + 1)
     band = np.arange(1, min(int(np.max(bins)), (n_per - 1) // 2) + 1)
-    if not use:
+    idx = (i0 + np.arange(skip, n_q) * n_per)[:, None] + np.arange(n_per)   # (n_b, n_per)
+    miss = gone[idx]
+    u, y = rec.effort[idx], rec.velocity[idx]
+    keep, filled = ~miss.any(axis=1), None
+    if miss.any():
+        u, y, keep, filled = _filled_block(rec, u, y, miss, j, band, used_until is None)
+    dropped = [(float(starts[q]), float(starts[q] + n_per / rec.fs))
+               for q, k in zip(range(skip, n_q), keep) if not k]
+    if not np.any(keep):
         empty = np.empty((0, bins.size, rec.velocity.shape[1]), dtype=complex)
-        return bins, empty, empty, skip, dropped, empty[:, :0], empty[:, :0, 0]
-    idx = np.asarray(use)[:, None] + np.arange(n_per)         # (n_used, n_per)
-    U = periodic_spectra(rec.effort[idx], bins, axis=1)
-    Y = periodic_spectra(rec.velocity[idx], bins, axis=1)
-    return (bins, U, Y, skip, dropped, periodic_spectra(rec.velocity[idx], lines, axis=1),
-            periodic_spectra(rec.effort[idx, int(info['input'])], band, axis=1))
+        return bins, empty, empty, skip, dropped, empty[:, :0], empty[:, :0, 0], None
+    u, y = u[keep], y[keep]
+    U = periodic_spectra(u, bins, axis=1)
+    Y = periodic_spectra(y, bins, axis=1)
+    return (bins, U, Y, skip, dropped, periodic_spectra(y, lines, axis=1),
+            periodic_spectra(u[:, :, j], band, axis=1), filled)
+
+
+def _filled_block(rec: Recording, u: np.ndarray, y: np.ndarray, miss: np.ndarray, j: int,
+                  band: np.ndarray, new_run: bool) -> tuple:
+    """
+    Estimate the missing samples of a block's periods from its other periods.
+
+    ``u``, ``y`` (n_b, n_per, n) the efforts and velocities of the block's periods, ``miss``
+    (n_b, n_per) their missing samples (:mod:`frf_ident.core.estimation.missing_periodic`). A
+    new run is filled from its steady periods (the transient test on the input's and outputs'
+    lines up to the band). Returns u, y, the periods kept (all, unless a sample is missing in
+    every period: then those a gap touches are dropped) and (FilledPeriods, account) or None.
+    """
+    n_u = u.shape[2]
+
+    def first_steady(v: np.ndarray) -> int:
+        return steady_periods(np.concatenate([periodic_spectra(v[:, :, j], band, axis=1)[
+            :, :, None], periodic_spectra(v[:, :, n_u:], band, axis=1)], axis=2)).first
+    fill = fill_steady_periods(np.concatenate([u, y], axis=2), miss,
+                               first_steady if new_run else None)
+    if not fill.complete:
+        return u, y, ~miss.any(axis=1), None
+    names = rec.joint_names
+    outs = set(_output_columns(rec))
+    channels = [f'tau_m/{m}' for m in names] + [f'dq_m/{m}' for m in names]
+    keep = np.array([k == j for k in range(n_u)] + [k in outs for k in range(y.shape[2])])
+    accounts = [fill.account(channels, keep=keep, periods=np.arange(len(miss)) == q)
+                for q in range(len(miss))]
+    return (np.ascontiguousarray(fill.values[:, :, :n_u]),
+            np.ascontiguousarray(fill.values[:, :, n_u:]), np.ones(len(miss), bool),
+            (fill.periods(), accounts))
 
 
 def _steady(e: dict[str, Any]) -> SteadyState:
@@ -803,14 +862,17 @@ def detected_frf(rec: Recording, seg: Segment) -> FrequencyResponse:
     return frf
 
 
-def block_length(block_s: float | None = None) -> float:
+def window_length(window_s: float | None = None, fs: float | None = None) -> float:
     """
-    Return the detection block length [s]: ``block_s``, or :data:`DEFAULT_BLOCK_S` for None.
+    Return the detection block length [s]: ``window_s``, or the default for the sample rate.
 
     Parameters
     ----------
-    block_s : float, optional
-        Block length [s] (> 0); None: the default.
+    window_s : float, optional
+        Block length [s] (> 0); None: :data:`DEFAULT_WINDOW_S`, or
+        :data:`DEFAULT_WINDOW_SAMPLES` samples at ``fs`` where that is longer.
+    fs : float, optional
+        The record's sample rate [Hz] (None: not known, the default in seconds).
 
     Returns
     -------
@@ -820,19 +882,21 @@ def block_length(block_s: float | None = None) -> float:
     Raises
     ------
     EstimationError
-        ``block_s`` is not > 0.
+        ``window_s`` is not > 0.
 
     Examples
     --------
-    >>> block_length(), block_length(60.0)
-    (300.0, 60.0)
+    >>> window_length(), window_length(60.0), window_length(fs=1000.0), window_length(fs=1.0)
+    (300.0, 60.0, 300.0, 300000.0)
 
     """
-    if block_s is None:
-        return DEFAULT_BLOCK_S
-    if not block_s > 0:
-        raise EstimationError(f'{block_s=}: expected a block length > 0 s')
-    return float(block_s)
+    if window_s is None:
+        if fs is not None and fs > 0:
+            return max(DEFAULT_WINDOW_S, DEFAULT_WINDOW_SAMPLES / float(fs))
+        return DEFAULT_WINDOW_S
+    if not window_s > 0:
+        raise EstimationError(f'{window_s=}: expected a block length > 0 s')
+    return float(window_s)
 
 
 class RecordingBlocks:
@@ -840,22 +904,22 @@ class RecordingBlocks:
     Cut an in-memory recording into blocks as a streamed bag is cut.
 
     The blocks of an in-memory recording, cut as a streamed bag is cut
-    (:class:`frf_ident.bag.windows.WindowReader` with ``block_s``): from the first sample,
-    ``block_s`` long, the next one from where the last used data ended
+    (:class:`frf_ident.bag.windows.WindowReader` with ``window_s``): from the first sample,
+    ``window_s`` long, the next one from where the last used data ended
     (:meth:`continue_from`) or else right after the block.
 
     Parameters
     ----------
     rec
         The recording.
-    block_s
-        Block length [s]; None: :data:`DEFAULT_BLOCK_S`.
+    window_s
+        Block length [s]; None: the default for the recording's rate (:func:`window_length`).
 
     """
 
-    def __init__(self, rec: Recording, block_s: float | None = None) -> None:
+    def __init__(self, rec: Recording, window_s: float | None = None) -> None:
         self.rec = rec
-        self.block_ns = int(round(block_length(block_s) * 1e9))
+        self.block_ns = int(round(window_length(window_s, rec.fs) * 1e9))
         self._lo: int | None = None
         self._resume: int | None = None
 
@@ -946,11 +1010,13 @@ def check_not_periodic(rec: Recording, input: str | None = None) -> None:  # noq
             det = detect_multisine(x[:, j], rec.fs)
         except EstimationError:
             continue                        # not periodic: the LPM's to estimate
+        what = (f'input {rec.joint_names[j]}' if rec.is_layout
+                else f'the {source} of {rec.joint_names[j]}')
         raise UnusableExcitationError(
-            f"method='lpm': the {source} of {rec.joint_names[j]} is periodic ({det.describe()}); "
+            f"method='lpm': {what} is periodic ({det.describe()}); "
             f'between its lines the LPM has no excitation and its FRF there would be wrong; '
-            f"expected non-periodic excitation — estimate without method='lpm' (the multisine "
-            f'estimator)')
+            f'expected non-periodic excitation — leave out --method lpm (the multisine '
+            f'estimator takes a periodic record)')
 
 
 def _add_lpm(lpm: LpmBlocks, rec: Recording, resume: Callable[[float], None] | None
@@ -963,14 +1029,14 @@ def _add_lpm(lpm: LpmBlocks, rec: Recording, resume: Callable[[float], None] | N
 
 def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions | None = None,
                        *, resume: Callable[[float], None] | None = None,
-                       block_s: float | None = None) -> dict[str, FrequencyResponse]:
+                       window_s: float | None = None) -> dict[str, FrequencyResponse]:
     """
     Detect and estimate block by block (:class:`DetectedEstimator`).
 
     A block whose detection or checks fail is left out with a note (in each estimate's
     meta['detected']); when no block contributes, the reason is raised (the only block's,
     or the first of several). ``resume`` is told where the data used by a block end (the
-    next block starts there); ``block_s`` only names the block length in messages.
+    next block starts there); ``window_s`` only names the block length in messages.
 
     Where no block holds a multisine or chirp (or ``options.method == 'lpm'``), the blocks'
     frames are estimated by the Local Polynomial Method instead
@@ -990,8 +1056,9 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
         :class:`ExcitationOptions` replacing detection.
     resume
         E.g. ``RecordingBlocks.continue_from``.
-    block_s
-        Block length [s], for messages; None: :data:`DEFAULT_BLOCK_S`.
+    window_s
+        Block length [s], for messages; None: the default for the blocks' sample rate
+        (:func:`window_length`).
 
     Returns
     -------
@@ -1013,8 +1080,10 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
     first: EstimationError | None = None
     unusable: str | None = None                 # the first block whose excitation was refused
     n = 0
+    span = [np.inf, -np.inf, None]              # first and last time [s], sample rate
     for rec in blocks:
         n += 1
+        span = [min(span[0], rec.t[0]), max(span[1], rec.t[-1]), rec.fs]
         try:
             if opts.method in LPM_METHODS:
                 opts.check(rec)
@@ -1039,24 +1108,27 @@ def estimate_in_blocks(blocks: Iterable[Recording], options: ExcitationOptions |
             continue
         if det.used_until is not None and resume is not None:
             resume(det.used_until)
+    length = window_length(window_s, span[2])
     if not det.entries and unusable is not None:
         # an excitation was found and refused: no other block's LPM stands in for it
         if n == 1:
             raise first
-        raise UnusableExcitationError(f'an excitation was found but refused ({unusable}); '
-                                      f'{n} blocks of at most {block_length(block_s):g} s, '
-                                      f'none estimated')
-    if not det.entries and (lpm.frames or opts.method in LPM_METHODS):
-        if not lpm.frames and first is not None:
-            raise first
+        whole = span[1] - span[0] + (1.0 / span[2] if span[2] else 0.0)
+        raise UnusableExcitationError(
+            f'an excitation was found but refused ({unusable}); {n} blocks of at most '
+            f'{length:g} s, none estimated; a block that holds more of the record may show '
+            f'the excitation whole: --window {np.ceil(whole):g} (the whole record, '
+            f'{whole:.4g} s)')
+    if not det.entries and (lpm.frames or lpm.dropped or opts.method in LPM_METHODS):
+        if not lpm.frames and not lpm.dropped and first is not None:
+            raise first                     # (frames only gaps dropped: the LPM says why)
         why = ([] if opts.method in LPM_METHODS else
-               [f'no multisine or chirp found in {n} block(s) of at most '
-                f'{block_length(block_s):g} s'])
+               [f'no multisine or chirp found in {n} block(s) of at most {length:g} s'])
         return lpm.results(why)
     if not det.entries:
         if n == 1 and first is not None:
             raise first
-        raise EstimationError(f'no multisine or chirp found in any {block_length(block_s):g} s '
+        raise EstimationError(f'no multisine or chirp found in any {length:g} s '
                               f'block ({n} blocks; first: '
                               f'{notes[0] if notes else "no joint states"})')
     estimates = det.results()

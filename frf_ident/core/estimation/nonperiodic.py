@@ -16,21 +16,22 @@ Recordings without periodic excitation (PRBS, noise, normal motion): the LPM, bl
 
 :class:`LpmBlocks` takes the blocks of a recording (in memory or a streamed bag's windows,
 :func:`frf_ident.core.estimation.detected.estimate_in_blocks`), cuts them into frames of one
-length (:data:`~frf_ident.core.estimation.lpm.DEFAULT_FRAME_SAMPLES`, or the first block when
-it is shorter) and adds every frame without missing samples to an
-:class:`~frf_ident.core.estimation.lpm.LpmAccumulator`. The inputs are the torques of the
-joints whose excitation source moves (the velocity reference when the bag has one, else the
-torque, as detection chooses), the outputs the velocities of every joint. With the reference
-the estimate is the indirect one, P = G_yr G_ur^-1; without it the direct one, with a
-warning.
+length (:data:`~frf_ident.core.estimation.lpm_frames.DEFAULT_FRAME_SAMPLES`, or the first
+block when it is shorter) and adds every frame whose regressor is complete to an
+:class:`~frf_ident.core.estimation.lpm_frames.LpmAccumulator` (missing output samples are
+estimated with the FRF, :mod:`frf_ident.core.estimation.missing_lpm`). The inputs are the
+torques of the joints whose excitation source moves (the velocity reference when the bag has
+one, else the torque, as detection chooses), the outputs the velocities of every joint. With
+the reference the estimate is the indirect one, P = G_yr G_ur^-1; without it the direct one,
+with a warning.
 """
 from __future__ import annotations
 
 from typing import Any
 
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.estimation.lpm import (DEFAULT_FRAME_SAMPLES, DIRECT_WARNING,
-                                           EXCITED_FRACTION, LpmAccumulator)
+from frf_ident.core.estimation.lpm_frames import (DEFAULT_FRAME_SAMPLES, DIRECT_WARNING,
+                                                  EXCITED_FRACTION, LpmAccumulator)
 from frf_ident.core.excitation.detect import excitation_source
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
@@ -69,8 +70,25 @@ class LpmBlocks:
         self.inputs: list[int] = []
         self.units: dict[str, Any] = {}
         self.source = ''
+        self.layout = False                 # an import layout: inputs and sensors, no robot
         self.dropped = 0
+        self.why: dict[str, int] = {}
         self.used_until: float | None = None
+
+    def _drop(self, why: str) -> None:
+        """Count a frame dropped for gaps, and why."""
+        self.dropped += 1
+        self.why[why] = self.why.get(why, 0) + 1
+
+    def _dropped_text(self) -> str:
+        """Say how many frames gaps dropped and why ('' for none)."""
+        if not self.dropped:
+            return ''
+        x = 'reference r' if self.source == 'velocity reference' else 'torque u'
+        reasons = [f'{k} frame(s): their {x} (the regressor) is missing there; the missing-'
+                   f'data LPM estimates missing outputs only' if why == 'regressor'
+                   else f'{k} frame(s): {why}' for why, k in self.why.items()]
+        return f', {self.dropped} frame(s) dropped for gaps ({"; ".join(reasons)})'
 
     @property
     def frames(self) -> int:
@@ -81,6 +99,7 @@ class LpmBlocks:
         """Choose inputs and frame length from the first block."""
         x = rec.reference if self.source == 'velocity reference' else rec.effort
         source = self.source
+        self.layout = rec.is_layout
         names = rec.joint_names
         if self.input is not None:
             if self.input not in names:
@@ -108,7 +127,8 @@ class LpmBlocks:
         Add the whole frames of a block; return where the data used end [s], None if none.
 
         Leading samples without a value in some channel (a reference not yet commanded) are
-        skipped; a frame holding a missing sample later is dropped (counted).
+        skipped; a frame whose outputs miss samples later is estimated with them as unknowns,
+        one whose regressor (r, else u) misses one is dropped (counted, with the reason).
 
         Parameters
         ----------
@@ -141,13 +161,21 @@ class LpmBlocks:
             self._start(rec, ok.size - a)
         n = self.acc.n
         j = self.inputs
+        # a frame whose regressor (r, else u) is complete keeps missing outputs: they are
+        # estimated with it (missing_lpm.py); one missing a regressor sample is dropped
+        x = u[:, j] if ref is None else ref[:, j]
+        whole = np.all(np.isfinite(x), axis=1)
         end = None
         for s in range(a, ok.size - n + 1, n):
-            if not np.all(ok[s:s + n]):
-                self.dropped += 1
-                continue
             sl = slice(s, s + n)
-            self.acc.add(y[sl], u[sl, j], None if ref is None else ref[sl, j])
+            if not np.all(ok[sl]) and not np.all(whole[sl]):
+                self._drop('regressor')
+                continue
+            try:
+                self.acc.add(y[sl], u[sl, j], None if ref is None else ref[sl, j])
+            except EstimationError as why:
+                self._drop(str(why))
+                continue
             end = float(rec.t[0] + (s + n) / rec.fs)
         if end is not None:
             self.used_until = end
@@ -172,13 +200,15 @@ class LpmBlocks:
         Raises
         ------
         EstimationError
-            No whole frame without missing samples.
+            No whole frame left to estimate (gaps in the regressor drop a frame).
 
         """
         if self.acc is None or not self.acc.frames:
             n = 0 if self.acc is None else self.acc.n
-            raise EstimationError(f'no whole LPM frame of {n} samples without missing samples '
-                                  f'({self.dropped} dropped for gaps); expected a longer record')
+            raise EstimationError(f'no whole LPM frame of {n} samples left to estimate'
+                                  f'{self._dropped_text() or " (none dropped for gaps)"}; '
+                                  f'expected a longer record, or the regressor recorded '
+                                  f'without gaps')
         res = self.acc.result()
         frf, h1 = res.frf, res.h1
         if not frf.freq_hz.size:
@@ -191,7 +221,8 @@ class LpmBlocks:
         band, singular = frf.meta['excitation_band_hz'], frf.meta['singular_lines']
         unexcited = frf.meta['unexcited_lines']
         how = (f'indirect through the velocity reference r of {ins} (P = G_yr G_ur^-1)'
-               if res.method == 'indirect' else f'direct, torque of {ins} as input')
+               if res.method == 'indirect' else f'direct, input {ins}' if self.layout
+               else f'direct, torque of {ins} as input')
         line = (f'Local Polynomial Method, {how}: '
                 f'{frf.noutputs}x{frf.ninputs} channels, {frf.freq_hz.size} lines '
                 f'{frf.freq_hz[0]:.4g}-{frf.freq_hz[-1]:.4g} Hz, {res.frames} frame(s) of '
@@ -202,7 +233,7 @@ class LpmBlocks:
                    if singular else '')
                 + (f', {unexcited} line(s) with less than {EXCITED_FRACTION:g} of the largest '
                    f'line excitation dropped' if unexcited else '')
-                + (f', {self.dropped} frame(s) dropped for gaps' if self.dropped else ''))
+                + self._dropped_text())
         ex = h1.meta['excited']
         coh = np.median(h1.meta['coherence'][:, ex], axis=1)
         f_ex = h1.freq_hz[ex]
@@ -216,6 +247,8 @@ class LpmBlocks:
             v.meta['detected'] = detected
             v.meta['units'] = self.units
         frf.meta['dropped'] = {'frames': self.dropped} if self.dropped else {}
+        if self.acc.missing is not None:
+            frf.meta['missing'] = self.acc.missing.to_dict()
         return {'lpm': frf, 'lpm_h1': h1}
 
     def _no_line_text(self, frf: FrequencyResponse) -> str:

@@ -134,7 +134,7 @@ def _realisations(X, name: str, ndim: int = 4) -> list[np.ndarray]:
     return out
 
 
-def best_linear_approximation(Y, U) -> BLAResult:
+def best_linear_approximation(Y, U, *, filled=None) -> BLAResult:
     """
     Multisine BLA P_l = 1/(n_p n_q) sum_p sum_q P[p,q] (eq. 14) with variances.
 
@@ -144,6 +144,10 @@ def best_linear_approximation(Y, U) -> BLAResult:
         (n_q_p, n_freq, n_y, n_ex) array per realisation (periods removed by gaps).
     U
         Input spectra, shaped alike with n_u.
+    filled : list of FilledPeriods, optional
+        Per realisation, what estimated missing samples do to the spread over its periods
+        (:class:`frf_ident.core.estimation.missing_periodic.FilledPeriods`); the noise
+        variance is corrected for them.
 
     Returns
     -------
@@ -164,10 +168,10 @@ def best_linear_approximation(Y, U) -> BLAResult:
         Ppq.append(np.array([P for P, _ in per]))
         cond.append(np.max([c for _, c in per], axis=0))
     Pp = np.array([P.mean(axis=0) for P in Ppq])
-    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), np.array(cond), Pp)
+    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp, filled), np.array(cond), Pp)
 
 
-def _bla_variances(Ppq, Pp: np.ndarray):
+def _bla_variances(Ppq, Pp: np.ndarray, filled=None):
     """
     Compute the variances of the eq. 14 mean.
 
@@ -178,6 +182,9 @@ def _bla_variances(Ppq, Pp: np.ndarray):
     The per-period variance is pooled over the realisations (sum of squares over
     sum(n_q_p - 1)); the variance of P_p is that over n_q_p, of the mean over p the sum over
     p divided by n_p^2 (equal n_q: the usual sum_p var_q / (n_q (n_q - 1)) / n_p^2).
+    With ``filled`` (per realisation, :class:`~frf_ident.core.estimation.missing_periodic.
+    FilledPeriods`), periods holding estimated missing samples: the dof loses their share
+    and each realisation's variance its factor.
     """
     n_p = Pp.shape[0]
     nq = np.array([P.shape[0] for P in Ppq])
@@ -185,7 +192,12 @@ def _bla_variances(Ppq, Pp: np.ndarray):
     dof = int(np.sum(nq - 1))
     if dof >= 1:
         ss = sum(np.sum(np.abs(P - P.mean(axis=0)) ** 2, axis=0) for P in Ppq)
-        noise_var = ss / dof * np.sum(1.0 / nq) / n_p ** 2
+        if filled is None:
+            noise_var = ss / dof * np.sum(1.0 / nq) / n_p ** 2
+        else:
+            left = dof - sum(float(np.sum(f.lost)) for f in filled)
+            noise_var = (ss / left if left > 0 else np.inf * ss) * np.sum(
+                [np.mean(f.factor) / n for f, n in zip(filled, nq)]) / n_p ** 2
     if n_p >= 2:
         total_var = np.sum(np.abs(Pp - Pp.mean(axis=0)) ** 2, axis=0) / (n_p - 1) / n_p
         if noise_var is not None:
@@ -193,7 +205,7 @@ def _bla_variances(Ppq, Pp: np.ndarray):
     return noise_var, total_var, nl_var
 
 
-def best_linear_approximation_reference(Y, U, R) -> BLAResult:
+def best_linear_approximation_reference(Y, U, R, *, filled=None) -> BLAResult:
     """
     Estimate the closed-loop BLA through the reference.
 
@@ -203,7 +215,8 @@ def best_linear_approximation_reference(Y, U, R) -> BLAResult:
     Shapes as :func:`best_linear_approximation` (arrays or one array per realisation), R with
     n_r. Averaging the cross spectra with r over the periods before inverting removes the
     noise that the controller feeds back into u (uncorrelated with r), which biases the
-    per-period Y U^+. Noise variance from the spread of the per-period estimates, total
+    per-period Y U^+. Noise variance from the spread of the per-period estimates (corrected
+    for estimated missing samples by ``filled``, as :func:`best_linear_approximation`), total
     variance from the spread over realisations.
     """
     Ys, Us, Rs = _realisations(Y, 'Y'), _realisations(U, 'U'), _realisations(R, 'R')
@@ -217,7 +230,7 @@ def best_linear_approximation_reference(Y, U, R) -> BLAResult:
         cond.append(sv[..., 0] / np.maximum(sv[..., -1], 1e-300))
         Ppq.append(np.moveaxis(Syr @ np.linalg.pinv(Sur), 1, -1))     # (q, n_y, n_u, F)
     Pp = np.array(Pp)
-    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp), np.array(cond), Pp)
+    return BLAResult(Pp.mean(axis=0), *_bla_variances(Ppq, Pp, filled), np.array(cond), Pp)
 
 
 @dataclass

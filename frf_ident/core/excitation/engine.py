@@ -243,6 +243,61 @@ class PhaseStream:
             return self._cur.held
         return self.phases[self._i_phase].kind in ('move', 'settle')
 
+    @property
+    def phase_index(self) -> int:
+        """Return the index in :attr:`phases` of the phase the next sample belongs to."""
+        return self._i_phase
+
+    def replace_after_current(self, then: list[Phase]) -> None:
+        """
+        Run ``then`` after the current phase instead of the rest of the procedure.
+
+        Parameters
+        ----------
+        then : list of Phase
+            The phases that follow the current one.
+
+        """
+        keep = self._i_phase + (1 if self._cur is not None else 0)
+        self.phases = self.phases[:keep] + list(then)
+        self.total = (self.sent - self._i + sum(p.n_samples for p in self.phases[self._i_phase:]))
+
+    def stop_segment(self, n_fade: int, then: list[Phase]) -> bool:
+        """
+        End the running excite segment from the next sample: fade out, then run ``then``.
+
+        The excitation part of the segment's remaining samples fades to zero over
+        ``n_fade`` samples (a raised cosine; the constant velocity under it goes on, so the
+        position stays inside the segment's planned path), after which ``then`` replaces the
+        rest of the procedure. No 'end' event follows for the segment: the caller reports
+        where it stopped.
+
+        Parameters
+        ----------
+        n_fade : int
+            Samples of the fade (at most the segment's remaining ones).
+        then : list of Phase
+            The phases to run after the fade (the procedure's tail).
+
+        Returns
+        -------
+        bool
+            False when no segment is running (nothing changed).
+
+        """
+        if self.done or self._cur is None or self.phases[self._i_phase].segment is None:
+            return False
+        ph, i = self.phases[self._i_phase], self._i
+        n = max(1, min(int(n_fade), ph.n_samples - i))
+        w = 0.5 + 0.5 * np.cos(np.pi * (np.arange(n) + 1) / n)
+        exc = ph.excitation[i:i + n] * w[:, None]
+        base = ph.reference[i:i + n] - ph.excitation[i:i + n]
+        fade = Phase('excite', n, reference=base + exc, excitation=exc)
+        self.phases = self.phases[:self._i_phase] + [fade] + list(then)
+        self._i, self._cur = 0, None
+        self.total = self.sent + sum(p.n_samples for p in self.phases[self._i_phase:])
+        return True
+
     def next_sample(self, q: np.ndarray | None) -> StreamSample:
         """
         Produce the next sample, given the newest measured position ``q``.

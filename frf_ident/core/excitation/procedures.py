@@ -279,6 +279,39 @@ def multisine_procedure(cfg: MultisineConfig, n_axes: int, fs: float) -> tuple[l
     return phases, design
 
 
+#: samples over which a multisine stopped at its target fades its excitation out (50 ms at
+#: 1 kHz: no step in the reference; the constant velocity goes on meanwhile)
+STOP_FADE_S = 0.05
+
+
+def multisine_tail(phases: list[Phase], i_segment: int) -> list[Phase]:
+    """
+    Return the phases that end a multisine procedure stopped in segment ``i_segment``.
+
+    :func:`multisine_procedure` follows each segment with its ramp down and a settle, and
+    ends with the move back to the operating point and a settle: those run, the runs after
+    the segment do not.
+
+    Parameters
+    ----------
+    phases : list of Phase
+        The procedure.
+    i_segment : int
+        Index of the segment's phase in ``phases``.
+
+    Returns
+    -------
+    list of Phase
+
+    """
+    after = []
+    for ph in phases[i_segment + 1:]:
+        if ph.kind == 'move' or ph.segment is not None:
+            break
+        after.append(ph)
+    return after + phases[-2:]
+
+
 def check_position_bound(phases: list[Phase], start: np.ndarray, bound: float, dt: float) -> None:
     """Predicted position (integral of the reference) of every excite phase within +-bound."""
     q = np.asarray(start, dtype=float).copy()

@@ -19,4 +19,8 @@ Parametric models fitted to a measured FRF, with their uncertainty.
 - :mod:`frf_ident.core.fit.physical` — the two-mass flexible joint per axis (eqs. 20-22)
 - :mod:`frf_ident.core.fit.coupled` — all axes and the link coupling from the MIMO FRF
 - :mod:`frf_ident.core.fit.rational` — a continuous-time rational model of chosen order
+- :mod:`frf_ident.core.fit.stable` — its ML refit over stable denominators only
+- :mod:`frf_ident.core.fit.modes` — the modes of a fitted denominator with their errors
+- :mod:`frf_ident.core.fit.model_error` — the bias bound where the cost test fails
+- :mod:`frf_ident.core.fit.delay` — the input delay's start and its model-file convention
 """

@@ -74,6 +74,22 @@ class CostTest:
         """Return True when the cost exceeds its limit (only with a weighted residual)."""
         return self.weighted and self.cost > self.limit
 
+    @property
+    def verdict(self) -> str:
+        """
+        Return what the errors mean, in one line.
+
+        'parameters describe the data' where the noise explains the residual; 'structure
+        missing: treat errors as lower bounds' where it does not (the reported errors then
+        include the model-error bound of :mod:`frf_ident.core.fit.model_error`, which assumes
+        a smooth model error); without variance the test cannot decide.
+        """
+        if not self.weighted:
+            return 'no FRF variance: the cost test cannot decide; errors from the residual'
+        if self.structure_missing:
+            return 'structure missing: treat errors as lower bounds'
+        return 'parameters describe the data'
+
     def summary(self) -> str:
         """Return one line for people: cost, expectation and the verdict."""
         if not self.weighted:

@@ -31,12 +31,19 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from frf_ident.core.fit.cost import cost_test, CostTest, normalised_residual
-from frf_ident.core.fit.physical import fit_two_mass, PARAMETERS, PhysicalFit
+from frf_ident.core.fit.delay import delay_text
+from frf_ident.core.fit.model_error import bound, shape_basis, shifts
+from frf_ident.core.fit.physical import fit_two_mass, PARAMETERS, PhysicalFit, UNITS
 import numpy as np
 from scipy import optimize
 
-__all__ = ['COUPLING_SCALE_SHARE', 'CoupledFit', 'coupled_response', 'fit_coupled']
+__all__ = ['COUPLING_SCALE_SHARE', 'CoupledFit', 'DISAGREEMENT_ERRORS', 'coupled_response',
+           'fit_coupled']
 
+#: a per-axis and the coupled estimate of the same parameter are said to disagree when they
+#: lie more than this many combined reported errors apart (sqrt(se_axis^2 + se_coupled^2)):
+#: 2 is the 95 % band of a difference of two independent Gaussian estimates
+DISAGREEMENT_ERRORS = 2.0
 #: scale of a link-coupling term (started at 0): this share of sqrt(Jo_i Jo_j); it sets only
 #: the conditioning of the first LM steps, not the minimum
 COUPLING_SCALE_SHARE = 0.05
@@ -107,6 +114,11 @@ class CoupledFit:
         The input delay of every axis [s]: given, or fitted.
     delay_std_s : float
         Cramer-Rao standard error of a fitted delay [s]; NaN when it was given.
+    model_error : ndarray, shape (n_par,)
+        Bound of the bias a missing structure can leave in each parameter
+        (:mod:`frf_ident.core.fit.model_error`); zeros where the cost test passes.
+    delay_model_error_s : float
+        The same for a fitted delay [s].
 
     """
 
@@ -119,42 +131,86 @@ class CoupledFit:
     model: np.ndarray
     delay_s: float = 0.0
     delay_std_s: float = float('nan')
+    model_error: np.ndarray | None = None
+    delay_model_error_s: float = 0.0
+
+    @property
+    def reported_std(self) -> np.ndarray:
+        """Return the standard errors to report: Cramer-Rao and model-error bound combined."""
+        return self.std if self.model_error is None else np.hypot(self.std, self.model_error)
+
+    @property
+    def delay_reported_std_s(self) -> float:
+        """Return the reported standard error of a fitted delay [s] (NaN when given)."""
+        return float(np.hypot(self.delay_std_s, self.delay_model_error_s))
 
     def axis_parameters(self, i: int) -> dict[str, float]:
         """Return axis i's five parameters as {model-file key: value}."""
         n = len(self.names)
         return {k: float(self.value[r * n + i]) for r, k in enumerate(PARAMETERS)}
 
-    def axis_std(self, i: int) -> dict[str, float]:
-        """Return axis i's standard errors as {model-file key: value}."""
+    def axis_std(self, i: int, reported: bool = False) -> dict[str, float]:
+        """Return axis i's standard errors (Cramer-Rao, or ``reported``) by model-file key."""
         n = len(self.names)
-        return {k: float(self.std[r * n + i]) for r, k in enumerate(PARAMETERS)}
+        sd = self.reported_std if reported else self.std
+        return {k: float(sd[r * n + i]) for r, k in enumerate(PARAMETERS)}
 
-    def link_coupling(self) -> tuple[np.ndarray, np.ndarray]:
-        """Return the link-coupling matrix (zero diagonal) and its standard errors."""
+    def link_coupling(self, reported: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Return the link-coupling matrix (zero diagonal) and its (``reported``) errors."""
         n = len(self.names)
         out = []
-        for v in (self.value, self.std):
+        for v in (self.value, self.reported_std if reported else self.std):
             m = np.zeros((n, n))
             iu = np.triu_indices(n, 1)
             m[iu] = v[5 * n:]
             out.append(m + m.T)
         return out[0], out[1]
 
-    def summary(self) -> list[str]:
-        """Return each axis's parameters, the coupling terms (with standard errors), the cost."""
-        lines = [f'{name}: ' + ', '.join(f'{k} {v:.5g} +- {self.axis_std(i)[k]:.2g}'
-                                         for k, v in self.axis_parameters(i).items())
-                 for i, name in enumerate(self.names)]
-        c, sd = self.link_coupling()
+    def disagreements(self) -> list[str]:
+        """
+        Return one line per parameter whose per-axis and coupled estimates disagree.
+
+        Disagree: more than :data:`DISAGREEMENT_ERRORS` combined reported errors apart. The
+        per-axis fit of the diagonal lacks the coupling (and sees one channel), so where the
+        coupling matters the two differ by more than either's noise.
+        """
+        out = []
+        for i, fit in enumerate(self.per_axis):
+            sd = self.axis_std(i, reported=True)
+            for r, (k, v) in enumerate(self.axis_parameters(i).items()):
+                a, sa = float(fit.value[r]), float(fit.reported_std[r])
+                apart = abs(a - v) / max(float(np.hypot(sa, sd[k])), 1e-300)
+                if apart > DISAGREEMENT_ERRORS:
+                    out.append(f'{self.names[i]} {k}: per axis {a:.5g} +- {sa:.2g}, coupled '
+                               f'{v:.5g} +- {sd[k]:.2g} {UNITS[k]}: {apart:.3g} combined errors '
+                               f'apart')
+        return out
+
+    def summary(self, hold_s: float = 0.0) -> list[str]:
+        """
+        Return each axis's parameters, the coupling terms, the delay and the cost test.
+
+        Every line starts with ``coupled:``; values carry units and the reported errors
+        (Cramer-Rao and model-error bound). ``hold_s``: the share of the delay a zero-order
+        hold has by itself (half a sample), printed as the model file's ``time_delay``
+        convention (delay - hold_s), as model.yaml writes it.
+        """
+        lines = []
+        for i, name in enumerate(self.names):
+            sd = self.axis_std(i, reported=True)
+            parts = [f'{k} {v:.5g} +- {sd[k]:.2g} {UNITS[k]}'
+                     for k, v in self.axis_parameters(i).items()]
+            lines += [f'coupled: {name}: ' + ', '.join(parts[:3]),
+                      f'coupled: {name}: ' + ', '.join(parts[3:])]
+        c, sd = self.link_coupling(reported=True)
         iu = np.triu_indices(len(self.names), 1)
         terms = ', '.join(f'{self.names[i]}-{self.names[j]} {c[i, j]:.4g} +- {sd[i, j]:.2g}'
                           for i, j in zip(*iu))
-        delay = (f'delay {1e3 * self.delay_s:.4g} +- {1e3 * self.delay_std_s:.2g} ms (fitted)'
-                 if np.isfinite(self.delay_std_s)
-                 else f'delay {1e3 * self.delay_s:.4g} ms (given)')
-        return lines + [f'link coupling [kg m^2]: {terms}; {delay}',
-                        f'coupled: {self.cost.summary()}']
+        delay = delay_text(self.delay_s, self.delay_reported_std_s, hold_s)
+        return lines + [f'coupled: link coupling [kg m^2]: {terms}',
+                        f'coupled: {delay}',
+                        f'coupled: {self.cost.summary()}',
+                        f'coupled: {self.cost.verdict}']
 
 
 def fit_coupled(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray | None = None,
@@ -226,5 +282,12 @@ def fit_coupled(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray 
     cov = cov_x * np.outer(scale, scale)
     tau_std = float(np.sqrt(cov[-1, -1])) if fit_delay else float('nan')
     cov = cov[:value.size, :value.size]
-    return CoupledFit(names, value, np.sqrt(np.diag(cov)), cov, per_axis, test,
-                      coupled_response(value, f, n, tau), float(tau), tau_std)
+    model = coupled_response(value, f, n, tau)
+    bias = np.zeros(scale.size)
+    if test.structure_missing:
+        sigma = np.sqrt(var.reshape(n * n, -1))
+        basis = shape_basis(f, model.reshape(n * n, -1), np.sqrt(2.0) / sigma)
+        bias = bound(shifts(sol.jac, basis, test.cost - test.dof)) * scale
+    return CoupledFit(names, value, np.sqrt(np.diag(cov)), cov, per_axis, test, model,
+                      float(tau), tau_std, model_error=bias[:value.size],
+                      delay_model_error_s=float(bias[-1]) if fit_delay else 0.0)

@@ -39,13 +39,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from frf_ident.core.fit.cost import cost_test, CostTest, normalised_residual
+from frf_ident.core.fit.delay import (delay_correction, delay_from_phase, DELAY_START_SHARE,
+                                      delay_text)
 from frf_ident.core.fit.levy import sanathanan_koerner
+from frf_ident.core.fit.model_error import bound, shape_basis, shifts
 from frf_ident.core.model.params import AxisParams
 import numpy as np
 from scipy import optimize
 
 __all__ = ['DELAY_START_SHARE', 'PARAMETERS', 'PhysicalFit', 'UNITS', 'delay_from_phase',
-           'fit_two_mass', 'physical_from_rational', 'two_mass_jacobian', 'two_mass_response']
+           'delay_text', 'fit_two_mass', 'physical_from_rational', 'two_mass_jacobian',
+           'two_mass_response']
 
 #: the fitted parameters, in the order of every array of :class:`PhysicalFit`
 PARAMETERS = ('motor_inertia', 'link_inertia', 'stiffness', 'damping', 'viscous_friction')
@@ -57,11 +61,6 @@ UNITS = {'motor_inertia': 'kg m^2', 'link_inertia': 'kg m^2', 'stiffness': 'N m/
 #: inertia times the lowest measured angular frequency (friction that changes |P| there by
 #: about 1 %); only the conditioning of the ML step depends on it, not its minimum
 VISCOUS_SCALE_SHARE = 0.01
-#: share of the lines (the highest in frequency, at least 3) whose phase slope starts a fitted
-#: delay: above the resonance the velocity FRF times s tends to 1/Jm, so its phase there is the
-#: delay's -omega tau plus a constant; a quarter keeps the resonance's phase out on the
-#: section-6 joint and the 3-axis robot measured to 60 Hz (the refinement removes the rest)
-DELAY_START_SHARE = 0.25
 
 
 def _num_den(theta: np.ndarray, s: np.ndarray):
@@ -164,46 +163,6 @@ def physical_from_rational(num: np.ndarray, den: np.ndarray) -> np.ndarray:
     return np.array([jm, jo, k, d, bv])
 
 
-def delay_from_phase(freq_hz: np.ndarray, response: np.ndarray) -> float:
-    """
-    Return a delay read off the phase slope of s P(s) over the highest lines.
-
-    The highest :data:`DELAY_START_SHARE` of the lines (at least 3): the unwrapped phase of
-    s P(j omega) is fitted by a - omega tau (least squares); above the resonance s P tends to a
-    positive constant (1 / Jm), so the slope is the delay. A start only: the resonance's
-    phase tail biases it a little.
-
-    Parameters
-    ----------
-    freq_hz : ndarray, shape (n_freq,)
-        Frequencies in Hz (increasing).
-    response : ndarray of complex, shape (n_freq,)
-        Measured velocity FRF.
-
-    Returns
-    -------
-    float
-        The delay [s], at least 0.
-
-    """
-    f = np.asarray(freq_hz, dtype=float)
-    order = np.argsort(f)
-    top = order[-max(3, int(np.ceil(DELAY_START_SHARE * f.size))):]
-    w = 2 * np.pi * f[top]
-    phase = np.unwrap(np.angle(1j * w * np.asarray(response)[top]))
-    slope = np.polyfit(w, phase, 1)[0]
-    return max(float(-slope), 0.0)
-
-
-def _delay_correction(freq_hz: np.ndarray, measured: np.ndarray, model: np.ndarray,
-                      sigma: np.ndarray) -> float:
-    """Return the delay the phase of measured / model still shows (weighted, through 0)."""
-    w = 2 * np.pi * freq_hz
-    phase = np.angle(measured / model)
-    weight = np.abs(measured) ** 2 / sigma ** 2              # 1 / variance of the phase
-    return float(-np.sum(weight * w * phase) / np.sum(weight * w ** 2))
-
-
 @dataclass
 class PhysicalFit:
     """
@@ -235,6 +194,11 @@ class PhysicalFit:
         Residual evaluations of the ML step.
     delay_std_s : float
         Cramer-Rao standard error of a fitted delay [s]; NaN when the delay was given.
+    model_error : ndarray, shape (5,)
+        Bound of the bias a missing structure can leave in each parameter
+        (:mod:`frf_ident.core.fit.model_error`); zeros where the cost test passes.
+    delay_model_error_s : float
+        The same for a fitted delay [s] (0 otherwise).
 
     """
 
@@ -250,6 +214,18 @@ class PhysicalFit:
     evaluations: int = 0
     names: tuple[str, ...] = field(default=PARAMETERS)
     delay_std_s: float = float('nan')
+    model_error: np.ndarray = field(default_factory=lambda: np.zeros(5))
+    delay_model_error_s: float = 0.0
+
+    @property
+    def reported_std(self) -> np.ndarray:
+        """Return the standard errors to report: Cramer-Rao and model-error bound combined."""
+        return np.hypot(self.std, self.model_error)
+
+    @property
+    def delay_reported_std_s(self) -> float:
+        """Return the reported standard error of a fitted delay [s] (NaN when given)."""
+        return float(np.hypot(self.delay_std_s, self.delay_model_error_s))
 
     @property
     def delay_fitted(self) -> bool:
@@ -292,17 +268,24 @@ class PhysicalFit:
         return (float(np.sqrt(k / jo) / (2 * np.pi)),
                 float(np.sqrt(k * (1 / jm + 1 / jo)) / (2 * np.pi)))
 
-    def summary(self) -> list[str]:
-        """Return a few lines for people: parameters with standard errors, then the cost."""
+    def summary(self, hold_s: float = 0.0) -> list[str]:
+        """
+        Return a few lines for people: parameters with units and errors, delay, cost, verdict.
+
+        The errors are the reported ones (Cramer-Rao and the model-error bound); ``hold_s``
+        is the zero-order hold's share of the delay (half a sample of the model file), shown
+        apart so that the printed ``time_delay`` is the one model.yaml holds.
+        """
         fa, fr = self.resonances_hz()
         parts = [f'{k} {v:.5g} +- {s:.2g} {UNITS[k]}'
-                 for k, v, s in zip(self.names, self.value, self.std)]
-        delay = (f'delay {1e3 * self.delay_s:.4g} +- {1e3 * self.delay_std_s:.2g} ms (fitted)'
-                 if self.delay_fitted else f'delay {1e3 * self.delay_s:.4g} ms (given)')
+                 for k, v, s in zip(self.names, self.value, self.reported_std)]
+        delay = delay_text(self.delay_s, self.delay_reported_std_s, hold_s)
         return [f'{self.name}: ' + ', '.join(parts[:3]),
                 f'{self.name}: ' + ', '.join(parts[3:])
-                + f'; antiresonance {fa:.2f} Hz, resonance {fr:.2f} Hz; {delay}',
-                f'{self.name}: {self.cost.summary()}']
+                + f'; antiresonance {fa:.2f} Hz, resonance {fr:.2f} Hz',
+                f'{self.name}: {delay}',
+                f'{self.name}: {self.cost.summary()}',
+                f'{self.name}: {self.cost.verdict}']
 
 
 def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray | None = None,
@@ -354,8 +337,8 @@ def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
     tau = delay_from_phase(f, p) if fit_delay else float(delay_s)
     starts = [(_linear_start(f, p, sigma, tau), tau)]
     if fit_delay:
-        refined = max(tau + _delay_correction(f, p, two_mass_response(starts[0][0], f, tau),
-                                              sigma), 0.0)
+        refined = max(tau + delay_correction(f, p, two_mass_response(starts[0][0], f, tau),
+                                             sigma), 0.0)
         starts.append((_linear_start(f, p, sigma, refined), refined))
     # 2. ML in scaled parameters x = theta / scale (and tau / tau_scale)
     fits = [_ml_fit(f, p, variance, sigma, start, t, fit_delay) for start, t in starts]
@@ -372,9 +355,21 @@ def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
     cov = cov_x * np.outer(scale, scale)
     tau_std = float(np.sqrt(cov[5, 5])) if fit_delay else float('nan')
     cov = cov[:5, :5]
-    return PhysicalFit(name, value, np.sqrt(np.diag(cov)), cov, start, test, f,
-                       two_mass_response(value, f, tau), float(tau), int(sol.nfev),
-                       delay_std_s=tau_std)
+    model = two_mass_response(value, f, tau)
+    bias = _model_error(f, model, sigma, jr, scale, test) if variance is not None else None
+    bias = np.zeros(scale.size) if bias is None else bias
+    return PhysicalFit(name, value, np.sqrt(np.diag(cov)), cov, start, test, f, model,
+                       float(tau), int(sol.nfev), delay_std_s=tau_std, model_error=bias[:5],
+                       delay_model_error_s=float(bias[5]) if fit_delay else 0.0)
+
+
+def _model_error(f: np.ndarray, model: np.ndarray, sigma: np.ndarray, jac: np.ndarray,
+                 scale: np.ndarray, test: CostTest) -> np.ndarray | None:
+    """Return the model-error bound of every fitted parameter (None: the cost test passes)."""
+    if not test.structure_missing:
+        return None
+    basis = shape_basis(f, model[None], (np.sqrt(2.0) / sigma)[None])
+    return bound(shifts(jac, basis, test.cost - test.dof)) * scale
 
 
 def _physical(theta: np.ndarray) -> bool:

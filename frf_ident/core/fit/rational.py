@@ -20,14 +20,22 @@ P_ij(s) = N_ij(s) / D(s): one monic denominator of degree ``order`` shared by ev
 
 1. Sanathanan-Koerner start (:mod:`frf_ident.core.fit.levy`), weighted by 1 / sigma;
 2. ML: Levenberg-Marquardt on the residual normalised by the FRF's standard deviation;
+   where that leaves a pole in the right half-plane, ML over stable denominators only
+   (:mod:`frf_ident.core.fit.stable`: the unstable poles reflected, the denominator a
+   product of Hurwitz factors), so a fit never returns an unstable pole;
 3. Cramer-Rao covariance of the coefficients, first-order standard errors of the modes'
-   natural frequencies and damping ratios, and the cost test.
+   natural frequencies and damping ratios, the cost test, and where it fails the bound of
+   the bias a missing structure can leave (:mod:`frf_ident.core.fit.model_error`).
+
+A mode (a complex pole pair) outside the fitted band is flagged (:attr:`Mode.in_band`): the
+data do not show it, the fit used it to shape the response at the band's edge.
 
 Coefficients are kept in the scaled variable s / omega_0 (omega_0 the highest measured
 angular frequency), which keeps the problem well conditioned; :attr:`RationalFit.num` /
 ``den`` and :meth:`RationalFit.state_space` give the unscaled model.
-:func:`select_order` fits several orders and picks the lowest one that passes the cost test
-(else the lowest AIC).
+:func:`select_order` fits several orders and picks, among the admissible ones (every mode in
+the band and off the stability limit), the lowest that passes the cost test, else the lowest
+AIC.
 """
 from __future__ import annotations
 
@@ -35,35 +43,13 @@ from dataclasses import dataclass
 
 from frf_ident.core.fit.cost import cost_test, CostTest
 from frf_ident.core.fit.levy import sk_common_denominator
+from frf_ident.core.fit.model_error import shape_basis, shifts
+from frf_ident.core.fit.modes import Mode, modes_of
+from frf_ident.core.fit.stable import stable_refit
 import numpy as np
 from scipy import optimize
 
 __all__ = ['Mode', 'OrderSelection', 'RationalFit', 'fit_rational', 'select_order']
-
-
-@dataclass(frozen=True)
-class Mode:
-    """
-    One pole pair (or real pole) of a fitted model with its first-order standard errors.
-
-    Attributes
-    ----------
-    frequency_hz, frequency_std_hz : float
-        Natural frequency |p| / 2 pi [Hz] and its standard error.
-    damping, damping_std : float
-        Damping ratio -Re p / |p| and its standard error (1 for a real pole).
-
-    """
-
-    frequency_hz: float
-    frequency_std_hz: float
-    damping: float
-    damping_std: float
-
-    def summary(self) -> str:
-        """Return one line: frequency and damping with their standard errors."""
-        return (f'{self.frequency_hz:.3f} +- {self.frequency_std_hz:.2g} Hz, damping ratio '
-                f'{self.damping:.4f} +- {self.damping_std:.2g}')
 
 
 @dataclass
@@ -89,6 +75,12 @@ class RationalFit:
         The fitted model at ``freq_hz``.
     inputs, outputs : list of str
         Channel names.
+    reflected : int
+        Poles the free ML fit put in the right half-plane (0: it was stable); the model is
+        then the ML fit over stable denominators (:mod:`frf_ident.core.fit.stable`).
+    shift : ndarray, shape (n_par, n_shapes), or None
+        Coefficient shifts of the model-error shapes
+        (:func:`frf_ident.core.fit.model_error.shifts`); None where the cost test passes.
 
     """
 
@@ -101,6 +93,8 @@ class RationalFit:
     model: np.ndarray
     inputs: list[str]
     outputs: list[str]
+    reflected: int = 0
+    shift: np.ndarray | None = None
 
     @property
     def order(self) -> int:
@@ -144,31 +138,21 @@ class RationalFit:
         """
         Return the poles as modes with standard errors, one per upper-half-plane pole.
 
-        First order: a change da_m of the scaled denominator moves a pole p by
-        -p^m da_m / D'(p); the covariance of the denominator maps through that Jacobian.
-
         Returns
         -------
         list of Mode
-            Sorted by frequency.
+            Sorted by frequency (:func:`frf_ident.core.fit.modes.modes_of`).
 
         """
-        a = self.den_scaled
         n = self.order
-        cov_a = self.covariance[-n:, -n:]
-        dpoly = np.polyder(a[::-1])
-        out = []
-        for p in np.roots(a[::-1]):
-            if p.imag < -1e-12 * abs(p):
-                continue
-            dp = -(p ** np.arange(n)) / np.polyval(dpoly, p)     # dp / da_m, complex
-            r = abs(p)
-            dr = (np.conj(p) * dp).real / r
-            dz = -dp.real / r + p.real * dr / r ** 2
-            out.append(Mode(float(r * self.omega0 / (2 * np.pi)),
-                            float(np.sqrt(max(dr @ cov_a @ dr, 0.0)) * self.omega0 / (2 * np.pi)),
-                            float(-p.real / r), float(np.sqrt(max(dz @ cov_a @ dz, 0.0)))))
-        return sorted(out, key=lambda m: m.frequency_hz)
+        return modes_of(self.den_scaled, self.omega0, self.covariance[-n:, -n:],
+                        None if self.shift is None else self.shift[-n:],
+                        (float(self.freq_hz.min()), float(self.freq_hz.max())))
+
+    @property
+    def admissible(self) -> bool:
+        """Return whether the data support every mode (:attr:`Mode.supported`)."""
+        return all(m.supported for m in self.modes())
 
     def response(self, freq_hz: np.ndarray) -> np.ndarray:
         """Return the model's FRF at ``freq_hz``, shape (n_out, n_in, n_freq)."""
@@ -205,11 +189,15 @@ class RationalFit:
         return A * self.omega0, B * self.omega0, C, D
 
     def summary(self) -> list[str]:
-        """Return a few lines for people: order, modes and the cost test."""
+        """Return a few lines for people: order, stability, modes, the cost test, verdict."""
         lines = [f'order {self.order} ({self.n_params} parameters, {self.freq_hz.size} lines '
                  f'{self.freq_hz.min():.3g}-{self.freq_hz.max():.3g} Hz)']
+        if self.reflected:
+            lines.append(f'  the free ML fit had {self.reflected} unstable pole(s): refitted '
+                         f'over stable models only (poles reflected, then constrained ML)')
         lines += [f'  mode {m.summary()}' for m in self.modes() if m.damping < 1.0]
         lines.append(f'  {self.cost.summary()}')
+        lines.append(f'  {self.cost.verdict}')
         return lines
 
 
@@ -231,8 +219,8 @@ def _as_mimo(response, variance):
 
 def fit_rational(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray | None = None,
                  order: int = 2, n_num: int | None = None, *,
-                 inputs: list[str] | None = None, outputs: list[str] | None = None
-                 ) -> RationalFit:
+                 inputs: list[str] | None = None, outputs: list[str] | None = None,
+                 stable: bool = True) -> RationalFit:
     """
     Fit a common-denominator continuous-time model of ``order`` poles by maximum likelihood.
 
@@ -251,6 +239,9 @@ def fit_rational(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
         Degree of the numerators (default ``order - 1``, at most ``order``).
     inputs, outputs : list of str, optional
         Channel names carried by the result.
+    stable : bool, optional
+        Refit over stable denominators where the free ML fit has a pole in the right
+        half-plane (default); False returns the free fit as it is.
 
     Returns
     -------
@@ -303,15 +294,25 @@ def fit_rational(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
 
     sol = optimize.least_squares(resid, np.concatenate([b0.ravel(), a0[:-1]]), jac=jac,
                                  method='lm', x_scale='jac')
-    test = cost_test(sol.fun, sol.x.size, var is not None)
-    cov = np.linalg.pinv(sol.jac.T @ sol.jac)
+    x, reflected = sol.x, 0
+    b, a = split(x)
+    if stable and np.any(np.roots(a[::-1]).real >= 0):
+        b, a, reflected = stable_refit(s, pm, weight, b, a)
+        x = np.concatenate([b.ravel(), a[:-1]])
+    fun, jx = resid(x), jac(x)
+    test = cost_test(fun, x.size, var is not None)
+    cov = np.linalg.pinv(jx.T @ jx)
     if var is None:
         cov = cov * test.cost / max(test.dof, 1)
-    b, a = split(sol.x)
     num = b.reshape(n_out, n_in, nb)
-    return RationalFit(f, w0, num, a, cov, test, _evaluate(num, a, s),
+    model = _evaluate(num, a, s)
+    shift = None
+    if test.structure_missing:
+        basis = shape_basis(f, model.reshape(m, nf), weight)
+        shift = shifts(jx, basis, test.cost - test.dof)
+    return RationalFit(f, w0, num, a, cov, test, model,
                        list(inputs or [f'u{i}' for i in range(n_in)]),
-                       list(outputs or [f'y{i}' for i in range(n_out)]))
+                       list(outputs or [f'y{i}' for i in range(n_out)]), reflected, shift)
 
 
 @dataclass
@@ -326,25 +327,57 @@ class OrderSelection:
     chosen : int
         Index into ``fits`` of the chosen model.
     reason : str
-        ``'cost test'`` (the lowest order whose residual the noise explains) or ``'AIC'``
-        (no order passed, or no variance: the lowest Akaike criterion).
+        ``'cost test'`` (the lowest admissible order whose residual the noise explains) or
+        ``'AIC'`` (no admissible order passed, or no variance: the lowest Akaike criterion,
+        among the admissible fits where there are any).
+    runner_up : int or None
+        Index of the next best candidate: the order tried before the one the cost test
+        accepted, or the second-lowest AIC; None when only one order was tried.
 
     """
 
     fits: list[RationalFit]
     chosen: int
     reason: str
+    runner_up: int | None = None
 
     @property
     def best(self) -> RationalFit:
         """Return the chosen fit."""
         return self.fits[self.chosen]
 
+    def lines(self) -> list[str]:
+        """Return the choice, every tried order's cost, and the runner-up, for people."""
+        best = self.best
+        why = ('the lowest admissible order the noise explains' if self.reason == 'cost test'
+               else 'the lowest AIC = cost + 2 parameters among the admissible orders'
+               if any(f.admissible for f in self.fits)
+               else 'the lowest AIC; no order is admissible')
+        lines = [f'order {best.order} chosen by the {self.reason} ({why})',
+                 'tried (order: cost, cost/dof): ' + '; '.join(
+                     f'{f.order}: {f.cost.cost:.4g}, {f.cost.ratio:.3g}' for f in self.fits)]
+        bad = [str(f.order) for f in self.fits if not f.admissible]
+        if bad:
+            lines.append(f'not admissible (a mode outside the band or at the stability limit): '
+                         f'order {", ".join(bad)}')
+        if self.runner_up is not None:
+            r = self.fits[self.runner_up]
+            q = r.cost.cost / best.cost.cost
+            rel = f'{100 * (q - 1):+.2g} %' if q < 2 else f'{q:.3g} times'
+            lines.append(f'runner-up: order {r.order}, cost {r.cost.cost:.4g} ({rel} the '
+                         f"chosen's), AIC {r.aic - best.aic:+.4g}; {r.cost.verdict}")
+        return lines
+
 
 def select_order(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray | None,
                  orders: list[int] | range, **kwargs) -> OrderSelection:
     """
-    Fit the orders from the lowest up; stop at the first that passes the cost test.
+    Fit the orders from the lowest up; stop at the first admissible one the cost test accepts.
+
+    Admissible: every mode supported by the data, none outside the fitted band and none at
+    the stability limit of the refit (:attr:`RationalFit.admissible`; every fit is stable,
+    :func:`fit_rational`). A model with a mode the data do not support is kept only when no
+    order gives one without.
 
     Parameters
     ----------
@@ -359,13 +392,17 @@ def select_order(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
     Returns
     -------
     OrderSelection
-        The fits made (up to the first passing one) and the chosen one: the first passing
-        the cost test, else the lowest AIC of all.
+        The fits made (up to the first admissible passing one) and the chosen one: that
+        one, else the lowest AIC of the admissible fits (of all when none is).
 
     """
     fits = []
     for o in sorted(orders):
         fits.append(fit_rational(freq_hz, response, variance, int(o), **kwargs))
-        if fits[-1].cost.weighted and not fits[-1].cost.structure_missing:
-            return OrderSelection(fits, len(fits) - 1, 'cost test')
-    return OrderSelection(fits, int(np.argmin([f.aic for f in fits])), 'AIC')
+        last = fits[-1]
+        if last.cost.weighted and not last.cost.structure_missing and last.admissible:
+            k = len(fits) - 1
+            return OrderSelection(fits, k, 'cost test', k - 1 if k else None)
+    pool = [k for k, f in enumerate(fits) if f.admissible] or list(range(len(fits)))
+    ranked = sorted(pool, key=lambda k: fits[k].aic)
+    return OrderSelection(fits, ranked[0], 'AIC', ranked[1] if len(ranked) > 1 else None)

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ['AxisMargins', 'DRAWS', 'LoopCheck', 'Margin', 'draw_responses', 'loop_response',
-           'pi_response', 'sensitivity_peak']
+__all__ = ['AxisMargins', 'DRAWS', 'LoopCheck', 'Margin', 'draw_responses', 'edge_gain_db',
+           'loop_response', 'pi_response', 'sensitivity_peak']
 
 #: Monte-Carlo draws of the FRF for the margins' standard deviations: the relative error of a
 #: standard deviation from n draws is about 1 / sqrt(2 n), 10 % for 50 (each draw costs one
@@ -81,6 +81,29 @@ def loop_response(response: np.ndarray, controller: np.ndarray) -> np.ndarray:
 
     """
     return response * controller[None, :, :]
+
+
+def edge_gain_db(loop: np.ndarray) -> np.ndarray:
+    """
+    Return |L| at the highest measured line in dB (above 0: a crossover above the band).
+
+    Parameters
+    ----------
+    loop : ndarray of complex, shape (..., n_freq)
+        Loop responses on increasing frequencies.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        20 log10 |L(f_max)|.
+
+    Examples
+    --------
+    >>> float(edge_gain_db(np.array([10.0, 1.0, 0.1j])))
+    -20.0
+
+    """
+    return 20 * np.log10(np.abs(np.asarray(loop)[..., -1]))
 
 
 def sensitivity_peak(loop: np.ndarray) -> np.ndarray:
@@ -165,6 +188,11 @@ class AxisMargins:
         Gain crossover frequency [Hz].
     modulus_margin : Margin
         min |1 + L|, the distance of the Nyquist curve from -1.
+    band_hz : tuple of float
+        The measured band (lowest, highest line) [Hz] the margins were read in.
+    edge_gain_db : float
+        |L| at the highest measured line [dB]: above 0 the loop crosses over above the
+        band, where nothing was measured.
 
     """
 
@@ -175,13 +203,47 @@ class AxisMargins:
     phase_margin_deg: Margin
     crossover_hz: Margin
     modulus_margin: Margin
+    band_hz: tuple[float, float] = (float('nan'), float('nan'))
+    edge_gain_db: float = float('nan')
+
+    @property
+    def crossover_above_band(self) -> bool:
+        """Return whether |L| is still above 1 at the highest measured line."""
+        return bool(self.edge_gain_db > 0)
+
+    def notes(self) -> dict[str, str]:
+        """
+        Return why a margin has no value, by margin name (empty when all are measured).
+
+        ``gain_margin_db``: no -180 deg crossing in the band (python-control's infinite gain
+        margin: whatever lies above the band was not measured); ``phase_margin_deg`` and
+        ``crossover_hz``: no gain crossover in the band; ``band_edge``: |L| above 1 at the
+        highest line, so a crossover lies above the band and the margins read in the band do
+        not describe the loop.
+        """
+        top = f'{self.band_hz[1]:.3g} Hz'
+        out = {}
+        if not np.isfinite(self.gain_margin_db.value):
+            out['gain_margin_db'] = (f'no gain margin within the measured band (no -180 deg '
+                                     f'crossing up to {top})')
+        if not np.isfinite(self.phase_margin_deg.value):
+            out['phase_margin_deg'] = out['crossover_hz'] = (
+                f'no gain crossover within the measured band (up to {top})')
+        if self.crossover_above_band:
+            out['band_edge'] = (f'|L| is {self.edge_gain_db:+.1f} dB at the band edge {top}: '
+                                f'the loop crosses over above the measured band, where its '
+                                f'margins are not measured')
+        return out
 
     def summary(self) -> str:
-        """Return one line with the four margins."""
-        return (f'{self.axis} (kp {self.kp:.4g}, ki {self.ki:.4g}): gain margin '
-                f'{self.gain_margin_db.text("dB")}, phase margin '
-                f'{self.phase_margin_deg.text("deg")} at {self.crossover_hz.text("Hz")}, '
-                f'modulus margin {self.modulus_margin.text("", 2).strip()}')
+        """Return one line with the four margins (and what the band does not show)."""
+        notes = self.notes()
+        gm = notes.get('gain_margin_db', f'gain margin {self.gain_margin_db.text("dB")}')
+        pm = notes.get('phase_margin_deg', f'phase margin {self.phase_margin_deg.text("deg")} '
+                                           f'at {self.crossover_hz.text("Hz")}')
+        edge = f'; {notes["band_edge"]}' if 'band_edge' in notes else ''
+        return (f'{self.axis} (kp {self.kp:.4g}, ki {self.ki:.4g}): {gm}, {pm}, '
+                f'modulus margin {self.modulus_margin.text("", 2).strip()}{edge}')
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,9 @@ Extensions beyond the contract (all optional, documented in docs/model_file.md):
 - top level ``simulation``: {substeps, velocity_from_encoder, seed}
 - per axis ``gravity_torque``, ``gravity`` (configuration-dependent load, list of
   {amplitude, phase, joints}), ``encoder_resolution``, ``velocity_noise``, ``torque_noise``
+- ``controller.filters``: {axis name: list of second-order sections [b0, b1, b2, 1, a1, a2]}
+  on the measured velocity, discrete at ``sample_rate`` (what ``frf-ident tune`` writes;
+  :func:`controller_filters`, :func:`check_sections`)
 """
 from __future__ import annotations
 
@@ -41,6 +44,12 @@ _AXIS_KEYS = {f.name for f in fields(AxisParams)}
 _TOP_KEYS = {'frf_ident_model', 'sample_rate', 'axes', 'controller', 'link_coupling',
              'simulation', 'description', 'mjcf', 'pose'}
 _SIM_KEYS = {'substeps', 'velocity_from_encoder', 'seed'}
+_CONTROLLER_KEYS = {'kind', 'kp', 'ki', 'filters'}
+#: a pass-through section: pads an axis with fewer sections than another
+PASS_SECTION = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
+#: a filter chain must pass DC within this share: a velocity feedback that does not (a
+#: high-pass, a gain) leaves the PI's integral without its measurement and is refused
+DC_GAIN_TOLERANCE = 0.01
 
 
 def _number(where: str, value: Any, *, allow_none: bool = False) -> float | None:
@@ -198,6 +207,10 @@ def controller_gains(d: dict[str, Any], robot: RobotParams) -> tuple[np.ndarray,
         raise ModelFileError(f'controller: expected a mapping with kind, kp, ki, got {c!r}')
     if c.get('kind', 'pi_velocity') != 'pi_velocity':
         raise ModelFileError(f"controller.kind: expected 'pi_velocity', got {c.get('kind')!r}")
+    unknown = set(c) - _CONTROLLER_KEYS
+    if unknown:
+        raise ModelFileError(f'controller: unknown key(s) {sorted(unknown)}; expected some of '
+                             f'{sorted(_CONTROLLER_KEYS)}')
     n = robot.n_axes
     gains = {}
     for key in ('kp', 'ki'):
@@ -214,12 +227,97 @@ def controller_gains(d: dict[str, Any], robot: RobotParams) -> tuple[np.ndarray,
     return gains['kp'], gains['ki']
 
 
+def check_sections(sections: np.ndarray) -> str | None:
+    """
+    Return what is wrong with one axis' chain of filter sections, or None when it is usable.
+
+    A usable chain has rows [b0, b1, b2, 1, a1, a2] of finite numbers, every section stable
+    (its poles inside the unit circle) and a DC gain within DC_GAIN_TOLERANCE of 1.
+
+    Parameters
+    ----------
+    sections : ndarray, shape (n_sections, 6)
+        The chain.
+
+    Returns
+    -------
+    str or None
+        One sentence naming the section and the problem.
+
+    """
+    sec = np.asarray(sections, dtype=float)
+    if sec.ndim != 2 or sec.shape[1] != 6:
+        return f'expected rows of 6 numbers [b0, b1, b2, 1, a1, a2], got shape {sec.shape}'
+    for k, row in enumerate(sec):
+        if not np.all(np.isfinite(row)):
+            return f'section {k}: not all numbers are finite'
+        if row[3] != 1.0:
+            return f'section {k}: a0 must be 1 (normalised), got {row[3]:g}'
+        if np.any(np.abs(np.roots(row[3:])) >= 1.0):
+            return f'section {k}: unstable (a pole on or outside the unit circle)'
+    dc = float(np.prod(sec[:, :3].sum(axis=1) / sec[:, 3:].sum(axis=1))) if len(sec) else 1.0
+    if abs(dc - 1.0) > DC_GAIN_TOLERANCE:
+        return (f'DC gain {dc:.4g}: a filter on the measured velocity must pass DC (1 within '
+                f'{DC_GAIN_TOLERANCE:g}), or the integral loses its measurement')
+    return None
+
+
+def controller_filters(d: dict[str, Any], robot: RobotParams) -> np.ndarray:
+    """
+    Return ``controller.filters`` as sos (n, n_sections, 6), pass-through sections as padding.
+
+    Parameters
+    ----------
+    d : dict
+        The model-file mapping.
+    robot : RobotParams
+        Its robot (the axis names).
+
+    Returns
+    -------
+    ndarray, shape (n, n_sections, 6)
+        No sections without ``filters``.
+
+    Raises
+    ------
+    ModelFileError
+        Not a mapping of axis names to lists of usable sections (:func:`check_sections`).
+
+    """
+    spec = (d.get('controller') or {}).get('filters')
+    n = robot.n_axes
+    if spec is None:
+        return np.zeros((n, 0, 6))
+    if not isinstance(spec, dict):
+        raise ModelFileError(f'controller.filters: expected a mapping {{axis name: list of '
+                             f'[b0, b1, b2, 1, a1, a2]}}, got {spec!r}')
+    names = robot.joint_names
+    chains = [np.zeros((0, 6))] * n
+    for name, sections in spec.items():
+        where = f'controller.filters.{name}'
+        if name not in names:
+            raise ModelFileError(f'{where}: no axis of that name (axes {names})')
+        try:
+            sec = np.asarray(sections if sections else np.zeros((0, 6)), dtype=float)
+        except (TypeError, ValueError):
+            raise ModelFileError(f'{where}: expected a list of [b0, b1, b2, 1, a1, a2], got '
+                                 f'{sections!r}') from None
+        problem = check_sections(sec)
+        if problem is not None:
+            raise ModelFileError(f'{where}: {problem}')
+        chains[names.index(name)] = sec
+    m = max(len(x) for x in chains)
+    return np.array([np.vstack([x, np.tile(PASS_SECTION, (m - len(x), 1))]) for x in chains]
+                    ).reshape(n, m, 6)
+
+
 def robot_to_dict(robot: RobotParams, controller: Any = None) -> dict[str, Any]:
     """
     Convert RobotParams (+ controller) to a model-file mapping (inverse of robot_from_dict).
 
     ``controller``: a velocity PI with ``kp`` and ``ki`` arrays (a
-    :class:`frf_ident.core.simulation.controller.PIVelocity`), or None.
+    :class:`frf_ident.core.simulation.controller.PIVelocity`, its ``sos`` filters written as
+    ``filters``), or None.
     """
     axes = []
     for a in robot.axes:
@@ -241,6 +339,13 @@ def robot_to_dict(robot: RobotParams, controller: Any = None) -> dict[str, Any]:
     if controller is not None:
         d['controller'] = {'kind': 'pi_velocity', 'kp': controller.kp.tolist(),
                            'ki': controller.ki.tolist()}
+        sos = getattr(controller, 'sos', np.zeros((robot.n_axes, 0, 6)))
+        chains = {a.name: [row.tolist() for row in sos[i]
+                           if not np.array_equal(row, PASS_SECTION)]
+                  for i, a in enumerate(robot.axes)}
+        chains = {k: v for k, v in chains.items() if v}
+        if chains:
+            d['controller']['filters'] = chains
     return d
 
 

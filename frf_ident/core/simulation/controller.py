@@ -16,18 +16,84 @@ Closed-loop velocity controller: PI with torque limit and anti-windup (Fig. 2 of
 
 The same compiled PI step runs inside the batch simulation and in the controller node, so the
 node graph and the offline runner compute identical torques.
+
+Optional filters (issue #51, ``frf-ident tune``): per axis a chain of second-order sections
+[b0, b1, b2, 1, a1, a2] (scipy's ``sos`` layout, transposed direct form II) on the measured
+velocity in front of the PI: u = PI(r - F y). The loop gain is C P with C = PI F, as for a
+filter on the torque setpoint, while the PI's anti-windup stays exact and the reference is not
+filtered; it is where a ros2_control chain puts it (chained_filter_controller on the state
+interface in front of pid_controller). Without filters (the default, zero sections) the
+torques are bit for bit those of the PI alone.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import math
 from typing import Any
 
 from frf_ident.core.model.params import RobotParams
-from frf_ident.core.model.schema import controller_gains
+from frf_ident.core.model.schema import check_sections, controller_filters, controller_gains
 import numba
 import numpy as np
 
-__all__ = ['controller_from_dict', 'PIVelocity', 'pi_step']
+__all__ = ['controller_from_dict', 'filter_measurement', 'PIVelocity', 'pi_step', 'sos_step']
+
+
+@numba.njit(cache=True, fastmath=True, inline='always')
+def sos_step(x, sos, zf, i):
+    """
+    Filter one sample of axis ``i`` through its second-order sections.
+
+    Transposed direct form II per section s: y = b0 x + z0, z0 = b1 x - a1 y + z1,
+    z1 = b2 x - a2 y, then x = y for the next section. Compiled with numba.
+
+    Parameters
+    ----------
+    x : float
+        Input sample.
+    sos : ndarray, shape (n, n_sections, 6)
+        [b0, b1, b2, 1, a1, a2] per axis and section.
+    zf : ndarray, shape (n, n_sections, 2)
+        Filter states; updated in place.
+    i : int
+        The axis.
+
+    Returns
+    -------
+    float
+        The filtered sample (``x`` itself without sections).
+
+    """
+    for s in range(sos.shape[1]):
+        y = sos[i, s, 0] * x + zf[i, s, 0]
+        zf[i, s, 0] = sos[i, s, 1] * x - sos[i, s, 4] * y + zf[i, s, 1]
+        zf[i, s, 1] = sos[i, s, 2] * x - sos[i, s, 5] * y
+        x = y
+    return x
+
+
+@numba.njit(cache=True, fastmath=True)
+def filter_measurement(y, sos, zf, out):
+    """
+    Filter a measured velocity sample of every axis; a non-finite entry passes unfiltered.
+
+    Parameters
+    ----------
+    y : ndarray, shape (n,)
+        Measured velocities.
+    sos, zf : ndarray
+        As :func:`sos_step`.
+    out : ndarray, shape (n,)
+        Output, written in place (a non-finite y leaves that axis' filter state untouched).
+
+    Returns
+    -------
+    None
+        The result is ``out``.
+
+    """
+    for i in range(y.shape[0]):
+        out[i] = sos_step(y[i], sos, zf, i) if math.isfinite(y[i]) else y[i]
 
 
 @numba.njit(cache=True, fastmath=True, inline='always')
@@ -81,7 +147,8 @@ class PIVelocity:
     Velocity PI u = kp (r - y) + ki int (r - y) dt + ff, limited to +-torque_limit.
 
     The controller K of the closed loop (Fig. 2). Anti-windup by back-calculation: while
-    saturated the integral is held so that u sits exactly at the limit.
+    saturated the integral is held so that u sits exactly at the limit. With filters, y is
+    the filtered measurement F y (module doc).
 
     Parameters
     ----------
@@ -96,11 +163,18 @@ class PIVelocity:
     integral : array_like, shape (n,), optional
         Controller state [N m], e.g. the holding (gravity) torque so the loop starts at rest;
         default zero.
+    sos : array_like, shape (n, n_sections, 6), optional
+        Filters on the measured velocity (module doc), discrete at ``dt``; an axis with fewer
+        sections than another is padded with pass-through sections [1, 0, 0, 1, 0, 0].
+        Default none.
+    filter_state : array_like, shape (n, n_sections, 2), optional
+        The filters' states; default zero (the robot at rest).
 
     Raises
     ------
     ValueError
-        A gain is negative or a torque limit not positive.
+        A gain is negative, a torque limit not positive, or a filter not usable
+        (:func:`frf_ident.core.model.schema.check_sections`).
 
     """
 
@@ -109,6 +183,8 @@ class PIVelocity:
     torque_limit: np.ndarray
     dt: float
     integral: np.ndarray = field(default=None)  # type: ignore[assignment]
+    sos: np.ndarray = field(default=None)  # type: ignore[assignment]
+    filter_state: np.ndarray = field(default=None)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         self.kp = np.atleast_1d(np.asarray(self.kp, dtype=float))
@@ -123,6 +199,24 @@ class PIVelocity:
         if self.integral is None:
             self.integral = np.zeros(n)
         self.integral = np.asarray(self.integral, dtype=float).copy()
+        self.sos = np.zeros((n, 0, 6)) if self.sos is None else \
+            np.ascontiguousarray(self.sos, dtype=float).copy()
+        if self.sos.ndim != 3 or self.sos.shape[0] != n or self.sos.shape[2] != 6:
+            raise ValueError(f'sos: expected shape ({n}, n_sections, 6), got {self.sos.shape}')
+        for i in range(n):
+            problem = check_sections(self.sos[i])
+            if problem is not None:
+                raise ValueError(f'filters of axis {i}: {problem}')
+        self.filter_state = np.zeros(self.sos.shape[:2] + (2,)) if self.filter_state is None \
+            else np.ascontiguousarray(self.filter_state, dtype=float).copy()
+        if self.filter_state.shape != self.sos.shape[:2] + (2,):
+            raise ValueError(f'filter_state: expected shape {self.sos.shape[:2] + (2,)}, got '
+                             f'{self.filter_state.shape}')
+
+    @property
+    def n_sections(self) -> int:
+        """Return the number of filter sections per axis (0: the PI alone)."""
+        return self.sos.shape[1]
 
     @property
     def n_axes(self) -> int:
@@ -131,7 +225,7 @@ class PIVelocity:
 
     def reset(self, holding_torque: np.ndarray | None = None) -> None:
         """
-        Reset the integral state.
+        Reset the integral state (and the filters' states to rest).
 
         Parameters
         ----------
@@ -141,6 +235,7 @@ class PIVelocity:
         """
         self.integral = np.zeros(self.n_axes) if holding_torque is None else \
             np.asarray(holding_torque, dtype=float).copy()
+        self.filter_state = np.zeros_like(self.filter_state)
 
     def step(self, reference: np.ndarray, measured: np.ndarray,
              feedforward: np.ndarray | None = None) -> np.ndarray:
@@ -161,10 +256,16 @@ class PIVelocity:
         ndarray, shape (n,)
             Torque command u [N m], within +-torque_limit; ``integral`` is updated. An axis
             whose error or feedforward is not finite gets its integral torque alone (no P
-            action, no integration).
+            action, no integration; its filters hold their state).
 
         """
-        e = np.asarray(reference, dtype=float) - np.asarray(measured, dtype=float)
+        y = np.asarray(measured, dtype=float)
+        if self.sos.shape[1]:
+            yf = np.empty(self.n_axes)
+            filter_measurement(np.ascontiguousarray(y.reshape(self.n_axes)), self.sos,
+                               self.filter_state, yf)
+            y = yf
+        e = np.asarray(reference, dtype=float) - y
         ff = np.zeros(self.n_axes) if feedforward is None else np.asarray(feedforward, float)
         # a measurement that is no number (the PI is compiled with fastmath, which assumes
         # none): that axis gets no P action and no integration, so it keeps the integral
@@ -188,7 +289,7 @@ class PIVelocity:
 
         """
         return PIVelocity(self.kp.copy(), self.ki.copy(), self.torque_limit.copy(), self.dt,
-                          self.integral.copy())
+                          self.integral.copy(), self.sos.copy(), self.filter_state.copy())
 
 
 def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
@@ -196,10 +297,11 @@ def controller_from_dict(d: dict[str, Any], robot: RobotParams) -> PIVelocity:
     Return the model file's velocity controller (torque limits from the axes).
 
     The ``controller`` section of a loaded model file (docs/CONTRACT.md §5), its gains checked
-    by :func:`frf_ident.core.model.schema.controller_gains`; the integral starts at the
-    gravity load of the zero pose.
+    by :func:`frf_ident.core.model.schema.controller_gains` and its filters (an extension,
+    docs/model_file.md) by :func:`frf_ident.core.model.schema.controller_filters`; the
+    integral starts at the gravity load of the zero pose.
     """
     kp, ki = controller_gains(d, robot)
-    ctrl = PIVelocity(kp, ki, robot.torque_limits(), robot.dt)
+    ctrl = PIVelocity(kp, ki, robot.torque_limits(), robot.dt, sos=controller_filters(d, robot))
     ctrl.reset(robot.gravity_load(np.zeros(robot.n_axes)))
     return ctrl

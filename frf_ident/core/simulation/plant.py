@@ -53,7 +53,7 @@ import math
 from typing import Any
 
 from frf_ident.core.model.params import AxisParams, RobotParams
-from frf_ident.core.simulation.controller import pi_step
+from frf_ident.core.simulation.controller import pi_step, sos_step
 import numba
 import numpy as np
 from scipy import linalg
@@ -396,13 +396,15 @@ def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
 # ~20 array arguments per sample, atomic operations that dominated the run in `perf`. The
 # signals are bit-identical; the speed is `python -m benchmarks --markdown simulation`.
 @numba.njit(cache=True, fastmath=True, error_model='numpy', _nrt=False)
-def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, m, dt,
-              offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph, gsel,
-              nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q, out_v,
-              out_u, out_x, keep_x, out_r, sc, work):
+def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, sos, zf,
+              m, dt, offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph,
+              gsel, nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q,
+              out_v, out_u, out_x, keep_x, out_r, sc, work):
     """
     Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
 
+    ``sos`` (n, n_sections, 6) and its state ``zf`` filter the measured velocity in front of
+    the PI (:func:`~frf_ident.core.simulation.controller.sos_step`); no sections, no filter.
     With a position plan (``has_plan``) the velocity reference gets position feedback,
     r_k <- r_k + kpos (qplan_k - q_k), as the excitation node does for moves; out_r holds the
     reference actually used.
@@ -416,6 +418,7 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
     n = r.shape[1]
     N = r.shape[0]
     qm, vm, e, u = work[0], work[1], work[2], work[3]
+    filtered = sos.shape[1] > 0
     for k in range(N):
         _measure(x, qprev, enc, from_encoder, dt, vnoise, k, qm, vm)
         for i in range(n):
@@ -426,7 +429,10 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
                 if has_plan:
                     ref += kpos[i] * (qplan[k, i] - qm[i])
                 out_r[k, i] = ref
-                e[i] = ref - vm[i]
+                if filtered:
+                    e[i] = ref - sos_step(vm[i], sos, zf, i)
+                else:
+                    e[i] = ref - vm[i]
             pi_step(e, integ, kp, ki, u_ext, k, ulim_ctrl, dt, u)
         else:
             for i in range(n):
@@ -611,8 +617,8 @@ class FlexibleJointPlant:
         Run samples from the current state.
 
         Closed loop (``controller`` given, a
-        :class:`~frf_ident.core.simulation.controller.PIVelocity`):
-        u = PI(reference - y) + torque. Open loop: u = torque (zero-order hold). ``torque_fine``
+        :class:`~frf_ident.core.simulation.controller.PIVelocity`, with its filters):
+        u = PI(reference - F y) + torque. Open loop: u = torque (zero-order hold). ``torque_fine``
         is an extra torque on the integrator's stage grid, shape (2 m N + 1, n) with
         m = substeps, used for continuous-time excitations (e.g. the paper's open-loop example).
         ``position_plan`` (N, n): absolute measured positions to hold with ``position_gain``
@@ -645,11 +651,14 @@ class FlexibleJointPlant:
                                            np.minimum(controller.torque_limit,
                                                       self.params.torque_limits()),
                                            controller.integral, True)
+            sos, zf = controller.sos, controller.filter_state
         else:
             kp = ki = np.zeros(n)
             ulim, integ, closed = self.params.torque_limits(), np.zeros(n), False
+            sos, zf = np.zeros((n, 0, 6)), np.zeros((n, 0, 2))
         _simulate(self.x, self.qprev, integ, self.buf, r, u_ext, uff, has_ff, kp, ki, ulim,
-                  closed, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm, p.ad,
+                  closed, sos, zf, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm,
+                  p.ad,
                   p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.gamp, p.gph,
                   p.gsel, p.nonlinear,
                   p.enc, bool(self.params.velocity_from_encoder), vn, tn, qplan, kpos, has_plan,

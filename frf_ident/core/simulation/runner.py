@@ -26,8 +26,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 import logging
 import time
-from typing import Any
+from typing import Any, Callable
 
+from frf_ident.core.estimation.live import LiveEstimate
+from frf_ident.core.estimation.target import UncertaintyTarget
 from frf_ident.core.excitation.engine import PhaseEngine
 from frf_ident.core.excitation.procedures import (check_torque_bound, ChirpConfig, ChirpIteration,
                                                   multisine_procedure, MultisineConfig, Phase,
@@ -37,6 +39,7 @@ from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
+from frf_ident.core.simulation.stop_at_target import run_multisine_to_target
 from frf_ident.errors import FrfIdentInputError
 import numpy as np
 
@@ -231,13 +234,17 @@ def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVel
 class IdentificationConfig:
     multisine: MultisineConfig | None = field(default_factory=MultisineConfig)
     chirp: ChirpConfig | None = field(default_factory=ChirpConfig)
+    #: the multisine ends at its first whole period meeting it (None or 0 dB: no target)
+    target: UncertaintyTarget | None = None
 
 
 def run_identification(plant: Any, controller: PIVelocity,
                        config: IdentificationConfig | None = None, *,
                        progress: Progress | None = None,
                        meta: dict[str, Any] | None = None,
-                       model: RobotParams | None = None, dry_run: Any = None) -> Recording:
+                       model: RobotParams | None = None, dry_run: Any = None,
+                       on_estimate: Callable[[LiveEstimate], None] | None = None
+                       ) -> Recording:
     """
     Run the Section 7 procedures (multisine with compensation run, iterated chirps).
 
@@ -260,6 +267,9 @@ def run_identification(plant: Any, controller: PIVelocity,
     dry_run : object, optional
         The noiseless plant the prediction runs on instead of our plant of ``model``
         (:func:`predict_peak_torque`'s ``plant``).
+    on_estimate : callable, optional
+        Called with the multisine's live estimate after every whole MIMO period (as the
+        excitation node publishes it); the run is the same with and without it.
 
     Returns
     -------
@@ -296,15 +306,27 @@ def run_identification(plant: Any, controller: PIVelocity,
     if phases is not None:
         t_start = loop.t
         n_exc = sum(1 for p in phases if p.segment)
-        done = 0
-        for ph in phases:
-            loop.run_phase(ph)
-            if ph.segment:
-                done += 1
-                _log.debug(f'multisine: segment {done}/{n_exc} '
-                           f'({ph.segment["design"]}, realisation {ph.segment["realisation"]}, '
-                           f'experiment {ph.segment["experiment"]})')
-        summary['multisine'] = {'experiment_time_s': loop.t - t_start,
+        stop = None
+        targeted = cfg.target is not None and cfg.target.enabled
+        live = None
+        if targeted or on_estimate is not None:
+            live = run_multisine_to_target(loop, phases, cfg.target or UncertaintyTarget(),
+                                           on_estimate)
+        if targeted:
+            stop = live
+            say(f"multisine: {'stopped at' if stop['stopped'] else 'did not reach'} the "
+                f'target {cfg.target.sd_db:g} dB after {stop["periods"]} periods (worst sd '
+                f'{stop["worst_sd_db"]:.2f} dB)')
+        if live is None:
+            done = 0
+            for ph in phases:
+                loop.run_phase(ph)
+                if ph.segment:
+                    done += 1
+                    _log.debug(f'multisine: segment {done}/{n_exc} ({ph.segment["design"]}, '
+                               f'realisation {ph.segment["realisation"]}, '
+                               f'experiment {ph.segment["experiment"]})')
+        summary['multisine'] = {'experiment_time_s': loop.t - t_start, 'target': stop,
                                 'segments': n_exc, 'lines': int(design.harmonics.size),
                                 'period_s': design.period,
                                 'constant_velocity':

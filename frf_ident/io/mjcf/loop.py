@@ -35,7 +35,7 @@ import ctypes
 import glob
 import os
 
-from frf_ident.core.simulation.controller import pi_step
+from frf_ident.core.simulation.controller import pi_step, sos_step
 import mujoco
 import numba
 from numba.experimental.function_type import WrapperAddressProtocol
@@ -80,7 +80,7 @@ class _MjStep(WrapperAddressProtocol):
 
 
 def _body(maddr, daddr, qpos, qvel, ctrl, qadr, vadr, act, gear, substeps, r, u_ext, closed,
-          kp, ki, integ, ulim_ctrl, ulim, dt, enc, vn, tn, qplan, kpos, has_plan,
+          kp, ki, integ, sos, zf, ulim_ctrl, ulim, dt, enc, vn, tn, qplan, kpos, has_plan,
           out_q, out_v, out_u, out_r, step):
     """Run N samples (see :func:`run_loop`); ``step(maddr, daddr)`` is one MuJoCo step."""
     n = qadr.shape[0]
@@ -101,7 +101,10 @@ def _body(maddr, daddr, qpos, qvel, ctrl, qadr, vadr, act, gear, substeps, r, u_
                 if has_plan:
                     ref += kpos[i] * (qplan[k, i] - q[i])
                 out_r[k, i] = ref
-                e[i] = ref - out_v[k, i]
+                if sos.shape[1] > 0:      # the controller's filters on the measured velocity
+                    e[i] = ref - sos_step(out_v[k, i], sos, zf, i)
+                else:
+                    e[i] = ref - out_v[k, i]
             pi_step(e, integ, kp, ki, u_ext, k, ulim_ctrl, dt, u)
         else:
             for i in range(n):

@@ -168,9 +168,11 @@ class MujocoPlant:
         if controller is not None:
             kp, ki, integ = controller.kp, controller.ki, controller.integral
             ulim_ctrl = np.minimum(controller.torque_limit, lim)
+            sos, zf = controller.sos, controller.filter_state
         else:
             kp = ki = np.zeros(n)
             integ, ulim_ctrl = np.zeros(n), lim
+            sos, zf = np.zeros((n, 0, 6)), np.zeros((n, 0, 2))
         vn, tn = self._noise(N)
         out_q, out_v, out_u = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
         out_r = r.copy()
@@ -178,8 +180,8 @@ class MujocoPlant:
         run_loop(rb.model, self.data, qadr=rb.qadr, vadr=rb.vadr, act=rb.actuator,
                  gear=np.ascontiguousarray(rb.gear, float), substeps=self.substeps, r=r,
                  u_ext=u_ext, closed=controller is not None, kp=kp, ki=ki, integ=integ,
-                 ulim_ctrl=ulim_ctrl, ulim=lim, dt=self.dt, enc=self.enc, vn=vn, tn=tn,
-                 qplan=qplan, kpos=kpos, has_plan=has_plan, out_q=out_q, out_v=out_v,
+                 sos=sos, zf=zf, ulim_ctrl=ulim_ctrl, ulim=lim, dt=self.dt, enc=self.enc, vn=vn,
+                 tn=tn, qplan=qplan, kpos=kpos, has_plan=has_plan, out_q=out_q, out_v=out_v,
                  out_u=out_u, out_r=out_r)
         t0 = self.data.time - N * self.dt
         return SimResult(t0 + np.arange(N) * self.dt, out_q, out_v, out_u, None, out_r)

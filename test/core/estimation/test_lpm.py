@@ -21,7 +21,8 @@ The output noise is 1 % of the velocity rms (40 dB SNR). The truth is the analyt
 FRF (:func:`robot_frf_sampled`), the spread of the estimate is measured over noise
 realisations with the same r (Monte-Carlo), neither produced by the estimator.
 """
-from frf_ident.core.estimation.lpm import default_half_width, lpm_frf, lpm_lines, LpmAccumulator
+from frf_ident.core.estimation.lpm import default_half_width, lpm_lines
+from frf_ident.core.estimation.lpm_frames import lpm_frf, LpmAccumulator
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict
 from frf_ident.core.simulation.analytic import robot_frf_sampled
 from frf_ident.core.simulation.controller import controller_from_dict

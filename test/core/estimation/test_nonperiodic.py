@@ -19,7 +19,7 @@ Two joints driven open loop by independent white-noise torques through known dig
 in the middle. Before issue 39 this recording was refused ("no multisine or chirp found").
 """
 from frf_ident.core.estimation.described import estimate_recording
-from frf_ident.core.estimation.lpm import DIRECT_WARNING
+from frf_ident.core.estimation.lpm_frames import DIRECT_WARNING
 from frf_ident.core.recording import Recording
 import numpy as np
 from scipy import signal
@@ -44,7 +44,7 @@ def _recording(n=3 * 4096 + 100):
 
 
 def test_direct_lpm_with_a_gap():
-    est = estimate_recording(_recording(), block_s=4096 / FS)
+    est = estimate_recording(_recording(), window_s=4096 / FS)
     assert sorted(est) == ['lpm', 'lpm_h1']
     frf = est['lpm']
     assert frf.meta['method'] == 'lpm_direct' and frf.meta['dropped'] == {'frames': 1}
@@ -80,9 +80,9 @@ def test_a_reference_that_excites_no_line_is_refused_and_the_direct_estimate_off
     rec = Recording(t, rec.joint_names, rec.position, rec.velocity, rec.effort, ref, None,
                     [], {})
     with pytest.raises(EstimationError, match='no line of the LPM is determined.*lpm-direct'):
-        estimate_recording(rec, options=ExcitationOptions(method='lpm'), block_s=4096 / FS)
+        estimate_recording(rec, options=ExcitationOptions(method='lpm'), window_s=4096 / FS)
     est = estimate_recording(rec, options=ExcitationOptions(method='lpm-direct'),
-                             block_s=4096 / FS)
+                             window_s=4096 / FS)
     frf = est['lpm']
     assert frf.meta['method'] == 'lpm_direct'
     assert any("method='lpm-direct'" in line for line in frf.meta['detected'])

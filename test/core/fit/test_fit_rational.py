@@ -97,6 +97,22 @@ N = 8192                   # samples per period
 LINES = np.arange(1, 2684, 2)    # the excited odd lines, up to 200 Hz
 
 
+def silverbox_bla():
+    """Return (freq [Hz], BLA, total variance) of the 10 SNLS80mV realisations, 0.07-200 Hz."""
+    m = loadmat(SILVERBOX / 'SNLS80mV.mat', squeeze_me=True)
+    u, y = np.asarray(m['V1'], float), np.asarray(m['V2'], float)
+    quiet = np.abs(u - np.median(u)) < 0.05 * np.std(u)
+    run = np.convolve(quiet, np.ones(20), 'valid') == 20
+    starts = [s for s in np.flatnonzero(run[:-1] & ~run[1:]) + 20 if 40000 < s < 120000]
+    take = [slice(s + 492, s + 492 + N) for s in starts]
+
+    def spec(x):
+        return periodic_spectra(np.array([x[t] for t in take])[:, None, :, None, None], LINES,
+                                axis=2)
+    bla = best_linear_approximation(spec(y), spec(u))
+    return LINES * FS / N, bla.response[0, 0], bla.total_variance[0, 0]
+
+
 @pytest.mark.skipif(not (SILVERBOX / 'SNLS80mV.mat').is_file(), reason='no Silverbox data')
 def test_silverbox_second_order_fit_beside_the_bla_peak():
     """
@@ -109,19 +125,7 @@ def test_silverbox_second_order_fit_beside_the_bla_peak():
     sharper measured peak there). The cost is 1.15 times its chi-square expectation:
     (M - 1) / (M - 2) = 1.125 is what a variance estimated from M = 10 realisations adds.
     """
-    m = loadmat(SILVERBOX / 'SNLS80mV.mat', squeeze_me=True)
-    u, y = np.asarray(m['V1'], float), np.asarray(m['V2'], float)
-    quiet = np.abs(u - np.median(u)) < 0.05 * np.std(u)
-    run = np.convolve(quiet, np.ones(20), 'valid') == 20
-    starts = [s for s in np.flatnonzero(run[:-1] & ~run[1:]) + 20 if 40000 < s < 120000]
-    take = [slice(s + 492, s + 492 + N) for s in starts]
-
-    def spec(x):
-        return periodic_spectra(np.array([x[t] for t in take])[:, None, :, None, None], LINES,
-                                axis=2)
-    bla = best_linear_approximation(spec(y), spec(u))
-    f = LINES * FS / N
-    g, var = bla.response[0, 0], bla.total_variance[0, 0]
+    f, g, var = silverbox_bla()
     fit = fit_rational(f, g, var, 2, 1)
     mode = fit.modes()[0]
     peak = f[np.argmax(np.abs(g))]
@@ -136,7 +140,49 @@ def test_silverbox_second_order_fit_beside_the_bla_peak():
     assert 1.0 < fit.cost.ratio < 1.3
 
 
+@pytest.mark.skipif(not (SILVERBOX / 'SNLS80mV.mat').is_file(), reason='no Silverbox data')
+def test_silverbox_order_selection_keeps_stable_modes_inside_the_band():
+    """
+    The Silverbox BLA on 1-150 Hz, orders 1-12 chosen from (issue 54, user case 1).
+
+    The free ML fit puts poles in the right half-plane at orders 5-10 and 12 (the cubic
+    spring's distortions and the noise at 1000 lines); by the lowest AIC it chose order 12,
+    with an unstable pair here (three in the issue's run). Every fit is now stable, a pair that
+    ends at the stability limit or outside the band makes an order inadmissible, and the
+    choice is order 2 beside the BLA peak: every mode stable and inside 1-150 Hz.
+    """
+    f, g, var = silverbox_bla()
+    k = (f >= 1.0) & (f <= 150.0)
+    free = [int(np.sum(fit_rational(f[k], g[k], var[k], o, stable=False).poles().real >= 0))
+            for o in range(1, 13)]
+    sel = select_order(f[k], g[k], var[k], range(1, 13))
+    print('Silverbox 1-150 Hz: unstable poles of the free fits by order', free)
+    print('\n'.join(sel.best.summary() + sel.lines()))
+    assert sum(free) > 0                       # the mechanism is needed on these data
+    for fit in sel.fits:
+        assert np.all(fit.poles().real < 0), fit.order
+    modes = [m for m in sel.best.modes() if m.damping < 1]
+    assert modes and all(1.0 <= m.frequency_hz <= 150.0 for m in modes)
+    assert any(abs(m.frequency_hz - 69.8) < 0.7 for m in modes)
+    assert sel.runner_up is not None and len(sel.lines()) >= 3
+
+
 DAISY = Path(__file__).resolve().parents[3].parent / 'shared' / 'data' / 'DaISy_robot_arm'
+
+
+def daisy_h1():
+    """Return (freq [cycles/sample], H1, coherence variance) of the DaISy arm, 0.005-0.2."""
+    from scipy import signal
+    d = np.loadtxt(DAISY / 'robot_arm.dat')
+    u, y = d[:, 0], d[:, 1]
+    opts = {'fs': 1.0, 'nperseg': 128, 'noverlap': 0, 'window': 'hann'}
+    f, puu = signal.welch(u, **opts)
+    _, pyy = signal.welch(y, **opts)
+    _, puy = signal.csd(u, y, **opts)
+    h, coh = puy / puu, np.abs(puy) ** 2 / (puu * pyy)
+    var = (1 - coh) / (coh * (len(u) // 128)) * np.abs(h) ** 2
+    k = (f > 0.005) & (f < 0.2)
+    return f[k], h[k], var[k]
 
 
 @pytest.mark.skipif(not (DAISY / 'robot_arm.dat').is_file(), reason='no DaISy arm data')
@@ -151,20 +197,30 @@ def test_daisy_arm_two_modes_beside_the_welch_peaks():
     the fit (ratio about 7): the H1 of one non-periodic record carries leakage bias at the
     sharp peaks that its coherence variance does not describe.
     """
-    from scipy import signal
-    d = np.loadtxt(DAISY / 'robot_arm.dat')
-    u, y = d[:, 0], d[:, 1]
-    opts = {'fs': 1.0, 'nperseg': 128, 'noverlap': 0, 'window': 'hann'}
-    f, puu = signal.welch(u, **opts)
-    _, pyy = signal.welch(y, **opts)
-    _, puy = signal.csd(u, y, **opts)
-    h, coh = puy / puu, np.abs(puy) ** 2 / (puu * pyy)
-    var = (1 - coh) / (coh * (len(u) // 128)) * np.abs(h) ** 2
-    k = (f > 0.005) & (f < 0.2)
-    fit = fit_rational(f[k], h[k], var[k], 4, 4)
+    f, h, var = daisy_h1()
+    fit = fit_rational(f, h, var, 4, 4)
     modes = [m for m in fit.modes() if m.damping < 0.1]
     print('DaISy arm, order 4/4:', '; '.join(m.summary() for m in modes), fit.cost.summary())
     assert len(modes) == 2
     for m, peak in zip(modes, (0.0625, 0.125)):
         assert abs(m.frequency_hz / peak - 1) < 0.1
     assert fit.cost.structure_missing
+
+
+@pytest.mark.skipif(not (DAISY / 'robot_arm.dat').is_file(), reason='no DaISy arm data')
+def test_daisy_arm_order_selection_keeps_the_modes_inside_the_band():
+    """
+    The DaISy H1, orders 1-12 chosen from: every mode of the choice inside 0.005-0.2.
+
+    Orders that add a pole pair above the band (0.3 cycles/sample: it shapes the response at
+    the band's edge, the data do not show it) are not admissible; the choice keeps the two
+    modes beside the H1 peaks.
+    """
+    f, h, var = daisy_h1()
+    sel = select_order(f, h, var, range(1, 13), n_num=None)
+    print('\n'.join(sel.best.summary() + sel.lines()))
+    modes = [m for m in sel.best.modes() if m.damping < 1]
+    assert all(f[0] <= m.frequency_hz <= f[-1] for m in modes), modes
+    assert all(np.all(fit.poles().real < 0) for fit in sel.fits)
+    for peak in (0.0625, 0.125):
+        assert any(abs(m.frequency_hz / peak - 1) < 0.1 for m in modes), modes
