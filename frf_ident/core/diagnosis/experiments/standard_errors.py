@@ -98,7 +98,8 @@ class AxisFit:
     def correlation(self) -> np.ndarray:
         """Return the correlation matrix of the slots' values (0 where an error is not finite)."""
         d = np.where(np.isfinite(self.se) & (self.se > 0), self.se, np.inf)
-        return self.cov / np.outer(d, d)
+        with np.errstate(invalid='ignore'):     # an infinite variance over an infinite error
+            return np.nan_to_num(self.cov / np.outer(d, d), nan=0.0, posinf=0.0, neginf=0.0)
 
     def disagreement(self) -> np.ndarray:
         """Return per slot |multisine alone - chirp alone| / combined standard error (0: none)."""
@@ -216,7 +217,8 @@ def axis_fit(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: int) ->
     # at its tolerance) is at least that far from it
     between = np.where(fit.disagreement() > REFITS_AGREE_Z, between_experiments(fit.alone), 0.0)
     se = np.maximum.reduce([fit.se, between, np.abs(fit.optimum - x0)])
-    fit.cov = fit.correlation() * np.outer(se, se)
+    with np.errstate(invalid='ignore'):         # 0 correlation times an infinite error
+        fit.cov = fit.correlation() * np.outer(se, se)
     fit.cov[~np.isfinite(se), :] = fit.cov[:, ~np.isfinite(se)] = 0.0
     fit.cov[np.diag_indices_from(fit.cov)] = se ** 2
     fit.within, fit.se = fit.se, se
@@ -239,11 +241,14 @@ def between_experiments(alone: dict[str, tuple[np.ndarray, np.ndarray]]) -> np.n
     s = np.array([e for _, e in alone.values()])
     ok = np.all(np.isfinite(x) & np.isfinite(s) & (s > 0), axis=0)
     x, s = np.where(ok, x, 0.0), np.where(ok, s, 1.0)
-    w = 1.0 / s ** 2
-    mean = (w * x).sum(0) / w.sum(0)
-    q = (w * (x - mean) ** 2).sum(0)
-    tau2 = np.maximum(0.0, (q - (x.shape[0] - 1)) / (w.sum(0) - (w ** 2).sum(0) / w.sum(0)))
-    return np.where(ok, 1.0 / np.sqrt((1.0 / (s ** 2 + tau2)).sum(0)), 0.0)
+    # errors so small that their weights overflow leave tau^2 undefined (nan): a value with
+    # such an error is labelled not determined (:mod:`.settle`), as without this guard
+    with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
+        w = 1.0 / s ** 2
+        mean = (w * x).sum(0) / w.sum(0)
+        q = (w * (x - mean) ** 2).sum(0)
+        tau2 = np.maximum(0.0, (q - (x.shape[0] - 1)) / (w.sum(0) - (w ** 2).sum(0) / w.sum(0)))
+        return np.where(ok, 1.0 / np.sqrt((1.0 / (s ** 2 + tau2)).sum(0)), 0.0)
 
 
 def sandwich(J: np.ndarray, r: np.ndarray, blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
