@@ -26,7 +26,7 @@ from pathlib import Path
 import xml.etree.ElementTree as ET
 
 from frf_ident.app.operator_console import COMMANDS
-from frf_ident.nodes.common import TOPICS
+from frf_ident.nodes.common import LIVE_FRAMES, TOPICS
 
 POLICY = Path(__file__).resolve().parents[1] / 'config' / 'sros2' / 'frf_ident_policy.xml'
 RULES = {'topics': ({'publish', 'subscribe'}, 'topic'),
@@ -34,6 +34,8 @@ RULES = {'topics': ({'publish', 'subscribe'}, 'topic'),
 RUN_SERVICES = {'frf/run_multisine', 'frf/run_iteration'}
 #: the node ``ros2 service call SERVICE std_srvs/srv/Trigger`` creates (ros2cli)
 ROS2CLI_TRIGGER = '_ros2cli_requester_std_srvs_Trigger'
+#: the live estimate's topics (frf_ident/nodes/common.py: live_topic + LIVE_FRAMES)
+LIVE = {f"{TOPICS['live_topic'].lstrip('/')}/{k}" for k in LIVE_FRAMES}
 
 
 def _grants():
@@ -80,7 +82,7 @@ def test_only_the_excitation_node_moves_the_robot_and_only_the_operator_enables_
 
 def test_policy_names_are_the_nodes_names():
     g = _grants()
-    topics = {v.lstrip('/') for v in TOPICS.values()}
+    topics = {v.lstrip('/') for v in TOPICS.values()} | LIVE
     services = {s.lstrip('/') for s in COMMANDS.values()}
     node_common = {'rosout', 'parameter_events'}     # and '~/...' parameter services
     for _e, node, kind, _p, name in g:
@@ -104,3 +106,22 @@ def test_ros2_service_call_has_a_profile_in_the_operator_enclave_only():
     assert {e for e, n, *_ in g if n == ROS2CLI_TRIGGER} == {'/frf_ident/operator'}
     own = {o for e, n, k, p, o in g if n == ROS2CLI_TRIGGER and (k, p) == ('services', 'reply')}
     assert '~/describe_parameters' in own and '~/get_type_description' in own
+
+
+def test_every_topic_the_nodes_create_is_granted():
+    """
+    The excitation node publishes, and the estimator records, the live estimate and warnings.
+
+    Under Enforce a publisher without a grant is not created at all: the excitation node
+    died at start-up with "failed to create topic [rt/frf/live/frf]" once the live estimate
+    came (issue 52) and the policy did not list it.
+    """
+    g = _grants()
+    published = {o for e, _n, k, p, o in g
+                 if (e, k, p) == ('/frf_ident/excitation', 'topics', 'publish')}
+    recorded = {o for e, _n, k, p, o in g
+                if (e, k, p) == ('/frf_ident/estimator', 'topics', 'subscribe')}
+    kinds = ('progress_topic', 'warnings_topic', 'experiment_topic', 'excitation_topic')
+    own = {TOPICS[k].lstrip('/') for k in kinds}
+    assert LIVE | own <= published
+    assert LIVE | own <= recorded

@@ -189,7 +189,7 @@ def load_records(data: Path, validate: Sequence[Path], robot: RobotParams, model
                 f'{list(rec.joint_names)} of {data} (another robot? name them alike in the '
                 f'import map)')
     for p, r in [(str(data), rec)] + others:
-        gaps = r.meta.get('gaps') or []
+        gaps = r.gaps
         if gaps:
             progress(f'{p}: {len(gaps)} gap(s) in the joint states '
                      f'({sum(b - a for a, b in gaps):.3f} s, first at {gaps[0][0]:.3f} s) left '

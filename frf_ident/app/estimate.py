@@ -84,7 +84,7 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
         st = res.stats
         progress(f'streamed {sum(st.messages.values())} messages in {st.windows} windows, '
                  f'at most {st.peak_rows} held at once')
-        return res.estimates, res.timing, res.meta.get('summary', {}), {
+        return res.estimates, res.timing, res.summary, {
             'windows': st.windows, 'peak_rows': st.peak_rows, 'messages': st.messages,
             'budget_bytes': budget}
     from frf_ident.bag import read_recording
@@ -104,13 +104,13 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
         progress(line)
     if joints is None:
         return (estimate_recording(rec, options=options, window_s=window_s), timing,
-                rec.meta.get('summary', {}), None)
+                rec.summary, None)
     check_joints(joints, rec.joint_names)
     # every joint the experiments excited takes part; the wanted channels are picked
     part = rec.select_joints(experiment_joints(rec, joints))
     est = estimate_recording(part, options=options, window_s=window_s)
     return ({k: joint_channels(v, joints) for k, v in est.items()}, timing,
-            rec.meta.get('summary', {}), None)
+            rec.summary, None)
 
 
 def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=None,
@@ -172,14 +172,14 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     if streamed is not None:
         for line in timing.summary():
             progress(line)
-    first = next(iter(estimates.values())).meta
+    first = next(iter(estimates.values())).notes
     for line in first.get('detected', []):
         progress(f'detected: {line}')
     for line in first.get('left_out', []):
         progress(f'left out: {line}')
     for k, v in estimates.items():
-        if v.meta.get('transient'):
-            progress(f'{k}: {v.meta["transient"]}')
+        if 'transient' in v.notes:
+            progress(f'{k}: {v.notes["transient"]}')
     key = primary or ('multisine' if 'multisine' in estimates else next(iter(estimates)))
     if key not in estimates:
         raise FrfIdentInputError(f'--primary {key!r}: the bag supports {sorted(estimates)}')
@@ -191,12 +191,12 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     (out / 'frf.json').write_text(json.dumps(doc))
     (out / 'estimates.json').write_text(json.dumps({k: v.to_dict()
                                                     for k, v in estimates.items()}))
-    dropped = {k: v.meta['dropped'] for k, v in estimates.items() if v.meta.get('dropped')}
+    dropped = {k: v.dropped for k, v in estimates.items() if v.dropped}
     for k, d in dropped.items():
         line = dropped_text(d)
         if line:
             progress(f'{k}: {line}')
-    missing = {k: v.meta['missing'] for k, v in estimates.items() if v.meta.get('missing')}
+    missing = {k: v.missing.to_dict() for k, v in estimates.items() if v.missing}
     for line in missing_lines(estimates):
         progress(line)
     summary = {'bag': str(bag), 'primary': key, 'estimates': sorted(estimates),
@@ -208,8 +208,9 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
     bode_figure(dict(pairs or [(key, frf)]), out / 'bode.png',
                 title=f'{bag.name}: {" vs ".join(k for k, _ in pairs) or key}',
                 units=frf_units(frf))
-    progress(f'wrote {out / "frf.json"} ({key}: {frf.noutputs}x{frf.ninputs} channels, '
-             f'{frf.freq_hz.size} lines) and {out / "bode.png"}')
+    # the folder once, the files by name (a deep output folder made 250-character lines)
+    progress(f'wrote frf.json ({key}: {frf.noutputs}x{frf.ninputs} channels, '
+             f'{frf.freq_hz.size} lines) and bode.png in {out}')
     report_distortion(estimates, out, title=bag.name, progress=progress)
     report_robust_lpm(estimates, out, title=bag.name, progress=progress)
     if fit is not None:
@@ -244,11 +245,9 @@ def report_robust_lpm(estimates: dict, out: Path | None = None, *, title: str = 
         The PNG, or None when no estimate carries robust-LPM levels (or ``out`` is None).
 
     """
-    from frf_ident.core.estimation.lpm import RobustLpmLevels
     from frf_ident.report.distortion import robust_lpm_figure
     progress = sink(progress)
-    found = [(k, v, RobustLpmLevels.from_dict(v.meta['robust_lpm']))
-             for k, v in estimates.items() if isinstance(v.meta.get('robust_lpm'), dict)]
+    found = [(k, v, v.robust_lpm) for k, v in estimates.items() if v.robust_lpm is not None]
     for k, _, levels in found:
         for line in levels.summary():
             progress(f'{k} robust LPM: {line}')
@@ -256,7 +255,7 @@ def report_robust_lpm(estimates: dict, out: Path | None = None, *, title: str = 
         return None
     k, frf, levels = found[0]
     path = robust_lpm_figure(levels, frf, out / 'robust_lpm.png', title=f'{title}: {k}')
-    progress(f'wrote {path} (|P| with its noise and nonlinear level per line, {k})')
+    progress(f'wrote {path.name} (|P| with its noise and nonlinear level per line, {k})')
     return path
 
 
@@ -284,18 +283,16 @@ def report_distortion(estimates: dict, out: Path, *, title: str,
         The PNG, or None when no estimate carries distortion levels.
 
     """
-    from frf_ident.core.estimation.distortion import DistortionLines
     from frf_ident.report.distortion import distortion_figure
     progress = sink(progress)
-    found = [(k, DistortionLines.from_dict(v.meta['distortion'])) for k, v in estimates.items()
-             if isinstance(v.meta.get('distortion'), dict)]
+    found = [(k, v.distortion) for k, v in estimates.items() if v.distortion is not None]
     for line in distortion_table(found):
         progress(line)
     if not found:
         return None
     k, levels = found[0]
     path = distortion_figure(levels, out / 'distortion.png', title=f'{title}: {k}')
-    progress(f'wrote {path} (output levels at excited, odd and even lines of {k})')
+    progress(f'wrote {path.name} (output levels at excited, odd and even lines of {k})')
     return path
 
 
@@ -346,8 +343,8 @@ def frf_units(frf) -> str | None:
 
     """
     from frf_ident.core.recording import JOINT_STATE_FRF_UNIT
-    u = frf.meta.get('units')
-    if not isinstance(u, dict):
+    u = frf.units
+    if not u:
         return JOINT_STATE_FRF_UNIT
     outs = set(u.get('outputs') or [''])
     out, inp = outs.pop(), u.get('input', '')
@@ -426,14 +423,13 @@ def missing_lines(estimates: dict) -> list[str]:
         an estimate whose line equals the one before it is named there.
 
     """
-    from frf_ident.core.estimation.missing import MissingSamples
     from frf_ident.core.recording import JOINT_STATE_UNITS
     texts: dict[str, list[str]] = {}
     for k, v in estimates.items():
-        if not v.meta.get('missing'):
+        acc = v.missing
+        if acc is None:
             continue
-        acc = MissingSamples.from_dict(v.meta['missing'])
-        u = v.meta.get('units') if isinstance(v.meta.get('units'), dict) else {}
+        u = v.units
         units = {c: (u.get('input') or JOINT_STATE_UNITS['effort']) if c.startswith('tau_m/')
                  else JOINT_STATE_UNITS['velocity'] for c in acc.channels}
         for c, unit in zip(v.outputs, u.get('outputs') or []):

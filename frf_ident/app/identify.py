@@ -182,7 +182,7 @@ def concatenate_poses(recs: list, gap_s: float = POSE_GAP_S):
         parts.append((t, rec))
         segs += [Segment(sg.t_start + shift, sg.t_end + shift, dict(sg.info))
                  for sg in rec.segments]
-        spans.append({'pose_index': k, 'pose_rad': rec.meta['summary'].get('pose_rad'),
+        spans.append({'pose_index': k, 'pose_rad': rec.summary.get('pose_rad'),
                       't_start': float(t[0]), 't_end': float(t[-1] + dt)})
         t_next = float(t[-1]) + dt + gap_s
 

@@ -53,7 +53,7 @@ def import_file(file: Path, map_path: Path, out: str | Path, *,
     from frf_ident.io.importer import import_table
     out = check_out(out, outputs=None, overwrite=False)
     rec = import_table(file, map_path)
-    info = rec.meta['import']
+    info = rec.import_info
     progress(f'{file.name}: {rec.t.size} samples at {rec.fs:.6g} Hz '
              f'(t = {rec.t[0]:.3f} .. {rec.t[-1]:.3f} s), joints {", ".join(rec.joint_names)}')
     for key, how in info['derived'].items():

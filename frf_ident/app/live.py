@@ -150,8 +150,8 @@ class EstimateOut:
         sd = est.magnitude_sd_db
         self.out.live_frame('frf', frf_frame(f.freq_hz, f.response, sd, est.phase_sd_deg,
                                              est.coherence, f.outputs, f.inputs))
-        if f.meta.get('distortion'):
-            self.out.live_frame('distortion', distortion_frame(f.meta['distortion']))
+        if f.distortion is not None:
+            self.out.live_frame('distortion', distortion_frame(f.distortion.to_dict()))
         worst = self.target.worst_db(sd)
         left = periods_left(est, self.target)
         self.out.live_frame('summary', summary_frame({

@@ -84,7 +84,7 @@ def bag_poses(bag: Path) -> list[PoseSpan] | None:
             spans.setdefault(int(k), []).append(s)
     if len(spans) < 2:
         return None
-    listed = {int(p['pose_index']): p for p in exp.meta.get('summary', {}).get('poses', [])}
+    listed = {int(p['pose_index']): p for p in exp.summary.get('poses', [])}
     out = []
     for k in sorted(spans):
         segs = spans[k]

@@ -82,6 +82,12 @@ class StreamedEstimate:
     meta: dict[str, Any] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
 
+    @property
+    def summary(self) -> dict[str, Any]:
+        """Return the procedures' summary the run recorded (poses; empty without)."""
+        s = self.meta.get('summary')
+        return s if isinstance(s, dict) else {}
+
 
 def default_memory_budget() -> int:
     """
@@ -195,8 +201,8 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
                                  experiment=exp, progress=progress)
         say(f'streaming: {len(segments)} experiment segments in {len(reader.windows)} windows')
         estimates = segment_estimates(reader, segments, exp, joints, options, reports)
-    elif exp.meta.get('segments_left_out') and (t_range is None or cut):
-        raise cut_short_error(len(exp.meta['segments_left_out']))
+    elif exp.segments_left_out and (t_range is None or cut):
+        raise cut_short_error(len(exp.segments_left_out))
     else:
         say(f'streaming: no experiment descriptors; detecting the excitation in blocks of '
             f'{window_s:g} s')
@@ -204,7 +210,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
         reader = bs.WindowReader(bag, window_s=window_s, joints=joints, experiment=exp,
                                  span=span, progress=progress)
         estimates = block_estimates(reader, options, window_s, reports)
-        notes = [n for n in next(iter(estimates.values())).meta['detected']
+        notes = [n for n in next(iter(estimates.values())).notes.get('detected', [])
                  if n.startswith('block ')]
     if not reports:
         raise EstimationError(f'{bag}: no joint states inside the analysed windows')
@@ -262,7 +268,7 @@ def segment_estimates(reader: Any, segments: list, exp: Any, joints: list[str] |
                               f'{s.t_start:.3f}..{s.t_end:.3f} s')
     estimates = est.results()
     if not estimates:
-        left_out = len(exp.meta.get('segments_left_out', []))
+        left_out = len(exp.segments_left_out)
         raise (cut_short_error(left_out) if left_out else
                EstimationError('the experiment segments give no estimate'))
     if joints is not None:

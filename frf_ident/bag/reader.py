@@ -128,6 +128,17 @@ class ExperimentIndex:
     warnings: list[str]
     events: int = 0
 
+    @property
+    def summary(self) -> dict[str, Any]:
+        """Return the procedures' summary the run recorded (poses; empty without)."""
+        s = self.meta.get('summary')
+        return s if isinstance(s, dict) else {}
+
+    @property
+    def segments_left_out(self) -> list[list[float]]:
+        """Return the [t_start, t_end] of the segments a time range cut (left out, named)."""
+        return list(self.meta.get('segments_left_out') or [])
+
 
 def read_experiment(path: str | Path, *, topics: BagTopics | None = None) -> ExperimentIndex:
     """

@@ -162,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
                                  f'(0: a free one)')
     rec = run_identify(args.model, args.plant, identification_config(args), args.out,
                        progress=say, foxglove_port=args.foxglove)
-    s = rec.meta['summary']
+    s = rec.summary
     if 'multisine' in s:
         m = s['multisine']
         say(f"multisine: {m['segments']} segments, {m['lines']} lines, period "

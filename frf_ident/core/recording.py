@@ -178,6 +178,35 @@ class Recording:
                 raise ValueError(f'{name} shape {val.shape} != ({self.t.size}, {n})')
             setattr(self, name, val)
 
+    # --- named fields of ``meta``: the entries the other layers read, one definition each ---
+    @property
+    def gaps(self) -> list[tuple[float, float]]:
+        """Return the [t_first, t_last] [s] of every stretch of joint states a bag lost."""
+        return [(float(a), float(b)) for a, b in self.meta.get('gaps') or []]
+
+    @property
+    def units(self) -> dict[str, Any]:
+        """Return the import map's units per joint, {joint: {signal: unit}} (robot: empty)."""
+        u = self.meta.get('units')
+        return u if isinstance(u, dict) else {}
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """Return the procedures' summary a run recorded (poses, pose_rad; empty without)."""
+        s = self.meta.get('summary')
+        return s if isinstance(s, dict) else {}
+
+    @property
+    def import_info(self) -> dict[str, Any]:
+        """Return how an imported table was read (source, map, derived signals; or empty)."""
+        i = self.meta.get('import')
+        return i if isinstance(i, dict) else {}
+
+    @property
+    def segments_left_out(self) -> list[list[float]]:
+        """Return the [t_start, t_end] of the segments a time range cut (left out, named)."""
+        return list(self.meta.get('segments_left_out') or [])
+
     def output_columns(self) -> list[int]:
         """
         Return the joints whose velocity is an output of the FRF.

@@ -59,6 +59,7 @@ class OperatorGate:
         self.pub = node.create_publisher(self.String, t['arming_topic'],
                                          mw.qos_transient_local(1))
         self._stop = threading.Event()
+        self._spinner: Optional[threading.Thread] = None
         self.hb_node: Any = None
         name = node.get_name()
         if self.gate.required:
@@ -85,8 +86,9 @@ class OperatorGate:
                                       namespace=node.get_namespace(), global_arguments=False)
         self.hb_node.create_subscription(self.String, topic, self._on_heartbeat,
                                          mw.qos_default(1))
-        threading.Thread(target=mw.spin, args=(self.hb_node, self._stop), daemon=True,
-                         name='operator heartbeat').start()
+        self._spinner = threading.Thread(target=mw.spin, args=(self.hb_node, self._stop),
+                                         daemon=True, name='operator heartbeat')
+        self._spinner.start()
 
     def _on_heartbeat(self, msg: Any) -> None:
         reason = self.gate.on_heartbeat(msg.data)
@@ -94,8 +96,16 @@ class OperatorGate:
             self.log('warn', reason)
 
     def close(self) -> None:
-        """Stop taking heartbeats."""
+        """
+        Stop taking heartbeats and wait for their thread (it spins in 0.1 s steps).
+
+        Joined before the middleware shuts down: a thread still inside rclpy's wait set at
+        shutdown raised, and the interpreter's exit then aborted the process (SIGABRT,
+        "terminate called without an active exception") instead of exiting 0.
+        """
         self._stop.set()
+        if self._spinner is not None:
+            self._spinner.join(timeout=2.0)
 
     def check(self) -> None:
         """Raise NotArmed when a run may not start now (ArmingGate.check)."""

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from frf_ident.core.estimation.distortion import DistortionLines
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.estimation.lpm import RobustLpmLevels
+from frf_ident.core.estimation.robust_levels import RobustLpmLevels
 import matplotlib
 
 matplotlib.use('Agg')

@@ -207,11 +207,8 @@ def bode_figure(frfs: Mapping[str, FrequencyResponse], path: Path, *,
 
 
 def _coherence(frf: FrequencyResponse, n_out: int) -> np.ndarray | None:
-    coh = frf.meta.get('coherence') if isinstance(frf.meta, dict) else None
-    if coh is None:
-        return None
-    coh = np.asarray(coh, dtype=float)
-    return coh if coh.shape == (n_out, frf.freq_hz.size) else None
+    coh = frf.coherence
+    return coh if coh is not None and coh.shape[0] == n_out else None
 
 
 def _coherence_panel(ax: plt.Axes, frfs: Mapping[str, FrequencyResponse], o: int, output: str,

@@ -43,9 +43,7 @@ import math
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from frf_ident.core.estimation.distortion import DistortionLines
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.estimation.lpm import RobustLpmLevels
 from frf_ident.core.fit.coupled import CoupledFit
 from frf_ident.core.fit.physical import PhysicalFit, UNITS
 from frf_ident.core.fit.rational import RationalFit
@@ -147,7 +145,7 @@ def _estimates_table(frfs: Mapping[str, FrequencyResponse],
         err = _error_to_reference(frf, reference)
         rows.append([label, f'{frf.noutputs} \u00d7 {frf.ninputs}', frf.freq_hz.size,
                      f'{frf.freq_hz[0]:.3g} \u2013 {frf.freq_hz[-1]:.3g}',
-                     str(frf.meta.get('method', frf.meta.get('design', ''))) or '\u2014',
+                     frf.method or '\u2014',
                      which or 'none', '\u2014' if snr is None else f'{snr:.1f}',
                      '\u2014' if err is None else f'{err:.2f}'])
     first = next(iter(frfs.values()))
@@ -191,9 +189,8 @@ def _bode_section(out: Path, frfs: Mapping[str, FrequencyResponse],
 def _distortion_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str:
     """Return the detection-line plot and summary of the first estimate with distortion levels."""
     for name, frf in frfs.items():
-        d = frf.meta.get('distortion')
-        if isinstance(d, dict):
-            levels = DistortionLines.from_dict(d)
+        levels = frf.distortion
+        if levels is not None:
             distortion_figure(levels, out / 'distortion.png', title=name)
             items = ''.join(f'<li>{html.escape(line)}</li>' for line in levels.summary())
             return f'<ul>{items}</ul>' + figure_tag(
@@ -210,9 +207,8 @@ def _distortion_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str
 def _robust_lpm_section(out: Path, frfs: Mapping[str, FrequencyResponse]) -> str:
     """Return the robust-LPM plot and summary of the first estimate with robust-LPM levels."""
     for name, frf in frfs.items():
-        d = frf.meta.get('robust_lpm')
-        if isinstance(d, dict):
-            levels = RobustLpmLevels.from_dict(d)
+        levels = frf.robust_lpm
+        if levels is not None:
             robust_lpm_figure(levels, frf, out / 'robust_lpm.png', title=name)
             items = ''.join(f'<li>{html.escape(line)}</li>' for line in levels.summary())
             return f'<ul>{items}</ul>' + figure_tag(
@@ -244,7 +240,7 @@ def _signals_section(out: Path, rec: Recording) -> str:
     if rec.reference is not None and np.isfinite(rec.reference).any():
         series.append(('reference r', rec.reference, unit('reference', 'rad/s')))
     figures.timeseries_figure(rec.t, series, rec.joint_names, out / 'timeseries.png')
-    units = rec.meta.get('units')
+    units = rec.units
     note = (f' Units per joint (import map): {html.escape(str(units))}.' if units else '')
     return figure_tag('timeseries.png',
                       f'Applied motor torque, measured velocity and velocity reference of each '
@@ -253,7 +249,7 @@ def _signals_section(out: Path, rec: Recording) -> str:
 
 def _common_units(rec: Recording):
     """unit(signal, default): the unit all joints share per the import map, else default."""
-    units = rec.meta.get('units') if isinstance(rec.meta.get('units'), dict) else {}
+    units = rec.units
 
     def unit(sig: str, default: str) -> str:
         found = {str(u.get(sig)) for u in units.values() if isinstance(u, dict) and u.get(sig)}

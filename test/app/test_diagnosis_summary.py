@@ -53,9 +53,10 @@ def test_summary_lines_read_as_sentences_with_units_and_four_digits():
         '2. viscous_friction on joint_2: viscous_friction 51.08 \u00b1 1.2 N m s/rad; score 0.50',
         'unexplained on joint_3: 31 % of the nominal misfit left, strongest misfit 34.3-38.7 Hz',
         'held-out error: nominal FRF 2.06 dB, time NRMSE 0.157 -> extended FRF 0.151 dB, '
-        'time NRMSE 0.00561 (held-out realisation)',
+        'time NRMSE 0.00561',
+        '  held-out realisation',
         'on b.mat: nominal time NRMSE 2.03 -> extended time NRMSE 0.601',
-        'wrote D/report.json, D/extended_model.yaml, D/report.html']
+        'wrote report.json, extended_model.yaml and report.html in D']
     assert not any(c in line for line in lines for c in ('{', '}', "'"))
     assert all(len(line) <= 160 for line in lines)
 

@@ -18,7 +18,7 @@ Truth by construction: P = 1 / (j 2 pi f) (rad/s per N m), noise variance 1e-4 |
 below |P|), stochastic nonlinear variance 100 times the noise (20 dB above it).
 """
 from frf_ident.core.estimation.frd import FrequencyResponse
-from frf_ident.core.estimation.lpm import RobustLpmLevels
+from frf_ident.core.estimation.robust_levels import RobustLpmLevels
 from frf_ident.report import write_report
 from frf_ident.report.distortion import plt, robust_lpm_figure
 import numpy as np

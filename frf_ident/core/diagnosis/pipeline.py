@@ -88,8 +88,8 @@ class Diagnosis:
             out['discretisation'] = res.discretisation.to_dict()
         if res.band is not None:
             out['analysis_band'] = res.band.to_dict()
-        if self.recording.meta.get('gaps'):
-            out['gaps'] = self.recording.meta['gaps']
+        if self.recording.gaps:
+            out['gaps'] = [list(g) for g in self.recording.gaps]
         return strict_json(out)
 
 

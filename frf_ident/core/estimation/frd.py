@@ -23,6 +23,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from frf_ident.core.estimation.distortion import DistortionLines
+from frf_ident.core.estimation.missing import MissingSamples
+from frf_ident.core.estimation.robust_levels import RobustLpmLevels
 from frf_ident.core.jsonable import jsonable
 import numpy as np
 
@@ -112,6 +115,57 @@ class FrequencyResponse:
     def omega(self) -> np.ndarray:
         """Return the frequencies in rad/s, 2 pi ``freq_hz``."""
         return 2.0 * np.pi * self.freq_hz
+
+    # --- named fields of ``meta``: what estimates.json keeps beside the response ----------
+    @property
+    def distortion(self) -> DistortionLines | None:
+        """Return the odd/even detection-line levels of a multisine estimate (None: none)."""
+        d = self.meta.get('distortion')
+        return DistortionLines.from_dict(d) if isinstance(d, dict) else None
+
+    @property
+    def robust_lpm(self) -> RobustLpmLevels | None:
+        """Return the noise and nonlinear variance of one realisation (None: none)."""
+        d = self.meta.get('robust_lpm')
+        return RobustLpmLevels.from_dict(d) if isinstance(d, dict) else None
+
+    @property
+    def missing(self) -> MissingSamples | None:
+        """Return the account of the samples a gap took and the estimate filled (None: none)."""
+        d = self.meta.get('missing')
+        return MissingSamples.from_dict(d) if d else None
+
+    @property
+    def coherence(self) -> np.ndarray | None:
+        """Return the coherence per output and line, shape (n_out, n_freq) (None: none)."""
+        c = self.meta.get('coherence')
+        if c is None:
+            return None
+        c = np.asarray(c, dtype=float)
+        return c if c.shape == (self.noutputs, self.freq_hz.size) else None
+
+    @property
+    def units(self) -> dict[str, Any]:
+        """Return the import map's units: ``input`` and ``outputs`` (empty for a robot's bag)."""
+        u = self.meta.get('units')
+        return u if isinstance(u, dict) else {}
+
+    @property
+    def method(self) -> str:
+        """Return how it was estimated: the method, else the excitation's design ('' unknown)."""
+        return str(self.meta.get('method', self.meta.get('design', '')))
+
+    @property
+    def notes(self) -> dict[str, Any]:
+        """Return what was found and left out: ``detected``, ``left_out``, ``transient``."""
+        return {k: self.meta[k] for k in ('detected', 'left_out', 'transient')
+                if self.meta.get(k)}
+
+    @property
+    def dropped(self) -> dict[str, Any]:
+        """Return what the estimate left out, periods or frames, and why; empty: nothing."""
+        d = self.meta.get('dropped')
+        return d if isinstance(d, dict) else {}
 
     def magnitude_db(self) -> np.ndarray:
         """

@@ -66,7 +66,7 @@ def test_a_position_term_is_kept_only_if_it_predicts_the_other_record(load, kept
     out, verdict = drop_terms_not_generalising(res, fit, robot, [('other', other)])
     names = {(e.name, e.axis) for e in out.effects}
     assert (('gravity', 'joint_2') in names) == kept, verdict
-    assert verdict['joint_2']['dropped'] == (not kept)
+    assert verdict['joint_2'].dropped == (not kept)
     # the friction of every axis stays whatever happens to the position term
     assert {('coulomb_friction', f'joint_{k}') for k in (1, 2, 3)} <= names
     if kept:

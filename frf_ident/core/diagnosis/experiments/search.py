@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import textwrap
 from typing import Callable
 
 from frf_ident.core.model.params import RobotParams
@@ -48,5 +49,16 @@ class Search:
 
 
 def named(kept: list[Effect]) -> str:
-    """Return 'kept: name@axis, ...' for a log line."""
-    return 'kept: ' + (', '.join(f'{c.name}@{c.axis}' for c in kept) or 'none')
+    """
+    Return 'kept: axis name, name; axis name' for a log line, grouped by axis.
+
+    Grouped and wrapped at 100 characters (continuation lines indented): five effects as
+    name@axis made a 170-character stage line, wider than a terminal.
+    """
+    if not kept:
+        return 'kept: none'
+    axes: dict[str, list[str]] = {}
+    for c in kept:
+        axes.setdefault(c.axis, []).append(c.name)
+    text = 'kept: ' + '; '.join(f'{a} ' + ', '.join(n) for a, n in axes.items())
+    return '\n    '.join(textwrap.wrap(text, 100, break_on_hyphens=False))
