@@ -425,6 +425,13 @@ def bench_second_mode() -> list[tuple[str, str, str, str]]:
     return bench_rows()
 
 
+@section('diagnosis_uncertainty')
+def bench_diagnosis_uncertainty() -> list[tuple[str, str, str, str]]:
+    """Check diagnosed values against their standard errors: pair scenes, a Monte Carlo."""
+    from benchmarks.diagnosis_uncertainty import rows
+    return rows()
+
+
 @section('diagnosis_demo')
 def bench_diagnosis_demo() -> list[tuple[str, str, str, str]]:
     """Diagnose the demo bag with its simulations on 1 and on 2 processes: wall time."""

@@ -258,21 +258,31 @@ def identify_scene(scene: dict[str, Any], bag: Path) -> Path:
     return bag
 
 
-def diagnose_scene(scene: dict[str, Any], bag: Path, out: Path, **kw: Any) -> dict[str, Any]:
-    """Diagnose a scene's bag against MODEL (``kw``: of ``diagnose``) and score it."""
+def diagnose_scene(scene: dict[str, Any], bag: Path, out: Path, *, keep_report: bool = False,
+                   **kw: Any) -> dict[str, Any]:
+    """
+    Diagnose a scene's bag against MODEL (``kw``: of ``diagnose``) and score it.
+
+    With ``keep_report`` the score holds the report.json content too (``report``).
+    """
     from frf_ident.app.diagnose import diagnose
     t0 = time.perf_counter()
     _diagnosis_log()
     res = diagnose(bag, MODEL, out, progress=lambda _m: None, **kw)
     gains = getattr(res.result.detail, 'held_out_gains', {})
-    return score_scene(scene, res.report(), time.perf_counter() - t0, res.result.n_sims,
-                       {k: (round(g.gain, 4), round(g.z, 2), g.beyond_noise)
-                        for k, g in gains.items()})
+    r = score_scene(scene, res.report(), time.perf_counter() - t0, res.result.n_sims,
+                    {k: (round(g.gain, 4), round(g.z, 2), g.beyond_noise)
+                     for k, g in gains.items()})
+    if keep_report:
+        r['report'] = res.report()
+    return r
 
 
-def run_scene(scene: dict[str, Any], work: Path) -> dict[str, Any]:
+def run_scene(scene: dict[str, Any], work: Path, *, keep_report: bool = False
+              ) -> dict[str, Any]:
     """Identify the scene's plant through ``--plant`` into a bag, diagnose the bag."""
-    return diagnose_scene(scene, identify_scene(scene, work / 'bag'), work / 'diag')
+    return diagnose_scene(scene, identify_scene(scene, work / 'bag'), work / 'diag',
+                          keep_report=keep_report)
 
 
 def param_error(name: str, truth: dict[str, Any], found: dict[str, Any]) -> float:
@@ -282,6 +292,8 @@ def param_error(name: str, truth: dict[str, Any], found: dict[str, Any]) -> floa
         return abs(found[name][key] / truth[name][key] - 1)
     if key == 'amplitude':
         return abs(found[name][-1]['amplitude'] / truth[name][0]['amplitude'] - 1)
+    if key not in truth:        # a mismatch of another parameter than the stiffness (damping)
+        key = next(iter(truth))
     return abs(found.get(key, math.nan) / truth[key] - 1)
 
 
@@ -292,11 +304,15 @@ def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0
 
     ``gains``: the held-out check's gain test per effect it judged, 'name@axis' -> (gain
     [noise floors], z, beyond noise); each is marked true or spurious by the scene's truth.
+    An effect with a value the record does not determine (``not_determined``) does not count
+    as found, nor as a false alarm: it is listed under ``not_determined``.
     """
     names = _nominal_names()
     hidden = {(n, names[a]): p for n, a, p in scene['truth']}
     found = {(e['name'], e['axis']): e['parameters'] for e in report['effects']
-             if e['name'] not in SENSOR_EFFECTS}
+             if e['name'] not in SENSOR_EFFECTS and not e.get('not_determined')}
+    loose = sorted(f'{e["name"]}@{e["axis"]}' for e in report['effects']
+                   if e.get('not_determined'))
     sensor = {(e['name'], e['axis']): e['parameters'] for e in report['effects']
               if e['name'] in SENSOR_EFFECTS}
     has_sensor = bool(scene['scene'].get('velocity_from_encoder'))
@@ -315,7 +331,7 @@ def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0
         mode_ok = any(near(b) for sig in on_axis for b in sig.get('bands_hz', []))
         mode_first = any(near(sig['band_hz']) for sig in on_axis if 'band_hz' in sig)
     return {'kind': scene['kind'], 'hidden': sorted(f'{n}@{a}' for n, a in hidden),
-            'found': sorted(f'{n}@{a}' for n, a in found),
+            'found': sorted(f'{n}@{a}' for n, a in found), 'not_determined': loose,
             'hits': len(hits), 'n_hidden': len(hidden),
             'false_alarms': len([k for k in found if k not in hidden]),
             'n_found': len(found), 'param_errors': perr, 'mode_named': mode_named,

@@ -26,7 +26,7 @@ from pathlib import Path
 import textwrap
 from typing import TYPE_CHECKING
 
-from frf_ident.report.text import parameters_text
+from frf_ident.report.text import not_determined_text, parameters_text
 
 if TYPE_CHECKING:
     from frf_ident.core.diagnosis import Diagnosis
@@ -50,14 +50,21 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
     Returns
     -------
     list of str
-        One line per effect and per unexplained axis, the held-out error before and after,
+        One line per effect (its values with units and standard errors; below it two per
+        value the record does not determine: its range and the experiment that would
+        determine it) and per unexplained axis, the held-out error before and after,
         one per validation record, and where the report was written.
 
     """
     res = diag.result
-    lines = [f'{k + 1}. {e.name} on {e.axis}: '
-             f'{parameters_text(e.parameters, e.standard_error)}; score {e.score:.2f}'
-             for k, e in enumerate(res.effects)]
+    lines = []
+    for k, e in enumerate(res.effects):
+        lines.append(f'{k + 1}. {e.name} on {e.axis}: '
+                     f'{parameters_text(e.parameters, e.standard_error)}; score {e.score:.2f}'
+                     + (' (not counted as found)' if e.not_determined else ''))
+        for n in e.not_determined:
+            what, helps = not_determined_text(n)
+            lines += [f'   {what}', f'   {helps}']
     if not res.effects:
         lines.append('no effects: none of the candidates improves the held-out data')
     if res.band is not None:

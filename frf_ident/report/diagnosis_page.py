@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 from frf_ident.report import figures
 from frf_ident.report.effect_names import effect_phrase
 from frf_ident.report.page import figure_tag, page, table
-from frf_ident.report.text import parameters_text
+from frf_ident.report.text import not_determined_text, parameters_text
 
 if TYPE_CHECKING:
     from frf_ident.core.diagnosis import Diagnosis, DiagnosisResult
@@ -88,7 +88,9 @@ def _effects(res: DiagnosisResult) -> str:
         return '<p>none of the candidate effects improves the held-out data.</p>'
     return table(['#', 'effect', 'axis', 'score', 'value (\u00b1 standard error)', 'evidence'],
                  [[k + 1, effect_phrase(e.name), e.axis, round(e.score, 3),
-                   parameters_text(e.parameters, e.standard_error), e.evidence]
+                   parameters_text(e.parameters, e.standard_error) + ''.join(
+                       '; ' + ': '.join(not_determined_text(n)) for n in e.not_determined),
+                   e.evidence]
                   for k, e in enumerate(res.effects)])
 
 

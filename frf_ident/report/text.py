@@ -14,11 +14,14 @@
 """Report values written for a person: 4 significant digits, ``name value`` instead of dicts."""
 from __future__ import annotations
 
-from typing import Any, Mapping
+from typing import Any, Mapping, TYPE_CHECKING
 
 from frf_ident.core.model.units import with_unit
 
-__all__ = ['parameters_text', 'plain']
+if TYPE_CHECKING:
+    from frf_ident.core.diagnosis.records import NotDetermined
+
+__all__ = ['not_determined_text', 'parameters_text', 'plain']
 
 
 def plain(value: Any) -> str:
@@ -100,3 +103,27 @@ def _term(term: Mapping[str, Any], err: Mapping[str, Any] | None) -> str:
 def _number(x: Any) -> float | None:
     """Return a standard error as a float, None where there is none."""
     return float(x) if isinstance(x, (int, float)) and not isinstance(x, bool) else None
+
+
+def not_determined_text(entry: NotDetermined) -> tuple[str, str]:
+    """
+    Write a parameter the record does not determine, and the experiment that would.
+
+    Parameters
+    ----------
+    entry : NotDetermined
+        The effect's ``not_determined`` entry.
+
+    Returns
+    -------
+    (str, str)
+        E.g. ``viscous_friction not determined by this record: 45 to 1146 N m s/rad (standard
+        error 180, 54 % of the value)`` and ``a slower multisine or constant-velocity runs at
+        several speeds would determine it``.
+
+    """
+    key = entry.parameter.split()[-1]
+    lo, hi = entry.value_range
+    return (f'{entry.parameter} not determined by this record: {lo:.4g} to '
+            f'{with_unit(key, hi)} ({entry.reason})',
+            f'{entry.experiment} would determine it')

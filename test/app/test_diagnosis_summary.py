@@ -19,7 +19,8 @@ from frf_ident.core.diagnosis import Diagnosis, DiagnosisResult, Effect
 from frf_ident.core.diagnosis.band import AnalysisBand
 from frf_ident.core.diagnosis.crosscheck.checks import CrossChecks
 from frf_ident.core.diagnosis.crosscheck.validation import RecordCheck
-from frf_ident.core.diagnosis.records import RouteMetrics, Scores, Signature, Unexplained
+from frf_ident.core.diagnosis.records import (NotDetermined, RouteMetrics, Scores,
+                                              Signature, Unexplained)
 from frf_ident.core.model.schema import default_robot
 import numpy as np
 
@@ -103,3 +104,21 @@ def test_second_mode_and_its_band_before_and_after_are_said_in_words():
                for x in lines)
     assert 'not an improvement: the extension is worse in a resonance band' in lines
     assert not metrics.improved and metrics.to_dict()['improved'] is False
+
+
+def test_a_value_not_determined_is_said_with_its_range_unit_and_the_experiment():
+    """Issue 58: a viscous friction of 334 for a true 45 is not printed as a finding."""
+    loose = Effect('viscous_friction', 'joint_2', 0.0, {'viscous_friction': 333.7}, 'evidence',
+                   standard_error={'viscous_friction': 180.2},
+                   not_determined=[NotDetermined('viscous_friction', [0.0, 1146.0],
+                                                 'standard error 180, 54 % of the value',
+                                                 'a slower multisine or constant-velocity runs '
+                                                 'at several speeds')])
+    lines = diagnosis_summary(diagnosis(effects=[loose]), Path('D'))
+    assert lines[:3] == [
+        '1. viscous_friction on joint_2: viscous_friction 333.7 \u00b1 1.8e+02 N m s/rad; score '
+        '0.00 (not counted as found)',
+        '   viscous_friction not determined by this record: 0 to 1146 N m s/rad (standard '
+        'error 180, 54 % of the value)',
+        '   a slower multisine or constant-velocity runs at several speeds would determine it']
+    assert all(len(line) <= 160 for line in lines)

@@ -21,7 +21,7 @@ docs/CONTRACT.md §7 (frf_error_db, time_nrmse).
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
 from frf_ident.core.model.params import RobotParams
@@ -30,6 +30,7 @@ from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 import numpy as np
 
+from .records import NotDetermined
 from .thresholds import GAP_GUARD_S
 
 EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'backlash',
@@ -54,12 +55,17 @@ class Effect:
     standard_error: dict[str, Any] | None = None
     #: why a rule, not a simulation, kept it out (its report.json ``rejected`` reason)
     reason: str | None = None
+    #: the parameters the record does not determine (empty: every value is determined); an
+    #: effect with one does not count as found (its score is 0)
+    not_determined: list[NotDetermined] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         out = {'name': self.name, 'axis': self.axis, 'score': round(float(self.score), 3),
                'parameters': _plain(self.parameters), 'evidence': self.evidence}
         if self.standard_error is not None:
             out['standard_error'] = _plain(self.standard_error)
+        if self.not_determined:
+            out['not_determined'] = [n.to_dict() for n in self.not_determined]
         return out
 
 

@@ -18,15 +18,15 @@ Diagnose a record against a nominal model: the route, then the cross-checks.
 record's evidence calls for (identification experiments: :mod:`.experiments`, anything else:
 :mod:`.timeseries`), then the checks against what the route did not fit on
 (:mod:`.crosscheck`): the gravity of the robot's kinematics, position-dependent terms on the
-other records, standard errors across records, the least-squares baseline and both model
-files on every other record; last the sensor the record shows is named (:mod:`.sensor`; the
-experiments route already read its effects against it). Its :class:`Diagnosis` is what
-``frf-ident diagnose`` writes (report.json from :meth:`Diagnosis.report`, docs/CONTRACT.md
-§7) and what the console and the HTML report read.
+other records, standard errors across records (and the values they leave undetermined),
+the least-squares baseline and both model files on every other record; last the sensor the
+record shows is named (:mod:`.sensor`; the experiments route already read its effects
+against it). Its :class:`Diagnosis` is what ``frf-ident diagnose`` writes (report.json from
+:meth:`Diagnosis.report`, docs/CONTRACT.md §7) and what the console and the HTML report read.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 from typing import Any, Sequence
 
@@ -42,6 +42,7 @@ from .crosscheck.kinematic_gravity import GravityBasis, kinematic_gravity
 from .crosscheck.least_squares import against_least_squares
 from .crosscheck.spread import standard_errors_across
 from .crosscheck.validation import on_other_records
+from .determination import on_unexplained_axes, undetermined_effects
 from .experiments.pipeline import diagnose_experiments
 from .result import DiagnosisResult
 from .sensor import name_sensor
@@ -148,6 +149,7 @@ def diagnose(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
     res, checks.standard_errors_across = standard_errors_across(res, rec, others, robot,
                                                                 progress)
     res, checks.least_squares = against_least_squares(res, rec, others, robot, progress)
+    res = undetermined(res)
     checks.validation_records = on_other_records(res, rec, others, robot, ctrl, progress,
                                                  name=name, simulator=simulator)
     return Diagnosis(name_sensor(res, rec, robot), checks, rec, others)
@@ -162,6 +164,21 @@ def route(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *, jobs: int, fd
                                     simulator=simulator)
     progress('no identification experiments: time-series (inverse-dynamics) evidence')
     return diagnose_timeseries(rec, robot)
+
+
+def undetermined(res: DiagnosisResult) -> DiagnosisResult:
+    """
+    Label the values the record does not determine; rank again.
+
+    On either route, after the standard errors were checked against the spread between
+    records: a value whose standard error exceeds NOT_DETERMINED_SHARE of it
+    (:func:`.determination.undetermined_effects`), and the values on an axis left unexplained
+    (:func:`.determination.on_unexplained_axes`); an effect with such a value scores 0 and
+    goes after the effects found. The experiments route labelled its own already (the
+    joint refits that may settle a value are simulations, :mod:`.experiments.settle`).
+    """
+    effects = on_unexplained_axes(undetermined_effects(res.effects), res.unexplained)
+    return replace(res, effects=sorted(effects, key=lambda e: -e.score))
 
 
 def strict_json(x: Any) -> Any:

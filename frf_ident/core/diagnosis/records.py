@@ -18,7 +18,8 @@ Each record is what report.json (docs/CONTRACT.md §7) holds under one key, and 
 console summary and the HTML report read: the held-out scores of a model (:class:`Scores`),
 the route's metrics (:class:`RouteMetrics`), an axis left unexplained (:class:`Unexplained`,
 with its :class:`Signature`), a candidate not taken (:class:`Rejected`) and the integrator
-check (:class:`IntegratorCheck`). ``to_dict`` writes the report's entry, keys in the order
+check (:class:`IntegratorCheck`), and a parameter the record does not determine
+(:class:`NotDetermined`, on its effect). ``to_dict`` writes the report's entry, keys in the order
 report.json has always had them; absent optional fields are left out.
 """
 from __future__ import annotations
@@ -28,7 +29,8 @@ from typing import Any
 
 from .line_cause import LineCause
 
-__all__ = ['AxisScore', 'IntegratorCheck', 'Rejected', 'ResonanceBand', 'RouteMetrics', 'Scores',
+__all__ = ['AxisScore', 'IntegratorCheck', 'NotDetermined', 'Rejected', 'ResonanceBand',
+           'RouteMetrics', 'Scores',
            'Signature', 'Unexplained']
 
 
@@ -270,3 +272,24 @@ class IntegratorCheck:
                 + (' (doubling it again moves no axis beyond the noise).' if self.settled else
                    ' (doubling it again no longer lowers the misfit of every axis it moves: '
                    "the rest of the misfit is not the integrator's alone)."))
+
+
+@dataclass(frozen=True)
+class NotDetermined:
+    """A parameter of a named effect that the record does not determine (``not_determined``)."""
+
+    #: the model-file key ('viscous_friction'; 'torque_ripple amplitude' for a term's field)
+    parameter: str
+    #: [lo, hi] the values its refits took and its value +- 2 standard errors (model units;
+    #: report.json ``range``)
+    value_range: list[float]
+    #: why: its standard error is too large a share of its value, or its refits disagree
+    reason: str
+    #: the experiment that would determine it ('a slower multisine or ...')
+    experiment: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the report's ``not_determined`` entry."""
+        return {'parameter': self.parameter,
+                'range': [float(f'{x:.6g}') for x in self.value_range],
+                'reason': self.reason, 'experiment': self.experiment}

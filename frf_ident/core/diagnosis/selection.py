@@ -265,19 +265,7 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
     used = np.unique(ids)
     if used.size < 3:
         return {k: np.full(max(groups[k].shape[1] // 2, 1), math.nan) for k in chosen}
-    # H_bb = A A' with A = X_b (X'X)^-1/2: its nonzero eigenvalues are the squared singular
-    # values of A (at most one per column), so (I - H_bb)^-1/2 e_b costs O(n_b p^2)
-    lam, vec = np.linalg.eigh(bread)
-    half = (vec * np.sqrt(np.maximum(lam, 0.0))) @ vec.T
-    meat = np.zeros_like(bread)
-    for b in used:
-        xb, eb = X[ids == b], e[ids == b]
-        u, sv, _ = np.linalg.svd(xb @ half, full_matrices=False)
-        # an eigenvalue of I - H_bb near 0 is a block the fit rests on alone
-        gain = 1.0 / np.sqrt(np.maximum(1.0 - sv ** 2, 1e-12)) - 1.0
-        score = xb.T @ (eb + u @ (gain * (u.T @ eb)))
-        meat += np.outer(score, score)
-    cov = bread @ meat @ bread
+    cov = cluster_covariance(X, e, ids, bread)
     out = {}
     for k, ix in by_group(np.arange(coef.size), groups, chosen).items():
         if ix.size == 1:
@@ -288,6 +276,50 @@ def block_standard_errors(groups: dict[str, np.ndarray], chosen: list[str], y: n
             out[k] = np.array([np.std(np.hypot(*_normal_draws(coef[p], cov[np.ix_(p, p)])))
                                for p in ix.reshape(-1, 2)])
     return out
+
+
+def cluster_covariance(X: np.ndarray, e: np.ndarray, ids: np.ndarray, bread: np.ndarray
+                       ) -> np.ndarray:
+    """
+    Return the bias-reduced cluster-robust (CR2) covariance of a least-squares fit.
+
+    bread (sum_b X_b' A_b e_b e_b' A_b X_b) bread over the clusters b of ``ids``, A_b =
+    (I - H_bb)^-1/2 with H_bb the cluster's part of the hat matrix (Bell & McCaffrey 2002):
+    unbiased for independent noise however few the clusters.
+
+    Parameters
+    ----------
+    X : ndarray, shape (N, p)
+        The regressors (columns) of the fitted rows.
+    e : ndarray, shape (N,)
+        The residuals of the fit.
+    ids : ndarray, shape (N,)
+        The cluster (block) of each row.
+    bread : ndarray, shape (p, p)
+        (X'X)^-1, or its pseudo-inverse.
+
+    Returns
+    -------
+    ndarray, shape (p, p)
+        The covariance of the coefficients.
+
+    """
+    # H_bb = A A' with A = X_b (X'X)^-1/2: its nonzero eigenvalues are the squared singular
+    # values of A (at most one per column), so (I - H_bb)^-1/2 e_b costs O(n_b p^2)
+    lam, vec = np.linalg.eigh(bread)
+    half = (vec * np.sqrt(np.maximum(lam, 0.0))) @ vec.T
+    meat = np.zeros_like(bread)
+    # the rows of each cluster in their order, one sort instead of a mask per cluster
+    order = np.argsort(ids, kind='stable')
+    starts = np.flatnonzero(np.r_[True, np.diff(ids[order]) != 0])
+    for rows in np.split(order, starts[1:]):
+        xb, eb = X[rows], e[rows]
+        u, sv, _ = np.linalg.svd(xb @ half, full_matrices=False)
+        # an eigenvalue of I - H_bb near 0 is a block the fit rests on alone
+        gain = 1.0 / np.sqrt(np.maximum(1.0 - sv ** 2, 1e-12)) - 1.0
+        score = xb.T @ (eb + u @ (gain * (u.T @ eb)))
+        meat += np.outer(score, score)
+    return bread @ meat @ bread
 
 
 def _normal_draws(mean: np.ndarray, cov: np.ndarray, n: int = 4000) -> np.ndarray:

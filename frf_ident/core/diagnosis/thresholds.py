@@ -358,17 +358,43 @@ LS_BASELINE_MARGIN = 0.10
 #: [deg] a validation record that leaves the fitted configuration range of an axis by more
 #: than this is warned about (below it: the same range up to encoder and filter detail)
 RANGE_TOLERANCE_DEG = 0.5
-#: leave-range-out (extrapolation.leave_range_out): each end of a position-dependent term's
-#: fitted range held out is this share of the range (by angle). Calibrated on KUKA A, axis 3,
-#: whose gravity sin(q2 + q3 + phi) the authors' rigid-body gravity confirms (r = 0.977):
-#: with a tenth held out at each end it passes (residual energy there 393 with, 6.8e3
-#: without), with a fifth it fails (1.9e4 with, 1.1e4 without), the sinusoid's phase and the
-#: axis' constant being nearly one parameter over 40 deg (test/app/test_diagnose_real.py)
+#: leave-range-out (extrapolation.leave_range_out): this share of a position term's fitted
+#: range held out at each end. On KUKA A axis 3 (gravity sin(q2 + q3 + phi), r = 0.977 with the
+#: authors' rigid-body gravity) a tenth passes (residual energy 393 with, 6.8e3 without), a fifth
+#: fails (1.9e4 with, 1.1e4 without): phase and constant are nearly one parameter over 40 deg
 RANGE_OUT_SHARE = 0.1
 
 # --- standard errors across records (spread.py) -----------------------------------------------
 
-#: the standard errors are widened when the differences between records, in units of their
-#: combined standard errors, are this unlikely under chi-square (one false widening in 20
-#: checks of errors that hold)
+#: the standard errors are widened when the records' differences, in their combined standard
+#: errors, are this unlikely under chi-square (one false widening in 20 checks)
 SPREAD_ALPHA = 0.05
+
+# --- uncertainty of the diagnosed values (experiments/standard_errors.py, determination.py) ----
+
+#: a parameter whose standard error exceeds this share of its value (after the joint refits)
+#: is not determined: within 2 errors the truth then lies between 1/3 and 5/3 of the value (a
+#: factor of 3). Held by the sweep ``python -m benchmarks diagnosis_uncertainty``
+NOT_DETERMINED_SHARE = 1.0 / 3.0
+#: the refits of a parameter on the record's multisine alone and on its chirp alone disagree
+#: beyond their errors where they differ by more than this many combined standard errors
+#: (MIN_Z's 3: about 1 in 370 pairs by chance if the errors were Gaussian)
+REFITS_AGREE_Z = 3.0
+#: a parameter trades against another of its axis when their estimates correlate by at
+#: least this much (|r|): the joint refit of an unsettled parameter takes those along
+TRADE_CORRELATION = 0.5
+#: joint refits (Gauss-Newton steps on the parameter and its partners) before an unsettled
+#: parameter is reported not determined
+SETTLE_ROUNDS = 2
+#: a scalar parameter further than this many standard errors from its axis' linearised optimum
+#: is taken there (a simplex's 1 % tolerance is several errors of a sharp parameter; half an
+#: error adds at most 1/8 to the variance). Set on the Monte Carlo of test/core/diagnosis/
+#: test_experiment_standard_errors.py (at 2 the values' spread was 1.2x the standard error)
+OFF_OPTIMUM_Z = 0.5
+#: forward-difference step of the simulated residual's Jacobian: this share of a scale, or
+#: this many radians of phase (a phase; a spatial frequency by the phase it drifts over travel)
+SE_STEP = 0.02
+#: an effect is dropped before the held-out check when each of its parameters lies within this
+#: many standard errors of the nominal model's value: the record cannot tell it from the
+#: nominal model
+NOMINAL_Z = 2.0

@@ -249,12 +249,17 @@ def rejected_entry(c: Effect, gain: HeldOutGain | None = None) -> Rejected:
     """
     Return the report.json ``rejected`` entry of a candidate that was not taken.
 
-    One the simulator cannot hold carries the rule's ``reason`` (``c.reason``); one the
-    held-out check dropped for a gain within noise carries that as its ``reason``.
+    One the simulator cannot hold carries the rule's ``reason`` (``c.reason``); one whose
+    values the record does not determine says which; one the held-out check dropped for a
+    gain within noise carries that as its ``reason``.
     """
     if c.reason is not None:
         return Rejected(c.name, c.axis, c.to_dict()['parameters'] or None, reason=c.reason)
-    reason = (f'{gain.describe()}: within what the noise alone gives, dropped'
-              if gain is not None and not gain.beyond_noise else None)
+    if c.not_determined:
+        reason = 'not determined by this record: ' + '; '.join(
+            f'{n.parameter} {n.reason}' for n in c.not_determined)
+    else:
+        reason = (f'{gain.describe()}: within what the noise alone gives, dropped'
+                  if gain is not None and not gain.beyond_noise else None)
     return Rejected(c.name, c.axis, c.to_dict()['parameters'], reason=reason,
                     misfit_share_removed=round(float(c.gain), 4))

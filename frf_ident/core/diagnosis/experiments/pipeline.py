@@ -45,6 +45,7 @@ from .refit import FRICTION, refit_friction, refit_jointly
 from .rigid_axes import rigid_axes, rigid_in_band
 from .search import named, Search
 from .second_mode import refine_modes, take_second_mode
+from .settle import final_errors, settle, within_nominal
 from .structure import read_structure
 from .unheld import not_held, spring_shapes_skipped
 from ..common import apply_effect, Effect, Simulator
@@ -70,8 +71,10 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     (Coulomb and viscous friction, torque ripple, gravity) from one joint regression per axis;
     then, against the simulation of that model, the FRF-shape effects (time delay, parameter
     mismatch, stiffening, backlash), so friction does not pose as stiffness. A second pass,
-    joint refits and a held-out check follow; kept effects whose removal does not worsen the
-    held-out misfit are dropped.
+    joint refits follow; then every value's standard error (a parameter that has not settled
+    is refitted jointly with those it trades against, else labelled not determined) and the
+    held-out check: kept effects within their errors of the nominal model, or whose removal
+    does not worsen the held-out misfit, are dropped.
 
     Parameters
     ----------
@@ -114,8 +117,11 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         joint_refits(s)
         late_ripples(s)
         refine_modes(s)
+        settled = settle(s)
+        within_nominal(s, settled)
         val_ext, sim_ext = held_out_check(s)
         val_ext, sim_ext, val_base = structure_missing(s, val_ext, sim_ext)
+        final_errors(s, settled)
         return finish(s, val_ext, sim_ext, val_base)
     finally:
         s.ev.close()
