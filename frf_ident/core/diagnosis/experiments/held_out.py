@@ -197,12 +197,13 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
     ev, robot, kept = s.ev, s.robot, s.kept
     step = discretisation_check(ev, s.ext, val_ext)
     if step.written_substeps != step.substeps:
-        log.info('simulation.substeps = %d is too coarse for this record (at twice as many the '
-                 'held-out misfit moves from %s noise floors): the extended model is written '
-                 'with %d', step.substeps, ', '.join(
-                     f'{a} {x:.4g} to {y:.4g}' for a, x, y in zip(
+        # two lines: the axes' numbers made a 200-character line
+        log.info('simulation.substeps = %d is too coarse for this record: the extended model '
+                 'is written with %d\n    held-out misfit at twice as many substeps [noise '
+                 'floors]: %s', step.substeps, step.written_substeps, ', '.join(
+                     f'{a} {x:.4g} -> {y:.4g}' for a, x, y in zip(
                          step.axes, step.held_out_misfit, step.held_out_misfit_double_substeps)
-                     if a in step.too_coarse), step.written_substeps)
+                     if a in step.too_coarse))
         s.ext = replace(s.ext, substeps=step.written_substeps)
         sim_ext = ev.simulate(s.ext)
         val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
