@@ -36,7 +36,8 @@ from frf_ident.core.model.schema import check_sections, controller_filters, cont
 import numba
 import numpy as np
 
-__all__ = ['controller_from_dict', 'filter_measurement', 'PIVelocity', 'pi_step', 'sos_step']
+__all__ = ['closed_loop_step', 'controller_from_dict', 'filter_measurement', 'PIVelocity',
+           'pi_step', 'sos_step']
 
 
 @numba.njit(cache=True, fastmath=True, inline='always')
@@ -139,6 +140,56 @@ def pi_step(e, integ, kp, ki, ff, k, ulim, dt, u):
             integ[i] -= v + ulim[i]
             v = -ulim[i]
         u[i] = v
+
+
+@numba.njit(cache=True, fastmath=True, inline='always')
+def closed_loop_step(r, k, q, v, has_plan, kpos, qplan, sos, zf, integ, kp, ki, ff, ulim, dt,
+                     e, u, out_r):
+    """
+    Compute one sample of the velocity loop every simulated plant closes (ours and MuJoCo's).
+
+    The reference r[k] gets the position plan's feedback, r_k + kpos (qplan_k - q_k), where
+    ``has_plan`` (as the excitation node does for moves) and is written to out_r[k]; the
+    measured velocity ``v`` passes the controller's second-order sections (``sos`` with no
+    sections: no filter); then :func:`pi_step` gives the torque command ``u``.
+
+    Parameters
+    ----------
+    r, qplan : ndarray, shape (K, n)
+        Velocity reference [rad/s] and planned position [rad] per sample.
+    k : int
+        The sample.
+    q, v : ndarray, shape (n,)
+        Measured position [rad] and velocity [rad/s] at the sample.
+    has_plan : bool
+        Whether ``qplan`` feeds back.
+    kpos : ndarray, shape (n,)
+        Position feedback gain [1/s].
+    sos, zf : ndarray
+        Second-order sections (n, n_sections, 6) and their state; updated in place.
+    integ, kp, ki, ff, ulim, dt, u
+        As :func:`pi_step`.
+    e : ndarray, shape (n,)
+        Scratch: the velocity error.
+    out_r : ndarray, shape (K, n)
+        The reference used, row k written.
+
+    Returns
+    -------
+    None
+        The results are ``u``, ``out_r[k]``, ``integ`` and ``zf``.
+
+    """
+    for i in range(q.shape[0]):
+        ref = r[k, i]
+        if has_plan:
+            ref += kpos[i] * (qplan[k, i] - q[i])
+        out_r[k, i] = ref
+        if sos.shape[1] > 0:
+            e[i] = ref - sos_step(v[i], sos, zf, i)
+        else:
+            e[i] = ref - v[i]
+    pi_step(e, integ, kp, ki, ff, k, ulim, dt, u)
 
 
 @dataclass

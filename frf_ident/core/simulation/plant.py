@@ -54,7 +54,7 @@ import math
 from typing import Any
 
 from frf_ident.core.model.params import AxisParams, RobotParams
-from frf_ident.core.simulation.controller import pi_step, sos_step
+from frf_ident.core.simulation.controller import closed_loop_step
 import numba
 import numpy as np
 from scipy import linalg
@@ -437,11 +437,11 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
     """
     Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
 
-    ``sos`` (n, n_sections, 6) and its state ``zf`` filter the measured velocity in front of
-    the PI (:func:`~frf_ident.core.simulation.controller.sos_step`); no sections, no filter.
-    With a position plan (``has_plan``) the velocity reference gets position feedback,
-    r_k <- r_k + kpos (qplan_k - q_k), as the excitation node does for moves; out_r holds the
-    reference actually used.
+    The closed loop's sample is :func:`~frf_ident.core.simulation.controller.closed_loop_step`
+    (shared with the MuJoCo plant): ``sos`` (n, n_sections, 6) and its state ``zf`` filter the
+    measured velocity in front of the PI (no sections, no filter); with a position plan
+    (``has_plan``) the velocity reference gets position feedback, r_k <- r_k + kpos (qplan_k -
+    q_k), as the excitation node does for moves; out_r holds the reference actually used.
 
     ``sc`` (_NSCRATCH, nx) and ``work`` (4, n) are scratch arrays of the caller's (nx the
     state's length, 4 n plus two per second mode).
@@ -453,22 +453,13 @@ def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, cl
     n = r.shape[1]
     N = r.shape[0]
     qm, vm, e, u = work[0], work[1], work[2], work[3]
-    filtered = sos.shape[1] > 0
     for k in range(N):
         _measure(x, qprev, enc, from_encoder, dt, vnoise, k, qm, vm)
         for i in range(n):
             qprev[i] = qm[i]
         if closed:
-            for i in range(n):
-                ref = r[k, i]
-                if has_plan:
-                    ref += kpos[i] * (qplan[k, i] - qm[i])
-                out_r[k, i] = ref
-                if filtered:
-                    e[i] = ref - sos_step(vm[i], sos, zf, i)
-                else:
-                    e[i] = ref - vm[i]
-            pi_step(e, integ, kp, ki, u_ext, k, ulim_ctrl, dt, u)
+            closed_loop_step(r, k, qm, vm, has_plan, kpos, qplan, sos, zf, integ, kp, ki,
+                             u_ext, ulim_ctrl, dt, e, u, out_r)
         else:
             for i in range(n):
                 u[i] = min(max(u_ext[k, i], -ulim_ctrl[i]), ulim_ctrl[i])

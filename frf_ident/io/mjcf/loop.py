@@ -17,9 +17,10 @@ The closed loop around MuJoCo compiled: numba calls MuJoCo's C ``mj_step`` itsel
 A Python loop around ``mujoco.mj_step`` with the velocity PI in Python runs the iiwa 14 (3 axes,
 1 kHz) at about 20x real time here; the MuJoCo step alone is a few microseconds. This kernel is
 the sample loop of :func:`frf_ident.core.simulation.plant._simulate` for MuJoCo: measure the axes
-(position, velocity plus noise), the project's compiled PI step
-(:func:`~frf_ident.core.simulation.controller.pi_step`, the same function
-:class:`~frf_ident.core.simulation.controller.PIVelocity` runs), the torque limit, ``ctrl``, then
+(position, velocity plus noise), the project's compiled loop step
+(:func:`~frf_ident.core.simulation.controller.closed_loop_step`: plan feedback, filters and
+the PI step :class:`~frf_ident.core.simulation.controller.PIVelocity` runs, the same as our
+plant's), the torque limit, ``ctrl``, then
 ``substeps`` MuJoCo steps, all without Python per sample: MuJoCo's arrays are numpy views into
 its mjData, and ``mj_step`` is called as a numba first-class function on the model's and
 data's addresses (``MjModel._address``), so the kernel is cached on disk. MuJoCo's own
@@ -35,7 +36,7 @@ import ctypes
 import glob
 import os
 
-from frf_ident.core.simulation.controller import pi_step, sos_step
+from frf_ident.core.simulation.controller import closed_loop_step
 import mujoco
 import numba
 from numba.experimental.function_type import WrapperAddressProtocol
@@ -96,16 +97,8 @@ def _body(maddr, daddr, qpos, qvel, ctrl, qadr, vadr, act, gear, substeps, r, u_
             out_q[k, i] = x
             out_v[k, i] = qvel[vadr[i]] + vn[k, i]
         if closed:
-            for i in range(n):
-                ref = r[k, i]
-                if has_plan:
-                    ref += kpos[i] * (qplan[k, i] - q[i])
-                out_r[k, i] = ref
-                if sos.shape[1] > 0:      # the controller's filters on the measured velocity
-                    e[i] = ref - sos_step(out_v[k, i], sos, zf, i)
-                else:
-                    e[i] = ref - out_v[k, i]
-            pi_step(e, integ, kp, ki, u_ext, k, ulim_ctrl, dt, u)
+            closed_loop_step(r, k, q, out_v[k], has_plan, kpos, qplan, sos, zf, integ, kp, ki,
+                             u_ext, ulim_ctrl, dt, e, u, out_r)
         else:
             for i in range(n):
                 u[i] = u_ext[k, i]
