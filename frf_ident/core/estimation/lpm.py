@@ -46,7 +46,7 @@ from frf_ident.errors import EstimationError
 import numba
 import numpy as np
 
-__all__ = ['DEFAULT_ORDER', 'LpmLines', 'RobustLpmLevels', 'RobustLpmResult',
+__all__ = ['DEFAULT_ORDER', 'LpmLines', 'RobustLpmResult',
            'default_half_width', 'lpm_lines', 'robust_lpm', 'robust_lpm_periods']
 
 #: polynomial degree R of G and T in each window (P&S ch. 7 recommend R = 2: the bias of a
