@@ -51,8 +51,8 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
     t_range : tuple of float or None
         (start, end) in s of the bag clock: analyse only this time range; None: all of it.
     options : ExcitationOptions or None
-        :class:`~frf_ident.core.estimation.detected.ExcitationOptions` replacing detection
-        in bags without experiment descriptors; None: detect the excitation.
+        :class:`~frf_ident.core.estimation.excitation_options.ExcitationOptions` replacing
+        detection in bags without experiment descriptors; None: detect the excitation.
     stream : bool or None
         True: read window by window; False or None: only when the bag would exceed the
         memory budget.
@@ -136,7 +136,7 @@ def estimate_bag(bag: Path, out: Path, *, joints=None, t_range=None, primary=Non
         (start, end) in s: analyse only this time range.
     primary
         Which estimate goes to frf.json (default: multisine, else chirp).
-    options : :class:`~frf_ident.core.estimation.detected.ExcitationOptions` replacing
+    options : :class:`~frf_ident.core.estimation.excitation_options.ExcitationOptions` replacing
         detection in bags without experiment descriptors.
     stream
         Read window by window; None: only when the bag exceeds ``max_memory_mb``.

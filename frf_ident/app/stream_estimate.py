@@ -150,7 +150,7 @@ def stream_estimate(bag: str | Path, *, joints: list[str] | None = None,
     Each window is checked as
     :func:`~frf_ident.core.estimation.described.estimate_recording` checks a whole recording
     (band, periods, clipping); ``options``
-    (:class:`~frf_ident.core.estimation.detected.ExcitationOptions`) replace detection in
+    (:class:`~frf_ident.core.estimation.excitation_options.ExcitationOptions`) replace detection in
     every block.
     Only the last chirp iteration is read (the one estimated).
 

@@ -49,8 +49,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The subcommand's parser; the arguments are added to it.
 
     """
-    from frf_ident.core.estimation.detected import (DEFAULT_WINDOW_S, DEFAULT_WINDOW_SAMPLES,
-                                                    LPM_METHODS)
+    from frf_ident.core.estimation.detected import DEFAULT_WINDOW_S, DEFAULT_WINDOW_SAMPLES
+    from frf_ident.core.estimation.excitation_options import LPM_METHODS
     p.add_argument('bag', nargs='+',
                    help='a bag; or several, a folder of bags, a glob or @LIST.txt (one per '
                         'line): a campaign, one folder per bag under --out plus summary.csv, '
@@ -118,11 +118,11 @@ def excitation_options(args: argparse.Namespace):
     Returns
     -------
     ExcitationOptions
-        :class:`~frf_ident.core.estimation.detected.ExcitationOptions` (None where an
+        :class:`~frf_ident.core.estimation.excitation_options.ExcitationOptions` (None where an
         option is not given).
 
     """
-    from frf_ident.core.estimation.detected import ExcitationOptions
+    from frf_ident.core.estimation.excitation_options import ExcitationOptions
 
     def tup(v):
         return tuple(v) if v is not None else None

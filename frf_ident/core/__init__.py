@@ -50,7 +50,7 @@ _API = {
                                           'periodic_spectra'],
     'frf_ident.core.excitation.chirp_dft': ['chirp_excerpt_dft'],
     'frf_ident.core.estimation.described': ['chirp_frf', 'estimate_recording', 'multisine_frf'],
-    'frf_ident.core.estimation.detected': ['ExcitationOptions'],
+    'frf_ident.core.estimation.excitation_options': ['ExcitationOptions'],
     'frf_ident.core.recording': ['Recording', 'Segment'],
     'frf_ident.core.diagnosis.pipeline': ['diagnose', 'Diagnosis'],
     'frf_ident.core.diagnosis.experiments.pipeline': ['diagnose_experiments'],

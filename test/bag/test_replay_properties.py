@@ -204,8 +204,9 @@ def test_fractional_period_is_refused_not_estimated_by_the_lpm(method):
     naming what was found; ``--method lpm`` is refused too (the LPM on the multisine's line
     spectrum was up to 18 dB off at lines between its lines, outside its own variance).
     """
-    from frf_ident.core.estimation.detected import (estimate_in_blocks, ExcitationOptions,
-                                                    RecordingBlocks, UnusableExcitationError)
+    from frf_ident.core.estimation.detected import estimate_in_blocks, RecordingBlocks
+    from frf_ident.core.estimation.detected_segments import UnusableExcitationError
+    from frf_ident.core.estimation.excitation_options import ExcitationOptions
     if method is None:
         got = check_one(Imperfections(head_cut=1.3, tail_cut=1.7), 'fractional', 0, False, 0)
         assert got.startswith('refused: ') and 'multisine' in got, got

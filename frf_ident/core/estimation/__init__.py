@@ -18,7 +18,11 @@ Estimation: FRFs from recorded data and the checks that the data support them.
 - :mod:`frf_ident.core.estimation.spectra` — eq. 7, the BLA of eq. 14, Sec. 5.1 chirp spectra
 - :mod:`frf_ident.core.estimation.described` — estimates from a Recording with experiment
   descriptors
-- :mod:`frf_ident.core.estimation.detected` — estimates from data without descriptors
+- :mod:`frf_ident.core.estimation.detected` — estimates from data without descriptors, block
+  by block: :mod:`~frf_ident.core.estimation.excitation_options` (what is given),
+  :mod:`~frf_ident.core.estimation.detected_segments` (detection and its checks),
+  :mod:`~frf_ident.core.estimation.detected_spectra` (periods, gaps filled; chirp lines),
+  :mod:`~frf_ident.core.estimation.detected_estimator` (the column estimates)
 - :mod:`frf_ident.core.estimation.checks` — refusals: clipping, band, periods, coverage
 - :mod:`frf_ident.core.estimation.lpm`, :mod:`~frf_ident.core.estimation.lpm_frames` — the
   Local Polynomial Method (lines; frames of time records)

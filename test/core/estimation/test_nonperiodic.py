@@ -71,7 +71,7 @@ def test_a_reference_that_excites_no_line_is_refused_and_the_direct_estimate_off
     indirect route says why in one line, and ``method='lpm-direct'`` estimates y on u (here
     open loop, so the direct estimate is the truth's).
     """
-    from frf_ident.core.estimation.detected import ExcitationOptions
+    from frf_ident.core.estimation.excitation_options import ExcitationOptions
     from frf_ident.errors import EstimationError
     import pytest
     rec = _recording()

@@ -19,8 +19,8 @@ a 6 Hz mode (scipy's lfilter: analytic FRF). Before, detection called it an expo
 '16.6-4.27 Hz' and failed in the chirp design ('f_high=4.27 must be greater than
 f_low=16.63'), and the given `--chirp 2 15 --chirp-time 0 260` wrote an FRF 13 dB off.
 """
-from frf_ident.core.estimation.detected import (estimate_in_blocks, ExcitationOptions,
-                                                RecordingBlocks)
+from frf_ident.core.estimation.detected import estimate_in_blocks, RecordingBlocks
+from frf_ident.core.estimation.excitation_options import ExcitationOptions
 from frf_ident.core.excitation.detect import detect_chirp
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
