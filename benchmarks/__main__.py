@@ -198,7 +198,8 @@ def bench_experiment_time() -> list[tuple[str, str, str, str]]:
 
     Nominal linear 3-axis model, 40 dB SNR output noise; compared with the paper's totals.
     """
-    from frf_ident.core.estimation.described import chirp_frf, multisine_frf
+    from frf_ident.core.estimation.chirp_estimate import chirp_frf
+    from frf_ident.core.estimation.described import multisine_frf
     from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
     from frf_ident.core.model.schema import default_model_dict, robot_from_dict
     from frf_ident.core.simulation.analytic import robot_frf_sampled

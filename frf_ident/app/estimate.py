@@ -88,8 +88,9 @@ def read_estimates(bag: Path, joints, t_range, options, stream: bool | None, max
             'windows': st.windows, 'peak_rows': st.peak_rows, 'messages': st.messages,
             'budget_bytes': budget}
     from frf_ident.bag import read_recording
-    from frf_ident.core.estimation.described import (check_joints, estimate_recording,
-                                                     experiment_joints, joint_channels)
+    from frf_ident.core.estimation.channels import (check_joints, experiment_joints,
+                                                    joint_channels)
+    from frf_ident.core.estimation.described import estimate_recording
     from frf_ident.errors import FrfIdentInputError as InputError
     if joints is not None:
         check_joints(joints)

@@ -42,9 +42,9 @@ from frf_ident.bag import timing as tm
 from frf_ident.bag import windows as bs
 from frf_ident.bag.coverage import cut_warning, split_covered
 from frf_ident.bag.info import bag_info
-from frf_ident.core.estimation.described import (check_joints, check_recording,
-                                                 complete_chirp_iterations, cut_short_error,
-                                                 experiment_joints, joint_channels,
+from frf_ident.core.estimation.channels import check_joints, experiment_joints, joint_channels
+from frf_ident.core.estimation.chirp_estimate import complete_chirp_iterations
+from frf_ident.core.estimation.described import (check_recording, cut_short_error,
                                                  SegmentEstimator)
 from frf_ident.core.estimation.detected import estimate_in_blocks, window_length
 from frf_ident.core.estimation.frd import FrequencyResponse

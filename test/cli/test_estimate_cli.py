@@ -446,7 +446,7 @@ def test_a_chirp_iteration_cut_short_leaves_the_last_complete_one(
     with 'n_ex=1 experiments cannot identify n_u=3 inputs'.
     """
     from frf_ident.bag import read_recording
-    from frf_ident.core.estimation.described import chirp_frf
+    from frf_ident.core.estimation.chirp_estimate import chirp_frf
     rec = ms_and_chirp_rec
     chirps = [s for s in rec.segments if s.info.get('design') == 'chirp']
     last_of = {it: max((s for s in chirps if s.info['iteration'] == it),

@@ -31,7 +31,7 @@ import sys
 
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
-from frf_ident.core.estimation import described, detected_spectra
+from frf_ident.core.estimation import detected_spectra, multisine_estimate
 from frf_ident.core.estimation.missing_periodic import fill_periods
 from frf_ident.core.excitation.procedures import MultisineConfig
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict
@@ -77,7 +77,7 @@ def _drop_path(monkeypatch):
     """Switch to the estimator before issue 55: every period a gap touches dropped."""
     monkeypatch.setattr(detected_spectra, 'fill_steady_periods', lambda x, miss, first=None:
                         fill_periods(x, miss, average=np.zeros(len(miss), bool)))
-    monkeypatch.setattr(described, '_filled_series', lambda *a: None)
+    monkeypatch.setattr(multisine_estimate, '_filled_series', lambda *a: None)
 
 
 @pytest.fixture(scope='module')

@@ -17,7 +17,10 @@ Estimation: FRFs from recorded data and the checks that the data support them.
 - :mod:`frf_ident.core.estimation.frd` — ``FrequencyResponse``, the result object
 - :mod:`frf_ident.core.estimation.spectra` — eq. 7, the BLA of eq. 14, Sec. 5.1 chirp spectra
 - :mod:`frf_ident.core.estimation.described` — estimates from a Recording with experiment
-  descriptors
+  descriptors, from :mod:`~frf_ident.core.estimation.multisine_estimate` (the BLA, its
+  :mod:`~frf_ident.core.estimation.compensation`) and
+  :mod:`~frf_ident.core.estimation.chirp_estimate`; their
+  :mod:`~frf_ident.core.estimation.channels` and :mod:`~frf_ident.core.estimation.segment_counts`
 - :mod:`frf_ident.core.estimation.detected` — estimates from data without descriptors, block
   by block: :mod:`~frf_ident.core.estimation.excitation_options` (what is given),
   :mod:`~frf_ident.core.estimation.detected_segments` (detection and its checks),

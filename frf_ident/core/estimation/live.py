@@ -17,9 +17,10 @@ The running multisine BLA while a run goes on: one estimate per complete MIMO pe
 :class:`LiveMultisine` takes the samples of a streamed multisine procedure as they come
 (joint states, the excitation of each sample, the segment descriptors) and, after every whole
 period, the estimate of the periods so far. It feeds
-:class:`~frf_ident.core.estimation.described.MultisineSpectra` with each segment's series up to
-its last whole period, exactly as the offline estimator feeds it a recorded segment, so the
-estimate after the last period is the offline estimate of the recording (same arithmetic).
+:class:`~frf_ident.core.estimation.multisine_estimate.MultisineSpectra` with each segment's
+series up to its last whole period, exactly as the offline estimator feeds it a recorded
+segment, so the estimate after the last period is the offline estimate of the recording (same
+arithmetic).
 
 A MIMO realisation is one experiment per axis (eq. 9); its period q exists once every
 experiment has run period q, so the estimate changes only in a realisation's last experiment
@@ -32,8 +33,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from frf_ident.core.estimation.described import MultisineSpectra
 from frf_ident.core.estimation.frd import FrequencyResponse
+from frf_ident.core.estimation.multisine_estimate import MultisineSpectra
 import numpy as np
 
 __all__ = ['LiveEstimate', 'LiveMultisine', 'multiple_coherence', 'NONLINEAR_RATIO',

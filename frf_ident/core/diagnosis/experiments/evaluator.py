@@ -23,7 +23,8 @@ from __future__ import annotations
 from typing import Any, Sequence
 import weakref
 
-from frf_ident.core.estimation.described import chirp_frf, multisine_frf
+from frf_ident.core.estimation.chirp_estimate import chirp_frf
+from frf_ident.core.estimation.described import multisine_frf
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
