@@ -33,7 +33,7 @@ import sys
 import tempfile
 import time
 
-from frf_ident.app.excitation import SessionSettings
+from frf_ident.app.excitation_settings import SessionSettings
 from frf_ident.app.graph import Graph
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 

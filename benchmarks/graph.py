@@ -120,7 +120,7 @@ def rows() -> list[tuple[str, str, str, str]]:
             rate = r[f'graph{key}_steps_per_s']
             out.append((f'{be} {label}', f'{rate:,.0f} samples/s', base,
                         f'{100 * rate / pp:.0f} %'))
-    from frf_ident.app.excitation import SessionSettings
+    from frf_ident.app.excitation_settings import SessionSettings
     limit = SessionSettings().stale_samples          # samples at the graph's 1 kHz: ms
     gaps = free_running_gaps()
     out.append(('free-running: longest joint-state gap per run', ' / '.join(

@@ -18,6 +18,8 @@ Application functions used by both the CLI and the nodes: one module per job.
   per pose, the model linearised at each from the robot's URDF)
 - :mod:`frf_ident.app.campaign` — one application function mapped over many inputs (serial,
   worker processes or Dask), one summary table
+  (its parts: :mod:`~frf_ident.app.campaign_inputs`, :mod:`~frf_ident.app.campaign_executors`,
+  :mod:`~frf_ident.app.campaign_summary`)
 - :mod:`frf_ident.app.frf_map` — resonance and antiresonance per axis against the pose
 - :mod:`frf_ident.app.estimate` — estimate FRFs from a bag (in memory, or streamed by
   :mod:`frf_ident.app.stream_estimate` when it would not fit)

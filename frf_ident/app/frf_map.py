@@ -26,7 +26,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from frf_ident.app.campaign import CampaignResult
+from frf_ident.app.campaign_summary import CampaignResult
 
 __all__ = ['MAP_FILES', 'write_frf_map']
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
-from frf_ident.app.campaign import campaign_dirs, expand_inputs
+from frf_ident.app.campaign_inputs import campaign_dirs, expand_inputs
 from frf_ident.app.fit import is_fit_input, source_pose
 from frf_ident.app.frf_source import axis_channels, read_source
 from frf_ident.core.estimation.frd import FrequencyResponse
@@ -108,7 +108,7 @@ def read_campaign(specs: Sequence[str | Path], nominal: str | None = None) -> Ca
     ----------
     specs : sequence of str or Path
         Estimate output folders (frf.json) or FRF files, folders of them, globs,
-        ``@list.txt`` (:func:`frf_ident.app.campaign.expand_inputs`).
+        ``@list.txt`` (:func:`frf_ident.app.campaign_inputs.expand_inputs`).
     nominal : str, optional
         Name (folder or file name) of the nominal pose; default the pose whose own-axis FRFs
         lie nearest to all others (least largest median relative distance), the first of

@@ -14,10 +14,11 @@
 """rosbag2 MCAP input/output of frf_ident (see docs/bag_format.md)."""
 from .info import bag_info
 from .reader import read_experiment, read_recording
+from .recorder import BagRecorder
 from .repair import reindex
 from .timing import TimingReport, TopicTiming
 from .topics import BagTopics
-from .writer import BagRecorder, write_recording
+from .writer import write_recording
 
 __all__ = ['BagRecorder', 'BagTopics', 'TimingReport', 'TopicTiming', 'bag_info',
            'read_experiment', 'read_recording', 'reindex', 'write_recording']

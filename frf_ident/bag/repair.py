@@ -78,7 +78,7 @@ def reindex(path: str | Path, out: str | Path) -> Path:
         ``out``.
 
     """
-    from .writer import BagRecorder
+    from .recorder import BagRecorder
 
     bag = locate(path)
     rec = BagRecorder(chunk_bytes=1 << 20, flush_period_s=1e9)

@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
     """
     from functools import partial
 
-    from frf_ident.app.campaign import is_campaign
+    from frf_ident.app.campaign_inputs import is_campaign
     from frf_ident.app.console import say
     from frf_ident.app.diagnose import diagnose, diagnose_columns, OUTPUT_FILES
     from frf_ident.app.diagnosis_summary import diagnosis_summary

@@ -154,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
     """
     from functools import partial
 
-    from frf_ident.app.campaign import is_campaign
+    from frf_ident.app.campaign_inputs import is_campaign
     from frf_ident.app.console import say
     from frf_ident.app.estimate import estimate_bag, estimate_columns, OUTPUT_FILES
     from frf_ident.app.fit import OUTPUT_FILES as FIT_FILES

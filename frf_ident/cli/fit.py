@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     """Fit and write the output directory (a campaign: 1 where an FRF failed), else 0."""
     from functools import partial
 
-    from frf_ident.app.campaign import is_campaign
+    from frf_ident.app.campaign_inputs import is_campaign
     from frf_ident.app.console import say
     from frf_ident.app.fit import fit_columns, fit_frf, is_fit_input, OUTPUT_FILES
     from frf_ident.app.outdir import check_out

@@ -82,12 +82,12 @@ def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[...,
     title : str
         The command's name.
     after : callable, optional
-        Called with the :class:`~frf_ident.app.campaign.CampaignResult`; returns the paths
+        Called with the :class:`~frf_ident.app.campaign_summary.CampaignResult`; returns the paths
         it wrote into ``--out`` (the FRF map of an estimate campaign).
     after_outputs : sequence of str
         The files ``after`` may write into ``--out`` (checked before any work).
     member : callable, optional
-        What an input is when not a bag (:func:`~frf_ident.app.campaign.expand_inputs`).
+        What an input is when not a bag (:func:`~frf_ident.app.campaign_inputs.expand_inputs`).
     inputs : sequence of Path, optional
         The inputs already expanded (the poses of a multi-pose bag); ``specs`` is then not
         expanded.
@@ -98,7 +98,8 @@ def run_many(args: argparse.Namespace, specs: Sequence[Any], task: Callable[...,
         0 when every input succeeded, 1 when some did not (their rows say why).
 
     """
-    from frf_ident.app.campaign import expand_inputs, run_campaign
+    from frf_ident.app.campaign import run_campaign
+    from frf_ident.app.campaign_inputs import expand_inputs
     from frf_ident.app.console import say
     res = run_campaign(task, list(inputs) if inputs is not None else
                        expand_inputs(specs, member), args.out, outputs=outputs,

@@ -22,7 +22,7 @@ import time
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
-from frf_ident.app.excitation import SessionSettings
+from frf_ident.app.excitation_settings import SessionSettings
 from frf_ident.errors import FrfIdentInputError
 
 #: Topic defaults (docs/CONTRACT.md §3); every one is a node parameter.

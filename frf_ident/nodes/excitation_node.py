@@ -47,7 +47,8 @@ import time
 from typing import Any, Optional, Sequence
 
 from frf_ident import middleware as mw
-from frf_ident.app.excitation import ExcitationSession, SessionSettings
+from frf_ident.app.excitation import ExcitationSession
+from frf_ident.app.excitation_settings import SessionSettings
 from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.nodes import common as c
@@ -294,7 +295,7 @@ class ExcitationNode:
         Parameters
         ----------
         event : dict
-            JSON-serialisable event (see :meth:`frf_ident.app.excitation.Outputs.progress`).
+            JSON-serialisable event (see :meth:`frf_ident.app.excitation_run.Outputs.progress`).
 
         """
         # compact: `ros2 topic echo` shows 128 characters unless --full-length

@@ -28,7 +28,8 @@ lockstep: true  -- one sample per received command (deterministic, faster than r
 lockstep: false -- free-running on a wall timer at the model's sample rate, zero-order holding
                    the last command. Like a robot's hardware interface, joint state k then
                    reports in ``effort`` the torque applied from t_k (the held command), so a
-                   consumer pairs state k with its own effort (see frf_ident.app.excitation).
+                   consumer pairs state k with its own effort (see
+                   frf_ident.app.excitation_torque).
 
 Run: ``python -m frf_ident.nodes.plant_node --ros-args -p model:=config/model_3axis.yaml``.
 """

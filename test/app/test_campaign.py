@@ -24,7 +24,7 @@ from pathlib import Path
 import subprocess
 import sys
 
-from frf_ident.app.campaign import campaign_dirs, expand_inputs, is_campaign
+from frf_ident.app.campaign_inputs import campaign_dirs, expand_inputs, is_campaign
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
 from frf_ident.core.excitation.procedures import MultisineConfig

@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import json
 
-from frf_ident.app.excitation import ExcitationSession, SessionSettings
+from frf_ident.app.excitation import ExcitationSession
+from frf_ident.app.excitation_settings import SessionSettings
 from frf_ident.core.excitation.procedures import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model

@@ -23,7 +23,8 @@ from __future__ import annotations
 import json
 from types import SimpleNamespace
 
-from frf_ident.app.excitation import ExcitationSession, SessionSettings
+from frf_ident.app.excitation import ExcitationSession
+from frf_ident.app.excitation_settings import SessionSettings
 from frf_ident.core.excitation.procedures import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import DesignError, SafetyError
@@ -433,7 +434,7 @@ def test_a_chirp_step_fills_the_torque_of_missed_joint_states():
     and the step's error in dB agree within 1 % and 0.1 dB. With gaps of 4 samples the step
     fails naming what is missing, instead of updating from holes.
     """
-    from frf_ident.app.excitation import fill_torque_gaps
+    from frf_ident.app.excitation_torque import fill_torque_gaps
     from frf_ident.core.excitation.procedures import ChirpConfig
     cfg = ChirpConfig(duration=3.0, lead_s=0.2, settle_s=0.3)
     full = _free_run(SessionSettings(stale_samples=10 ** 9, chirp=cfg), chirp=True)
@@ -473,8 +474,8 @@ def test_a_start_during_a_run_is_refused_before_planning_and_the_run_goes_on(mon
 
     def no_plan(*args, **kw):
         raise AssertionError('planned while a run was running')
-    monkeypatch.setattr('frf_ident.app.excitation.multisine_procedure', no_plan)
-    monkeypatch.setattr('frf_ident.app.excitation.ChirpIteration', no_plan)
+    monkeypatch.setattr('frf_ident.app.excitation_plan.multisine_procedure', no_plan)
+    monkeypatch.setattr('frf_ident.app.excitation_plan.ChirpIteration', no_plan)
     for start in (sess.start_multisine, sess.start_chirp_iteration):
         with pytest.raises(RuntimeError, match="experiment 'multisine' is still running"):
             start()

@@ -25,7 +25,8 @@ silent for longer than ``plant_silent_s`` of wall time (a dead plant stops /cloc
 from __future__ import annotations
 
 from frf_ident.app import excitation
-from frf_ident.app.excitation import ExcitationSession, SessionSettings
+from frf_ident.app.excitation import ExcitationSession
+from frf_ident.app.excitation_settings import SessionSettings
 from frf_ident.core.excitation.procedures import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model

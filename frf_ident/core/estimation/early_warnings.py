@@ -24,7 +24,7 @@ Early warnings while a multisine run goes on; none of them stops it (the safety 
   above the noise: averaging lowers noise there, so a rising line is a drifting plant (heat,
   wear, a resonance building up).
 - ``near_torque_limit``: an axis whose measured torque reached :data:`NEAR_LIMIT` of its
-  limit (the run aborts at 0.995, frf_ident/app/excitation.py ``SATURATION``).
+  limit (the run aborts at 0.995, frf_ident/app/excitation_settings.py ``SATURATION``).
 
 Each (kind, channel) is reported once per run.
 """
