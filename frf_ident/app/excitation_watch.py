@@ -93,6 +93,11 @@ class SessionWatchdog:
         state by more than ``stale_s``; and in wall time only ``plant_silent_s`` without any
         joint state (a dead plant). Free-running (a robot): ``stale_samples`` sample times of
         wall time without a joint state.
+
+        The age counts from when the node took the newest joint state, not from when it
+        came: joint states queued while the node planned a run count as fresh when worked
+        through, so a robot that died in the planning is seen once the queue is empty (the
+        planning time plus ``stale_samples`` later; test/nodes/test_free_running.py).
         """
         with self.lock:
             run = self.run

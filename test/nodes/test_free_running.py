@@ -105,7 +105,9 @@ def _recorded_until(bag, after_last_reference_s, timeout_s):
         try:
             rec, _ = read_recording(bag)
         except BagError:
-            continue                  # no reference recorded yet, or a chunk being written
+            continue                  # a chunk being written
+        if rec.reference is None:
+            continue                  # joint states recorded, no reference yet
         sent = np.isfinite(rec.reference).all(axis=1)
         if sent.any() and rec.t[-1] >= rec.t[sent][-1] + after_last_reference_s:
             break
@@ -132,8 +134,6 @@ def test_controller_stops_the_robot_when_its_references_stop(tmp_path):
     move's slow end held 0.0096 rad/s while the joints still moved faster, and were at 11 %
     of the held reference at +1.5 s, 0.08 % at +2.5 s (a full suite at load 12).
     """
-    import time
-
     from frf_ident.bag import read_recording
     ms = MultisineConfig(n_realisations=1, n_periods=20, resolution_hz=1.0, compensate=False,
                          return_s=2.0, settle_s=0.3)
@@ -145,7 +145,7 @@ def test_controller_stops_the_robot_when_its_references_stop(tmp_path):
     g.start()
     drv = g.driver(multisine=True, iterations=0)
     try:
-        time.sleep(6.0)                    # into the run: a move, the ramp or the multisine
+        _streaming(tmp_path, drv)          # into the run: a move, the ramp or the multisine
         assert drv.poll() is None
         g.kill('excitation_node')
         _recorded_until(g.bag, 2.55, timeout_s=60.0)
@@ -176,6 +176,27 @@ def _aborts(out):
             if 'aborted' in ln]
 
 
+def _streaming(out, drv, timeout_s=90.0):
+    """
+    Wait until the run streams: its request accepted, then 2 s of it (or the driver ended).
+
+    The node plans a run (a simulation of it on the model) before it accepts it; the joint
+    states that came meanwhile wait in its queue and are worked through once the run starts.
+    A plant killed while they wait is seen only when the queue is empty: the kill must come
+    in the run, with the node up to date. (A kill a fixed 6 s after the start came, on a
+    loaded PC, before the request was accepted: the abort line followed it by the planning
+    time plus 0.2 s, 857 ms in CI, 18.6 s in a run whose planning compiled the model.)
+    """
+    import time
+    deadline = time.monotonic() + timeout_s
+    log = out / 'excitation_node.log'
+    while time.monotonic() < deadline and drv.poll() is None:
+        if log.exists() and 'run_multisine accepted' in log.read_text():
+            time.sleep(2.0)
+            return
+        time.sleep(0.1)
+
+
 def _abort_after_plant_kill(tmp_path):
     """Kill the plant mid-run; return (wall s from kill to the abort line, its text) or None."""
     import re
@@ -187,7 +208,7 @@ def _abort_after_plant_kill(tmp_path):
     g.start()
     drv = g.driver(multisine=True, iterations=0)
     try:
-        time.sleep(6.0)
+        _streaming(tmp_path, drv)
         early = drv.poll() is not None
         if not early:
             t_kill = time.time()
