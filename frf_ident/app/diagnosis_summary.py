@@ -26,6 +26,7 @@ from pathlib import Path
 import textwrap
 from typing import TYPE_CHECKING
 
+from frf_ident.report.effect_names import effect_phrase
 from frf_ident.report.text import not_determined_text, parameters_text
 
 if TYPE_CHECKING:
@@ -33,7 +34,12 @@ if TYPE_CHECKING:
     from frf_ident.core.diagnosis.crosscheck.least_squares import LeastSquaresCheck
     from frf_ident.core.diagnosis.records import Scores, Unexplained
 
-__all__ = ['diagnosis_summary']
+__all__ = ['CONTINUED', 'diagnosis_summary']
+
+#: a summary line's width [characters]: a terminal's 160 less a log line's prefix
+WIDTH = 150
+#: the indent of an effect line's continuation (not-determined lines are indented by 3)
+CONTINUED = ' ' * 6
 
 
 def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
@@ -59,9 +65,10 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
     res = diag.result
     lines = []
     for k, e in enumerate(res.effects):
-        lines.append(f'{k + 1}. {e.name} on {e.axis}: '
-                     f'{parameters_text(e.parameters, e.standard_error)}; score {e.score:.2f}'
-                     + (' (not counted as found)' if e.not_determined else ''))
+        lines += _effect_lines(f'{k + 1}. {effect_phrase(e.name)} on {e.axis}: ',
+                               parameters_text(e.parameters, e.standard_error),
+                               f'score {e.score:.2f}'
+                               + (' (not counted as found)' if e.not_determined else ''))
         for n in e.not_determined:
             what, helps = not_determined_text(n)
             lines += [f'   {what}', f'   {helps}']
@@ -89,6 +96,25 @@ def diagnosis_summary(diag: Diagnosis, out: Path) -> list[str]:
     xml = ', extended_model.xml' if (out / 'extended_model.xml').is_file() else ''
     lines.append(f'wrote report.json, extended_model.yaml{xml} and report.html in {out}')
     return lines
+
+
+def _effect_lines(head: str, values: str, score: str) -> list[str]:
+    """
+    Write an effect: its head, its values and score, wrapped between values only.
+
+    The cause in words made a ripple's line 170 characters long; a value is never parted
+    from its unit or error: continuation lines (indented by ``CONTINUED``) start at a value.
+    """
+    groups = [g.split(', ') for g in values.split('; ')]
+    tokens = [part + (', ' if j < len(group) - 1 else '; ')
+              for group in groups for j, part in enumerate(group)]
+    lines, line, empty = [], head, True
+    for token in tokens + [score]:
+        if not empty and len(line) + len(token.rstrip()) > WIDTH:
+            lines.append(line.rstrip())
+            line = CONTINUED
+        line, empty = line + token, False
+    return lines + [line]
 
 
 def _unexplained(u: Unexplained) -> str:

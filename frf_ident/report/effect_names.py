@@ -27,13 +27,14 @@ EFFECT_PHRASES = {
     'coulomb_friction': 'Coulomb friction',
     'viscous_friction': 'viscous friction',
     'stiffness_nonlinearity': 'gear stiffening with load',
-    'backlash': 'backlash (lost motion)',
+    'backlash': 'lost motion in the gear',
     'torque_ripple': 'position-locked torque ripple',
     'time_delay': 'time delay beyond the sensor',
     'gravity': 'gravity load varying with pose',
     'parameter_mismatch': 'nominal parameters off',
     'velocity_from_encoder': 'velocity from encoder differences, half a sample late',
     'quantisation': 'encoder quantisation',
+    'second_mode': 'a second, link-side resonance',
 }
 
 

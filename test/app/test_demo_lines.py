@@ -26,6 +26,7 @@ import re
 
 from benchmarks.diagnosis import identify_scene, scene_of
 from frf_ident.app.demo import DEMO_MODEL, estimate_and_diagnose
+from frf_ident.app.diagnosis_summary import CONTINUED
 from frf_ident.io.share import config_file
 import pytest
 
@@ -62,7 +63,14 @@ def test_demo_lines_have_units_fit_the_terminal_and_ask_no_edit(tmp_path, caplog
                for part in m.split('\n')]
     print('\n'.join(printed))
     assert all(len(line) <= 160 for line in printed), max(printed, key=len)
-    effects = [line for line in printed if re.match(r'\d+\. \w+ on \w+: ', line)]
+    # an effect wrapped between its values (app/diagnosis_summary.py) is read whole
+    joined = []
+    for line in printed:
+        if line.startswith(CONTINUED) and joined:
+            joined[-1] += line[len(CONTINUED) - 1:]
+        else:
+            joined.append(line)
+    effects = [line for line in joined if re.match(r'\d+\. \w+ \([^)]+\) on \w+: ', line)]
     assert effects, printed
     for line in effects:
         text = line.split(': ', 1)[1].rsplit('; score', 1)[0]

@@ -46,11 +46,19 @@ def diagnosis(effects=EFFECTS, unexplained=UNEXPLAINED, band=None):
 
 
 def test_summary_lines_read_as_sentences_with_units_and_four_digits():
+    """
+    Each effect named as a drives engineer says it beside its key (issue 55), wrapped.
+
+    A line runs to 150 characters at most and breaks only between values: the score of the
+    ripple goes on a continuation line, no value parts from its unit.
+    """
     lines = diagnosis_summary(diagnosis(), Path('D'))
     assert lines == [
-        '1. torque_ripple on joint_1: torque_ripple amplitude 4.012 N m, spatial_frequency '
-        '122.3 1/rad, phase 0.4 rad; score 0.81',
-        '2. viscous_friction on joint_2: viscous_friction 51.08 \u00b1 1.2 N m s/rad; score 0.50',
+        '1. torque_ripple (position-locked torque ripple) on joint_1: torque_ripple amplitude '
+        '4.012 N m, spatial_frequency 122.3 1/rad, phase 0.4 rad;',
+        '      score 0.81',
+        '2. viscous_friction (viscous friction) on joint_2: viscous_friction 51.08 \u00b1 1.2 '
+        'N m s/rad; score 0.50',
         'unexplained on joint_3: 31 % of the nominal misfit left, strongest misfit 34.3-38.7 Hz',
         'held-out error: nominal FRF 2.06 dB, time NRMSE 0.157 -> extended FRF 0.151 dB, '
         'time NRMSE 0.00561',
@@ -74,7 +82,7 @@ def test_band_and_a_resonance_above_it_are_said_in_words():
                        kind='resonance above the analysis band')
     band = AnalysisBand(20.0, (13.7,), 250.0, 'calibrated minimum')
     lines = diagnosis_summary(diagnosis(unexplained=[peak], band=band), Path('D'))
-    assert lines[2:4] == [
+    assert lines[3:5] == [
         'analysis band 0-20 Hz (set by the calibrated minimum); residual above it scanned for '
         'resonances',
         'unexplained on emps: resonance above the analysis band, 435-450 Hz (peak 445 Hz, 16.9x '
@@ -97,7 +105,8 @@ def test_second_mode_and_its_band_before_and_after_are_said_in_words():
                           np.ones(3, bool), np.ones(3, bool))
     diag = Diagnosis(res, CrossChecks(), None)
     lines = diagnosis_summary(diag, Path('D'))
-    assert lines[0].startswith('1. second_mode on joint_3: second_mode frequency_hz 28.16')
+    assert lines[0].startswith('1. second_mode (a second, link-side resonance) on joint_3: '
+                               'second_mode frequency_hz 28.16')
     assert ('held-out FRF error in the band of joint_3 30.13-31.45 Hz (second_mode): 0.635 dB '
             '(95th percentile 0.635) -> 0.0001 dB (0.0001)') in lines
     assert any('joint_1 12-14 Hz (unexplained)' in x and 'worse with the extension' in x
@@ -116,8 +125,8 @@ def test_a_value_not_determined_is_said_with_its_range_unit_and_the_experiment()
                                                  'at several speeds')])
     lines = diagnosis_summary(diagnosis(effects=[loose]), Path('D'))
     assert lines[:3] == [
-        '1. viscous_friction on joint_2: viscous_friction 333.7 \u00b1 1.8e+02 N m s/rad; score '
-        '0.00 (not counted as found)',
+        '1. viscous_friction (viscous friction) on joint_2: viscous_friction 333.7 \u00b1 '
+        '1.8e+02 N m s/rad; score 0.00 (not counted as found)',
         '   viscous_friction not determined by this record: 0 to 1146 N m s/rad (standard '
         'error 180, 54 % of the value)',
         '   a slower multisine or constant-velocity runs at several speeds would determine it']
