@@ -200,7 +200,8 @@ def bench_experiment_time() -> list[tuple[str, str, str, str]]:
     """
     from frf_ident.core.estimation.chirp_estimate import chirp_frf
     from frf_ident.core.estimation.described import multisine_frf
-    from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+    from frf_ident.core.excitation.chirp_iteration import ChirpConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     from frf_ident.core.model.schema import default_model_dict, robot_from_dict
     from frf_ident.core.simulation.analytic import robot_frf_sampled
     from frf_ident.core.simulation.controller import controller_from_dict
@@ -261,7 +262,7 @@ def _target_rows(rob, ctrl) -> list[tuple[str, str, str, str]]:
     """
     from frf_ident.core.estimation.described import multisine_frf
     from frf_ident.core.estimation.target import UncertaintyTarget
-    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     from frf_ident.core.simulation.analytic import robot_frf_sampled
     from frf_ident.core.simulation.plant import FlexibleJointPlant
     from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
@@ -288,7 +289,7 @@ def bench_chirp_iteration() -> list[tuple[str, str, str, str]]:
     The nominal 3-axis model, linear and with Coulomb friction of 15, 20 and 8 N m (the demo
     robot's), 20 s chirps; the error is the worst channel's RMS dB error to U_des.
     """
-    from frf_ident.core.excitation.procedures import ChirpConfig
+    from frf_ident.core.excitation.chirp_iteration import ChirpConfig
     from frf_ident.core.model.schema import default_model_dict, robot_from_dict
     from frf_ident.core.simulation.controller import controller_from_dict
     from frf_ident.core.simulation.plant import FlexibleJointPlant

@@ -35,7 +35,8 @@ import time
 
 from frf_ident.app.excitation_settings import SessionSettings
 from frf_ident.app.graph import Graph
-from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.core.excitation.chirp_iteration import ChirpConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 
 #: the wall-time staleness limit of the lockstep watchdog before issue 44 [s]
 OLD_WALL_LIMIT_S = 0.5

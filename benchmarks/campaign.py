@@ -53,7 +53,7 @@ _MEASURE = ('import resource, sys\n'
 def write_bags(root: Path, n: int = N_BAGS) -> list[Path]:
     """Write ``n`` demo bags (multisine seeds 1..n) under ``root``."""
     from frf_ident.bag import write_recording
-    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
     from frf_ident.io.model_file import load_model, load_plant
     model, _, ctrl = load_model(None)

@@ -228,7 +228,8 @@ def _link_mode_scene(rng: np.random.Generator, kind: str, axes: list[dict[str, A
 
 def identification_config():
     """Short experiments (the demo's design, fewer realisations): a scene in about a minute."""
-    from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+    from frf_ident.core.excitation.chirp_iteration import ChirpConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     from frf_ident.core.simulation.runner import IdentificationConfig
     return IdentificationConfig(MultisineConfig(n_realisations=3, n_periods=2,
                                                 resolution_hz=0.5),

@@ -38,7 +38,7 @@ from frf_ident.app.graph import Graph
 
 def _graph_rate(out: Path, nodes: Optional[tuple[str, ...]], model: Optional[str],
                 middleware: Optional[str] = None, lockstep: bool = True) -> dict[str, Any]:
-    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     ms = MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0, compensate=False)
     # the watchdog out of the way: the run is measured, not judged
     params = {'excitation_node': {'stale_s': 2.0} if lockstep else {'stale_samples': 10 ** 6}}

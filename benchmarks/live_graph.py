@@ -35,7 +35,7 @@ import tempfile
 from typing import Any
 
 from frf_ident.app.graph import Graph
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 
 #: the issue's goal: steps/s with the live stream at least this share of those without
 GOAL = 0.90
@@ -102,7 +102,7 @@ def rows(pairs: int = 5) -> list[tuple[str, str, str, str]]:
                         f'{b["steps_per_s"]:,.0f}; {b["cpu_ms_per_1000"]:,.0f} ms',
                         f'{a["steps_per_s"]:,.0f}; {a["cpu_ms_per_1000"]:,.0f} ms',
                         f'{b["steps_per_s"] / a["steps_per_s"]:.2f}'))
-    from frf_ident.core.excitation.procedures import multisine_procedure
+    from frf_ident.core.excitation.multisine_procedure import multisine_procedure
     ratio = statistics.median(b / a for a, b in zip(off, on))
     sim = design()
     period = multisine_procedure(sim, 3, 1000.0)[1].period

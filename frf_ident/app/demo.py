@@ -24,7 +24,8 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.core.excitation.chirp_iteration import ChirpConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.progress import Progress, sink
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.share import config_file

@@ -48,8 +48,8 @@ from frf_ident.app.excitation_settings import RATE_WINDOW, SessionSettings
 from frf_ident.app.excitation_stream import SessionStreaming
 from frf_ident.app.excitation_torque import torque_sample_offset
 from frf_ident.app.excitation_watch import SessionWatchdog
+from frf_ident.core.excitation.chirp_iteration import ChirpIteration
 from frf_ident.core.excitation.engine import PhaseEngine
-from frf_ident.core.excitation.procedures import ChirpIteration
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np

@@ -30,10 +30,11 @@ from typing import Callable, Optional
 
 from frf_ident.app.excitation_run import Run
 from frf_ident.app.excitation_torque import fill_torque_gaps
+from frf_ident.core.excitation.chirp_iteration import ChirpIteration
 from frf_ident.core.excitation.engine import PhaseStream
-from frf_ident.core.excitation.procedures import (check_position_bound, ChirpIteration,
-                                                  multisine_procedure, multisine_tail,
-                                                  STOP_FADE_S)
+from frf_ident.core.excitation.multisine_procedure import (multisine_procedure, multisine_tail,
+                                                           STOP_FADE_S)
+from frf_ident.core.excitation.plan_checks import check_position_bound
 from frf_ident.core.recording import Segment
 from frf_ident.core.simulation.runner import check_plan_torque
 from frf_ident.errors import SafetyError

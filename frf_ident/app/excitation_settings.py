@@ -22,7 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 
-from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.core.excitation.chirp_iteration import ChirpConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.errors import DesignError
 
 __all__ = ['MAX_ABORT_RAMP_S', 'RATE_WINDOW', 'REGULAR', 'SATURATION', 'SessionSettings',
@@ -32,7 +33,7 @@ __all__ = ['MAX_ABORT_RAMP_S', 'RATE_WINDOW', 'REGULAR', 'SATURATION', 'SessionS
 #: the longest ramp to zero an abort may take [s]
 MAX_ABORT_RAMP_S = 0.1
 #: a measured torque at this share of its limit is a saturated drive: the run aborts (the
-#: procedures aim at 0.95 of the limit at most, procedures.TORQUE_MARGIN)
+#: procedures aim at 0.95 of the limit at most, plan_checks.TORQUE_MARGIN)
 SATURATION = 0.995
 #: free-running: the joint states whose stamp steps judge their rate (at least half of them)
 RATE_WINDOW = 16

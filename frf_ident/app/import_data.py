@@ -48,7 +48,8 @@ def import_file(file: Path, map_path: Path, out: str | Path, *,
     progress = sink(progress)
     from frf_ident.bag import write_recording
     from frf_ident.core.estimation.checks import check_band
-    from frf_ident.core.excitation.detect import detect_excitation, excitation_source
+    from frf_ident.core.excitation.detect import detect_excitation
+    from frf_ident.core.excitation.detect_input import excitation_source
     from frf_ident.errors import EstimationError
     from frf_ident.io.importer import import_table
     out = check_out(out, outputs=None, overwrite=False)

@@ -140,7 +140,7 @@ def verify_tuning(outcome, tuned_model: Path, out: Path, *,
     """
     from frf_ident.app.estimate import estimate_bag
     from frf_ident.app.identify import run_identify
-    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     from frf_ident.core.simulation.runner import IdentificationConfig
     from frf_ident.io.model_file import load_model
     say = sink(progress)

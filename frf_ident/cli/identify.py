@@ -18,7 +18,8 @@ import argparse
 from pathlib import Path
 
 from frf_ident.cli.options import add_design_arguments
-from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.core.excitation.chirp_iteration import ChirpConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.errors import FrfIdentInputError
 
 __all__ = ['DESCRIPTION', 'HELP', 'add_arguments', 'identification_config', 'run']

@@ -47,7 +47,8 @@ class Segment:
 
     Notes
     -----
-    Keys of ``info`` used by the estimators (see ``frf_ident.core.excitation.procedures``):
+    Keys of ``info`` used by the estimators (see ``frf_ident.core.excitation.procedures``, the
+    procedures' modules ``multisine_procedure`` and ``chirp_iteration``):
 
     - ``design``: 'multisine' | 'chirp' | 'constant_velocity' | 'idle'
     - ``procedure``: name of the procedure (e.g. 'multisine_bla', 'chirp_iteration')

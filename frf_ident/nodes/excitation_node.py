@@ -49,7 +49,8 @@ from typing import Any, Optional, Sequence
 from frf_ident import middleware as mw
 from frf_ident.app.excitation import ExcitationSession
 from frf_ident.app.excitation_settings import SessionSettings
-from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.core.excitation.chirp_iteration import ChirpConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.nodes import common as c
 from frf_ident.nodes.operator_gate import OperatorGate

@@ -27,7 +27,7 @@ import sys
 from frf_ident.app.campaign_inputs import campaign_dirs, expand_inputs, is_campaign
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
 from frf_ident.io.model_file import load_model, load_plant
 import pytest

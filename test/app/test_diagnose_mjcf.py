@@ -133,7 +133,7 @@ def _files(scene: Scene, tmp: Path) -> tuple[Path, str]:
 
 def _chirp(scene: Scene):
     """Return the chirp of a scene: 10 s, two iterations, its torque amplitudes."""
-    from frf_ident.core.excitation.procedures import ChirpConfig
+    from frf_ident.core.excitation.chirp_iteration import ChirpConfig
     if scene.u_des is None:
         return ChirpConfig(duration=10.0, max_iterations=2)
     return ChirpConfig(duration=10.0, max_iterations=2, u_des=np.array(scene.u_des))
@@ -144,7 +144,7 @@ def diagnosed(request, tmp_path_factory):
     """Identify the truth in MuJoCo, diagnose against the plain MJCF; the files and report."""
     from frf_ident.app.diagnose import diagnose
     from frf_ident.app.identify import run_identify
-    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     from frf_ident.core.simulation.runner import IdentificationConfig
     scene = request.param
     tmp = tmp_path_factory.mktemp(scene.name)

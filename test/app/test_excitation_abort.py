@@ -26,7 +26,7 @@ import json
 
 from frf_ident.app.excitation import ExcitationSession
 from frf_ident.app.excitation_settings import SessionSettings
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
 import numpy as np

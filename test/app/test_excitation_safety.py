@@ -25,7 +25,7 @@ from types import SimpleNamespace
 
 from frf_ident.app.excitation import ExcitationSession
 from frf_ident.app.excitation_settings import SessionSettings
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.errors import DesignError, SafetyError
 from frf_ident.io.model_file import load_model
@@ -251,7 +251,7 @@ def test_a_first_chirp_step_predicted_to_need_95_percent_of_a_limit_is_refused()
     The default 0.006 rad/s (134 N m predicted) starts; only the first step is predicted on
     the model, later ones from what the earlier steps measured.
     """
-    from frf_ident.core.excitation.procedures import ChirpConfig
+    from frf_ident.core.excitation.chirp_iteration import ChirpConfig
     robot, ctrl = load_model(None)[1:]
     lim = np.array([300.0, 300.0, 300.0])
     q0 = FlexibleJointPlant(robot).state[0].copy()
@@ -338,7 +338,7 @@ def test_the_dry_run_starts_where_the_robot_is_now():
     from where the session first saw it. The prediction from the operating point was 10 % low
     on joint 2 (more than the 5 % margin); from the current position it is what the run needs.
     """
-    from frf_ident.core.excitation.procedures import multisine_procedure
+    from frf_ident.core.excitation.multisine_procedure import multisine_procedure
     from frf_ident.core.simulation.runner import predict_peak_torque
     robot, ctrl = load_model(None)[1:]
     robot.axes[1].gravity = [{'amplitude': 300.0, 'phase': 0.2}]
@@ -435,7 +435,7 @@ def test_a_chirp_step_fills_the_torque_of_missed_joint_states():
     fails naming what is missing, instead of updating from holes.
     """
     from frf_ident.app.excitation_torque import fill_torque_gaps
-    from frf_ident.core.excitation.procedures import ChirpConfig
+    from frf_ident.core.excitation.chirp_iteration import ChirpConfig
     cfg = ChirpConfig(duration=3.0, lead_s=0.2, settle_s=0.3)
     full = _free_run(SessionSettings(stale_samples=10 ** 9, chirp=cfg), chirp=True)
     holes = _free_run(SessionSettings(stale_samples=10 ** 9, chirp=cfg), chirp=True,
@@ -485,7 +485,7 @@ def test_a_start_during_a_run_is_refused_before_planning_and_the_run_goes_on(mon
 
 def test_the_chirp_iteration_stops_at_max_iterations():
     """max_iterations=1: a second step is refused (the node ran a fourth of three before)."""
-    from frf_ident.core.excitation.procedures import ChirpConfig
+    from frf_ident.core.excitation.chirp_iteration import ChirpConfig
     cfg = ChirpConfig(duration=3.0, lead_s=0.2, settle_s=0.3, max_iterations=1)
     res = _free_run(SessionSettings(stale_samples=10 ** 9, chirp=cfg), chirp=True)
     assert res.run.result['iteration'] == 1 and not res.run.result['converged']

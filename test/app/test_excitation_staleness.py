@@ -27,7 +27,7 @@ from __future__ import annotations
 from frf_ident.app import excitation
 from frf_ident.app.excitation import ExcitationSession
 from frf_ident.app.excitation_settings import SessionSettings
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
 import numpy as np

@@ -31,7 +31,7 @@ import json
 from frf_ident.app.identify import POSE_INDEX, run_identify_poses
 from frf_ident.bag import read_recording
 from frf_ident.cli import main
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.runner import IdentificationConfig
 from frf_ident.errors import FrfIdentInputError
 from frf_ident.io.model_file import load_model

@@ -29,7 +29,7 @@ import json
 
 from frf_ident.bag import write_recording
 from frf_ident.cli import main
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.analytic import robot_frf_sampled

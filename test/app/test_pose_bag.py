@@ -25,7 +25,7 @@ import json
 
 from frf_ident.app.identify import ONE_BAG, POSE_INDEX, run_identify_poses
 from frf_ident.cli import main
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.runner import IdentificationConfig
 import numpy as np
 import pytest

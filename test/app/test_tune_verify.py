@@ -29,7 +29,7 @@ import json
 
 from frf_ident.app.identify import run_identify
 from frf_ident.cli import main
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.runner import IdentificationConfig
 from frf_ident.io.model_file import load_model
 import numpy as np

@@ -25,7 +25,7 @@ from frf_ident.bag import write_recording
 from frf_ident.cli import main
 from frf_ident.core.excitation.chirp import chirp_phase
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import controller_from_dict
@@ -377,7 +377,7 @@ def test_a_realisation_cut_short_is_left_out_and_the_rest_estimated(tmp_path, ca
 @pytest.fixture(scope='module')
 def ms_and_chirp_rec():
     """One multisine realisation (3 experiments) and two chirp iterations (3 experiments each)."""
-    from frf_ident.core.excitation.procedures import ChirpConfig
+    from frf_ident.core.excitation.chirp_iteration import ChirpConfig
     model, _, ctrl = load_model(None)
     cfg = IdentificationConfig(MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=1.0,
                                                compensate=False),

@@ -33,7 +33,7 @@ from frf_ident.bag import write_recording
 from frf_ident.cli import main
 from frf_ident.core.estimation import detected_spectra, multisine_estimate
 from frf_ident.core.estimation.missing_periodic import fill_periods
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict
 from frf_ident.core.simulation.analytic import robot_frf_sampled
 from frf_ident.core.simulation.controller import controller_from_dict

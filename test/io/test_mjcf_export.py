@@ -94,7 +94,7 @@ def fitted(tmp_path_factory):
     from frf_ident.app.estimate import estimate_bag
     from frf_ident.app.fit import fit_frf
     from frf_ident.app.identify import run_identify
-    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     from frf_ident.core.simulation.runner import IdentificationConfig
     import yaml
     tmp = tmp_path_factory.mktemp('fit')

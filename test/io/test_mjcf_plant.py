@@ -20,7 +20,7 @@ The shared iiwa 14 (MuJoCo_iiwa14) with series elasticity on joints 2 and 4
 mjd_transitionFD's A, B at rest, computed in test/plants/mujoco_iiwa.py.
 """
 from frf_ident.core.estimation.described import multisine_frf
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
 from frf_ident.io.model_file import load_plant

@@ -25,7 +25,7 @@ import dataclasses
 import json
 
 from frf_ident.app.graph import Graph
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 import numpy as np
 import pytest
 

@@ -31,7 +31,8 @@ import sys
 import time
 
 from frf_ident.app.graph import Graph
-from frf_ident.core.excitation.procedures import ChirpConfig, MultisineConfig
+from frf_ident.core.excitation.chirp_iteration import ChirpConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 import numpy as np
 import pytest
 

@@ -24,7 +24,7 @@ import json
 from pathlib import Path
 
 from frf_ident.app.graph import Graph
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 import numpy as np
 import pytest
 

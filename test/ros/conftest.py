@@ -94,7 +94,7 @@ def _wait_subscribed(proc, log, timeout_s=60.0):
 def lockstep_run(tmp_path_factory, new_domain):
     """Run a 16 s lockstep multisine on rclpy, recorded by the estimator and ros2 bag record."""
     from frf_ident.app.graph import Graph
-    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     ms = MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=2.0, compensate=False,
                          return_s=2.0, settle_s=0.3)
     out = tmp_path_factory.mktemp('lockstep_run')

@@ -127,7 +127,7 @@ def _operator(g, token):
 
 def _graph(out, middleware, domain=None):
     from frf_ident.app.graph import Graph
-    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     ms = MultisineConfig(n_realisations=1, n_periods=8, resolution_hz=2.0, compensate=False,
                          return_s=2.0, settle_s=0.3)
     return Graph(out, multisine=ms, lockstep=False, middleware=middleware, domain_id=domain,

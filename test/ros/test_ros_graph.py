@@ -21,7 +21,7 @@ estimator, and the reverse) must record the same bag: the FRFs agree to 1e-6 dB.
 import json
 
 from frf_ident.app.graph import Graph
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 import numpy as np
 import pytest
 

@@ -20,7 +20,7 @@ multisine through plant node (hosting the PI), excitation node and estimator nod
 the recorded bag against MuJoCo's own linearisation (computed in the test's helper).
 """
 from frf_ident.app.graph import Graph
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 import numpy as np
 from plants.mujoco_iiwa import AXES, elastic_xml, HELD, home, KI, KP, truth_frf
 import pytest

@@ -494,7 +494,7 @@ def check_multisine_segments(rec, segments) -> list:
     Check the descriptor multisine segments of a recording.
 
     Band, sample rate and whole steady-state periods of descriptor multisine segments
-    (``info`` keys of :func:`frf_ident.core.excitation.procedures.multisine_procedure`);
+    (``info`` keys of :func:`frf_ident.core.excitation.multisine_procedure.multisine_procedure`);
     returns the analysed (steady-state) effort of each segment, (N_i, n) arrays, for the
     clipping check.
     """

@@ -36,7 +36,8 @@ from frf_ident.core.estimation.detected_segments import (NoExcitationError,
 from frf_ident.core.estimation.excitation_options import ExcitationOptions, LPM_METHODS
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.nonperiodic import LpmBlocks
-from frf_ident.core.excitation.detect import detect_multisine, excitation_source
+from frf_ident.core.excitation.detect_input import excitation_source
+from frf_ident.core.excitation.multisine_detect import detect_multisine
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 import numpy as np

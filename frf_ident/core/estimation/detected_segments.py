@@ -16,7 +16,7 @@ Detection of the excitation in a recording without descriptors, as segments, and
 
 The excitation is detected in the data (:mod:`frf_ident.core.excitation.detect`): a periodic
 multisine or an exponential chirp, on the velocity reference when the bag has one, else on
-the torque (:func:`~frf_ident.core.excitation.detect.excitation_source`); what the
+the torque (:func:`~frf_ident.core.excitation.detect_input.excitation_source`); what the
 :class:`~frf_ident.core.estimation.excitation_options.ExcitationOptions` give replaces the
 respective detection. Each detection of an excited input becomes a
 :class:`~frf_ident.core.recording.Segment` (:func:`detect_segments`), checked before it is
@@ -32,9 +32,10 @@ from frf_ident.core.estimation.checks import (check_band, check_covers, check_no
                                               check_periods, check_whole_period, JOINT_STATES)
 from frf_ident.core.estimation.excitation_options import ExcitationOptions
 from frf_ident.core.estimation.spectra import periodic_spectra
-from frf_ident.core.excitation.detect import (ChirpDetection, detect_excitation,
-                                              excitation_source, multisine_at_period,
-                                              MultisineDetection)
+from frf_ident.core.excitation.detect import detect_excitation
+from frf_ident.core.excitation.detect_input import excitation_source
+from frf_ident.core.excitation.detection_results import ChirpDetection, MultisineDetection
+from frf_ident.core.excitation.multisine_detect import multisine_at_period
 from frf_ident.core.excitation.sweep_law import MAX_MISMATCH, sweep_mismatch
 from frf_ident.core.recording import Recording, Segment
 from frf_ident.errors import EstimationError

@@ -32,7 +32,7 @@ from typing import Any
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.estimation.lpm_frames import (DEFAULT_FRAME_SAMPLES, DIRECT_WARNING,
                                                   EXCITED_FRACTION, LpmAccumulator)
-from frf_ident.core.excitation.detect import excitation_source
+from frf_ident.core.excitation.detect_input import excitation_source
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 import numpy as np

@@ -16,7 +16,16 @@ Excitation: signal designs, experiment procedures and detection in measured data
 
 - :mod:`frf_ident.core.excitation.multisine` — odd random-phase multisines (Sec. 4, eqs. 8-12)
 - :mod:`frf_ident.core.excitation.chirp` — exponential chirps (Sec. 5, eqs. 15, 16, 26)
-- :mod:`frf_ident.core.excitation.procedures` — the Section 7 procedures as phases, and the
-  chirp iteration of Sec. 5.3 (eqs. 17-19)
+- :mod:`frf_ident.core.excitation.procedures` — a procedure as phases (:class:`Phase`) and
+  the move phases' plan; :mod:`~frf_ident.core.excitation.plan_checks` refuses settings and
+  plans beyond the limits
+- :mod:`frf_ident.core.excitation.multisine_procedure` — the Section 7 multisine procedure
+- :mod:`frf_ident.core.excitation.chirp_iteration` — the chirp iteration of Sec. 5.3
+  (eqs. 17-19)
 - :mod:`frf_ident.core.excitation.detect` — recover a multisine or chirp from a signal
+  (:mod:`~frf_ident.core.excitation.multisine_detect`,
+  :mod:`~frf_ident.core.excitation.chirp_detect`, with
+  :mod:`~frf_ident.core.excitation.periodic_block`,
+  :mod:`~frf_ident.core.excitation.detect_input` and
+  :mod:`~frf_ident.core.excitation.detection_results`)
 """

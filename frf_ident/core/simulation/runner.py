@@ -30,10 +30,11 @@ from typing import Any, Callable
 
 from frf_ident.core.estimation.live import LiveEstimate
 from frf_ident.core.estimation.target import UncertaintyTarget
+from frf_ident.core.excitation.chirp_iteration import ChirpConfig, ChirpIteration
 from frf_ident.core.excitation.engine import PhaseEngine
-from frf_ident.core.excitation.procedures import (check_torque_bound, ChirpConfig, ChirpIteration,
-                                                  multisine_procedure, MultisineConfig, Phase,
-                                                  POSITION_GAIN)
+from frf_ident.core.excitation.multisine_procedure import multisine_procedure, MultisineConfig
+from frf_ident.core.excitation.plan_checks import check_torque_bound
+from frf_ident.core.excitation.procedures import Phase, POSITION_GAIN
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording, Segment
@@ -155,8 +156,8 @@ def predict_peak_torque(phases: list[Phase], robot: RobotParams, controller: PIV
     Parameters
     ----------
     phases : list of Phase
-        The plan, as :func:`~frf_ident.core.excitation.procedures.multisine_procedure` or
-        :meth:`~frf_ident.core.excitation.procedures.ChirpIteration.phases` return it.
+        The plan, as :func:`~frf_ident.core.excitation.multisine_procedure.multisine_procedure` or
+        :meth:`~frf_ident.core.excitation.chirp_iteration.ChirpIteration.phases` return it.
     robot : RobotParams
         The nominal model.
     controller : PIVelocity
@@ -200,7 +201,7 @@ def check_plan_torque(phases: list[Phase], robot: RobotParams, controller: PIVel
     Predict a plan's peak torque and refuse the plan when it reaches 0.95 of a limit.
 
     :func:`predict_peak_torque` followed by
-    :func:`~frf_ident.core.excitation.procedures.check_torque_bound`: what the excitation node
+    :func:`~frf_ident.core.excitation.plan_checks.check_torque_bound`: what the excitation node
     and ``identify`` run before every plan they can predict.
 
     Parameters

@@ -18,7 +18,7 @@ Each segment runs period by period; :class:`~frf_ident.core.estimation.live.Live
 estimates after every whole period and, once
 :meth:`~frf_ident.core.estimation.target.UncertaintyTarget.met`, the segment ends there: its
 excitation fades out over ``STOP_FADE_S`` and the procedure's tail (ramp down, settle, move
-back) runs instead of the remaining runs (frf_ident/core/excitation/procedures.py
+back) runs instead of the remaining runs (frf_ident/core/excitation/multisine_procedure.py
 ``multisine_tail``). The recording's segment then says how many periods it holds.
 """
 from __future__ import annotations
@@ -27,7 +27,8 @@ from typing import Any, Callable
 
 from frf_ident.core.estimation.live import LiveEstimate, LiveMultisine
 from frf_ident.core.estimation.target import UncertaintyTarget
-from frf_ident.core.excitation.procedures import multisine_tail, Phase, STOP_FADE_S
+from frf_ident.core.excitation.multisine_procedure import multisine_tail, STOP_FADE_S
+from frf_ident.core.excitation.procedures import Phase
 from frf_ident.core.recording import Segment
 import numpy as np
 

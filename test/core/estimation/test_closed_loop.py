@@ -13,7 +13,8 @@
 # limitations under the License.
 """Section 7 closed-loop procedures on the 3-axis robot against analytic truth."""
 from frf_ident.core.estimation.described import estimate_recording, multisine_frf
-from frf_ident.core.excitation.procedures import ChirpConfig, multisine_procedure, MultisineConfig
+from frf_ident.core.excitation.chirp_iteration import ChirpConfig
+from frf_ident.core.excitation.multisine_procedure import multisine_procedure, MultisineConfig
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict
 from frf_ident.core.simulation.analytic import robot_frf_sampled
 from frf_ident.core.simulation.controller import controller_from_dict

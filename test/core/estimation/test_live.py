@@ -31,7 +31,7 @@ from frf_ident.core.estimation.described import estimate_recording
 from frf_ident.core.estimation.early_warnings import FAR_BELOW_DB, NEAR_LIMIT, WarningMonitor
 from frf_ident.core.estimation.live import LiveMultisine, multiple_coherence
 from frf_ident.core.estimation.target import MIN_STOP_PERIODS, UncertaintyTarget
-from frf_ident.core.excitation.procedures import MultisineConfig
+from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict
 from frf_ident.core.simulation.analytic import robot_frf_sampled
 from frf_ident.core.simulation.controller import controller_from_dict

@@ -18,8 +18,8 @@ A lightly damped mode driven by an odd multisine from rest (scipy's lfilter, kno
 noise): the truth is analytic, the noise variance of the period mean sigma^2 / (N |U|^2 n).
 """
 from frf_ident.core.estimation.detected import estimate_in_blocks, RecordingBlocks
-from frf_ident.core.excitation.detect import detect_multisine
 from frf_ident.core.excitation.multisine import design_odd_multisine, multisine_realisation
+from frf_ident.core.excitation.multisine_detect import detect_multisine
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 import numpy as np

@@ -97,7 +97,7 @@ def test_bad_design_names_value(kwargs, needle):
 ])
 def test_multisine_config_refuses_non_finite_and_empty_settings(kw, match):
     """A node took resolution_hz NaN at start-up and refused it only at the service call."""
-    from frf_ident.core.excitation.procedures import MultisineConfig
+    from frf_ident.core.excitation.multisine_procedure import MultisineConfig
     from frf_ident.errors import DesignError
     with pytest.raises(DesignError, match=re.escape(match)):
         MultisineConfig(**kw)
@@ -110,7 +110,7 @@ def test_multisine_config_refuses_non_finite_and_empty_settings(kw, match):
     ({'r_initial': [0.006, float('nan'), 0.012]}, 'must be finite'),
 ])
 def test_chirp_config_refuses_non_finite_and_empty_settings(kw, match):
-    from frf_ident.core.excitation.procedures import ChirpConfig
+    from frf_ident.core.excitation.chirp_iteration import ChirpConfig
     from frf_ident.errors import DesignError
     with pytest.raises(DesignError, match=re.escape(match)):
         ChirpConfig(**kw)

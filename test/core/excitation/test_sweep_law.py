@@ -21,7 +21,7 @@ f_low=16.63'), and the given `--chirp 2 15 --chirp-time 0 260` wrote an FRF 13 d
 """
 from frf_ident.core.estimation.detected import estimate_in_blocks, RecordingBlocks
 from frf_ident.core.estimation.excitation_options import ExcitationOptions
-from frf_ident.core.excitation.detect import detect_chirp
+from frf_ident.core.excitation.chirp_detect import detect_chirp
 from frf_ident.core.recording import Recording
 from frf_ident.errors import EstimationError
 import numpy as np
