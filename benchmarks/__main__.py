@@ -451,8 +451,9 @@ def bench_diagnosis_sensor() -> list[tuple[str, str, str, str]]:
 @section('diagnosis_real')
 def bench_diagnosis_real() -> list[tuple[str, str, str, str]]:
     """Compare the KUKA KR300 diagnosis of the halves of trajectory A (and of A, B, C)."""
-    from benchmarks.diagnosis import (kuka_baseline_rows, kuka_halves_rows,
-                                      kuka_synthetic_halves_rows, kuka_trajectories_rows)
+    from benchmarks.diagnosis_kuka import kuka_halves_rows, kuka_trajectories_rows
+    from benchmarks.diagnosis_kuka_baseline import kuka_baseline_rows
+    from benchmarks.diagnosis_kuka_synthetic import kuka_synthetic_halves_rows
     return (kuka_baseline_rows() + kuka_halves_rows() + kuka_synthetic_halves_rows()
             + kuka_trajectories_rows())
 

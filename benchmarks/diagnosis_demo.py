@@ -139,7 +139,8 @@ def _names(effects: list[tuple]) -> str:
 
 def mismatch_rows() -> list[tuple[str, str, str, str]]:
     """Return the before/after of stage 0 on the mismatch scene MISMATCH_SEED."""
-    from benchmarks.diagnosis import diagnose_scene, identify_scene, scene_of
+    from benchmarks.diagnosis_scene_run import diagnose_scene, identify_scene
+    from benchmarks.diagnosis_scenes import scene_of
     scene = scene_of(MISMATCH_SEED, 0, 'mismatch')
     _, ax, truth = scene['truth'][0]
     with tempfile.TemporaryDirectory() as tmp:

@@ -45,7 +45,8 @@ import tempfile
 import time
 from typing import Any
 
-from benchmarks.diagnosis import identify_scene, MODEL, scene_of, score_scene
+from benchmarks.diagnosis_scene_run import identify_scene, score_scene
+from benchmarks.diagnosis_scenes import MODEL, scene_of
 from frf_ident.core.diagnosis.thresholds import HELD_OUT_GAIN_Z
 import numpy as np
 

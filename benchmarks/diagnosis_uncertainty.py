@@ -38,7 +38,8 @@ import sys
 import tempfile
 from typing import Any
 
-from benchmarks.diagnosis import draw_effect, MODEL, NOISE, run_scene
+from benchmarks.diagnosis_scene_run import run_scene
+from benchmarks.diagnosis_scenes import draw_effect, MODEL, NOISE
 import numpy as np
 
 #: the pair kinds: two effects on one axis that trade against each other

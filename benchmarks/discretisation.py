@@ -31,7 +31,7 @@ import math
 import numpy as np
 
 #: one effect at a time on every axis of the default model (model-file keys); sizes in the
-#: middle of the realistic ranges of benchmarks/diagnosis.py (stiffening: k2 = 1.5 k1)
+#: middle of the realistic ranges of benchmarks/diagnosis_scenes.py (stiffening: k2 = 1.5 k1)
 EFFECTS = {
     'none (linear)': {},
     'Coulomb friction 15 N m': {'coulomb_friction': 15.0},

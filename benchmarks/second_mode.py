@@ -14,12 +14,12 @@
 """
 Second link-side modes in scenes of the independent reference plant (issue 57).
 
-Scenes of benchmarks/diagnosis.py: ``link_mode`` (a mass of 10-25 % of a random axis' link on
-a spring tuned to 15-45 Hz with the link held, damping ratio 0.005-0.08), ``link_mode_beside``
-(the same and one drawn effect on another axis), ``clean`` (the nominal model is the truth)
-and ``random`` (1-4 drawn effects, no mode), identified through ``identify --plant`` and
-diagnosed against the nominal model. A
-mode is found when ``second_mode`` is named on its axis with its frequency within 5 % and its
+Scenes of benchmarks/diagnosis_scenes.py: ``link_mode`` (a mass of 10-25 % of a random axis'
+link on a spring tuned to 15-45 Hz with the link held, damping ratio 0.005-0.08),
+``link_mode_beside`` (the same and one drawn effect on another axis), ``clean`` (the nominal
+model is the truth) and ``random`` (1-4 drawn effects, no mode), identified through
+``identify --plant`` and diagnosed against the nominal model. A mode is found when
+``second_mode`` is named on its axis with its frequency within 5 % and its
 damping ratio within 30 %; ``parameter_mismatch`` naming ``link_inertia`` on that axis is the
 issue's failure; a ``second_mode`` on an axis without one is a false alarm.
 
@@ -40,7 +40,8 @@ import tempfile
 import time
 from typing import Any
 
-from benchmarks.diagnosis import identify_scene, MODEL, scene_of
+from benchmarks.diagnosis_scene_run import identify_scene
+from benchmarks.diagnosis_scenes import MODEL, scene_of
 import numpy as np
 
 KINDS = ('link_mode', 'link_mode_beside', 'clean', 'random')
@@ -64,8 +65,8 @@ def mode_result(scene: dict[str, Any], report: dict[str, Any]) -> dict[str, Any]
         hidden, the resonance bands and what is unexplained.
 
     """
-    from benchmarks.diagnosis import _nominal_names
-    names = _nominal_names()
+    from benchmarks.diagnosis_scenes import nominal_names
+    names = nominal_names()
     truth = [(ax, p['second_mode']) for n, ax, p in scene['truth'] if n == 'second_mode']
     named = [e for e in report['effects'] if e['name'] == 'second_mode']
     axes = {names[ax] for ax, _ in truth}

@@ -24,7 +24,8 @@ a shipped file.
 import logging
 import re
 
-from benchmarks.diagnosis import identify_scene, scene_of
+from benchmarks.diagnosis_scene_run import identify_scene
+from benchmarks.diagnosis_scenes import scene_of
 from frf_ident.app.demo import DEMO_MODEL, estimate_and_diagnose
 from frf_ident.app.diagnosis_summary import CONTINUED
 from frf_ident.io.share import config_file

@@ -34,7 +34,7 @@ import json
 import os
 import sys
 
-from benchmarks.diagnosis import scene_of
+from benchmarks.diagnosis_scenes import scene_of
 from benchmarks.second_mode import (FREQUENCY_TOL, NOMINAL_KINDS, rates, run_mode_scene,
                                     success, sweep)
 import pytest

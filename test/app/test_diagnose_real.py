@@ -150,7 +150,7 @@ def test_kuka_standard_errors_match_the_spread_on_synthetic_halves():
     diagnosis_real` at 9a63d26: conservative most where one block holds much of what
     determines a parameter, axis 2's Coulomb friction in the first half).
     """
-    from benchmarks.diagnosis import kuka_synthetic_halves
+    from benchmarks.diagnosis_kuka_synthetic import kuka_synthetic_halves
     runs = 10
     syn = kuka_synthetic_halves(runs, seed=1)
     ratio = {}
@@ -231,7 +231,7 @@ def test_kuka_gravity_from_the_urdf_follows_the_authors_rigid_body_gravity(tmp_p
     assert np.corrcoef(g3, tau_g[:, 2])[0, 1] > 0.99
 
 
-#: directory with the authors' trajectories B.mat and C.mat (benchmarks.diagnosis.KUKA_BC_ENV)
+#: directory with the authors' trajectories B.mat and C.mat (benchmarks.diagnosis_kuka.KUKA_BC_ENV)
 KUKA_BC = Path(os.environ.get('KUKA_BC', '') or '/nonexistent')
 
 

@@ -29,8 +29,8 @@ import os
 from pathlib import Path
 import sys
 
-from benchmarks.diagnosis import (draw_scene, identification_config, KINDS, MODEL, PLANT,
-                                  run_scene, scene_of)
+from benchmarks.diagnosis_scene_run import identification_config, PLANT, run_scene
+from benchmarks.diagnosis_scenes import draw_scene, KINDS, MODEL, scene_of
 from frf_ident.app.diagnose import load_data
 from frf_ident.app.identify import run_identify
 from frf_ident.core.diagnosis.experiments.candidates import (coupled_ripples, fit_ripple,

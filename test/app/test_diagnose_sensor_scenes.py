@@ -31,7 +31,8 @@ the one scene per kind above); the same sweep with its rows printed is
 import os
 import sys
 
-from benchmarks.diagnosis import draw_scene, run_scene
+from benchmarks.diagnosis_scene_run import run_scene
+from benchmarks.diagnosis_scenes import draw_scene
 from benchmarks.diagnosis_sensor import sensor_sweep
 import numpy as np
 import pytest

@@ -34,7 +34,7 @@ from pathlib import Path
 from frf_ident.core.estimation.frd import FrequencyResponse
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.simulation.analytic import robot_frf_sampled
-from frf_ident.core.simulation.plant import state_space
+from frf_ident.core.simulation.linear import state_space
 from frf_ident.io.export import write_frf
 from frf_ident.io.model_file import load_model
 import numpy as np

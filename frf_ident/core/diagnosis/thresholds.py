@@ -229,7 +229,7 @@ RIGID_ROUNDS = 3
 NOISE_SMOOTH_LINES = 3
 #: a band of the residual marks missing structure when it spans at least this many lines (a
 #: mode the model lacks moves its axis' resonances: 7-53 lines in the second-mode scenes of
-#: benchmarks/diagnosis.py); a lone line or two is reported by the residual test, not read
+#: benchmarks/diagnosis_scenes.py); a lone line or two is reported by the residual test, not read
 MODE_MIN_LINES = 3
 #: a second mode is fitted in each axis' strongest bands, at most this many: the mode's own
 #: band need not be the strongest (its shift of the axis' first resonance can be: a 35.3 Hz

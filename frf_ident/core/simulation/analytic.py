@@ -18,7 +18,7 @@ Closed-form frequency responses of the linear flexible-joint robot (analytic tru
   (Jo s^2 + d s + k1) / (s (Jm Jo s^2 + (Jm + Jo)(d s + k1)))   (+ viscous friction)
 - :func:`robot_frf` — MIMO continuous-time tau_m -> dq_m with link inertial coupling and the
   axes' second modes (:func:`second_mode_stiffness`)
-- :func:`~frf_ident.core.simulation.plant.state_space` (defined with the plant) — linear
+- :func:`~frf_ident.core.simulation.linear.state_space` (the plant's linear part) — linear
   state-space model (A, B, C) of the robot, used by :func:`robot_frf_sampled`
 - :func:`robot_frf_sampled` — the exact FRF of the sampled plant as the simulation realises it:
   zero-order-hold input, input delay, velocity sampled (or differentiated encoder position)
@@ -29,7 +29,7 @@ from __future__ import annotations
 from typing import Sequence
 
 from frf_ident.core.model.params import RobotParams
-from frf_ident.core.simulation.plant import state_space
+from frf_ident.core.simulation.linear import state_space
 import numpy as np
 from scipy import linalg
 

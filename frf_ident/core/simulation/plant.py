@@ -28,7 +28,8 @@ gravity terms G sin(sum_j q_o,j + phi) (a link's weight about its own joint, or 
 joints it depends on for a coupled arm), an input delay and a torque limit.
 ``M_o`` is the link inertia matrix: diagonal ``link_inertia`` plus optional symmetric coupling,
 which makes the MIMO FRF non-diagonal and reciprocal. An axis' optional ``second_mode`` carries
-part of its link inertia on a spring and damper behind the link (linear, in :func:`state_space`).
+part of its link inertia on a spring and damper behind the link (linear, in
+:func:`~frf_ident.core.simulation.linear.state_space`).
 
 Measurement: motor position, optionally quantised by the encoder resolution; velocity either the
 true motor velocity or, like a real drive, the difference of quantised positions over one sample;
@@ -46,6 +47,12 @@ below Fc). Linear runs therefore match the analytic FRFs of
 with the substeps m as m^-2 for the smooth torques (stiffening spring, ripple) and as m^-1
 where the dynamics switch inside a substep (stick-slip transitions, backlash contacts):
 ``python -m benchmarks discretisation`` measures it per effect against the noise a record has.
+
+This module is the plant's Python API (:class:`FlexibleJointPlant`, :class:`SimResult`,
+:func:`static_deflection`). The linear part and its exact discretisation are in
+:mod:`frf_ident.core.simulation.linear`, the parameters packed for the kernels in
+:mod:`frf_ident.core.simulation.packed`, the compiled sample loop in
+:mod:`frf_ident.core.simulation.kernels`.
 """
 from __future__ import annotations
 
@@ -54,457 +61,10 @@ import math
 from typing import Any
 
 from frf_ident.core.model.params import AxisParams, RobotParams
-from frf_ident.core.simulation.controller import closed_loop_step
-import numba
+from frf_ident.core.simulation.kernels import NSCRATCH, simulate, step_one
+from frf_ident.core.simulation.packed import pack, ULIM
 import numpy as np
-from scipy import linalg
 
-# columns of the per-axis parameter matrix used by the kernels
-JM, K1, K2, BS, DAMP, BV, FC, BL, GRAV, ULIM, NPARAM = range(11)
-
-
-# --- packing for the compiled kernels ---------------------------------------------------------
-
-@dataclass
-class _Packed:
-    prm: np.ndarray       # (n, NPARAM)
-    ad: np.ndarray        # (nx, nx) state transition over one substep (nx = 4n + 2 modes)
-    ga: np.ndarray        # (nx, n) input matrices for the stage values at start,
-    gm: np.ndarray        # ... middle and end of a substep (quadratic interpolation)
-    gb: np.ndarray
-    gw: np.ndarray        # (nx, 2n) residual torques (motor side, link side), held
-    cg: np.ndarray        # (nx,) effect of the constant gravity torque over one substep
-    nonlinear: bool       # any residual torque (nonlinear spring, backlash, ripple)
-    gold: np.ndarray      # (m, nx, n) held command, delayed: part of substep s under the older
-    gnew: np.ndarray      # ... command u[k + offsets[s, 0, i]] and under the newer one
-    ra: np.ndarray        # (n, R) ripple amplitudes
-    rs: np.ndarray        # (n, R) spatial frequencies
-    rp: np.ndarray        # (n, R) phases
-    gamp: np.ndarray      # (n, G) gravity amplitudes G
-    gph: np.ndarray       # (n, G) gravity phases phi
-    gsel: np.ndarray      # (n, G, n) 1 where joint j's link position enters term g of axis i
-    offsets: np.ndarray   # (m, 2, n) int: sample offsets of the older / newer command
-    nbuf: int
-    enc: np.ndarray       # (n,) encoder resolution
-    vnoise: np.ndarray    # (n,)
-    tnoise: np.ndarray    # (n,)
-
-
-def _pack(params: RobotParams) -> _Packed:
-    n = params.n_axes
-    prm = np.zeros((n, NPARAM))
-    n_rip = max([len(a.torque_ripple) for a in params.axes] + [1])
-    ra, rs, rp = np.zeros((n, n_rip)), np.zeros((n, n_rip)), np.zeros((n, n_rip))
-    dt, m = params.dt, int(params.substeps)
-    n_g = max([len(a.gravity) for a in params.axes] + [1])
-    gamp, gph, gsel = np.zeros((n, n_g)), np.zeros((n, n_g)), np.zeros((n, n_g, n))
-    for i, a in enumerate(params.axes):
-        for j, g in enumerate(a.gravity):
-            gamp[i, j] = float(g['amplitude'])
-            gph[i, j] = float(g.get('phase', 0.0))
-            gsel[i, j, a.gravity_joints(params.joint_names, j)] = 1.0
-        prm[i, JM] = a.motor_inertia
-        prm[i, K1] = a.stiffness
-        nonlinear = a.stiffness_k2 is not None and a.stiffness_breakpoint is not None
-        prm[i, K2] = a.stiffness_k2 if nonlinear else a.stiffness
-        prm[i, BS] = a.stiffness_breakpoint if nonlinear else 0.0
-        prm[i, DAMP] = a.damping
-        prm[i, BV] = a.viscous_friction
-        prm[i, FC] = a.coulomb_friction
-        prm[i, BL] = a.backlash
-        prm[i, GRAV] = a.gravity_torque
-        prm[i, ULIM] = a.torque_limit
-        for j, rip in enumerate(a.torque_ripple):
-            ra[i, j] = float(rip['amplitude'])
-            rs[i, j] = float(rip['spatial_frequency'])
-            rp[i, j] = float(rip.get('phase', 0.0))
-    ad, ga, gm, gb, gw = _substep_matrices(params, dt / m)
-    offsets, gold, gnew = _delayed_hold_matrices(params)
-    nbuf = int(-offsets.min()) + 2
-    nonlinear = bool(np.any(ra != 0) or np.any(prm[:, BL] > 0) or np.any(gamp != 0)
-                     or np.any((prm[:, BS] > 0) & (prm[:, K2] != prm[:, K1])))
-    cg = gw[:, n:] @ (-prm[:, GRAV])
-    return _Packed(prm, ad, ga, gm, gb, gw, cg, nonlinear, gold, gnew, ra, rs, rp, gamp, gph,
-                   gsel, offsets, nbuf,
-                   np.array([a.encoder_resolution for a in params.axes]),
-                   np.array([a.velocity_noise for a in params.axes]),
-                   np.array([a.torque_noise for a in params.axes]))
-
-
-def state_space(params: RobotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """
-    Linear state space x' = A x + B tau of eqs. 20-22 (k1, d, viscous friction, coupling).
-
-    x = [q_m, v_m, q_o, v_o] (blocks of n), then [q_e, v_e] (blocks of one per axis with a
-    ``second_mode``, in axis order): the mode's inertia J_e sits on a spring k_e and damper d_e
-    behind its link, and the link's rigid inertia (:meth:`RobotParams.rigid_link_inertia_matrix`)
-    keeps the rest,
-
-        M_r ddq_o = k1 (q_m - q_o) + d (v_m - v_o) - k_e (q_o - q_e) - d_e (v_o - v_e)
-        J_e ddq_e = k_e (q_o - q_e) + d_e (v_o - v_e)
-
-    Returns (A, B, C_velocity, C_position).
-    """
-    n = params.n_axes
-    modes = [(i, a.second_mode_terms()) for i, a in enumerate(params.axes)
-             if a.second_mode is not None]
-    ne = len(modes)
-    jmi = np.diag([1.0 / a.motor_inertia for a in params.axes])
-    bv = np.diag([a.viscous_friction for a in params.axes])
-    k = np.diag([a.stiffness for a in params.axes])
-    d = np.diag([a.damping for a in params.axes])
-    moi = np.linalg.inv(params.rigid_link_inertia_matrix())
-    z, eye = np.zeros((n, n)), np.eye(n)
-    A = np.zeros((4 * n + 2 * ne, 4 * n + 2 * ne))
-    A[:4 * n, :4 * n] = np.block([
-        [z, eye, z, z],
-        [-jmi @ k, -jmi @ (d + bv), jmi @ k, jmi @ d],
-        [z, z, z, eye],
-        [moi @ k, moi @ d, -moi @ k, -moi @ d],
-    ])
-    vo = slice(3 * n, 4 * n)
-    for j, (i, (je, ke, de)) in enumerate(modes):
-        qe, ve = 4 * n + j, 4 * n + ne + j
-        A[qe, ve] = 1.0
-        for col, gain in ((2 * n + i, -ke), (qe, ke), (3 * n + i, -de), (ve, de)):
-            A[vo, col] += moi[:, i] * gain              # the mode's reaction on the links
-            A[ve, col] -= gain / je
-    B = np.zeros((A.shape[0], n))
-    B[n:2 * n] = jmi
-    C = np.zeros((n, A.shape[0]))
-    Cv, Cq = C.copy(), C
-    Cv[:, n:2 * n] = eye
-    Cq[:, :n] = eye
-    return A, B, Cv, Cq
-
-
-def link_torque_input(params: RobotParams) -> np.ndarray:
-    """Return the input matrix of a link-side torque per axis in :func:`state_space` (nx, n)."""
-    n = params.n_axes
-    nx = 4 * n + 2 * sum(a.second_mode is not None for a in params.axes)
-    out = np.zeros((nx, n))
-    out[3 * n:4 * n] = np.linalg.inv(params.rigid_link_inertia_matrix())
-    return out
-
-
-def _hold_response(A: np.ndarray, b: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
-    """(e^{A tau}, int_0^tau e^{A s} ds b) by one augmented matrix exponential."""
-    nx = A.shape[0]
-    M = np.zeros((nx + 1, nx + 1))
-    M[:nx, :nx] = A * tau
-    M[:nx, nx] = b * tau
-    E = linalg.expm(M)
-    return E[:nx, :nx], E[:nx, nx]
-
-
-def _delayed_hold_matrices(params: RobotParams):
-    """
-    Exact response to the zero-order-held command delayed by each axis' time_delay.
-
-    Over substep s of sample k (times [s h, (s+1) h) after t_k) axis i sees the command
-    u[k + floor((tau - delay_i)/dt)], which switches at most once, at a fraction phi of the
-    substep: x+ gets Gold u_old + Gnew u_new with Gold = e^{A h (1-phi)} Gamma(phi h) b_i and
-    Gnew = Gamma(h (1-phi)) b_i. Returns offsets (m, 2, n), Gold, Gnew (m, 4n, n).
-    """
-    A, B, _, _ = state_space(params)
-    n, m, dt = params.n_axes, int(params.substeps), params.dt
-    h = dt / m
-    nx = A.shape[0]
-    offsets = np.zeros((m, 2, n), dtype=np.int64)
-    gold, gnew = np.zeros((m, nx, n)), np.zeros((m, nx, n))
-    eps = 1e-9 * dt
-    for s in range(m):
-        for i, a in enumerate(params.axes):
-            o_old = math.floor((s * h + eps - a.time_delay) / dt)
-            o_new = math.floor(((s + 1) * h - eps - a.time_delay) / dt)
-            phi = 0.0
-            if o_new != o_old:
-                phi = (a.time_delay + (o_old + 1) * dt - s * h) / h
-            offsets[s, 0, i], offsets[s, 1, i] = o_old, o_new
-            e_rest, g_rest = _hold_response(A, B[:, i], h * (1.0 - phi))
-            _, g_first = _hold_response(A, B[:, i], h * phi)
-            gold[s, :, i] = e_rest @ g_first
-            gnew[s, :, i] = g_rest
-    return offsets, gold, gnew
-
-
-def _substep_matrices(params: RobotParams, h: float):
-    """
-    Exact discretisation of the linear part over one substep h.
-
-    Augmented exponential of [[A, Bu, 0, 0], [0, 0, I, 0], [0, 0, 0, I], [0, 0, 0, 0]] h gives
-    the responses to an input a + b s + c s^2 / 2; rewritten for the values at s = 0, h/2, h.
-    The residual torques enter like inputs: motor side through B, link side through the rigid
-    link inertia's inverse (:func:`link_torque_input`).
-    """
-    A, B, _, _ = state_space(params)
-    n = params.n_axes
-    nx = A.shape[0]
-    Bu = np.hstack([B, link_torque_input(params)])
-    nu = 2 * n
-    M = np.zeros((nx + 3 * nu, nx + 3 * nu))
-    M[:nx, :nx] = A
-    M[:nx, nx:nx + nu] = Bu
-    M[nx:nx + nu, nx + nu:nx + 2 * nu] = np.eye(nu)
-    M[nx + nu:nx + 2 * nu, nx + 2 * nu:] = np.eye(nu)
-    E = linalg.expm(M * h)
-    ad = E[:nx, :nx]
-    e0, e1, e2 = (E[:nx, nx + j * nu:nx + (j + 1) * nu] for j in range(3))
-    # u(s) = ua + beta s + gamma s^2 through (0, ua), (h/2, um), (h, ub); c = 2 gamma
-    ga = e0 - 3.0 / h * e1 + 4.0 / h ** 2 * e2
-    gm = 4.0 / h * e1 - 8.0 / h ** 2 * e2
-    gb = -1.0 / h * e1 + 4.0 / h ** 2 * e2
-    return (np.ascontiguousarray(ad), np.ascontiguousarray(ga[:, :n]),
-            np.ascontiguousarray(gm[:, :n]), np.ascontiguousarray(gb[:, :n]),
-            np.ascontiguousarray(e0))
-
-
-# --- compiled kernels -------------------------------------------------------------------------
-
-@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
-def _spring(e, k1, k2, bs):
-    """Deflection-dependent spring torque (eq. 2)."""
-    if bs > 0.0 and abs(e) > bs:
-        return math.copysign(k2 * (abs(e) - bs) + k1 * bs, e)
-    return k1 * e
-
-
-@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
-def _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, row):
-    """
-    Nonlinear residual torques beyond the linear model (k1, d) at flat state x.
-
-    Writes sc[row, :n] = motor side ripple - (tau_s - k1 dq) - (tau_d - d dv) and
-    sc[row, n:2n] = link side (tau_s - k1 dq) + (tau_d - d dv), with tau_s of eq. 2 behind the
-    backlash dead zone and the transmission damping acting only in contact, minus the
-    configuration-dependent gravity G sin(sum_j q_o,j + phi) on the link side. The constant
-    gravity torque is an input (see _exp_substep). Kernels index preallocated rows instead of
-    slicing, as array views cost reference counting in the hot loop.
-    """
-    n = prm.shape[0]
-    for i in range(n):
-        qm = x[i]
-        dq = qm - x[2 * n + i]
-        res = 0.0
-        e = dq
-        bl = prm[i, BL]
-        if bl > 0.0:
-            half = 0.5 * bl
-            if dq > half:
-                e = dq - half
-            elif dq < -half:
-                e = dq + half
-            else:
-                e = 0.0
-                res = -prm[i, DAMP] * (x[n + i] - x[3 * n + i])
-        res += _spring(e, prm[i, K1], prm[i, K2], prm[i, BS]) - prm[i, K1] * dq
-        rip = 0.0
-        for j in range(ra.shape[1]):
-            a = ra[i, j]
-            if a != 0.0:
-                rip += a * math.sin(rs[i, j] * qm + rp[i, j])
-        grav = 0.0
-        for j in range(gamp.shape[1]):
-            g = gamp[i, j]
-            if g != 0.0:
-                arg = gph[i, j]
-                for c in range(n):
-                    if gsel[i, j, c] != 0.0:
-                        arg += x[2 * n + c]
-                grav += g * math.sin(arg)
-        sc[row, i] = rip - res
-        sc[row, n + i] = res - grav
-
-
-# rows of the kernels' scratch array
-_UO, _UN, _FA, _FM, _FB, _LIN, _XP, _W1, _W2, _NSCRATCH = range(10)
-
-
-@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
-def _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp,
-                 gamp, gph, gsel, nonlinear, h):
-    """
-    One substep of the exponential integrator, then Coulomb friction.
-
-    Linear part exact: x+ = Ad x + Go uo + Gn un + cg for the delayed zero-order-held command
-    (older / newer value, rows _UO/_UN of sc), plus Ga fa + Gm fm + Gb fb for a feed-forward
-    torque quadratic through its values at start, middle and end of the substep; cg the
-    constant gravity load. Nonlinear residual torques w(x) by the exponential Heun
-    (trapezoidal) rule: x+ = lin + Gw (w(x) + w(x*)) / 2 with the predictor x* = lin + Gw w(x).
-    """
-    nx = x.shape[0]
-    n = prm.shape[0]
-    for r in range(nx):
-        acc = cg[r]
-        for c in range(nx):
-            acc += ad[r, c] * x[c]
-        for c in range(n):
-            acc += gold[s, r, c] * sc[_UO, c] + gnew[s, r, c] * sc[_UN, c]
-        if has_ff:
-            for c in range(n):
-                acc += ga[r, c] * sc[_FA, c] + gm[r, c] * sc[_FM, c] + gb[r, c] * sc[_FB, c]
-        sc[_LIN, r] = acc
-    if nonlinear:
-        _residual(x, prm, ra, rs, rp, gamp, gph, gsel, sc, _W1)
-        for r in range(nx):
-            acc = sc[_LIN, r]
-            for c in range(2 * n):
-                acc += gw[r, c] * sc[_W1, c]
-            sc[_XP, r] = acc
-        _residual(sc[_XP], prm, ra, rs, rp, gamp, gph, gsel, sc, _W2)
-        for r in range(nx):
-            acc = sc[_LIN, r]
-            for c in range(2 * n):
-                acc += 0.5 * gw[r, c] * (sc[_W1, c] + sc[_W2, c])
-            x[r] = acc
-    else:
-        for r in range(nx):
-            x[r] = sc[_LIN, r]
-    # Coulomb friction (eq. 1) as a set-valued force: the friction impulse over the substep is
-    # at most Fc h; if that suffices to stop the motor it sticks (the instant of the switch
-    # inside the substep is not located: first order in h across stick-slip transitions).
-    for i in range(n):
-        fc = prm[i, FC]
-        if fc > 0.0:
-            dvmax = fc * h / prm[i, JM]
-            v = x[n + i]
-            vnew = 0.0 if abs(v) <= dvmax else v - math.copysign(dvmax, v)
-            x[i] += 0.5 * h * (vnew - v)
-            x[n + i] = vnew
-
-
-@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
-def _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
-             cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc):
-    """
-    Advance the plant over one sample [t_k, t_k+dt).
-
-    Advance the plant over [t_k, t_k+dt): delayed zero-order-held commands from the ring
-    buffer plus an optional feed-forward torque on the stage grid uff[2 m k ... 2 m k + 2 m].
-    The total torque is limited to +-torque_limit (the feed-forward is cut where it would
-    exceed the limit together with the command).
-    """
-    n = prm.shape[0]
-    h = dt / m
-    # ring-buffer rows without an integer division per read: offsets lie in (-nbuf, 0]
-    kb = k % nbuf
-    for s in range(m):
-        for i in range(n):
-            lim = prm[i, ULIM]
-            ra_ = kb + offsets[s, 0, i]
-            rb_ = kb + offsets[s, 1, i]
-            if ra_ < 0:
-                ra_ += nbuf
-            if rb_ < 0:
-                rb_ += nbuf
-            a = min(max(buf[ra_, i], -lim), lim)
-            b = min(max(buf[rb_, i], -lim), lim)
-            sc[_UO, i] = a
-            sc[_UN, i] = b
-            if has_ff:
-                base = 2 * m * k + 2 * s
-                sc[_FA, i] = min(max(a + uff[base, i], -lim), lim) - a
-                sc[_FM, i] = min(max(b + uff[base + 1, i], -lim), lim) - b
-                sc[_FB, i] = min(max(b + uff[base + 2, i], -lim), lim) - b
-        _exp_substep(x, s, sc, has_ff, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp,
-                     gamp, gph, gsel, nonlinear, h)
-
-
-@numba.njit(cache=True, fastmath=True, error_model='numpy', inline='always')
-def _measure(x, qprev, enc, from_encoder, dt, vn, k, qout, vout):
-    """Encode position (quantised) and velocity (true or by differentiation) plus noise vn[k]."""
-    n = qout.shape[0]
-    for i in range(n):
-        q = x[i]
-        if enc[i] > 0.0:
-            q = enc[i] * math.floor(q / enc[i] + 0.5)
-        qout[i] = q
-        if from_encoder:
-            vout[i] = (q - qprev[i]) / dt + vn[k, i]
-        else:
-            vout[i] = x[n + i] + vn[k, i]
-
-
-# Without numba's reference counting (_nrt=False; the scratch arrays come from the caller):
-# the helpers inlined into the sample loop took and released a reference to each of their
-# ~20 array arguments per sample, atomic operations that dominated the run in `perf`. The
-# signals are bit-identical; the speed is `python -m benchmarks --markdown simulation`.
-@numba.njit(cache=True, fastmath=True, error_model='numpy', _nrt=False)
-def _simulate(x, qprev, integ, buf, r, u_ext, uff, has_ff, kp, ki, ulim_ctrl, closed, sos, zf,
-              m, dt, offsets, nbuf, prm, ad, gold, gnew, ga, gm, gb, gw, cg, ra, rs, rp, gamp, gph,
-              gsel, nonlinear, enc, from_encoder, vnoise, tnoise, qplan, kpos, has_plan, out_q,
-              out_v, out_u, out_x, keep_x, out_r, sc, work):
-    """
-    Run N samples. Closed loop: u = PI(r - y) + u_ext; open loop: u = u_ext (ZOH).
-
-    The closed loop's sample is :func:`~frf_ident.core.simulation.controller.closed_loop_step`
-    (shared with the MuJoCo plant): ``sos`` (n, n_sections, 6) and its state ``zf`` filter the
-    measured velocity in front of the PI (no sections, no filter); with a position plan
-    (``has_plan``) the velocity reference gets position feedback, r_k <- r_k + kpos (qplan_k -
-    q_k), as the excitation node does for moves; out_r holds the reference actually used.
-
-    ``sc`` (_NSCRATCH, nx) and ``work`` (4, n) are scratch arrays of the caller's (nx the
-    state's length, 4 n plus two per second mode).
-    ``uff`` adds a torque on the integrator's stage grid (continuous excitations). Fills
-    out_q, out_v, out_u (measured effort = commanded torque at the sample + torque noise) and
-    out_x (true states, N x 4 x n) where ``keep_x``. State arrays are updated in place so runs
-    can be chained.
-    """
-    n = r.shape[1]
-    N = r.shape[0]
-    qm, vm, e, u = work[0], work[1], work[2], work[3]
-    for k in range(N):
-        _measure(x, qprev, enc, from_encoder, dt, vnoise, k, qm, vm)
-        for i in range(n):
-            qprev[i] = qm[i]
-        if closed:
-            closed_loop_step(r, k, qm, vm, has_plan, kpos, qplan, sos, zf, integ, kp, ki,
-                             u_ext, ulim_ctrl, dt, e, u, out_r)
-        else:
-            for i in range(n):
-                u[i] = min(max(u_ext[k, i], -ulim_ctrl[i]), ulim_ctrl[i])
-        kb = k % nbuf
-        for i in range(n):
-            buf[kb, i] = u[i]
-            applied = u[i]
-            if has_ff:
-                applied += uff[2 * m * k, i]
-            applied = min(max(applied, -prm[i, ULIM]), prm[i, ULIM])
-            out_q[k, i] = qm[i]
-            out_v[k, i] = vm[i]
-            out_u[k, i] = applied + tnoise[k, i]
-            if keep_x:
-                for s in range(4):
-                    out_x[k, s, i] = x[s * n + i]
-        _advance(x, buf, k, offsets, nbuf, uff, has_ff, m, dt, prm, ad, gold, gnew, ga, gm, gb,
-                 gw, cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc)
-
-
-@numba.njit(cache=True, fastmath=True, error_model='numpy', _nrt=False)
-def _step_one(x, qprev, buf, u, offsets, nbuf, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw, cg,
-              ra, rs, rp, gamp, gph, gsel, nonlinear, enc, from_encoder, vnoise, sc, q, v):
-    """
-    Advance one sample for a command given from outside (plug-in step).
-
-    One sample of :func:`_simulate` for a command u given from outside (plug-in step):
-    the start position becomes qprev, u enters the delay buffer, the plant advances and the
-    measurement at the end of the sample goes to q, v. The buffer is left rebased (latest
-    command last), as :meth:`FlexibleJointPlant._rebase_buffer` leaves it.
-    """
-    n = u.shape[0]
-    _measure(x, qprev, enc, False, dt, vnoise, 0, q, v)
-    for i in range(n):
-        qprev[i] = q[i]
-        buf[0, i] = u[i]
-    _advance(x, buf, 0, offsets, nbuf, buf, False, m, dt, prm, ad, gold, gnew, ga, gm, gb, gw,
-             cg, ra, rs, rp, gamp, gph, gsel, nonlinear, sc)
-    for r in range(nbuf - 1):
-        for i in range(n):
-            buf[r, i], buf[r + 1, i] = buf[r + 1, i], buf[r, i]
-    _measure(x, qprev, enc, from_encoder, dt, vnoise, 0, q, v)
-
-
-# --- Python API -------------------------------------------------------------------------------
 
 @dataclass
 class SimResult:
@@ -557,7 +117,7 @@ class FlexibleJointPlant:
         else:
             from frf_ident.core.model.schema import default_robot, robot_from_dict
             self.params = robot_from_dict(config) if config else default_robot()
-        self._packed = _pack(self.params)
+        self._packed = pack(self.params)
         self.reset()
 
     @property
@@ -623,7 +183,7 @@ class FlexibleJointPlant:
         self.qprev = np.where(enc > 0, enc * np.floor(self.qprev / np.where(enc > 0, enc, 1)
                                                       + 0.5), self.qprev)
         self.buf = np.tile(hold, (self._packed.nbuf, 1))
-        self._scratch = np.zeros((_NSCRATCH, self.x.size))
+        self._scratch = np.zeros((NSCRATCH, self.x.size))
         self.k = 0
         if seed is not None or not hasattr(self, 'rng'):
             self.rng = np.random.default_rng(self.params.seed if seed is None else seed)
@@ -685,14 +245,14 @@ class FlexibleJointPlant:
             kp = ki = np.zeros(n)
             ulim, integ, closed = self.params.torque_limits(), np.zeros(n), False
             sos, zf = np.zeros((n, 0, 6)), np.zeros((n, 0, 2))
-        _simulate(self.x, self.qprev, integ, self.buf, r, u_ext, uff, has_ff, kp, ki, ulim,
-                  closed, sos, zf, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm,
-                  p.ad,
-                  p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.gamp, p.gph,
-                  p.gsel, p.nonlinear,
-                  p.enc, bool(self.params.velocity_from_encoder), vn, tn, qplan, kpos, has_plan,
-                  out_q, out_v, out_u, out_x, keep_states, out_r,
-                  np.zeros((_NSCRATCH, self.x.size)), np.zeros((4, n)))
+        simulate(self.x, self.qprev, integ, self.buf, r, u_ext, uff, has_ff, kp, ki, ulim,
+                 closed, sos, zf, int(self.params.substeps), self.dt, p.offsets, p.nbuf, p.prm,
+                 p.ad,
+                 p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs, p.rp, p.gamp, p.gph,
+                 p.gsel, p.nonlinear,
+                 p.enc, bool(self.params.velocity_from_encoder), vn, tn, qplan, kpos, has_plan,
+                 out_q, out_v, out_u, out_x, keep_states, out_r,
+                 np.zeros((NSCRATCH, self.x.size)), np.zeros((4, n)))
         t = (self.k + np.arange(N)) * self.dt
         self.k += N
         self._rebase_buffer(N)
@@ -718,9 +278,9 @@ class FlexibleJointPlant:
         u = np.clip(np.asarray(torque, dtype=float).reshape(self.n_axes), -lim, lim)
         vn, tn = self._noise(1)
         q, v = np.empty(self.n_axes), np.empty(self.n_axes)
-        _step_one(self.x, self.qprev, self.buf, u, p.offsets, p.nbuf, int(self.params.substeps),
-                  self.dt, p.prm, p.ad, p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs,
-                  p.rp, p.gamp, p.gph, p.gsel, p.nonlinear, p.enc,
-                  bool(self.params.velocity_from_encoder), vn, self._scratch, q, v)
+        step_one(self.x, self.qprev, self.buf, u, p.offsets, p.nbuf, int(self.params.substeps),
+                 self.dt, p.prm, p.ad, p.gold, p.gnew, p.ga, p.gm, p.gb, p.gw, p.cg, p.ra, p.rs,
+                 p.rp, p.gamp, p.gph, p.gsel, p.nonlinear, p.enc,
+                 bool(self.params.velocity_from_encoder), vn, self._scratch, q, v)
         self.k += 1
         return q, v, u + tn[0]

@@ -16,7 +16,7 @@ The closed loop around MuJoCo compiled: numba calls MuJoCo's C ``mj_step`` itsel
 
 A Python loop around ``mujoco.mj_step`` with the velocity PI in Python runs the iiwa 14 (3 axes,
 1 kHz) at about 20x real time here; the MuJoCo step alone is a few microseconds. This kernel is
-the sample loop of :func:`frf_ident.core.simulation.plant._simulate` for MuJoCo: measure the axes
+the sample loop of :func:`frf_ident.core.simulation.kernels.simulate` for MuJoCo: measure the axes
 (position, velocity plus noise), the project's compiled loop step
 (:func:`~frf_ident.core.simulation.controller.closed_loop_step`: plan feedback, filters and
 the PI step :class:`~frf_ident.core.simulation.controller.PIVelocity` runs, the same as our

@@ -23,7 +23,7 @@ truth here is the Monte Carlo: the spread of the values over the noise realisati
 from dataclasses import replace
 from pathlib import Path
 
-from benchmarks.diagnosis import identification_config
+from benchmarks.diagnosis_scene_run import identification_config
 from frf_ident.app.identify import run_identify
 from frf_ident.core.diagnosis.common import drive_reference, Effect
 from frf_ident.core.diagnosis.experiments.evaluator import Evaluator
