@@ -23,8 +23,11 @@ __all__ = ['from_control', 'import_table', 'load_map', 'read_frf', 'to_control',
 
 
 def __getattr__(name: str):  # the importer pulls in yaml/scipy.io only when used
-    """Load ``import_table`` and ``load_map`` from :mod:`frf_ident.io.importer` on first use."""
-    if name in ('import_table', 'load_map'):
+    """Load ``import_table`` (:mod:`frf_ident.io.importer`) and ``load_map`` on first use."""
+    if name == 'import_table':
         from . import importer
-        return getattr(importer, name)
+        return importer.import_table
+    if name == 'load_map':
+        from . import import_map
+        return import_map.load_map
     raise AttributeError(name)

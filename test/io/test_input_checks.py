@@ -21,7 +21,8 @@ from pathlib import Path
 
 from frf_ident.cli.main import main
 from frf_ident.errors import FrfIdentInputError, ModelFileError
-from frf_ident.io.importer import import_table, load_map
+from frf_ident.io.import_map import load_map
+from frf_ident.io.importer import import_table
 from frf_ident.io.model_file import load_model
 import numpy as np
 import pytest

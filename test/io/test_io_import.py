@@ -20,7 +20,8 @@ from frf_ident.bag import read_recording
 from frf_ident.cli import main
 from frf_ident.core.excitation.detect import detect_excitation
 from frf_ident.errors import FrfIdentInputError
-from frf_ident.io.importer import import_table, load_map
+from frf_ident.io.import_map import load_map
+from frf_ident.io.importer import import_table
 import numpy as np
 import pytest
 from scipy import signal

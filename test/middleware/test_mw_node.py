@@ -71,14 +71,14 @@ def test_wall_timer_and_cancel(domain_env):
 def test_ros_discovery_info_lists_node_entities(domain_env):
     from cyclonedds.core import Policy, Qos
     from cyclonedds.sub import DataReader
-    from frf_ident.middleware import dds_backend as dds
+    from frf_ident.middleware import dds_context
     from frf_ident.middleware import ros_types as rt
     node = mw.create_node('mw_graph_node')
     pub = node.create_publisher(mw.msg('std_msgs/msg/String'), '/frf/experiment',
                                 mw.qos_transient_local())
     sub = node.create_subscription(mw.msg('sensor_msgs/msg/JointState'), '/joint_states',
                                    lambda m: None, 10)
-    ctx = dds._get_context()
+    ctx = dds_context.get_context()
     reader = DataReader(ctx.participant,
                         ctx.topic('ros_discovery_info', rt.ParticipantEntitiesInfo),
                         Qos(Policy.Reliability.Reliable(10**9), Policy.Durability.TransientLocal,
@@ -132,14 +132,14 @@ def _xml_items(text: str) -> list:
 
 
 def test_localhost_config_equals_shipped_xml():
-    from frf_ident.middleware.dds_backend import LOCALHOST_CONFIG
+    from frf_ident.middleware.dds_context import LOCALHOST_CONFIG
     shipped = Path(__file__).resolve().parents[2] / 'config' / 'cyclonedds-localhost.xml'
     assert _xml_items(LOCALHOST_CONFIG) == _xml_items(shipped.read_text())
 
 
 GUARDED_CHILD = """
 import os
-from frf_ident.middleware import dds_backend as dds
+from frf_ident.middleware import dds_context as dds
 real_domain, real_participant, made = dds.Domain, dds.DomainParticipant, []
 def domain(domain_id, config):
     made.append(config)

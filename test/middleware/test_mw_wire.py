@@ -16,7 +16,7 @@
 import dataclasses
 
 from frf_ident.middleware import ros_types as rt
-from frf_ident.middleware.dds_backend import resolve_name
+from frf_ident.middleware.dds_wire import resolve_name
 import numpy as np
 import pytest
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
