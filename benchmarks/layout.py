@@ -17,8 +17,9 @@ The house's floor plan in numbers, now and at an earlier revision, side by side.
 ``python -m benchmarks layout`` (``FRF_LAYOUT_BEFORE=<rev>``, default the revision before issue
 53's floor plan): import cycles between modules, upward arrows between core's subpackages (in
 the order of .importlinter's core-floors contract), core/diagnosis' largest module and
-longest function and how many exceed 400 lines / 80 lines, public functions that return a
-``dict``, and the distinct ``meta`` keys the code reads and the layers that read them.
+longest function and how many exceed 400 lines / 80 lines, the package's modules over 600 lines
+(the house rule: one concept per module), public functions that return a ``dict``, and the
+distinct ``meta`` keys the code reads and the layers that read them.
 """
 from __future__ import annotations
 
@@ -115,6 +116,12 @@ def diagnosis_sizes(root: Path) -> tuple[int, int, int, int]:
     return big, long_, n_big, n_long
 
 
+def long_modules(root: Path, limit: int = 600) -> tuple[int, int]:
+    """Return how many modules of frf_ident exceed ``limit`` lines, and the largest one's."""
+    sizes = [len(p.read_text().splitlines()) for p in (root / 'frf_ident').rglob('*.py')]
+    return sum(n > limit for n in sizes), max(sizes)
+
+
 def dict_returning(root: Path) -> int:
     """Return how many public functions and methods are annotated to return a dict."""
     n = 0
@@ -154,10 +161,12 @@ def measure(root: Path) -> dict[str, str]:
     graph = imports(root)
     big, long_, n_big, n_long = diagnosis_sizes(root)
     keys, layers = meta_keys(root)
+    n_long_modules, largest = long_modules(root)
     return {'import cycles': str(cycles(graph)),
             'upward arrows inside core': str(len(upward_arrows(graph))),
             'core/diagnosis: largest module, longest function [lines]': f'{big}, {long_}',
             'core/diagnosis: modules > 400 lines, functions > 80 lines': f'{n_big}, {n_long}',
+            'frf_ident: modules > 600 lines, the largest [lines]': f'{n_long_modules}, {largest}',
             'public functions returning a dict': str(dict_returning(root)),
             'meta keys read, in how many layers': f'{keys} in {layers}'}
 
