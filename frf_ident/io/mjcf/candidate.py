@@ -37,9 +37,10 @@ from frf_ident.core.model.params import MjcfSource, RobotParams
 from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.errors import MjcfError
-from frf_ident.io.mjcf.drive_map import JointDrive
-from frf_ident.io.mjcf.export import drive_spec, MjcfExport
+from frf_ident.io.mjcf.drive_map import JointDrive, MODE_SUFFIX
+from frf_ident.io.mjcf.export import drive_spec, MjcfExport, write_drives
 from frf_ident.io.mjcf.held import Held, held_drives
+from frf_ident.io.mjcf.link_mode import read_mode
 from frf_ident.io.mjcf.plant import MujocoPlant
 from frf_ident.io.mjcf.robot import load_robot, load_spec, MjcfRobot
 import mujoco
@@ -57,13 +58,16 @@ def read_drives(robot: MjcfRobot) -> list[JointDrive]:
     out = []
     for i, name in enumerate(robot.axes):
         v, lv = robot.vadr[i], robot.link_vadr[i]
+        mj = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name + MODE_SUFFIX)
+        mode = {} if mj < 0 else dict(zip(('mode_inertia', 'mode_stiffness', 'mode_damping'),
+                                          read_mode(m, mj)))
         out.append(JointDrive(
             name, armature=float(m.dof_armature[v]), damping=float(m.dof_damping[v]),
             frictionloss=float(m.dof_frictionloss[v]),
             stiffness=float(m.jnt_stiffness[m.dof_jntid[lv]]) if lv >= 0 else None,
             link_damping=float(m.dof_damping[lv]) if lv >= 0 else 0.0,
             torque_limit=float(robot.torque_limit[i]),
-            delay=float(m.actuator_delay[robot.actuator[i]])))
+            delay=float(m.actuator_delay[robot.actuator[i]]), **mode))
     return out
 
 
@@ -172,11 +176,12 @@ class MjcfModels:
         simulates (the same drive terms and time step).
         """
         path = Path(path)
-        spec = self.spec(robot)
+        spec, modes = write_drives(mujoco.MjSpec.from_string(self.text),
+                                   self.held(robot).drives, timestep=self.step(robot))
         spec.compile()
         path.write_text(spec.to_xml())
         step = self.step(robot)
         notes = [] if step == self.timestep else [
             f'option timestep {step:g} s (the MJCF has {self.timestep:g} s): the integrator '
             f'check found the coarser step moves the simulation']
-        return MjcfExport(path, self.held(robot).limitations, notes)
+        return MjcfExport(path, self.held(robot).limitations + modes, notes)

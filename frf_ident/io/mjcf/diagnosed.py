@@ -44,7 +44,9 @@ EXTENDED_XML = 'extended_model.xml'
 TERMS = {'armature': 'joint@armature', 'damping': 'joint@damping',
          'frictionloss': 'joint@frictionloss', 'stiffness': '<joint>_link@stiffness',
          'link_damping': '<joint>_link@damping', 'delay': 'actuator@delay',
-         'torque_limit': 'actuator@ctrlrange x gear'}
+         'torque_limit': 'actuator@ctrlrange x gear',
+         'mode_inertia': '<joint>_mode_body inertia about the hinge (0: no second mode)',
+         'mode_stiffness': '<joint>_mode@stiffness', 'mode_damping': '<joint>_mode@damping'}
 
 
 @dataclass(frozen=True)

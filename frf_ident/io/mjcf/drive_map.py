@@ -21,10 +21,12 @@ A flexible joint is two hinges in series on the same axis: the actuated motor-si
 the joint's name and carries the rotor (``armature``), its viscous friction (``damping``) and
 dry friction (``frictionloss``); a child body holds the link-side hinge ``<joint>`` +
 :data:`LINK_SUFFIX` with ``stiffness`` and ``damping`` on the relative angle (the spring of
-eqs. 1-2). A joint without that child hinge is rigid. The actuator is a torque motor on the
-motor-side hinge: our command u [N m] is ``gear * ctrl``, the torque MuJoCo applies
-``gainprm[0] * u`` (1 for a ``motor``: the torque constant's ratio to its nominal value), the
-limit ``gear * ctrlrange``.
+eqs. 1-2). A joint without that child hinge is rigid. An axis' ``second_mode`` is a further
+child body of the link body, holding the hinge ``<joint>`` + :data:`MODE_SUFFIX` on the same
+axis with the mode's inertia, ``stiffness`` and ``damping`` (frf_ident/io/mjcf/link_mode.py).
+The actuator is a torque motor on the motor-side hinge: our command u [N m] is
+``gear * ctrl``, the torque MuJoCo applies ``gainprm[0] * u`` (1 for a ``motor``: the torque
+constant's ratio to its nominal value), the limit ``gear * ctrlrange``.
 
 Nothing here imports mujoco: these are names, numbers and the limits of the mapping.
 """
@@ -35,12 +37,16 @@ import math
 
 from frf_ident.core.model.params import AxisParams
 
-__all__ = ['JointDrive', 'LINK_SUFFIX', 'Limitation', 'MAPPING', 'MOTOR_BODY_INERTIA',
-           'MOTOR_BODY_MASS', 'RIGID_ANTIRESONANCE_NYQUIST', 'RIGID_MOTOR_SHARE',
-           'drive_from_axis', 'limitations', 'mapping_table', 'rigid_split']
+__all__ = ['JointDrive', 'LINK_SUFFIX', 'Limitation', 'MAPPING', 'MODE_BODY_MASS',
+           'MODE_SUFFIX', 'MOTOR_BODY_INERTIA', 'MOTOR_BODY_MASS', 'RIGID_ANTIRESONANCE_NYQUIST',
+           'RIGID_MOTOR_SHARE',
+           'drive_from_axis', 'limitations', 'mapping_table', 'mode_terms', 'rigid_split']
 
 #: name of the link-side hinge of a series-elastic joint: ``<joint name>`` + this
 LINK_SUFFIX = '_link'
+#: name of the hinge of an axis' second, link-side mode: ``<joint name>`` + this (its body:
+#: ``<joint name>`` + this + ``_body``)
+MODE_SUFFIX = '_mode'
 
 #: mass [kg] and principal inertia [kg m^2] of the body between the two hinges: MuJoCo refuses a
 #: moving body without mass (``mjMINVAL``), so the motor-side body gets this much; the rotor is
@@ -48,6 +54,9 @@ LINK_SUFFIX = '_link'
 #: measured FRF can see (the smallest armature of a real drive is ~1e-3 kg m^2 at the joint)
 MOTOR_BODY_MASS = 1e-6
 MOTOR_BODY_INERTIA = 1e-9
+#: mass [kg] of the body of a second mode (on the hinge axis: its inertia, not its mass, is the
+#: mode); taken from the link body, so the arm's mass and centre of mass stay the MJCF's
+MODE_BODY_MASS = 1e-6
 
 #: our parameters of a rigid MJCF joint (no link-side hinge), an approximation: the two-mass
 #: model needs a spring and a motor inertia, so the joint gets a spring whose antiresonance lies
@@ -120,6 +129,13 @@ MAPPING: tuple[Row, ...] = (
         '`backlash`: not simulated, listed in `rejected`'),
     Row('torque_ripple', '-', 'N m', 'not representable (no position-periodic joint torque)',
         '`torque_ripple`: not simulated, listed in `rejected`'),
+    Row('second_mode', f'child body of the link body: inertia J_e about hinge '
+        f'`<joint>{MODE_SUFFIX}` (same axis), its `stiffness` J_e (2 pi f)^2 and `damping` '
+        '2 zeta J_e 2 pi f', 'Hz, -, kg m^2',
+        'exact: J_e taken from the link body (standalone: link_inertia - J_e; an MJCF base: '
+        "its link body's inertial less the mode's, where that stays a valid inertia, else "
+        'kept and reported: the low-frequency inertia +J_e)',
+        '`second_mode` -> the mode body and hinge (simulated so)'),
     Row('encoder_resolution, velocity_noise, torque_noise', '-', '',
         'measurement, not the MJCF: the model file keeps them, the plant applies them',
         "- (the record's)"),
@@ -171,6 +187,12 @@ class JointDrive:
         ``gear * ctrlrange`` [N m].
     delay : float
         Actuator ``delay`` [s].
+    mode_inertia : float
+        Inertia [kg m^2] of the second mode's body about its hinge; 0: no second mode.
+    mode_stiffness : float
+        ``stiffness`` [N m/rad] of the second mode's hinge.
+    mode_damping : float
+        ``damping`` [N m s/rad] of the second mode's hinge.
 
     """
 
@@ -182,6 +204,19 @@ class JointDrive:
     link_damping: float
     torque_limit: float
     delay: float = 0.0
+    mode_inertia: float = 0.0
+    mode_stiffness: float = 0.0
+    mode_damping: float = 0.0
+
+    @property
+    def has_mode(self) -> bool:
+        """Tell whether the joint carries a second, link-side mode."""
+        return self.mode_inertia > 0
+
+    @property
+    def mode_joint(self) -> str:
+        """Return the name of the second mode's hinge."""
+        return self.joint + MODE_SUFFIX
 
     @property
     def elastic(self) -> bool:
@@ -231,7 +266,26 @@ def drive_from_axis(axis: AxisParams, *, elastic: bool = True) -> JointDrive:
                       frictionloss=float(axis.coulomb_friction),
                       stiffness=float(axis.stiffness) if elastic else None,
                       link_damping=float(axis.damping) if elastic else 0.0,
-                      torque_limit=float(axis.torque_limit), delay=float(axis.time_delay))
+                      torque_limit=float(axis.torque_limit), delay=float(axis.time_delay),
+                      **mode_terms(axis))
+
+
+def mode_terms(axis: AxisParams) -> dict[str, float]:
+    """
+    Return the :class:`JointDrive` fields of ``axis``' second mode (empty without one).
+
+    Examples
+    --------
+    >>> a = AxisParams(link_inertia=2.0, second_mode={'frequency_hz': 50.0,
+    ...                'damping_ratio': 0.0, 'inertia': 0.5})
+    >>> round(mode_terms(a)['mode_stiffness'])
+    49348
+
+    """
+    terms = axis.second_mode_terms()
+    if terms is None:
+        return {}
+    return dict(zip(('mode_inertia', 'mode_stiffness', 'mode_damping'), terms))
 
 
 def limitations(axis: AxisParams) -> list[Limitation]:

@@ -20,8 +20,10 @@ each axis' drive terms on the joint of the same name, inserting the series-elast
 :func:`write_mjcf` reports per axis how far ours differs from it at the pose. Without one it
 writes a standalone MJCF: one two-mass chain per axis (a motor body with the rotor as
 ``armature``, a link body whose inertia about the hinge is ``link_inertia``), no gravity, no
-link coupling (a star of independent axes cannot hold it: reported). Terms MJCF cannot hold
-are reported with what was written instead, never dropped silently.
+link coupling (a star of independent axes cannot hold it: reported). An axis' ``second_mode``
+becomes a child body of its link body on a hinge of its own
+(:func:`~frf_ident.io.mjcf.link_mode.add_modes`), its inertia taken from the link body. Terms
+MJCF cannot hold are reported with what was written instead, never dropped silently.
 """
 from __future__ import annotations
 
@@ -31,12 +33,13 @@ from pathlib import Path
 from frf_ident.core.model.params import RobotParams
 from frf_ident.io.mjcf.drive_map import (drive_from_axis, JointDrive, Limitation, limitations,
                                          LINK_SUFFIX, MOTOR_BODY_INERTIA, MOTOR_BODY_MASS)
+from frf_ident.io.mjcf.link_mode import add_modes
 from frf_ident.io.mjcf.robot import load_spec
 from frf_ident.io.mjcf.spec_edit import set_drive, split_elastic
 import mujoco
 import numpy as np
 
-__all__ = ['MjcfExport', 'drive_spec', 'write_mjcf']
+__all__ = ['MjcfExport', 'drive_spec', 'write_drives', 'write_mjcf']
 
 #: spacing [m] of the axes of a standalone MJCF along x (they do not touch: no geoms anyway)
 AXIS_SPACING = 1.0
@@ -141,9 +144,10 @@ def write_mjcf(robot: RobotParams, path: str | Path, *, base: str | Path | None 
     lims = [x for a in robot.axes for x in limitations(a)]
     if base is None:
         spec, notes = _standalone(robot)
-        spec = drive_spec(spec, drives)
     else:
-        spec, notes = drive_spec(load_spec(base), drives), []
+        spec, notes = load_spec(base), []
+    spec, more = write_drives(spec, drives)
+    lims += more
     spec.compile()
     path.write_text(spec.to_xml())
     if base is not None and robot.mjcf is not None:
@@ -153,8 +157,17 @@ def write_mjcf(robot: RobotParams, path: str | Path, *, base: str | Path | None 
 
 def drive_spec(spec: mujoco.MjSpec, drives: list[JointDrive], *,
                timestep: float | None = None) -> mujoco.MjSpec:
+    """Return :func:`write_drives`' spec (what it could not write exactly left out)."""
+    return write_drives(spec, drives, timestep=timestep)[0]
+
+
+def write_drives(spec: mujoco.MjSpec, drives: list[JointDrive], *,
+                 timestep: float | None = None) -> tuple[mujoco.MjSpec, list[Limitation]]:
     """
     Return ``spec`` with the drive terms written: the elastic joints split, each joint's terms.
+
+    The second modes are added (:func:`~frf_ident.io.mjcf.link_mode.add_modes`) after the
+    elastic pairs, so each sits behind its link-side hinge.
 
     Parameters
     ----------
@@ -168,18 +181,21 @@ def drive_spec(spec: mujoco.MjSpec, drives: list[JointDrive], *,
 
     Returns
     -------
-    mujoco.MjSpec
+    spec : mujoco.MjSpec
         The edited spec (not compiled).
+    limitations : list of Limitation
+        The second modes written inexactly (:func:`~frf_ident.io.mjcf.link_mode.add_modes`).
 
     """
     spec = split_elastic(spec, [d.joint for d in drives if d.elastic])
     if timestep is not None:
         spec.option.timestep = float(timestep)
+    lims = add_modes(spec, drives)
     for d in drives:
         set_drive(spec, d)
         _set_delay(spec.actuator(_actuator_name(spec, d.joint)), d.delay,
                    float(spec.option.timestep))
-    return spec
+    return spec, lims
 
 
 def _actuator_name(spec: mujoco.MjSpec, joint: str) -> str:

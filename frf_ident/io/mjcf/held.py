@@ -32,7 +32,8 @@ relative to what the nominal MJCF has, by :data:`~frf_ident.io.mjcf.drive_map.MA
 - a joint that is elastic in the MJCF keeps its pair: ``armature`` = motor inertia less what
   the motor-side body adds.
 - ``damping`` (motor side) = viscous friction, ``frictionloss`` = Coulomb friction, actuator
-  ``delay`` = time delay, ``ctrlrange`` from the torque limit, exactly.
+  ``delay`` = time delay, ``ctrlrange`` from the torque limit, exactly; a ``second_mode`` as
+  the mode body and hinge (frf_ident/io/mjcf/link_mode.py).
 
 What the MJCF cannot hold is returned as a :class:`~frf_ident.io.mjcf.drive_map.Limitation`
 with what was written instead, never dropped: a link inertia or coupling that differs from the
@@ -47,7 +48,7 @@ from dataclasses import dataclass, field
 import math
 
 from frf_ident.core.model.params import AxisParams, RobotParams
-from frf_ident.io.mjcf.drive_map import JointDrive, Limitation, limitations
+from frf_ident.io.mjcf.drive_map import JointDrive, Limitation, limitations, mode_terms
 import numpy as np
 
 __all__ = ['Held', 'LINK_INERTIA_TOLERANCE', 'SPRING_MAX_STEP_ANGLE', 'held_drives']
@@ -115,7 +116,8 @@ def _axis(a: AxisParams, a0: AxisParams, d0: JointDrive, h: float, fs: float
     """One axis: rigid or elastic, the inertias relative to the nominal view."""
     lims: list[Limitation] = []
     common = {'damping': float(a.viscous_friction), 'frictionloss': float(a.coulomb_friction),
-              'torque_limit': float(a.torque_limit), 'delay': float(a.time_delay)}
+              'torque_limit': float(a.torque_limit), 'delay': float(a.time_delay),
+              **mode_terms(a)}
     spring = not d0.elastic and abs(a.stiffness / a0.stiffness - 1.0) > SPRING_CHANGE
     w_r = math.sqrt(a.stiffness * (1.0 / a.motor_inertia + 1.0 / a.link_inertia))
     if spring and w_r * h > SPRING_MAX_STEP_ANGLE:

@@ -25,7 +25,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from frf_ident.io.mjcf.drive_map import rigid_split
+from frf_ident.io.mjcf.drive_map import MODE_SUFFIX, rigid_split
+from frf_ident.io.mjcf.link_mode import read_mode
 from frf_ident.io.mjcf.robot import MjcfRobot
 import mujoco
 import numpy as np
@@ -136,6 +137,13 @@ def _link_gravity(robot: MjcfRobot, qpos: np.ndarray, t: np.ndarray,
     return (t.T @ d.qfrc_bias)[link_cols]
 
 
+def _second_mode(inertia: float, stiffness: float, damping: float) -> dict[str, float]:
+    """Return the model file's ``second_mode`` of a mode hinge's inertia, spring, damper."""
+    w = np.sqrt(stiffness / inertia)
+    return {'frequency_hz': float(w / (2 * np.pi)),
+            'damping_ratio': float(damping / (2 * inertia * w)), 'inertia': float(inertia)}
+
+
 def axis_values(robot: MjcfRobot, fs: float) -> tuple[list[dict], np.ndarray]:
     """
     Return our parameters of the MJCF at rest at its pose (MJCF -> ours, docs/mujoco.md).
@@ -145,7 +153,8 @@ def axis_values(robot: MjcfRobot, fs: float) -> tuple[list[dict], np.ndarray]:
     ``viscous_friction`` (motor-side damping), ``coulomb_friction`` (frictionloss),
     ``torque_limit`` (gear x ctrlrange), ``gravity_torque`` and ``gravity`` (g(q0) and
     dg/dq at the pose q0 as terms dg/dq sin(q - q0), in the MJCF's own joint coordinates, so
-    positions are the plant's); a rigid joint by
+    positions are the plant's), ``second_mode`` where the axis has the mode hinge (its inertia
+    is in ``link_inertia``: the mode at rest moves with the link); a rigid joint by
     :func:`~frf_ident.io.mjcf.drive_map.rigid_split` (approximate).
 
     Returns
@@ -194,6 +203,9 @@ def axis_values(robot: MjcfRobot, fs: float) -> tuple[list[dict], np.ndarray]:
             jm, jo, k = rigid_split(float(inertia[i, i]) - arm, arm, fs)
             inertia[i, i] = jo
             entry.update(motor_inertia=jm, link_inertia=jo, stiffness=k, damping=0.0)
+        mj = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name + MODE_SUFFIX)
+        if mj >= 0:
+            entry['second_mode'] = _second_mode(*read_mode(m, mj))
         entry['gravity_torque'] = float(g0[i])
         # in the MJCF's joint coordinates: G sin(q_j - q0_j) = dg/dq (q_j - q0_j) near q0
         entry['gravity'] = [{'amplitude': float(grad[i, j]),

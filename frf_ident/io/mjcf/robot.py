@@ -30,6 +30,7 @@ from pathlib import Path
 
 from frf_ident.core.model.params import MjcfSource
 from frf_ident.errors import MjcfError
+from frf_ident.io.mjcf.link_mode import mode_joint
 from frf_ident.io.mjcf.spec_edit import find_actuator, link_joint, lock_joint
 import mujoco
 import numpy as np
@@ -245,7 +246,7 @@ def load_robot(source: MjcfSource, axes: list[str], *,
     Returns
     -------
     MjcfRobot
-        The simulation model with only the axes (and their link-side hinges) free.
+        The simulation model with only the axes (their link-side and second-mode hinges) free.
 
     Raises
     ------
@@ -262,12 +263,15 @@ def load_robot(source: MjcfSource, axes: list[str], *,
     for a in axes:
         if a not in names or spec.joint(a).type != mujoco.mjtJoint.mjJNT_HINGE:
             raise MjcfError(f'axis {a!r}: not a hinge joint of {source.file} (its hinges: '
-                            f'{sorted(n for n in names if not n.endswith("_link"))})')
+                            f'{sorted(n for n in names if not n.endswith(("_link", "_mode")))})')
         find_actuator(spec, a)
         keep.add(a)
         lj = link_joint(spec, a)
         if lj is not None:
             keep.add(lj.name)
+        mj = mode_joint(spec, a)
+        if mj is not None:
+            keep.add(mj.name)
     for j in list(spec.joints):
         if j.name in keep:
             continue
