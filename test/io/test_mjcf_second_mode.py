@@ -118,7 +118,7 @@ def test_iiwa_second_mode_poles_match_the_model(tmp_path, inertia, exact):
     mode_lines = [str(x) for x in exp.limitations if x.key == 'second_mode']
     assert bool(mode_lines) != exact
     if not exact:
-        assert 'low-frequency inertia is 0.1 kg m^2 larger' in mode_lines[0]
+        assert 'low-frequency inertia is 0.1 kg m^2 larger, 11.6 % of' in mode_lines[0]
     written = load_robot(MjcfSource(str(exp.path), None, rob.mjcf.pose), rob.joint_names)
     got = _mujoco_hz(transition(written, rob.dt))
     # the expectation: the two-mass + mode model at the pose; approximated, the link keeps its
@@ -176,3 +176,11 @@ def test_diagnosis_writes_and_simulates_the_mode(tmp_path):
     back = axis_values(written, rob.sample_rate)[0][0]
     assert back['second_mode']['frequency_hz'] == pytest.approx(45.0, rel=1e-5)
     assert back['link_inertia'] == pytest.approx(rob.axes[0].link_inertia, rel=1e-5)
+
+
+def test_a_mode_the_time_step_cannot_integrate_is_reported(tmp_path):
+    rob = replace(default_robot(), link_coupling=None)
+    mode = {'frequency_hz': 400.0, 'damping_ratio': 0.02, 'inertia': 10.0}    # w h = 2.5
+    rob = replace(rob, axes=[replace(rob.axes[0], second_mode=mode)] + list(rob.axes[1:]))
+    lines = [str(x) for x in export.write_mjcf(rob, tmp_path / 'model.xml').limitations]
+    assert any('joint_1: second_mode' in x and 'cannot integrate' in x for x in lines), lines

@@ -177,7 +177,8 @@ class MjcfModels:
         """
         path = Path(path)
         spec, modes = write_drives(mujoco.MjSpec.from_string(self.text),
-                                   self.held(robot).drives, timestep=self.step(robot))
+                                   self.held(robot).drives, timestep=self.step(robot),
+                                   link_inertia={a.name: a.link_inertia for a in robot.axes})
         spec.compile()
         path.write_text(spec.to_xml())
         step = self.step(robot)

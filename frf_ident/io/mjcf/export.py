@@ -146,7 +146,8 @@ def write_mjcf(robot: RobotParams, path: str | Path, *, base: str | Path | None 
         spec, notes = _standalone(robot)
     else:
         spec, notes = load_spec(base), []
-    spec, more = write_drives(spec, drives)
+    spec, more = write_drives(spec, drives,
+                              link_inertia={a.name: a.link_inertia for a in robot.axes})
     lims += more
     spec.compile()
     path.write_text(spec.to_xml())
@@ -161,8 +162,9 @@ def drive_spec(spec: mujoco.MjSpec, drives: list[JointDrive], *,
     return write_drives(spec, drives, timestep=timestep)[0]
 
 
-def write_drives(spec: mujoco.MjSpec, drives: list[JointDrive], *,
-                 timestep: float | None = None) -> tuple[mujoco.MjSpec, list[Limitation]]:
+def write_drives(spec: mujoco.MjSpec, drives: list[JointDrive], *, timestep: float | None = None,
+                 link_inertia: dict[str, float] | None = None
+                 ) -> tuple[mujoco.MjSpec, list[Limitation]]:
     """
     Return ``spec`` with the drive terms written: the elastic joints split, each joint's terms.
 
@@ -178,6 +180,8 @@ def write_drives(spec: mujoco.MjSpec, drives: list[JointDrive], *,
         One per joint to write; ``stiffness`` not None inserts the series-elastic pair.
     timestep : float, optional
         MuJoCo's ``option timestep`` [s] to write (default: the MJCF's).
+    link_inertia : dict of str to float, optional
+        Joint -> link inertia at the pose [kg m^2], named in a second mode's Limitation.
 
     Returns
     -------
@@ -190,7 +194,7 @@ def write_drives(spec: mujoco.MjSpec, drives: list[JointDrive], *,
     spec = split_elastic(spec, [d.joint for d in drives if d.elastic])
     if timestep is not None:
         spec.option.timestep = float(timestep)
-    lims = add_modes(spec, drives)
+    lims = add_modes(spec, drives, link_inertia=link_inertia)
     for d in drives:
         set_drive(spec, d)
         _set_delay(spec.actuator(_actuator_name(spec, d.joint)), d.delay,

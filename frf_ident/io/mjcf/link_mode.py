@@ -147,12 +147,14 @@ def _set_terms(j, d: JointDrive) -> None:
     j.damping = [d.mode_damping, 0.0, 0.0]
 
 
-def add_modes(spec: mujoco.MjSpec, drives: list[JointDrive]) -> list[Limitation]:
+def add_modes(spec: mujoco.MjSpec, drives: list[JointDrive], *,
+              link_inertia: dict[str, float] | None = None) -> list[Limitation]:
     """
     Write each drive's second mode into ``spec`` (in place; after the elastic pairs are in).
 
     A joint that already has its mode hinge gets the drive's ``stiffness`` and ``damping``
-    (its body's inertia kept: reported where it is not the drive's).
+    (its body's inertia kept: reported where it is not the drive's). ``link_inertia``: joint
+    -> its link inertia at the pose [kg m^2], to say what share of it an approximation adds.
 
     Returns
     -------
@@ -179,7 +181,7 @@ def add_modes(spec: mujoco.MjSpec, drives: list[JointDrive]) -> list[Limitation]
                 lims.append(Limitation(d.joint, 'second_mode', value,
                                        f"written: the MJCF's mode body kept, {je:.4g} kg m^2"))
         else:
-            lims += _new_mode(spec, model, d, value)
+            lims += _new_mode(spec, model, d, value, (link_inertia or {}).get(d.joint))
         if math.sqrt(d.mode_stiffness / d.mode_inertia) * h > SPRING_MAX_STEP_ANGLE:
             lims.append(Limitation(d.joint, 'second_mode', value, "written, but MuJoCo's time "
                                    f'step {h:g} s cannot integrate it (w h > '
@@ -187,8 +189,8 @@ def add_modes(spec: mujoco.MjSpec, drives: list[JointDrive]) -> list[Limitation]
     return lims
 
 
-def _new_mode(spec: mujoco.MjSpec, model: mujoco.MjModel, d: JointDrive, value: str
-              ) -> list[Limitation]:
+def _new_mode(spec: mujoco.MjSpec, model: mujoco.MjModel, d: JointDrive, value: str,
+              inertia: float | None) -> list[Limitation]:
     host = _host(spec, d.joint)
     jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, host.name)
     bid = int(model.jnt_bodyid[jid])
@@ -205,7 +207,10 @@ def _new_mode(spec: mujoco.MjSpec, model: mujoco.MjModel, d: JointDrive, value: 
            f"to give up the mode's disc")
     return [Limitation(d.joint, 'second_mode', value, f'written: the mode body added to the '
                        f'link body {host.parent.name!r} kept as it is ({why}): the '
-                       f'low-frequency inertia is {d.mode_inertia:.4g} kg m^2 larger')]
+                       f'low-frequency inertia is {d.mode_inertia:.4g} kg m^2 larger'
+                       + ('' if inertia is None else
+                          f', {100 * d.mode_inertia / inertia:.1f} % of the link inertia '
+                          f'{inertia:.4g} kg m^2 at the pose'))]
 
 
 def read_mode(model: mujoco.MjModel, jid: int) -> tuple[float, float, float]:
