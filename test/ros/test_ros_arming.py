@@ -187,6 +187,18 @@ def _play(recorded, env):
                  '--topics', '/frf/heartbeat', '/frf/arming'], env)
 
 
+def _until_refused(g, seen, why):
+    """
+    Wait until the node's log, after its first ``seen`` characters, refuses a played heartbeat.
+
+    The request must come while the played heartbeats reach the node: a fixed 2 s after
+    ``ros2 bag play`` started came, on a loaded PC, before the player published any (the
+    refusal then named the stopped or missing heartbeat instead of the replay).
+    """
+    _until(lambda: 'heartbeat refused' in _log(g)[seen:] and why in _log(g)[seen:], 60,
+           f'a played heartbeat refused ({why})')
+
+
 def _read_recorded(path):
     """Read the recorder's bag: {topic: [(receive ns, message)]}, with rosbags' reader."""
     from rosbags.highlevel import AnyReader
@@ -233,8 +245,9 @@ def session(tmp_path_factory, new_domain):
         res['recorded'] = out / 'recorded'
         # the recorded session played back while the same node runs: never a run
         op.send(signal.SIGKILL)
+        seen = len(_log(g))
         player = _play(out / 'recorded', env)
-        time.sleep(2.0)
+        _until_refused(g, seen, 'replayed or duplicated')
         res['replayed_same_session'] = _call(env)
         player.stop()
         res['log'] = _log(g)
@@ -324,8 +337,9 @@ def test_replay_into_a_new_start_on_dds(session, tmp_path):
     player = op = None
     try:
         token = _token(g)
+        seen = len(_log(g))
         player = _play(session['recorded'], env)
-        time.sleep(2.0)
+        _until_refused(g, seen, 'another session')
         replayed = _call(env)
         player.stop()
         op = _operator(g, token)
