@@ -135,8 +135,11 @@ def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_
                               'diagnosis')
     ev = Evaluator(rec, ctrl, jobs=jobs, simulator=simulator)
     given, reading = robot, read_sensor(rec, robot.joint_names)
-    if sensor_effects(reading, robot):
-        robot = with_sensor(robot, reading)
+    # the nominal's own output read as the record's: a sensor it already shows (an MJCF in
+    # MuJoCo outputs the backward difference) is no effect; kept, it is sim0 where none is
+    shown = read_sensor(ev.simulate(given), robot.joint_names)
+    if sensor_effects(reading, robot, shown=shown):
+        robot = with_sensor(robot, reading, shown)
         log.info('the record shows its sensor (%s): the search reads every effect against '
                  'the model with it', describe_sensor(given, robot))
     if ev.missing.any():
