@@ -23,7 +23,7 @@ issue 55, and so does the nominal MJCF's own simulation: the model lacks nothing
 output, the difference checked here on it.
 """
 from frf_ident.core.diagnosis.sensor import (model_sensor, read_sensor, sensor_effects,
-                                             with_sensor)
+                                             with_lacking_sensor, with_sensor)
 from frf_ident.core.recording import Recording, Segment
 import numpy as np
 from plants.mujoco_iiwa import SHARED_IIWA
@@ -93,3 +93,5 @@ def test_a_difference_the_mjcf_itself_outputs_is_no_sensor_effect(tmp_path):
     assert [e for e in sensor_effects(reading, robot, shown=shown)
             if e.name == 'velocity_from_encoder'] == []
     assert not with_sensor(robot, reading, shown).velocity_from_encoder
+    # the experiments route searches against the nominal as it is
+    assert with_lacking_sensor(rec, robot, mj(rec, robot, ctrl)) is robot

@@ -59,7 +59,7 @@ from .thresholds import (SENSOR_DIFF_EXPLAINS, SENSOR_GRID_SHARE, SENSOR_GRID_TO
 
 __all__ = ['AxisSensor', 'describe_sensor', 'encoder_step', 'lacks_difference', 'model_sensor',
            'name_sensor', 'read_sensor', 'SENSOR_EFFECTS', 'sensor_effects', 'velocity_taps',
-           'with_sensor']
+           'with_lacking_sensor', 'with_sensor']
 
 #: the effect names of the sensor (report.json ``effects[].name``)
 SENSOR_EFFECTS = ('velocity_from_encoder', 'quantisation')
@@ -285,6 +285,22 @@ def with_sensor(robot: RobotParams, reading: list[AxisSensor],
              and any(lacks_difference(reading, robot, shown)))
     return replace(robot, axes=axes,
                    velocity_from_encoder=robot.velocity_from_encoder or every)
+
+
+def with_lacking_sensor(rec: Recording, robot: RobotParams, simulated: Recording
+                        ) -> RobotParams:
+    """
+    Return ``robot`` with the sensor ``rec`` shows and ``robot``'s own output lacks.
+
+    ``simulated`` is ``robot`` simulated on ``rec``'s excitation (the experiments route's
+    nominal simulation), read as the record is (:func:`model_sensor`); ``robot`` itself (the
+    same object) where it lacks nothing.
+    """
+    reading = read_sensor(rec, robot.joint_names)
+    shown = read_sensor(simulated, robot.joint_names)
+    if not sensor_effects(reading, robot, shown=shown):
+        return robot
+    return with_sensor(robot, reading, shown)
 
 
 def describe_sensor(robot: RobotParams, with_it: RobotParams) -> str:

@@ -22,8 +22,9 @@ import map; KUKA: the drive's own filtered velocity).
 """
 from pathlib import Path
 
+from frf_ident.core.diagnosis.common import simulate_like
 from frf_ident.core.diagnosis.sensor import (model_sensor, read_sensor, sensor_effects,
-                                             with_sensor)
+                                             with_lacking_sensor, with_sensor)
 from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
 import numpy as np
@@ -122,5 +123,7 @@ def test_our_plant_outputs_the_true_velocity_so_a_differenced_record_names_the_s
              if e.name == 'velocity_from_encoder']
     assert named == ['joint_1', 'joint_2']
     assert with_sensor(robot, read_sensor(rec), shown).velocity_from_encoder
+    ctrl = controller_from_dict(MODEL, robot)
+    assert with_lacking_sensor(rec, robot, simulate_like(rec, robot, ctrl)).velocity_from_encoder
     # a record without experiments: nothing to simulate, the model file alone counts
     assert model_sensor(base, robot, controller_from_dict(MODEL, robot)) is None
