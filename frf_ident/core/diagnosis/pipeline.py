@@ -20,9 +20,10 @@ record's evidence calls for (identification experiments: :mod:`.experiments`, an
 (:mod:`.crosscheck`): the gravity of the robot's kinematics, position-dependent terms on the
 other records, standard errors across records (and the values they leave undetermined),
 the least-squares baseline and both model files on every other record; last the sensor the
-record shows is named (:mod:`.sensor`; the experiments route already read its effects
-against it). Its :class:`Diagnosis` is what ``frf-ident diagnose`` writes (report.json from
-:meth:`Diagnosis.report`, docs/CONTRACT.md §7) and what the console and the HTML report read.
+record shows and the nominal model's own simulation does not is named (:mod:`.sensor`; the
+experiments route already read its effects against it). Its :class:`Diagnosis` is what
+``frf-ident diagnose`` writes (report.json from :meth:`Diagnosis.report`, docs/CONTRACT.md §7)
+and what the console and the HTML report read.
 """
 from __future__ import annotations
 
@@ -45,7 +46,7 @@ from .crosscheck.validation import on_other_records
 from .determination import on_unexplained_axes, undetermined_effects
 from .experiments.pipeline import diagnose_experiments
 from .result import DiagnosisResult
-from .sensor import name_sensor
+from .sensor import model_sensor, name_sensor
 from .thresholds import SIM_JOBS
 from .timeseries.pipeline import diagnose_timeseries
 
@@ -152,7 +153,8 @@ def diagnose(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
     res = undetermined(res)
     checks.validation_records = on_other_records(res, rec, others, robot, ctrl, progress,
                                                  name=name, simulator=simulator)
-    return Diagnosis(name_sensor(res, rec, robot), checks, rec, others)
+    shown = model_sensor(rec, robot, ctrl, simulator)
+    return Diagnosis(name_sensor(res, rec, robot, shown), checks, rec, others)
 
 
 def route(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *, jobs: int, fd_fit: bool,

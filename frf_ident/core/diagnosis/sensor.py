@@ -29,9 +29,18 @@ signals, not fitted (issue 55 item 1):
   the central difference (the true velocity's best estimate) leaves.
 
 Per axis :class:`AxisSensor` holds the reading and its numbers; :func:`sensor_effects` names
-what the model file lacks of it, on every axis that shows it, and :func:`with_sensor` writes
-it into a model (``simulation.velocity_from_encoder`` holds for all axes: written only where
-every axis shows it).
+what the model lacks of it, on every axis that shows it, and :func:`with_sensor` writes it into
+a model (``simulation.velocity_from_encoder`` holds for all axes: written only where every axis
+shows it).
+
+What the model lacks is judged against the model's own output, not only its file: the
+nominal model simulated on the record's excitation (:func:`model_sensor`, by the simulator the
+diagnosis uses) is read the same way, and a velocity its own simulation already forms as a
+position difference is no effect. MuJoCo's semi-implicit step (Euler, implicit, implicitfast)
+updates q_(k+1) = q_k + h v_(k+1), so an MJCF stepped once per sample outputs exactly the
+backward difference (frf_ident/io/mjcf/loop.py): its record shows the sensor, and so does the
+nominal MJCF. Our own plant (frf_ident/core/simulation/plant.py) outputs the true velocity
+unless ``simulation.velocity_from_encoder`` is set.
 """
 from __future__ import annotations
 
@@ -40,15 +49,17 @@ import math
 
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
+from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np
 
-from .common import Effect
+from .common import bridge_gaps, Effect, has_experiments, simulate_like, Simulator
 from .result import DiagnosisResult
 from .thresholds import (SENSOR_DIFF_EXPLAINS, SENSOR_GRID_SHARE, SENSOR_GRID_TOL,
                          SENSOR_MIN_STEPS, SENSOR_RESOLUTION_MATCH, SENSOR_TAP_TOL)
 
-__all__ = ['AxisSensor', 'describe_sensor', 'encoder_step', 'name_sensor', 'read_sensor',
-           'SENSOR_EFFECTS', 'sensor_effects', 'velocity_taps', 'with_sensor']
+__all__ = ['AxisSensor', 'describe_sensor', 'encoder_step', 'lacks_difference', 'model_sensor',
+           'name_sensor', 'read_sensor', 'SENSOR_EFFECTS', 'sensor_effects', 'velocity_taps',
+           'with_lacking_sensor', 'with_sensor']
 
 #: the effect names of the sensor (report.json ``effects[].name``)
 SENSOR_EFFECTS = ('velocity_from_encoder', 'quantisation')
@@ -157,10 +168,53 @@ def read_sensor(rec: Recording, names: list[str] | None = None) -> list[AxisSens
     return out
 
 
-def sensor_effects(reading: list[AxisSensor], robot: RobotParams,
-                   score: list[float] | None = None) -> list[Effect]:
+def model_sensor(rec: Recording, robot: RobotParams, ctrl: PIVelocity,
+                 simulator: Simulator | None = None) -> list[AxisSensor] | None:
     """
-    Return the sensor effects the model file lacks, on every axis that shows them.
+    Return what the nominal model's own output says about its sensor, read as the record's.
+
+    ``robot`` simulated in closed loop on the record's (gap-bridged) excitation by
+    ``simulator`` (default our plant, :func:`.common.simulate_like`; MuJoCo for a model naming
+    an MJCF), read by :func:`read_sensor`. None where the record holds no identification
+    experiments to simulate (the time-series route: then only the model file's sensor counts).
+    """
+    if rec.reference is None or not has_experiments(rec):
+        return None
+    bridged, _ = bridge_gaps(rec)
+    sim = (simulator or simulate_like)(bridged, robot, ctrl)
+    return read_sensor(sim, robot.joint_names)
+
+
+def lacks_difference(reading: list[AxisSensor], robot: RobotParams,
+                     shown: list[AxisSensor] | None = None) -> list[bool]:
+    """
+    Return per axis whether the record's velocity is differenced and the model's is not.
+
+    Not where the model file has ``simulation.velocity_from_encoder``, nor where the model's
+    own simulation (``shown``, :func:`model_sensor`) already outputs the difference.
+
+    Examples
+    --------
+    >>> from frf_ident.core.model.schema import default_model_dict, robot_from_dict
+    >>> robot = robot_from_dict(default_model_dict())
+    >>> diff = AxisSensor('joint_1', None, 0.0, (1.0, 0.0), 1e-4, 1e-2, 1e-3)
+    >>> true = AxisSensor('joint_1', None, 0.0, (0.5, 0.5), 1e-2, 1e-4, 1e-3)
+    >>> lacks_difference([diff], robot), lacks_difference([diff], robot, [true])
+    ([True], [True])
+    >>> lacks_difference([diff], robot, [diff]), lacks_difference([true], robot)
+    ([False], [False])
+
+    """
+    return [s.differenced and not robot.velocity_from_encoder
+            and not (shown is not None and shown[i].differenced)
+            for i, s in enumerate(reading)]
+
+
+def sensor_effects(reading: list[AxisSensor], robot: RobotParams,
+                   score: list[float] | None = None,
+                   shown: list[AxisSensor] | None = None) -> list[Effect]:
+    """
+    Return the sensor effects the model lacks, on every axis that shows them.
 
     Parameters
     ----------
@@ -170,6 +224,9 @@ def sensor_effects(reading: list[AxisSensor], robot: RobotParams,
         The nominal model (a sensor it already has is no effect).
     score : list of float, optional
         Per axis the share of its misfit the sensor removes (experiments route); 0 if omitted.
+    shown : list of AxisSensor, optional
+        :func:`model_sensor`: the model's own simulation read the same way (a velocity it
+        already outputs as a position difference is no effect); None: the model file only.
 
     Returns
     -------
@@ -178,10 +235,11 @@ def sensor_effects(reading: list[AxisSensor], robot: RobotParams,
     """
     out = []
     every = all(s.differenced for s in reading)
+    lacks = lacks_difference(reading, robot, shown)
     for i, s in enumerate(reading):
         ax = robot.axes[i]
         sc = score[i] if score is not None else 0.0
-        if s.differenced and not robot.velocity_from_encoder:
+        if lacks[i]:
             said = ('' if every else "; not every axis shows it, and the model file's "
                     'simulation.velocity_from_encoder holds for all: not written')
             out.append(Effect(
@@ -212,18 +270,37 @@ def quantisation_evidence(s: AxisSensor) -> str:
     return text
 
 
-def with_sensor(robot: RobotParams, reading: list[AxisSensor]) -> RobotParams:
+def with_sensor(robot: RobotParams, reading: list[AxisSensor],
+                shown: list[AxisSensor] | None = None) -> RobotParams:
     """
     Return the model with the sensor the record shows written in.
 
-    ``simulation.velocity_from_encoder`` where every axis' velocity is differenced; each
-    axis' ``encoder_resolution`` where its positions are quantised.
+    ``simulation.velocity_from_encoder`` where every axis' velocity is differenced and the
+    model's own output (``shown``, :func:`model_sensor`) is not already; each axis'
+    ``encoder_resolution`` where its positions are quantised.
     """
     axes = [replace(a, encoder_resolution=s.resolution) if s.resolution is not None else a
             for a, s in zip(robot.axes, reading)]
-    every = bool(reading) and all(s.differenced for s in reading)
+    every = (bool(reading) and all(s.differenced for s in reading)
+             and any(lacks_difference(reading, robot, shown)))
     return replace(robot, axes=axes,
                    velocity_from_encoder=robot.velocity_from_encoder or every)
+
+
+def with_lacking_sensor(rec: Recording, robot: RobotParams, simulated: Recording
+                        ) -> RobotParams:
+    """
+    Return ``robot`` with the sensor ``rec`` shows and ``robot``'s own output lacks.
+
+    ``simulated`` is ``robot`` simulated on ``rec``'s excitation (the experiments route's
+    nominal simulation), read as the record is (:func:`model_sensor`); ``robot`` itself (the
+    same object) where it lacks nothing.
+    """
+    reading = read_sensor(rec, robot.joint_names)
+    shown = read_sensor(simulated, robot.joint_names)
+    if not sensor_effects(reading, robot, shown=shown):
+        return robot
+    return with_sensor(robot, reading, shown)
 
 
 def describe_sensor(robot: RobotParams, with_it: RobotParams) -> str:
@@ -236,9 +313,13 @@ def describe_sensor(robot: RobotParams, with_it: RobotParams) -> str:
     return ', '.join(parts) or 'nothing new'
 
 
-def name_sensor(res: DiagnosisResult, rec: Recording, robot: RobotParams) -> DiagnosisResult:
+def name_sensor(res: DiagnosisResult, rec: Recording, robot: RobotParams,
+                shown: list[AxisSensor] | None = None) -> DiagnosisResult:
     """
     Return the result with the sensor effects the record shows, and the model with them.
+
+    ``shown`` is :func:`model_sensor` of the nominal model: what its own output already shows
+    is no effect.
 
     The experiments route searched against the model with the sensor (its extended model has
     it, its held-out misfit without it is ``detail.misfit['without_sensor']``): each axis'
@@ -251,8 +332,8 @@ def name_sensor(res: DiagnosisResult, rec: Recording, robot: RobotParams) -> Dia
     if 'without_sensor' in misfit:
         score = [float(np.clip((w - b) / max(w - 1.0, 1e-12), 0.0, 1.0))
                  for w, b in zip(misfit['without_sensor'], misfit['baseline'])]
-    found = sensor_effects(reading, robot, score)
+    found = sensor_effects(reading, robot, score, shown)
     if not found:
         return res
     return replace(res, effects=sorted(found + list(res.effects), key=lambda e: -e.score),
-                   extended=with_sensor(res.extended, reading))
+                   extended=with_sensor(res.extended, reading, shown))

@@ -22,7 +22,9 @@ import map; KUKA: the drive's own filtered velocity).
 """
 from pathlib import Path
 
-from frf_ident.core.diagnosis.sensor import read_sensor, sensor_effects, with_sensor
+from frf_ident.core.diagnosis.common import simulate_like
+from frf_ident.core.diagnosis.sensor import (model_sensor, read_sensor, sensor_effects,
+                                             with_lacking_sensor, with_sensor)
 from frf_ident.core.model.schema import robot_from_dict
 from frf_ident.core.recording import Recording
 import numpy as np
@@ -102,3 +104,26 @@ def test_the_real_records_sensors(data, map_name, step, differenced):
         if step is not None:
             assert s.resolution == pytest.approx(step, rel=1e-6)
         assert s.differenced == differenced, s
+
+
+def test_our_plant_outputs_the_true_velocity_so_a_differenced_record_names_the_sensor():
+    """Our plant's own simulation is read as the record's: its velocity is no difference."""
+    from frf_ident.core.recording import Segment
+    from frf_ident.core.simulation.controller import controller_from_dict
+    base = _record({'velocity_from_encoder': True})
+    vr = np.gradient(base.position, base.t, axis=0)       # what the loop followed, about
+    rec = Recording(base.t, base.joint_names, base.position, base.velocity, base.effort, vr,
+                    np.zeros_like(vr), [Segment(0.0, base.t[-1] + 1 / FS,
+                                                {'design': 'multisine', 'realisation': 0})])
+    robot = robot_from_dict(MODEL)
+    shown = model_sensor(rec, robot, controller_from_dict(MODEL, robot))
+    print(shown)
+    assert shown is not None and not any(s.differenced for s in shown), shown
+    named = [e.axis for e in sensor_effects(read_sensor(rec), robot, shown=shown)
+             if e.name == 'velocity_from_encoder']
+    assert named == ['joint_1', 'joint_2']
+    assert with_sensor(robot, read_sensor(rec), shown).velocity_from_encoder
+    ctrl = controller_from_dict(MODEL, robot)
+    assert with_lacking_sensor(rec, robot, simulate_like(rec, robot, ctrl)).velocity_from_encoder
+    # a record without experiments: nothing to simulate, the model file alone counts
+    assert model_sensor(base, robot, controller_from_dict(MODEL, robot)) is None

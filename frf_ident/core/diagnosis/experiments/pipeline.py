@@ -50,7 +50,7 @@ from .structure import read_structure
 from .unheld import not_held, spring_shapes_skipped
 from ..common import apply_effect, Effect, Simulator
 from ..result import DiagnosisResult
-from ..sensor import describe_sensor, read_sensor, sensor_effects, with_sensor
+from ..sensor import describe_sensor, with_lacking_sensor
 from ..thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS, UNEXPLAINED_RATIO
 
 __all__ = ['diagnose_experiments']
@@ -134,9 +134,9 @@ def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_
         raise EstimationError('recording has no velocity reference: use the time-series '
                               'diagnosis')
     ev = Evaluator(rec, ctrl, jobs=jobs, simulator=simulator)
-    given, reading = robot, read_sensor(rec, robot.joint_names)
-    if sensor_effects(reading, robot):
-        robot = with_sensor(robot, reading)
+    given = robot       # its simulation is sim0 where the record shows no sensor it lacks
+    robot = with_lacking_sensor(rec, given, ev.simulate(given))
+    if robot is not given:
         log.info('the record shows its sensor (%s): the search reads every effect against '
                  'the model with it', describe_sensor(given, robot))
     if ev.missing.any():
