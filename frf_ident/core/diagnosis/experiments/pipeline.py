@@ -46,6 +46,7 @@ from .rigid_axes import rigid_axes, rigid_in_band
 from .search import named, Search
 from .second_mode import refine_modes, take_second_mode
 from .settle import final_errors, settle, within_nominal
+from .spring_reading import gap_or_stiffening
 from .structure import read_structure
 from .unheld import not_held, spring_shapes_skipped
 from ..common import apply_effect, Effect, Simulator
@@ -71,10 +72,11 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     (Coulomb and viscous friction, torque ripple, gravity) from one joint regression per axis;
     then, against the simulation of that model, the FRF-shape effects (time delay, parameter
     mismatch, stiffening, backlash), so friction does not pose as stiffness. A second pass,
-    joint refits follow; then every value's standard error (a parameter that has not settled
-    is refitted jointly with those it trades against, else labelled not determined) and the
-    held-out check: kept effects within their errors of the nominal model, or whose removal
-    does not worsen the held-out misfit, are dropped.
+    joint refits follow (a backlash on a stiffness a mismatch raised is read again as a
+    stiffening gear, :mod:`.spring_reading`); then every value's standard error (one not
+    settled is refitted jointly with those it trades against, else labelled not determined)
+    and the held-out check: kept effects within their errors of the nominal model, or whose
+    removal does not worsen the held-out misfit, are dropped.
 
     Parameters
     ----------
@@ -101,9 +103,8 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
 
     Notes
     -----
-    A few lines per stage are logged at INFO level (logger ``frf_ident.core.diagnosis.*``),
-    the search trace (every candidate's misfit before and after, refits, held-out duels) at
-    DEBUG level.
+    A few lines per stage at INFO level (logger ``frf_ident.core.diagnosis.*``), the search
+    trace (candidates' misfits before and after, refits, held-out duels) at DEBUG level.
 
     """
     s = start(rec, robot, ctrl, jobs, simulator)
@@ -117,6 +118,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         joint_refits(s)
         late_ripples(s)
         refine_modes(s)
+        gap_or_stiffening(s)
         settled = settle(s)
         within_nominal(s, settled)
         val_ext, sim_ext = held_out_check(s)
@@ -394,6 +396,5 @@ def late_ripples(s: Search) -> None:
     """
     late = [r for r in (ripple_again(s.ev, s.ext, i, s.stage1, s.kept)
                         for i in sorted(s.shaped)) if r is not None]
-    if late:
-        s.ext, s.cur = accept(s.ev, s.robot, s.kept, late, s.cur, s.say)
-        s.cands += late
+    s.ext, s.cur = accept(s.ev, s.robot, s.kept, late, s.cur, s.say) if late else (s.ext, s.cur)
+    s.cands += late
