@@ -24,6 +24,7 @@ import math
 from typing import Any, Callable
 
 from frf_ident.core.model.params import RobotParams
+from frf_ident.errors import ModelFileError
 import numpy as np
 
 from .brent import bounded_minimum
@@ -40,6 +41,31 @@ def rebuild(robot: RobotParams, effects: list[Effect]) -> RobotParams:
     for e in effects:
         robot = apply_effect(robot, e)
     return robot
+
+
+def searched(ev: Evaluator, mk: Callable[[np.ndarray], RobotParams], axis: int
+             ) -> tuple[Callable[[np.ndarray], float], Callable[[list[np.ndarray]], None]]:
+    """
+    Return a simplex search's loss and prefetch of the models ``mk(x)``, on one axis.
+
+    A point whose model no robot holds (``mk`` raises ModelFileError: a link lighter than
+    the mode it carries, when a joint refit lowers the link inertia under a second mode
+    kept on the same coupled link) scores infinity: the search steps back from it instead of
+    ending the diagnosis (issue 50: ``demo --plant mujoco`` on the elastic iiwa).
+    """
+    def model(x: np.ndarray) -> RobotParams | None:
+        try:
+            return mk(x)
+        except ModelFileError:
+            return None
+
+    def loss(x: np.ndarray) -> float:
+        m = model(x)
+        return math.inf if m is None else ev.loss(m, axis)
+
+    def prefetch(xs: list[np.ndarray]) -> None:
+        ev.prefetch([m for m in map(model, xs) if m is not None])
+    return loss, prefetch
 
 
 def _friction_scale(ev: Evaluator, axis: int, key: str) -> float:
@@ -198,9 +224,10 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
     n = len(slots)
     x0 = np.zeros(n)
     simplex = np.vstack([x0] + [x0 + 0.2 * np.eye(n)[k] for k in range(n)])
-    ev.prefetch([mk(x) for x in simplex])
-    best = nelder_mead(lambda x: ev.loss(mk(x), axis), simplex, xatol=0.01, fatol=1e-3,
-                       maxfev=8 + 6 * n, prefetch=lambda xs: ev.prefetch([mk(x) for x in xs]))
+    loss, prefetch = searched(ev, mk, axis)
+    prefetch(list(simplex))
+    best = nelder_mead(loss, simplex, xatol=0.01, fatol=1e-3, maxfev=8 + 6 * n,
+                       prefetch=prefetch)
     ext = mk(best)
     new = ev.misfit(ev.terms(ext))
     if new[axis] >= cur[axis]:
