@@ -43,28 +43,35 @@ def rebuild(robot: RobotParams, effects: list[Effect]) -> RobotParams:
     return robot
 
 
+def built(make: Callable[..., RobotParams], *args: Any) -> RobotParams | None:
+    """
+    Return ``make(*args)``, a trial model of a search, or None where no robot holds it.
+
+    A search that moves parameters may reach values no model holds (ModelFileError: a link
+    lighter than the second mode it carries, when a refit lowers the link inertia under a
+    mode kept on it); such a trial scores infinity (:func:`loss_of`): the search steps back
+    from it instead of ending the diagnosis (issue 50: ``demo --plant mujoco`` on the
+    elastic iiwa).
+    """
+    try:
+        return make(*args)
+    except ModelFileError:
+        return None
+
+
+def loss_of(ev: Evaluator, model: RobotParams | None, axis: int) -> float:
+    """Return the axis' misfit of a trial model, infinity where it is None (:func:`built`)."""
+    return math.inf if model is None else ev.loss(model, axis)
+
+
 def searched(ev: Evaluator, mk: Callable[[np.ndarray], RobotParams], axis: int
              ) -> tuple[Callable[[np.ndarray], float], Callable[[list[np.ndarray]], None]]:
-    """
-    Return a simplex search's loss and prefetch of the models ``mk(x)``, on one axis.
-
-    A point whose model no robot holds (``mk`` raises ModelFileError: a link lighter than
-    the mode it carries, when a joint refit lowers the link inertia under a second mode
-    kept on the same coupled link) scores infinity: the search steps back from it instead of
-    ending the diagnosis (issue 50: ``demo --plant mujoco`` on the elastic iiwa).
-    """
-    def model(x: np.ndarray) -> RobotParams | None:
-        try:
-            return mk(x)
-        except ModelFileError:
-            return None
-
+    """Return a simplex search's loss and prefetch of the models ``mk(x)`` (:func:`built`)."""
     def loss(x: np.ndarray) -> float:
-        m = model(x)
-        return math.inf if m is None else ev.loss(m, axis)
+        return loss_of(ev, built(mk, x), axis)
 
     def prefetch(xs: list[np.ndarray]) -> None:
-        ev.prefetch([m for m in map(model, xs) if m is not None])
+        ev.prefetch([m for m in (built(mk, x) for x in xs) if m is not None])
     return loss, prefetch
 
 
