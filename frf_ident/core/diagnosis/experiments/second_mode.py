@@ -49,7 +49,7 @@ from frf_ident.errors import ModelFileError
 import numpy as np
 
 from .acceptance import accept
-from .refit import rebuild
+from .refit import rebuild, searched
 from .search import Search
 from .simplex import nelder_mead
 from .structure import structural, StructureReading
@@ -270,10 +270,10 @@ def refine_modes(s: Search) -> None:
             return rebuild(s.robot, [replace(k, parameters=params(x)) if k is c else k
                                      for k in s.kept])
         simplex = np.vstack([np.zeros(3), np.diag(MODE_REFINE_STEP)])
-        s.ev.prefetch([mk(x) for x in simplex])
-        best = nelder_mead(lambda x: s.ev.loss(mk(x), i), simplex, xatol=0.005, fatol=1e-3,
-                           maxfev=MODE_REFINE_EVALUATIONS,
-                           prefetch=lambda xs: s.ev.prefetch([mk(x) for x in xs]))
+        loss, prefetch = searched(s.ev, mk, i)
+        prefetch(list(simplex))
+        best = nelder_mead(loss, simplex, xatol=0.005, fatol=1e-3,
+                           maxfev=MODE_REFINE_EVALUATIONS, prefetch=prefetch)
         ext = mk(best)
         new = s.ev.misfit(s.ev.terms(ext))
         if new[i] >= s.cur[i]:
