@@ -72,11 +72,10 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     (Coulomb and viscous friction, torque ripple, gravity) from one joint regression per axis;
     then, against the simulation of that model, the FRF-shape effects (time delay, parameter
     mismatch, stiffening, backlash), so friction does not pose as stiffness. A second pass,
-    joint refits follow (a backlash on a stiffness a mismatch raised is read again as a
-    stiffening gear, :mod:`.spring_reading`); then every value's standard error (one not
-    settled is refitted jointly with those it trades against, else labelled not determined)
-    and the held-out check: kept effects within their errors of the nominal model, or whose
-    removal does not worsen the held-out misfit, are dropped.
+    joint refits and a stiffening gear read in place of a mismatched stiffness a spring shape
+    bends (:mod:`.spring_reading`) follow; then every value's standard error (one not settled
+    is refitted jointly with those it trades against, else labelled not determined), and the
+    held-out check drops kept effects within their errors of nominal or not missed held out.
 
     Parameters
     ----------
@@ -189,8 +188,7 @@ def frequency_domain_fit(s: Search) -> None:
     if s.stage0:
         s.ext, s.cur = accept(ev, robot, s.kept, s.stage0, s.cur, s.say)
     s.cands += s.stage0
-    log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0),
-             named(s.kept))
+    log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0), named(s.kept))
 
 
 def torque_residual_effects(s: Search) -> None:
@@ -259,11 +257,10 @@ def axis_candidates(s: Search, axes: list[int], sim_est: dict) -> list[list[Effe
     """
     Return :func:`frf_shape_candidates` of each axis, one axis after the other.
 
-    The searches inside an axis (the Nelder-Mead refinement of a stiffening, the grid of a
-    backlash) hand their independent models to the evaluator's workers. One axis usually
-    holds all of a round's searches (on the demo bag, joint_2's stiffening: 35 of the round's
-    37 simulations), so the axes are not spread over processes: forked one per axis, the axis
-    with the search ran alone on one core while the other idled.
+    The searches inside an axis (a stiffening's simplex, a backlash's grid) hand their models
+    to the evaluator's workers. One axis usually holds all of a round's searches (demo bag:
+    joint_2's stiffening, 35 of 37 simulations): forked one per axis, that axis ran alone on
+    one core while the other idled.
     """
     return [frf_shape_candidates(s, i, sim_est) for i in axes]
 
