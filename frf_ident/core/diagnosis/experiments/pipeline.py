@@ -44,6 +44,7 @@ from .held_out import finish, held_out_check, structure_missing
 from .refit import FRICTION, refit_friction, refit_jointly
 from .rigid_axes import rigid_axes, rigid_in_band
 from .search import named, Search
+from .mode_search import search_left_modes
 from .second_mode import refine_modes, take_second_mode
 from .settle import final_errors, settle, within_nominal
 from .structure import read_structure
@@ -116,6 +117,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         second_pass(s)
         joint_refits(s)
         late_ripples(s)
+        search_left_modes(s)
         refine_modes(s)
         settled = settle(s)
         within_nominal(s, settled)
