@@ -136,10 +136,15 @@ def _fit_by_simulation(s: Search, i: int, base: list[Effect]) -> Effect | None:
     ev.prefetch([m for m in (model(x) for x in grid) if m is not None])
     x0 = grid[int(np.argmin([loss(x) for x in grid]))]
 
+    # within the grid's band and MODE_DAMPING_RANGE (a fit past them has found no mode)
+    f = search_grid(s, i)
+    bounds = [(math.log(f[0]), math.log(f[-1] * MODE_SEARCH_STEP)),
+              tuple(math.log(z) for z in MODE_DAMPING_RANGE), (x0[2] - 5.0, x0[2] + 5.0)]
+
     def fit(x: np.ndarray) -> np.ndarray:
         simplex = np.vstack([x, x + np.diag(MODE_SEARCH_SIMPLEX)])
         ev.prefetch([m for m in (model(y) for y in simplex) if m is not None])
-        return nelder_mead(loss, simplex, xatol=0.005, fatol=1e-3,
+        return nelder_mead(loss, simplex, bounds=bounds, xatol=0.005, fatol=1e-3,
                            maxfev=MODE_SEARCH_EVALUATIONS,
                            prefetch=lambda xs: ev.prefetch([m for m in (model(y) for y in xs)
                                                             if m is not None]))
