@@ -65,17 +65,16 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     """
     Diagnose an identification recording against the nominal ``robot``.
 
-    Every candidate is judged on its own axis' misfit (in units of the noise floor). First
-    (stage 0) a linear parameter mismatch the frequency-domain physical fit of the measured
-    FRFs shows at both loads (:mod:`.frequency_fit`, seconds, one simulation to judge it),
-    so the later stages start from the model with it; then the torque-residual effects
-    (Coulomb and viscous friction, torque ripple, gravity) from one joint regression per axis;
-    then, against the simulation of that model, the FRF-shape effects (time delay, parameter
-    mismatch, stiffening, backlash), so friction does not pose as stiffness. A second pass,
-    joint refits follow; then every value's standard error (a parameter that has not settled
-    is refitted jointly with those it trades against, else labelled not determined) and the
-    held-out check: kept effects within their errors of the nominal model, or whose removal
-    does not worsen the held-out misfit, are dropped.
+    Every candidate is judged on its own axis' misfit (noise floors). First (stage 0) a linear
+    parameter mismatch the frequency-domain physical fit of the measured FRFs shows at both loads
+    (:mod:`.frequency_fit`), so the later stages start from the model with it; then the
+    torque-residual effects (Coulomb and viscous friction, torque ripple, gravity) from one joint
+    regression per axis; then, against the simulation of that model, the FRF-shape effects (time
+    delay, parameter mismatch, stiffening, backlash), so friction does not pose as stiffness. A
+    second pass, joint refits and a second mode fitted by simulation where an axis stays
+    unexplained (:mod:`.mode_search`) follow; then every value's standard error (a parameter that
+    has not settled is refitted jointly with those it trades against, else labelled not determined)
+    and the held-out check (effects within their errors of the nominal or not needed are dropped).
 
     Parameters
     ----------
