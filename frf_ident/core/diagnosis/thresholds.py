@@ -293,6 +293,12 @@ MODE_SEARCH_DAMPING = (0.02, 0.005, 0.05)
 MODE_SEARCH_SHARE = (0.08, 0.12, 0.18, 0.27)
 MODE_SEARCH_SIMPLEX = (0.02, 0.7, 0.3)
 MODE_SEARCH_EVALUATIONS = 60
+#: ... and offered only where its frequency is determined: refitted with the frequency
+#: MODE_FREQUENCY_SE off on either side, the misfit must rise beyond the chi-square quantile
+#: (1 degree of freedom) of this false-alarm probability, the residual test's (a heavy mode's
+#: frequency trades with its damping and inertia: scene link_mode_beside 6588469, chi-square
+#: 2.7, a mode 29 % off fitting as well as the truth; 6588475 and 6588470, 51 and more)
+MODE_PROFILE_ALPHA = 1e-3
 
 # --- experiments route: what stays unexplained ------------------------------------------------
 

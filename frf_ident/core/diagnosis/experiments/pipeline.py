@@ -41,10 +41,10 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
 from .evaluator import Evaluator
 from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence, shifts_text
 from .held_out import finish, held_out_check, structure_missing
+from .mode_search import search_left_modes
 from .refit import FRICTION, refit_friction, refit_jointly
 from .rigid_axes import rigid_axes, rigid_in_band
 from .search import named, Search
-from .mode_search import search_left_modes
 from .second_mode import refine_modes, take_second_mode
 from .settle import final_errors, settle, within_nominal
 from .structure import read_structure
