@@ -28,15 +28,19 @@ of 6588470: 15.1 floors with the true time delay on joint_2, 0.88 with the true 
 
 :func:`search_left_modes` therefore tries, on every axis still UNEXPLAINED_RATIO floors above
 its noise once the other effects are named and that holds no mode, a mode fitted by
-simulation: its link-held frequency on a grid (MODE_SEARCH_STEP apart, from the axis' first
-resonance to the highest measured line; MODE_SEARCH_DAMPING, MODE_SEARCH_SHARE of the link on
-the spring), then Nelder-Mead on the log of frequency, damping ratio and inertia from the best
-grid point (MODE_SEARCH_EVALUATIONS). The fit is offered as a ``second_mode`` only where it
-explains its axis (the misfit left below UNEXPLAINED_RATIO floors: a mode posing for a missed
-friction or ripple does not), and is judged as every candidate (:func:`.acceptance.accept`);
-the held-out check judges it again. Its standard errors are those of the frequency-domain fit
-of the multisine ratio started at its frequency where that fit lands within MODE_FREQUENCY_SE of
-it, else not given.
+simulation against the other axes' effects (what the axis took while the mode was missing may
+stand in for it, and is offered again on top of the mode): its link-held frequency on a grid
+(MODE_SEARCH_STEP apart, from the axis' first resonance to the highest measured line) times
+shares of the link on the spring (MODE_SEARCH_SHARE), then Nelder-Mead on the log of frequency,
+damping ratio and inertia over frequency squared from the best grid point, once from each of
+MODE_SEARCH_DAMPING's further damping ratios. The fit is offered as a ``second_mode`` only where
+it explains its axis (the misfit left below UNEXPLAINED_RATIO floors: a mode posing for a missed
+friction or ripple does not) and where its frequency is determined (refitted MODE_FREQUENCY_SE
+off, the misfit rises beyond chi-square(1) at MODE_PROFILE_ALPHA); else the axis stays
+unexplained, as before. It is judged as every candidate (:func:`.acceptance.passes`); the
+held-out check judges it again. Its standard errors are those of the frequency-domain fit of the
+multisine ratio started at its frequency where that fit lands within MODE_FREQUENCY_SE of it
+(wider than the records' fit: the lines hardly see the mode), else not given.
 """
 from __future__ import annotations
 
@@ -198,7 +202,8 @@ def _fit_by_simulation(s: Search, i: int, base: list[Effect]) -> Effect | None:
                   f'named, and the multisine lines show no band a mode explains there: a '
                   f'link-side mode fitted by simulation of the records, {text} (misfit '
                   f'{s.cur[i]:.3g} -> {left:.3g} noise floors; {100 * MODE_FREQUENCY_SE:g} % '
-                  f'off its frequency at least {rise:.3g} more, chi-square {stat:.3g})', i,
+                  f'off its frequency at least {rise:.3g} more, chi-square {stat:.3g}; standard '
+                  f"errors of the multisine fit started there, wider than the records' fit)", i,
                   standard_error={'second_mode': _frequency_domain_errors(s, i, m)})
 
 
