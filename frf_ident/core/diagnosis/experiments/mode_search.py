@@ -57,9 +57,10 @@ from .refit import rebuild
 from .search import Search
 from .simplex import nelder_mead
 from ..common import Effect
-from ..thresholds import (MODE_DAMPING_RANGE, MODE_FREQUENCY_SE, MODE_PROFILE_ALPHA,
-                          MODE_SEARCH_DAMPING, MODE_SEARCH_EVALUATIONS, MODE_SEARCH_SHARE,
-                          MODE_SEARCH_SIMPLEX, MODE_SEARCH_STEP, UNEXPLAINED_RATIO)
+from ..mode_thresholds import (MODE_DAMPING_RANGE, MODE_FREQUENCY_SE, MODE_PROFILE_ALPHA,
+                               MODE_SEARCH_DAMPING, MODE_SEARCH_EVALUATIONS, MODE_SEARCH_SHARE,
+                               MODE_SEARCH_SIMPLEX, MODE_SEARCH_STEP)
+from ..thresholds import UNEXPLAINED_RATIO
 
 __all__ = ['search_left_modes']
 
