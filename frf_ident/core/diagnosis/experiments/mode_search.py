@@ -58,8 +58,8 @@ from .search import Search
 from .simplex import nelder_mead
 from ..common import Effect
 from ..mode_thresholds import (MODE_DAMPING_RANGE, MODE_FREQUENCY_SE, MODE_PROFILE_ALPHA,
-                               MODE_SEARCH_DAMPING, MODE_SEARCH_EVALUATIONS, MODE_SEARCH_SHARE,
-                               MODE_SEARCH_SIMPLEX, MODE_SEARCH_STEP)
+                               MODE_SCAN_STEP, MODE_SEARCH_DAMPING, MODE_SEARCH_EVALUATIONS,
+                               MODE_SEARCH_SHARE, MODE_SEARCH_SIMPLEX, MODE_SEARCH_STEP)
 from ..thresholds import UNEXPLAINED_RATIO
 
 __all__ = ['search_left_modes']
@@ -176,16 +176,23 @@ def _fit_by_simulation(s: Search, i: int, base: list[Effect]) -> Effect | None:
     fit.bounds = [(math.log(f[0]), math.log(f[-1] * MODE_SEARCH_STEP)),
                   (math.log(MODE_DAMPING_RANGE[0]), math.log(MODE_DAMPING_RANGE[1])),
                   (x0[2] - 5.0, x0[2] + 5.0)]
-    # a light mode's narrow valley and a heavy one's broad one: one start in each
-    best = min((fit.fit(np.array([x0[0], math.log(z), x0[2]]))
-                for z in MODE_SEARCH_DAMPING[1:]), key=fit.loss)
+    # a light mode's valley is as narrow as its half-power width: scanned at MODE_SCAN_STEP with
+    # the grid's inertia / frequency^2; a heavy one's broad valley from the grid's best point
+    hi = f[-1] * MODE_SEARCH_STEP
+    scan = [np.array([math.log(g), math.log(MODE_SEARCH_DAMPING[1]), x0[2]])
+            for g in f[0] * MODE_SCAN_STEP ** np.arange(
+                int(math.log(hi / f[0]) / math.log(MODE_SCAN_STEP)) + 1)]
+    fit.prefetch(scan)
+    x1 = scan[int(np.argmin([fit.loss(x) for x in scan]))]
+    heavy = np.array([x0[0], math.log(MODE_SEARCH_DAMPING[2]), x0[2]])
+    best = min((fit.fit(x1), fit.fit(heavy)), key=fit.loss)
     left = fit.loss(best)
     m = mode_of(best, fit.limit)
     text = ', '.join(f'{k} {m[k]:.4g}' for k in KEYS)
     floor = ev.floor_seen(s.cur)[i]
-    starts = ' and '.join(f'{z:g}' for z in MODE_SEARCH_DAMPING[1:])
-    s.say(f'  {name}: second mode by simulation (grid best {math.exp(x0[0]):.3g} Hz, damping '
-          f'ratio from {starts}): {text}, misfit {s.cur[i]:.4g} -> {left:.4g} (floor {floor:.3g})')
+    s.say(f'  {name}: second mode by simulation (grid best {math.exp(x0[0]):.3g} Hz, scan best '
+          f'{math.exp(x1[0]):.3g} Hz): {text}, misfit {s.cur[i]:.4g} -> {left:.4g} (floor '
+          f'{floor:.3g})')
     if not left <= UNEXPLAINED_RATIO * floor:
         s.say(f'  {name}: not offered: it does not explain the axis')
         return None
