@@ -31,10 +31,11 @@ its noise once the other effects are named and that holds no mode, a mode fitted
 simulation against the other axes' effects (what the axis took while the mode was missing may
 stand in for it, and is offered again on top of the mode): its link-held frequency on a grid
 (MODE_SEARCH_STEP apart, from the axis' first resonance to the highest measured line) times
-shares of the link on the spring (MODE_SEARCH_SHARE), then Nelder-Mead on the log of frequency,
-damping ratio and inertia over frequency squared from the best grid point, once from each of
-MODE_SEARCH_DAMPING's further damping ratios. The fit is offered as a ``second_mode`` only where
-it explains its axis (the misfit left below UNEXPLAINED_RATIO floors: a mode posing for a missed
+shares of the link on the spring (MODE_SEARCH_SHARE), the band again MODE_SCAN_STEP apart at a
+light damping ratio (a light mode's valley is as narrow as its half-power width), then
+Nelder-Mead on the log of frequency, damping ratio and inertia over frequency squared from the
+scan's best point and from the grid's at a heavy damping ratio (MODE_SEARCH_DAMPING). The fit
+is offered as a ``second_mode`` only where it explains its axis (the misfit left below UNEXPLAINED_RATIO floors: a mode posing for a missed
 friction or ripple does not) and where its frequency is determined (refitted MODE_FREQUENCY_SE
 off, the misfit rises beyond chi-square(1) at MODE_PROFILE_ALPHA); else the axis stays
 unexplained, as before. It is judged as every candidate (:func:`.acceptance.passes`); the
