@@ -118,6 +118,10 @@ class SessionPlanning:
         """
         Return the chirp iteration (created on first use).
 
+        Its later steps are capped where their planned position would leave the plan's
+        position bound (:mod:`frf_ident.core.excitation.chirp_position`): the plan check
+        refuses such a step, so the iteration must not ask for one.
+
         Returns
         -------
         ChirpIteration
@@ -125,7 +129,8 @@ class SessionPlanning:
 
         """
         if self.chirp is None:
-            self.chirp = ChirpIteration(self.s.chirp, self.n, self.fs, self.torque_limit)
+            self.chirp = ChirpIteration(self.s.chirp, self.n, self.fs, self.torque_limit,
+                                        position_bound=self.bound)
         return self.chirp
 
     def start_chirp_iteration(self) -> Run:
@@ -168,6 +173,9 @@ class SessionPlanning:
             r_runs = [r for (_k0, _k1, r) in run.stream.segments]
             u_runs = [fill_torque_gaps(run.u[i]) for i in range(len(run.stream.segments))]
             s = it.update(r_runs, u_runs)
+            if s.get('position_cap'):
+                self.out.log('info', f'chirp iteration {s["iteration"] + 1}: '
+                                     f'{it.position_cap.describe()}')
             return {'procedure': 'chirp_iteration', 'iteration': s['iteration'],
                     'error_db': s['max_abs_error_db'],
                     'error_db_per_channel': np.asarray(s['error_db_per_channel']).tolist(),

@@ -95,3 +95,47 @@ def test_a_difference_the_mjcf_itself_outputs_is_no_sensor_effect(tmp_path):
     assert not with_sensor(robot, reading, shown).velocity_from_encoder
     # the experiments route searches against the nominal as it is
     assert with_lacking_sensor(rec, robot, mj(rec, robot, ctrl)) is robot
+
+
+def _time_series(tmp_path, T: float = 8.0):
+    """Return the nominal MJCF, its controller and its own simulation as a plain time series."""
+    robot, ctrl = _nominal(tmp_path)
+    mj = MjcfModels(robot)
+    template = _excitation(robot.n_axes, T=T)
+    template = Recording(template.t, robot.joint_names, template.position, template.velocity,
+                         template.effort, template.reference, template.excitation,
+                         template.segments)
+    sim = mj(template, robot, ctrl)
+    rng = np.random.default_rng(11)
+    noisy = sim.velocity + VELOCITY_NOISE * rng.standard_normal(sim.velocity.shape)
+    # what a robot's log holds: the joint states, no reference, no experiments
+    return robot, ctrl, mj, Recording(sim.t, sim.joint_names, sim.position, noisy, sim.effort,
+                                      None, None, [])
+
+
+def test_the_time_series_route_reads_the_mjcfs_own_output_too(tmp_path):
+    """
+    The time series of the nominal MJCF itself: no velocity_from_encoder on either route.
+
+    Without experiments the nominal model is simulated following the record's velocity (its
+    reference unknown): MuJoCo's output is the backward difference, as the record's is.
+    """
+    robot, ctrl, mj, rec = _time_series(tmp_path)
+    reading = read_sensor(rec, robot.joint_names)
+    assert all(s.differenced for s in reading), reading
+    shown = model_sensor(rec, robot, ctrl, mj)
+    print('record:', reading, '\nnominal MJCF on the time series:', shown)
+    assert shown is not None and all(s.differenced for s in shown), shown
+    assert [e for e in sensor_effects(reading, robot, shown=shown)
+            if e.name == 'velocity_from_encoder'] == []
+
+
+def test_time_series_diagnosis_of_the_nominal_mjcf_names_no_sensor(tmp_path):
+    from frf_ident.core.diagnosis.pipeline import diagnose
+    robot, ctrl, mj, rec = _time_series(tmp_path)
+    res = diagnose(rec, robot, ctrl, simulator=mj, jobs=1)
+    assert res.mode == 'timeseries'
+    names = [(e.name, e.axis) for e in res.result.effects]
+    print('effects:', names)
+    assert not [n for n in names if n[0] == 'velocity_from_encoder'], names
+    assert not res.result.extended.velocity_from_encoder

@@ -35,8 +35,9 @@ shows it).
 
 What the model lacks is judged against the model's own output, not only its file: the
 nominal model simulated on the record's excitation (:func:`model_sensor`, by the simulator the
-diagnosis uses) is read the same way, and a velocity its own simulation already forms as a
-position difference is no effect. MuJoCo's semi-implicit step (Euler, implicit, implicitfast)
+diagnosis uses; on a time series without a reference, following its measured velocity) is
+read the same way, and a velocity its own simulation already forms as a position difference
+is no effect, on either route. MuJoCo's semi-implicit step (Euler, implicit, implicitfast)
 updates q_(k+1) = q_k + h v_(k+1), so an MJCF stepped once per sample outputs exactly the
 backward difference (frf_ident/io/mjcf/loop.py): its record shows the sensor, and so does the
 nominal MJCF. Our own plant (frf_ident/core/simulation/plant.py) outputs the true velocity
@@ -52,7 +53,7 @@ from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np
 
-from .common import bridge_gaps, Effect, has_experiments, simulate_like, Simulator
+from .common import bridge_gaps, drive_reference, Effect, simulate_like, Simulator
 from .result import DiagnosisResult
 from .thresholds import (SENSOR_DIFF_EXPLAINS, SENSOR_GRID_SHARE, SENSOR_GRID_TOL,
                          SENSOR_MIN_STEPS, SENSOR_RESOLUTION_MATCH, SENSOR_TAP_TOL)
@@ -173,15 +174,19 @@ def model_sensor(rec: Recording, robot: RobotParams, ctrl: PIVelocity,
     """
     Return what the nominal model's own output says about its sensor, read as the record's.
 
-    ``robot`` simulated in closed loop on the record's (gap-bridged) excitation by
+    ``robot`` simulated in closed loop on the record's (gap-bridged) reference by
     ``simulator`` (default our plant, :func:`.common.simulate_like`; MuJoCo for a model naming
-    an MJCF), read by :func:`read_sensor`. None where the record holds no identification
-    experiments to simulate (the time-series route: then only the model file's sensor counts).
+    an MJCF), read by :func:`read_sensor`. Both routes: a record without a reference (a plain
+    time series) drives the simulation with its measured velocity as the reference, as
+    :func:`.common.drive_reference` does inside a reference's gaps; the simulation need not
+    reproduce the record, its output only shows how the model forms its velocity. None where
+    no axis of the record shows a differenced velocity (nothing the model could lack).
     """
-    if rec.reference is None or not has_experiments(rec):
+    if not any(s.differenced for s in read_sensor(rec, robot.joint_names)):
         return None
     bridged, _ = bridge_gaps(rec)
-    sim = (simulator or simulate_like)(bridged, robot, ctrl)
+    ref = bridged.velocity if bridged.reference is None else drive_reference(bridged)
+    sim = (simulator or simulate_like)(bridged, robot, ctrl, reference=ref)
     return read_sensor(sim, robot.joint_names)
 
 
@@ -324,7 +329,8 @@ def name_sensor(res: DiagnosisResult, rec: Recording, robot: RobotParams,
     The experiments route searched against the model with the sensor (its extended model has
     it, its held-out misfit without it is ``detail.misfit['without_sensor']``): each axis'
     score is the share of its misfit above the floor the sensor removes. The time-series
-    route's inverse dynamics do not depend on it: score 0, named for the model file.
+    route's inverse dynamics do not depend on it: score 0, named where the model's own
+    simulation (``shown``) does not output the difference either.
     """
     reading = read_sensor(rec, robot.joint_names)
     misfit = getattr(res.detail, 'misfit', None) or {}

@@ -16,7 +16,8 @@ The chirp iteration of Sec. 5.3 (eqs. 17-19) as phases, for an n_u-axis robot.
 
 :class:`ChirpIteration` plans MIMO chirps (eq. 26 phases) whose reference is iterated until
 the plant input reaches the desired torque amplitudes (Table 1), the predicted torque kept
-below the limits; its settings are :class:`ChirpConfig`.
+below the limits and, given a position bound, its planned position inside it
+(:mod:`.chirp_position`); its settings are :class:`ChirpConfig`.
 """
 from __future__ import annotations
 
@@ -27,8 +28,10 @@ from frf_ident.core.excitation.chirp import (chirp_instantaneous_frequency, chir
                                              chirp_phase_flips, ChirpDesign)
 from frf_ident.core.excitation.chirp_dft import (chirp_analysis_frequencies, chirp_excerpt_dft,
                                                  chirp_spectra)
+from frf_ident.core.excitation.chirp_position import cap_position, PositionCap
 from frf_ident.core.excitation.multisine import reference_frequency_set
-from frf_ident.core.excitation.plan_checks import check_band, check_finite, TORQUE_MARGIN
+from frf_ident.core.excitation.plan_checks import (check_band, check_finite, POSITION_MARGIN,
+                                                   TORQUE_MARGIN)
 from frf_ident.core.excitation.procedures import Phase
 from frf_ident.errors import DesignError, SafetyError
 import numpy as np
@@ -55,6 +58,7 @@ class ChirpConfig:
     settle_s: float = 1.0
     max_gain_step: float = 100.0
     torque_margin: float = TORQUE_MARGIN
+    position_margin: float = POSITION_MARGIN
     regularisation: float = 1e-3
 
     def __post_init__(self) -> None:
@@ -64,11 +68,15 @@ class ChirpConfig:
         check_finite(duration=self.duration, tolerance_db=self.tolerance_db,
                      lead_s=self.lead_s, settle_s=self.settle_s,
                      max_gain_step=self.max_gain_step, torque_margin=self.torque_margin,
+                     position_margin=self.position_margin,
                      regularisation=self.regularisation, minimum=0.0,
-                     positive=('duration', 'tolerance_db', 'max_gain_step', 'torque_margin'))
+                     positive=('duration', 'tolerance_db', 'max_gain_step', 'torque_margin',
+                               'position_margin'))
         if self.torque_margin > 1.0 or self.n_lines < 1:
             raise DesignError(f'torque_margin={self.torque_margin} must be at most 1 and '
                               f'n_lines={self.n_lines} at least 1')
+        if self.position_margin > 1.0:
+            raise DesignError(f'position_margin={self.position_margin} must be at most 1')
         if not (np.all(np.isfinite(self.u_des)) and np.all(np.isfinite(self.r_initial))):
             raise DesignError(f'u_des {self.u_des.tolist()} and r_initial '
                               f'{self.r_initial.tolist()} must be finite')
@@ -99,14 +107,18 @@ class ChirpIteration:
     (the excerpt DFT of the signal divided by that of a unit chirp, so a chirp of amplitude a
     and phase psi reads a e^{j psi}). Step i: run the experiments of :meth:`phases`, then
     :meth:`update` with the measured r and u: P_r->u = U R^-1 (eq. 7 on r -> u), the next
-    R_{i+1} = P_r->u^-1 U_des (eq. 18), regularised, step-limited and scaled so the predicted
-    torque in time stays below the limit (:meth:`torque_scale`); r_{i+1}(t) synthesised from
-    R_{i+1} (eq. 19).
+    R_{i+1} = P_r->u^-1 U_des (eq. 18), regularised, step-limited, capped where its planned
+    position would leave ``position_bound`` [rad] (:func:`.chirp_position.cap_position`; None:
+    no bound) and scaled so the predicted torque in time stays below the limit
+    (:meth:`torque_scale`); r_{i+1}(t) synthesised from R_{i+1} (eq. 19).
     """
 
     def __init__(self, cfg: ChirpConfig, n_axes: int, fs: float,
-                 torque_limit: np.ndarray) -> None:
+                 torque_limit: np.ndarray, position_bound: float | None = None) -> None:
         self.cfg, self.n, self.fs = cfg, n_axes, fs
+        self.position_bound = position_bound
+        #: what the last update's position cap lowered (None: no bound or no update yet)
+        self.position_cap: PositionCap | None = None
         self.dt = 1.0 / fs
         self.design = ChirpDesign(cfg.f_low, cfg.f_high, cfg.duration, np.ones((n_axes, 1)))
         self.design.check_sample_rate(fs)
@@ -287,10 +299,16 @@ class ChirpIteration:
         grow = np.abs(R_next) / np.maximum(np.abs(Rm), 1e-300)
         limit = np.minimum(1.0, self.cfg.max_gain_step / np.maximum(grow, 1e-300))
         R_next = R_next * limit
+        if self.position_bound is not None:
+            R_next, self.position_cap = cap_position(
+                R_next, self.freqs, self.reference_signals, self.dt, self.position_bound,
+                self.cfg.position_margin, self.cfg.f_low)
         scale, peak = self.torque_scale(P_ru @ R_next, Um, u_runs)
         R_next = R_next * scale
+        cap = self.position_cap
         summary.update({'predicted_peak_torque': peak.tolist(),
                         'scaled_for_torque_limit': bool(scale < 1.0),
+                        'position_cap': cap.to_dict() if cap and cap.capped else None,
                         'cond_P_ru_max': float(np.max(np.linalg.cond(P_ru)))})
         self.history.append(summary)
         self.R = R_next

@@ -89,6 +89,11 @@ def check_position_bound(phases: list[Phase], start: np.ndarray, bound: float, d
             q = traj[-1]
 
 
+#: share of the position bound a chirp step capped by it may plan to use (the planned position is
+#: the reference's integral; the measured one follows it through the closed loop, which
+#: frf_ident/app/excitation_stream.py checks against the wider live bound)
+POSITION_MARGIN = 0.95
+
 #: share of each torque limit a plan may use (the predicted peak torque; the rest is left for
 #: what the model does not know)
 TORQUE_MARGIN = 0.95

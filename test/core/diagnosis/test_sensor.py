@@ -125,5 +125,11 @@ def test_our_plant_outputs_the_true_velocity_so_a_differenced_record_names_the_s
     assert with_sensor(robot, read_sensor(rec), shown).velocity_from_encoder
     ctrl = controller_from_dict(MODEL, robot)
     assert with_lacking_sensor(rec, robot, simulate_like(rec, robot, ctrl)).velocity_from_encoder
-    # a record without experiments: nothing to simulate, the model file alone counts
-    assert model_sensor(base, robot, controller_from_dict(MODEL, robot)) is None
+    # a time series (no reference, no experiments): the model follows its measured velocity,
+    # its output is still no difference, so the sensor is still named (issue 50)
+    shown = model_sensor(base, robot, ctrl)
+    assert shown is not None and not any(s.differenced for s in shown), shown
+    assert [e.axis for e in sensor_effects(read_sensor(base), robot, shown=shown)
+            if e.name == 'velocity_from_encoder'] == ['joint_1', 'joint_2']
+    # a record whose velocity is no difference: nothing the model could lack, no simulation
+    assert model_sensor(_record({}), robot, ctrl) is None

@@ -107,6 +107,8 @@ def test_multisine_config_refuses_non_finite_and_empty_settings(kw, match):
     ({'duration': float('nan')}, 'duration=nan must be a finite number, positive'),
     ({'f_high': float('inf')}, 'f_low=2.0, f_high=inf'),
     ({'torque_margin': 1.5}, 'torque_margin=1.5 must be at most 1'),
+    ({'position_margin': 1.5}, 'position_margin=1.5 must be at most 1'),
+    ({'position_margin': 0.0}, 'position_margin=0.0 must be a finite number, positive'),
     ({'r_initial': [0.006, float('nan'), 0.012]}, 'must be finite'),
 ])
 def test_chirp_config_refuses_non_finite_and_empty_settings(kw, match):

@@ -111,6 +111,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         if fd_fit:
             frequency_domain_fit(s)
         rigid_axes(s)
+        take_second_mode(s)
         torque_residual_effects(s)
         frf_shape_effects(s)
         second_pass(s)
@@ -162,9 +163,12 @@ def frequency_domain_fit(s: Search) -> None:
     stiffness differ at both loads, with a spring stage 2 would call linear
     (:func:`.frequency_fit.load_dependence`) and a residual the linear parameters leave white
     (:func:`.structure.read_structure`), gets a ``parameter_mismatch`` candidate
-    (:func:`.frequency_fit.fd_parameter_mismatch`); where the residual has a band, a second
-    mode fitted there may explain it (:func:`.second_mode.take_second_mode`). Each is judged
-    by simulation; taken, it is what the later stages read against (held out, it may be dropped).
+    (:func:`.frequency_fit.fd_parameter_mismatch`). Where the residual has a band, a second
+    mode fitted there may explain it (:func:`.second_mode.take_second_mode`), offered after the
+    rigid axes' springs are read (stage 0b): judged against a model without them, a joint
+    spring's resonance, which couples into the neighbouring axes' FRFs, was taken as a second
+    mode on a neighbour. Each is judged by simulation; taken, it is what the later stages read
+    against (held out, it may be dropped).
     """
     ev, robot = s.ev, s.robot
     sim_est = ev.fit_estimates(robot, s.sim0)
@@ -184,7 +188,6 @@ def frequency_domain_fit(s: Search) -> None:
     if s.stage0:
         s.ext, s.cur = accept(ev, robot, s.kept, s.stage0, s.cur, s.say)
     s.cands += s.stage0
-    take_second_mode(s)
     log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0),
              named(s.kept))
 

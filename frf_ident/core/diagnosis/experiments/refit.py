@@ -24,6 +24,7 @@ import math
 from typing import Any, Callable
 
 from frf_ident.core.model.params import RobotParams
+from frf_ident.errors import ModelFileError
 import numpy as np
 
 from .brent import bounded_minimum
@@ -40,6 +41,38 @@ def rebuild(robot: RobotParams, effects: list[Effect]) -> RobotParams:
     for e in effects:
         robot = apply_effect(robot, e)
     return robot
+
+
+def built(make: Callable[..., RobotParams], *args: Any) -> RobotParams | None:
+    """
+    Return ``make(*args)``, a trial model of a search, or None where no robot holds it.
+
+    A search that moves parameters may reach values no model holds (ModelFileError: a link
+    lighter than the second mode it carries, when a refit lowers the link inertia under a
+    mode kept on it); such a trial scores infinity (:func:`loss_of`): the search steps back
+    from it instead of ending the diagnosis (issue 50: ``demo --plant mujoco`` on the
+    elastic iiwa).
+    """
+    try:
+        return make(*args)
+    except ModelFileError:
+        return None
+
+
+def loss_of(ev: Evaluator, model: RobotParams | None, axis: int) -> float:
+    """Return the axis' misfit of a trial model, infinity where it is None (:func:`built`)."""
+    return math.inf if model is None else ev.loss(model, axis)
+
+
+def searched(ev: Evaluator, mk: Callable[[np.ndarray], RobotParams], axis: int
+             ) -> tuple[Callable[[np.ndarray], float], Callable[[list[np.ndarray]], None]]:
+    """Return a simplex search's loss and prefetch of the models ``mk(x)`` (:func:`built`)."""
+    def loss(x: np.ndarray) -> float:
+        return loss_of(ev, built(mk, x), axis)
+
+    def prefetch(xs: list[np.ndarray]) -> None:
+        ev.prefetch([m for m in (built(mk, x) for x in xs) if m is not None])
+    return loss, prefetch
 
 
 def _friction_scale(ev: Evaluator, axis: int, key: str) -> float:
@@ -198,9 +231,10 @@ def refit_jointly(ev: Evaluator, base: RobotParams, kept: list[Effect], axis: in
     n = len(slots)
     x0 = np.zeros(n)
     simplex = np.vstack([x0] + [x0 + 0.2 * np.eye(n)[k] for k in range(n)])
-    ev.prefetch([mk(x) for x in simplex])
-    best = nelder_mead(lambda x: ev.loss(mk(x), axis), simplex, xatol=0.01, fatol=1e-3,
-                       maxfev=8 + 6 * n, prefetch=lambda xs: ev.prefetch([mk(x) for x in xs]))
+    loss, prefetch = searched(ev, mk, axis)
+    prefetch(list(simplex))
+    best = nelder_mead(loss, simplex, xatol=0.01, fatol=1e-3, maxfev=8 + 6 * n,
+                       prefetch=prefetch)
     ext = mk(best)
     new = ev.misfit(ev.terms(ext))
     if new[axis] >= cur[axis]:

@@ -49,7 +49,8 @@ from frf_ident.errors import ModelFileError
 import numpy as np
 
 from .acceptance import accept
-from .refit import rebuild
+from .refit import rebuild, searched
+from .rigid_axes import rigid_in_band
 from .search import Search
 from .simplex import nelder_mead
 from .structure import structural, StructureReading
@@ -67,7 +68,10 @@ def second_mode_candidates(reading: StructureReading, robot: RobotParams,
     """
     Yield the second modes that explain a band of stage 0's residual, strongest band first.
 
-    Each axis' MODE_BANDS_TRIED strongest bands, in the order of their statistics: a mode is fitted
+    Each axis' MODE_BANDS_TRIED strongest bands, in the order of their statistics (not on an axis
+    the model holds rigid in the band: a resonance there is the joint's missing spring, which
+    stage 0b reads, :mod:`.rigid_axes`; the iiwa 14 of ``demo --plant mujoco`` against its rigid
+    MJCF had its joint springs read as second modes, and left unexplained): a mode is fitted
     there (:func:`~frf_ident.core.fit.link_mode.fit_second_mode`) and yielded when it explains the
     band (:func:`_why_not`); an axis' weaker bands are tried only while none of its stronger ones
     gave a candidate. A mode moves its axis' first resonance and antiresonance too, so its own band
@@ -95,7 +99,13 @@ def second_mode_candidates(reading: StructureReading, robot: RobotParams,
         ``second_mode`` candidates, one per axis at most.
 
     """
-    order = sorted(((b.statistic, i, k, b) for i in range(robot.n_axes)
+    # a joint the model holds rigid has no first resonance for a mode to sit behind: what its
+    # FRFs show in the band is the joint's own spring, read by stage 0b (.rigid_axes)
+    rigid = [i for i in range(robot.n_axes) if rigid_in_band(robot, i)]
+    for i in rigid:
+        say(f'  {robot.axes[i].name}: rigid in the model: a resonance in its band is read as '
+            f'the joint spring it lacks (stage 0b), not as a second mode')
+    order = sorted(((b.statistic, i, k, b) for i in range(robot.n_axes) if i not in rigid
                     for k, b in enumerate(reading.bands(i)[:MODE_BANDS_TRIED])),
                    key=lambda t: t[:3], reverse=True)
     done: set[int] = set()
@@ -270,10 +280,10 @@ def refine_modes(s: Search) -> None:
             return rebuild(s.robot, [replace(k, parameters=params(x)) if k is c else k
                                      for k in s.kept])
         simplex = np.vstack([np.zeros(3), np.diag(MODE_REFINE_STEP)])
-        s.ev.prefetch([mk(x) for x in simplex])
-        best = nelder_mead(lambda x: s.ev.loss(mk(x), i), simplex, xatol=0.005, fatol=1e-3,
-                           maxfev=MODE_REFINE_EVALUATIONS,
-                           prefetch=lambda xs: s.ev.prefetch([mk(x) for x in xs]))
+        loss, prefetch = searched(s.ev, mk, i)
+        prefetch(list(simplex))
+        best = nelder_mead(loss, simplex, xatol=0.005, fatol=1e-3,
+                           maxfev=MODE_REFINE_EVALUATIONS, prefetch=prefetch)
         ext = mk(best)
         new = s.ev.misfit(s.ev.terms(ext))
         if new[i] >= s.cur[i]:

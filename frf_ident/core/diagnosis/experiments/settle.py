@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from .refit import rebuild
+from .refit import built, loss_of, rebuild
 from .search import Search
 from .standard_errors import axis_fit, AxisFit, effects_with, model_with
 from ..common import Effect
@@ -204,10 +204,10 @@ def joint_step(s: Search, i: int, fit: AxisFit, loose: list[int], off: list[int]
     shrink += [float((_MAX_FACTOR - 1) / (r - 1)) for r in ratio if r > _MAX_FACTOR]
     move *= min([1.0] + shrink)
     trial = [x0 + move, x0 + 0.5 * move]
-    models = [model_with(s.robot, s.kept, fit.slots, x) for x in trial]
-    s.ev.prefetch(models)
+    models = [built(model_with, s.robot, s.kept, fit.slots, x) for x in trial]
+    s.ev.prefetch([m for m in models if m is not None])
     now = s.ev.loss(rebuild(s.robot, s.kept), i)
-    loss = [s.ev.loss(m, i) for m in models]
+    loss = [loss_of(s.ev, m, i) for m in models]
     b = int(np.argmin(loss))
     names = [', '.join(fit.slots[j].label for j in js) or 'nothing' for js in (loose, off)]
     s.say(f'  {s.robot.axes[i].name}: {names[0]} unsettled, {names[1]} off its optimum; '
