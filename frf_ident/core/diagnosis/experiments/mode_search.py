@@ -26,22 +26,22 @@ mode on joint_1 at 31-37 Hz). The closed-loop records see it: the chirp passes t
 resonance and the axis stays far above its noise floor with every other effect named (joint_1
 of 6588470: 15.1 floors with the true time delay on joint_2, 0.88 with the true mode too).
 
-:func:`search_left_modes` therefore tries, on every axis still UNEXPLAINED_RATIO floors above
-its noise once the other effects are named and that holds no mode, a mode fitted by
-simulation against the other axes' effects (what the axis took while the mode was missing may
-stand in for it, and is offered again on top of the mode): its link-held frequency on a grid
-(MODE_SEARCH_STEP apart, from the axis' first resonance to the highest measured line) times
-shares of the link on the spring (MODE_SEARCH_SHARE), the band again MODE_SCAN_STEP apart at a
-light damping ratio (a light mode's valley is as narrow as its half-power width), then
-Nelder-Mead on the log of frequency, damping ratio and inertia over frequency squared from the
-scan's best point and from the grid's at a heavy damping ratio (MODE_SEARCH_DAMPING). The fit
-is offered as a ``second_mode`` only where it explains its axis (the misfit left below UNEXPLAINED_RATIO floors: a mode posing for a missed
-friction or ripple does not) and where its frequency is determined (refitted MODE_FREQUENCY_SE
-off, the misfit rises beyond chi-square(1) at MODE_PROFILE_ALPHA); else the axis stays
-unexplained, as before. It is judged as every candidate (:func:`.acceptance.passes`); the
-held-out check judges it again. Its standard errors are those of the frequency-domain fit of the
-multisine ratio started at its frequency where that fit lands within MODE_FREQUENCY_SE of it
-(wider than the records' fit: the lines hardly see the mode), else not given.
+:func:`search_left_modes` therefore tries, on every axis still UNEXPLAINED_RATIO floors above its
+noise once the other effects are named and that holds no mode, a mode fitted by simulation against
+the other axes' effects (what the axis took while the mode was missing may stand in for it, and is
+offered again on top of the mode): its link-held frequency on a grid (MODE_SEARCH_STEP apart, from
+the axis' first resonance to the highest measured line) times shares of the link on the spring
+(MODE_SEARCH_SHARE), the band again MODE_SCAN_STEP apart at a light damping ratio (a light mode's
+valley is as narrow as its half-power width), then Nelder-Mead on the log of frequency, damping
+ratio and inertia over frequency squared from the scan's best point and from the grid's at a heavy
+damping ratio (MODE_SEARCH_DAMPING). The fit is offered as a ``second_mode`` only where it explains
+its axis (the misfit left below UNEXPLAINED_RATIO floors: a mode posing for a missed friction or
+ripple does not) and where its frequency is determined (refitted MODE_FREQUENCY_SE off, the misfit
+rises beyond chi-square(1) at MODE_PROFILE_ALPHA); else the axis stays unexplained, as before. It
+is judged as every candidate (:func:`.acceptance.passes`); the held-out check judges it again. Its
+standard errors are those of the frequency-domain fit of the multisine ratio started at its
+frequency where that fit lands within MODE_FREQUENCY_SE of it (wider than the records' fit: the
+lines hardly see the mode), else not given.
 """
 from __future__ import annotations
 
@@ -55,6 +55,7 @@ from scipy import stats
 
 from .acceptance import accept, passes, share_of_misfit
 from .refit import rebuild
+from .rigid_axes import rigid_in_band
 from .search import Search
 from .simplex import nelder_mead
 from ..common import Effect
@@ -95,7 +96,8 @@ def search_left_modes(s: Search) -> None:
     ev = s.ev
     floor = ev.floor_seen(s.cur)
     for i in range(s.robot.n_axes):
-        if (s.cur[i] <= UNEXPLAINED_RATIO * floor[i]
+        # an axis the model holds rigid lacks its spring, not a mode (stage 0b, .rigid_axes)
+        if (s.cur[i] <= UNEXPLAINED_RATIO * floor[i] or rigid_in_band(s.robot, i)
                 or any(k.name == 'second_mode' and k.axis_index == i for k in s.kept)):
             continue
         others = [k for k in s.kept if k.axis_index != i]

@@ -158,17 +158,14 @@ def frequency_domain_fit(s: Search) -> None:
     """
     Stage 0: take a linear parameter mismatch or a second mode the FRF fits show.
 
-    The physical fit of the measured multisine and chirp FRFs against the same fit of the
-    nominal simulation (:func:`.frequency_fit.linear_shifts`); an axis whose inertias or
-    stiffness differ at both loads, with a spring stage 2 would call linear
-    (:func:`.frequency_fit.load_dependence`) and a residual the linear parameters leave white
-    (:func:`.structure.read_structure`), gets a ``parameter_mismatch`` candidate
-    (:func:`.frequency_fit.fd_parameter_mismatch`). Where the residual has a band, a second
-    mode fitted there may explain it (:func:`.second_mode.take_second_mode`), offered after the
-    rigid axes' springs are read (stage 0b): judged against a model without them, a joint
-    spring's resonance, which couples into the neighbouring axes' FRFs, was taken as a second
-    mode on a neighbour. Each is judged by simulation; taken, it is what the later stages read
-    against (held out, it may be dropped).
+    The physical fit of the measured multisine and chirp FRFs against the same fit of the nominal
+    simulation (:func:`.frequency_fit.linear_shifts`); an axis whose inertias or stiffness differ
+    at both loads, with a spring stage 2 would call linear (:func:`.frequency_fit.load_dependence`)
+    and a residual the linear parameters leave white (:func:`.structure.read_structure`), gets a
+    ``parameter_mismatch`` candidate (:func:`.frequency_fit.fd_parameter_mismatch`). Where the
+    residual has a band, a second mode fitted there may explain it
+    (:func:`.second_mode.take_second_mode`, offered after stage 0b's springs of the rigid axes: a
+    spring's resonance couples into its neighbours' FRFs). Each is judged by simulation.
     """
     ev, robot = s.ev, s.robot
     sim_est = ev.fit_estimates(robot, s.sim0)
