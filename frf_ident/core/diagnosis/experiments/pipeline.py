@@ -41,6 +41,7 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
 from .evaluator import Evaluator
 from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence, shifts_text
 from .held_out import finish, held_out_check, structure_missing
+from .mode_search import search_left_modes
 from .refit import FRICTION, refit_friction, refit_jointly
 from .rigid_axes import rigid_axes, rigid_in_band
 from .search import named, Search
@@ -65,17 +66,18 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     """
     Diagnose an identification recording against the nominal ``robot``.
 
-    Every candidate is judged on its own axis' misfit (in units of the noise floor). First
-    (stage 0) a linear parameter mismatch the frequency-domain physical fit of the measured
-    FRFs shows at both loads (:mod:`.frequency_fit`, seconds, one simulation to judge it),
-    so the later stages start from the model with it; then the torque-residual effects
-    (Coulomb and viscous friction, torque ripple, gravity) from one joint regression per axis;
-    then, against the simulation of that model, the FRF-shape effects (time delay, parameter
-    mismatch, stiffening, backlash), so friction does not pose as stiffness. A second pass,
-    joint refits and a stiffening gear read in place of a mismatched stiffness a spring shape
-    bends (:mod:`.spring_reading`) follow; then every value's standard error (one not settled
-    is refitted jointly with those it trades against, else labelled not determined), and the
-    held-out check drops kept effects within their errors of nominal or not missed held out.
+    Every candidate is judged on its own axis' misfit (noise floors). First (stage 0) a linear
+    parameter mismatch the frequency-domain physical fit of the measured FRFs shows at both loads
+    (:mod:`.frequency_fit`), so the later stages start from the model with it; then the
+    torque-residual effects (Coulomb and viscous friction, torque ripple, gravity) from one joint
+    regression per axis; then, against the simulation of that model, the FRF-shape effects (time
+    delay, parameter mismatch, stiffening, backlash), so friction does not pose as stiffness. A
+    second pass, joint refits, a second mode fitted by simulation where an axis stays
+    unexplained (:mod:`.mode_search`) and a stiffening gear read in place of a mismatched
+    stiffness a spring shape bends (:mod:`.spring_reading`) follow; then every value's standard
+    error (a parameter that has not settled is refitted jointly with those it trades against,
+    else labelled not determined) and the held-out check (effects within their errors of the
+    nominal or not needed are dropped).
 
     Parameters
     ----------
@@ -117,6 +119,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         second_pass(s)
         joint_refits(s)
         late_ripples(s)
+        search_left_modes(s)
         refine_modes(s)
         gap_or_stiffening(s)
         settled = settle(s)
@@ -158,17 +161,14 @@ def frequency_domain_fit(s: Search) -> None:
     """
     Stage 0: take a linear parameter mismatch or a second mode the FRF fits show.
 
-    The physical fit of the measured multisine and chirp FRFs against the same fit of the
-    nominal simulation (:func:`.frequency_fit.linear_shifts`); an axis whose inertias or
-    stiffness differ at both loads, with a spring stage 2 would call linear
-    (:func:`.frequency_fit.load_dependence`) and a residual the linear parameters leave white
-    (:func:`.structure.read_structure`), gets a ``parameter_mismatch`` candidate
-    (:func:`.frequency_fit.fd_parameter_mismatch`). Where the residual has a band, a second
-    mode fitted there may explain it (:func:`.second_mode.take_second_mode`), offered after the
-    rigid axes' springs are read (stage 0b): judged against a model without them, a joint
-    spring's resonance, which couples into the neighbouring axes' FRFs, was taken as a second
-    mode on a neighbour. Each is judged by simulation; taken, it is what the later stages read
-    against (held out, it may be dropped).
+    The physical fit of the measured multisine and chirp FRFs against the same fit of the nominal
+    simulation (:func:`.frequency_fit.linear_shifts`); an axis whose inertias or stiffness differ
+    at both loads, with a spring stage 2 would call linear (:func:`.frequency_fit.load_dependence`)
+    and a residual the linear parameters leave white (:func:`.structure.read_structure`), gets a
+    ``parameter_mismatch`` candidate (:func:`.frequency_fit.fd_parameter_mismatch`). Where the
+    residual has a band, a second mode fitted there may explain it
+    (:func:`.second_mode.take_second_mode`, offered after stage 0b's springs of the rigid axes: a
+    spring's resonance couples into its neighbours' FRFs). Each is judged by simulation.
     """
     ev, robot = s.ev, s.robot
     sim_est = ev.fit_estimates(robot, s.sim0)

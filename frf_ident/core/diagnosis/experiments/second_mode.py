@@ -55,10 +55,10 @@ from .search import Search
 from .simplex import nelder_mead
 from .structure import structural, StructureReading
 from ..common import apply_effect, Effect
-from ..thresholds import (FD_MISMATCH_Z, MISMATCH_MIN_LOG, MODE_BAND_DB, MODE_BAND_SPAN,
-                          MODE_BANDS_TRIED, MODE_COST_SHARE, MODE_DAMPING_RANGE, MODE_FREQUENCY_SE,
-                          MODE_LEFT_SHARE, MODE_MIN_INERTIA_SHARE, MODE_REFINE_EVALUATIONS,
-                          MODE_REFINE_STEP)
+from ..mode_thresholds import (MODE_BAND_DB, MODE_BAND_SPAN, MODE_BANDS_TRIED, MODE_COST_SHARE,
+                               MODE_DAMPING_RANGE, MODE_FREQUENCY_SE, MODE_LEFT_SHARE,
+                               MODE_MIN_INERTIA_SHARE, MODE_REFINE_EVALUATIONS, MODE_REFINE_STEP)
+from ..thresholds import FD_MISMATCH_Z, MISMATCH_MIN_LOG
 
 __all__ = ['mode_band', 'refine_modes', 'second_mode_candidates', 'take_second_mode']
 

@@ -44,7 +44,7 @@ from frf_ident.core.fit.residual_whiteness import residual_test, ResidualBand, R
 from frf_ident.core.model.params import RobotParams
 import numpy as np
 
-from ..thresholds import MODE_LEFT_SHARE, MODE_MIN_LINES, NOISE_SMOOTH_LINES
+from ..mode_thresholds import MODE_LEFT_SHARE, MODE_MIN_LINES, NOISE_SMOOTH_LINES
 
 __all__ = ['StructureReading', 'model_bands', 'ratio_data', 'read_structure', 'structural']
 
