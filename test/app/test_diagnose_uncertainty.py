@@ -38,9 +38,10 @@ def _seed() -> int:
     return int(given) if given else int.from_bytes(os.urandom(3), 'little')
 
 
-#: fresh draws fail at the rate the sweep measures (89 % within 2 errors or labelled; seed
-#: 3687644 stiffening_damping named a backlash of 1.31e-4 +- 2.1e-6 rad on joint_3, where the
-#: plant has none): they are the sweep's, run with FRF_UNCERTAINTY_SCENES=1, not make test's
+#: fresh draws fail at the rate the sweep measures: they are the sweep's, run with
+#: FRF_UNCERTAINTY_SCENES=1, not make test's. A stiffening gear found to within 0.05 % can lie
+#: 25 of its standard errors off (seed 5804 stiffening_damping: k2 231922 +- 4.4 for 231809),
+#: errors that cover the noise, not what else the simulator does differently from the plant
 FRESH = os.environ.get('FRF_UNCERTAINTY_SCENES') == '1'
 
 
@@ -62,3 +63,26 @@ def test_values_lie_within_their_errors_or_are_not_determined(kind):
     assert sum(v['determined'] and not v['within_2se'] for v in vals) <= 1, msg
     # every value the report names carries its standard error
     assert all(v['se'] is not None for v in vals), msg
+
+
+@pytest.mark.slow
+def test_a_stiffening_gear_beside_a_damping_mismatch_is_not_named_a_backlash():
+    """
+    Seed 3687644 (stiffening_damping on joint_3): the gear, not a backlash on a stiffer spring.
+
+    The stiffening candidate of the first round, fitted without the damping mismatch, lost the
+    held-out duel to a parameter mismatch of stiffness and damping; a backlash on top then took
+    the gear's bend (the same line beyond the breakpoint): 1.31e-4 +- 2.1e-6 rad was named
+    where the plant has none, the mismatch's stiffness 192541 for the plant's 120000 and no
+    stiffening gear. Read again as a stiffening gear from the nominal stiffness
+    (frf_ident/core/diagnosis/experiments/spring_reading.py), the axis' two effects are named,
+    every value within 1 % of the plant's.
+    """
+    seed = 3687644
+    r = run_pair(draw_pair(np.random.default_rng(seed), 'stiffening_damping'), seed)
+    msg = f'{r["found"]} {r["values"]}'
+    assert r['found'] == r['hidden'] == ['parameter_mismatch@joint_3',
+                                         'stiffness_nonlinearity@joint_3'], msg
+    vals = r['values']
+    assert all(v['determined'] and abs(v['value'] / v['truth'] - 1) < 0.01 for v in vals), msg
+    assert sum(not v['within_2se'] for v in vals) <= 1, msg

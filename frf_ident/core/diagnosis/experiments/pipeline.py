@@ -47,6 +47,7 @@ from .rigid_axes import rigid_axes, rigid_in_band
 from .search import named, Search
 from .second_mode import refine_modes, take_second_mode
 from .settle import final_errors, settle, within_nominal
+from .spring_reading import gap_or_stiffening
 from .structure import read_structure
 from .unheld import not_held, spring_shapes_skipped
 from ..common import apply_effect, Effect, Simulator
@@ -71,10 +72,12 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     torque-residual effects (Coulomb and viscous friction, torque ripple, gravity) from one joint
     regression per axis; then, against the simulation of that model, the FRF-shape effects (time
     delay, parameter mismatch, stiffening, backlash), so friction does not pose as stiffness. A
-    second pass, joint refits and a second mode fitted by simulation where an axis stays
-    unexplained (:mod:`.mode_search`) follow; then every value's standard error (a parameter that
-    has not settled is refitted jointly with those it trades against, else labelled not determined)
-    and the held-out check (effects within their errors of the nominal or not needed are dropped).
+    second pass, joint refits, a second mode fitted by simulation where an axis stays
+    unexplained (:mod:`.mode_search`) and a stiffening gear read in place of a mismatched
+    stiffness a spring shape bends (:mod:`.spring_reading`) follow; then every value's standard
+    error (a parameter that has not settled is refitted jointly with those it trades against,
+    else labelled not determined) and the held-out check (effects within their errors of the
+    nominal or not needed are dropped).
 
     Parameters
     ----------
@@ -101,9 +104,8 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
 
     Notes
     -----
-    A few lines per stage are logged at INFO level (logger ``frf_ident.core.diagnosis.*``),
-    the search trace (every candidate's misfit before and after, refits, held-out duels) at
-    DEBUG level.
+    A few lines per stage at INFO level (logger ``frf_ident.core.diagnosis.*``), the search
+    trace (candidates' misfits before and after, refits, held-out duels) at DEBUG level.
 
     """
     s = start(rec, robot, ctrl, jobs, simulator)
@@ -119,6 +121,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         late_ripples(s)
         search_left_modes(s)
         refine_modes(s)
+        gap_or_stiffening(s)
         settled = settle(s)
         within_nominal(s, settled)
         val_ext, sim_ext = held_out_check(s)
@@ -185,8 +188,7 @@ def frequency_domain_fit(s: Search) -> None:
     if s.stage0:
         s.ext, s.cur = accept(ev, robot, s.kept, s.stage0, s.cur, s.say)
     s.cands += s.stage0
-    log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0),
-             named(s.kept))
+    log.info('stage 0 (frequency-domain fit): %d candidate(s), %s', len(s.stage0), named(s.kept))
 
 
 def torque_residual_effects(s: Search) -> None:
@@ -255,11 +257,10 @@ def axis_candidates(s: Search, axes: list[int], sim_est: dict) -> list[list[Effe
     """
     Return :func:`frf_shape_candidates` of each axis, one axis after the other.
 
-    The searches inside an axis (the Nelder-Mead refinement of a stiffening, the grid of a
-    backlash) hand their independent models to the evaluator's workers. One axis usually
-    holds all of a round's searches (on the demo bag, joint_2's stiffening: 35 of the round's
-    37 simulations), so the axes are not spread over processes: forked one per axis, the axis
-    with the search ran alone on one core while the other idled.
+    The searches inside an axis (a stiffening's simplex, a backlash's grid) hand their models
+    to the evaluator's workers. One axis usually holds all of a round's searches (demo bag:
+    joint_2's stiffening, 35 of 37 simulations): forked one per axis, that axis ran alone on
+    one core while the other idled.
     """
     return [frf_shape_candidates(s, i, sim_est) for i in axes]
 
@@ -395,6 +396,5 @@ def late_ripples(s: Search) -> None:
     """
     late = [r for r in (ripple_again(s.ev, s.ext, i, s.stage1, s.kept)
                         for i in sorted(s.shaped)) if r is not None]
-    if late:
-        s.ext, s.cur = accept(s.ev, s.robot, s.kept, late, s.cur, s.say)
-        s.cands += late
+    s.ext, s.cur = accept(s.ev, s.robot, s.kept, late, s.cur, s.say) if late else (s.ext, s.cur)
+    s.cands += late
