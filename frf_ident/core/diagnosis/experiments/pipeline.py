@@ -43,7 +43,7 @@ from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
 from .held_out import finish, held_out_check, structure_missing
 from .mode_search import search_left_modes
 from .refit import FRICTION, refit_friction, refit_jointly
-from .rigid_axes import rigid_again, rigid_axes, rigid_in_band
+from .rigid_axes import rigid_axes, rigid_in_band
 from .search import named, Search
 from .second_mode import refine_modes, take_second_mode
 from .settle import final_errors, settle, within_nominal
@@ -67,16 +67,17 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     Diagnose an identification recording against the nominal ``robot``.
 
     Every candidate is judged on its own axis' misfit (noise floors). First (stage 0) a linear
-    mismatch the physical fit of the FRFs shows at both loads (:mod:`.frequency_fit`; rigid axes:
-    :mod:`.rigid_axes`), then the torque-residual effects (friction, ripple, gravity) of one
-    regression per axis (a rigid axis' rejected reading judged again on top); then, against the
-    simulation of that model, the FRF-shape effects (time delay, mismatch, stiffening, backlash),
-    so friction does not pose as stiffness. A second pass, joint refits, a second mode fitted by
-    simulation where an axis stays unexplained (:mod:`.mode_search`) and a stiffening gear read in
-    place of a mismatched stiffness a spring shape bends (:mod:`.spring_reading`) follow; then
-    every value's standard error (a parameter that has not settled is refitted jointly with those
-    it trades against, else labelled not determined) and the held-out check (effects within their
-    errors of the nominal or not needed are dropped).
+    parameter mismatch the frequency-domain physical fit of the measured FRFs shows at both loads
+    (:mod:`.frequency_fit`), so the later stages start from the model with it; then the
+    torque-residual effects (Coulomb and viscous friction, torque ripple, gravity) from one joint
+    regression per axis; then, against the simulation of that model, the FRF-shape effects (time
+    delay, parameter mismatch, stiffening, backlash), so friction does not pose as stiffness. A
+    second pass, joint refits, a second mode fitted by simulation where an axis stays
+    unexplained (:mod:`.mode_search`) and a stiffening gear read in place of a mismatched
+    stiffness a spring shape bends (:mod:`.spring_reading`) follow; then every value's standard
+    error (a parameter that has not settled is refitted jointly with those it trades against,
+    else labelled not determined) and the held-out check (effects within their errors of the
+    nominal or not needed are dropped).
 
     Parameters
     ----------
@@ -114,7 +115,6 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         rigid_axes(s)
         take_second_mode(s)
         torque_residual_effects(s)
-        rigid_again(s)
         frf_shape_effects(s)
         second_pass(s)
         joint_refits(s)

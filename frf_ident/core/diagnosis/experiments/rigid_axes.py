@@ -52,7 +52,7 @@ from ..common import Effect
 from ..thresholds import (MISMATCH_MIN_LOG, RIGID_ROUNDS, RIGID_SPRING_DAMPING,
                           RIGID_SPRING_GRID, SPRING_COST_RATIO)
 
-__all__ = ['RigidReading', 'read_rigid_axis', 'rigid_again', 'rigid_axes', 'rigid_axis_candidate',
+__all__ = ['RigidReading', 'read_rigid_axis', 'rigid_axes', 'rigid_axis_candidate',
            'rigid_in_band']
 
 log = logging.getLogger(__name__)
@@ -238,28 +238,3 @@ def rigid_axes(s: Search) -> None:
     s.cands += found
     log.info('stage 0b (axes rigid in the band): %d candidate(s), %s', len(found),
              named(s.kept))
-
-
-def rigid_again(s: Search) -> None:
-    """
-    Offer a rigid axis' rejected stage-0b reading again once the axis took a stage-1 effect.
-
-    The readings come from the measured FRFs (the joint in motion) against a linear model; their
-    judgement is a simulation of the model so far. Where that model lacks the axis' dry
-    friction, the simulated joint slides where the real one sticks, the friction dominates the
-    axis' misfit and a right rotor removes no share of it (the UR5e's shoulder_pan of
-    test/app/test_diagnose_mjcf.py: rotor 0.503 kg m^2 for 0.5, rejected with share 0.0 beside
-    6 N m of dry friction, so its viscous friction lost the held-out check too). Judged again on
-    top of the axis' torque-residual effects.
-    """
-    took = {k.axis_index for k in s.kept if k in s.stage1}
-    again = [c for c in s.stage0 if c not in s.kept and c.name == 'parameter_mismatch'
-             and c.axis_index in took and rigid_in_band(s.robot, c.axis_index)
-             and not any(k.name == c.name and k.axis == c.axis for k in s.kept)]
-    if not again:
-        return
-    s.say('stage 0b readings rejected before the axis took its friction, judged again: '
-          + ', '.join(c.axis for c in again))
-    s.ext, s.cur = accept(s.ev, s.robot, s.kept, again, s.cur, s.say)
-    log.info('stage 1b (rigid axes again, on top of their friction): %d candidate(s), %s',
-             len(again), named(s.kept))
