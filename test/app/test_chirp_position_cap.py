@@ -34,6 +34,7 @@ from frf_ident.core.simulation.controller import PIVelocity
 from frf_ident.io.model_file import load_plant
 import numpy as np
 from plants.mujoco_iiwa import AXES, elastic_xml, home, KI, KP
+from plants.session_outputs import RecordingOutputs
 import pytest
 
 pytest.importorskip('mujoco')
@@ -45,30 +46,12 @@ SHORT = ChirpConfig(f_low=2.0, f_high=30.0, duration=3.0, lead_s=0.2, settle_s=0
                     n_lines=30, max_iterations=2)
 
 
-class _Out:
-    def __init__(self) -> None:
-        self.refs: list[np.ndarray] = []
-        self.logs: list[str] = []
-
-    def reference(self, k, r, x) -> None:
-        self.refs.append(np.array(r, float))
-
-    def experiment(self, text) -> None:
-        pass
-
-    def progress(self, event) -> None:
-        pass
-
-    def log(self, level, text) -> None:
-        self.logs.append(text)
-
-
 def _step(sess, out, plant, ctrl, k, q, v):
     """Run one chirp step free-running on MuJoCo; return the last sample and state."""
     lim = plant.torque_limit
     run = sess.start_chirp_iteration()
     while not run.done.is_set():
-        r = out.refs[-1] if out.refs else np.zeros(plant.n_axes)
+        r = out.refs[max(out.refs)] if out.refs else np.zeros(plant.n_axes)
         u = np.clip(ctrl.step(r, v), -lim, lim)
         q, v, effort = plant.step(u)
         k += 1
@@ -87,7 +70,7 @@ def session(tmp_path_factory):
              'controller': {'kind': 'pi_velocity', 'kp': KP, 'ki': KI}}
     plant = load_plant('mujoco', model)
     ctrl = PIVelocity(KP, KI, plant.torque_limit, plant.dt, plant.hold.copy())
-    out = _Out()
+    out = RecordingOutputs()
     settings = SessionSettings(stale_samples=10 ** 9, chirp=SHORT)
     sess = ExcitationSession(settings, AXES, plant.dt, plant.torque_limit, out)
     q, v = plant.state[0].copy(), np.zeros(plant.n_axes)

@@ -31,28 +31,11 @@ from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
 import numpy as np
+from plants.session_outputs import RecordingOutputs
 import pytest
 
 SHORT = MultisineConfig(n_realisations=1, n_periods=2, resolution_hz=2.0, compensate=False,
                         return_s=2.0, settle_s=0.3)
-
-
-class _Out:
-    def __init__(self) -> None:
-        self.refs: dict[int, np.ndarray] = {}
-        self.logs: list[str] = []
-
-    def reference(self, k, r, x) -> None:
-        self.refs[k] = np.array(r, float)
-
-    def experiment(self, text) -> None:
-        pass
-
-    def progress(self, event) -> None:
-        pass
-
-    def log(self, level, text) -> None:
-        self.logs.append(text)
 
 
 class _Wall:
@@ -85,7 +68,7 @@ def _lockstep(wall, steps=None, stall_every=2000, stall_s=2.0, lead_s=0.0):
     plant = FlexibleJointPlant(robot)
     lim = np.minimum(ctrl.torque_limit, robot.torque_limits())
     ctrl.torque_limit = lim
-    out = _Out()
+    out = RecordingOutputs()
     clock = {'ns': 0}
     settings = SessionSettings(lockstep=True, multisine=SHORT)
     sess = ExcitationSession(settings, robot.joint_names, robot.dt, lim, out,
