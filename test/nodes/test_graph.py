@@ -127,7 +127,8 @@ from frf_ident import middleware as mw
 node = mw.create_node('kill_observer')
 log = []
 def seen(m):
-    log.append((time.time(), list(m.data)))
+    # the writer's source timestamp (DDS, wall clock) beside this process' receive time
+    log.append((time.time(), m.sample_info.source_timestamp * 1e-9, list(m.data)))
     if len(log) == {KILL_AFTER}:
         print('running', flush=True)
 node.create_subscription(mw.msg('std_msgs/msg/Float64MultiArray'),
@@ -190,12 +191,18 @@ def _kill_plant(tmp_path):
         obs.wait(10)
         bag = g.stop()
     log = json.loads(obs_file.read_text())
-    after = [(t, d) for t, d in log if t >= t_kill]
+    # judged on the excitation node's publish times (the DDS source timestamps, one wall clock
+    # on this PC): the observer's receive times add its own scheduling under load (a full make
+    # test once saw 50.2 ms by receive time)
+    after = [(t, d) for _, t, d in log if t >= t_kill]
     assert after, 'no reference published after the kill'
     assert np.allclose(after[-1][1], 0.0), after[-1]
     nonzero = [t for t, d in after if np.any(np.abs(d) > 0)]
     t_zero = after[-1][0] if not nonzero else min(t for t, d in after if t > max(nonzero))
-    assert t_zero - t_kill < 0.05, f'reference zero {1e3 * (t_zero - t_kill):.1f} ms after kill'
+    received = min(r for r, t, _ in log if t == t_zero)
+    assert t_zero - t_kill < 0.05, (
+        f'reference zero published {1e3 * (t_zero - t_kill):.1f} ms after kill '
+        f'(received {1e3 * (received - t_kill):.1f} ms after)')
     exc_log = (tmp_path / 'excitation_node.log').read_text()
     assert 'aborted' in exc_log and 'stale' in exc_log
     rec, timing = read_recording(bag)
