@@ -20,7 +20,9 @@ its second chirp step: "planned position reaches 8.44 deg, beyond the bound 4.00
 iteration asked for them there. Here the excitation session (what excitation_node runs) drives
 MuJoCo sample by sample, free-running, through two short chirp steps: the second must start,
 plan inside the bound, say in the log that it was capped, and keep the amplitude the
-iteration asked for on the lines the bound does not need lowered.
+iteration asked for on the lines the bound does not need lowered. The offline runner
+(`identify`, core/simulation/runner.py) does the same: it caps its second step, checks every
+step's plan, and refuses a first step beyond the bound before anything runs.
 """
 from __future__ import annotations
 
@@ -31,6 +33,8 @@ from frf_ident.app.excitation_settings import SessionSettings
 from frf_ident.core.excitation.chirp_iteration import ChirpConfig, ChirpIteration
 from frf_ident.core.excitation.chirp_position import cap_position, planned_peak
 from frf_ident.core.simulation.controller import PIVelocity
+from frf_ident.core.simulation.runner import IdentificationConfig, run_identification
+from frf_ident.errors import SafetyError
 from frf_ident.io.model_file import load_plant
 import numpy as np
 from plants.mujoco_iiwa import AXES, elastic_xml, home, KI, KP
@@ -61,14 +65,18 @@ def _step(sess, out, plant, ctrl, k, q, v):
 
 
 @pytest.fixture(scope='module')
-def session(tmp_path_factory):
+def iiwa_model(tmp_path_factory):
     path = tmp_path_factory.mktemp('iiwa') / 'iiwa_elastic.xml'
     path.write_text(elastic_xml())
     pose = home()
-    model = {'frf_ident_model': 1, 'sample_rate': 1000.0, 'mjcf': str(path),
-             'pose': {a: pose[a] for a in AXES}, 'axes': [{'name': a} for a in AXES],
-             'controller': {'kind': 'pi_velocity', 'kp': KP, 'ki': KI}}
-    plant = load_plant('mujoco', model)
+    return {'frf_ident_model': 1, 'sample_rate': 1000.0, 'mjcf': str(path),
+            'pose': {a: pose[a] for a in AXES}, 'axes': [{'name': a} for a in AXES],
+            'controller': {'kind': 'pi_velocity', 'kp': KP, 'ki': KI}}
+
+
+@pytest.fixture(scope='module')
+def session(iiwa_model):
+    plant = load_plant('mujoco', iiwa_model)
     ctrl = PIVelocity(KP, KI, plant.torque_limit, plant.dt, plant.hold.copy())
     out = RecordingOutputs()
     settings = SessionSettings(stale_samples=10 ** 9, chirp=SHORT)
@@ -118,3 +126,28 @@ def test_cap_lowers_only_the_lines_the_bound_needs():
     same, none = cap_position(R, it.freqs, it.reference_signals, it.dt,
                               math.radians(10.0), 0.95, SHORT.f_low)
     assert same is R and not none.capped
+
+
+def test_the_offline_runner_caps_its_chirp_steps_and_refuses_a_plan_beyond_the_bound(
+        iiwa_model):
+    plant = load_plant('mujoco', iiwa_model)
+    ctrl = PIVelocity(KP, KI, plant.torque_limit, plant.dt, plant.hold.copy())
+    said = []
+    rec = run_identification(plant, ctrl, IdentificationConfig(None, SHORT), progress=said.append)
+    steps = rec.meta['summary']['chirp']['iterations']
+    assert len(steps) == 2
+    cap = steps[0]['position_cap']
+    assert cap and max(cap['uncapped_peak_deg']) > 1.5 * 4.0, steps[0]
+    assert max(cap['planned_peak_deg']) <= SHORT.position_margin * 4.0 * (1 + 1e-9)
+    assert any('chirp iteration 1: amplitude capped by the position limit at 4.00 deg' in t
+               for t in said), said
+    # the second step ran as planned: its reference's integral stays inside the bound
+    seg = [s for s in rec.segments if s.info.get('design') == 'chirp'][-1]
+    r = rec.reference[rec.slice(seg.t_start, seg.t_end)]
+    assert np.degrees(planned_peak(r[None], plant.dt).max()) <= 4.0
+    # a first step that leaves the bound (2 rad/s at 2 Hz: about 9 deg): refused before any
+    # sample is run
+    plant.reset()
+    wide = ChirpConfig(**{**SHORT.__dict__, 'r_initial': np.full(len(AXES), 2.0)})
+    with pytest.raises(SafetyError, match='beyond the bound 4.00 deg'):
+        run_identification(plant, ctrl, IdentificationConfig(None, wide))

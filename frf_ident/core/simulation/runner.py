@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import logging
+import math
 import time
 from typing import Any, Callable
 
@@ -33,7 +34,7 @@ from frf_ident.core.estimation.target import UncertaintyTarget
 from frf_ident.core.excitation.chirp_iteration import ChirpConfig, ChirpIteration
 from frf_ident.core.excitation.engine import PhaseEngine
 from frf_ident.core.excitation.multisine_procedure import multisine_procedure, MultisineConfig
-from frf_ident.core.excitation.plan_checks import check_torque_bound
+from frf_ident.core.excitation.plan_checks import check_position_bound, check_torque_bound
 from frf_ident.core.excitation.procedures import Phase, POSITION_GAIN
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.progress import Progress, sink
@@ -238,6 +239,11 @@ class IdentificationConfig:
     #: the multisine ends at its first whole period meeting it (None or 0 dB: no target)
     target: UncertaintyTarget | None = None
 
+    @property
+    def position_bound(self) -> float:
+        """Return the planned-position bound [rad]: the multisine's (its default without one)."""
+        return math.radians((self.multisine or MultisineConfig()).position_bound_deg)
+
 
 def run_identification(plant: Any, controller: PIVelocity,
                        config: IdentificationConfig | None = None, *,
@@ -293,8 +299,14 @@ def run_identification(plant: Any, controller: PIVelocity,
     # every plan is checked before anything runs: a refusal costs no experiment
     phases, design = (multisine_procedure(cfg.multisine, loop.n, fs)
                       if cfg.multisine is not None else (None, None))
-    it = (ChirpIteration(cfg.chirp, loop.n, fs, controller.torque_limit)
+    # the chirp's later steps are capped where their planned position would leave the bound,
+    # as the excitation node's (frf_ident/app/excitation_plan.py)
+    it = (ChirpIteration(cfg.chirp, loop.n, fs, controller.torque_limit,
+                         position_bound=cfg.position_bound)
           if cfg.chirp is not None else None)
+    for plan in (phases, it and it.phases()):
+        if plan is not None:
+            check_position_bound(plan, np.zeros(loop.n), cfg.position_bound, loop.dt)
     if model is not None:
         for name, plan, remedy in (('multisine', phases, cfg.multisine),
                                    ('chirp_iteration_1', it and it.phases(), cfg.chirp)):
@@ -338,7 +350,9 @@ def run_identification(plant: Any, controller: PIVelocity,
         iterations = []
         for _ in range(cfg.chirp.max_iterations):
             r_runs, u_runs = [], []
-            for ph in it.phases():
+            plan = it.phases()
+            check_position_bound(plan, np.zeros(loop.n), cfg.position_bound, loop.dt)
+            for ph in plan:
                 _, _, u = loop.run_phase(ph)
                 if ph.segment:
                     r_runs.append(ph.reference)
@@ -349,6 +363,8 @@ def run_identification(plant: Any, controller: PIVelocity,
                 f"{s['max_abs_error_db']:.2f} dB, peak |u| "
                 f"{max(s['max_abs_torque']):.1f} N m"
                 + (' (converged)' if s['converged'] else ''))
+            if s.get('position_cap'):
+                say(f"chirp iteration {s['iteration']}: {it.position_cap.describe()}")
             if s['converged']:
                 break
         summary['chirp'] = {'experiment_time_s': loop.t - t_start, 'iterations': iterations,
