@@ -132,6 +132,9 @@ HELD_OUT_GAIN_Z = 3.0
 #: error of 0.008 / 0.017 / 0.020 / 0.019 noise floors from blocks of 0.1 / 0.5 / 1 / 2 s:
 #: shorter blocks are correlated, longer ones few; set by hand at 1 s
 HELD_OUT_GAIN_BLOCK_S = 1.0
+#: neighbouring pieces (FRF lines, time blocks) whose autocovariance enters a term's standard
+#: error of the held-out gain, with Bartlett's weights (experiments/noise_gain.py ``paired``)
+HELD_OUT_GAIN_LAGS = 2
 #: held-out misfit above this many noise floors (experiments: misfit units; time series: NRMSE^2
 #: over its noise floor) is clearly above noise: unexplained, or a friction reading to refit.
 #: Set by hand; held by the second-mode scenes (test_unmodelled_second_mode_is_unexplained...).
