@@ -65,8 +65,12 @@ NULL_EFFECTS = (
         {'amplitude': 0.0002, 'spatial_frequency': 300.0, 'phase': 0.0}]}))
 
 
-def null_gains(result: Any) -> list[tuple[str, float, dict[str, float]]]:
-    """Return ('name@axis', z, z per term) of the rule on NULL_EFFECTS added to the result."""
+def null_gains(result: Any) -> list[tuple[str, float, dict[str, float], list[str]]]:
+    """
+    Return the rule on NULL_EFFECTS added to the result.
+
+    Per effect: 'name@axis', its z, its z per term and the terms it found unexplained.
+    """
     from frf_ident.core.diagnosis.common import apply_effect, Effect
     from frf_ident.core.diagnosis.experiments.noise_gain import held_out_gain
     ev, ext = result.detail.evaluator, result.extended
@@ -76,7 +80,7 @@ def null_gains(result: Any) -> list[tuple[str, float, dict[str, float]]]:
             eff = Effect(name, axis.name, 0.0, params(axis), '', axis_index=i)
             g = held_out_gain(ev, apply_effect(ext, eff), ext, i)
             out.append((f'{name}@{axis.name}', round(g.z, 3),
-                        {k: round(z, 3) for k, z in g.term_z.items()}))
+                        {k: round(z, 3) for k, z in g.term_z.items()}, sorted(g.unexplained)))
     return out
 
 
@@ -150,6 +154,8 @@ def sensor_aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
         'null_z_mean_sd': (f'{np.mean(z):.2f} / {np.std(z, ddof=1):.2f}' if z.size > 1
                            else 'n/a'),
         'null_term_z_sd': term_sd,
+        'null_unexplained_terms': sum(len(x[3]) for r in nominal for x in r.get('null_z', [])
+                                      if len(x) > 3),
         'two_effect_scenes': len(two),
         'recall': f'{sum(r["hits"] for r in two)}/{sum(r["n_hidden"] for r in two)}',
         'both_found': sum(r['hits'] == r['n_hidden'] for r in two),
@@ -178,7 +184,8 @@ def rows() -> list[tuple[str, str, str, str]]:
         ('... held-out gain rule: true effects passing', a['gain_rule_true_passed'], '', ''),
         ('... held-out gain rule on null effects (nominal scenes, 4 per axis): passing',
          a['null_rule_false_alarms'], f'z mean / sd {a["null_z_mean_sd"]} (noise: 0 / 1); '
-         'per term sd ' + ', '.join(f'{k} {v}' for k, v in a['null_term_z_sd'].items()), ''),
+         'per term sd ' + ', '.join(f'{k} {v}' for k, v in a['null_term_z_sd'].items())
+         + f'; terms unexplained {a["null_unexplained_terms"]}', ''),
         (f'two small effects on two axes ({a["two_effect_scenes"]} scenes): recall',
          a['recall'], f'both found in {a["both_found"]}', ''),
         ('... false alarms among named effects', a['false_alarms'],
