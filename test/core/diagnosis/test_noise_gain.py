@@ -26,6 +26,7 @@ import math
 from frf_ident.core.diagnosis.experiments.noise_gain import correlation, HeldOutGain, paired
 from frf_ident.core.diagnosis.thresholds import HELD_OUT_GAIN_Z
 import numpy as np
+import pytest
 
 #: draws of the Monte Carlo (the tail of 3 holds 0.13 %: 26 expected passes)
 DRAWS = 20000
@@ -109,7 +110,7 @@ def test_a_true_effect_with_one_biased_term_is_kept():
     kept = HeldOutGain(terms, 200, frozenset({'chirp'}), corr)
     assert not vetoed.beyond_noise            # the chirp's bias vetoes it where it judges
     assert kept.beyond_noise
-    assert kept.z == (-0.2 + 4.3 + 2.8) / math.sqrt(4 + 2 * 0.23)
+    assert kept.z == pytest.approx((-0.2 + 4.3 + 2.8) / math.sqrt(4 + 2 * 0.23))
     assert 'chirp -3.5 unexplained' in kept.describe()
 
 
