@@ -164,12 +164,15 @@ def diagnosed(request, tmp_path_factory):
 #: what the diagnosis does not yet deliver on a scene, the run that showed it (xfail, strict:
 #: a pass is reported so that the mark goes); the deterministic scenes give the same run
 SHORTFALL = {
-    ('named', 'ur5e'): 'shoulder_pan armature (read 0.517 for 0.5) and viscous friction (3.97 for '
-                       '4) not named: the held-out gain rule drops the viscous friction (2.3 '
-                       'standard errors of noise, its chirp term -5.0), and without it the axis '
-                       'stays 26 x its floor, so the rotor is withdrawn as structure missing',
-    ('terms', 'ur5e'): 'shoulder_pan armature and damping not written (see named), its '
-                       'frictionloss 7.33 for 6 (+22 %) takes their place',
+    ('named', 'ur5e'): 'shoulder_pan armature (refitted 0.517 for 0.5) not named: the held-out '
+                       'chirp (iteration 1 at r_initial, the joint held by its 6 N m dry '
+                       'friction, 1/60 of the torque of the fitted iteration) leaves even the '
+                       'true model 84 x the noise floor of the multisine there, the axis '
+                       '22 x, so the rotor is withdrawn as structure missing (FRF 11.7 x on '
+                       'the typical line); the held-out gain rule no longer drops the viscous '
+                       'friction',
+    ('terms', 'ur5e'): 'shoulder_pan armature not written (see named); refitted without it the '
+                       'damping is 1.45 for 4 (-64 %), the frictionloss 7.49 for 6 (+25 %)',
     ('linear', 'ur5e'): 'shoulder_pan: its armature is missing (see named), extended MJCF 2.25 dB '
                         'off the truth (nominal 2.41 dB)',
     # since c2da412 the scene's chirp is capped by the position bound, as on a robot (Table 1's
