@@ -53,7 +53,8 @@ from .unheld import not_held, spring_shapes_skipped
 from ..common import apply_effect, Effect, Simulator
 from ..result import DiagnosisResult
 from ..sensor import describe_sensor, with_lacking_sensor
-from ..thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS, UNEXPLAINED_RATIO
+from ..thresholds import (MIN_DELAY_SAMPLES, REFIT_REOFFER_FALL, SIM_JOBS, STAGE2_ROUNDS,
+                          UNEXPLAINED_RATIO)
 
 __all__ = ['diagnose_experiments']
 
@@ -118,6 +119,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         frf_shape_effects(s)
         second_pass(s)
         joint_refits(s)
+        friction_after_refit(s)
         late_ripples(s)
         search_left_modes(s)
         refine_modes(s)
@@ -383,8 +385,36 @@ def joint_refits(s: Search) -> None:
     for i in range(robot.n_axes):
         above = s.cur[i] > UNEXPLAINED_RATIO * ev.floor_seen(s.cur)[i]
         if any(c.axis_index == i for c in kept) and (i in second or i in early or above):
+            before = float(s.cur[i])
             s.ext, s.cur = refit_jointly(ev, robot, kept, i, s.cur, s.say,
                                          ripple=above or i in second)
+            s.refitted[i] = before
+
+
+def friction_after_refit(s: Search) -> None:
+    """
+    Offer a rejected stage-1 friction again on an axis its joint refit brought much closer.
+
+    A candidate's share is judged against its axis' misfit at the time: a motor-side viscous
+    friction read on top of a spring whose damping had taken it removes a few percent of an
+    axis still tens of floors above its noise, and is rejected; once the joint refit has
+    brought the axis near its floor (by REFIT_REOFFER_FALL or more), the same friction, refitted
+    by simulation on top, is judged again, and the axis refitted jointly with it where taken.
+    """
+    ev, robot, kept = s.ev, s.robot, s.kept
+    fallen = {i for i, before in s.refitted.items()
+              if s.cur[i] * REFIT_REOFFER_FALL <= before}
+    late = [c for c in s.stage1 if c.axis_index in fallen and c.name in FRICTION
+            and c not in kept and not any(k.name == c.name and k.axis == c.axis for k in kept)]
+    if not late:
+        return
+    s.say('friction read again on axes the joint refit brought near their floor')
+    for c in late:
+        r = refit_friction(ev, s.ext, c)
+        c.parameters, c.evidence = r.parameters, r.evidence
+    s.ext, s.cur = accept(ev, robot, kept, late, s.cur, s.say)
+    for i in sorted({c.axis_index for c in late if c in kept}):
+        s.ext, s.cur = refit_jointly(ev, robot, kept, i, s.cur, s.say, ripple=False)
 
 
 def late_ripples(s: Search) -> None:

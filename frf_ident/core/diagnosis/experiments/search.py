@@ -48,6 +48,8 @@ class Search:
     rivals: dict[int, list[Effect]] = field(default_factory=dict)
     shaped: set[int] = field(default_factory=set)   # axes that took an FRF-shape effect
     again: list[Effect] = field(default_factory=list)  # second-pass candidates
+    #: per axis the joint refit worked on, its misfit before the refit
+    refitted: dict[int, float] = field(default_factory=dict)
     #: stage 0's residual tests of the linear fit (None: no multisine variance, or no stage 0)
     structure: StructureReading | None = None
     #: the model file as given, where ``robot`` is it with the sensor the record shows
