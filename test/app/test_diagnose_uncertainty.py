@@ -41,9 +41,10 @@ def _seed() -> int:
 
 
 #: fresh draws fail at the rate the sweep measures: they are the sweep's, run with
-#: FRF_UNCERTAINTY_SCENES=1, not make test's. A stiffening gear found to within 0.05 % can lie
-#: 25 of its standard errors off (seed 5804 stiffening_damping: k2 231922 +- 4.4 for 231809),
-#: errors that cover the noise, not what else the simulator does differently from the plant
+#: FRF_UNCERTAINTY_SCENES=1, not make test's. Before the step bias a stiffening gear found to
+#: within 0.05 % lay 25 of its standard errors off (seed 5804 stiffening_damping: k2 231922 +-
+#: 4.4 for 231809; now +- 173); the errors still do not cover what else the simulator does
+#: differently from the plant (docs/diagnosis/measured.md)
 FRESH = os.environ.get('FRF_UNCERTAINTY_SCENES') == '1'
 
 
