@@ -159,14 +159,21 @@ def rates(runs: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def sweep(n: int, seed: int, kind: str | None = None) -> dict[str, Any]:
-    """Run ``n`` pair scenes from ``seed`` (kinds cycled, or all ``kind``); print each."""
+    """
+    Run ``n`` pair scenes from ``seed`` (kinds cycled, or all ``kind``); print each.
+
+    Returns the rates over all scenes and, under ``per_kind``, those of each kind run.
+    """
     runs = []
     for k in range(n):
         r = run_pair(pair_of(seed + k, kind), seed + k)
         print(json.dumps({x: r[x] for x in ('seed', 'kind', 'hidden', 'found', 'values')},
                          default=float), flush=True)
         runs.append(r)
-    return {'n': len(runs), **rates(runs)}
+    kinds = [k for k in PAIRS if any(r['kind'] == k for r in runs)]
+    return {'n': len(runs), **rates(runs),
+            'per_kind': {k: {'n': sum(r['kind'] == k for r in runs),
+                             **rates([r for r in runs if r['kind'] == k])} for k in kinds}}
 
 
 def monte_carlo(n: int = NOISE_SEEDS, seed: int = 0) -> dict[str, Any]:

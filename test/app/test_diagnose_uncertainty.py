@@ -27,7 +27,9 @@ themselves, are ``python -m benchmarks diagnosis_uncertainty``).
 import os
 import sys
 
-from benchmarks.diagnosis_uncertainty import draw_pair, PAIRS, rates, run_pair
+from benchmarks.diagnosis_scene_run import run_scene
+from benchmarks.diagnosis_scenes import scene_of
+from benchmarks.diagnosis_uncertainty import draw_pair, PAIRS, rates, run_pair, value_checks
 import numpy as np
 import pytest
 
@@ -39,9 +41,10 @@ def _seed() -> int:
 
 
 #: fresh draws fail at the rate the sweep measures: they are the sweep's, run with
-#: FRF_UNCERTAINTY_SCENES=1, not make test's. A stiffening gear found to within 0.05 % can lie
-#: 25 of its standard errors off (seed 5804 stiffening_damping: k2 231922 +- 4.4 for 231809),
-#: errors that cover the noise, not what else the simulator does differently from the plant
+#: FRF_UNCERTAINTY_SCENES=1, not make test's. Before the step bias a stiffening gear found to
+#: within 0.05 % lay 25 of its standard errors off (seed 5804 stiffening_damping: k2 231922 +-
+#: 4.4 for 231809; now +- 173); the errors still do not cover what else the simulator does
+#: differently from the plant (docs/diagnosis/measured.md)
 FRESH = os.environ.get('FRF_UNCERTAINTY_SCENES') == '1'
 
 
@@ -86,3 +89,23 @@ def test_a_stiffening_gear_beside_a_damping_mismatch_is_not_named_a_backlash():
     vals = r['values']
     assert all(v['determined'] and abs(v['value'] / v['truth'] - 1) < 0.01 for v in vals), msg
     assert sum(not v['within_2se'] for v in vals) <= 1, msg
+
+
+@pytest.mark.slow
+def test_a_stiffer_spring_behind_a_gap_is_not_named_a_stiffening_gear(tmp_path):
+    """
+    Scene 9135 of kind mismatch (joint_2 19 % stiffer with a gap): the mismatch and the gap.
+
+    joint_2's stiffness is 356811 N m/rad for the nominal 3e5, behind a backlash of 7.8e-5 rad.
+    The search named a stiffening gear from nominal (k2 3.573e5 beyond 2.55e-4 rad), the same
+    line beyond its breakpoint; read the other way (frf_ident/core/diagnosis/experiments/
+    spring_reading.py) the axis is named as the plant has it. The reading is not taken where
+    its mismatch leaves the axis lacking structure (test/app/test_diagnose_scenes.py, scene
+    7189810).
+    """
+    scene = scene_of(9135, 0, 'mismatch')
+    r = run_scene(scene, tmp_path, keep_report=True)
+    vals = value_checks(scene, r.pop('report'))
+    msg = f'{r} {vals}'
+    assert r['found'] == r['hidden'] == ['backlash@joint_2', 'parameter_mismatch@joint_2'], msg
+    assert all(v['determined'] and abs(v['value'] / v['truth'] - 1) < 0.1 for v in vals), msg

@@ -12,13 +12,14 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-A mismatched stiffness bent by a backlash or a stiffening, read as a stiffening gear from nominal.
+A bent joint spring read both ways: a stiffening gear from nominal, or a stiffness with a gap.
 
 The truth is the spring law itself (eq. 2 behind a dead zone, written out here as the
 reference plant test/plants/reference.py has it): beyond its breakpoint the stiffening gear of
-:func:`as_stiffening` carries the same torque as the spring it replaces, within it less.
+:func:`as_stiffening` carries the same torque as the spring it replaces, within it less; beyond
+the bends the stiffer spring behind a gap of :func:`as_backlash` carries the gear's.
 """
-from frf_ident.core.diagnosis.experiments.spring_reading import as_stiffening
+from frf_ident.core.diagnosis.experiments.spring_reading import as_backlash, as_stiffening
 from hypothesis import given, settings, strategies as st
 import numpy as np
 
@@ -57,3 +58,20 @@ def test_the_gear_carries_the_same_torque_beyond_its_breakpoint(k1, stiffer, gap
 def test_a_softer_line_is_no_stiffening_gear():
     # a stiffness mismatched below nominal with a dead zone: no gear from k1 bends it so
     assert as_stiffening(1.2e5, 1.0e5, 1e-4) is None
+
+
+@settings(max_examples=40, deadline=None)
+@given(k1=st.floats(5e4, 5e5), stiffer=st.floats(1.05, 3.0), bs=st.floats(1e-5, 5e-4))
+def test_the_gap_carries_the_same_torque_beyond_the_bends(k1, stiffer, bs):
+    k2 = k1 * stiffer
+    k, gap = as_backlash(k1, k2, bs)
+    e = np.linspace(1.01, 4.0, 40) * max(bs, gap / 2)
+    was = spring(e, k1, k2, bs)
+    assert np.allclose(spring(e, k, gap=gap), was, rtol=1e-9, atol=1e-9 * abs(was).max())
+    # and read back as a stiffening gear from k1 it is the gear it came from
+    assert np.allclose(as_stiffening(k1, k, gap), (k2, bs), rtol=1e-9)
+
+
+def test_a_softer_gear_is_no_gap():
+    # a stiffening gear that softens beyond its breakpoint: no stiffer spring behind a gap
+    assert as_backlash(3e5, 2.5e5, 1e-4) is None

@@ -25,6 +25,7 @@ import logging
 import math
 
 from frf_ident.core.fit.residual_whiteness import ResidualBand
+from frf_ident.core.model.params import RobotParams
 from frf_ident.core.recording import Recording
 import numpy as np
 
@@ -44,7 +45,7 @@ from ..result import DiagnosisResult, ExperimentsDetail
 from ..thresholds import UNEXPLAINED_RATIO
 
 __all__ = ['finish', 'held_out_check', 'partners_without', 'rejected_entry',
-           'structure_missing']
+           'structure_left', 'structure_missing']
 
 log = logging.getLogger(__name__)
 
@@ -152,16 +153,9 @@ def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
         if c.name != 'parameter_mismatch' or (rigid_in_band(robot, c.axis_index)
                                               and 'stiffness' in c.parameters):
             continue
-        # the share rule first: the FRF test costs the estimates of the simulation
-        if left_unexplained(val_ext, val_base, c.axis_index):
-            why = 'its share of the nominal misfit'
-        else:
-            off = typical_unscalable_misfit(ev, sim_ext, c.axis_index, s.ext)
-            band = _band_left(s, sim_ext, c.axis_index)
-            if off <= UNEXPLAINED_RATIO and band is None:
-                continue
-            why = (f'its FRF {off:.3g} x on the typical line with the parameters refitted'
-                   if band is None else f'its FRF residual leaves {band.text()}')
+        why = structure_left(s, c.axis_index, s.ext, sim_ext, val_ext, val_base)
+        if why is None:
+            continue
         s.say(f'  {c.axis} parameter_mismatch not named: the axis stays at '
               f'{val_ext[c.axis_index]:.4g} x its floor with it ({why}): structure missing, '
               f'not parameters')
@@ -180,7 +174,29 @@ def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
     return val_ext, sim_ext, val_base
 
 
-def _band_left(s: Search, sim: Recording, axis: int) -> ResidualBand | None:
+def structure_left(s: Search, axis: int, model: RobotParams, sim: Recording, val: np.ndarray,
+                   val_base: np.ndarray) -> str | None:
+    """
+    Return why a model's parameter mismatch leaves its axis lacking structure, in words.
+
+    None where it does not: the axis' held-out misfit ``val`` left is no share of the
+    nominal's ``val_base`` that calls it unexplained, a rescale of its linear parameters
+    brings its FRF near the measured one on the typical line, and its FRF residual leaves no
+    band (:func:`_band_left`). ``sim`` is the simulation of ``model``.
+    """
+    # the share rule first: the FRF test costs the estimates of the simulation
+    if left_unexplained(val, val_base, axis):
+        return 'its share of the nominal misfit'
+    off = typical_unscalable_misfit(s.ev, sim, axis, model)
+    band = _band_left(s, sim, axis, model)
+    if off <= UNEXPLAINED_RATIO and band is None:
+        return None
+    return (f'its FRF {off:.3g} x on the typical line with the parameters refitted'
+            if band is None else f'its FRF residual leaves {band.text()}')
+
+
+def _band_left(s: Search, sim: Recording, axis: int, model: RobotParams
+               ) -> ResidualBand | None:
     """
     Return the strongest band of missing structure a model leaves on an axis, or None.
 
@@ -189,7 +205,7 @@ def _band_left(s: Search, sim: Recording, axis: int) -> ResidualBand | None:
     lines UNEXPLAINED_RATIO times its noise. A parameter change is named only where the
     residual left after it has none.
     """
-    bands = model_bands(s.ev.meas_fit, s.ev.fit_estimates(s.ext, sim), s.ext, s.structure)
+    bands = model_bands(s.ev.meas_fit, s.ev.fit_estimates(model, sim), model, s.structure)
     left = [b for b in bands[axis] if b.excess >= UNEXPLAINED_RATIO]
     return left[0] if left else None
 

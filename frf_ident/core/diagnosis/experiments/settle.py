@@ -165,7 +165,8 @@ def settle_axis(s: Search, i: int, out: Settled) -> None:
 def _trace(s: Search, i: int, fit: AxisFit) -> None:
     """Say each slot's value, standard error and refits on each experiment alone."""
     s.say(f'  {s.robot.axes[i].name}: standard errors ' + ', '.join(
-        f'{sl.label} {sl.value:.4g} +- {fit.se[j]:.3g} (within {fit.within[j]:.3g}, '
+        f'{sl.label} {sl.value:.4g} +- {fit.se[j]:.3g} (within {fit.within[j]:.3g}, step '
+        f'bias {fit.step_bias[j]:.3g}, '
         f'linearised optimum {fit.optimum[j]:.4g})' + ''.join(
             f' ({k} alone {a[j]:.4g} +- {e[j]:.3g})' for k, (a, e) in fit.alone.items())
         for j, sl in enumerate(fit.slots)))
