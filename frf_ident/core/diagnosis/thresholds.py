@@ -131,7 +131,7 @@ MAX_SUBSTEPS = 16
 HELD_OUT_GAIN_Z = 3.0
 #: a friction candidate stage 1 rejected on an axis is offered again after the axis' joint
 #: refit where the refit lowered the axis' misfit by this factor or more (its share was judged
-#: against the misfit before: pipeline.friction_after_refit). Set by hand at 4, the same factor
+#: against the misfit before: later_passes.friction_after_refit). Set by hand at 4, the same factor
 #: as UNEXPLAINED_RATIO: a refit that moves an axis by less left its candidates judged on about
 #: the misfit they were judged on. Where it acts: the capped-chirp iiwa 14 scene of
 #: test/app/test_diagnose_mjcf.py (joint2 34.4 -> 7.1 floors, its motor damping taken then);
