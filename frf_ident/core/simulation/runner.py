@@ -351,7 +351,8 @@ def run_identification(plant: Any, controller: PIVelocity,
         for _ in range(cfg.chirp.max_iterations):
             r_runs, u_runs = [], []
             plan = it.phases()
-            check_position_bound(plan, np.zeros(loop.n), cfg.position_bound, loop.dt)
+            if iterations:          # the first step was checked before anything ran
+                check_position_bound(plan, np.zeros(loop.n), cfg.position_bound, loop.dt)
             for ph in plan:
                 _, _, u = loop.run_phase(ph)
                 if ph.segment:
