@@ -158,18 +158,51 @@ def rates(runs: list[dict[str, Any]]) -> dict[str, Any]:
             'off_3x_unlabelled': sum(v['off_3x'] for v in det)}
 
 
-def sweep(n: int, seed: int, kind: str | None = None) -> dict[str, Any]:
+def _pair_run(seed: int, kind: str | None) -> dict[str, Any]:
+    """Run the pair scene of ``seed`` (a process pool's task)."""
+    return run_pair(pair_of(seed, kind), seed)
+
+
+def _mc_run(seed: int) -> dict[str, Any]:
+    """Run the Monte Carlo scene under noise seed ``seed`` (a process pool's task)."""
+    scene = {'scene': dict(MC_SCENE, seed=seed), 'truth': MC_TRUTH, 'mode': None,
+             'kind': 'monte_carlo'}
+    return run_pair(scene, seed)
+
+
+def _pool_map(fn, *args, jobs: int | None = None):
+    """Yield ``fn`` over ``args`` in order, the scenes run side by side (one per core)."""
+    from concurrent.futures import ProcessPoolExecutor
+    with ProcessPoolExecutor(max_workers=jobs or os.cpu_count() or 1) as pool:
+        yield from pool.map(fn, *args)
+
+
+def _save_runs(runs: list[dict[str, Any]]) -> None:
+    """Append every scene's checks to ``FRF_UNCERTAINTY_RUNS`` (JSON lines), when set."""
+    path = os.environ.get('FRF_UNCERTAINTY_RUNS', '')
+    if path:
+        with open(path, 'a') as f:
+            for r in runs:
+                f.write(json.dumps({x: r.get(x) for x in
+                                    ('seed', 'kind', 'hidden', 'found', 'values')},
+                                   default=float) + '\n')
+
+
+def sweep(n: int, seed: int, kind: str | None = None, jobs: int | None = None
+          ) -> dict[str, Any]:
     """
     Run ``n`` pair scenes from ``seed`` (kinds cycled, or all ``kind``); print each.
 
-    Returns the rates over all scenes and, under ``per_kind``, those of each kind run.
+    The scenes run side by side, ``jobs`` at a time (default one per core). Returns the
+    rates over all scenes and, under ``per_kind``, those of each kind run.
     """
     runs = []
-    for k in range(n):
-        r = run_pair(pair_of(seed + k, kind), seed + k)
+    seeds = [seed + k for k in range(n)]
+    for r in _pool_map(_pair_run, seeds, [kind] * n, jobs=jobs):
         print(json.dumps({x: r[x] for x in ('seed', 'kind', 'hidden', 'found', 'values')},
                          default=float), flush=True)
         runs.append(r)
+    _save_runs(runs)
     kinds = [k for k in PAIRS if any(r['kind'] == k for r in runs)]
     return {'n': len(runs), **rates(runs),
             'per_kind': {k: {'n': sum(r['kind'] == k for r in runs),
@@ -184,11 +217,9 @@ def monte_carlo(n: int = NOISE_SEEDS, seed: int = 0) -> dict[str, Any]:
     RMS of the reported standard errors and its ratio to the standard deviation.
     """
     vals: dict[str, list[tuple[float, float]]] = {}
-    for k in range(n):
-        scene = {'scene': dict(MC_SCENE, seed=seed + k), 'truth': MC_TRUTH, 'mode': None,
-                 'kind': 'monte_carlo'}
-        r = run_pair(scene, seed + k)
-        print(json.dumps({'seed': seed + k, 'values': r['values']}, default=float), flush=True)
+    for r in _pool_map(_mc_run, [seed + k for k in range(n)]):
+        print(json.dumps({'seed': r['seed'], 'values': r['values']}, default=float),
+              flush=True)
         for v in r['values']:
             if v['se'] is not None:
                 vals.setdefault(f'{v["parameter"]}@{v["axis"]}', []).append((v['value'], v['se']))
@@ -209,12 +240,12 @@ def rows() -> list[tuple[str, str, str, str]]:
     Return the rows of section ``diagnosis_uncertainty``.
 
     FRF_BENCH_SCENES pair scenes (default 21, kinds cycled) from seed 5800, then the Monte
-    Carlo of :data:`MC_SCENE` over NOISE_SEEDS noise seeds.
+    Carlo of :data:`MC_SCENE` over NOISE_SEEDS noise seeds; the scenes side by side, one per
+    core. ``FRF_UNCERTAINTY_RUNS=FILE`` appends every pair scene's checks there (JSON lines).
     """
     n = int(os.environ.get('FRF_BENCH_SCENES', '21'))
-    runs = []
-    for k in range(n):
-        runs.append(run_pair(pair_of(5800 + k), 5800 + k))
+    runs = list(_pool_map(_pair_run, [5800 + k for k in range(n)], [None] * n))
+    _save_runs(runs)
     r = rates(runs)
     vals = [v for run in runs for v in run['values']]
     near = sum(abs(v['value'] / v['truth'] - 1) <= 0.2 for v in vals if v['truth'])
