@@ -210,15 +210,21 @@ def _band_left(s: Search, sim: Recording, axis: int, model: RobotParams
     return left[0] if left else None
 
 
-def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndarray
-           ) -> DiagnosisResult:
+def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndarray,
+           moved: bool = False) -> DiagnosisResult:
     """
     Check the step, rank the effects, list the unexplained axes and take the metrics.
 
-    The integrator check (:func:`.unexplained.discretisation_check`) may raise the extended
+    ``moved``: the last settling (:func:`.settle.final_errors`) moved values since the
+    held-out check simulated the extended model; it is simulated again, so the integrator
+    check, the unexplained axes and the metrics are those of the model written. The
+    integrator check (:func:`.unexplained.discretisation_check`) may raise the extended
     model's substeps; the model is then simulated and judged at the step it is written with.
     """
     ev, robot, kept = s.ev, s.robot, s.kept
+    if moved:
+        sim_ext = ev.simulate(s.ext)
+        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
     step = discretisation_check(ev, s.ext, val_ext)
     if step.written_substeps != step.substeps:
         # two lines: the axes' numbers made a 200-character line

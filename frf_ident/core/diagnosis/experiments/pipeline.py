@@ -128,8 +128,8 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         within_nominal(s, settled)
         val_ext, sim_ext = held_out_check(s)
         val_ext, sim_ext, val_base = structure_missing(s, val_ext, sim_ext)
-        final_errors(s, settled)
-        return finish(s, val_ext, sim_ext, val_base)
+        moved = final_errors(s, settled)
+        return finish(s, val_ext, sim_ext, val_base, moved)
     finally:
         s.ev.close()
 

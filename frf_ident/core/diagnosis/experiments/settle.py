@@ -273,13 +273,15 @@ def _nominal(axis: Any, key: str, fld: str | None) -> float | None:
     return float(v) if isinstance(v, (int, float)) and key != 'stiffness_breakpoint' else None
 
 
-def final_errors(s: Search, out: Settled) -> None:
+def final_errors(s: Search, out: Settled) -> bool:
     """
     Write the standard errors on the kept effects; label what has not settled.
 
     An axis whose effects the held-out check or a rival changed since :func:`settle` (a
     friction partner refitted without a dropped term) is settled again at its new values.
+    Returns whether that moved the extended model (then its held-out misfit is stale).
     """
+    judged = s.ext
     for i in range(s.robot.n_axes):
         if not any(c.axis_index == i for c in s.kept):
             continue
@@ -308,3 +310,4 @@ def final_errors(s: Search, out: Settled) -> None:
             if labels.get(id(c)):
                 new = labelled(c, labels[id(c)])
                 c.not_determined, c.score = new.not_determined, new.score
+    return s.ext is not judged
