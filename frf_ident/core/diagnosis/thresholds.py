@@ -127,7 +127,8 @@ MAX_SUBSTEPS = 16
 #: that buys nothing passes with the normal tail, 0.13 %; 0.10 % in the Monte Carlo of
 #: test/core/diagnosis/test_noise_gain.py (pieces correlated as measured on the nominal
 #: sensor scenes); the rate and the z's spread measured on those scenes:
-#: docs/diagnosis/experiments.md, "Held-out gain over noise"
+#: docs/diagnosis/experiments.md, "Held-out gain over noise". The same threshold holds the
+#: gain over the largest standard error any noise gives the two misfits (``bound_z``)
 HELD_OUT_GAIN_Z = 3.0
 #: a friction candidate stage 1 rejected on an axis is offered again after the axis' joint
 #: refit where the refit lowered the axis' misfit by this factor or more (its share was judged
