@@ -44,7 +44,8 @@ import numpy as np
 from scipy import optimize
 
 __all__ = ['LINEAR', 'LinearRatioFit', 'ModeFit', 'RatioData', 'START_DAMPING',
-           'START_FREQUENCY_SHARES', 'START_RATIOS', 'fit_linear_ratio', 'fit_second_mode']
+           'START_FREQUENCY_SHARES', 'START_RATIOS', 'covariance', 'fit_linear_ratio',
+           'fit_second_mode']
 
 #: the linear parameters each axis may scale (viscous friction: friction confounds it)
 LINEAR = ('motor_inertia', 'link_inertia', 'stiffness', 'damping')
@@ -174,10 +175,17 @@ def _real(e: np.ndarray) -> np.ndarray:
     return math.sqrt(2.0) * np.concatenate([e.real.ravel(), e.imag.ravel()])
 
 
-def _covariance(sol: optimize.OptimizeResult, dof: int) -> np.ndarray:
-    """Return the Cramer-Rao covariance at the minimum, widened by cost / dof above 1."""
-    cov = np.linalg.pinv(sol.jac.T @ sol.jac)
-    return cov * max(1.0, 2.0 * float(sol.cost) / max(dof, 1))
+def covariance(sol: optimize.OptimizeResult, dof: int) -> np.ndarray:
+    """
+    Return the Cramer-Rao covariance at the minimum, widened by cost / dof above 1.
+
+    As the Gram matrix of the Jacobian's pseudo-inverse, J^+ J^+T, which is positive
+    semi-definite by construction: the pseudo-inverse of J^T J, ill-conditioned where two
+    parameters trade, returned negative variances (random draw 8992073 of
+    test_diagnose_scenes.py ended in a math domain error; test_link_mode.py).
+    """
+    jp = np.linalg.pinv(sol.jac)
+    return (jp @ jp.T) * max(1.0, 2.0 * float(sol.cost) / max(dof, 1))
 
 
 def fit_linear_ratio(robot: RobotParams, data: RatioData) -> LinearRatioFit:
@@ -204,7 +212,7 @@ def fit_linear_ratio(robot: RobotParams, data: RatioData) -> LinearRatioFit:
         return _real(m.residual(x.reshape(n, 4)))
     sol = optimize.least_squares(res, np.zeros(4 * n), method='lm', x_scale=0.1)
     dof = sol.fun.size - sol.x.size
-    sd = np.sqrt(np.diag(_covariance(sol, dof))).reshape(n, 4)
+    sd = np.sqrt(np.diag(covariance(sol, dof))).reshape(n, 4)
     x = sol.x.reshape(n, 4)
     return LinearRatioFit(x, sd, m.residual(x), 2.0 * float(sol.cost), dof)
 
@@ -285,7 +293,7 @@ def fit_second_mode(robot: RobotParams, data: RatioData, axis: int, centre_hz: f
     if sol is None:
         return None
     dof = sol.fun.size - sol.x.size
-    cov = _covariance(sol, dof)
+    cov = covariance(sol, dof)
     sd = np.sqrt(np.diag(cov))
     ls, (_, fe, ze, je) = full(sol.x)
     r = 1.0 / (1.0 + math.exp(-sol.x[-1]))
@@ -293,8 +301,9 @@ def fit_second_mode(robot: RobotParams, data: RatioData, axis: int, centre_hz: f
     g = np.zeros(sol.x.size)
     g[-1], g[4 * axis + 1] = 1.0 - r, 1.0
     k = 4 * n
+    inertia_sd = je * math.sqrt(max(float(g @ cov @ g), 0.0))
     return ModeFit(axis, float(fe), float(ze), float(je), float(fe * sd[k]), float(ze * sd[k + 1]),
-                   float(je * math.sqrt(float(g @ cov @ g))), ls[axis], sd[4 * axis:4 * axis + 4],
+                   float(inertia_sd), ls[axis], sd[4 * axis:4 * axis + 4],
                    m.residual(ls, (axis, fe, ze, je)) * inflate[:, None], 2.0 * float(sol.cost),
                    dof, linear_cost)
 
