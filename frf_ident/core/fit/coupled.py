@@ -31,6 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from frf_ident.core.fit.cost import cost_test, CostTest, normalised_residual
+from frf_ident.core.fit.cramer_rao import cramer_rao
 from frf_ident.core.fit.delay import delay_text
 from frf_ident.core.fit.model_error import bound, shape_basis, shifts
 from frf_ident.core.fit.physical import fit_two_mass, PARAMETERS, PhysicalFit, UNITS
@@ -275,7 +276,7 @@ def fit_coupled(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray 
 
     sol = optimize.least_squares(resid, start / scale, method='lm', x_scale=1.0)
     test = cost_test(sol.fun, sol.x.size, variance is not None)
-    cov_x = np.linalg.pinv(sol.jac.T @ sol.jac)
+    cov_x = cramer_rao(sol.jac)
     if variance is None:
         cov_x = cov_x * test.cost / max(test.dof, 1)
     value, tau = split(sol.x)

@@ -38,6 +38,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 
+from frf_ident.core.fit.cramer_rao import cramer_rao
 from frf_ident.core.model.params import RobotParams
 from frf_ident.core.simulation.analytic import link_chain_frf, second_mode_stiffness
 import numpy as np
@@ -176,16 +177,8 @@ def _real(e: np.ndarray) -> np.ndarray:
 
 
 def covariance(sol: optimize.OptimizeResult, dof: int) -> np.ndarray:
-    """
-    Return the Cramer-Rao covariance at the minimum, widened by cost / dof above 1.
-
-    As the Gram matrix of the Jacobian's pseudo-inverse, J^+ J^+T, which is positive
-    semi-definite by construction: the pseudo-inverse of J^T J, ill-conditioned where two
-    parameters trade, returned negative variances (random draw 8992073 of
-    test_diagnose_scenes.py ended in a math domain error; test_link_mode.py).
-    """
-    jp = np.linalg.pinv(sol.jac)
-    return (jp @ jp.T) * max(1.0, 2.0 * float(sol.cost) / max(dof, 1))
+    """Return the Cramer-Rao covariance at the minimum, widened by cost / dof above 1."""
+    return cramer_rao(sol.jac) * max(1.0, 2.0 * float(sol.cost) / max(dof, 1))
 
 
 def fit_linear_ratio(robot: RobotParams, data: RatioData) -> LinearRatioFit:

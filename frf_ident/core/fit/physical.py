@@ -39,6 +39,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from frf_ident.core.fit.cost import cost_test, CostTest, normalised_residual
+from frf_ident.core.fit.cramer_rao import cramer_rao
 from frf_ident.core.fit.delay import (delay_correction, delay_from_phase, DELAY_START_SHARE,
                                       delay_text)
 from frf_ident.core.fit.levy import sanathanan_koerner
@@ -346,7 +347,7 @@ def fit_two_mass(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
                                                        float(r[0].cost)))
     # 3. Cramer-Rao bound (unit-variance residual) and cost test
     jr = sol.jac
-    cov_x = np.linalg.pinv(jr.T @ jr)
+    cov_x = cramer_rao(jr)
     test = cost_test(sol.fun, sol.x.size, variance is not None)
     if variance is None:
         cov_x = cov_x * test.cost / max(test.dof, 1)

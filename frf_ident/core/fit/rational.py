@@ -42,6 +42,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from frf_ident.core.fit.cost import cost_test, CostTest
+from frf_ident.core.fit.cramer_rao import cramer_rao
 from frf_ident.core.fit.levy import sk_common_denominator
 from frf_ident.core.fit.model_error import shape_basis, shifts
 from frf_ident.core.fit.modes import Mode, modes_of
@@ -301,7 +302,7 @@ def fit_rational(freq_hz: np.ndarray, response: np.ndarray, variance: np.ndarray
         x = np.concatenate([b.ravel(), a[:-1]])
     fun, jx = resid(x), jac(x)
     test = cost_test(fun, x.size, var is not None)
-    cov = np.linalg.pinv(jx.T @ jx)
+    cov = cramer_rao(jx)
     if var is None:
         cov = cov * test.cost / max(test.dof, 1)
     num = b.reshape(n_out, n_in, nb)

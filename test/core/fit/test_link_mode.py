@@ -22,8 +22,7 @@ linear fit's residual not white where the mode is and white where there is none.
 """
 from dataclasses import replace
 
-from frf_ident.core.fit.link_mode import (
-    covariance, fit_linear_ratio, fit_second_mode, RatioData)
+from frf_ident.core.fit.link_mode import fit_linear_ratio, fit_second_mode, RatioData
 from frf_ident.core.fit.residual_whiteness import residual_test
 from frf_ident.core.model.schema import default_robot
 import numpy as np
@@ -176,24 +175,3 @@ def test_stage_0_leaves_a_rigid_joints_resonance_to_the_spring_reading():
     print('\n'.join(trace))
     assert 1 not in [c.axis_index for c in found]
     assert any('joint_2: rigid in the model' in t for t in trace)
-
-
-def test_covariance_has_no_negative_variance_where_parameters_trade():
-    # Jacobians with two nearly equal columns and one badly scaled: the pseudo-inverse of
-    # J^T J gave negative variances on 134 of 2000 such draws (random scene 8992073 ended in
-    # a math domain error); the Gram matrix of J's pseudo-inverse is positive semi-definite
-    from types import SimpleNamespace
-    rng = np.random.default_rng(8992073)
-    for _ in range(500):
-        jac = rng.standard_normal((40, 8))
-        jac[:, 1] = (jac[:, 0] * (1 + 10 ** rng.uniform(-12, -6))
-                     + 10 ** rng.uniform(-12, -7) * rng.standard_normal(40))
-        jac[:, 3] *= 10 ** rng.uniform(-8, 0)
-        cov = covariance(SimpleNamespace(jac=jac, cost=16.0), 32)
-        g = rng.standard_normal(8)
-        assert np.all(np.diag(cov) >= 0)
-        assert g @ cov @ g >= -1e-9 * np.abs(cov).max()
-    # a well-conditioned fit: the inverse of J^T J, widened by cost / dof = 2 * 16 / 32 = 1
-    jac = rng.standard_normal((40, 3))
-    np.testing.assert_allclose(covariance(SimpleNamespace(jac=jac, cost=16.0), 32),
-                               np.linalg.inv(jac.T @ jac), rtol=1e-9)
