@@ -38,6 +38,7 @@ every scene's score there as JSON.
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 import sys
@@ -69,7 +70,9 @@ def null_gains(result: Any) -> list[tuple[str, float, dict[str, float], list[str
     """
     Return the rule on NULL_EFFECTS added to the result.
 
-    Per effect: 'name@axis', its z, its z per term and the terms it found unexplained.
+    Per effect: 'name@axis', its z, its z per term, the terms it found unexplained, whether
+    the rule passes it (either z beyond the threshold) and its bound z (the gain over the
+    most any noise gives the two misfits).
     """
     from frf_ident.core.diagnosis.common import apply_effect, Effect
     from frf_ident.core.diagnosis.experiments.noise_gain import held_out_gain
@@ -80,7 +83,8 @@ def null_gains(result: Any) -> list[tuple[str, float, dict[str, float], list[str
             eff = Effect(name, axis.name, 0.0, params(axis), '', axis_index=i)
             g = held_out_gain(ev, apply_effect(ext, eff), ext, i)
             out.append((f'{name}@{axis.name}', round(g.z, 3),
-                        {k: round(z, 3) for k, z in g.term_z.items()}, sorted(g.unexplained)))
+                        {k: round(z, 3) for k, z in g.term_z.items()}, sorted(g.unexplained),
+                        bool(g.beyond_noise), round(g.bound_z, 3)))
     return out
 
 
@@ -136,7 +140,8 @@ def sensor_aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
     borrowed = sum(sum(f.split('@')[1] in ax and f not in r['hidden'] for f in r['found'])
                    for r, ax in zip(two, hidden_axes))
     res_err = [e for r in runs for e in r['sensor_resolution_error'].values()]
-    z = np.array([x[1] for r in nominal for x in r.get('null_z', [])])
+    nulls = [x for r in nominal for x in r.get('null_z', [])]
+    z = np.array([x[1] for x in nulls])
     terms = [x[2] for r in nominal for x in r.get('null_z', []) if len(x) > 2]
     term_sd = {k: round(float(np.std([t[k] for t in terms if k in t], ddof=1)), 2)
                for k in sorted({k for t in terms for k in t})} if len(terms) > 1 else {}
@@ -150,7 +155,9 @@ def sensor_aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
         'gain_rule_false_alarms': f'{sum(t[2] for t in spurious + false_two)}/'
                                   f'{len(spurious) + len(false_two)}',
         'gain_rule_true_passed': f'{sum(t[2] for t in true)}/{len(true)}',
-        'null_rule_false_alarms': f'{int(np.sum(z > HELD_OUT_GAIN_Z))}/{z.size}',
+        'null_rule_false_alarms': f'{sum(x[4] for x in nulls if len(x) > 4)}/{z.size}',
+        'null_paired_z_above': f'{int(np.sum(z > HELD_OUT_GAIN_Z))}/{z.size}',
+        'null_bound_z_max': max([x[5] for x in nulls if len(x) > 5] or [math.nan]),
         'null_z_mean_sd': (f'{np.mean(z):.2f} / {np.std(z, ddof=1):.2f}' if z.size > 1
                            else 'n/a'),
         'null_term_z_sd': term_sd,
@@ -185,7 +192,8 @@ def rows() -> list[tuple[str, str, str, str]]:
         ('... held-out gain rule on null effects (nominal scenes, 4 per axis): passing',
          a['null_rule_false_alarms'], f'z mean / sd {a["null_z_mean_sd"]} (noise: 0 / 1); '
          'per term sd ' + ', '.join(f'{k} {v}' for k, v in a['null_term_z_sd'].items())
-         + f'; terms unexplained {a["null_unexplained_terms"]}', ''),
+         + f'; terms unexplained {a["null_unexplained_terms"]}; paired z above 3 '
+         f'{a["null_paired_z_above"]}, bound z at most {a["null_bound_z_max"]:.2f}', ''),
         (f'two small effects on two axes ({a["two_effect_scenes"]} scenes): recall',
          a['recall'], f'both found in {a["both_found"]}', ''),
         ('... false alarms among named effects', a['false_alarms'],
