@@ -175,15 +175,6 @@ SHORTFALL = {
                        'frictionloss 7.33 for 6 (+22 %) takes their place',
     ('linear', 'ur5e'): 'shoulder_pan: its armature is missing (see named), extended MJCF 2.25 dB '
                         'off the truth (nominal 2.41 dB)',
-    # since c2da412 the scene's chirp is capped by the position bound, as on a robot (Table 1's
-    # amplitudes planned 4.7-82 deg on the iiwa's light links); uncapped, every term was
-    # within 1 %
-    ('named', 'iiwa14'): 'joint2 motor damping (5) not named: found by the late-friction stage '
-                         '(4.921, the axis settled at 0.43 floors) but dropped by the held-out '
-                         'gain rule at 3.0 standard errors, not above 3 (multisine 0.7, chirp '
-                         '-0.4, effort 4.2, velocity 1.8, effort/velocity correlated 0.21)',
-    ('terms', 'iiwa14'): 'joint2 damping 0 for 5 (see named); link damping 11.52 for 10 (+15 %) '
-                         'and frictionloss 6.89 for 6 (+15 %) take its place',
 }
 
 
