@@ -44,9 +44,12 @@ def cramer_rao(jac: np.ndarray) -> np.ndarray:
         Positive semi-definite; directions the data do not determine (singular values below
         the pseudo-inverse's cutoff) get no variance, as with the pseudo-inverse of J^T J.
 
+    Examples
+    --------
     >>> cramer_rao(np.array([[2.0, 0.0], [0.0, 1.0], [0.0, 1.0]]))
     array([[0.25, 0.  ],
            [0.  , 0.5 ]])
+
     """
     jp = np.linalg.pinv(np.asarray(jac, float))
     return jp @ jp.T
