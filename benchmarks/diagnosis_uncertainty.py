@@ -198,15 +198,18 @@ def _pool_map(fn, *args, jobs: int | None = None):
         yield from pool.map(fn, *args)
 
 
+def _record(r: dict[str, Any]) -> dict[str, Any]:
+    """Return what is printed and kept of a scene: its truth, what was named, the checks."""
+    return {x: r[x] for x in ('seed', 'kind', 'hidden', 'found', 'values', 'refused') if x in r}
+
+
 def _save_runs(runs: list[dict[str, Any]]) -> None:
     """Append every scene's checks to ``FRF_UNCERTAINTY_RUNS`` (JSON lines), when set."""
     path = os.environ.get('FRF_UNCERTAINTY_RUNS', '')
     if path:
         with open(path, 'a') as f:
             for r in runs:
-                f.write(json.dumps({x: r[x] for x in
-                                    ('seed', 'kind', 'hidden', 'found', 'values', 'refused')
-                                    if x in r}, default=float) + '\n')
+                f.write(json.dumps(_record(r), default=float) + '\n')
 
 
 def sweep(n: int, seed: int, kind: str | None = None, jobs: int | None = None
@@ -220,8 +223,7 @@ def sweep(n: int, seed: int, kind: str | None = None, jobs: int | None = None
     runs = []
     seeds = [seed + k for k in range(n)]
     for r in _pool_map(_pair_run, seeds, [kind] * n, jobs=jobs):
-        keys = ('seed', 'kind', 'hidden', 'found', 'values', 'refused')
-        print(json.dumps({x: r[x] for x in keys if x in r}, default=float), flush=True)
+        print(json.dumps(_record(r), default=float), flush=True)
         runs.append(r)
     _save_runs(runs)
     kinds = [k for k in PAIRS if any(r['kind'] == k for r in runs)]

@@ -16,11 +16,11 @@ The Cramer-Rao covariance of a least-squares fit at its minimum, from its Jacobi
 
 For a residual of unit variance the covariance of the parameters is (J^T J)^-1. Where two
 parameters trade (a stiffness and a damping, a mode's inertia and its frequency) J^T J is
-ill-conditioned, and its pseudo-inverse, computed as such, returns negative variances (134 of
-2000 Jacobians with two nearly equal columns, test/core/fit/test_cramer_rao.py; a random
-diagnosis scene ended in a math domain error). The Gram matrix of the Jacobian's
-pseudo-inverse, J^+ J^+T, is the same matrix where J has full rank and positive
-semi-definite by construction wherever it has not.
+ill-conditioned, and its pseudo-inverse, computed as such, returns negative variances (40 of
+the 500 Jacobians with two nearly equal columns of test/core/fit/test_cramer_rao.py, which
+prints the count; a random diagnosis scene ended in a math domain error). The Gram matrix
+of the Jacobian's pseudo-inverse, J^+ J^+T, is the same matrix where J has full rank and
+positive semi-definite by construction wherever it has not.
 """
 from __future__ import annotations
 

@@ -45,8 +45,7 @@ import numpy as np
 from scipy import optimize
 
 __all__ = ['LINEAR', 'LinearRatioFit', 'ModeFit', 'RatioData', 'START_DAMPING',
-           'START_FREQUENCY_SHARES', 'START_RATIOS', 'covariance', 'fit_linear_ratio',
-           'fit_second_mode']
+           'START_FREQUENCY_SHARES', 'START_RATIOS', 'fit_linear_ratio', 'fit_second_mode']
 
 #: the linear parameters each axis may scale (viscous friction: friction confounds it)
 LINEAR = ('motor_inertia', 'link_inertia', 'stiffness', 'damping')
@@ -176,7 +175,7 @@ def _real(e: np.ndarray) -> np.ndarray:
     return math.sqrt(2.0) * np.concatenate([e.real.ravel(), e.imag.ravel()])
 
 
-def covariance(sol: optimize.OptimizeResult, dof: int) -> np.ndarray:
+def _covariance(sol: optimize.OptimizeResult, dof: int) -> np.ndarray:
     """Return the Cramer-Rao covariance at the minimum, widened by cost / dof above 1."""
     return cramer_rao(sol.jac) * max(1.0, 2.0 * float(sol.cost) / max(dof, 1))
 
@@ -205,7 +204,7 @@ def fit_linear_ratio(robot: RobotParams, data: RatioData) -> LinearRatioFit:
         return _real(m.residual(x.reshape(n, 4)))
     sol = optimize.least_squares(res, np.zeros(4 * n), method='lm', x_scale=0.1)
     dof = sol.fun.size - sol.x.size
-    sd = np.sqrt(np.diag(covariance(sol, dof))).reshape(n, 4)
+    sd = np.sqrt(np.diag(_covariance(sol, dof))).reshape(n, 4)
     x = sol.x.reshape(n, 4)
     return LinearRatioFit(x, sd, m.residual(x), 2.0 * float(sol.cost), dof)
 
@@ -286,7 +285,7 @@ def fit_second_mode(robot: RobotParams, data: RatioData, axis: int, centre_hz: f
     if sol is None:
         return None
     dof = sol.fun.size - sol.x.size
-    cov = covariance(sol, dof)
+    cov = _covariance(sol, dof)
     sd = np.sqrt(np.diag(cov))
     ls, (_, fe, ze, je) = full(sol.x)
     r = 1.0 / (1.0 + math.exp(-sol.x[-1]))
