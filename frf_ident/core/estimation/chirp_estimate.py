@@ -127,6 +127,82 @@ class ChirpSpectra:
             'cond_max': float(np.max(cond)), 'dropped': dropped})
 
 
+def chirp_input_power(rec: Recording, *, iteration: int | None = None
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return each input's effective power at the analysis lines of a chirp iteration.
+
+    The estimate :func:`chirp_frf` forms is P = Y U^-1 over the experiments (eq. 7), so
+    output noise of variance s^2 in every excerpt puts s^2 sum_m |U^-1[m, j]|^2 on column j
+    of P: the effective power of input j is 1 / sum_m |U^-1[m, j]|^2 (|U_jj|^2 for one
+    input). The noise of the estimate relative to the response scales with its inverse: how
+    the diagnosis sets the noise floor of an iteration weaker than the one it fits.
+
+    Parameters
+    ----------
+    rec : Recording
+        A recording with chirp segments.
+    iteration : int, optional
+        The iteration (default: the last complete one, else the last).
+
+    Returns
+    -------
+    freq_hz : ndarray, shape (n_freq,)
+        The analysis lines.
+    power : ndarray, shape (n_freq, n_inputs)
+        Effective power per line and input; NaN where an excerpt held a missing sample or
+        the iteration lacks an experiment.
+
+    Examples
+    --------
+    One axis, a unit torque line: its power is |U|^2 of the excerpt spectrum.
+
+    >>> import numpy as np
+    >>> U = np.array([[[2.0 + 0j]]])
+    >>> float(effective_input_power(U)[0, 0])
+    4.0
+
+    """
+    its = chirp_iterations(rec)
+    if not its:
+        raise EstimationError('recording has no chirp segments')
+    it = (complete_chirp_iterations(rec.segments) or its)[-1] if iteration is None \
+        else iteration
+    acc = ChirpSpectra()
+    for s in rec.segments_where(design='chirp', iteration=it):
+        acc.add(rec, s)
+    freqs = np.asarray(acc.info[it]['freq_hz'], dtype=float)
+    n = len(rec.joint_names)
+    if it not in acc.complete():
+        return freqs, np.full((freqs.size, n), np.nan)
+    exps = acc.spec[it]
+    U = np.stack([exps[m]['u'] for m in sorted(exps)], axis=-1)
+    return freqs, effective_input_power(U)
+
+
+def effective_input_power(U: np.ndarray) -> np.ndarray:
+    """
+    Return 1 / sum_m |U^-1[m, j]|^2 per line and input (see :func:`chirp_input_power`).
+
+    Parameters
+    ----------
+    U : ndarray, shape (n_freq, n_inputs, n_experiments)
+        Input spectra per line, input and experiment.
+
+    Returns
+    -------
+    ndarray, shape (n_freq, n_inputs)
+        The effective power; NaN on a line with a missing sample.
+
+    """
+    out = np.full(U.shape[:2], np.nan)
+    ok = np.all(np.isfinite(U), axis=(1, 2))
+    if ok.any():
+        inv = np.linalg.pinv(U[ok])                     # (n_ok, n_experiments, n_inputs)
+        out[ok] = 1.0 / np.maximum(np.sum(np.abs(inv) ** 2, axis=1), 1e-300)
+    return out
+
+
 def chirp_iterations(rec: Recording) -> list[int]:
     return sorted({s.info['iteration'] for s in rec.segments if s.info.get('design') == 'chirp'})
 

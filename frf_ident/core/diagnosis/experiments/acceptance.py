@@ -158,7 +158,7 @@ def pick_per_axis(ev: Evaluator, ext: RobotParams, scored: list[tuple[float, Eff
         if len(cs) == 1:
             best[i] = cs[0]
             continue
-        held = [float(ev.misfit(ev.terms(apply_effect(ext, c), held_out=True))[i])
+        held = [float(ev.held_out_misfit(apply_effect(ext, c))[i])
                 for c in cs[:2]]
         best[i] = cs[int(np.argmin(held))]
         if rivals is not None:

@@ -30,7 +30,7 @@ from frf_ident.core.recording import Recording
 from frf_ident.core.simulation.controller import PIVelocity
 import numpy as np
 
-from .floors import period_noise
+from .floors import held_out_chirp_scale, period_noise
 from .parallel import WorkerPool
 from ..common import (as_simulation, bridge_gaps, diag_ratio, drive_reference, frf_error_db, nrmse,
                       rms_about_mean, segment_mask, simulate_like, Simulator, split_recording,
@@ -121,6 +121,12 @@ class Evaluator:
             # filtered closed-loop signals: about one independent sample per 10 ms
             count[key] = max(m.sum() * rec.dt / INDEPENDENT_SAMPLE_S, 10.0)
         self.floors = {k: np.maximum(v, FLOOR_MIN) for k, v in fl.items()}
+        #: the floors of the held-out part: the chirp's at the held-out iteration's own level
+        self.floors_held = dict(self.floors)
+        if 'chirp' in self.floors and self.val.segments:
+            self.floors_held['chirp'] = np.maximum(
+                self.floors['chirp'] * held_out_chirp_scale(self.fit, self.val,
+                                                            self.meas_fit['chirp']), FLOOR_MIN)
         self.counts = count
         self.lowest = np.full(n, np.inf)
         self.n_sims = 0
@@ -313,9 +319,18 @@ class Evaluator:
         """Return the misfit of one axis (units of its noise floor) of a model, on the fit part."""
         return float(self.misfit(self.terms(robot))[axis])
 
-    def misfit(self, terms: dict[str, np.ndarray]) -> np.ndarray:
-        """Return per axis the mean of term / noise floor over the loss terms (1 = at noise)."""
-        return np.mean([terms[k] / self.floors[k] for k in terms], axis=0)
+    def misfit(self, terms: dict[str, np.ndarray], *, held_out: bool = False) -> np.ndarray:
+        """
+        Return per axis the mean of term / noise floor over the loss terms (1 = at noise).
+
+        ``held_out``: the terms are the held-out part's (:attr:`floors_held`).
+        """
+        floors = self.floors_held if held_out else self.floors
+        return np.mean([terms[k] / floors[k] for k in terms], axis=0)
+
+    def held_out_misfit(self, robot: RobotParams, sim: Recording | None = None) -> np.ndarray:
+        """Return :meth:`misfit` per axis of a model on the held-out part (its floors)."""
+        return self.misfit(self.terms(robot, sim, held_out=True), held_out=True)
 
     def floor_seen(self, misfit: np.ndarray) -> np.ndarray:
         """

@@ -69,14 +69,14 @@ def held_out_check(s: Search) -> tuple[np.ndarray, Recording]:
     """
     ev, robot, kept = s.ev, s.robot, s.kept
     sim_ext = ev.simulate(s.ext)
-    val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+    val_ext = ev.held_out_misfit(s.ext, sim_ext)
     for c in list(kept):
         others = [k for k in kept if k is not c]
         refit = partners_without(s, c, others)
         alt = [refit.get(id(k), k) for k in others]
         i = c.axis_index
         without = rebuild(robot, alt)
-        v = ev.misfit(ev.terms(without, held_out=True))
+        v = ev.held_out_misfit(without)
         v_fit = ev.misfit(ev.terms(without))[i] if refit else math.inf
         g = s.gains[id(c)] = held_out_gain(ev, s.ext, without, i)
         if v[i] <= val_ext[i] or v_fit <= s.cur[i] or not g.beyond_noise:
@@ -94,7 +94,7 @@ def held_out_check(s: Search) -> tuple[np.ndarray, Recording]:
     if len(kept) != len([c for c in s.cands if c.score > 0]):
         s.ext = rebuild(robot, kept)
         sim_ext = ev.simulate(s.ext)
-        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+        val_ext = ev.held_out_misfit(s.ext, sim_ext)
     log.info('held-out check: %s', named(kept))
     return val_ext, sim_ext
 
@@ -142,7 +142,7 @@ def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
 
     """
     ev, robot, kept = s.ev, s.robot, s.kept
-    val_base = ev.misfit(ev.terms(robot, s.sim0, held_out=True))
+    val_base = ev.held_out_misfit(robot, s.sim0)
     lacking = []
     for c in kept:
         # a spring read on a joint the model holds rigid (stage 0b) adds the resonance the
@@ -170,7 +170,7 @@ def structure_missing(s: Search, val_ext: np.ndarray, sim_ext: Recording
     if lacking:
         s.ext = rebuild(robot, kept)
         sim_ext = ev.simulate(s.ext)
-        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+        val_ext = ev.held_out_misfit(s.ext, sim_ext)
     return val_ext, sim_ext, val_base
 
 
@@ -224,7 +224,7 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
     ev, robot, kept = s.ev, s.robot, s.kept
     if moved:
         sim_ext = ev.simulate(s.ext)
-        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+        val_ext = ev.held_out_misfit(s.ext, sim_ext)
     step = discretisation_check(ev, s.ext, val_ext)
     if step.written_substeps != step.substeps:
         # two lines: the axes' numbers made a 200-character line
@@ -236,7 +236,7 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
                      if a in step.too_coarse))
         s.ext = replace(s.ext, substeps=step.written_substeps)
         sim_ext = ev.simulate(s.ext)
-        val_ext = ev.misfit(ev.terms(s.ext, sim_ext, held_out=True))
+        val_ext = ev.held_out_misfit(s.ext, sim_ext)
     ext = s.ext
     kept.sort(key=lambda c: -c.score)
     unexplained = []
@@ -250,8 +250,7 @@ def finish(s: Search, val_ext: np.ndarray, sim_ext: Recording, val_base: np.ndar
     if s.nominal is not None:
         # the search read against the record's sensor; the report's nominal is the file
         nominal, sim_nominal = s.nominal, ev.simulate(s.nominal)
-        misfit['without_sensor'] = ev.misfit(ev.terms(nominal, sim_nominal,
-                                                      held_out=True)).tolist()
+        misfit['without_sensor'] = ev.held_out_misfit(nominal, sim_nominal).tolist()
     part = ev.val if ev.val.segments else ev.fit
     plots = {'measured': ev.meas_val or ev.meas_fit,
              'nominal': frf_estimates(replace_segments(sim_nominal, part)),

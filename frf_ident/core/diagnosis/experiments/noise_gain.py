@@ -185,6 +185,7 @@ def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotPa
     sims = [ev.simulate(m) for m in (without_model, with_model)]
     held = bool(ev.meas_val)
     meas = ev.meas_val if held else ev.meas_fit
+    floors = ev.floors_held if held else ev.floors
     terms: dict[str, tuple[float, float]] = {}
     misfits: dict[str, tuple[float, float, int]] = {}
     pieces = 0
@@ -193,7 +194,7 @@ def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotPa
         for m, sim in zip((without_model, with_model), sims):
             est = (frf_estimates(replace_segments(sim, ev.val)) if held
                    else ev.fit_estimates(m, sim))
-            sq.append(np.abs(np.log(diag_ratio(pm, est[k])[axis])) ** 2 / ev.floors[k][axis])
+            sq.append(np.abs(np.log(diag_ratio(pm, est[k])[axis])) ** 2 / floors[k][axis])
         d = sq[0] - sq[1]
         terms[k] = paired(d)
         misfits[k] = (float(sq[0].mean()), float(sq[1].mean()), int(d.size))
@@ -205,7 +206,7 @@ def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotPa
         a = getattr(ev.rec, key)[:, axis]
         # in the units of the evaluator's terms: NRMSE^2 on the fit part's scale
         den2 = max(float(rms_about_mean(a[ev.fit_mask])) ** 2, 1e-300)
-        e = [(a[mask] - getattr(sim, key)[:, axis][mask]) ** 2 / den2 / ev.floors[key][axis]
+        e = [(a[mask] - getattr(sim, key)[:, axis][mask]) ** 2 / den2 / floors[key][axis]
              for sim in sims]
         d = e[0] - e[1]
         blocks[key] = np.array([x.mean() for x in np.array_split(d, max(d.size // block, 2))])
@@ -214,7 +215,7 @@ def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotPa
         pieces += blocks[key].size
     with_terms = ev.terms(with_model, sims[1], held_out=held)
     unexplained = frozenset(k for k in terms if with_terms[k][axis] / own_floor(
-        ev.floors[k][axis], meas.get(k), axis) > UNEXPLAINED_RATIO)
+        floors[k][axis], meas.get(k), axis) > UNEXPLAINED_RATIO)
     return HeldOutGain(terms, pieces, unexplained,
                        {('effort', 'velocity'): correlation(blocks['effort'],
                                                             blocks['velocity'])}, misfits)

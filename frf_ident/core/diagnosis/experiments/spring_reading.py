@@ -156,7 +156,7 @@ def _duel(s: Search, i: int, old: list[Effect], new: list[Effect]) -> None:
     trial = others + new
     ext, now = refit_jointly(ev, robot, trial, i, ev.misfit(ev.terms(rebuild(robot, trial))),
                              s.say)
-    held = [float(ev.misfit(ev.terms(m, held_out=True))[i]) for m in (s.ext, ext)]
+    held = [float(ev.held_out_misfit(m)[i]) for m in (s.ext, ext)]
     was, then = (', '.join(f'{c.name} {_text(c)}' for c in cs) for cs in (old, new))
     s.say(f'  {robot.axes[i].name}: {was} vs {then} in their place on held-out data: '
           f'{held[0]:.4g} vs {held[1]:.4g}')
@@ -194,8 +194,8 @@ def _lacks_structure(s: Search, i: int, new: list[Effect], ext: RobotParams) -> 
         return False
     ev = s.ev
     sim = ev.simulate(ext)
-    why = structure_left(s, i, ext, sim, ev.misfit(ev.terms(ext, sim, held_out=True)),
-                         ev.misfit(ev.terms(s.robot, s.sim0, held_out=True)))
+    why = structure_left(s, i, ext, sim, ev.held_out_misfit(ext, sim),
+                         ev.held_out_misfit(s.robot, s.sim0))
     if why is not None:
         s.say(f'  {s.robot.axes[i].name}: not taken: its stiffness mismatch leaves the axis '
               f'lacking structure ({why})')

@@ -142,6 +142,7 @@ def unscalable_misfit(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams
     """
     meas = ev.meas_val if ev.meas_val else ev.meas_fit
     part = ev.val if ev.val.segments else ev.fit
+    floors = ev.floors_held if ev.meas_val else ev.floors
     est = frf_estimates(replace_segments(sim, part))
     ratio = {k: diag_ratio(pm, est[k])[axis] for k, pm in meas.items()}
     scaled = {k: replace(pm, response=pm.response * 0 + 0j) for k, pm in meas.items()}
@@ -154,7 +155,7 @@ def unscalable_misfit(ev: Evaluator, sim: Recording, axis: int, ext: RobotParams
         f_ = pm.freq_hz
         r = np.abs(np.log(ratio[k] * robot_frf_sampled(ext, f_)[axis, axis]
                           / robot_frf_sampled(refit, f_)[axis, axis])) ** 2
-        out.append((f_, r / ev.floors[k][axis]))
+        out.append((f_, r / floors[k][axis]))
     return out
 
 
@@ -234,7 +235,7 @@ def discretisation_check(ev: Evaluator, robot: RobotParams, val: np.ndarray
 
     """
     def misfit_at(n: int) -> np.ndarray:
-        return ev.misfit(ev.terms(replace(robot, substeps=n), held_out=True))
+        return ev.held_out_misfit(replace(robot, substeps=n))
     n = int(robot.substeps)
     fine = misfit_at(2 * n)
     moved = np.abs(fine - val) > MIN_Z * ev.misfit_sd()
@@ -303,7 +304,7 @@ def rival_instead(ev: Evaluator, base: RobotParams, kept: list[Effect], pm: Effe
         trial = [replace(k) for k in out] + [replace(r)]
         ext, _ = refit_jointly(ev, base, trial, i,
                                ev.misfit(ev.terms(rebuild(base, trial))), say)
-        val = ev.misfit(ev.terms(ext, held_out=True))
+        val = ev.held_out_misfit(ext)
         say(f'  {pm.axis}: {r.name} (the rival the parameter mismatch won over) in its place: '
             f'held-out misfit {val[i]:.4g} x its floor')
         if not left_unexplained(val, val_base, i):
