@@ -37,6 +37,9 @@ EFFECTS = ('coulomb_friction', 'viscous_friction', 'stiffness_nonlinearity', 'ba
            'torque_ripple', 'time_delay', 'gravity', 'parameter_mismatch', 'second_mode',
            # the sensor, read from the record (sensor.py)
            'velocity_from_encoder', 'quantisation')
+#: effects that bend the joint's spring (its stiffness depends on the deflection): rivals of
+#: a mismatched linear stiffness, and what holds an axis' stiffness once taken
+SPRING_SHAPES = ('stiffness_nonlinearity', 'backlash')
 
 
 @dataclass

@@ -232,16 +232,21 @@ def stiffness_seen(meas: dict, sim_est: dict, robot: RobotParams, axis: int, key
                  - fit_linear_scales(sim_est, robot, axis, ('stiffness',), (key,))[0])
 
 
-def fit_parameter_mismatch(ev: Evaluator, robot: RobotParams, axis: int, scales_ms, scales_ch
-                           ) -> Effect | None:
-    """Fit inertias, stiffness and damping to both loads; consistent shifts only."""
-    x = fit_linear_scales(ev.meas_fit, robot, axis)
+def fit_parameter_mismatch(ev: Evaluator, robot: RobotParams, axis: int, scales_ms, scales_ch,
+                           keys: tuple[str, ...] = LIN_KEYS) -> Effect | None:
+    """
+    Fit inertias, stiffness and damping to both loads; consistent shifts only.
+
+    ``keys``: the linear parameters fitted (without the stiffness on an axis whose spring a
+    kept stiffening or backlash holds: :func:`.acceptance.without_stiffness`).
+    """
+    x = fit_linear_scales(ev.meas_fit, robot, axis, keys)
     a = robot.axes[axis]
-    changed = {k: getattr(a, k) * math.exp(v) for k, v in zip(LIN_KEYS, x)
+    changed = {k: getattr(a, k) * math.exp(v) for k, v in zip(keys, x)
                if abs(v) > MISMATCH_MIN_LOG}
     if not changed:
         return None
-    ks = [f'{k} x{math.exp(v):.2f}' for k, v in zip(LIN_KEYS, x) if abs(v) > MISMATCH_MIN_LOG]
+    ks = [f'{k} x{math.exp(v):.2f}' for k, v in zip(keys, x) if abs(v) > MISMATCH_MIN_LOG]
     return Effect('parameter_mismatch', a.name, 0.0, changed,
                   f'resonance/antiresonance shifted consistently at low and high load '
                   f'(stiffness fit multisine x{math.exp(scales_ms):.3f}, chirp '

@@ -36,8 +36,8 @@ import numpy as np
 from .acceptance import accept
 from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity,
                          fit_parameter_mismatch, fit_ripple, fit_stiffness_nonlinearity,
-                         fit_time_delay, fit_viscous, friction_regression, ripple_again,
-                         stiffness_seen, with_params)
+                         fit_time_delay, fit_viscous, friction_regression, LIN_KEYS,
+                         ripple_again, stiffness_seen, with_params)
 from .evaluator import Evaluator
 from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence, shifts_text
 from .held_out import finish, held_out_check, structure_missing
@@ -51,7 +51,7 @@ from .settle import final_errors, settle, within_nominal
 from .spring_reading import gap_or_stiffening
 from .structure import read_structure
 from .unheld import not_held, spring_shapes_skipped
-from ..common import apply_effect, Effect, Simulator
+from ..common import apply_effect, Effect, Simulator, SPRING_SHAPES
 from ..result import DiagnosisResult
 from ..sensor import describe_sensor, with_lacking_sensor
 from ..thresholds import MIN_DELAY_SAMPLES, SIM_JOBS, STAGE2_ROUNDS
@@ -290,8 +290,11 @@ def frf_shape_candidates(s: Search, i: int, sim_est: dict) -> list[Effect]:
     # is not offered again below), nor for an axis rigid in the band (no spring to bend or
     # rescale: rigid_axes reads it) or where the simulator cannot hold them
     skip = spring_shapes_skipped(s, i, s_ms, s_ch) | taken
+    # a spring shape taken holds the axis' stiffness: a mismatch is read without it
+    lin = tuple(k for k in LIN_KEYS if k != 'stiffness' or not taken & set(SPRING_SHAPES))
     found = [fit_time_delay(ev, sim_est, ext, i),
-             None if rigid_in_band(ext, i) else fit_parameter_mismatch(ev, ext, i, s_ms, s_ch),
+             None if rigid_in_band(ext, i) else fit_parameter_mismatch(ev, ext, i, s_ms, s_ch,
+                                                                       lin),
              None if 'stiffness_nonlinearity' in skip
              else fit_stiffness_nonlinearity(ev, ext, i, s_ms, s_ch),
              None if 'backlash' in skip else fit_backlash(ev, ext, i, s_ms, s_ch)]

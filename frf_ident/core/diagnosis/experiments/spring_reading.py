@@ -43,12 +43,9 @@ from .acceptance import share_of_misfit
 from .held_out import structure_left
 from .refit import rebuild, refit_jointly
 from .search import Search
-from ..common import Effect
+from ..common import Effect, SPRING_SHAPES
 
 __all__ = ['as_backlash', 'as_stiffening', 'gap_or_stiffening']
-
-#: the effects that bend the joint spring (read again here on top of a mismatched stiffness)
-SHAPES = ('backlash', 'stiffness_nonlinearity')
 
 
 def as_stiffening(k1: float, k_a: float, gap: float = 0.0, k2: float | None = None,
@@ -105,7 +102,7 @@ def gap_or_stiffening(s: Search) -> None:
     for i in range(s.robot.n_axes):
         mine = [c for c in s.kept if c.axis_index == i]
         pm = next((c for c in mine if c.name == 'parameter_mismatch'), None)
-        bent = {c.name: c for c in mine if c.name in SHAPES}
+        bent = {c.name: c for c in mine if c.name in SPRING_SHAPES}
         k1 = float(s.robot.axes[i].stiffness)
         if pm is not None and 'stiffness' in pm.parameters and bent:
             st = bent.get('stiffness_nonlinearity')

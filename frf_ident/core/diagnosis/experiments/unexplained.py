@@ -33,7 +33,7 @@ from .acceptance import left_unexplained
 from .candidates import fit_linear_scales, LIN_KEYS, scaled_axis
 from .evaluator import Evaluator, frf_estimates, replace_segments
 from .refit import rebuild, refit_jointly
-from ..common import diag_ratio, Effect
+from ..common import diag_ratio, Effect, SPRING_SHAPES
 from ..records import IntegratorCheck, Signature
 from ..thresholds import BAND_SHARE, CORRELATES_MIN, MAX_BANDS, MAX_SUBSTEPS, MIN_Z, SHOWN
 
@@ -253,10 +253,6 @@ def discretisation_check(ev: Evaluator, robot: RobotParams, val: np.ndarray
                            settled=not move.any())
 
 
-#: effects that bend the joint's spring: rivals of a mismatched linear stiffness
-SPRING_SHAPE = ('stiffness_nonlinearity', 'backlash')
-
-
 def rival_instead(ev: Evaluator, base: RobotParams, kept: list[Effect], pm: Effect,
                   rivals: dict[int, list[Effect]], val_base: np.ndarray,
                   say: Callable[[str], None]) -> list[Effect] | None:
@@ -297,10 +293,10 @@ def rival_instead(ev: Evaluator, base: RobotParams, kept: list[Effect], pm: Effe
     """
     i = pm.axis_index
     for r in rivals.get(i, []):
-        if r.name not in SPRING_SHAPE:
+        if r.name not in SPRING_SHAPES:
             continue
         out = [k for k in kept if k.axis_index != i
-               or (k is not pm and k.name not in SPRING_SHAPE)]
+               or (k is not pm and k.name not in SPRING_SHAPES)]
         trial = [replace(k) for k in out] + [replace(r)]
         ext, _ = refit_jointly(ev, base, trial, i,
                                ev.misfit(ev.terms(rebuild(base, trial))), say)

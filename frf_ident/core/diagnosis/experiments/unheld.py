@@ -27,7 +27,7 @@ import math
 
 from .rigid_axes import rigid_in_band
 from .search import Search
-from ..common import Effect
+from ..common import Effect, SPRING_SHAPES
 from ..thresholds import LOAD_DEPENDENCE_MIN_LOG
 
 __all__ = ['not_held', 'spring_shapes_skipped']
@@ -58,7 +58,7 @@ def spring_shapes_skipped(s: Search, i: int, s_ms: float, s_ch: float) -> set[st
     bend); none the simulator cannot hold, each named in ``rejected`` where the stiffness the
     two loads see differs (the evidence that would have called for it).
     """
-    shapes = {'stiffness_nonlinearity', 'backlash'}
+    shapes = set(SPRING_SHAPES)
     if rigid_in_band(s.ext, i):
         return shapes
     out = shapes & set(s.ev.unheld)
