@@ -17,10 +17,11 @@ The held-out chirp's noise floor at its own level, against the misfit noise alon
 The diagnosis holds out the chirp iteration before the one it fits; with two iterations
 that is the first, at ``r_initial`` (1/60 of the fitted torque on the UR5e scene of
 test/app/test_diagnose_mjcf.py). Its floor is the fitted one's times
-:func:`frf_ident.core.diagnosis.experiments.floors.held_out_chirp_scale`. Checked here on the 3-axis model with velocity noise: the
-true model, simulated noise-free on the recorded reference, misfits the held-out chirp by
-about that factor more than the fitted one (the ratio of the two terms is noise alone:
-the same model, the same estimator), over a few noise seeds.
+:func:`frf_ident.core.diagnosis.experiments.floors.held_out_chirp_scale`. Checked here on
+the 3-axis model with velocity noise: the true model, simulated noise-free on the recorded
+reference, misfits the held-out chirp by about that factor more than the fitted one (the
+ratio of the two terms is noise alone: the same model, the same estimator), over a few
+noise seeds.
 """
 from frf_ident.core.diagnosis.experiments.evaluator import Evaluator
 from frf_ident.core.estimation.chirp_estimate import effective_input_power
