@@ -24,6 +24,7 @@ in :mod:`.held_out`.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 import logging
 import math
 
@@ -255,6 +256,11 @@ def frf_shape_effects(s: Search) -> None:
     log.info('stage 2 (FRF shape): %d candidate(s), %s', len(stage2_all), named(s.kept))
 
 
+def _values(params: dict) -> str:
+    """Return parameters as 'key value' pairs for an evidence line."""
+    return ', '.join(f'{k} {v:.4g}' for k, v in params.items())
+
+
 def axis_candidates(s: Search, axes: list[int], sim_est: dict) -> list[list[Effect]]:
     """
     Return :func:`frf_shape_candidates` of each axis, one axis after the other.
@@ -330,8 +336,18 @@ def frf_shape_candidates(s: Search, i: int, sim_est: dict) -> list[Effect]:
                         'proportion to a velocity)', i)
         out.append(refit_friction(ev, ext, vc))
     for e in found:
-        if e is not None and not any(k.name == e.name and k.axis == e.axis for k in kept):
+        old = None if e is None else next(
+            (k for k in kept if k.name == e.name and k.axis == e.axis), None)
+        if e is not None and old is None:
             out.append(e)
+        elif e is not None and e.name == 'parameter_mismatch':
+            # a mismatch kept already (stage 0 reads stiffness and inertias): the reading on
+            # top of it is a new value for it, what it kept and what is read now together;
+            # without it the viscous rival above was offered alone (pair scene 284807: a
+            # viscous friction of 179 named for a joint-damping mismatch never offered)
+            out.append(replace(e, parameters={**old.parameters, **e.parameters},
+                               evidence=e.evidence + f'; read on top of the mismatch kept '
+                                                     f'({_values(old.parameters)})'))
     r = ripple_again(ev, ext, i, s.stage1, kept)
     if r is not None:
         out.append(r)
