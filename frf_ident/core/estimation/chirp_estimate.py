@@ -163,14 +163,7 @@ def chirp_input_power(rec: Recording, *, iteration: int | None = None
     4.0
 
     """
-    its = chirp_iterations(rec)
-    if not its:
-        raise EstimationError('recording has no chirp segments')
-    it = (complete_chirp_iterations(rec.segments) or its)[-1] if iteration is None \
-        else iteration
-    acc = ChirpSpectra()
-    for s in rec.segments_where(design='chirp', iteration=it):
-        acc.add(rec, s)
+    it, acc = iteration_spectra(rec, iteration)
     freqs = np.asarray(acc.info[it]['freq_hz'], dtype=float)
     n = len(rec.joint_names)
     if it not in acc.complete():
@@ -252,13 +245,34 @@ def complete_chirp_iterations(segments: list[Segment]) -> list[int]:
 def chirp_frf(rec: Recording, *, iteration: int | None = None, method: str = 'plain',
               path: str = 'u->y') -> FrequencyResponse:
     """Chirp estimate of one iteration (default: the last), see :meth:`ChirpSpectra.frf`."""
+    it, acc = iteration_spectra(rec, iteration)
+    return acc.frf(iteration=it, method=method, path=path)
+
+
+def iteration_spectra(rec: Recording, iteration: int | None = None
+                      ) -> tuple[int, ChirpSpectra]:
+    """
+    Return a chirp iteration and the spectra of its segments.
+
+    Parameters
+    ----------
+    rec : Recording
+        A recording with chirp segments.
+    iteration : int, optional
+        The iteration (default: the last complete one, else the last, which
+        :meth:`ChirpSpectra.frf` refuses naming what it lacks).
+
+    Returns
+    -------
+    int, ChirpSpectra
+
+    """
     its = chirp_iterations(rec)
     if not its:
         raise EstimationError('recording has no chirp segments')
-    # the last complete iteration (else the last one, refused naming what it lacks)
     it = (complete_chirp_iterations(rec.segments) or its)[-1] if iteration is None \
         else iteration
     acc = ChirpSpectra()
     for s in rec.segments_where(design='chirp', iteration=it):
         acc.add(rec, s)
-    return acc.frf(iteration=it, method=method, path=path)
+    return it, acc
