@@ -24,7 +24,7 @@ ratio of the two terms is noise alone: the same model, the same estimator), over
 noise seeds.
 """
 from frf_ident.core.diagnosis.experiments.evaluator import Evaluator
-from frf_ident.core.estimation.chirp_estimate import effective_input_power
+from frf_ident.core.estimation.chirp_estimate import chirp_input_power, effective_input_power
 from frf_ident.core.excitation.chirp_iteration import ChirpConfig
 from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict
@@ -68,19 +68,27 @@ def runs():
             ChirpConfig(duration=6.0, max_iterations=2)))
         ev = Evaluator(rec, ctrl, jobs=1)
         measured = ev.terms(rob, held_out=True)['chirp'] / ev.terms(rob)['chirp']
-        out.append((measured, ev.floors_held['chirp'] / ev.floors['chirp']))
+        # the uniform mean over the lines of power_fit / power_held, beside the weighted one
+        r = chirp_input_power(ev.fit)[1] / chirp_input_power(ev.val)[1]
+        out.append((measured, ev.floors_held['chirp'] / ev.floors['chirp'],
+                    np.nanmean(r, axis=0)))
     return out
 
 
 def test_held_out_chirp_floor_follows_the_noise_of_the_weaker_iteration(runs):
     measured = np.array([r[0] for r in runs])
     predicted = np.array([r[1] for r in runs])
+    uniform = np.array([r[2] for r in runs])
     ratio = np.exp(np.mean(np.log(measured / predicted), axis=0))
     print(f'held-out / fitted chirp term of the true model over {len(runs)} noise seeds, per '
           f'axis (geometric mean): measured {np.exp(np.mean(np.log(measured), 0)).round(1)}, '
-          f'predicted {np.exp(np.mean(np.log(predicted), 0)).round(1)}; measured / predicted '
+          f'predicted {np.exp(np.mean(np.log(predicted), 0)).round(1)}, uniform mean of the '
+          f'power ratio {np.exp(np.mean(np.log(uniform), 0)).round(1)}; measured / predicted '
           f'{ratio.round(2)}')
     # the held-out iteration is far weaker: a floor borrowed from the fitted one is far off
     assert np.all(predicted > 20)
     # and the predicted factor is within 2x of what noise alone does, on every axis
     assert np.all(np.abs(np.log(ratio)) < np.log(2.0)), ratio
+    # the line weights matter: the uniform mean is farther from what noise does on every axis
+    off_uniform = np.abs(np.mean(np.log(measured / uniform), axis=0))
+    assert np.all(off_uniform > np.abs(np.log(ratio))), (off_uniform, ratio)

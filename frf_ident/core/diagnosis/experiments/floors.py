@@ -74,10 +74,9 @@ def held_out_chirp_scale(fit: Recording, val: Recording, fitted: Any) -> np.ndar
     white noise's share grows with f). The held-out iteration's line has r_f =
     power_fit / power_held times the fitted one's noise; the evaluator's chirp term is the
     mean over the lines, so the factor is ``sum(x_f r_f) / sum(x_f)``. The noise
-    concentrates on a few lines (on the 3-axis model 5 of 80 hold 50-80 % of it, at the
-    antiresonance), so the weights matter: with uniform ones the factor came out 3-5x too
-    large. test/core/diagnosis/test_held_out_floor.py checks it against the misfit noise
-    alone puts on a simulated record.
+    concentrates on a few lines (near the antiresonance), so the weights matter:
+    test/core/diagnosis/test_held_out_floor.py checks the factor against the misfit noise
+    alone puts on a simulated record, and prints the uniform mean of r_f beside it.
 
     Parameters
     ----------

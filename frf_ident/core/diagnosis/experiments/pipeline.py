@@ -336,11 +336,12 @@ def frf_shape_candidates(s: Search, i: int, sim_est: dict) -> list[Effect]:
                         'proportion to a velocity)', i)
         out.append(refit_friction(ev, ext, vc))
     for e in found:
-        old = None if e is None else next(
-            (k for k in kept if k.name == e.name and k.axis == e.axis), None)
-        if e is not None and old is None:
+        if e is None:
+            continue
+        old = next((k for k in kept if k.name == e.name and k.axis == e.axis), None)
+        if old is None:
             out.append(e)
-        elif e is not None and e.name == 'parameter_mismatch':
+        elif e.name == 'parameter_mismatch':
             # a mismatch kept already (stage 0 reads stiffness and inertias): the reading on
             # top of it is a new value for it, what it kept and what is read now together;
             # without it the viscous rival above was offered alone (pair scene 284807: a
