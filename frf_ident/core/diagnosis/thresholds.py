@@ -111,8 +111,10 @@ SENSOR_RESOLUTION_MATCH = 0.1
 #: held-out misfit left is this share of the nominal one (and above UNEXPLAINED_RATIO) is
 #: unexplained. Set by hand; held by the sweeps' false-alarm rate.
 MIN_SHARE = 0.10
-#: ... and the drop must exceed this many standard deviations of the misfit under noise alone;
-#: also the move of the held-out misfit at doubled substeps that calls a simulation too coarse.
+#: ... and the drop must exceed this many standard deviations of the misfit under noise alone,
+#: or this many standard errors of the two models' paired differences on the fit part
+#: (experiments/acceptance.py ``passes``); also the move of the held-out misfit at doubled
+#: substeps that calls a simulation too coarse.
 MIN_Z = 3.0
 #: the integrator check doubles ``simulation.substeps`` of the extended model while the doubled
 #: step still moves an axis' held-out misfit by MIN_Z, up to this many substeps (the plant's

@@ -15,7 +15,8 @@
 Decide which candidate effects a model takes: the acceptance rule and the greedy rounds.
 
 An effect is taken when it removes at least MIN_SHARE of its axis' misfit above the noise
-floor and the drop exceeds MIN_Z standard deviations of the misfit under noise.
+floor and the drop exceeds MIN_Z standard deviations of the misfit under noise, or, paired,
+MIN_Z standard errors of the drop itself (:func:`passes`).
 """
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ from frf_ident.core.model.params import RobotParams
 import numpy as np
 
 from .evaluator import Evaluator
+from .noise_gain import held_out_gain, HeldOutGain
 from .refit import FRICTION, rebuild, refit_friction, refit_jointly
 from ..common import apply_effect, Effect, SPRING_SHAPES
 from ..thresholds import DOMINANT_SHARE, MIN_SHARE, MIN_Z, REFIT_T, UNEXPLAINED_RATIO
@@ -56,9 +58,35 @@ def share_of_misfit(ev: Evaluator, cur: np.ndarray, new: np.ndarray, i: int
     return gain, (gain / (cur[i] - fl) if cur[i] > fl else 0.0)
 
 
-def passes(ev: Evaluator, gain: float, share: float) -> bool:
-    """Return the acceptance rule: share >= MIN_SHARE and a drop >= MIN_Z sd under noise."""
-    return share >= MIN_SHARE and gain >= MIN_Z * ev.misfit_sd()
+def passes(ev: Evaluator, gain: float, share: float,
+           paired: Callable[[], HeldOutGain] | None = None,
+           say: Callable[[str], None] | None = None) -> bool:
+    """
+    Return the acceptance rule: share >= MIN_SHARE and a drop beyond the noise.
+
+    The drop is beyond the noise where it exceeds MIN_Z standard deviations of the misfit
+    under noise alone, or else, with ``paired`` (the two models' paired test on the fit
+    part, :func:`.noise_gain.held_out_gain` with ``held_out=False``), where it exceeds
+    MIN_Z standard errors of the paired differences. The first is the spread of one model's
+    misfit, not of the difference of two models judged on the same data: on an axis at its
+    noise floor a real effect's drop is a small part of it (sensor scene 15162288 of
+    benchmarks/diagnosis_sensor.py: a viscous friction of 47 for the nominal 25, read at
+    39, dropped the misfit by 0.071 against 3 x 0.045). The paired spread holds only the
+    noise's cross term with the change: a parameter fitted to noise alone gets a z of
+    about half a standard normal (|sum n g| / (2 sigma |g|)), so the second route adds no
+    false alarm of its own; the held-out check (:mod:`.held_out`) judges every kept effect
+    again on data it was not fitted on.
+    """
+    if share < MIN_SHARE:
+        return False
+    if gain >= MIN_Z * ev.misfit_sd():
+        return True
+    if paired is None or gain <= 0.0:
+        return False
+    g = paired()
+    if say is not None:
+        say(f'    drop under {MIN_Z:g} sd of the misfit; paired: {g.describe()}')
+    return g.beyond_noise
 
 
 def _refit_first(ev: Evaluator, c: Effect, cur: np.ndarray, rnd: int) -> bool:
@@ -133,7 +161,9 @@ def judge(ev: Evaluator, ext: RobotParams, c: Effect, cur: np.ndarray, rnd: int,
 
     A friction candidate of an axis still clearly above its floor after a round is refitted
     by simulation first (:func:`_refit_first`); one the regression clearly sees whose value
-    makes the simulation worse is refitted around its reading.
+    makes the simulation worse is refitted around its reading; and one whose drop is within
+    the misfit's spread, left to the paired test of :func:`passes`, is judged at its
+    refitted value too.
     """
     i = c.axis_index
     refitted = _refit_first(ev, c, cur, rnd)
@@ -151,18 +181,36 @@ def judge(ev: Evaluator, ext: RobotParams, c: Effect, cur: np.ndarray, rnd: int,
         # high with a negative viscous term); the closed-loop simulation sticks
         # like the robot, so the level is refitted by it around the reading (over the
         # whole range when the reading left the physical range and was floored at 0)
-        r = refit_friction(ev, ext, c, local=True)
-        e_r = ev.misfit(ev.terms(apply_effect(ext, r)))
-        say(f'  {c.axis} {c.name} {c.parameters[c.name]:.4g} (t = {c.support:.1f}) '
-            f'refitted by simulation: {r.parameters[c.name]:.4g}, misfit '
-            f'{e_c[i]:.4g} -> {e_r[i]:.4g}')
-        if e_r[i] < e_c[i]:
-            c.parameters, c.evidence, e_c = r.parameters, r.evidence, e_r
-            gain, share = share_of_misfit(ev, cur, e_c, i)
+        e_c, refitted = _refit_if_better(ev, ext, c, e_c, say), True
+        gain, share = share_of_misfit(ev, cur, e_c, i)
+    if (not refitted and c.name in FRICTION and share >= MIN_SHARE
+            and 0.0 < gain < MIN_Z * ev.misfit_sd()):
+        # a drop within the misfit's spread goes to the paired test, which judges the
+        # friction at its best value, not the regression's first reading (sensor scene
+        # 15162298 of benchmarks/diagnosis_sensor.py: a viscous friction of 46 read at 62
+        # lost to a Coulomb level of 0.4 that only stood in for it)
+        e_c = _refit_if_better(ev, ext, c, e_c, say)
+        gain, share = share_of_misfit(ev, cur, e_c, i)
     c.gain = float(share)
     say(f'  {c.axis} {c.name}: misfit {cur[i]:.4g} -> {e_c[i]:.4g} '
         f'(share {share:.3f}) {c.parameters}')
-    return passes(ev, gain, share)
+    return passes(ev, gain, share,
+                  lambda: held_out_gain(ev, apply_effect(ext, c), ext, i, held_out=False), say)
+
+
+def _refit_if_better(ev: Evaluator, ext: RobotParams, c: Effect, e_c: np.ndarray,
+                     say: Callable[[str], None]) -> np.ndarray:
+    """Refit friction ``c`` by simulation around its value; keep the refit where it is better."""
+    i = c.axis_index
+    r = refit_friction(ev, ext, c, local=True)
+    e_r = ev.misfit(ev.terms(apply_effect(ext, r)))
+    say(f'  {c.axis} {c.name} {c.parameters[c.name]:.4g} (t = {c.support:.1f}) '
+        f'refitted by simulation: {r.parameters[c.name]:.4g}, misfit '
+        f'{e_c[i]:.4g} -> {e_r[i]:.4g}')
+    if e_r[i] < e_c[i]:
+        c.parameters, c.evidence = r.parameters, r.evidence
+        return e_r
+    return e_c
 
 
 def pick_per_axis(ev: Evaluator, ext: RobotParams, scored: list[tuple[float, Effect]],
@@ -246,8 +294,7 @@ def gravity_with_shape(ev: Evaluator, base: RobotParams, kept: list[Effect], can
     alone, so they are offered on top. The candidate is added, the axis' kept effects are
     refitted jointly by simulation (:func:`.refit.refit_jointly`), and the pair replaces the
     axis' effects if it passes the acceptance rule of :func:`accept` against the model
-    without the load (share of the misfit above the floor >= MIN_SHARE, drop >= MIN_Z
-    standard deviations under noise).
+    without the load (:func:`passes`).
 
     Parameters
     ----------
@@ -277,8 +324,10 @@ def gravity_with_shape(ev: Evaluator, base: RobotParams, kept: list[Effect], can
     gain, share = share_of_misfit(ev, cur, new, i)
     say(f"  {cand.axis} gravity with the axis' effects refitted beside it: misfit "
         f'{cur[i]:.4g} -> {with_load[i]:.4g} on top, {new[i]:.4g} refitted (share {share:.3f})')
-    if not passes(ev, gain, share):
-        return rebuild(base, kept), cur
+    without = rebuild(base, kept)
+    if not passes(ev, gain, share,
+                  lambda: held_out_gain(ev, ext, without, i, held_out=False), say):
+        return without, cur
     cand.parameters = trial[-1].parameters
     cand.gain = cand.score = float(np.clip(share, 0.0, 1.0))
     for k, t in zip(kept, trial):

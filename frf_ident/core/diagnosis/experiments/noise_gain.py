@@ -102,6 +102,9 @@ class HeldOutGain:
     #: per loss term: the misfit without and with the effect [noise floors] and the number of
     #: pieces, for :attr:`bound_z` (none: the bound is not judged)
     misfits: dict[str, tuple[float, float, int]] = field(default_factory=dict)
+    #: judged on the held-out part (False: on the fit part, where the record has no held-out
+    #: part or the acceptance rule asked for it)
+    held_out: bool = True
 
     @property
     def gain(self) -> float:
@@ -150,7 +153,8 @@ class HeldOutGain:
 
     def describe(self) -> str:
         """Return the numbers people read."""
-        return (f'held-out gain {self.gain:.3g} noise floors, {self.z:.1f} standard errors of '
+        part = 'held-out' if self.held_out else 'fit-part'
+        return (f'{part} gain {self.gain:.3g} noise floors, {self.z:.1f} standard errors of '
                 f'noise alone over its terms (' + ', '.join(
                     f'{k} {z:.1f}' + (' unexplained: only for it' if k in self.unexplained
                                       else '') for k, z in self.term_z.items())
@@ -162,9 +166,12 @@ class HeldOutGain:
 
 
 def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotParams,
-                  axis: int) -> HeldOutGain:
+                  axis: int, *, held_out: bool = True) -> HeldOutGain:
     """
     Return the held-out gain of ``with_model`` over ``without_model`` on ``axis``.
+
+    ``held_out`` False: the same paired test on the fit part (the acceptance rule's second
+    route for a drop smaller than the misfit's own spread, :func:`.acceptance.passes`).
 
     Parameters
     ----------
@@ -174,16 +181,18 @@ def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotPa
         The model with the effect and the model without it.
     axis : int
         The effect's axis.
+    held_out : bool
+        Judge the held-out part (where the record has one) or the fit part.
 
     Returns
     -------
     HeldOutGain
-        Its mean is the difference of the two models' held-out misfits on the axis
+        Its mean is the difference of the two models' misfits on the axis and part
         (:meth:`Evaluator.misfit`).
 
     """
     sims = [ev.simulate(m) for m in (without_model, with_model)]
-    held = bool(ev.meas_val)
+    held = held_out and bool(ev.meas_val)
     meas = ev.meas_val if held else ev.meas_fit
     floors = ev.floors_held if held else ev.floors
     terms: dict[str, tuple[float, float]] = {}
@@ -218,7 +227,8 @@ def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotPa
         floors[k][axis], meas.get(k), axis) > UNEXPLAINED_RATIO)
     return HeldOutGain(terms, pieces, unexplained,
                        {('effort', 'velocity'): correlation(blocks['effort'],
-                                                            blocks['velocity'])}, misfits)
+                                                            blocks['velocity'])}, misfits,
+                       held)
 
 
 def paired(d: np.ndarray, lags: int = HELD_OUT_GAIN_LAGS) -> tuple[float, float]:
