@@ -178,3 +178,33 @@ def test_the_bound_passes_no_effect_that_buys_nothing(v):
     print(f'noise {v:g}: bound z max {bound.max():.2f}, paired z sd {np.std(paired_z):.2f}')
     assert np.all(bound < HELD_OUT_GAIN_Z)
     assert np.std(paired_z) < 1.05
+
+
+@pytest.mark.parametrize('k', [1, 3])
+def test_parameters_fitted_to_noise_stay_under_the_paired_bar(k):
+    # the acceptance rule's second route (experiments/acceptance.py ``passes``): the paired
+    # test on the fit part, the part the candidate's parameters were fitted on. Under noise
+    # alone a least-squares fit of k parameters drops the squared errors by |P n|^2 and the
+    # paired spread is about 2 sigma |P n| / N, so the z is about sqrt(chi2_k) / 2: fitted to
+    # noise, one parameter passes 3 with the normal tail of 6, three (a ripple's amplitude,
+    # phase and a frequency) with chi2_3 beyond 36, both about 1e-7. Squared errors of
+    # samples in blocks, as the torque and velocity terms are judged; regressors of a
+    # different shape per draw
+    rng = np.random.default_rng(58 + k)
+    n_s, blocks = 57 * 40, 57
+    t = np.arange(n_s) / n_s
+    zs = []
+    for _ in range(2000):
+        g = np.stack([np.sin(2 * np.pi * (rng.uniform(1, 40) * t + rng.uniform(0, 1)))
+                      for _ in range(k)], axis=1)
+        noise = rng.standard_normal(n_s)
+        theta = np.linalg.lstsq(g, noise, rcond=None)[0]
+        d = noise ** 2 - (noise - g @ theta) ** 2
+        b = np.array([x.mean() for x in np.array_split(d, blocks)])
+        zs.append(HeldOutGain({'effort': (float(d.mean()), paired(b)[1])}, blocks).z)
+    zs = np.array(zs)
+    print(f'{k} parameter(s) fitted to noise: paired z mean {zs.mean():.2f}, max {zs.max():.2f}'
+          f' (sqrt(chi2_{k}) / 2 has mean {math.sqrt(2) * math.gamma((k + 1) / 2) / math.gamma(k / 2) / 2:.2f})')
+    assert np.all(zs < HELD_OUT_GAIN_Z)
+    assert zs.mean() == pytest.approx(
+        math.sqrt(2) * math.gamma((k + 1) / 2) / math.gamma(k / 2) / 2, rel=0.2)
