@@ -72,3 +72,14 @@ def test_the_command_names_no_path_of_the_machine(monkeypatch, tmp_path):
     assert cmd == ('FRF_BENCH_SCENES=4 KUKA_BC=<path> FRF_DEMO_BAG=out/demo/graph/bag '
                    'python -m benchmarks --markdown diagnosis_demo'), cmd
     assert str(tmp_path) not in cmd and str(md.ROOT) not in cmd
+
+
+def test_a_sweeps_scene_records_beside_the_runs_are_no_section(tmp_path):
+    # the sensor sweep keeps every scene's score as a list in docs/benchmarks/; rendering
+    # the page read it as a section's run and failed (list indices must be integers)
+    runs = tmp_path / 'runs'
+    md.store('a', [('x', '1', '2', '')], wall_s=1.0, cmd='python -m benchmarks a',
+             started=md.machine(), runs_dir=runs)
+    (runs / 'a_runs_123.json').write_text('[{"seed": 123}]')
+    text = md.render({'a': lambda: []}, runs)
+    assert '## a' in text and 'a_runs_123' not in text
