@@ -203,8 +203,8 @@ def test_parameters_fitted_to_noise_stay_under_the_paired_bar(k):
         b = np.array([x.mean() for x in np.array_split(d, blocks)])
         zs.append(HeldOutGain({'effort': (float(d.mean()), paired(b)[1])}, blocks).z)
     zs = np.array(zs)
+    half_chi = math.sqrt(2) * math.gamma((k + 1) / 2) / math.gamma(k / 2) / 2
     print(f'{k} parameter(s) fitted to noise: paired z mean {zs.mean():.2f}, max {zs.max():.2f}'
-          f' (sqrt(chi2_{k}) / 2 has mean {math.sqrt(2) * math.gamma((k + 1) / 2) / math.gamma(k / 2) / 2:.2f})')
+          f' (sqrt(chi2_{k}) / 2 has mean {half_chi:.2f})')
     assert np.all(zs < HELD_OUT_GAIN_Z)
-    assert zs.mean() == pytest.approx(
-        math.sqrt(2) * math.gamma((k + 1) / 2) / math.gamma(k / 2) / 2, rel=0.2)
+    assert zs.mean() == pytest.approx(half_chi, rel=0.2)
