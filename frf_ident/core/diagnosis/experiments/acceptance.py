@@ -73,20 +73,27 @@ def passes(ev: Evaluator, gain: float, share: float,
     benchmarks/diagnosis_sensor.py: a viscous friction of 47 for the nominal 25, read at
     39, dropped the misfit by 0.071 against 3 x 0.045). The paired spread holds only the
     noise's cross term with the change: a parameter fitted to noise alone gets a z of
-    about half a standard normal (|sum n g| / (2 sigma |g|)), so the second route adds no
-    false alarm of its own; the held-out check (:mod:`.held_out`) judges every kept effect
-    again on data it was not fitted on.
+    about half a standard normal (|sum n g| / (2 sigma |g|)), so under noise alone the
+    second route adds no false alarm of its own. A change that takes part of another
+    effect's signature passes it (a test of the direction, not of the name): the
+    per-axis duel and the held-out check (:mod:`.held_out`) judge such rivals on data
+    they were not fitted on.
     """
     if share < MIN_SHARE:
         return False
-    if gain >= MIN_Z * ev.misfit_sd():
-        return True
-    if paired is None or gain <= 0.0:
+    if not within_spread(ev, gain, share):
+        return gain > 0.0
+    if paired is None:
         return False
     g = paired()
     if say is not None:
         say(f'    drop under {MIN_Z:g} sd of the misfit; paired: {g.describe()}')
     return g.beyond_noise
+
+
+def within_spread(ev: Evaluator, gain: float, share: float) -> bool:
+    """Return whether a drop that passes the share is within the misfit's spread (> 0)."""
+    return share >= MIN_SHARE and 0.0 < gain < MIN_Z * ev.misfit_sd()
 
 
 def _refit_first(ev: Evaluator, c: Effect, cur: np.ndarray, rnd: int) -> bool:
@@ -183,8 +190,7 @@ def judge(ev: Evaluator, ext: RobotParams, c: Effect, cur: np.ndarray, rnd: int,
         # whole range when the reading left the physical range and was floored at 0)
         e_c, refitted = _refit_if_better(ev, ext, c, e_c, say), True
         gain, share = share_of_misfit(ev, cur, e_c, i)
-    if (not refitted and c.name in FRICTION and share >= MIN_SHARE
-            and 0.0 < gain < MIN_Z * ev.misfit_sd()):
+    if not refitted and c.name in FRICTION and within_spread(ev, gain, share):
         # a drop within the misfit's spread goes to the paired test, which judges the
         # friction at its best value, not the regression's first reading (sensor scene
         # 15162298 of benchmarks/diagnosis_sensor.py: a viscous friction of 46 read at 62
