@@ -39,6 +39,7 @@ from .candidates import (coupled_ripples, fit_backlash, fit_coulomb, fit_gravity
                          fit_parameter_mismatch, fit_ripple, fit_stiffness_nonlinearity,
                          fit_time_delay, fit_viscous, friction_regression, LIN_KEYS,
                          ripple_again, stiffness_seen, with_params)
+from .dissipation_reading import damping_or_viscous
 from .evaluator import Evaluator
 from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence, shifts_text
 from .held_out import finish, held_out_check, structure_missing
@@ -75,11 +76,12 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
     regression per axis; then, against the simulation of that model, the FRF-shape effects (time
     delay, parameter mismatch, stiffening, backlash), so friction does not pose as stiffness. A
     second pass, joint refits, a second mode fitted by simulation where an axis stays
-    unexplained (:mod:`.mode_search`) and a stiffening gear read in place of a mismatched
-    stiffness a spring shape bends (:mod:`.spring_reading`) follow; then every value's standard
-    error (a parameter that has not settled is refitted jointly with those it trades against,
-    else labelled not determined) and the held-out check (effects within their errors of the
-    nominal or not needed are dropped).
+    unexplained (:mod:`.mode_search`), a stiffening gear read in place of a mismatched stiffness
+    a spring shape bends (:mod:`.spring_reading`) and a gear damping read in place of a viscous
+    friction or the other way round (:mod:`.dissipation_reading`) follow; then every value's
+    standard error (a parameter that has not settled is refitted jointly with those it trades
+    against, else labelled not determined) and the held-out check (effects within their errors
+    of the nominal or not needed are dropped).
 
     Parameters
     ----------
@@ -125,6 +127,7 @@ def diagnose_experiments(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *
         search_left_modes(s)
         refine_modes(s)
         gap_or_stiffening(s)
+        damping_or_viscous(s)
         settled = settle(s)
         within_nominal(s, settled)
         val_ext, sim_ext = held_out_check(s)
@@ -241,6 +244,7 @@ def frf_shape_effects(s: Search) -> None:
     for rnd in range(STAGE2_ROUNDS):
         sim_est = ev.fit_estimates(s.ext)
         stage2 = [c for found in axis_candidates(s, sorted(axes), sim_est) for c in found]
+        s.stage2_read += stage2
         n_kept = len(s.kept)
         s.ext, s.cur = accept(ev, robot, s.kept, stage2, s.cur, s.say, s.rivals)
         stage2_all = [c for c in stage2_all if c in s.kept or not any(

@@ -45,6 +45,9 @@ class Search:
     stage0: list[Effect] = field(default_factory=list)     # frequency-domain fit candidates
     stage1: list[Effect] = field(default_factory=list)     # torque-residual candidates
     stage2: list[Effect] = field(default_factory=list)     # FRF-shape candidates
+    #: every FRF-shape candidate of every stage-2 round (``stage2`` and ``cands`` keep an
+    #: axis' last reading of each effect only)
+    stage2_read: list[Effect] = field(default_factory=list)
     rivals: dict[int, list[Effect]] = field(default_factory=dict)
     shaped: set[int] = field(default_factory=set)   # axes that took an FRF-shape effect
     again: list[Effect] = field(default_factory=list)  # second-pass candidates

@@ -37,11 +37,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from frf_ident.core.model.params import RobotParams
-
-from .acceptance import share_of_misfit
-from .held_out import structure_left
-from .refit import rebuild, refit_jointly
+from .readings import duel
 from .search import Search
 from ..common import Effect, SPRING_SHAPES
 
@@ -97,7 +93,7 @@ def gap_or_stiffening(s: Search) -> None:
     offered a stiffness mismatch plus the backlash of :func:`as_backlash`. The reading is
     refitted jointly by simulation (:func:`.refit.refit_jointly`) and replaces the axis'
     effects where its held-out misfit is lower and, where it holds a stiffness mismatch, that
-    mismatch leaves no structure missing on the axis (:func:`_lacks_structure`).
+    mismatch leaves no structure missing on the axis (:func:`.readings.duel`).
     """
     for i in range(s.robot.n_axes):
         mine = [c for c in s.kept if c.axis_index == i]
@@ -112,14 +108,14 @@ def gap_or_stiffening(s: Search) -> None:
                 *((float(st.parameters['stiffness_k2']),
                    float(st.parameters['stiffness_breakpoint'])) if st is not None else ()))
             if shape is not None:
-                _duel(s, i, [pm, *bent.values()], _stiffening_reading(s, i, pm, shape))
+                duel(s, i, [pm, *bent.values()], _stiffening_reading(s, i, pm, shape))
         elif list(bent) == ['stiffness_nonlinearity']:
             st = bent['stiffness_nonlinearity']
             line = as_backlash(k1, float(st.parameters['stiffness_k2']),
                                float(st.parameters['stiffness_breakpoint']))
             if line is not None:
-                _duel(s, i, [st] + ([pm] if pm is not None else []),
-                      _backlash_reading(s, i, pm, line))
+                duel(s, i, [st] + ([pm] if pm is not None else []),
+                     _backlash_reading(s, i, pm, line))
 
 
 def _stiffening_reading(s: Search, i: int, pm: Effect, shape: tuple[float, float]
@@ -144,61 +140,3 @@ def _backlash_reading(s: Search, i: int, pm: Effect | None, line: tuple[float, f
     mm = (replace(pm, parameters={**pm.parameters, 'stiffness': line[0]}) if pm is not None
           else Effect('parameter_mismatch', name, 0.0, {'stiffness': line[0]}, why, i))
     return [mm, Effect('backlash', name, 0.0, {'backlash': line[1]}, why, i)]
-
-
-def _duel(s: Search, i: int, old: list[Effect], new: list[Effect]) -> None:
-    """Refit axis i with ``new`` in place of ``old``; take it where the held-out data prefer."""
-    ev, robot = s.ev, s.robot
-    others = [replace(k) for k in s.kept if all(k is not o for o in old)]
-    trial = others + new
-    ext, now = refit_jointly(ev, robot, trial, i, ev.misfit(ev.terms(rebuild(robot, trial))),
-                             s.say)
-    held = [float(ev.held_out_misfit(m)[i]) for m in (s.ext, ext)]
-    was, then = (', '.join(f'{c.name} {_text(c)}' for c in cs) for cs in (old, new))
-    s.say(f'  {robot.axes[i].name}: {was} vs {then} in their place on held-out data: '
-          f'{held[0]:.4g} vs {held[1]:.4g}')
-    s.cands += [c for c in new if all(c is not o for o in old)]
-    if not held[1] < held[0] or _lacks_structure(s, i, new, ext):
-        return
-    for c in new:
-        without = ev.misfit(ev.terms(rebuild(robot, [k for k in trial if k is not c])))
-        c.gain = share_of_misfit(ev, without, now, i)[1]
-        c.score = min(max(c.gain, 0.0), 1.0)
-        c.evidence += (f'; refitted jointly with the other effects of the axis: '
-                       f'{_text(c)}; held-out misfit {held[1]:.4g} (with {was}: {held[0]:.4g})')
-    for c in old:
-        c.evidence += f'; {then} in its place fits the held-out data better'
-        c.gain = c.score = 0.0
-    kept = [k for k in s.kept if all(k is not o for o in old)]
-    for k, t in zip(kept, others):
-        k.parameters = t.parameters
-    s.kept[:] = kept + new
-    s.ext, s.cur = ext, ev.misfit(ev.terms(ext))
-
-
-def _lacks_structure(s: Search, i: int, new: list[Effect], ext: RobotParams) -> bool:
-    """
-    Return whether the reading's stiffness mismatch would be withdrawn as missing structure.
-
-    A reading that puts the axis' stiffness into a parameter mismatch is judged by
-    :func:`.held_out.structure_left` before it is taken: where the mismatch leaves its axis
-    lacking structure, the closing stage would withdraw it, and the axis would lose the
-    effects the reading replaced (CI scene 7189810: joint_3's stiffening gear beside a time
-    delay and Coulomb friction, 888.6 held-out floors, read as a stiffer spring behind a gap at
-    809.9; the mismatch withdrawn, none of the axis' three effects was named).
-    """
-    if not any(c.name == 'parameter_mismatch' and 'stiffness' in c.parameters for c in new):
-        return False
-    ev = s.ev
-    sim = ev.simulate(ext)
-    why = structure_left(s, i, ext, sim, ev.held_out_misfit(ext, sim),
-                         ev.held_out_misfit(s.robot, s.sim0))
-    if why is not None:
-        s.say(f'  {s.robot.axes[i].name}: not taken: its stiffness mismatch leaves the axis '
-              f'lacking structure ({why})')
-    return why is not None
-
-
-def _text(c: Effect) -> str:
-    """Return an effect's scalar parameters, as in the trace."""
-    return ', '.join(f'{k} {v:.4g}' for k, v in c.parameters.items() if isinstance(v, float))
