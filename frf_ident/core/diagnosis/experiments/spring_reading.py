@@ -43,6 +43,11 @@ from ..common import Effect, SPRING_SHAPES
 
 __all__ = ['as_backlash', 'as_stiffening', 'gap_or_stiffening']
 
+#: the effects that may carry a linear stiffness change beside their own parameters: a
+#: parameter mismatch, and a second mode fitted with its axis' linear parameters
+#: (:func:`.second_mode.take_second_mode`)
+STIFFNESS_HOLDERS = ('parameter_mismatch', 'second_mode')
+
 
 def as_stiffening(k1: float, k_a: float, gap: float = 0.0, k2: float | None = None,
                   bs: float = 0.0) -> tuple[float, float] | None:
@@ -87,28 +92,30 @@ def gap_or_stiffening(s: Search) -> None:
     """
     Offer the other reading of an axis' bent spring; keep the one the held-out data prefer.
 
-    An axis with a parameter mismatch of the stiffness and a backlash or a stiffening on top
-    is offered the mismatch without its stiffness plus the stiffening gear of
-    :func:`as_stiffening`; an axis with a stiffening gear from the nominal stiffness alone is
-    offered a stiffness mismatch plus the backlash of :func:`as_backlash`. The reading is
-    refitted jointly by simulation (:func:`.refit.refit_jointly`) and replaces the axis'
-    effects where its held-out misfit is lower and, where it holds a stiffness mismatch, that
-    mismatch leaves no structure missing on the axis (:func:`.readings.duel`).
+    An axis with a parameter mismatch of the stiffness (or a second mode fitted with one) and
+    a backlash or a stiffening on top is offered that effect without its stiffness plus the
+    stiffening gear of :func:`as_stiffening`; an axis with a stiffening gear from the nominal
+    stiffness alone is offered a stiffness mismatch plus the backlash of :func:`as_backlash`.
+    The reading is refitted jointly by simulation (:func:`.refit.refit_jointly`) and replaces
+    the axis' effects where its held-out misfit is lower and, where it holds a stiffness
+    mismatch, that mismatch leaves no structure missing on the axis (:func:`.readings.duel`).
     """
     for i in range(s.robot.n_axes):
         mine = [c for c in s.kept if c.axis_index == i]
         pm = next((c for c in mine if c.name == 'parameter_mismatch'), None)
+        held = next((c for c in mine if c.name in STIFFNESS_HOLDERS
+                     and 'stiffness' in c.parameters), None)
         bent = {c.name: c for c in mine if c.name in SPRING_SHAPES}
         k1 = float(s.robot.axes[i].stiffness)
-        if pm is not None and 'stiffness' in pm.parameters and bent:
+        if held is not None and bent:
             st = bent.get('stiffness_nonlinearity')
             shape = as_stiffening(
-                k1, float(pm.parameters['stiffness']),
+                k1, float(held.parameters['stiffness']),
                 float(bent['backlash'].parameters['backlash']) if 'backlash' in bent else 0.0,
                 *((float(st.parameters['stiffness_k2']),
                    float(st.parameters['stiffness_breakpoint'])) if st is not None else ()))
             if shape is not None:
-                duel(s, i, [pm, *bent.values()], _stiffening_reading(s, i, pm, shape))
+                duel(s, i, [held, *bent.values()], _stiffening_reading(s, i, held, shape))
         elif list(bent) == ['stiffness_nonlinearity']:
             st = bent['stiffness_nonlinearity']
             line = as_backlash(k1, float(st.parameters['stiffness_k2']),
@@ -120,7 +127,7 @@ def gap_or_stiffening(s: Search) -> None:
 
 def _stiffening_reading(s: Search, i: int, pm: Effect, shape: tuple[float, float]
                         ) -> list[Effect]:
-    """Return the mismatch without its stiffness (if anything is left) and the gear."""
+    """Return the stiffness holder without its stiffness (if anything is left) and the gear."""
     rest = {k: v for k, v in pm.parameters.items() if k != 'stiffness'}
     st = Effect('stiffness_nonlinearity', pm.axis, 0.0,
                 {'stiffness_k2': shape[0], 'stiffness_breakpoint': shape[1]},
