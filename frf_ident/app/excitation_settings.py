@@ -26,12 +26,16 @@ from frf_ident.core.excitation.chirp_iteration import ChirpConfig
 from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.errors import DesignError
 
-__all__ = ['MAX_ABORT_RAMP_S', 'RATE_WINDOW', 'REGULAR', 'SATURATION', 'SessionSettings',
-           'SLOW_STEP']
+__all__ = ['abort_ramp_steps', 'MAX_ABORT_RAMP_S', 'MIN_ABORT_RAMP_STEPS', 'RATE_WINDOW',
+           'REGULAR', 'SATURATION', 'SessionSettings', 'SLOW_STEP']
 
 
 #: the longest ramp to zero an abort may take [s]
 MAX_ABORT_RAMP_S = 0.1
+#: the fewest samples an abort's ramp to zero takes (at low sample rates, where
+#: abort_ramp_s holds fewer)
+MIN_ABORT_RAMP_STEPS = 4
+
 #: a measured torque at this share of its limit is a saturated drive: the run aborts (the
 #: procedures aim at 0.95 of the limit at most, plan_checks.TORQUE_MARGIN)
 SATURATION = 0.995
@@ -46,6 +50,21 @@ SLOW_STEP = 5
 #: free-running: the share of steps within 15 % (at least one sample) of their median that
 #: makes them regular (a robot's stamps jitter by a share of its own period)
 REGULAR = 0.75
+
+
+def abort_ramp_steps(abort_ramp_s: float, dt: float) -> int:
+    """
+    Return the samples an abort's ramp to zero takes: every sample of ``abort_ramp_s``.
+
+    At least MIN_ABORT_RAMP_STEPS. A fixed 4 steps moved the reference by a quarter of its
+    value per sample whatever the rate: at 1 kHz 0.0064 rad/s from 0.0257, more than the
+    multisine's own largest step of that run (0.0062; test/ros/test_ros_arming.py), so
+    the abort jerked the robot harder than the experiment did.
+
+    >>> abort_ramp_steps(0.01, 0.001), abort_ramp_steps(0.01, 0.01)
+    (10, 4)
+    """
+    return max(MIN_ABORT_RAMP_STEPS, int(abort_ramp_s / dt + 1e-9))
 
 
 @dataclass

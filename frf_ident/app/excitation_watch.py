@@ -29,7 +29,8 @@ import time
 from typing import Optional
 
 from frf_ident.app.excitation_run import event_json, Run
-from frf_ident.app.excitation_settings import RATE_WINDOW, REGULAR, SLOW_STEP
+from frf_ident.app.excitation_settings import (abort_ramp_steps, RATE_WINDOW, REGULAR,
+                                               SLOW_STEP)
 import numpy as np
 
 __all__ = ['SessionWatchdog']
@@ -71,7 +72,7 @@ class SessionWatchdog:
         self.next_k = max(self.next_k, self.k_js + self.lag)
         run.end_k = self.next_k
         self.out.log(level, f'experiment {run.name!r} aborted: {reason}')
-        steps = 4
+        steps = abort_ramp_steps(self.s.abort_ramp_s, self.dt)
         r0 = self.last_ref.copy()
         for s in range(1, steps + 1):
             self._publish(self.next_k, r0 * (1.0 - s / steps), np.zeros(self.n))

@@ -15,8 +15,8 @@
 An abort on request (the ``/frf/abort`` service) stops a lockstep run at once.
 
 The session runs a multisine against the simulated plant; after 4000 samples (inside the
-first segment) the abort comes: the reference ramps to zero in the 4 samples after those
-already published, an
+first segment) the abort comes: the reference ramps to zero over the samples of
+``abort_ramp_s`` after those already published, no step of it larger than the run's own, an
 ``aborted`` descriptor and a ``finished`` progress event with ``aborted`` go out, and the
 descriptors declare the effort lag of the lockstep plant (1 sample, bag/pairing.py).
 """
@@ -25,7 +25,7 @@ from __future__ import annotations
 import json
 
 from frf_ident.app.excitation import ExcitationSession
-from frf_ident.app.excitation_settings import SessionSettings
+from frf_ident.app.excitation_settings import abort_ramp_steps, SessionSettings
 from frf_ident.core.excitation.multisine_procedure import MultisineConfig
 from frf_ident.core.simulation.plant import FlexibleJointPlant
 from frf_ident.io.model_file import load_model
@@ -77,8 +77,11 @@ def test_abort_on_request_ramps_to_zero_and_reports():
     assert run.done.is_set() and 'abort requested' in run.error
     # lockstep: the ramp follows the references already published ahead (lookahead)
     ramp = [out.refs[k] for k in range(before + 1, max(out.refs) + 1)]
-    assert len(ramp) == 4 and np.allclose(ramp[-1], 0.0)
+    assert len(ramp) == abort_ramp_steps(sess.s.abort_ramp_s, robot.dt) == 10
+    assert np.allclose(ramp[-1], 0.0)
     assert np.all(np.abs(ramp[0]) <= np.abs(r0) + 1e-12)
+    run_step = np.abs(np.diff([out.refs[k] for k in range(before + 1)], axis=0)).max()
+    assert np.abs(np.diff([r0] + ramp, axis=0)).max() <= run_step
     assert out.events[-1]['event'] == 'aborted'
     end = out.progress_events[-1]
     assert end['event'] == 'finished' and end['aborted'] and not end['success']

@@ -324,10 +324,11 @@ def test_joint_states_jumping_past_the_stream_abort_the_run():
                     hide=lambda k: 6000 <= k < 6050)
     assert res.end == 6050 and 'did not see 50 joint states' in res.run.error
     np.testing.assert_array_equal(res.out.refs[-1][1], np.zeros(3))
-    # the ramp to zero is dated after the newest joint state, not back in the stall
-    assert [k for k, _r in res.out.refs[-4:]] == [6051, 6052, 6053, 6054]
+    # the ramp to zero is dated after the newest joint state, not back in the stall: the
+    # samples of abort_ramp_s (10 at the model's 1 kHz)
+    assert [k for k, _r in res.out.refs[-10:]] == list(range(6051, 6061))
     aborted = json.loads(res.out.events[-1])
-    assert aborted['event'] == 'aborted' and aborted['t_end'] == pytest.approx(6.055)
+    assert aborted['event'] == 'aborted' and aborted['t_end'] == pytest.approx(6.061)
 
 
 def test_the_dry_run_starts_where_the_robot_is_now():
