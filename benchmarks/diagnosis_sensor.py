@@ -172,13 +172,18 @@ def sensor_aggregate(runs: list[dict[str, Any]]) -> dict[str, Any]:
         'runs': runs}
 
 
+def keep_runs(a: dict[str, Any]) -> None:
+    """Write the sweep's per-scene checks to ``FRF_SENSOR_RUNS`` (JSON), when set."""
+    runs = os.environ.get('FRF_SENSOR_RUNS', '')
+    if runs:
+        Path(runs).write_text(json.dumps(a['runs'], default=float, indent=1))
+
+
 def rows() -> list[tuple[str, str, str, str]]:
     """Return the section's rows."""
     n = int(os.environ.get('FRF_SENSOR_SCENES', '20'))
     a = sensor_sweep(n, verbose=False)
-    runs = os.environ.get('FRF_SENSOR_RUNS', '')
-    if runs:
-        Path(runs).write_text(json.dumps(a['runs'], default=float, indent=1))
+    keep_runs(a)
     return [
         (f'sensor scenes ({a["nominal_scenes"]} nominal): no plant effect named',
          f'{a["nominal_without_plant_effect"]}/{a["nominal_scenes"]}', 'goal all', ''),
@@ -203,4 +208,5 @@ def rows() -> list[tuple[str, str, str, str]]:
 if __name__ == '__main__':
     argv = sys.argv[1:]
     out = sensor_sweep(int(argv[0]) if argv else 20, int(argv[1]) if len(argv) > 1 else None)
+    keep_runs(out)
     print(json.dumps({k: v for k, v in out.items() if k != 'runs'}))

@@ -57,10 +57,11 @@ def damping_or_viscous(s: Search) -> None:
             d = _offered(s, i, 'parameter_mismatch', 'damping')
             if d is None:
                 continue
-            why = (f'the gear damping {d:.4g} N m s/rad the FRF shape read, offered in the '
+            why = (f'; the gear damping {d:.4g} N m s/rad the FRF shape read, offered in the '
                    f'place of the viscous friction the torque residual read')
-            new = (replace(pm, parameters={**pm.parameters, 'damping': d}) if pm is not None
-                   else Effect('parameter_mismatch', name, 0.0, {'damping': d}, why, i))
+            new = (replace(pm, parameters={**pm.parameters, 'damping': d},
+                           evidence=pm.evidence + why) if pm is not None
+                   else Effect('parameter_mismatch', name, 0.0, {'damping': d}, why[2:], i))
             duel(s, i, [visc] + ([pm] if pm is not None else []), [new], beyond_noise=True)
         elif visc is None and damped:
             v = _offered(s, i, 'viscous_friction', 'viscous_friction')

@@ -125,16 +125,16 @@ def gap_or_stiffening(s: Search) -> None:
                      _backlash_reading(s, i, pm, line))
 
 
-def _stiffening_reading(s: Search, i: int, pm: Effect, shape: tuple[float, float]
+def _stiffening_reading(s: Search, i: int, held: Effect, shape: tuple[float, float]
                         ) -> list[Effect]:
     """Return the stiffness holder without its stiffness (if anything is left) and the gear."""
-    rest = {k: v for k, v in pm.parameters.items() if k != 'stiffness'}
-    st = Effect('stiffness_nonlinearity', pm.axis, 0.0,
+    rest = {k: v for k, v in held.parameters.items() if k != 'stiffness'}
+    st = Effect('stiffness_nonlinearity', held.axis, 0.0,
                 {'stiffness_k2': shape[0], 'stiffness_breakpoint': shape[1]},
-                f'a stiffness mismatched to {pm.parameters["stiffness"]:.4g} N m/rad with a '
+                f'a stiffness mismatched to {held.parameters["stiffness"]:.4g} N m/rad with a '
                 f'spring shape on top is, beyond its bends, the line of a stiffening gear from '
                 f'the nominal {s.robot.axes[i].stiffness:.4g} N m/rad', i)
-    return ([replace(pm, parameters=rest)] if rest else []) + [st]
+    return ([replace(held, parameters=rest)] if rest else []) + [st]
 
 
 def _backlash_reading(s: Search, i: int, pm: Effect | None, line: tuple[float, float]
