@@ -220,7 +220,7 @@ class ControllerNode:
             if dropped is not None:
                 self.node.get_logger().warn(
                     f'no velocity reference for {self.timeout_s:g} s (reference_timeout_s): '
-                    f'zero velocity instead of {np.round(dropped, 4).tolist()} rad/s')
+                    f'zero velocity instead of {[float(f"{v:.4g}") for v in dropped]} rad/s')
             self._control(r, y)
         elif self.refs:
             self._control(self.refs.popleft(), y)

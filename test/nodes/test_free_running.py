@@ -132,7 +132,9 @@ def test_controller_stops_the_robot_when_its_references_stop(tmp_path):
     last one, later when the controller lags) overshoots by ~25 % at +0.6 s and was at
     10.2 % of the held reference at +1.0 s, 1.8 % at +1.5 s (a run at load 12); a kill in a
     move's slow end held 0.0096 rad/s while the joints still moved faster, and were at 11 %
-    of the held reference at +1.5 s, 0.08 % at +2.5 s (a full suite at load 12).
+    of the held reference at +1.5 s, 0.08 % at +2.5 s (a full suite at load 12). A kill at
+    the move's very start held 1.8e-5 rad/s, which the warning printed as 0.0 when it
+    rounded to 4 decimals; it prints 4 significant digits now.
     """
     from frf_ident.bag import read_recording
     ms = MultisineConfig(n_realisations=1, n_periods=20, resolution_hz=1.0, compensate=False,
