@@ -122,7 +122,17 @@ def _call(env, service='/frf/run_multisine'):
 
 
 def _operator(g, token):
-    return Proc([sys.executable, '-m', 'frf_ident.nodes.operator_node', '--token', token,
+    """
+    Start the operator console, above the test's load where the OS lets it (``nice -n -10``).
+
+    In a full suite (2 cores, the other worker's tests beside the free-running graph) the
+    console sent no heartbeat for 1.14 s right after the armed run call, on the recorder's own
+    receive times: the node's abort after 1013 ms was right, the console was not run. On a
+    robot PC the enabling device keeps its share of the CPU; here the test gives it that (or,
+    where the OS refuses to raise it, runs it as before; nice then says so on its output).
+    """
+    return Proc(['nice', '-n', '-10', sys.executable, '-m', 'frf_ident.nodes.operator_node',
+                 '--token', token,
                  '--name', 'test-operator@robot-pc', '--ros-args', '--params-file',
                  str(g.params_file)], g.env, stdin=subprocess.PIPE)
 
