@@ -46,7 +46,7 @@ def identification_config():
                                 ChirpConfig(duration=10.0, max_iterations=3))
 
 
-def _diagnosis_log() -> None:
+def diagnosis_log() -> None:
     """With FRF_DIAG_LOG=1 send the diagnosis' search trace (DEBUG log lines) to stderr."""
     if os.environ.get('FRF_DIAG_LOG', '') not in ('', '0'):
         import logging
@@ -78,7 +78,7 @@ def diagnose_scene(scene: dict[str, Any], bag: Path, out: Path, *, keep_report: 
     """
     from frf_ident.app.diagnose import diagnose
     t0 = time.perf_counter()
-    _diagnosis_log()
+    diagnosis_log()
     res = diagnose(bag, MODEL, out, progress=lambda _m: None, **kw)
     gains = getattr(res.result.detail, 'held_out_gains', {})
     r = score_scene(scene, res.report(), time.perf_counter() - t0, res.result.n_sims,

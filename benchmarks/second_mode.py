@@ -40,8 +40,8 @@ import tempfile
 import time
 from typing import Any
 
-from benchmarks.diagnosis_scene_run import identify_scene
-from benchmarks.diagnosis_scenes import MODEL, scene_of
+from benchmarks.diagnosis_scene_run import diagnosis_log, identify_scene
+from benchmarks.diagnosis_scenes import MODEL, nominal_names, scene_of
 import numpy as np
 
 KINDS = ('link_mode', 'link_mode_beside', 'clean', 'random')
@@ -65,7 +65,6 @@ def mode_result(scene: dict[str, Any], report: dict[str, Any]) -> dict[str, Any]
         hidden, the resonance bands and what is unexplained.
 
     """
-    from benchmarks.diagnosis_scenes import nominal_names
     names = nominal_names()
     truth = [(ax, p['second_mode']) for n, ax, p in scene['truth'] if n == 'second_mode']
     named = [e for e in report['effects'] if e['name'] == 'second_mode']
@@ -105,11 +104,17 @@ def run_mode_scene(kind: str, seed: int, bags: Path | None = None) -> dict[str, 
         if not bag.exists():
             identify_scene(scene, bag)
         t1 = time.perf_counter()
+        diagnosis_log()
         res = diagnose(bag, MODEL, Path(tmp) / 'diag', progress=lambda _m: None)
         t2 = time.perf_counter()
         written = model_file_modes(Path(tmp) / 'diag' / 'extended_model.yaml')
         page = (Path(tmp) / 'diag' / 'report.html').read_text()
     out = mode_result(scene, res.report())
+    # the nominal model's held-out misfit per axis [noise floors]: an axis at or below
+    # UNEXPLAINED_RATIO is at its noise by the diagnosis' own threshold
+    base = getattr(res.result.detail, 'misfit', {}).get('baseline')
+    out['nominal_misfit'] = (None if base is None else
+                             {a: round(float(v), 3) for a, v in zip(nominal_names(), base)})
     out['model_file_modes'] = written
     out['in_model_file'] = in_model_file(out, written)
     # the held-out table of report.html shows the bands' error before and after

@@ -101,9 +101,17 @@ MODE_SEARCH_DAMPING = (0.02, 0.01, 0.05)
 MODE_SEARCH_SHARE = (0.08, 0.12, 0.18, 0.27)
 MODE_SEARCH_SIMPLEX = (0.02, 0.7, 0.3)
 MODE_SEARCH_EVALUATIONS = 60
-#: ... and offered only where its frequency is determined: refitted with the frequency
-#: MODE_FREQUENCY_SE off on either side, the misfit must rise beyond the chi-square quantile
-#: (1 degree of freedom) of this false-alarm probability, the residual test's (a heavy mode's
-#: frequency trades with its damping and inertia: scene link_mode_beside 6588469, chi-square
-#: 2.7, a mode 29 % off fitting as well as the truth; 6588475 and 6588470, 51 and more)
+#: ... and offered only where its frequency is determined: refitted MODE_FREQUENCY_SE off on
+#: either side, it must win the paired test of experiments/noise_gain.py on the fit part by the
+#: z of a profile likelihood ratio beyond the chi-square quantile (1 degree of freedom) of this
+#: false-alarm probability, the residual test's. With the noise's variance v per piece and the
+#: two models' errors s (near the truth) and s + d, the ratio is N mean(d^2) / v and the paired
+#: z mean(d^2) / sqrt(4 v mean(d^2) / N): the ratio is 4 z^2, so the z needed is
+#: sqrt(chi2.isf(alpha, 1) / 4) = 1.64 (mode_search.py: PROFILE_Z; the larger of the test's
+#: z and its bound_z). The paired test measures the spread of the differences on the record
+#: where the misfit's own spread took every time sample as independent (link_mode 4173340: a
+#: wrong mode 21 on that chi-square, -0.1 on the paired test; link_mode_beside 6588469, 2.7
+#: and -1.1; 9222929 and 9223932 of ``python -m benchmarks.second_mode 10 9222924``, modes
+#: 27 % and 23 % off, -0.4 and 0.2). The modes named right: 6588470 4.1, 9222928 2.7,
+#: 9223926 3.2, 9222933 3.0 (docs/diagnosis/measured.md)
 MODE_PROFILE_ALPHA = 1e-3

@@ -16,15 +16,19 @@ The simulation search of a second mode (frf_ident/core/diagnosis/experiments/mod
 
 Its start (the axis' first resonance) and its coordinates (inertia over frequency squared)
 against the analytic FRF of the flexible joint (frf_ident/core/simulation/analytic.py). The
-search itself is held end to end by test/app/test_diagnose_modes.py (scene 6588470 and 6588469).
+search itself is held end to end by test/app/test_diagnose_modes.py (scenes 6588470, 6588469
+and 4173340).
 """
 import math
 
-from frf_ident.core.diagnosis.experiments.mode_search import first_resonance_hz, mode_of
+from frf_ident.core.diagnosis.experiments.mode_search import (first_resonance_hz, mode_of,
+                                                              PROFILE_Z)
+from frf_ident.core.diagnosis.experiments.noise_gain import paired
 from frf_ident.core.model.params import AxisParams, RobotParams
 from frf_ident.core.simulation.analytic import robot_frf
 import numpy as np
 import pytest
+from scipy import stats
 
 AXIS = {'motor_inertia': 35.0, 'link_inertia': 150.0, 'stiffness': 1.5e5, 'damping': 5.0,
         'viscous_friction': 0.0}
@@ -61,3 +65,28 @@ def test_mode_of_reads_its_coordinates_and_caps_the_inertia():
     assert m == pytest.approx({'frequency_hz': 35.6, 'damping_ratio': 0.0057, 'inertia': 27.4})
     assert mode_of(x, 20.0)['inertia'] == 20.0
     assert math.isfinite(m['inertia'])
+
+
+@pytest.mark.parametrize('size', [0.05, 0.2])
+def test_profile_z_is_the_likelihood_ratio_of_the_paired_test(size):
+    """
+    The determination threshold: a likelihood ratio of 4 z^2 of the paired test's z.
+
+    Monte Carlo, written here: N pieces of Gaussian noise of variance v, a model at the truth
+    and one off by d per piece (drawn, of mean square ``size`` v). The likelihood ratio of
+    the two (the sum of their squared-error difference over v) and 4 z^2 of the paired z
+    (mean over its standard error, noise_gain.paired) agree within 10 % in the median, so a
+    z of PROFILE_Z is a ratio at the chi-square(1) quantile of MODE_PROFILE_ALPHA.
+    """
+    rng = np.random.default_rng(7)
+    n, v = 400, 2.5
+    ratio, z2 = [], []
+    for _ in range(400):
+        noise = rng.normal(scale=math.sqrt(v), size=n)
+        d = rng.normal(scale=math.sqrt(size * v), size=n)
+        diff = (d + noise) ** 2 - noise ** 2
+        mean, se = paired(diff, lags=0)
+        ratio.append(diff.sum() / v)
+        z2.append(4 * (mean / se) ** 2)
+    assert np.median(z2) == pytest.approx(np.median(ratio), rel=0.1)
+    assert 4 * PROFILE_Z ** 2 == pytest.approx(stats.chi2.isf(1e-3, 1))
