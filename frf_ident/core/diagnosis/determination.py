@@ -48,6 +48,7 @@ EXPERIMENT = {
     'motor_inertia': 'a multisine reaching above the resonance',
     'link_inertia': 'a multisine with lines below the antiresonance',
     'time_delay': 'a multisine reaching higher frequencies',
+    'second_mode': 'a chirp or a multisine with dense lines through the mode',
     'torque_ripple': 'a slower constant-velocity run over more of the travel',
     'gravity': 'motion over a larger range of the joint angles',
     'gravity_torque': 'motion over a larger range of the joint angles'}
@@ -60,13 +61,20 @@ def magnitudes(effect: Effect) -> Iterator[tuple[str, float, float | None]]:
     """
     Yield (parameter, value, standard error) of an effect's magnitudes.
 
-    A magnitude is a scalar parameter other than 0 or a term's amplitude (the terms the
-    diagnosis added: those with a standard error); phases and spatial frequencies are not
-    (their errors are reported, the share of a value means nothing for them).
+    A magnitude is a scalar parameter other than 0, a term's amplitude (the terms the
+    diagnosis added: those with a standard error) or a value of a mapping (a second mode's
+    frequency, damping ratio and inertia: ``second_mode damping_ratio``); phases and spatial
+    frequencies are not (their errors are reported, the share of a value means nothing for
+    them).
     """
     se = effect.standard_error or {}
     for key, value in effect.parameters.items():
-        if isinstance(value, (list, tuple)):
+        if isinstance(value, dict):
+            errs = se.get(key) or {}
+            for sub, v in value.items():
+                if isinstance(v, (int, float)) and v != 0:
+                    yield f'{key} {sub}', float(v), errs.get(sub)
+        elif isinstance(value, (list, tuple)):
             for term, err in zip(value, se.get(key) or [None] * len(value)):
                 if err is not None and 'amplitude' in term:
                     yield f'{key} amplitude', float(term['amplitude']), err.get('amplitude')
@@ -126,14 +134,16 @@ def undetermined_effects(effects: list[Effect]) -> list[Effect]:
 
     A magnitude with a standard error above NOT_DETERMINED_SHARE of its value (or none that
     is finite) gets a :class:`.records.NotDetermined` entry and its effect the score 0; a
-    parameter without a standard error (None: not estimated) is left as it is.
+    parameter without a standard error (None: not estimated) is left as it is. An effect a
+    stage labelled already (a mode's damping ratio its profile leaves free,
+    experiments/mode_search.py) scores 0 too.
     """
     out = []
     for e in effects:
         labels = [not_determined(k, v, float(se), share_text(v, float(se)))
                   for k, v, se in magnitudes(e)
                   if se is not None and not float(se) <= NOT_DETERMINED_SHARE * abs(v)]
-        out.append(labelled(e, labels) if labels else e)
+        out.append(labelled(e, labels) if labels or e.not_determined else e)
     return out
 
 

@@ -15,7 +15,7 @@
 import math
 
 from frf_ident.core.diagnosis.common import Effect
-from frf_ident.core.diagnosis.determination import undetermined_effects
+from frf_ident.core.diagnosis.determination import not_determined, undetermined_effects
 from frf_ident.core.diagnosis.experiments.standard_errors import between_experiments, sandwich
 from frf_ident.core.diagnosis.thresholds import NOT_DETERMINED_SHARE
 import numpy as np
@@ -52,6 +52,33 @@ def test_a_value_whose_error_exceeds_its_share_is_labelled_and_scores_nothing():
     assert 'not_determined' not in coul.to_dict()
     # labelling twice adds nothing
     assert undetermined_effects(out)[0].not_determined == visc.not_determined
+
+
+def test_a_mode_is_judged_value_by_value_and_a_stage_label_scores_nothing():
+    """
+    A second mode's frequency, damping ratio and inertia are magnitudes too.
+
+    Until stop 65 the share rule skipped a mapping: a mode whose damping ratio had an error
+    of 60 % of its value was reported as determined. A label a stage gave (the simulation
+    search's damping profile) zeroes the score like the rule's own.
+    """
+    mode = {'frequency_hz': 43.87, 'damping_ratio': 0.0066, 'inertia': 27.7}
+    errs = {'frequency_hz': 0.2, 'damping_ratio': 0.0066 * 0.6, 'inertia': 1.0}
+    given = not_determined('second_mode damping_ratio', 0.0066, 0.0, 'its profile', [0.0132])
+    out = undetermined_effects([
+        Effect('second_mode', 'joint_1', 0.8, {'second_mode': mode}, '',
+               standard_error={'second_mode': errs}),
+        Effect('second_mode', 'joint_2', 0.7, {'second_mode': mode}, '',
+               standard_error={'second_mode': None}, not_determined=[given]),
+        Effect('second_mode', 'joint_3', 0.6, {'second_mode': mode}, '',
+               standard_error={'second_mode': {**errs, 'damping_ratio': 0.001}})])
+    rule, staged, sure = out
+    assert [n.parameter for n in rule.not_determined] == ['second_mode damping_ratio']
+    assert rule.not_determined[0].value_range == pytest.approx([0.0, 0.0066 * 2.2])
+    assert rule.score == 0.0 and 'chirp' in rule.not_determined[0].experiment
+    assert staged.not_determined == [given] and staged.score == 0.0
+    assert given.value_range == pytest.approx([0.0066, 0.0132])
+    assert not sure.not_determined and sure.score == 0.6
 
 
 def test_the_sandwich_leaves_a_direction_the_rows_cannot_see_free():

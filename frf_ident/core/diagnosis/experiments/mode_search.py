@@ -39,7 +39,9 @@ its axis (the misfit left below UNEXPLAINED_RATIO floors: a mode posing for a mi
 ripple does not) and where its frequency is determined: the mode refitted MODE_FREQUENCY_SE off
 on either side loses to it by more than the noise gives (the paired test of :mod:`.noise_gain`
 on the fit part, at the z of a profile likelihood ratio test at MODE_PROFILE_ALPHA,
-PROFILE_Z); else the axis stays unexplained. It
+PROFILE_Z); else the axis stays unexplained. Its damping ratio, which a light mode far above
+the first resonance may leave free, is labelled not determined where the same test does not
+exclude it moved by MODE_DAMPING_PROFILE either way. It
 is judged as every candidate (:func:`.acceptance.passes`); the held-out check judges it again. Its
 standard errors are those of the frequency-domain fit of the multisine ratio started at its
 frequency where that fit lands within MODE_FREQUENCY_SE of it (wider than the records' fit: the
@@ -62,9 +64,12 @@ from .rigid_axes import rigid_in_band
 from .search import Search
 from .simplex import nelder_mead
 from ..common import Effect
-from ..mode_thresholds import (MODE_DAMPING_RANGE, MODE_FREQUENCY_SE, MODE_PROFILE_ALPHA,
-                               MODE_SCAN_STEP, MODE_SEARCH_DAMPING, MODE_SEARCH_EVALUATIONS,
-                               MODE_SEARCH_SHARE, MODE_SEARCH_SIMPLEX, MODE_SEARCH_STEP)
+from ..determination import not_determined
+from ..mode_thresholds import (MODE_DAMPING_PROFILE, MODE_DAMPING_RANGE, MODE_FREQUENCY_SE,
+                               MODE_PROFILE_ALPHA, MODE_SCAN_STEP, MODE_SEARCH_DAMPING,
+                               MODE_SEARCH_EVALUATIONS, MODE_SEARCH_SHARE, MODE_SEARCH_SIMPLEX,
+                               MODE_SEARCH_STEP)
+from ..records import NotDetermined
 from ..thresholds import UNEXPLAINED_RATIO
 
 __all__ = ['search_left_modes']
@@ -214,6 +219,9 @@ def _fit_by_simulation(s: Search, i: int, base: list[Effect]) -> Effect | None:
         s.say(f'  {name}: not offered: its frequency is not determined ({seen})')
         return None
     s.say(f'  {name}: its frequency is determined ({seen})')
+    labels = _damping_label(fit, best, m['damping_ratio'])
+    if labels:
+        s.say(f'  {name}: its damping ratio is not determined ({labels[0].reason})')
     return Effect('second_mode', name, 0.0, {'second_mode': m},
                   f'{name} stays at {s.cur[i]:.3g} x its noise floor with the other effects '
                   f'named, and the multisine lines show no band a mode explains there: a '
@@ -223,7 +231,8 @@ def _fit_by_simulation(s: Search, i: int, base: list[Effect]) -> Effect | None:
                   f'standard errors of the noise, '
                   f'needed {PROFILE_Z:.2f}; standard errors of the multisine fit started there, '
                   f"wider than the records' fit)", i,
-                  standard_error={'second_mode': _frequency_domain_errors(s, i, m)})
+                  standard_error={'second_mode': _frequency_domain_errors(s, i, m)},
+                  not_determined=labels)
 
 
 def _frequency_profile(fit: _Fit, best: np.ndarray) -> HeldOutGain | None:
@@ -252,6 +261,55 @@ def _frequency_profile(fit: _Fit, best: np.ndarray) -> HeldOutGain | None:
         if off is not None:
             sides.append(held_out_gain(fit.s.ev, fit.model(best), off, fit.i, held_out=False))
     return min(sides, key=lambda g: max(g.z, g.bound_z), default=None)
+
+
+def _damping_label(fit: _Fit, best: np.ndarray, zeta: float) -> list[NotDetermined]:
+    """
+    Return the label of a damping ratio the records leave free (empty: it is determined).
+
+    The damping ratio is moved by MODE_DAMPING_PROFILE each way, the frequency and the inertia
+    refitted, and judged as :func:`_frequency_profile` judges the frequency (the larger of
+    the paired test's z and its bound, PROFILE_Z). It is determined where both sides are
+    excluded; else each side not excluded is moved on by the same factor until it is (or
+    leaves MODE_DAMPING_RANGE), and the label's range runs between the first excluded values:
+    the values the records do not exclude lie within it.
+    """
+    ends, said = [], []
+    for factor in (1.0 / MODE_DAMPING_PROFILE, MODE_DAMPING_PROFILE):
+        k, wins = 1, _wins_over(fit, best, factor)
+        if wins > PROFILE_Z:
+            ends.append(zeta * factor)
+            continue
+        said.append(f'{factor:g} x (wins by {wins:.2f})')
+        while not wins > PROFILE_Z:
+            k += 1
+            if not MODE_DAMPING_RANGE[0] <= zeta * factor ** k <= MODE_DAMPING_RANGE[1]:
+                break
+            wins = _wins_over(fit, best, factor ** k)
+        ends.append(min(max(zeta * factor ** k, MODE_DAMPING_RANGE[0]), MODE_DAMPING_RANGE[1]))
+    if not said:
+        return []
+    return [not_determined(
+        'second_mode damping_ratio', zeta, 0.0,
+        'moved ' + ' and '.join(said) + f', frequency and inertia refitted, it fits the '
+        f'records within {PROFILE_Z:.2f} standard errors of their paired test; they exclude '
+        f'{ends[0]:.3g} and {ends[1]:.3g}', ends)]
+
+
+def _wins_over(fit: _Fit, best: np.ndarray, factor: float) -> float:
+    """
+    Return what ``best`` wins by over its damping ratio times ``factor``, the rest refitted.
+
+    The larger of the paired test's z and its bound on the fit part; inf where no model
+    holds the mode there.
+    """
+    x = np.array(best, dtype=float)
+    x[1] += math.log(factor)
+    off = fit.model(fit.fit(x, free=(0, 2)))
+    if off is None:
+        return math.inf
+    g = held_out_gain(fit.s.ev, fit.model(best), off, fit.i, held_out=False)
+    return max(g.z, g.bound_z)
 
 
 def mode_of(x: np.ndarray, limit: float) -> dict[str, float]:
