@@ -210,8 +210,7 @@ def _fit_by_simulation(s: Search, i: int, base: list[Effect]) -> Effect | None:
     if not left <= UNEXPLAINED_RATIO * floor:
         s.say(f'  {name}: not offered: it does not explain the axis')
         return None
-    side = _frequency_profile(fit, best)
-    z = -math.inf if side is None else max(side.z, side.bound_z)
+    z, side = _frequency_profile(fit, best)
     seen = (f'refitted {100 * MODE_FREQUENCY_SE:g} % off, it wins by {z:.2f} standard errors, '
             f'needed {PROFILE_Z:.2f}: ' + (side.describe() if side else
                                            'no model holds it there'))
@@ -235,13 +234,12 @@ def _fit_by_simulation(s: Search, i: int, base: list[Effect]) -> Effect | None:
                   not_determined=labels)
 
 
-def _frequency_profile(fit: _Fit, best: np.ndarray) -> HeldOutGain | None:
+def _frequency_profile(fit: _Fit, best: np.ndarray) -> tuple[float, HeldOutGain | None]:
     """
-    Return the paired gain of ``best`` over its refit MODE_FREQUENCY_SE off (the closer side).
+    Return what ``best`` wins by over its refit MODE_FREQUENCY_SE off, the closer side.
 
-    None: no model holds the mode on either side.
-
-    The damping ratio and inertia are refitted at each side: a heavy mode's frequency trades
+    With that side's paired gain (-inf and None: no model holds the mode on either side). The
+    damping ratio and inertia are refitted at each side: a heavy mode's frequency trades
     with them along a valley the records may not close (scene link_mode_beside 6588469 of
     ``python -m benchmarks.second_mode 10 6587468``: its mode of 37.4 Hz, damping ratio 0.070
     and 20.5 kg m^2 on joint_1 and one of 48.3 Hz, 0.035 and 35.4 kg m^2 leave 0.55 floors
@@ -252,15 +250,11 @@ def _frequency_profile(fit: _Fit, best: np.ndarray) -> HeldOutGain | None:
     that scale's chi-square, while the paired test put it 2.4 standard errors behind the truth
     and 0.1 behind its refit 5 % off (the larger of z and bound_z).
     """
-    sides = []
-    for sign in (-1.0, 1.0):
-        x = np.array(best, dtype=float)
-        x[0] += math.log1p(sign * MODE_FREQUENCY_SE)
-        # the low-frequency change (inertia / frequency^2) kept at the first step
-        off = fit.model(fit.fit(x, free=(1, 2)))
-        if off is not None:
-            sides.append(held_out_gain(fit.s.ev, fit.model(best), off, fit.i, held_out=False))
-    return min(sides, key=lambda g: max(g.z, g.bound_z), default=None)
+    # the low-frequency change (inertia / frequency^2) kept at the first step; a side no
+    # model holds tells nothing
+    sides = [w for w in (_wins_over(fit, best, 0, 1.0 + sign * MODE_FREQUENCY_SE, (1, 2))
+                         for sign in (-1.0, 1.0)) if w[1] is not None]
+    return min(sides, key=lambda t: t[0], default=(-math.inf, None))
 
 
 def _damping_label(fit: _Fit, best: np.ndarray, zeta: float) -> list[NotDetermined]:
@@ -276,7 +270,7 @@ def _damping_label(fit: _Fit, best: np.ndarray, zeta: float) -> list[NotDetermin
     """
     ends, said = [], []
     for factor in (1.0 / MODE_DAMPING_PROFILE, MODE_DAMPING_PROFILE):
-        k, wins = 1, _wins_over(fit, best, factor)
+        k, wins = 1, _wins_over(fit, best, 1, factor, (0, 2))[0]
         if wins > PROFILE_Z:
             ends.append(zeta * factor)
             continue
@@ -285,7 +279,7 @@ def _damping_label(fit: _Fit, best: np.ndarray, zeta: float) -> list[NotDetermin
             k += 1
             if not MODE_DAMPING_RANGE[0] <= zeta * factor ** k <= MODE_DAMPING_RANGE[1]:
                 break
-            wins = _wins_over(fit, best, factor ** k)
+            wins = _wins_over(fit, best, 1, factor ** k, (0, 2))[0]
         ends.append(min(max(zeta * factor ** k, MODE_DAMPING_RANGE[0]), MODE_DAMPING_RANGE[1]))
     if not said:
         return []
@@ -296,20 +290,21 @@ def _damping_label(fit: _Fit, best: np.ndarray, zeta: float) -> list[NotDetermin
         f'{ends[0]:.3g} and {ends[1]:.3g}', ends)]
 
 
-def _wins_over(fit: _Fit, best: np.ndarray, factor: float) -> float:
+def _wins_over(fit: _Fit, best: np.ndarray, coordinate: int, factor: float,
+               free: tuple[int, ...]) -> tuple[float, HeldOutGain | None]:
     """
-    Return what ``best`` wins by over its damping ratio times ``factor``, the rest refitted.
+    Return what ``best`` wins by over itself with one coordinate times ``factor``.
 
-    The larger of the paired test's z and its bound on the fit part; inf where no model
-    holds the mode there.
+    The coordinates ``free`` refitted; what it wins by is the larger of the paired test's z
+    and its bound on the fit part (inf, with no gain, where no model holds the mode there).
     """
     x = np.array(best, dtype=float)
-    x[1] += math.log(factor)
-    off = fit.model(fit.fit(x, free=(0, 2)))
+    x[coordinate] += math.log(factor)
+    off = fit.model(fit.fit(x, free=free))
     if off is None:
-        return math.inf
+        return math.inf, None
     g = held_out_gain(fit.s.ev, fit.model(best), off, fit.i, held_out=False)
-    return max(g.z, g.bound_z)
+    return max(g.z, g.bound_z), g
 
 
 def mode_of(x: np.ndarray, limit: float) -> dict[str, float]:
