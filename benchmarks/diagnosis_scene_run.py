@@ -21,12 +21,13 @@ from benchmarks/diagnosis_scenes.py.
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 import math
 import os
 from pathlib import Path
 import sys
 import time
-from typing import Any
+from typing import Any, Iterator
 
 from benchmarks.diagnosis_scenes import CHECK_KEY, MODEL, nominal_names, second_mode_hz
 
@@ -160,3 +161,33 @@ def score_scene(scene: dict[str, Any], report: dict[str, Any], wall: float = 0.0
                     names.index(a)] - 1)
                 for (n, a), p in sensor.items()
                 if n == 'quantisation' and has_sensor}}
+
+
+@contextmanager
+def scene_search(bag: Path) -> Iterator[Any]:
+    """
+    Yield the diagnosis' search state on a scene's bag against MODEL (its evaluator ``ev``).
+
+    The start of the experiments route, as ``diagnose`` builds it: for figures about chosen
+    models (the true one, a named one) in the diagnosis' own noise floors.
+    """
+    from frf_ident.app.diagnose import at_record_rate, load_records
+    from frf_ident.core.diagnosis.experiments.pipeline import start
+    from frf_ident.io.model_file import load_model
+    _model, robot, ctrl = load_model(MODEL)
+    rec, _others = load_records(bag, [], robot, MODEL, None, lambda _m: None)
+    robot = at_record_rate(robot, rec, MODEL, bag, lambda _m: None)
+    s = start(rec, robot, ctrl, jobs=1)
+    try:
+        yield s
+    finally:
+        s.ev.close()
+
+
+def with_effects(robot: Any, effects: list[tuple[str, int, dict[str, Any]]]) -> Any:
+    """Return ``robot`` with a scene's ``truth`` entries (name, axis, parameters) applied."""
+    from frf_ident.core.diagnosis.common import apply_effect, Effect
+    names = [a.name for a in robot.axes]
+    for name, axis, params in effects:
+        robot = apply_effect(robot, Effect(name, names[axis], 1.0, params, '', axis))
+    return robot

@@ -29,32 +29,18 @@ from pathlib import Path
 import sys
 import tempfile
 
-from benchmarks.diagnosis_scene_run import identify_scene
-from benchmarks.diagnosis_scenes import MODEL, scene_of
+from benchmarks.diagnosis_scene_run import identify_scene, scene_search, with_effects
+from benchmarks.diagnosis_scenes import scene_of
 import numpy as np
 
 
 def true_model_terms(scene: dict, bag: Path) -> dict:
     """Return the true model's misfit per axis and its loss terms in noise floors."""
-    from frf_ident.app.diagnose import at_record_rate, load_records
-    from frf_ident.core.diagnosis.common import apply_effect, Effect
-    from frf_ident.core.diagnosis.experiments.pipeline import start
-    from frf_ident.io.model_file import load_model
-    _model, robot, ctrl = load_model(MODEL)
-    rec, _others = load_records(bag, [], robot, MODEL, None, lambda _m: None)
-    robot = at_record_rate(robot, rec, MODEL, bag, lambda _m: None)
-    s = start(rec, robot, ctrl, jobs=1)
-    try:
-        names = [a.name for a in s.robot.axes]
-        truth = s.robot
-        for name, axis, params in scene['truth']:
-            truth = apply_effect(truth, Effect(name, names[axis], 1.0, params, '', axis))
-        terms = s.ev.terms(truth)
+    with scene_search(bag) as s:
+        terms = s.ev.terms(with_effects(s.robot, scene['truth']))
         return {'misfit': np.round(s.ev.misfit(terms), 3).tolist(),
                 'terms': {k: np.round(v / s.ev.floors[k], 3).tolist()
                           for k, v in terms.items()}}
-    finally:
-        s.ev.close()
 
 
 def main(argv: list[str]) -> None:
