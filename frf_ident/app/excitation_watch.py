@@ -26,14 +26,30 @@ rate or less (the steps between the newest ``RATE_WINDOW``).
 from __future__ import annotations
 
 import time
-from typing import Optional
+from typing import Iterator, Optional
 
 from frf_ident.app.excitation_run import event_json, Run
 from frf_ident.app.excitation_settings import (abort_ramp_steps, RATE_WINDOW, REGULAR,
                                                SLOW_STEP)
 import numpy as np
 
-__all__ = ['SessionWatchdog']
+__all__ = ['paced', 'SessionWatchdog']
+
+
+def paced(steps: int, period: float) -> Iterator[int]:
+    """
+    Yield 1 .. ``steps``, step s at ``(s - 1) * period`` after the first (wall time).
+
+    Each step waits for its own time from the first, so sleeps that overshoot on a loaded PC
+    do not add up over the abort ramp's 10 steps at 1 kHz (test/nodes/test_graph.py
+    test_kill_plant once saw the zero reference 50.5 ms after the kill, its limit 50; ``python
+    -m benchmarks.abort_ramp`` times it against sleeps one after the other).
+    """
+    t0 = time.monotonic()
+    for s in range(1, steps + 1):
+        yield s
+        if s < steps:
+            time.sleep(max(t0 + s * period - time.monotonic(), 0.0))
 
 
 class SessionWatchdog:
@@ -74,17 +90,9 @@ class SessionWatchdog:
         self.out.log(level, f'experiment {run.name!r} aborted: {reason}')
         steps = abort_ramp_steps(self.s.abort_ramp_s, self.dt)
         r0 = self.last_ref.copy()
-        # each step on its own time from the ramp's start, so that sleeps which overshoot on a
-        # loaded PC do not add up over the ramp's 10 steps at 1 kHz (test/nodes/test_graph.py
-        # test_kill_plant once saw the zero reference 50.5 ms after the kill, its limit 50;
-        # 9 sleeps of 1 ms beside 3 busy processes on 2 cores: median 9.6 ms, 99th percentile
-        # 13.4 ms one after the other, 9.1 and 9.3 ms on their own times)
-        t0 = time.monotonic()
-        for s in range(1, steps + 1):
+        for s in paced(steps, self.s.abort_ramp_s / steps):
             self._publish(self.next_k, r0 * (1.0 - s / steps), np.zeros(self.n))
             self.next_k += 1
-            if s < steps:
-                time.sleep(max(t0 + s * self.s.abort_ramp_s / steps - time.monotonic(), 0.0))
         self.out.experiment(event_json(event='aborted', procedure=run.name, reason=reason,
                                        t_start=run.start_k * self.dt,
                                        t_end=self.next_k * self.dt))
