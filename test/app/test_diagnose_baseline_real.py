@@ -30,6 +30,7 @@ fit extrapolates axis 3 of the first half 280 times off); those axis-records are
 not compared.
 """
 import math
+import os
 from pathlib import Path
 
 from frf_ident.app.diagnose import diagnose, load_data
@@ -141,3 +142,73 @@ def test_the_baseline_is_as_strong_as_an_outside_fit_on_kuka_a(tmp_path):
     assert at_or_below >= 4, rows
     assert all(r[4] == 'loses' for r in rows if r[3] > 1.1 * r[1]), rows
     assert not any(math.isnan(r[1]) for r in rows)
+
+
+#: directory with the authors' trajectories B.mat and C.mat (benchmarks.diagnosis_kuka.KUKA_BC_ENV;
+#: not in ../shared/data: JonasWeigand/Robot_Identification on GitHub,
+#: data/recorded_trajectories/2020-10-21 10s FF {B,C} 08ms/data.mat)
+KUKA_BC = Path(os.environ.get('KUKA_BC', '') or '/nonexistent')
+
+
+NO_BC = not (KUKA.is_file() and (KUKA_BC / 'B.mat').is_file() and (KUKA_BC / 'C.mat').is_file())
+
+
+def _b_and_c_rows(tmp_path) -> list[tuple]:
+    """
+    Return per axis-record of B and C the report's baseline, the outside fit and the model.
+
+    Rows (axis-record, report baseline, outside fit, extended as written, verdict, extended
+    as fitted): A diagnosed with B and C as ``--validate`` records, the outside fit on all of
+    A's moving samples (:func:`_outside_fit`), every figure the report's ``time_nrmse``.
+    """
+    full = load_data(KUKA, CFG / 'map_kuka_kr300.yaml')
+    others = [KUKA_BC / 'B.mat', KUKA_BC / 'C.mat']
+    res = diagnose(KUKA, CFG / 'model_kuka_kr300_axes123.yaml', tmp_path / 'abc',
+                   map_path=CFG / 'map_kuka_kr300.yaml', validate=others,
+                   progress=lambda _m: None)
+    ls = res.checks.least_squares
+    fit = _outside_fit(full)
+    rows = []
+    for path, name in zip(others, 'BC'):
+        out = _outside_nrmse(load_data(path, CFG / 'map_kuka_kr300.yaml'), fit)
+        final = next(s for s in ls.held_out if s.record == str(path)).per_axis
+        fitted = next(s for s in ls.held_out_as_fitted if s.record == str(path)).per_axis
+        verdict = {v.axis: v.verdict for v in ls.verdicts if v.record == str(path)}
+        for ax in AXES:
+            rows.append((f'{name} {ax}', final[ax].least_squares, out[ax], final[ax].extended,
+                         verdict[ax], fitted[ax].extended))
+    for r in rows:
+        print(f'A -> {r[0]}: time_nrmse report baseline {r[1]:.3f}, outside fit {r[2]:.3f} '
+              f'({100 * (r[1] / r[2] - 1):+.1f} %), extended as written {r[3]:.3f} ({r[4]}), '
+              f'as fitted {r[5]:.3f}')
+    print(f'extended at or below the outside fit on {sum(r[3] <= r[2] for r in rows)} of '
+          f'{len(rows)}')
+    return rows
+
+
+@pytest.mark.skipif(NO_BC, reason='KUKA_BC (a directory with trajectories B.mat, C.mat) not set')
+def test_the_baseline_is_as_strong_as_an_outside_fit_on_kuka_b_and_c(tmp_path):
+    """
+    Fit on KUKA trajectory A, predict B and C: the report's baseline against the outside fit.
+
+    Issue 55's must-show: the report's baseline within 5 % of the outside 4-parameter fit
+    (fitted here on all of A's moving samples) on each of the six axis-records of B and C
+    (measured: -0.4 to +0.0 %), and the model the diagnosis writes ties or beats it on each
+    (measured: ties, at most 0.9 % above; as fitted, before the rule, axis 1 lost on B and C
+    and axis 3 on C by 21-68 %).
+    """
+    rows = _b_and_c_rows(tmp_path)
+    assert len(rows) == 6
+    assert all(r[1] <= 1.05 * r[2] for r in rows), rows
+    assert all(r[4] in ('beats', 'ties') for r in rows), rows
+
+
+@pytest.mark.skipif(NO_BC, reason='KUKA_BC (a directory with trajectories B.mat, C.mat) not set')
+@pytest.mark.xfail(strict=True, reason="issue 55's must-show not met: the written model ties "
+                   'the outside fit on B and C (4 of 6 a hair above) and beats it nowhere; '
+                   "what would beat it is axis 1's configuration-dependent inertia, which the "
+                   'model file cannot hold (benchmarks/kuka_rigid_body.py)')
+def test_the_written_model_is_at_or_below_the_outside_fit_on_5_of_6(tmp_path):
+    """The model the diagnosis writes at or below the outside fit on >= 5 of B and C's 6."""
+    rows = _b_and_c_rows(tmp_path)
+    assert sum(r[3] <= r[2] for r in rows) >= 5, rows

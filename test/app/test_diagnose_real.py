@@ -243,16 +243,15 @@ def test_kuka_a_on_b_and_c_drops_the_gravity_that_does_not_generalise(tmp_path):
     Fit on KUKA trajectory A, validate on B and C (issue #41's table).
 
     B and C leave A's range of q2 by 24.5 and 12.3 deg. The gravity fitted on A makes axes
-    2 and 3 worse there than the same axes refitted without it (axis 2: 0.706 / 0.276 with,
-    0.333 / 0.470 without): it is dropped and named. What then still loses to the
-    4-parameter least-squares baseline is named per axis with its effects (axis 1: viscous
-    and Coulomb friction at the nominal inertia 8.8, where the baseline fits 7.45; axis 3 on
-    C: 0.352 against 0.291), which are replaced by the baseline's terms refitted in the
-    model: the final model ties the baseline on all six axis-records of B and C (0.314 /
-    0.333 / 0.458 against 0.313 / 0.333 / 0.458 on B; rejecting the effects instead left
-    the nominal axes, 1.48 pooled on B against the baseline's 0.38). The parameters of B and
-    C lie within their standard errors of A's (RMS 0.84 combined standard errors over 13
-    pairs).
+    2 and 3 worse there than the same axes refitted without it: it is dropped and named.
+    What then still loses to the 4-parameter least-squares baseline is named per axis with
+    its effects (axis 1 on B and C: 0.429 / 0.362 against 0.353 / 0.283; axis 3 on C: 0.352
+    against 0.210), which are replaced by the baseline's terms refitted in the model on all
+    of A's usable rows, as the baseline judged on B and C is: the final model ties the
+    baseline on all six axis-records (B 0.354 / 0.333 / 0.518 against 0.353 / 0.330 /
+    0.518, C 0.283 / 0.470 / 0.212 against 0.283 / 0.468 / 0.210). Refitted on the
+    diagnosis' fit rows instead, axis 3 still lost on C (0.293). The parameters of B and
+    C lie within their standard errors of A's.
     """
     bc = [str(KUKA_BC / 'B.mat'), str(KUKA_BC / 'C.mat')]
     rep = _diagnose(tmp_path, 'abc', KUKA, 'model_kuka_kr300_axes123.yaml',

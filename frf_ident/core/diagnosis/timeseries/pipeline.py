@@ -71,7 +71,8 @@ log = logging.getLogger(__name__)
 
 def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None = None,
                         exclude: dict[str, set[str]] | None = None,
-                        only: dict[str, tuple[str, ...]] | None = None) -> DiagnosisResult:
+                        only: dict[str, tuple[str, ...]] | None = None,
+                        all_rows: bool = False) -> DiagnosisResult:
     """
     Diagnose a time-series recording against the nominal ``robot``.
 
@@ -97,6 +98,10 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
         way, are left out as always): the least-squares baseline's terms
         (:data:`..crosscheck.baseline.BASELINE_GROUPS`) for an axis whose selected effects
         lost to it.
+    all_rows
+        Fit on every usable row of the record, its held-out blocks too (their metrics are
+        then in sample): how the least-squares baseline judged on another record is fitted
+        (:func:`..crosscheck.baseline.usable_rows`), for the axes refitted with its terms.
 
     Returns
     -------
@@ -113,7 +118,7 @@ def diagnose_timeseries(rec: Recording, robot: RobotParams, *, fc: float | None 
     band = analysis_band(rec) if fc is None else fixed_band(rec, fc)
     fc = band.fc_hz
     log.debug('%s', band.describe())
-    d = prepare(rec, robot, fc, log.debug)
+    d = prepare(rec, robot, fc, log.debug, all_rows=all_rows)
     effects: list[Effect] = []
     rejected: list[Rejected] = []
     ext_axes = list(robot.axes)

@@ -53,9 +53,14 @@ class Prepared:
     bearing: list           # runs of joints whose angle carries a load
 
 
-def prepare(rec: Recording, robot: RobotParams, fc: float, say: Callable[[str], None]
-            ) -> Prepared:
-    """Check the record, bridge its gaps, take the residual, the blocks and the load runs."""
+def prepare(rec: Recording, robot: RobotParams, fc: float, say: Callable[[str], None], *,
+            all_rows: bool = False) -> Prepared:
+    """
+    Check the record, bridge its gaps, take the residual, the blocks and the load runs.
+
+    ``all_rows``: fit on every row no gap bridged, the held-out blocks and the ends too (the
+    held-out rows stay the blocks', their metrics then in sample).
+    """
     check_diagnosable(rec, robot.joint_names)
     rec, lost = bridge_gaps(rec)
     fs = rec.fs
@@ -64,7 +69,7 @@ def prepare(rec: Recording, robot: RobotParams, fc: float, say: Callable[[str], 
     fit_m, val_m = split_blocks(N - 1, fs, fc)
     # rows bridged over gaps of the record take part in neither fit nor validation
     kept = ~(lost[1:] | lost[:-1])
-    fit_m, val_m = fit_m & kept, val_m & kept
+    fit_m, val_m = (kept if all_rows else fit_m & kept), val_m & kept
     names = robot.joint_names
     move = moving(vh, rec.velocity, fs, fc)
     check_diagnosable(rec, names, move & fit_m[:, None], move & val_m[:, None])
