@@ -28,7 +28,8 @@ fitted factor; with its gravity g_i(q) / gear_i as well; and, as the upper line,
 authors' own rigid-body torques stored in the records (``tau_a_all`` inertia, ``tau_c_all``
 Coriolis, ``tau_g_all`` gravity), each scaled per axis. Axis 1's link inertia changes with the
 reach of the arm (the authors' ``m_all``: 1206-1856 kg m^2 over A, 729-1351 over B); a
-constant inertia fitted on A cannot follow it.
+constant inertia fitted on A cannot follow it. The diagnosis offers the inertia torque with
+``--urdf`` (effect ``pose_dependent_inertia``); the gravity scaled per axis it does not.
 """
 from __future__ import annotations
 

@@ -36,7 +36,7 @@ from typing import Any, Sequence, TYPE_CHECKING
 
 from frf_ident.app.outdir import clear_outputs
 from frf_ident.app.threads import one_blas_thread
-from frf_ident.core.model.params import RobotParams
+from frf_ident.core.model.params import RobotParams, UrdfSource
 from frf_ident.core.progress import Progress, sink
 from frf_ident.core.recording import Recording
 from frf_ident.errors import FrfIdentInputError
@@ -124,7 +124,9 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         or ripple term that does not generalise to them is dropped.
     urdf
         The robot's URDF: the time-series route fits the gravity its kinematics imply
-        (:mod:`frf_ident.core.diagnosis.crosscheck.kinematic_gravity`; pinocchio reads it).
+        (:mod:`frf_ident.core.diagnosis.crosscheck.kinematic_gravity`; pinocchio reads it)
+        and offers each axis a share of its inertia and Coriolis torque, a pose-dependent
+        inertia (``urdf_inertia``, written with the URDF's path as the model's ``urdf``).
     jobs
         Processes that simulate independent candidate models at once (experiments route);
         None: :data:`frf_ident.core.diagnosis.thresholds.SIM_JOBS`; 1: one after the other
@@ -157,7 +159,10 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     if urdf is not None:
         from frf_ident.core.diagnosis import GravityBasis
         from frf_ident.io.kinematics import load_kinematics
-        gravity = GravityBasis(str(urdf), load_kinematics(urdf, robot.joint_names).gravity_basis)
+        kin = load_kinematics(urdf, robot.joint_names)
+        gravity = GravityBasis(str(urdf), kin.gravity_basis)
+        # its inertia and Coriolis torque: the candidate of a pose-dependent inertia per axis
+        robot = replace(robot, urdf=UrdfSource(str(Path(urdf).resolve()), kin.inertial_torque))
     mjcf = mjcf_models(robot)
     diag = diagnose_record(rec, robot, ctrl, others=others, gravity=gravity,
                            jobs=SIM_JOBS if jobs is None else jobs, fd_fit=fd_fit,

@@ -64,8 +64,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         'several after one flag, or the flag repeated')
     p.add_argument('--urdf', type=Path, default=None,
                    help="the robot's URDF (needs the pin package): gravity with the structure "
-                        'of its kinematics, base parameters fitted jointly over the axes '
-                        '(time-series route; the joints named as the model axes)')
+                        'of its kinematics, base parameters fitted jointly over the axes, and '
+                        'per axis a share of its inertia and Coriolis torque (a load inertia '
+                        'changing with the pose; time-series route; joints named as the model '
+                        'axes)')
     p.add_argument('--no-fd-fit', dest='fd_fit', action='store_false',
                    help='skip stage 0, the frequency-domain physical fit that names a linear '
                         'parameter mismatch before any simulation search (experiments route; '

@@ -34,7 +34,9 @@ parameters, 10 per link: m, m c, the inertia about the joint frame's origin):
 ``computeJointTorqueRegressor`` with gravity off and unit accelerations),
 :meth:`Kinematics.with_parameters` the kinematics with other inertial parameters and
 :meth:`Kinematics.write_urdf` a URDF that holds them: what the global pose model of
-``frf-ident fit`` fits and writes.
+``frf-ident fit`` fits and writes. :meth:`Kinematics.inertial_torque` gives the inertia and
+Coriolis torque along a record (RNEA minus gravity, motor side): the pose-dependent inertia
+a model file's ``urdf_inertia`` takes a share of.
 """
 from __future__ import annotations
 
@@ -181,6 +183,41 @@ class Kinematics:
             if np.all(np.isfinite(qk)):
                 out[k] = self._regressor(qk)[:, cols]
         return out / self.reduction[None, :, None] if motor_side else out
+
+    def inertial_torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """
+        Return the link side's inertia and Coriolis torque on the motor side at every sample.
+
+        pinocchio's RNEA at (q, v, a) minus the gravity at q, divided by each joint's gear
+        ratio: M(q) a + C(q, v) v at the URDF's inertial parameters, as each motor sees it.
+
+        Parameters
+        ----------
+        q, v, a : ndarray, shape (N, n)
+            Joint positions [rad], velocities [rad/s] and accelerations [rad/s^2] in
+            ``joint_names`` order.
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+            The torque [N m] (NaN where a sample is not finite).
+
+        """
+        pin = self._pin
+        q, v, a = (np.asarray(x, dtype=float) for x in (q, v, a))
+        out = np.full(q.shape, np.nan)
+        full = [np.zeros(self.model.nq), np.zeros(self.model.nv), np.zeros(self.model.nv)]
+        zero = np.zeros(self.model.nv)
+        for k in range(q.shape[0]):
+            if not (np.all(np.isfinite(q[k])) and np.all(np.isfinite(v[k]))
+                    and np.all(np.isfinite(a[k]))):
+                continue
+            for x, row in zip(full, (q[k], v[k], a[k])):
+                x[self.index] = row
+            tau = pin.rnea(self.model, self.data, full[0], full[1], full[2])
+            tau = tau - pin.rnea(self.model, self.data, full[0], zero, zero)
+            out[k] = np.asarray(tau)[self.index]
+        return out / self.reduction
 
     def at(self, q: Sequence[float]) -> LinkSide:
         """

@@ -19,11 +19,12 @@ name the file and the field (one line, CLI exit status 2).
 """
 from __future__ import annotations
 
+from dataclasses import replace
 import importlib
 from pathlib import Path
 from typing import Any
 
-from frf_ident.core.model.params import RobotParams
+from frf_ident.core.model.params import RobotParams, UrdfSource
 from frf_ident.core.model.schema import default_model_dict, robot_from_dict, robot_to_dict
 from frf_ident.core.simulation.controller import controller_from_dict, PIVelocity
 from frf_ident.core.simulation.plant import FlexibleJointPlant
@@ -32,7 +33,7 @@ from frf_ident.io.yamlio import read_yaml_file
 import yaml
 
 __all__ = ['MUJOCO', 'dry_run_plant', 'load_model', 'load_plant', 'read_model_dict',
-           'save_model']
+           'save_model', 'with_urdf']
 
 #: the plant spec that simulates an MJCF in MuJoCo (``mujoco`` or ``mujoco:FILE.xml``)
 MUJOCO = 'mujoco'
@@ -111,12 +112,31 @@ def load_model(path: str | Path | None) -> tuple[dict[str, Any], RobotParams, PI
         d = _mjcf_view(d, Path(path))
     try:
         robot = robot_from_dict(d)
+        if robot.urdf is not None:
+            robot = with_urdf(robot, Path(path).parent if path is not None else Path.cwd())
         ctrl = controller_from_dict(d, robot)
         if robot.mjcf is not None:      # an MJCF starts at its pose, not at q = 0
             ctrl.reset(robot.gravity_load([robot.mjcf.pose[a] for a in robot.joint_names]))
     except ModelFileError as exc:
         raise ModelFileError(f'{path or "default model"}: {exc}') from None
     return d, robot, ctrl
+
+
+def with_urdf(robot: RobotParams, base: Path) -> RobotParams:
+    """
+    Return the model with its ``urdf`` read: the path made absolute, its evaluator attached.
+
+    A relative path is taken from ``base`` (the model file's folder). pinocchio evaluates the
+    URDF (:meth:`frf_ident.io.kinematics.Kinematics.inertial_torque`).
+    """
+    from frf_ident.io.kinematics import load_kinematics
+    p = Path(robot.urdf.file)
+    p = p if p.is_absolute() else (base / p).resolve()
+    try:
+        kin = load_kinematics(p, robot.joint_names)
+    except FrfIdentInputError as err:
+        raise ModelFileError(f'urdf: {err}') from err
+    return replace(robot, urdf=UrdfSource(str(p), kin.inertial_torque))
 
 
 def _mjcf_view(d: dict[str, Any], path: Path) -> dict[str, Any]:

@@ -35,6 +35,7 @@ EFFECT_PHRASES = {
     'velocity_from_encoder': 'velocity from encoder differences, half a sample late',
     'quantisation': 'encoder quantisation',
     'second_mode': 'a second, link-side resonance',
+    'pose_dependent_inertia': 'load inertia changing with the pose',
 }
 
 

@@ -36,8 +36,9 @@ def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]
     Return u - (torque the model needs for the measured motion), between samples.
 
     Linear part from :func:`.residual.inverse_dynamics_residual`, plus the model's own Coulomb
-    friction, torque ripple and gravity (link positions taken as the motor positions: the
-    deflection is far below the gravity terms' angular scale).
+    friction, torque ripple, gravity and share of its URDF's inertia and Coriolis torque
+    (``urdf_inertia``; link positions taken as the motor positions: the deflection is far
+    below the gravity terms' angular scale).
 
     Parameters
     ----------
@@ -56,7 +57,8 @@ def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]
                                               robot)
     # the flexible inverse dynamics carries the load in its link-side equation
     grav = robot.gravity_load(qh) if is_rigid(robot, rec.fs) else np.zeros_like(qh)
-    return f - coulomb_and_ripple(robot, qh, vh) - grav, qh, vh, ah
+    pose = robot.pose_inertia_torque(qh, vh, ah)
+    return f - coulomb_and_ripple(robot, qh, vh) - grav - pose, qh, vh, ah
 
 
 def gravity_sets(n: int, i: int) -> list[tuple[int, ...]]:

@@ -25,12 +25,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import math
-from typing import Any
+from typing import Any, Callable
 
 from frf_ident.errors import ModelFileError
 import numpy as np
 
-__all__ = ['AxisParams', 'MjcfSource', 'RobotParams', 'SECOND_MODE_KEYS']
+__all__ = ['AxisParams', 'MjcfSource', 'RobotParams', 'SECOND_MODE_KEYS', 'UrdfSource']
 
 #: the keys of an axis' ``second_mode`` (docs/model_file.md), in the order they are written
 SECOND_MODE_KEYS = ('frequency_hz', 'damping_ratio', 'inertia')
@@ -96,6 +96,12 @@ class AxisParams:
         link_inertia; the rigid link keeps the rest, so at low frequency the link weighs
         ``link_inertia``), tuned to ``f`` with the link held (stiffness J_e (2 pi f)^2) and
         damped at ``zeta`` of critical. None (default): no such mode.
+    urdf_inertia : float, optional
+        Share [-] of the link-side inertia and Coriolis torque of the robot's URDF (the model
+        file's ``urdf``, at the URDF's own inertial parameters, divided by the gear ratio of
+        its ``transmission``) that this axis carries besides its own terms: a load inertia
+        that changes with the pose (an arm's reach on its base axis). Evaluated in inverse
+        dynamics only; a model with it is not simulated. 0 (default): none.
 
     Raises
     ------
@@ -124,6 +130,7 @@ class AxisParams:
     velocity_noise: float = 0.0
     torque_noise: float = 0.0
     second_mode: dict[str, float] | None = None
+    urdf_inertia: float = 0.0
 
     def __post_init__(self) -> None:
         for key in ('motor_inertia', 'link_inertia', 'stiffness'):
@@ -131,7 +138,7 @@ class AxisParams:
             if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
                 raise ModelFileError(f'axis {self.name}: {key}={val!r} must be positive')
         for key in ('damping', 'viscous_friction', 'coulomb_friction', 'backlash', 'time_delay',
-                    'encoder_resolution', 'velocity_noise', 'torque_noise'):
+                    'encoder_resolution', 'velocity_noise', 'torque_noise', 'urdf_inertia'):
             val = getattr(self, key)
             if not (isinstance(val, (int, float)) and math.isfinite(val) and val >= 0):
                 raise ModelFileError(f'axis {self.name}: {key}={val!r} must be >= 0')
@@ -198,7 +205,7 @@ class AxisParams:
     @property
     def is_linear(self) -> bool:
         return (self.coulomb_friction == 0 and self.backlash == 0 and not self.torque_ripple
-                and not self.gravity
+                and not self.gravity and not self.urdf_inertia
                 and (self.stiffness_k2 is None or self.stiffness_k2 == self.stiffness))
 
     def gravity_joints(self, names: list[str], k: int) -> list[int]:
@@ -258,6 +265,37 @@ class MjcfSource:
     pose: dict[str, float] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class UrdfSource:
+    """
+    The URDF a model file names for the pose-dependent link inertia (``urdf``; docs/model_file.md).
+
+    Plain data plus the evaluator the adapter that read the file attaches
+    (:meth:`frf_ident.io.kinematics.Kinematics.inertial_torque`): the core never reads a URDF.
+
+    Parameters
+    ----------
+    file : str
+        Path of the URDF (absolute once loaded).
+    inertial_torque : callable, optional
+        ``(q, v, a) -> tau``, each (N, n) in axis order: the URDF's link-side inertia and
+        Coriolis torque on the motor side. None until an adapter attaches it.
+
+    """
+
+    file: str
+    inertial_torque: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = field(
+        default=None, compare=False, repr=False)
+
+    def torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Return the URDF's inertia and Coriolis torque (N, n) at q, v, a (motor side)."""
+        if self.inertial_torque is None:
+            raise ModelFileError(f'urdf: {self.file} has not been read: load the model file '
+                                 f'with frf_ident.io.model_file.load_model (pinocchio, extra '
+                                 f'[kinematics], evaluates it)')
+        return np.asarray(self.inertial_torque(q, v, a), dtype=float)
+
+
 @dataclass
 class RobotParams:
     """
@@ -301,6 +339,7 @@ class RobotParams:
     velocity_from_encoder: bool = False
     seed: int = 0
     mjcf: MjcfSource | None = None
+    urdf: UrdfSource | None = None
 
     def __post_init__(self) -> None:
         if not self.axes:
@@ -328,6 +367,9 @@ class RobotParams:
         for a in self.axes:
             for k in range(len(a.gravity)):
                 a.gravity_joints(self.joint_names, k)
+            if a.urdf_inertia and self.urdf is None:
+                raise ModelFileError(f'axis {a.name}: urdf_inertia={a.urdf_inertia!r} needs the '
+                                     f"model file's urdf (the robot's URDF it is a share of)")
         if np.any(np.linalg.eigvalsh(self.link_inertia_matrix()) <= 0):
             raise ModelFileError('link inertia matrix (link_inertia + link_coupling) must be '
                                  'positive definite')
@@ -404,6 +446,36 @@ class RobotParams:
                 arg = sum(q[..., j] for j in a.gravity_joints(names, k))
                 out[..., i] += float(g['amplitude']) * np.sin(arg + float(g.get('phase', 0.0)))
         return out
+
+    def pose_inertia_torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """
+        Return each axis' share of the URDF's inertia and Coriolis torque (``urdf_inertia``).
+
+        Parameters
+        ----------
+        q, v, a : ndarray, shape (N, n)
+            Positions [rad], velocities [rad/s] and accelerations [rad/s^2] in axis order.
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+            The motor-side torque [N m]; zeros where no axis has ``urdf_inertia``.
+
+        """
+        share = np.array([ax.urdf_inertia for ax in self.axes], dtype=float)
+        if not share.any():
+            return np.zeros(np.shape(q))
+        return self.urdf.torque(q, v, a) * share
+
+    def refuse_pose_inertia(self, what: str) -> None:
+        """Raise ModelFileError when an axis has ``urdf_inertia``: ``what`` cannot hold it."""
+        named = [ax.name for ax in self.axes if ax.urdf_inertia]
+        if named:
+            raise ModelFileError(
+                f'axes {named}: urdf_inertia (a pose-dependent inertia from '
+                f'{self.urdf.file if self.urdf else "a URDF"}) is evaluated in inverse '
+                f'dynamics only; {what} holds constant inertias (a model written by diagnose '
+                f'with --urdf: set urdf_inertia to 0, or simulate the URDF in MuJoCo)')
 
     def torque_limits(self) -> np.ndarray:
         """

@@ -23,7 +23,9 @@ Extensions beyond the contract (all optional, documented in docs/model_file.md):
 - top level ``simulation``: {substeps, velocity_from_encoder, seed}
 - per axis ``gravity_torque``, ``gravity`` (configuration-dependent load, list of
   {amplitude, phase, joints}), ``encoder_resolution``, ``velocity_noise``, ``torque_noise``,
-  ``second_mode`` ({frequency_hz, damping_ratio, inertia}: a link-side mass on a spring)
+  ``second_mode`` ({frequency_hz, damping_ratio, inertia}: a link-side mass on a spring),
+  ``urdf_inertia`` (the axis' share of the top-level ``urdf``'s inertia and Coriolis torque)
+- top level ``urdf``: the robot's URDF (path), for ``urdf_inertia``
 - ``controller.filters``: {axis name: list of second-order sections [b0, b1, b2, 1, a1, a2]}
   on the measured velocity, discrete at ``sample_rate`` (what ``frf-ident tune`` writes;
   :func:`controller_filters`, :func:`check_sections`)
@@ -36,14 +38,15 @@ import math
 from typing import Any
 
 from frf_ident.core.model.fields import expect_bool, expect_int
-from frf_ident.core.model.params import AxisParams, MjcfSource, RobotParams, SECOND_MODE_KEYS
+from frf_ident.core.model.params import (AxisParams, MjcfSource, RobotParams, SECOND_MODE_KEYS,
+                                        UrdfSource)
 from frf_ident.errors import ModelFileError
 import numpy as np
 
 MODEL_VERSION = 1
 _AXIS_KEYS = {f.name for f in fields(AxisParams)}
 _TOP_KEYS = {'frf_ident_model', 'sample_rate', 'axes', 'controller', 'link_coupling',
-             'simulation', 'description', 'mjcf', 'pose'}
+             'simulation', 'description', 'mjcf', 'pose', 'urdf'}
 _SIM_KEYS = {'substeps', 'velocity_from_encoder', 'seed'}
 _CONTROLLER_KEYS = {'kind', 'kp', 'ki', 'filters'}
 #: a pass-through section: pads an axis with fewer sections than another
@@ -171,7 +174,7 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
             raise ModelFileError(f'link_coupling: expected an {len(axes)}x{len(axes)} matrix '
                                  f'of numbers, got {coupling!r}') from None
     return RobotParams(
-        axes=axes, link_coupling=coupling, mjcf=mjcf_source_from_dict(d),
+        axes=axes, link_coupling=coupling, mjcf=mjcf_source_from_dict(d), urdf=_urdf(d),
         sample_rate=_number('sample_rate', d.get('sample_rate', RobotParams.sample_rate)),
         substeps=expect_int('simulation.substeps', sim.get('substeps', RobotParams.substeps),
                             1, ModelFileError),
@@ -181,6 +184,16 @@ def robot_from_dict(d: dict[str, Any]) -> RobotParams:
                                           ModelFileError),
         seed=expect_int('simulation.seed', sim.get('seed', RobotParams.seed), 0,
                         ModelFileError))
+
+
+def _urdf(d: dict[str, Any]) -> UrdfSource | None:
+    """Return the model file's ``urdf`` (a path) as a UrdfSource, None without it."""
+    path = d.get('urdf')
+    if path is None:
+        return None
+    if not isinstance(path, str) or not path:
+        raise ModelFileError(f'urdf: expected the path of a URDF file, got {path!r}')
+    return UrdfSource(path)
 
 
 def mjcf_source_from_dict(d: dict[str, Any]) -> MjcfSource | None:
@@ -339,6 +352,8 @@ def robot_to_dict(robot: RobotParams, controller: Any = None) -> dict[str, Any]:
         ad['gravity'] = [dict(g) for g in a.gravity]
         if not ad['gravity']:
             del ad['gravity']
+        if not a.urdf_inertia:
+            del ad['urdf_inertia']
         if a.second_mode is None:
             del ad['second_mode']
         else:
@@ -353,6 +368,8 @@ def robot_to_dict(robot: RobotParams, controller: Any = None) -> dict[str, Any]:
                        'seed': int(robot.seed)}
     if robot.mjcf is not None:
         d['description'] = f'{robot.mjcf.file} linearised at its pose, in our parameters'
+    if robot.urdf is not None:
+        d['urdf'] = robot.urdf.file
     if controller is not None:
         d['controller'] = {'kind': 'pi_velocity', 'kp': controller.kp.tolist(),
                            'ki': controller.ki.tolist()}

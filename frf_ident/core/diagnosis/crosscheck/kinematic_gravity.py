@@ -43,12 +43,14 @@ from ..residual import lowpass
 from ..result import DiagnosisResult
 from ..selection import block_standard_errors
 from ..thresholds import FC_HZ
+from ..timeseries.effects import EFFECT_OF
 
 __all__ = ['fit_kinematic_gravity', 'GravityBasis', 'KinematicGravityFit', 'kinematic_gravity',
            'sinusoid_terms']
 
 #: the scalar terms refitted beside the gravity (the time-series route's group names)
-SCALARS = ('gravity_torque', 'coulomb_friction', 'viscous_friction', 'motor_inertia')
+SCALARS = ('gravity_torque', 'coulomb_friction', 'viscous_friction', 'motor_inertia',
+           'urdf_inertia')
 #: a gravity that the sinusoids of joint-angle sums leave more of than this share (RMS) is
 #: not one the model file can hold (its joints are not parallel after a vertical one)
 EXACT = 1e-6
@@ -204,6 +206,9 @@ def fit_kinematic_gravity(res: DiagnosisResult, rec: Recording, robot: RobotPara
     groups: dict[str, np.ndarray] = {}
     for i in range(n):
         own = regressor_groups(qh, vh, ah, fs, fc, i, 0.0, [], ())
+        if robot.urdf is not None:
+            own['urdf_inertia'] = lowpass(
+                np.nan_to_num(robot.urdf.torque(qh, vh, ah)[:, i:i + 1]), fs, fc)
         for j, k in keys:
             col = groups.setdefault(f'{j}:{k}', np.zeros((n * rows, 1)))
             if j == i:
@@ -235,7 +240,7 @@ def _with_gravity(res, rec, robot, keys, coef, se, theta, samples, source, fc):
                 continue
             ch[k] = getattr(ax, k) + float(coef[f'{i}:{k}'])
             effects.append(Effect(
-                'parameter_mismatch' if k in ('motor_inertia', 'gravity_torque') else k,
+                EFFECT_OF.get(k, k),
                 ax.name, score.get((ax.name, k), 0.0), {k: ch[k]},
                 f'{k} = {ch[k]:.4g} \u00b1 {se[f"{i}:{k}"]:.2g}, fitted jointly with the '
                 f'gravity of {source}', i, standard_error={k: se[f'{i}:{k}']}))

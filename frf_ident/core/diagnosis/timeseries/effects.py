@@ -38,9 +38,12 @@ from ..residual import lowpass
 from ..selection import block_standard_errors, by_group, lstsq, select_groups
 from ..thresholds import ONE_WAY, RANGE_OUT_SHARE
 
-__all__ = ['axis_effects', 'axis_groups', 'rejected_groups', 'select_extrapolating',
-           'select_physical']
+__all__ = ['axis_effects', 'axis_groups', 'EFFECT_OF', 'rejected_groups',
+           'select_extrapolating', 'select_physical']
 
+#: the effect a one-coefficient group names where it is not the group's own name
+EFFECT_OF = {'motor_inertia': 'parameter_mismatch', 'gravity_torque': 'parameter_mismatch',
+             'urdf_inertia': 'pose_dependent_inertia'}
 #: evidence sentence of each one-coefficient regressor group (c: fitted coefficient)
 _SCALAR_EVIDENCE = {
     'coulomb_friction': ('inverse-dynamics residual steps by {step:.3g} (torque units) at each '
@@ -52,6 +55,9 @@ _SCALAR_EVIDENCE = {
                       '(p = {p:.2g})'),
     'gravity_torque': ('constant torque residual {c:+.3g} (a load or friction asymmetry the model '
                        'lacks; p = {p:.2g})'),
+    'urdf_inertia': ("residual proportional to the URDF's inertia and Coriolis torque along the "
+                     'motion: a load inertia that changes with the pose, share {old:.4g} -> '
+                     '{new:.4g} of the URDF (p = {p:.2g})'),
 }
 #: evidence of a term of an axis refitted with the least-squares baseline's terms (``only``)
 _BASELINE_EVIDENCE = ('{c:+.4g} on the model value {old:.4g}, fitted with the least-squares '
@@ -103,6 +109,8 @@ def axis_groups(d: Prepared, robot: RobotParams, i: int, rejected: list[Rejected
         + [lowpass(trend, fs, 0.45 * fs)]) @ c0
     s, peak, thr = find_ripple(wide, qh[:, i], fit_i)
     groups = regressor_groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0, d.bearing, skip)
+    if d.urdf_torque is not None:
+        groups['urdf_inertia'] = lowpass(np.nan_to_num(d.urdf_torque[:, i:i + 1]), fs, fc)
     up = float(np.mean(vh[fit_i, i] > 0)) if fit_i.any() else 0.0
     forced: list[str] = []
     if min(up, 1.0 - up) < ONE_WAY:
@@ -140,7 +148,8 @@ def select_physical(d: Prepared, ax, i: int, groups: dict[str, np.ndarray], forc
         cf = by_group(coef, groups, chosen)
         bad = [k for k, base in (('coulomb_friction', ax.coulomb_friction),
                                  ('viscous_friction', ax.viscous_friction),
-                                 ('motor_inertia', ax.motor_inertia))
+                                 ('motor_inertia', ax.motor_inertia),
+                                 ('urdf_inertia', ax.urdf_inertia))
                if k in cf and base + float(cf[k][0]) <= 0]
         if not bad:
             break
@@ -215,7 +224,7 @@ def axis_effects(d: Prepared, robot: RobotParams, i: int, groups: dict[str, np.n
     score = {k: float(np.clip(info[k].get('held_out_gain', 0.0), 0, 1)) for k in chosen}
     se = block_standard_errors(groups, chosen, ff, fit_i, d.rec.fs)
     for k in ('coulomb_friction', 'viscous_friction', 'motor_inertia', 'torque_ripple',
-              'gravity_torque'):
+              'gravity_torque', 'urdf_inertia'):
         if k not in cf:
             continue
         if k == 'torque_ripple':
@@ -239,8 +248,8 @@ def axis_effects(d: Prepared, robot: RobotParams, i: int, groups: dict[str, np.n
             if math.isfinite(se[k][0]):
                 text += f'; {k} = {ch[k]:.4g}{_pm(se[k][0])}'
             err = {k: _se(se[k][0])}
-        name = 'parameter_mismatch' if k in ('motor_inertia', 'gravity_torque') else k
-        out.append(Effect(name, ax.name, score[k], {k: ch[k]}, text, i, standard_error=err))
+        out.append(Effect(EFFECT_OF.get(k, k), ax.name, score[k], {k: ch[k]}, text, i,
+                          standard_error=err))
     gk = [k for k in chosen if k.startswith('gravity:')]
     if gk:
         ch['gravity'], eff = gravity_effect(robot, i, gk, cf, se, max(score[k] for k in gk))
