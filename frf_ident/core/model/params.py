@@ -288,7 +288,7 @@ class UrdfSource:
         default=None, compare=False, repr=False)
 
     def torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
-        """Return the URDF's inertia and Coriolis torque (N, n) at q, v, a (motor side)."""
+        """Return the URDF's inertia and Coriolis torques, shape (N, n), on the motor side."""
         if self.inertial_torque is None:
             raise ModelFileError(f'urdf: {self.file} has not been read: load the model file '
                                  f'with frf_ident.io.model_file.load_model (pinocchio, extra '

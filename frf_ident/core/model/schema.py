@@ -38,8 +38,8 @@ import math
 from typing import Any
 
 from frf_ident.core.model.fields import expect_bool, expect_int
-from frf_ident.core.model.params import (AxisParams, MjcfSource, RobotParams, SECOND_MODE_KEYS,
-                                        UrdfSource)
+from frf_ident.core.model.params import (
+    AxisParams, MjcfSource, RobotParams, SECOND_MODE_KEYS, UrdfSource)
 from frf_ident.errors import ModelFileError
 import numpy as np
 
