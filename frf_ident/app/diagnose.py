@@ -125,8 +125,9 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
     urdf
         The robot's URDF: the time-series route fits the gravity its kinematics imply
         (:mod:`frf_ident.core.diagnosis.crosscheck.kinematic_gravity`; pinocchio reads it)
-        and offers each axis a share of its inertia and Coriolis torque, a pose-dependent
-        inertia (``urdf_inertia``, written with the URDF's path as the model's ``urdf``).
+        and offers each axis shares of its inertia and Coriolis torque, a pose-dependent
+        inertia, and of its gravity (``urdf_inertia``, ``urdf_gravity``, written with the
+        URDF's path as the model's ``urdf``).
     jobs
         Processes that simulate independent candidate models at once (experiments route);
         None: :data:`frf_ident.core.diagnosis.thresholds.SIM_JOBS`; 1: one after the other
@@ -161,8 +162,8 @@ def diagnose(data: Path, model_path: Path, out: Path, *, map_path: Path | None =
         from frf_ident.io.kinematics import load_kinematics
         kin = load_kinematics(urdf, robot.joint_names)
         gravity = GravityBasis(str(urdf), kin.gravity_basis)
-        # its inertia and Coriolis torque: the candidate of a pose-dependent inertia per axis
-        robot = replace(robot, urdf=UrdfSource(str(Path(urdf).resolve()), kin.inertial_torque))
+        # its inertia, Coriolis and gravity torques: each axis' candidate shares of them
+        robot = replace(robot, urdf=UrdfSource(str(Path(urdf).resolve()), kin))
     mjcf = mjcf_models(robot)
     diag = diagnose_record(rec, robot, ctrl, others=others, gravity=gravity,
                            jobs=SIM_JOBS if jobs is None else jobs, fd_fit=fd_fit,

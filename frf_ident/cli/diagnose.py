@@ -65,9 +65,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--urdf', type=Path, default=None,
                    help="the robot's URDF (needs the pin package): gravity with the structure "
                         'of its kinematics, base parameters fitted jointly over the axes, and '
-                        'per axis a share of its inertia and Coriolis torque (a load inertia '
-                        'changing with the pose; time-series route; joints named as the model '
-                        'axes)')
+                        'per axis shares of its inertia and Coriolis torque (a load inertia '
+                        'changing with the pose) and of its gravity (time-series route; joints '
+                        'named as the model axes)')
     p.add_argument('--no-fd-fit', dest='fd_fit', action='store_false',
                    help='skip stage 0, the frequency-domain physical fit that names a linear '
                         'parameter mismatch before any simulation search (experiments route; '

@@ -35,8 +35,9 @@ parameters, 10 per link: m, m c, the inertia about the joint frame's origin):
 :meth:`Kinematics.with_parameters` the kinematics with other inertial parameters and
 :meth:`Kinematics.write_urdf` a URDF that holds them: what the global pose model of
 ``frf-ident fit`` fits and writes. :meth:`Kinematics.inertial_torque` gives the inertia and
-Coriolis torque along a record (RNEA minus gravity, motor side): the pose-dependent inertia
-a model file's ``urdf_inertia`` takes a share of.
+Coriolis torque along a record (RNEA minus gravity, motor side) and
+:meth:`Kinematics.gravity_torque` its gravity: what a model file's ``urdf_inertia`` and
+``urdf_gravity`` take a share of.
 """
 from __future__ import annotations
 
@@ -217,6 +218,32 @@ class Kinematics:
             tau = pin.rnea(self.model, self.data, full[0], full[1], full[2])
             tau = tau - pin.rnea(self.model, self.data, full[0], zero, zero)
             out[k] = np.asarray(tau)[self.index]
+        return out / self.reduction
+
+    def gravity_torque(self, q: np.ndarray) -> np.ndarray:
+        """
+        Return the link side's gravity on the motor side at every sample: g(q) over the gears.
+
+        Parameters
+        ----------
+        q : ndarray, shape (N, n)
+            Joint positions [rad] in ``joint_names`` order.
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+            The torque [N m] at the URDF's inertial parameters (NaN where q is not finite).
+
+        """
+        pin = self._pin
+        q = np.asarray(q, dtype=float)
+        out = np.full(q.shape, np.nan)
+        full = np.zeros(self.model.nq)
+        for k in range(q.shape[0]):
+            if np.all(np.isfinite(q[k])):
+                full[self.index] = q[k]
+                out[k] = np.asarray(pin.computeGeneralizedGravity(self.model, self.data,
+                                                                  full))[self.index]
         return out / self.reduction
 
     def at(self, q: Sequence[float]) -> LinkSide:

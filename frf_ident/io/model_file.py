@@ -136,7 +136,7 @@ def with_urdf(robot: RobotParams, base: Path) -> RobotParams:
         kin = load_kinematics(p, robot.joint_names)
     except FrfIdentInputError as err:
         raise ModelFileError(f'urdf: {err}') from err
-    return replace(robot, urdf=UrdfSource(str(p), kin.inertial_torque))
+    return replace(robot, urdf=UrdfSource(str(p), kin))
 
 
 def _mjcf_view(d: dict[str, Any], path: Path) -> dict[str, Any]:

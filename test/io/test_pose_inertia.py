@@ -14,6 +14,8 @@
 """
 A load inertia that changes with the pose: the URDF's inertia torque, found and written.
 
+The model file's shares of a URDF (``urdf_inertia``, ``urdf_gravity``) against pinocchio.
+
 The truth is pinocchio's own RNEA (``pin.rnea`` with and without motion), not the evaluator
 the code uses (:meth:`frf_ident.io.kinematics.Kinematics.inertial_torque`); the records are an
 arm written here whose base axis carries 1.5 times the inertia torque of
@@ -80,15 +82,25 @@ def _nominal(fs: float, urdf: bool = True):
     if not urdf:
         return robot
     kin = load_kinematics(KR300, NAMES)
-    return replace(robot, urdf=UrdfSource(str(KR300), kin.inertial_torque))
+    return replace(robot, urdf=UrdfSource(str(KR300), kin))
 
 
-def test_the_evaluator_is_pinocchios_inertia_torque_on_the_motor_side():
+def _gravity_torque(q):
+    """Return pinocchio's RNEA at rest over the gear ratios: the truth's gravity."""
+    model = pin.buildModelFromUrdf(str(KR300))
+    data = model.createData()
+    z = np.zeros(3)
+    return np.array([pin.rnea(model, data, qk, z, z) for qk in q]) / GEAR
+
+
+def test_the_evaluator_is_pinocchios_inertia_and_gravity_torque_on_the_motor_side():
     kin = load_kinematics(KR300, NAMES)
     rng = np.random.default_rng(2)
     q, v, a = (rng.uniform(-2, 2, (20, 3)) for _ in range(3))
     np.testing.assert_allclose(kin.inertial_torque(q, v, a), _inertia_torque(q, v, a),
                                rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(kin.gravity_torque(q), _gravity_torque(q), rtol=1e-12,
+                               atol=1e-12)
 
 
 def test_a_pose_dependent_inertia_is_found_on_its_axis_and_predicts_another_pose_range():
@@ -120,19 +132,23 @@ def test_a_pose_dependent_inertia_is_found_on_its_axis_and_predicts_another_pose
 
 def test_the_model_file_keeps_the_share_and_the_simulation_refuses_it(tmp_path):
     robot = _nominal(250.0)
-    robot = replace(robot, axes=[replace(robot.axes[0], urdf_inertia=1.5)] + robot.axes[1:])
+    robot = replace(robot, axes=[replace(robot.axes[0], urdf_inertia=1.5), robot.axes[1],
+                                 replace(robot.axes[2], urdf_gravity=-0.7)])
     path = save_model(tmp_path / 'm.yaml', robot,
                       extra={'controller': {'kind': 'pi_velocity', 'kp': 50.0, 'ki': 0.0}})
     back = load_model(path)[1]
     assert back.axes[0].urdf_inertia == 1.5 and back.axes[1].urdf_inertia == 0.0
+    assert back.axes[2].urdf_gravity == -0.7
     assert Path(back.urdf.file) == KR300.resolve()
     q = np.random.default_rng(3).uniform(-1, 1, (5, 3))
-    np.testing.assert_allclose(back.pose_inertia_torque(q, q, q)[:, 0],
-                               1.5 * _inertia_torque(q, q, q)[:, 0], rtol=1e-12)
-    with pytest.raises(ModelFileError, match=r"\['joint_1'\]: urdf_inertia"):
+    truth = np.column_stack([1.5 * _inertia_torque(q, q, q)[:, 0], np.zeros(5),
+                             -0.7 * _gravity_torque(q)[:, 2]])
+    np.testing.assert_allclose(back.urdf_torque(q, q, q), truth, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ModelFileError,
+                       match=r"\['joint_1', 'joint_3'\]: urdf_inertia / urdf_gravity"):
         FlexibleJointPlant(back)
     d = {'frf_ident_model': 1, 'axes': [{'name': 'joint_1', 'urdf_inertia': 1.0}]}
     with pytest.raises(ModelFileError, match="urdf_inertia=1.0 needs the model file's urdf"):
         robot_from_dict(d)
     with pytest.raises(ModelFileError, match='has not been read'):
-        robot_from_dict({**d, 'urdf': 'robot.urdf'}).pose_inertia_torque(q, q, q)
+        robot_from_dict({**d, 'urdf': 'robot.urdf'}).urdf_torque(q, q, q)

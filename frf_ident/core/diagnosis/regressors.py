@@ -30,6 +30,10 @@ from .residual import (coulomb_and_ripple, effective_samples, inverse_dynamics_r
 from .selection import f_test, lstsq
 from .thresholds import ALPHA, BEARING_SHARE, MIN_TRAVEL, ONE_WAY, REST_NOISE, REST_SHARE
 
+#: the groups of a URDF's torques (model keys ``urdf_inertia``, ``urdf_gravity``): one share of
+#: a shape the URDF fixes each (no free phase to cancel over a short travel: no leave-range-out)
+URDF_GROUPS = ('urdf_inertia', 'urdf_gravity')
+
 
 def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]:
     """
@@ -57,7 +61,7 @@ def model_residual(rec: Recording, robot: RobotParams) -> tuple[np.ndarray, ...]
                                               robot)
     # the flexible inverse dynamics carries the load in its link-side equation
     grav = robot.gravity_load(qh) if is_rigid(robot, rec.fs) else np.zeros_like(qh)
-    pose = robot.pose_inertia_torque(qh, vh, ah)
+    pose = robot.urdf_torque(qh, vh, ah)
     return f - coulomb_and_ripple(robot, qh, vh) - grav - pose, qh, vh, ah
 
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import math
-from typing import Any, Callable
+from typing import Any
 
 from frf_ident.errors import ModelFileError
 import numpy as np
@@ -102,6 +102,10 @@ class AxisParams:
         its ``transmission``) that this axis carries besides its own terms: a load inertia
         that changes with the pose (an arm's reach on its base axis). Evaluated in inverse
         dynamics only; a model with it is not simulated. 0 (default): none.
+    urdf_gravity : float, optional
+        Share [-] of the URDF's gravity torque (over the gear ratio) this axis carries, either
+        sign (a counterbalance can outweigh the link); inverse dynamics only, like
+        ``urdf_inertia``. 0 (default): none.
 
     Raises
     ------
@@ -131,6 +135,7 @@ class AxisParams:
     torque_noise: float = 0.0
     second_mode: dict[str, float] | None = None
     urdf_inertia: float = 0.0
+    urdf_gravity: float = 0.0
 
     def __post_init__(self) -> None:
         for key in ('motor_inertia', 'link_inertia', 'stiffness'):
@@ -166,6 +171,9 @@ class AxisParams:
             if unknown:
                 raise ModelFileError(f'axis {self.name}: gravity[{i}] has unknown key(s) '
                                      f'{sorted(unknown)}; expected amplitude, phase, joints')
+        if not (isinstance(self.urdf_gravity, (int, float)) and math.isfinite(self.urdf_gravity)):
+            raise ModelFileError(f'axis {self.name}: urdf_gravity={self.urdf_gravity!r} must be '
+                                 f'a finite number')
         if self.second_mode is not None:
             self._check_second_mode()
 
@@ -205,7 +213,7 @@ class AxisParams:
     @property
     def is_linear(self) -> bool:
         return (self.coulomb_friction == 0 and self.backlash == 0 and not self.torque_ripple
-                and not self.gravity and not self.urdf_inertia
+                and not self.gravity and not self.urdf_inertia and not self.urdf_gravity
                 and (self.stiffness_k2 is None or self.stiffness_k2 == self.stiffness))
 
     def gravity_joints(self, names: list[str], k: int) -> list[int]:
@@ -268,32 +276,39 @@ class MjcfSource:
 @dataclass(frozen=True)
 class UrdfSource:
     """
-    The URDF a model file names for the pose-dependent link inertia (``urdf``; docs/model_file.md).
+    The URDF a model file names for its pose-dependent terms (``urdf``; docs/model_file.md).
 
-    Plain data plus the evaluator the adapter that read the file attaches
-    (:meth:`frf_ident.io.kinematics.Kinematics.inertial_torque`): the core never reads a URDF.
+    Plain data plus the evaluator the adapter that read the file attaches (a
+    :class:`frf_ident.io.kinematics.Kinematics`): the core never reads a URDF.
 
     Parameters
     ----------
     file : str
         Path of the URDF (absolute once loaded).
-    inertial_torque : callable, optional
-        ``(q, v, a) -> tau``, each (N, n) in axis order: the URDF's link-side inertia and
-        Coriolis torque on the motor side. None until an adapter attaches it.
+    evaluator : object, optional
+        Has ``inertial_torque(q, v, a)`` and ``gravity_torque(q)``, arrays (N, n) in axis
+        order: the URDF's link-side inertia and Coriolis torque, and its gravity, on the motor
+        side. None until an adapter attaches it.
 
     """
 
     file: str
-    inertial_torque: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = field(
-        default=None, compare=False, repr=False)
+    evaluator: Any = field(default=None, compare=False, repr=False)
 
-    def torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
-        """Return the URDF's inertia and Coriolis torques, shape (N, n), on the motor side."""
-        if self.inertial_torque is None:
+    def _read(self) -> Any:
+        if self.evaluator is None:
             raise ModelFileError(f'urdf: {self.file} has not been read: load the model file '
                                  f'with frf_ident.io.model_file.load_model (pinocchio, extra '
                                  f'[kinematics], evaluates it)')
-        return np.asarray(self.inertial_torque(q, v, a), dtype=float)
+        return self.evaluator
+
+    def inertia(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Return the URDF's inertia and Coriolis torques, shape (N, n), on the motor side."""
+        return np.asarray(self._read().inertial_torque(q, v, a), dtype=float)
+
+    def gravity(self, q: np.ndarray) -> np.ndarray:
+        """Return the URDF's gravity torques, shape (N, n), on the motor side."""
+        return np.asarray(self._read().gravity_torque(q), dtype=float)
 
 
 @dataclass
@@ -367,9 +382,11 @@ class RobotParams:
         for a in self.axes:
             for k in range(len(a.gravity)):
                 a.gravity_joints(self.joint_names, k)
-            if a.urdf_inertia and self.urdf is None:
-                raise ModelFileError(f'axis {a.name}: urdf_inertia={a.urdf_inertia!r} needs the '
-                                     f"model file's urdf (the robot's URDF it is a share of)")
+            for key in ('urdf_inertia', 'urdf_gravity'):
+                if getattr(a, key) and self.urdf is None:
+                    raise ModelFileError(f'axis {a.name}: {key}={getattr(a, key)!r} needs the '
+                                         f"model file's urdf (the robot's URDF it is a share "
+                                         f'of)')
         if np.any(np.linalg.eigvalsh(self.link_inertia_matrix()) <= 0):
             raise ModelFileError('link inertia matrix (link_inertia + link_coupling) must be '
                                  'positive definite')
@@ -447,9 +464,9 @@ class RobotParams:
                 out[..., i] += float(g['amplitude']) * np.sin(arg + float(g.get('phase', 0.0)))
         return out
 
-    def pose_inertia_torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+    def urdf_torque(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """
-        Return each axis' share of the URDF's inertia and Coriolis torque (``urdf_inertia``).
+        Return each axis' share of its URDF's torques (``urdf_inertia``, ``urdf_gravity``).
 
         Parameters
         ----------
@@ -459,23 +476,28 @@ class RobotParams:
         Returns
         -------
         ndarray, shape (N, n)
-            The motor-side torque [N m]; zeros where no axis has ``urdf_inertia``.
+            The motor-side torque [N m]; zeros where no axis takes a share.
 
         """
-        share = np.array([ax.urdf_inertia for ax in self.axes], dtype=float)
-        if not share.any():
-            return np.zeros(np.shape(q))
-        return self.urdf.torque(q, v, a) * share
+        inertia = np.array([ax.urdf_inertia for ax in self.axes], dtype=float)
+        gravity = np.array([ax.urdf_gravity for ax in self.axes], dtype=float)
+        out = np.zeros(np.shape(q))
+        if inertia.any():
+            out += self.urdf.inertia(q, v, a) * inertia
+        if gravity.any():
+            out += self.urdf.gravity(q) * gravity
+        return out
 
-    def refuse_pose_inertia(self, what: str) -> None:
-        """Raise ModelFileError when an axis has ``urdf_inertia``: ``what`` cannot hold it."""
-        named = [ax.name for ax in self.axes if ax.urdf_inertia]
+    def refuse_urdf_terms(self, what: str) -> None:
+        """Raise ModelFileError when an axis takes a share of its URDF: ``what`` cannot."""
+        named = [ax.name for ax in self.axes if ax.urdf_inertia or ax.urdf_gravity]
         if named:
             raise ModelFileError(
-                f'axes {named}: urdf_inertia (a pose-dependent inertia from '
-                f'{self.urdf.file if self.urdf else "a URDF"}) is evaluated in inverse '
-                f'dynamics only; {what} holds constant inertias (a model written by diagnose '
-                f'with --urdf: set urdf_inertia to 0, or simulate the URDF in MuJoCo)')
+                f'axes {named}: urdf_inertia / urdf_gravity (shares of '
+                f'{self.urdf.file if self.urdf else "a URDF"}) are evaluated in inverse '
+                f'dynamics only; {what} holds constant inertias and sinusoid gravity (a model '
+                f'written by diagnose with --urdf: set them to 0, or simulate the URDF in '
+                f'MuJoCo)')
 
     def torque_limits(self) -> np.ndarray:
         """

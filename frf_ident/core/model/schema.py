@@ -24,8 +24,9 @@ Extensions beyond the contract (all optional, documented in docs/model_file.md):
 - per axis ``gravity_torque``, ``gravity`` (configuration-dependent load, list of
   {amplitude, phase, joints}), ``encoder_resolution``, ``velocity_noise``, ``torque_noise``,
   ``second_mode`` ({frequency_hz, damping_ratio, inertia}: a link-side mass on a spring),
-  ``urdf_inertia`` (the axis' share of the top-level ``urdf``'s inertia and Coriolis torque)
-- top level ``urdf``: the robot's URDF (path), for ``urdf_inertia``
+  ``urdf_inertia``, ``urdf_gravity`` (the axis' shares of the top-level ``urdf``'s inertia and
+  Coriolis torque and of its gravity)
+- top level ``urdf``: the robot's URDF (path), for ``urdf_inertia`` and ``urdf_gravity``
 - ``controller.filters``: {axis name: list of second-order sections [b0, b1, b2, 1, a1, a2]}
   on the measured velocity, discrete at ``sample_rate`` (what ``frf-ident tune`` writes;
   :func:`controller_filters`, :func:`check_sections`)
@@ -352,8 +353,9 @@ def robot_to_dict(robot: RobotParams, controller: Any = None) -> dict[str, Any]:
         ad['gravity'] = [dict(g) for g in a.gravity]
         if not ad['gravity']:
             del ad['gravity']
-        if not a.urdf_inertia:
-            del ad['urdf_inertia']
+        for key in ('urdf_inertia', 'urdf_gravity'):
+            if not ad[key]:
+                del ad[key]
         if a.second_mode is None:
             del ad['second_mode']
         else:

@@ -44,7 +44,7 @@ def state_space(params: RobotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
     Returns (A, B, C_velocity, C_position).
     """
-    params.refuse_pose_inertia('the linear model')
+    params.refuse_urdf_terms('the linear model')
     n = params.n_axes
     modes = [(i, a.second_mode_terms()) for i, a in enumerate(params.axes)
              if a.second_mode is not None]

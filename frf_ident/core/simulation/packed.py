@@ -58,7 +58,7 @@ class Packed:
 
 
 def pack(params: RobotParams) -> Packed:
-    params.refuse_pose_inertia('the simulation')
+    params.refuse_urdf_terms('the simulation')
     n = params.n_axes
     prm = np.zeros((n, NPARAM))
     n_rip = max([len(a.torque_ripple) for a in params.axes] + [1])

@@ -114,7 +114,9 @@ def drop_terms_not_generalising(res: DiagnosisResult, rec: Recording, robot: Rob
     axes = {e.axis for e in res.effects if e.name in POSITION_TERMS}
     if res.mode != 'timeseries' or not others or not axes:
         return res, {}
-    alt = diagnose_timeseries(rec, robot, fc=fc, exclude={a: set(POSITION_TERMS) for a in axes})
+    # the URDF's gravity (a group of its own, effect gravity) is such a term too
+    alt = diagnose_timeseries(rec, robot, fc=fc,
+                              exclude={a: {*POSITION_TERMS, 'urdf_gravity'} for a in axes})
     e_with, e_without = _errors(res.extended, others, fc), _errors(alt.extended, others, fc)
     verdict = {}
     for ax in sorted(axes):

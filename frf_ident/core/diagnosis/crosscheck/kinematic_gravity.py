@@ -50,7 +50,7 @@ __all__ = ['fit_kinematic_gravity', 'GravityBasis', 'KinematicGravityFit', 'kine
 
 #: the scalar terms refitted beside the gravity (the time-series route's group names)
 SCALARS = ('gravity_torque', 'coulomb_friction', 'viscous_friction', 'motor_inertia',
-           'urdf_inertia')
+           'urdf_inertia', 'urdf_gravity')
 #: a gravity that the sinusoids of joint-angle sums leave more of than this share (RMS) is
 #: not one the model file can hold (its joints are not parallel after a vertical one)
 EXACT = 1e-6
@@ -199,7 +199,9 @@ def fit_kinematic_gravity(res: DiagnosisResult, rec: Recording, robot: RobotPara
     move = moving(vh, rec_b.velocity, fs, fc)
     ok = res.fit_rows & ~(lost[1:] | lost[:-1]) & np.isfinite(basis).all(axis=(1, 2))
     had = {(e.axis, k) for e in res.effects for k in e.parameters}
-    bas = [lowpass(np.nan_to_num(basis[:, i, :]), fs, fc) for i in range(n)]
+    # an axis whose gravity is its share of the URDF's keeps that share (refitted) instead
+    bas = [np.zeros(basis.shape[::2]) if (ax.name, 'urdf_gravity') in had
+           else lowpass(np.nan_to_num(basis[:, i, :]), fs, fc) for i, ax in enumerate(robot.axes)]
     keys = [(i, k) for i, ax in enumerate(robot.axes) for k in SCALARS
             if (ax.name, k) in had or (k == 'gravity_torque' and np.any(bas[i]))]
     rows = f.shape[0]
@@ -208,7 +210,9 @@ def fit_kinematic_gravity(res: DiagnosisResult, rec: Recording, robot: RobotPara
         own = regressor_groups(qh, vh, ah, fs, fc, i, 0.0, [], ())
         if robot.urdf is not None:
             own['urdf_inertia'] = lowpass(
-                np.nan_to_num(robot.urdf.torque(qh, vh, ah)[:, i:i + 1]), fs, fc)
+                np.nan_to_num(robot.urdf.inertia(qh, vh, ah)[:, i:i + 1]), fs, fc)
+            own['urdf_gravity'] = lowpass(np.nan_to_num(robot.urdf.gravity(qh)[:, i:i + 1]),
+                                          fs, fc)
         for j, k in keys:
             col = groups.setdefault(f'{j}:{k}', np.zeros((n * rows, 1)))
             if j == i:
@@ -244,7 +248,8 @@ def _with_gravity(res, rec, robot, keys, coef, se, theta, samples, source, fc):
                 ax.name, score.get((ax.name, k), 0.0), {k: ch[k]},
                 f'{k} = {ch[k]:.4g} \u00b1 {se[f"{i}:{k}"]:.2g}, fitted jointly with the '
                 f'gravity of {source}', i, standard_error={k: se[f'{i}:{k}']}))
-        terms = sinusoid_terms(q_s, b_s[:, i, :] @ theta, i, names)
+        terms = ([] if (i, 'urdf_gravity') in keys
+                 else sinusoid_terms(q_s, b_s[:, i, :] @ theta, i, names))
         if terms:
             ch['gravity'] = list(ax.gravity) + terms
             effects.append(Effect(

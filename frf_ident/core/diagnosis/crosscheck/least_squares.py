@@ -39,6 +39,7 @@ from .baseline import (axes_not_beating, BASELINE_GROUPS, fit_least_squares, hel
                        HeldOutSet, usable_rows, with_axes_of, without_axes)
 from .verdict import BaselineVerdict
 from ..prediction import predict_metrics
+from ..regressors import URDF_GROUPS
 from ..result import DiagnosisResult
 from ..timeseries.pipeline import diagnose_timeseries
 
@@ -182,8 +183,10 @@ def apply_rule(res: DiagnosisResult, rec: Recording, robot: RobotParams,
     """
     Apply the time-series rule to the axes that lose to the baseline.
 
-    Each is refitted with the baseline's terms in the model (:data:`.baseline.BASELINE_GROUPS`)
-    on the rows of the baseline it is judged against: the diagnosis' fit rows for the
+    Each is refitted with the baseline's terms in the model (:data:`.baseline.BASELINE_GROUPS`;
+    given the robot's URDF, with its shares of the URDF's inertia and gravity beside them,
+    :data:`..regressors.URDF_GROUPS`: the physics the user's robot description fixes) on the
+    rows of the baseline it is judged against: the diagnosis' fit rows for the
     record's own held-out rows (``sets[0]``), every usable row for other records. Where
     that ties or beats the baseline on every held-out set the axis takes it ('replaced').
     Elsewhere the axis takes whichever of the refit, the extended model as fitted and the
@@ -206,7 +209,9 @@ def apply_rule(res: DiagnosisResult, rec: Recording, robot: RobotParams,
 
     """
     fc = res.band.fc_hz if res.band else None
-    only = {ax: BASELINE_GROUPS for ax in lost}
+    # given the robot's URDF, its shares of the URDF's inertia and gravity beside them
+    terms = BASELINE_GROUPS + (URDF_GROUPS if robot.urdf is not None else ())
+    only = {ax: terms for ax in lost}
     alt = written = diagnose_timeseries(rec, robot, fc=fc, only=only)
     alt_comp = held_out_comparison(robot, alt.extended, sets[:1])
     if len(sets) > 1:

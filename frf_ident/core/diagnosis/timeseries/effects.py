@@ -33,7 +33,7 @@ from .prepared import Prepared
 from ..common import Effect
 from ..records import Rejected
 from ..regression import find_ripple
-from ..regressors import regressor_groups
+from ..regressors import regressor_groups, URDF_GROUPS
 from ..residual import lowpass
 from ..selection import block_standard_errors, by_group, lstsq, select_groups
 from ..thresholds import ONE_WAY, RANGE_OUT_SHARE
@@ -43,7 +43,7 @@ __all__ = ['axis_effects', 'axis_groups', 'EFFECT_OF', 'rejected_groups',
 
 #: the effect a one-coefficient group names where it is not the group's own name
 EFFECT_OF = {'motor_inertia': 'parameter_mismatch', 'gravity_torque': 'parameter_mismatch',
-             'urdf_inertia': 'pose_dependent_inertia'}
+             'urdf_inertia': 'pose_dependent_inertia', 'urdf_gravity': 'gravity'}
 #: evidence sentence of each one-coefficient regressor group (c: fitted coefficient)
 _SCALAR_EVIDENCE = {
     'coulomb_friction': ('inverse-dynamics residual steps by {step:.3g} (torque units) at each '
@@ -58,6 +58,8 @@ _SCALAR_EVIDENCE = {
     'urdf_inertia': ("residual proportional to the URDF's inertia and Coriolis torque along the "
                      'motion: a load inertia that changes with the pose, share {old:.4g} -> '
                      '{new:.4g} of the URDF (p = {p:.2g})'),
+    'urdf_gravity': ("residual proportional to the URDF's gravity torque along the motion: "
+                     'share {old:.4g} -> {new:.4g} of the URDF (p = {p:.2g})'),
 }
 #: evidence of a term of an axis refitted with the least-squares baseline's terms (``only``)
 _BASELINE_EVIDENCE = ('{c:+.4g} on the model value {old:.4g}, fitted with the least-squares '
@@ -110,7 +112,8 @@ def axis_groups(d: Prepared, robot: RobotParams, i: int, rejected: list[Rejected
     s, peak, thr = find_ripple(wide, qh[:, i], fit_i)
     groups = regressor_groups(qh, vh, ah, fs, fc, i, s if peak >= thr else 0.0, d.bearing, skip)
     if d.urdf_torque is not None:
-        groups['urdf_inertia'] = lowpass(np.nan_to_num(d.urdf_torque[:, i:i + 1]), fs, fc)
+        for k, x in zip(URDF_GROUPS, d.urdf_torque):
+            groups[k] = lowpass(np.nan_to_num(x[:, i:i + 1]), fs, fc)
     up = float(np.mean(vh[fit_i, i] > 0)) if fit_i.any() else 0.0
     forced: list[str] = []
     if min(up, 1.0 - up) < ONE_WAY:
@@ -224,7 +227,7 @@ def axis_effects(d: Prepared, robot: RobotParams, i: int, groups: dict[str, np.n
     score = {k: float(np.clip(info[k].get('held_out_gain', 0.0), 0, 1)) for k in chosen}
     se = block_standard_errors(groups, chosen, ff, fit_i, d.rec.fs)
     for k in ('coulomb_friction', 'viscous_friction', 'motor_inertia', 'torque_ripple',
-              'gravity_torque', 'urdf_inertia'):
+              'gravity_torque') + URDF_GROUPS:
         if k not in cf:
             continue
         if k == 'torque_ripple':

@@ -51,8 +51,9 @@ class Prepared:
     prep: list              # per axis :func:`..regressors.axis_masks`
     skips: list             # per axis the joint sets that move one way only
     bearing: list           # runs of joints whose angle carries a load
-    #: the URDF's inertia and Coriolis torque at the record's motion (N-1, n); None without one
-    urdf_torque: np.ndarray | None = None
+    #: the URDF's inertia and Coriolis torque, and its gravity, at the record's motion (each
+    #: (N-1, n)); None without a URDF
+    urdf_torque: tuple[np.ndarray, np.ndarray] | None = None
 
 
 def prepare(rec: Recording, robot: RobotParams, fc: float, say: Callable[[str], None], *,
@@ -81,5 +82,6 @@ def prepare(rec: Recording, robot: RobotParams, fc: float, say: Callable[[str], 
     bearing = gravity_bearing(qh, vh, ah, fs, fc, prep, skips)
     say(f'axes whose own angle carries a configuration-dependent load (runs of parallel '
         f'joints): {[[names[i] for i in run] for run in bearing] or "none"}')
-    urdf = None if robot.urdf is None else robot.urdf.torque(qh, vh, ah)
+    urdf = None if robot.urdf is None else (robot.urdf.inertia(qh, vh, ah),
+                                            robot.urdf.gravity(qh))
     return Prepared(rec, fc, f, qh, vh, ah, fit_m, val_m, prep, skips, bearing, urdf)
