@@ -428,8 +428,8 @@ def load_kinematics(path: str | os.PathLike[str] | None,
     try:
         import pinocchio as pin
     except ImportError as err:
-        raise FrfIdentInputError('poses need pinocchio: pip install "frf_ident[kinematics]" '
-                                 '(the pin package)') from err
+        raise FrfIdentInputError('reading a URDF needs pinocchio: pip install '
+                                 '"frf_ident[kinematics]" (the pin package)') from err
     p = Path(path) if path is not None else share_dir() / 'urdf' / DEMO_URDF
     if not p.is_file():
         raise FrfIdentInputError(f'{p}: no such URDF file')
