@@ -100,6 +100,31 @@ def test_a_stiffening_gear_read_as_a_mode_behind_a_gap_is_named_a_gear(tmp_path)
                                          'stiffness_nonlinearity@joint_2'], msg
 
 
+@pytest.mark.slow
+def test_the_true_model_of_a_coarse_encoder_scene_sits_at_its_floor(tmp_path):
+    """
+    Seed 13191138 (sensor_two): the true model within its noise floor on every axis.
+
+    joint_2's encoder steps 9.2e-6 rad. Its quantisation error repeats with the multisine's
+    period, so the floor from the spread between periods missed it: the true model's
+    multisine term sat at 2.77 / 3.80 / 1.88 floors (0.45 on joint_2 with steps of 1e-9,
+    ``python -m benchmarks.sensor_floor 13191138 [1e-9]``). The evaluator adds what the
+    quantisation puts on the FRF terms, measured by simulating the nominal model with and
+    without the encoder in the loop (Evaluator.add_quantisation_floor): 1.31 / 1.75 / 0.95,
+    the misfit 0.83 / 0.88 / 0.77 (1.19 / 1.39 / 1.00 before). The torque and velocity
+    terms, which the period spread already held, stay at 1.00 / 0.88 / 1.06.
+    """
+    from benchmarks.diagnosis_scene_run import identify_scene
+    from benchmarks.diagnosis_scenes import scene_of
+    from benchmarks.sensor_floor import true_model_terms
+    scene = scene_of(13191138, 0, 'sensor_two')
+    out = true_model_terms(scene, identify_scene(scene, tmp_path / 'bag'))
+    print(out, file=sys.stderr)
+    assert all(0.6 < m < 1.1 for m in out['misfit']), out
+    assert max(out['terms']['multisine']) < 2.0, out
+    assert all(0.8 < t < 1.2 for t in out['terms']['effort']), out
+
+
 #: scenes of each kind the sweep draws (0: skipped; the issue asks for >= 20)
 SWEEP = int(os.environ.get('FRF_SENSOR_SCENES', '0'))
 

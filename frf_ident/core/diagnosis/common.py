@@ -182,7 +182,8 @@ def drive_reference(rec: Recording) -> np.ndarray:
 
 
 def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
-                  reference: np.ndarray | None = None) -> Recording:
+                  reference: np.ndarray | None = None, keep: tuple[str, ...] = ()
+                  ) -> Recording:
     """
     Simulate ``robot`` in closed loop on the recording's reference and return the result.
 
@@ -190,9 +191,14 @@ def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
     same excitation through the same controller) and return a Recording with the same
     segments, so that it can be estimated exactly like the measurement. ``reference`` is
     :func:`drive_reference` of ``rec`` where the caller keeps it (it simulates many models).
+    Without noise and quantisation (what a model predicts) but the sensor fields in ``keep``
+    (``encoder_resolution``, ``velocity_noise``, ``torque_noise``: each axis' own), the
+    noise seeded alike in every call.
     """
     r = drive_reference(rec) if reference is None else reference
-    plant = FlexibleJointPlant(replace(quiet(robot), sample_rate=rec.fs))
+    model = replace(robot, axes=[replace(a, **{k: getattr(b, k) for k in keep})
+                                 for a, b in zip(quiet(robot).axes, robot.axes)])
+    plant = FlexibleJointPlant(replace(model, sample_rate=rec.fs))
     plant.reset(seed=0)
     c = ctrl.copy()
     c.dt = rec.dt

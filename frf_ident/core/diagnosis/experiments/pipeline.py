@@ -154,6 +154,13 @@ def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_
         log.info('%.1f %% of the samples lack a reference (or follow such a stretch): left '
                  'out of the comparison', 100 * ev.missing.mean())
     sim0 = ev.simulate(robot)
+    added = ev.add_quantisation_floor(robot)
+    if added:
+        log.info('encoder quantisation added to the noise floors (the record repeats it with '
+                 'the period): %s', '; '.join(
+                     f'{k} ' + ', '.join(f'{a.name} {d / max(f, 1e-300):.2f}' for a, d, f in
+                                         zip(robot.axes, added[k], ev.floors[k] - added[k]))
+                     for k in added))
     ev.base_terms = ev.terms(robot, sim0)
     e0 = ev.misfit(ev.base_terms)
     ev.floor_seen(e0)
