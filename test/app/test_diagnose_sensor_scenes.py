@@ -110,7 +110,7 @@ def test_the_true_model_of_a_coarse_encoder_scene_sits_at_its_floor(tmp_path):
     multisine term sat at 2.77 / 3.80 / 1.88 floors (0.45 on joint_2 with steps of 1e-9,
     ``python -m benchmarks.sensor_floor 13191138 [1e-9]``). The evaluator adds what the
     quantisation puts on the FRF terms, measured by simulating the nominal model with and
-    without the encoder in the loop (Evaluator.add_quantisation_floor): 1.31 / 1.75 / 0.95,
+    without the encoder in the loop (experiments/quantisation_floor.py): 1.31 / 1.75 / 0.95,
     the misfit 0.83 / 0.88 / 0.77 (1.19 / 1.39 / 1.00 before). The torque and velocity
     terms, which the period spread already held, stay at 1.00 / 0.88 / 1.06.
     """

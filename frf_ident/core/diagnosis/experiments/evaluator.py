@@ -20,7 +20,6 @@ and its misfit per axis in units of those floors.
 """
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any, Sequence
 import weakref
 
@@ -92,8 +91,8 @@ class Evaluator:
         self.rec, self.ctrl = bridge_gaps(rec)[0], ctrl
         rec = self.rec
         self.missing = missing_reference(rec)
-        # the reference every model is driven with (simulate_like forms it per call otherwise)
-        self._drive = drive_reference(rec)
+        #: the reference every model is driven with (simulate_like forms it per call otherwise)
+        self.drive = drive_reference(rec)
         fit, val, self.validation_text = split_recording(rec)
         self.fit, self.val = (drop_segments(fit, self.missing), drop_segments(val, self.missing))
         self.meas_fit = frf_estimates(self.fit)
@@ -115,8 +114,6 @@ class Evaluator:
             fl[k] = np.where(np.isfinite(rel), rel, FLOOR_MIN)
             count[k] = float(est.freq_hz.size)
         nv, nu = period_noise(rec, ~self.missing)
-        #: [rad/s] the velocity noise the multisine periods show per axis (0 where unknown)
-        self.velocity_noise = np.sqrt(np.nan_to_num(nv))
         m = self.fit_mask
         for key, var, x in (('effort', nu, rec.effort), ('velocity', nv, rec.velocity)):
             sig = np.var(x[m], axis=0) if m.any() else np.ones(n)
@@ -190,7 +187,7 @@ class Evaluator:
         """
         key = repr(robot)
         if key not in self._sims:
-            self._keep(key, self.simulator(self.rec, robot, self.ctrl, reference=self._drive))
+            self._keep(key, self.simulator(self.rec, robot, self.ctrl, reference=self.drive))
         return self._sims[key]
 
     def prefetch(self, robots: Sequence[RobotParams]) -> None:
@@ -223,7 +220,7 @@ class Evaluator:
     def _pool(self) -> WorkerPool:
         """Return the workers that simulate a model and estimate its fit part (forked once)."""
         if self._workers is None:
-            rec, ctrl, fit, drive, simulate = (self.rec, self.ctrl, self.fit, self._drive,
+            rec, ctrl, fit, drive, simulate = (self.rec, self.ctrl, self.fit, self.drive,
                                                self.simulator)
 
             def run(robot: RobotParams) -> tuple:
@@ -276,9 +273,9 @@ class Evaluator:
         sim = sim if sim is not None else self.simulate(robot)
         est = (frf_estimates(replace_segments(sim, self.val)) if held_out and self.val.segments
                else self.fit_estimates(robot, sim))
-        return self._terms_of(sim, est, held_out)
+        return self.terms_of(sim, est, held_out)
 
-    def _terms_of(self, sim: Recording, est: dict, held_out: bool) -> dict[str, np.ndarray]:
+    def terms_of(self, sim: Recording, est: dict, held_out: bool) -> dict[str, np.ndarray]:
         """Return the loss terms of a simulation and its FRF estimates (fit or held out)."""
         meas = self.meas_val if held_out and self.meas_val else self.meas_fit
         m = self.val_mask if held_out and self.val_mask.any() else self.fit_mask
@@ -306,54 +303,6 @@ class Evaluator:
                    for i in range(self.n)]
             self._measured[(key, held_out)] = ref
         return np.array([nrmse(a, x[:, i][m], scale=den) ** 2 for i, (a, den) in enumerate(ref)])
-
-    def add_quantisation_floor(self, robot: RobotParams) -> dict[str, np.ndarray] | None:
-        """
-        Raise the floors by what the record's encoder quantisation puts on every loss term.
-
-        The floors come from the spread between the multisine's periods, and an encoder's
-        quantisation error repeats with the period where the motion does (to within what the
-        noise dithers): no noise to that floor, yet no simulation reproduces it (scene
-        13191138 of the sensor sweep: the true model at 1.39 floors on an axis with 9.2e-6
-        rad steps, 0.45 with 1e-9). Its share is measured, not modelled: ``robot`` simulated
-        with the record's velocity noise (:attr:`velocity_noise`, the periods' spread, which
-        dithers the encoder as in the record), with and without its ``encoder_resolution`` in
-        the loop, the same noise in both; each against the record, the quantised one's terms
-        exceed the other's by the quantisation's share in each term's units (clipped at 0).
-        The FRF terms only: their estimates average the periods, where the repeating part
-        survives; the torque and velocity terms are sample by sample, where the period
-        spread already holds the quantisation (13191138's true model: 1.00 / 0.88 / 1.06
-        floors on both, its multisine term 2.77 / 3.80 / 1.88, with this 1.31 / 1.75 / 0.95).
-        Our plant only (another simulator: None, floors unchanged); nothing without a grid.
-
-        Returns
-        -------
-        dict or None
-            Per term the added floor (fit part), None where nothing was added.
-
-        """
-        if self.simulator is not simulate_like or not any(a.encoder_resolution
-                                                          for a in robot.axes):
-            return None
-        noisy = replace(robot, axes=[replace(a, velocity_noise=float(s)) for a, s in
-                                     zip(robot.axes, self.velocity_noise)])
-        sims = [simulate_like(self.rec, noisy, self.ctrl, reference=self._drive, keep=keep)
-                for keep in (('velocity_noise',), ('velocity_noise', 'encoder_resolution'))]
-        self.n_sims += 2
-        added = {}
-        for held, floors in ((False, self.floors), (True, self.floors_held)):
-            if held and not self.val.segments:
-                continue
-            part = self.val if held else self.fit
-            base, extra = (self._terms_of(x, frf_estimates(replace_segments(x, part)), held)
-                           for x in sims)
-            for k in self.meas_fit:     # the FRF terms: estimates that average periods
-                if k in floors and k in extra:
-                    d = np.maximum(extra[k] - base[k], 0.0)
-                    floors[k] = floors[k] + d
-                    if not held:
-                        added[k] = d
-        return added
 
     def fit_estimates(self, robot: RobotParams, sim: Recording | None = None) -> dict:
         """

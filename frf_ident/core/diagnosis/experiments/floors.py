@@ -15,8 +15,9 @@
 The noise the record's repeated multisine periods show.
 
 The raw material of the noise floors every misfit of :class:`.evaluator.Evaluator` is
-measured in: velocity and torque noise variance per axis, and how much weaker the held-out
-chirp iteration is than the one fitted.
+measured in: velocity and torque noise variance per axis, how much weaker the held-out chirp
+iteration is than the one fitted (what an encoder's repeating quantisation error adds:
+:mod:`.quantisation_floor`).
 """
 from __future__ import annotations
 

@@ -45,6 +45,7 @@ from .frequency_fit import fd_parameter_mismatch, linear_shifts, load_dependence
 from .held_out import finish, held_out_check, structure_missing
 from .later_passes import friction_after_refit, joint_refits, late_ripples, second_pass
 from .mode_search import search_left_modes
+from .quantisation_floor import add_quantisation_floor
 from .refit import refit_friction, refit_jointly
 from .rigid_axes import rigid_axes, rigid_in_band
 from .search import named, Search
@@ -154,7 +155,7 @@ def start(rec: Recording, robot: RobotParams, ctrl: PIVelocity, jobs: int = SIM_
         log.info('%.1f %% of the samples lack a reference (or follow such a stretch): left '
                  'out of the comparison', 100 * ev.missing.mean())
     sim0 = ev.simulate(robot)
-    added = ev.add_quantisation_floor(robot)
+    added = add_quantisation_floor(ev, robot)
     if added:
         log.info('encoder quantisation added to the noise floors (the record repeats it with '
                  'the period): %s', '; '.join(
