@@ -128,6 +128,11 @@ def main() -> int:
     print(f'{"model":44s} {head}')
     for label, errors in rows(bc):
         print(f'{label:44s} ' + ' '.join(f'{e:6.3f}' for e in errors))
+    from scipy.io import loadmat
+    for name, path in (('A', KUKA_A), ('B', bc / 'B.mat'), ('C', bc / 'C.mat')):
+        m = np.asarray(loadmat(path, squeeze_me=True)['m_all'])[0]
+        print(f"axis 1 link inertia over {name} (the authors' m_all): {m.min():.0f}-{m.max():.0f} "
+              f'kg m^2')
     return 0
 
 

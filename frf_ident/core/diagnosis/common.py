@@ -196,8 +196,10 @@ def simulate_like(rec: Recording, robot: RobotParams, ctrl: PIVelocity, *,
     noise seeded alike in every call.
     """
     r = drive_reference(rec) if reference is None else reference
-    model = replace(robot, axes=[replace(a, **{k: getattr(b, k) for k in keep})
-                                 for a, b in zip(quiet(robot).axes, robot.axes)])
+    model = quiet(robot)
+    if keep:
+        model = replace(model, axes=[replace(a, **{k: getattr(b, k) for k in keep})
+                                     for a, b in zip(model.axes, robot.axes)])
     plant = FlexibleJointPlant(replace(model, sample_rate=rec.fs))
     plant.reset(seed=0)
     c = ctrl.copy()

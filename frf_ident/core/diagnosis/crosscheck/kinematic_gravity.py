@@ -206,13 +206,14 @@ def fit_kinematic_gravity(res: DiagnosisResult, rec: Recording, robot: RobotPara
             if (ax.name, k) in had or (k == 'gravity_torque' and np.any(bas[i]))]
     rows = f.shape[0]
     groups: dict[str, np.ndarray] = {}
+    # the URDF's torques along the record, once for all axes (pinocchio per sample)
+    urdf = (None if robot.urdf is None else
+            {'urdf_inertia': np.nan_to_num(robot.urdf.inertia(qh, vh, ah)),
+             'urdf_gravity': np.nan_to_num(robot.urdf.gravity(qh))})
     for i in range(n):
         own = regressor_groups(qh, vh, ah, fs, fc, i, 0.0, [], ())
-        if robot.urdf is not None:
-            own['urdf_inertia'] = lowpass(
-                np.nan_to_num(robot.urdf.inertia(qh, vh, ah)[:, i:i + 1]), fs, fc)
-            own['urdf_gravity'] = lowpass(np.nan_to_num(robot.urdf.gravity(qh)[:, i:i + 1]),
-                                          fs, fc)
+        for k, x in (urdf or {}).items():
+            own[k] = lowpass(x[:, i:i + 1], fs, fc)
         for j, k in keys:
             col = groups.setdefault(f'{j}:{k}', np.zeros((n * rows, 1)))
             if j == i:
