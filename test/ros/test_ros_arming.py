@@ -137,11 +137,11 @@ def _operator(g, token):
                  str(g.params_file)], g.env, stdin=subprocess.PIPE)
 
 
-def _graph(out, middleware, domain=None):
+def _graph(out, middleware, domain=None, n_periods=8):
     from frf_ident.app.graph import Graph
     from frf_ident.core.excitation.multisine_procedure import MultisineConfig
-    ms = MultisineConfig(n_realisations=1, n_periods=8, resolution_hz=2.0, compensate=False,
-                         return_s=2.0, settle_s=0.3)
+    ms = MultisineConfig(n_realisations=1, n_periods=n_periods, resolution_hz=2.0,
+                         compensate=False, return_s=2.0, settle_s=0.3)
     return Graph(out, multisine=ms, lockstep=False, middleware=middleware, domain_id=domain,
                  # a loaded 2-core PC: the free-running simulation lags (as in
                  # test/nodes/test_free_running.py); the live bound of a robot is not tested here
@@ -239,6 +239,40 @@ def _read_recorded(path):
     return out
 
 
+def _armed_run(g, env, segments, tries: int = 3):
+    """
+    Call the armed run until its excitation segment starts; return (reply, retries).
+
+    Twice in full runs (make test on 2 cores) no segment came within 120 s of the accepted
+    call and the cause was not captured. A run the node aborts before its segment (the console
+    or the plant starved by the other worker's tests: a heartbeat or joint-state gap beyond its
+    limit, which the node is right to stop on) is called again, at most ``tries`` times, each
+    retry printed with the node's reason; the node must then accept it again (still armed).
+    Anything else fails with the reply and the node's log.
+    """
+    for attempt in range(tries):
+        seen = len(_log(g))
+        reply = _call(env)
+        assert reply['accepted'] is True, reply
+        deadline = time.monotonic() + 120.0
+        while time.monotonic() < deadline:
+            if segments.long_segment_started():
+                return reply, attempt
+            aborted = re.search(r"experiment 'multisine' aborted: (.*)", _log(g)[seen:])
+            if aborted:
+                print(f'armed run {attempt + 1} aborted before its segment (a loaded PC): '
+                      f'{aborted.group(1)}; called again')
+                _until(lambda: 'operator heartbeat of run' in _log(g)[seen:], 10,
+                       'the end of the aborted run')
+                break
+            time.sleep(0.05)
+        else:
+            pytest.fail(f'no excitation segment within 120 s of the armed run call '
+                        f'({reply!r}); excitation node log:\n{_log(g)[-3000:]}')
+    pytest.fail(f'{tries} armed runs aborted before their segment; excitation node log:\n'
+                f'{_log(g)[-3000:]}')
+
+
 @pytest.fixture(scope='module')
 def session(tmp_path_factory, new_domain):
     """
@@ -262,19 +296,15 @@ def session(tmp_path_factory, new_domain):
         op = _operator(g, token)
         op.wait_for('ARMED')
         recorder.wait_for("Subscribed to topic '/frf/heartbeat'")
-        res['armed'] = _call(env)
-        try:
-            _until(segments.long_segment_started, 120, 'an excitation segment')
-        except pytest.fail.Exception:
-            # twice in full runs (cause not captured): say what the run call and node said
-            pytest.fail(f'no excitation segment within 120 s of the armed run call '
-                        f'({res["armed"]!r}); excitation node log:\n{_log(g)[-3000:]}')
+        res['armed'], res['retries'] = _armed_run(g, env, segments)
         time.sleep(1.0)                          # the multisine moves the (simulated) robot
+        mark = len(_log(g))
         op.send(signal.SIGSTOP)                  # a hung console: no more heartbeats
         t_stop = time.monotonic()
-        _until(lambda: 'operator heartbeat lost' in _log(g), 30, 'the heartbeat abort')
+        _until(lambda: 'operator heartbeat lost' in _log(g)[mark:], 30, 'the heartbeat abort')
         res['abort_seen_s'] = time.monotonic() - t_stop
-        _until(lambda: 'operator heartbeat of run' in _log(g), 10, 'the heartbeat summary')
+        _until(lambda: 'operator heartbeat of run' in _log(g)[mark:], 10,
+               'the heartbeat summary')
         # the recorder takes what it subscribes to in batches, under make test's load up to
         # 0.4 s late (see test_armed_accepts...): 0.5 s once left the run's 'finished'
         # progress event out of the bag
@@ -331,7 +361,7 @@ def test_armed_accepts_and_heartbeat_loss_ramps_to_zero(session):
     assert re.search(r'/frf/run_multisine accepted at \S+: run \d+ multisine; caller: node '
                      r'/_ros2cli_requester', log), log[-3000:]
     assert 'aborted: operator heartbeat lost' in log, log[-3000:]
-    print(re.search(r'operator heartbeat of run.*', log).group(0))
+    print(re.findall(r'operator heartbeat of run.*', log)[-1])
     print(re.search(r'aborted: operator heartbeat lost: none for \d+ ms', log).group(0))
     rec = _read_recorded(session['recorded'])
     sent = _published(session['recorded'], ['/frf/heartbeat', '/velocity_controller/commands'])
@@ -366,7 +396,8 @@ def test_replayed_bag_never_starts_a_run(session):
     assert r['accepted'] is False, r
     assert 'not armed' in r['error'] and 'replayed or duplicated' in r['error'], r
     runs = re.findall(r'/frf/run_multisine accepted', session['log'])
-    assert len(runs) == 1, runs
+    # one per armed call the fixture made (it calls again after a run aborted by load)
+    assert len(runs) == 1 + session['retries'], runs
 
 
 def test_replay_into_a_new_start_on_dds(session, tmp_path):
@@ -376,7 +407,10 @@ def test_replay_into_a_new_start_on_dds(session, tmp_path):
     The recorded bag played into it cannot arm it; the console with the new token can, and
     the caller line then carries what the DDS backend tells (host, enclave, process).
     """
-    g = _graph(tmp_path / 'graph', 'dds')
+    # a 20 s multisine: the q must come while it runs (with 4 s the wait for the abort after q
+    # timed out once in a full run, output not captured; a q after the run's end aborts
+    # nothing)
+    g = _graph(tmp_path / 'graph', 'dds', n_periods=40)
     g.start()
     env = dict(g.env)
     player = op = None
@@ -393,7 +427,11 @@ def test_replay_into_a_new_start_on_dds(session, tmp_path):
         _until(lambda: 'multisine started' in op.text(), 60, 'the run on the console')
         op.p.stdin.write('q\n')
         op.p.stdin.flush()
-        _until(lambda: 'operator heartbeat lost' in _log(g), 30, 'the abort after q')
+        try:
+            _until(lambda: 'operator heartbeat lost' in _log(g), 30, 'the abort after q')
+        except pytest.fail.Exception:
+            pytest.fail(f'no abort within 30 s of q; console:\n{op.text()[-1500:]}\n'
+                        f'excitation node log:\n{_log(g)[-3000:]}')
         log = _log(g)
     finally:
         for p in (player, op):
