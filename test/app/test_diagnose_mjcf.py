@@ -163,16 +163,7 @@ def diagnosed(request, tmp_path_factory):
 
 #: what the diagnosis does not yet deliver on a scene, the run that showed it (xfail, strict:
 #: a pass is reported so that the mark goes); the deterministic scenes give the same run
-SHORTFALL = {
-    ('named', 'ur5e'): 'shoulder_pan viscous friction found at 4.003 for 4 but dropped by the '
-                       'held-out gain rule (z 1.3, bound 2.8 of 3): the held-out chirp is '
-                       'iteration 1 at r_initial, 1/60 of the fitted torque, where the 6 N m '
-                       'dry friction holds the joint and the noise dithers it, which no '
-                       'noise-free simulation reproduces (its chirp term -3.4 for the true '
-                       'value); since the held-out chirp floor at its own level (1fe2819) the '
-                       'rotor is named (0.512 for 0.5)',
-    ('terms', 'ur5e'): 'shoulder_pan damping not written (see named)',
-}
+SHORTFALL: dict[tuple[str, str], str] = {}
 
 
 def _shortfall(request, what: str, scene: Scene) -> None:

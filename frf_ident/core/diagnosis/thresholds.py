@@ -123,14 +123,17 @@ MAX_SUBSTEPS = 16
 #: experiments route: an effect is kept only where its held-out gain (the misfit of its axis
 #: without it minus with it, per loss term in the standard errors of the paired differences
 #: over the held-out FRF lines and time blocks, combined over the terms by Stouffer's rule
-#: with the torque and velocity terms' correlation, a term the model leaves above
+#: weighted by the z each term would show were the effect true, with the torque and velocity
+#: terms' correlation, a term the model leaves above
 #: UNEXPLAINED_RATIO of its own floor counting only for the effect) exceeds this many
 #: standard errors of noise alone (experiments/noise_gain.py). Set to MIN_Z's 3: an effect
 #: that buys nothing passes with the normal tail, 0.13 %; 0.10 % in the Monte Carlo of
 #: test/core/diagnosis/test_noise_gain.py (pieces correlated as measured on the nominal
 #: sensor scenes); the rate and the z's spread measured on those scenes:
 #: docs/diagnosis/experiments.md, "Held-out gain over noise". The same threshold holds the
-#: gain over the largest standard error any noise gives the two misfits (``bound_z``)
+#: gain over the largest standard error any noise gives the two misfits (``bound_z``), and
+#: the power below which the held-out part cannot show an effect and does not judge it
+#: (``HeldOutGain.can_show``: the z it would give the effect were it true)
 HELD_OUT_GAIN_Z = 3.0
 #: a friction candidate stage 1 rejected on an axis is offered again after the axis' joint
 #: refit where the refit lowered the axis' misfit by this factor or more (its share was judged

@@ -22,11 +22,19 @@ estimate, blocks of HELD_OUT_GAIN_BLOCK_S of the time signals. The two models ar
 the same measured data, so each term's gain is a paired difference: per piece the difference
 of the two squared errors, whose spread over the pieces gives the term's standard error
 under noise alone. The terms' gains in their standard errors are combined by Stouffer's
-rule (their sum over the root of their number: an effect shows in some terms, a torque ripple
-in the torque and velocity, not in the FRFs, whose lines then only add noise to an
-equal-weight mean; weighting by precision instead favours the terms a model change leaves
-alone, whose paired differences have no spread), and the effect is kept only where the
-combined z exceeds HELD_OUT_GAIN_Z.
+rule with weights, and the effect is kept only where the combined z exceeds HELD_OUT_GAIN_Z.
+An effect shows in some terms, a torque ripple in the torque and velocity, not in the FRFs,
+whose lines then only add noise to an equal-weight sum (weighting by precision instead favours
+the terms a model change leaves alone, whose paired differences have no spread). Each term is
+weighted by the z it would show were the effect true (:attr:`HeldOutGain.weights`): with the
+model with the effect the truth, the paired difference per piece is s0^2 + 2 n s0 (s0 the
+error of the model without it, n the noise), whose mean s0^2 is the misfit of the model
+without the effect against the simulation with it, computed from the two simulations alone.
+The weights do not depend on the noise of the part judged, so the weighted sum over its
+standard deviation stays a standard normal under noise alone, and for that alternative it is
+the most powerful combination. The same prediction combined gives the test's power
+(:attr:`HeldOutGain.power`): a held-out part whose power is below HELD_OUT_GAIN_Z cannot
+show the effect even were it true, and the held-out check does not judge it there.
 
 Two things the plain rule got wrong, measured (docs/diagnosis/experiments.md, "Held-out gain
 over noise"):
@@ -34,8 +42,9 @@ over noise"):
 - Torque and velocity share their samples: in the closed loop their errors are one noise
   seen twice, and their paired differences per block correlate (0.8 on the nominal sensor
   scenes), so the sum of the four z had a variance of about 4 + 2 x 0.8, not 4. The sum is
-  divided by the root of its variance under noise, n + 2 rho, with rho the correlation of
-  the two terms' block differences measured on the record (negative estimates taken as 0).
+  divided by the root of its variance under noise, sum(w^2) + 2 rho w_effort w_velocity
+  (n + 2 rho with equal weights), with rho the correlation of the two terms' block
+  differences measured on the record (negative estimates taken as 0).
 - A term on which the model with the effect stays above UNEXPLAINED_RATIO noise floors held
   out is not at its noise: its residual is an error neither model explains (the UR5e scene's
   held-out chirp on a joint its dry friction holds: the true model at 84 floors), and the
@@ -105,6 +114,10 @@ class HeldOutGain:
     #: judged on the held-out part (False: on the fit part, where the record has no held-out
     #: part or the acceptance rule asked for it)
     held_out: bool = True
+    #: per loss term: the gain the part would show were the model with the effect the truth
+    #: [noise floors]: the misfit of the model without it against the simulation with it
+    #: (:attr:`power`; none: not computed)
+    predicted: dict[str, float] = field(default_factory=dict)
 
     @property
     def gain(self) -> float:
@@ -117,12 +130,31 @@ class HeldOutGain:
         return {k: g / se for k, (g, se) in self.terms.items() if se > 0}
 
     @property
+    def weights(self) -> dict[str, float]:
+        """
+        Return per loss term its weight in the combination: the z it would show, were it true.
+
+        The predicted gain over the term's standard error (:attr:`predicted`); equal weights
+        where nothing was predicted or every prediction is 0.
+        """
+        w = self._predicted_z()
+        return w if any(x > 0 for x in w.values()) else {k: 1.0 for k in self.terms}
+
+    def _predicted_z(self) -> dict[str, float]:
+        """Return per loss term with a spread its predicted gain in its standard errors."""
+        return {k: g / self.terms[k][1] for k, g in self.predicted.items()
+                if self.terms.get(k, (0.0, 0.0))[1] > 0}
+
+    @property
     def z(self) -> float:
         """
-        Return the terms' z combined: their sum over its standard deviation under noise.
+        Return the terms' z combined: their weighted sum over its standard deviation under noise.
 
-        Stouffer's rule with correlated terms: the sum of the n terms' z has the variance
-        n + 2 sum(rho) under noise alone; an unexplained term's z counts only where positive.
+        Stouffer's rule with weights and correlated terms: sum(w z) has the variance sum(w^2)
+        + 2 sum(rho w_a w_b) under noise alone; an unexplained term's z counts only where
+        positive. The weights (:attr:`weights`) are the z each term would show were the
+        effect true, the most powerful combination for that alternative: a term the effect
+        leaves alone adds its noise with weight 0.
         """
         return self._combined(self.term_z)
 
@@ -138,30 +170,62 @@ class HeldOutGain:
                                for k, (m0, m1, n) in self.misfits.items() if m0 + m1 > 0})
 
     def _combined(self, term_z: dict[str, float]) -> float:
-        """Return Stouffer's combination of per-term z (an unexplained term only for)."""
+        """Return the weighted Stouffer combination of per-term z (unexplained: only for)."""
         zs = {k: max(z, 0.0) if k in self.unexplained else z for k, z in term_z.items()}
-        if not zs:
+        w = self.weights
+        var = sum(w.get(k, 0.0) ** 2 for k in zs) + 2.0 * sum(
+            max(r, 0.0) * w.get(a, 0.0) * w.get(b, 0.0)
+            for (a, b), r in self.correlation.items() if a in zs and b in zs)
+        if var <= 0:
             return -math.inf
-        var = len(zs) + 2.0 * sum(max(r, 0.0) for (a, b), r in self.correlation.items()
-                                  if a in zs and b in zs)
-        return float(sum(zs.values()) / math.sqrt(var))
+        return float(sum(w.get(k, 0.0) * z for k, z in zs.items()) / math.sqrt(var))
 
     @property
     def beyond_noise(self) -> bool:
         """Return whether the gain exceeds HELD_OUT_GAIN_Z standard errors by either z."""
         return max(self.z, self.bound_z) > HELD_OUT_GAIN_Z
 
+    @property
+    def power(self) -> float:
+        """
+        Return the z this part would give the effect were the model with it the truth.
+
+        Per term the predicted gain (:attr:`predicted`: with the effect true, the paired
+        difference per piece is s0^2 + 2 n s0, whose mean is the misfit s0^2 of the model
+        without it against the simulation with it) over the term's standard error measured
+        on the part, combined as :attr:`z`. Below HELD_OUT_GAIN_Z the part cannot show the
+        effect (:attr:`can_show`); 0 where every prediction is 0 (the two models simulate
+        alike), -inf where nothing was predicted.
+        """
+        if not self.predicted:
+            return -math.inf
+        z = self._predicted_z()
+        return self._combined(z) if any(x > 0 for x in z.values()) else 0.0
+
+    @property
+    def can_show(self) -> bool:
+        """Return whether the part could show the effect beyond noise, were it true."""
+        return self.power > HELD_OUT_GAIN_Z
+
+    @property
+    def against(self) -> bool:
+        """Return whether the part speaks against the effect: a z below -HELD_OUT_GAIN_Z."""
+        return min([self.z] + ([self.bound_z] if self.misfits else [])) < -HELD_OUT_GAIN_Z
+
     def describe(self) -> str:
         """Return the numbers people read."""
         part = 'held-out' if self.held_out else 'fit-part'
         return (f'{part} gain {self.gain:.3g} noise floors, {self.z:.1f} standard errors of '
                 f'noise alone over its terms (' + ', '.join(
-                    f'{k} {z:.1f}' + (' unexplained: only for it' if k in self.unexplained
-                                      else '') for k, z in self.term_z.items())
+                    f'{k} {z:.1f}' + (f' of {self.weights[k]:.1f}' if self.predicted else '')
+                    + (' unexplained: only for it' if k in self.unexplained else '')
+                    for k, z in self.term_z.items())
                 + ''.join(f'; {a}/{b} correlated {r:.2f}'
                           for (a, b), r in self.correlation.items())
                 + (f'; {self.bound_z:.1f} of the most any noise gives these misfits'
                    if self.misfits else '')
+                + (f'; {self.power:.1f} were it true, each term weighted by what it would '
+                   'show' if self.predicted else '')
                 + f'; kept above {HELD_OUT_GAIN_Z:g})')
 
 
@@ -197,16 +261,18 @@ def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotPa
     floors = ev.floors_held if held else ev.floors
     terms: dict[str, tuple[float, float]] = {}
     misfits: dict[str, tuple[float, float, int]] = {}
+    predicted: dict[str, float] = {}
     pieces = 0
+    ests = [frf_estimates(replace_segments(sim, ev.val)) if held else ev.fit_estimates(m, sim)
+            for m, sim in zip((without_model, with_model), sims)]
     for k, pm in meas.items():
-        sq = []
-        for m, sim in zip((without_model, with_model), sims):
-            est = (frf_estimates(replace_segments(sim, ev.val)) if held
-                   else ev.fit_estimates(m, sim))
-            sq.append(np.abs(np.log(diag_ratio(pm, est[k])[axis])) ** 2 / floors[k][axis])
+        sq = [np.abs(np.log(diag_ratio(pm, est[k])[axis])) ** 2 / floors[k][axis]
+              for est in ests]
         d = sq[0] - sq[1]
         terms[k] = paired(d)
         misfits[k] = (float(sq[0].mean()), float(sq[1].mean()), int(d.size))
+        predicted[k] = float(np.mean(np.abs(np.log(diag_ratio(ests[1][k], ests[0][k])[axis]))
+                                     ** 2 / floors[k][axis]))
         pieces += d.size
     mask = ev.val_mask if held and ev.val_mask.any() else ev.fit_mask
     block = max(int(round(HELD_OUT_GAIN_BLOCK_S * ev.rec.fs)), 1)
@@ -221,6 +287,9 @@ def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotPa
         blocks[key] = np.array([x.mean() for x in np.array_split(d, max(d.size // block, 2))])
         terms[key] = (float(d.mean()), paired(blocks[key])[1])
         misfits[key] = (float(e[0].mean()), float(e[1].mean()), int(blocks[key].size))
+        predicted[key] = float(np.mean((getattr(sims[0], key)[:, axis][mask]
+                                        - getattr(sims[1], key)[:, axis][mask]) ** 2
+                                       / den2 / floors[key][axis]))
         pieces += blocks[key].size
     with_terms = ev.terms(with_model, sims[1], held_out=held)
     unexplained = frozenset(k for k in terms if with_terms[k][axis] / own_floor(
@@ -228,7 +297,7 @@ def held_out_gain(ev: Evaluator, with_model: RobotParams, without_model: RobotPa
     return HeldOutGain(terms, pieces, unexplained,
                        {('effort', 'velocity'): correlation(blocks['effort'],
                                                             blocks['velocity'])}, misfits,
-                       held)
+                       held, predicted)
 
 
 def paired(d: np.ndarray, lags: int = HELD_OUT_GAIN_LAGS) -> tuple[float, float]:
