@@ -56,9 +56,10 @@ def held_out_check(s: Search) -> tuple[np.ndarray, Recording]:
 
     Judged only where the held-out part could show the effect (:attr:`.HeldOutGain.can_show`:
     its predicted gain, were the model with it the truth, beyond noise): a held-out part that
-    cannot show it says nothing for or against it, and the effect stays on the evidence of
-    the fit part that accepted it, unless the held-out part speaks against it
-    (:attr:`.HeldOutGain.against`) or the model without it refitted fits the fit part as well.
+    cannot show it says nothing for or against it, and the fit part judges it instead by the
+    same paired test at the values it has now, unless the held-out part speaks against it
+    (:attr:`.HeldOutGain.against`); it is dropped where the model without it refitted fits the
+    fit part as well.
 
     A friction term is checked against the axis' other friction term refitted without it (the
     two were fitted together, so the partner left at its value cannot show what the data need
@@ -85,10 +86,14 @@ def held_out_check(s: Search) -> tuple[np.ndarray, Recording]:
         v = ev.held_out_misfit(without)
         v_fit = ev.misfit(ev.terms(without))[i] if refit else math.inf
         g = s.gains[id(c)] = held_out_gain(ev, s.ext, without, i)
-        if v_fit > s.cur[i] and not g.can_show and not g.against:
-            s.say(f"  kept {c.axis} {c.name} on the fit part's evidence: the held-out part "
-                  f'cannot show it ({g.describe()})')
-            continue
+        if not g.can_show and not g.against:
+            # the held-out part could not show it were it true: the fit part judges it, at
+            # the values it has now (a later refit may have taken it to nothing)
+            g = s.gains[id(c)] = held_out_gain(ev, s.ext, without, i, held_out=False)
+            if v_fit > s.cur[i] and g.beyond_noise:
+                s.say(f"  kept {c.axis} {c.name} on the fit part's evidence: the held-out "
+                      f'part cannot show it ({g.describe()})')
+                continue
         if v[i] <= val_ext[i] or v_fit <= s.cur[i] or not g.beyond_noise:
             s.say(f'  dropped {c.axis} {c.name}: misfit without it held out '
                   f'{v[i]:.4g} (with it {val_ext[i]:.4g}; {g.describe()}), fitted {v_fit:.4g} '
