@@ -161,21 +161,8 @@ def diagnosed(request, tmp_path_factory):
     return scene, tmp, truth, report
 
 
-#: what the diagnosis does not yet deliver on a scene, the run that showed it (xfail, strict:
-#: a pass is reported so that the mark goes); the deterministic scenes give the same run
-SHORTFALL: dict[tuple[str, str], str] = {}
-
-
-def _shortfall(request, what: str, scene: Scene) -> None:
-    """Mark the test xfail (strict) where SHORTFALL names it for the scene."""
-    reason = SHORTFALL.get((what, scene.name))
-    if reason:
-        request.applymarker(pytest.mark.xfail(strict=True, reason=reason))
-
-
-def test_every_added_term_is_named_on_its_axis_nothing_on_the_untouched_one(diagnosed, request):
+def test_every_added_term_is_named_on_its_axis_nothing_on_the_untouched_one(diagnosed):
     scene, _, _, report = diagnosed
-    _shortfall(request, 'named', scene)
     named = {e['axis'] for e in report['effects']}
     terms = report['mjcf']['axes']
     for axis in scene.axes:
@@ -189,9 +176,8 @@ def test_every_added_term_is_named_on_its_axis_nothing_on_the_untouched_one(diag
             assert terms[axis]['changed'] == [], terms[axis]
 
 
-def test_every_added_term_within_20_percent(diagnosed, request):
+def test_every_added_term_within_20_percent(diagnosed):
     scene, _, _, report = diagnosed
-    _shortfall(request, 'terms', scene)
     terms = report['mjcf']['axes']
     bad = []
     for axis, added in scene.added.items():
@@ -205,9 +191,8 @@ def test_every_added_term_within_20_percent(diagnosed, request):
     assert not bad, bad
 
 
-def test_extended_mjcf_linearises_to_the_truth(diagnosed, request):
+def test_extended_mjcf_linearises_to_the_truth(diagnosed):
     scene, tmp, truth, _ = diagnosed
-    _shortfall(request, 'linear', scene)
     xml = tmp / 'diag' / 'extended_model.xml'
     mujoco.MjModel.from_xml_path(str(xml))           # it loads
     pose = home() if scene is IIWA else scene.pose

@@ -86,9 +86,10 @@ def held_out_check(s: Search) -> tuple[np.ndarray, Recording]:
         v = ev.held_out_misfit(without)
         v_fit = ev.misfit(ev.terms(without))[i] if refit else math.inf
         g = s.gains[id(c)] = held_out_gain(ev, s.ext, without, i)
-        if not g.can_show and not g.against:
+        if g.held_out and not g.can_show and not g.against:
             # the held-out part could not show it were it true: the fit part judges it, at
-            # the values it has now (a later refit may have taken it to nothing)
+            # the values it has now (a later refit may have taken it to nothing); a record
+            # without a held-out part was judged on the fit part already
             g = s.gains[id(c)] = held_out_gain(ev, s.ext, without, i, held_out=False)
             if v_fit > s.cur[i] and g.beyond_noise:
                 s.say(f"  kept {c.axis} {c.name} on the fit part's evidence: the held-out "

@@ -215,9 +215,10 @@ class HeldOutGain:
     def describe(self) -> str:
         """Return the numbers people read."""
         part = 'held-out' if self.held_out else 'fit-part'
+        w = self.weights
         return (f'{part} gain {self.gain:.3g} noise floors, {self.z:.1f} standard errors of '
                 f'noise alone over its terms (' + ', '.join(
-                    f'{k} {z:.1f}' + (f' of {self.weights[k]:.1f}' if self.predicted else '')
+                    f'{k} {z:.1f}' + (f' of {w.get(k, 0.0):.1f}' if self.predicted else '')
                     + (' unexplained: only for it' if k in self.unexplained else '')
                     for k, z in self.term_z.items())
                 + ''.join(f'; {a}/{b} correlated {r:.2f}'
